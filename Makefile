@@ -1,0 +1,58 @@
+# loudscape: the two commands a user needs are `make run` and `make test`.
+# Each does its own set-up: system packages (Debian, when root), the Python venv, the Rust build.
+
+VENV    ?= .venv
+PYTHON  ?= python3
+PY      := $(VENV)/bin/python
+CARGO   ?= cargo
+OUT     ?= out
+DEMO_SONG     := data/demo_song.ply
+DEMO_TIMELINE := data/demo_timeline.ply
+
+# Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
+XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
+
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py demo clean
+
+system:
+	@bash scripts/setup-system.sh
+
+$(VENV)/.installed: preprocess/pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e './preprocess[dev]'
+	touch $@
+
+venv: $(VENV)/.installed
+
+build: system
+	$(CARGO) build --release
+
+# Opens the demo in a window; with no display, renders every view of the demo to PNG files.
+run: build
+	@if [ -n "$(DISPLAY)$(WAYLAND_DISPLAY)" ] || [ "$$(uname -s)" = Darwin ]; then \
+		./target/release/loudscape $(DEMO_SONG) $(wildcard $(DEMO_TIMELINE)); \
+	else \
+		echo "No display found: rendering the demo to PNG files instead."; \
+		./target/release/loudscape render-demo --out-dir $(OUT) $(DEMO_SONG) $(wildcard $(DEMO_TIMELINE)); \
+	fi
+
+lint-rust:
+	$(CARGO) fmt --check
+	$(CARGO) clippy --all-targets -- -D warnings
+
+test-rust: system
+	$(XVFB) $(CARGO) test
+
+lint-py: venv
+	$(VENV)/bin/ruff check preprocess bench
+	$(VENV)/bin/ruff format --check preprocess bench
+
+test-py: venv
+	$(VENV)/bin/pytest -q preprocess/tests
+
+test: system lint-rust lint-py test-rust test-py
+
+clean:
+	$(CARGO) clean
+	rm -rf $(VENV) $(OUT)
