@@ -1,0 +1,1 @@
+//! PLY point-cloud loading.
