@@ -5,4 +5,7 @@
 //! The binary (`src/main.rs`) adds the command line and the egui window ([`ui`]).
 
 pub mod axes;
+pub mod camera;
 pub mod cloud;
+pub mod overlay;
+pub mod render;

@@ -1,0 +1,24 @@
+// Lines: the box around the data, its tick marks and the playhead, in data space.
+
+struct LineVertex {
+    @location(0) position: vec3<f32>,
+    @location(1) color: vec4<f32>,
+};
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) color: vec4<f32>,
+};
+
+@vertex
+fn vs_main(in: LineVertex) -> VertexOut {
+    var out: VertexOut;
+    out.clip = frame.clip_from_data * vec4<f32>(in.position, 1.0);
+    out.color = in.color;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    return in.color;
+}

@@ -1,0 +1,60 @@
+// Points view: every point of the cloud as a screen-aligned disc, coloured by hp.
+// Reads the cloud as a flat array of f32, five per point (x, y, z, scalar, hp), the PLY record.
+// Keep PointParams in sync with src/render/points.rs.
+
+struct PointParams {
+    // Draw points first, first + stride, first + 2 stride, ... (stride > 1 while moving).
+    stride: u32,
+    count: u32,
+    // Disc diameter in pixels.
+    size_px: f32,
+    // Points with scalar below this are not drawn.
+    min_scalar: f32,
+};
+
+@group(1) @binding(0) var<storage, read> cloud: array<f32>;
+@group(1) @binding(1) var<uniform> params: PointParams;
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) corner: vec2<f32>,
+    @location(1) color: vec3<f32>,
+};
+
+@vertex
+fn vs_main(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> VertexOut {
+    var out: VertexOut;
+    let index = instance * params.stride;
+    let base = index * 5u;
+    let position = vec3<f32>(cloud[base], cloud[base + 1u], cloud[base + 2u]);
+    let scalar = cloud[base + 3u];
+    let hp = cloud[base + 4u];
+    // Two triangles: corners of the unit square, as vertex 0..5.
+    let corners = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    );
+    let corner = corners[vertex];
+    var clip = frame.clip_from_data * vec4<f32>(position, 1.0);
+    // Offset in pixels, scaled back into clip space so the disc keeps its pixel size.
+    let half_size = 0.5 * params.size_px * frame.viewport.zw * 2.0;
+    clip = vec4<f32>(clip.xy + corner * half_size * clip.w, clip.zw);
+    if (scalar < params.min_scalar || index >= params.count) {
+        clip = vec4<f32>(0.0, 0.0, -2.0, 1.0);
+    }
+    out.clip = clip;
+    out.corner = corner;
+    out.color = hp_palette(hp);
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    let r2 = dot(in.corner, in.corner);
+    if (r2 > 1.0) {
+        discard;
+    }
+    // A little shading toward the rim so dense clouds keep their depth.
+    let shade = 1.0 - 0.25 * r2;
+    return vec4<f32>(in.color * shade, 1.0);
+}

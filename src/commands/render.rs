@@ -1,0 +1,199 @@
+//! `loudscape render` and `loudscape render-demo`: the window's passes, offscreen, to PNG.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use loudscape::camera::Camera;
+use loudscape::cloud::PointCloud;
+use loudscape::overlay;
+use loudscape::render::context::GpuContext;
+use loudscape::render::frame::FrameView;
+use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// The point cloud (.ply).
+    pub input: PathBuf,
+    /// What to draw: points, surface or volume.
+    #[arg(long, default_value = "points")]
+    pub view: String,
+    /// Camera as AZ,EL,DIST (degrees, degrees, world units); fitted to the data when omitted.
+    #[arg(long, allow_hyphen_values = true)]
+    pub camera: Option<String>,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Point disc diameter in pixels.
+    #[arg(long, default_value_t = 2.0)]
+    pub point_size: f32,
+    /// Leave out the axis labels.
+    #[arg(long)]
+    pub no_labels: bool,
+    /// The PNG file to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct RenderDemoArgs {
+    /// Where to write the PNG files.
+    #[arg(long, default_value = "out")]
+    pub out_dir: PathBuf,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Clouds to render (.ply).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+}
+
+/// Loads a cloud, with the file named in the error.
+pub fn load_cloud(path: &Path) -> anyhow::Result<PointCloud> {
+    Ok(loudscape::cloud::load(path)?)
+}
+
+/// Renders `cloud` as `view` and writes `output` (via a temporary file, so no half-written PNG).
+#[allow(clippy::too_many_arguments)]
+fn render_to_file(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    cloud: &PointCloud,
+    data: &SceneData,
+    camera: Option<Camera>,
+    size: (u32, u32),
+    settings: &RenderSettings,
+    labels: bool,
+    output: &Path,
+) -> anyhow::Result<()> {
+    let camera = camera.unwrap_or_else(|| {
+        let mut camera = Camera::default();
+        let (min, max) = data.world_box();
+        camera.fit(min, max, size.0 as f32 / size.1 as f32);
+        camera
+    });
+    let view = FrameView {
+        camera,
+        world_from_data: data.world_from_data,
+        width: size.0,
+        height: size.1,
+        frame_index: 0,
+        moving: false,
+    };
+    let target =
+        loudscape::render::headless::render_frame(gpu, renderer, Some(data), &view, settings);
+    if labels {
+        overlay::draw_headless(gpu, &target, &view, cloud, data);
+    }
+    let image = target
+        .read_rgba(&gpu.device, &gpu.queue)
+        .with_context(|| format!("rendering {}", output.display()))?;
+    save_png(&image, output)
+}
+
+/// Writes a PNG through a temporary file in the same folder, then renames it into place.
+pub fn save_png(image: &image::RgbaImage, output: &Path) -> anyhow::Result<()> {
+    let dir = output.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(dir) = dir {
+        if !dir.is_dir() {
+            bail!(
+                "{}: the folder {} does not exist",
+                output.display(),
+                dir.display()
+            );
+        }
+    }
+    let tmp = output.with_extension("png.tmp");
+    image
+        .save_with_format(&tmp, image::ImageFormat::Png)
+        .with_context(|| format!("{}: cannot write the image", output.display()))?;
+    std::fs::rename(&tmp, output).with_context(|| format!("{}: cannot write", output.display()))?;
+    Ok(())
+}
+
+fn parse_view(name: &str) -> anyhow::Result<ViewKind> {
+    let view = ViewKind::parse(name)
+        .with_context(|| format!("view '{name}' is not one of points, surface, volume"))?;
+    if !view.available() {
+        bail!(
+            "the {} view is not available in this build yet",
+            view.name()
+        );
+    }
+    Ok(view)
+}
+
+pub fn run(args: RenderArgs) -> anyhow::Result<()> {
+    let size = super::parse_size(&args.size)?;
+    let view = parse_view(&args.view)?;
+    let camera = match &args.camera {
+        Some(text) => {
+            let (az, el, dist) = super::parse_camera(text)?;
+            Some(Camera::from_angles(az, el, dist))
+        }
+        None => None,
+    };
+    if !(0.5..=64.0).contains(&args.point_size) {
+        bail!(
+            "point size {} is out of range 0.5 to 64 pixels",
+            args.point_size
+        );
+    }
+    let cloud = load_cloud(&args.input)?;
+    let gpu = GpuContext::new_headless()?;
+    let renderer = Renderer::new(&gpu.device);
+    let data = SceneData::new(&gpu.device, &renderer, &cloud);
+    let mut settings = RenderSettings {
+        view,
+        ..Default::default()
+    };
+    settings.points.size_px = args.point_size;
+    render_to_file(
+        &gpu,
+        &renderer,
+        &cloud,
+        &data,
+        camera,
+        size,
+        &settings,
+        !args.no_labels,
+        &args.output,
+    )?;
+    println!("wrote {}", args.output.display());
+    Ok(())
+}
+
+pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
+    let size = super::parse_size(&args.size)?;
+    std::fs::create_dir_all(&args.out_dir)
+        .with_context(|| format!("{}: cannot create the folder", args.out_dir.display()))?;
+    let gpu = GpuContext::new_headless()?;
+    eprintln!("rendering on {}", gpu.describe());
+    let renderer = Renderer::new(&gpu.device);
+    let mut written = Vec::new();
+    for input in &args.inputs {
+        let cloud = load_cloud(input)?;
+        let data = SceneData::new(&gpu.device, &renderer, &cloud);
+        let stem = input
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "cloud".into());
+        for view in ViewKind::ALL.into_iter().filter(|v| v.available()) {
+            let output = args
+                .out_dir
+                .join(format!("{stem}_{}.png", view.name().to_lowercase()));
+            let settings = RenderSettings {
+                view,
+                ..Default::default()
+            };
+            render_to_file(
+                &gpu, &renderer, &cloud, &data, None, size, &settings, true, &output,
+            )?;
+            written.push(output);
+        }
+    }
+    println!("Rendered the demo to:");
+    for path in written {
+        println!("  {}", path.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,38 @@
+//! Rendering without a window: the same passes into an offscreen target, read back as an image.
+
+use crate::render::context::GpuContext;
+use crate::render::frame::FrameView;
+use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::render::target::{ReadbackError, RenderTarget};
+
+/// Renders one frame at rest (full quality) and returns it with the target still holding it, so
+/// callers can draw more (labels) over it before reading back.
+pub fn render_frame(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    data: Option<&SceneData>,
+    view: &FrameView,
+    settings: &RenderSettings,
+) -> RenderTarget {
+    let target = RenderTarget::new(&gpu.device, view.width, view.height);
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("headless::frame"),
+        });
+    renderer.render(&gpu.queue, &mut encoder, &target, data, view, settings);
+    gpu.queue.submit([encoder.finish()]);
+    target
+}
+
+/// Renders one frame and reads it back.
+pub fn render_image(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    data: Option<&SceneData>,
+    view: &FrameView,
+    settings: &RenderSettings,
+) -> Result<image::RgbaImage, ReadbackError> {
+    let target = render_frame(gpu, renderer, data, view, settings);
+    target.read_rgba(&gpu.device, &gpu.queue)
+}

@@ -1,0 +1,162 @@
+//! Lines: the box around the data with its tick marks (and any other guide lines), drawn in
+//! data space with depth testing so the data can hide the far edges.
+//!
+//! Reads: a vertex buffer of [`LineVertex`] pairs. Writes: colour, tested against depth.
+
+use wgpu::util::DeviceExt;
+
+use crate::render::frame::FrameBinding;
+use crate::render::shaders;
+use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LineVertex {
+    pub position: [f32; 3],
+    pub color: [f32; 4],
+}
+
+/// Line segments on the GPU, two vertices each.
+pub struct LinesGpu {
+    buffer: wgpu::Buffer,
+    count: u32,
+}
+
+impl LinesGpu {
+    pub fn upload(device: &wgpu::Device, label: &str, vertices: &[LineVertex]) -> Self {
+        let contents: &[u8] = if vertices.is_empty() {
+            &[0; std::mem::size_of::<LineVertex>()]
+        } else {
+            bytemuck::cast_slice(vertices)
+        };
+        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        Self {
+            buffer,
+            count: vertices.len() as u32,
+        }
+    }
+}
+
+pub struct LinesPass {
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl LinesPass {
+    pub fn new(device: &wgpu::Device, frame: &FrameBinding) -> Self {
+        let module = shaders::module(device, "lines", &shaders::lines());
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lines::pipeline_layout"),
+            bind_group_layouts: &[Some(&frame.layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lines::pipeline"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<LineVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+                })],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::LineList,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { pipeline }
+    }
+
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &FrameBinding, lines: &LinesGpu) {
+        if lines.count == 0 {
+            return;
+        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &frame.bind_group, &[]);
+        pass.set_vertex_buffer(0, lines.buffer.slice(..));
+        pass.draw(0..lines.count, 0..1);
+    }
+}
+
+/// The twelve edges of the box `[min, max]` plus tick marks on three of its edges, at the given
+/// normalized positions along x, y and z.
+pub fn box_with_ticks(
+    min: glam::Vec3,
+    max: glam::Vec3,
+    ticks: [&[f32]; 3],
+    color: [f32; 4],
+) -> Vec<LineVertex> {
+    let mut out = Vec::new();
+    let corner = |i: u32| {
+        glam::Vec3::new(
+            if i & 1 == 0 { min.x } else { max.x },
+            if i & 2 == 0 { min.y } else { max.y },
+            if i & 4 == 0 { min.z } else { max.z },
+        )
+    };
+    let mut segment = |a: glam::Vec3, b: glam::Vec3| {
+        out.push(LineVertex {
+            position: a.into(),
+            color,
+        });
+        out.push(LineVertex {
+            position: b.into(),
+            color,
+        });
+    };
+    for i in 0..8u32 {
+        for bit in [1u32, 2, 4] {
+            if i & bit == 0 {
+                segment(corner(i), corner(i | bit));
+            }
+        }
+    }
+    let size = max - min;
+    let tick_length = 0.03 * size.max_element().max(1e-3);
+    // x ticks along the front bottom edge (y = min, z = max), pointing toward +z.
+    for &t in ticks[0] {
+        let x = min.x + (t + 1.0) * 0.5 * size.x;
+        let a = glam::Vec3::new(x, min.y, max.z);
+        segment(a, a + glam::Vec3::Z * tick_length);
+    }
+    // y ticks along the left front edge (x = min, z = max), pointing toward -x.
+    for &t in ticks[1] {
+        let y = min.y + (t + 1.0) * 0.5 * size.y;
+        let a = glam::Vec3::new(min.x, y, max.z);
+        segment(a, a - glam::Vec3::X * tick_length);
+    }
+    // z ticks along the right bottom edge (x = max, y = min), pointing toward +x.
+    for &t in ticks[2] {
+        let z = min.z + (t + 1.0) * 0.5 * size.z;
+        let a = glam::Vec3::new(max.x, min.y, z);
+        segment(a, a + glam::Vec3::X * tick_length);
+    }
+    out
+}

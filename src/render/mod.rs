@@ -1,0 +1,13 @@
+//! GPU passes. Nothing here knows of egui: the window and the headless renderer both drive
+//! [`scene::Renderer`], which owns one instance of every pass.
+
+pub mod context;
+pub mod frame;
+pub mod grid;
+pub mod headless;
+pub mod lines;
+pub mod palette;
+pub mod points;
+pub mod scene;
+pub mod shaders;
+pub mod target;

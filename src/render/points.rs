@@ -1,0 +1,246 @@
+//! Points view: draws a cloud's points as screen-aligned discs coloured by hp.
+//!
+//! Reads: the cloud uploaded by [`PointsGpu`] (one storage buffer per chunk, five f32 per point,
+//! the PLY record as is). Writes: colour and depth of the render target.
+//! Each point is an instance of six vertices (a quad); the fragment shader cuts the disc.
+//! Clouds larger than one storage binding are split into chunks, each drawn on its own.
+//! While the camera moves, every `stride`-th point is drawn (a level-of-detail subset).
+
+use wgpu::util::DeviceExt;
+
+use crate::cloud::Point;
+use crate::render::frame::FrameBinding;
+use crate::render::shaders;
+use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
+
+/// Keep in sync with `PointParams` in shaders/points.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct PointParams {
+    stride: u32,
+    count: u32,
+    size_px: f32,
+    min_scalar: f32,
+}
+const _: () = assert!(std::mem::size_of::<PointParams>() == 16);
+
+/// How the points are drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointStyle {
+    /// Disc diameter in pixels.
+    pub size_px: f32,
+    /// Points whose scalar (loudness) is below this are hidden.
+    pub min_scalar: f32,
+    /// At most this many points are drawn while the camera moves.
+    pub max_points_moving: u32,
+}
+
+impl Default for PointStyle {
+    fn default() -> Self {
+        Self {
+            size_px: 2.0,
+            min_scalar: 0.0,
+            max_points_moving: 250_000,
+        }
+    }
+}
+
+struct Chunk {
+    count: u32,
+    params: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    _points: wgpu::Buffer,
+}
+
+/// A cloud's points on the GPU.
+pub struct PointsGpu {
+    chunks: Vec<Chunk>,
+    pub total: u64,
+}
+
+impl PointsGpu {
+    /// Uploads `points`, split into chunks of at most `max_chunk_bytes` (use
+    /// [`PointsGpu::chunk_limit`] for the device's own limit).
+    pub fn upload(
+        device: &wgpu::Device,
+        pass: &PointsPass,
+        points: &[Point],
+        max_chunk_bytes: u64,
+    ) -> Self {
+        let per_chunk = (max_chunk_bytes / std::mem::size_of::<Point>() as u64).max(1) as usize;
+        let mut chunks = Vec::new();
+        for (i, slice) in points.chunks(per_chunk).enumerate() {
+            let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&format!("points::cloud_chunk_{i}")),
+                contents: bytemuck::cast_slice(slice),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            });
+            let params = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(&format!("points::params_{i}")),
+                size: std::mem::size_of::<PointParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&format!("points::bind_group_{i}")),
+                layout: &pass.cloud_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: points_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: params.as_entire_binding(),
+                    },
+                ],
+            });
+            chunks.push(Chunk {
+                count: slice.len() as u32,
+                params,
+                bind_group,
+                _points: points_buffer,
+            });
+        }
+        Self {
+            chunks,
+            total: points.len() as u64,
+        }
+    }
+
+    /// The largest chunk one storage binding and one buffer can hold on this device.
+    pub fn chunk_limit(device: &wgpu::Device) -> u64 {
+        let limits = device.limits();
+        u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size)
+    }
+
+    pub fn chunk_count(&self) -> usize {
+        self.chunks.len()
+    }
+}
+
+/// The points pipeline, built once.
+pub struct PointsPass {
+    pipeline: wgpu::RenderPipeline,
+    cloud_layout: wgpu::BindGroupLayout,
+}
+
+impl PointsPass {
+    pub fn new(device: &wgpu::Device, frame: &FrameBinding) -> Self {
+        let module = shaders::module(device, "points", &shaders::points());
+        let cloud_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("points::cloud_layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("points::pipeline_layout"),
+            bind_group_layouts: &[Some(&frame.layout), Some(&cloud_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("points::pipeline"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(COLOR_FORMAT.into())],
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(depth_state(true)),
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            pipeline,
+            cloud_layout,
+        }
+    }
+
+    /// Writes this frame's parameters; call before the render pass that draws.
+    pub fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        points: &PointsGpu,
+        style: &PointStyle,
+        moving: bool,
+    ) {
+        let stride = lod_stride(points.total, style, moving);
+        for chunk in &points.chunks {
+            let params = PointParams {
+                stride,
+                count: chunk.count,
+                size_px: style.size_px,
+                min_scalar: style.min_scalar,
+            };
+            queue.write_buffer(&chunk.params, 0, bytemuck::bytes_of(&params));
+        }
+    }
+
+    pub fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameBinding,
+        points: &PointsGpu,
+        style: &PointStyle,
+        moving: bool,
+    ) {
+        let stride = lod_stride(points.total, style, moving);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &frame.bind_group, &[]);
+        for chunk in &points.chunks {
+            pass.set_bind_group(1, &chunk.bind_group, &[]);
+            pass.draw(0..6, 0..chunk.count.div_ceil(stride));
+        }
+    }
+}
+
+/// Every how many points one is drawn: 1 at rest, more while moving so that at most
+/// `style.max_points_moving` are drawn.
+pub fn lod_stride(total: u64, style: &PointStyle, moving: bool) -> u32 {
+    let budget = u64::from(style.max_points_moving.max(1));
+    if moving && total > budget {
+        total.div_ceil(budget) as u32
+    } else {
+        1
+    }
+}
+
+/// Depth test shared by the opaque passes: nearer wins, optionally writing depth.
+pub fn depth_state(write: bool) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}

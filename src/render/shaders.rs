@@ -1,0 +1,44 @@
+//! WGSL sources. WGSL has no `#include`, so a pass's module is its own file with the shared
+//! helpers of shaders/utils/ prepended; [`all`] lists every module so one test can translate each
+//! to MSL (Metal) with naga.
+
+pub const FRAME: &str = include_str!("../../shaders/utils/frame.wgsl");
+pub const PALETTE: &str = include_str!("../../shaders/utils/palette.wgsl");
+
+pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
+pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
+pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
+
+/// Concatenates helper sources and a pass's own source into one module.
+pub fn compose(parts: &[&str]) -> String {
+    parts.join("\n")
+}
+
+pub fn points() -> String {
+    compose(&[FRAME, PALETTE, POINTS])
+}
+
+pub fn lines() -> String {
+    compose(&[FRAME, LINES])
+}
+
+pub fn composite() -> String {
+    COMPOSITE.to_string()
+}
+
+/// Every shader module the app builds, by name, as handed to the GPU.
+pub fn all() -> Vec<(&'static str, String)> {
+    vec![
+        ("points", points()),
+        ("lines", lines()),
+        ("composite", composite()),
+    ]
+}
+
+/// Creates a shader module from composed source, labelled with its name.
+pub fn module(device: &wgpu::Device, name: &str, source: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
+}
