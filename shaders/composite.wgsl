@@ -22,3 +22,12 @@ fn vs_main(@builtin(vertex_index) vertex: u32) -> VertexOut {
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     return textureSample(scene, scene_sampler, in.uv);
 }
+
+// For sRGB outputs: the scene holds gamma-encoded colour, which the output would encode again.
+@fragment
+fn fs_decode_srgb(in: VertexOut) -> @location(0) vec4<f32> {
+    let c = textureSample(scene, scene_sampler, in.uv);
+    let low = c.rgb / 12.92;
+    let high = pow((c.rgb + 0.055) / 1.055, vec3<f32>(2.4));
+    return vec4<f32>(select(high, low, c.rgb <= vec3<f32>(0.04045)), c.a);
+}

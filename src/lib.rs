@@ -9,3 +9,4 @@ pub mod camera;
 pub mod cloud;
 pub mod overlay;
 pub mod render;
+pub mod ui;

@@ -18,6 +18,10 @@ struct Cli {
     /// Song and/or timeline point clouds (.ply) to open in the window.
     files: Vec<PathBuf>,
 
+    /// Save a screenshot of the window to this PNG once the data is shown, then close.
+    #[arg(long, hide = true)]
+    screenshot: Option<PathBuf>,
+
     /// Print the full error chain and backtraces.
     #[arg(long, global = true)]
     debug: bool,
@@ -49,7 +53,10 @@ fn main() -> ExitCode {
         }));
     }
     let result = match cli.command {
-        None => commands::window::run(cli.files),
+        None => loudscape::ui::run(loudscape::ui::WindowOptions {
+            files: cli.files,
+            screenshot: cli.screenshot,
+        }),
         Some(Command::Render(args)) => commands::render::run(args),
         Some(Command::RenderDemo(args)) => commands::render::run_demo(args),
         Some(Command::Voxelize(args)) => commands::voxelize::run(args),

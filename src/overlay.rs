@@ -41,7 +41,11 @@ pub fn axis_title(axis: &Axis, fallback: &str) -> String {
 
 /// Tick labels and axis titles for the box drawn by the scene, on the same edges as its ticks.
 pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> Vec<Label> {
-    let (min, max) = (data.box_min, data.box_max);
+    axis_labels_for_box(cloud, data.box_min, data.box_max)
+}
+
+/// Tick labels and axis titles for a box `[min, max]` in data space.
+pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> Vec<Label> {
     let size = max - min;
     let axes = &cloud.meta.axes;
     let along = |t: f32, lo: f32, extent: f32| lo + (t + 1.0) * 0.5 * extent;
@@ -182,4 +186,14 @@ pub fn draw_headless(
     }
     gpu.queue
         .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+}
+
+/// Lines describing a cloud for the side panel: what it is and its loudness metrics.
+pub fn describe_cloud(cloud: &PointCloud) -> Vec<String> {
+    let mode = match cloud.meta.mode {
+        crate::cloud::DataMode::Song => "song",
+        crate::cloud::DataMode::Timeline => "timeline",
+        crate::cloud::DataMode::Generic => "generic point cloud",
+    };
+    vec![format!("mode: {mode}")]
 }

@@ -5,7 +5,6 @@ pub mod bench;
 pub mod mesh;
 pub mod render;
 pub mod voxelize;
-pub mod window;
 
 use anyhow::{Context, bail};
 

@@ -1,6 +1,7 @@
 //! GPU passes. Nothing here knows of egui: the window and the headless renderer both drive
 //! [`scene::Renderer`], which owns one instance of every pass.
 
+pub mod composite;
 pub mod context;
 pub mod frame;
 pub mod grid;

@@ -1,0 +1,105 @@
+//! The bridge between egui and the render passes: an `egui_wgpu` paint callback.
+//!
+//! `prepare` renders the scene into an offscreen [`RenderTarget`] sized to the 3D view, `paint`
+//! composites it into egui's frame. GPU state lives in egui_wgpu's callback resources as one
+//! [`ViewResources`], created once when the window opens.
+
+use std::collections::HashMap;
+
+use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor};
+
+use crate::cloud::PointCloud;
+use crate::render::composite::CompositePass;
+use crate::render::frame::FrameView;
+use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::render::target::RenderTarget;
+
+/// GPU state owned by the window, kept in egui_wgpu's callback resources.
+pub struct ViewResources {
+    pub renderer: Renderer,
+    composite: CompositePass,
+    target: Option<RenderTarget>,
+    /// Uploaded clouds by the app's cloud id.
+    pub scenes: HashMap<u64, SceneData>,
+}
+
+impl ViewResources {
+    pub fn install(render_state: &egui_wgpu::RenderState) {
+        let device = &render_state.device;
+        let resources = ViewResources {
+            renderer: Renderer::new(device),
+            composite: CompositePass::new(device, render_state.target_format),
+            target: None,
+            scenes: HashMap::new(),
+        };
+        render_state
+            .renderer
+            .write()
+            .callback_resources
+            .insert(resources);
+    }
+
+    /// Uploads a cloud under `id`, replacing what was there.
+    pub fn upload(render_state: &egui_wgpu::RenderState, id: u64, cloud: &PointCloud) {
+        let mut renderer = render_state.renderer.write();
+        if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
+            let data = SceneData::new(&render_state.device, &resources.renderer, cloud);
+            resources.scenes.insert(id, data);
+        }
+    }
+
+    pub fn remove(render_state: &egui_wgpu::RenderState, id: u64) {
+        let mut renderer = render_state.renderer.write();
+        if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
+            resources.scenes.remove(&id);
+        }
+    }
+}
+
+/// One frame of the 3D view.
+pub struct ViewCallback {
+    pub view: FrameView,
+    pub settings: RenderSettings,
+    pub cloud_id: Option<u64>,
+}
+
+impl CallbackTrait for ViewCallback {
+    fn prepare(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        _screen: &ScreenDescriptor,
+        encoder: &mut wgpu::CommandEncoder,
+        resources: &mut CallbackResources,
+    ) -> Vec<wgpu::CommandBuffer> {
+        let Some(res) = resources.get_mut::<ViewResources>() else {
+            return Vec::new();
+        };
+        let (w, h) = (self.view.width, self.view.height);
+        if !res.target.as_ref().is_some_and(|t| t.has_size(w, h)) {
+            let target = RenderTarget::new(device, w, h);
+            res.composite.set_source(device, &target);
+            res.target = Some(target);
+        }
+        let Some(target) = res.target.as_ref() else {
+            return Vec::new();
+        };
+        let data = self.cloud_id.and_then(|id| res.scenes.get(&id));
+        res.renderer
+            .render(queue, encoder, target, data, &self.view, &self.settings);
+        Vec::new()
+    }
+
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        render_pass: &mut wgpu::RenderPass<'static>,
+        resources: &CallbackResources,
+    ) {
+        if let Some(res) = resources.get::<ViewResources>() {
+            res.composite.draw(render_pass);
+        }
+    }
+}
+
+use eframe::egui;
