@@ -9,4 +9,5 @@ pub mod camera;
 pub mod cloud;
 pub mod overlay;
 pub mod render;
+mod synthetic;
 pub mod ui;

@@ -99,7 +99,10 @@ pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> Vec<Labe
 /// Paints labels projected through `view` into `rect` (the 3D view's place on screen, points).
 pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &[Label]) {
     let scale = rect.width() / view.width.max(1) as f32;
-    for label in labels {
+    let mut placed: Vec<Rect> = Vec::new();
+    // Titles first, so ticks make way for them.
+    let ordered = labels.iter().filter(|l| l.title).chain(labels.iter().filter(|l| !l.title));
+    for label in ordered {
         let Some(pixel) = view.project(label.anchor) else {
             continue;
         };
@@ -112,13 +115,14 @@ pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &[La
         } else {
             (12.0, Color32::from_rgb(160, 168, 182))
         };
-        painter.text(
-            pos,
-            label.align,
-            &label.text,
-            FontId::proportional(size),
-            color,
-        );
+        // Skip a label that would overlap one already placed (crowded ticks at some angles).
+        let galley = painter.layout_no_wrap(label.text.clone(), FontId::proportional(size), color);
+        let text_rect = label.align.anchor_size(pos, galley.size());
+        if placed.iter().any(|r: &Rect| r.expand(2.0).intersects(text_rect)) {
+            continue;
+        }
+        placed.push(text_rect);
+        painter.galley(text_rect.min, galley, color);
     }
 }
 
@@ -138,10 +142,11 @@ pub fn draw_headless(
         screen_rect: Some(rect),
         ..Default::default()
     };
-    let output = ctx.run_ui(input, |ui| {
+    let mut output = ctx.run_ui(input, |ui| {
         paint(ui.painter(), rect, view, &labels);
     });
-    let primitives = ctx.tessellate(output.shapes, 1.0);
+    let shapes = std::mem::take(&mut output.shapes);
+    let primitives = ctx.tessellate(shapes, 1.0);
     let mut renderer = egui_wgpu::Renderer::new(
         &gpu.device,
         COLOR_FORMAT,
@@ -152,6 +157,8 @@ pub fn draw_headless(
             renderer.update_texture(&gpu.device, &gpu.queue, *id, delta);
         }
     }
+    // Applied above; the renderer is dropped at the end, which frees its textures.
+    output.textures_delta.clear();
     let screen = egui_wgpu::ScreenDescriptor {
         size_in_pixels: [w, h],
         pixels_per_point: 1.0,
