@@ -9,6 +9,7 @@ polyphase upsampler.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -98,48 +99,63 @@ def _biquad(x: np.ndarray, b0: float, b1: float, b2: float, a1: float, a2: float
     return y
 
 
-def fft_convolve(x: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """Causal linear convolution ``y[n] = sum_k h[k] x[n - k]``, first ``len(x)`` samples
-    (what ``scipy.signal.lfilter(h, 1, x)`` gives), by overlap-save in float64.
+def fft_convolve(x: np.ndarray, h: np.ndarray, *, dtype=np.float64) -> np.ndarray:
+    """Causal linear convolution ``y[n] = sum_k h[k] x[n - k]`` along the last axis, first
+    ``n`` samples (what ``scipy.signal.lfilter(h, 1, x)`` gives), by overlap-save.
 
     Parameters
     ----------
-    x : np.ndarray [shape=(n,)]
+    x : np.ndarray [shape=(..., n)]
     h : np.ndarray [shape=(m,)]
+    dtype : {np.float64, np.float32}
+        Working precision (float32 halves the time; relative error about 1e-7).
 
     Returns
     -------
-    y : np.ndarray [shape=(n,), dtype=float64]
+    y : np.ndarray [shape=(..., n), dtype=dtype]
     """
-    x = np.asarray(x, dtype=np.float64)
-    n, m = x.shape[0], h.shape[0]
-    size = 1 << max(14, math.ceil(math.log2(4 * m)))
+    x = np.asarray(x)
+    lead, n = x.shape[:-1], x.shape[-1]
+    x = x.reshape(-1, n)
+    m = h.shape[0]
+    size = 1 << max(16, math.ceil(math.log2(4 * m)))
     step = size - m + 1
-    spectrum = scipy.fft.rfft(h, size)
-    y = np.empty(n)
-    padded = np.concatenate([np.zeros(m - 1), x, np.zeros(step)])
-    for start in range(0, n, step):
-        segment = padded[start : start + size]
-        out = scipy.fft.irfft(scipy.fft.rfft(segment, size) * spectrum, size)
-        stop = min(step, n - start)
-        y[start : start + stop] = out[m - 1 : m - 1 + stop]
-    return y
+    n_blocks = -(-n // step)
+    spectrum = scipy.fft.rfft(np.asarray(h, dtype=dtype), size)
+    padded = np.zeros((x.shape[0], m - 1 + n_blocks * step + size), dtype=dtype)
+    padded[:, m - 1 : m - 1 + n] = x
+    y = np.empty((x.shape[0], n_blocks * step), dtype=dtype)
+    batch = 8
+    for first in range(0, n_blocks, batch):
+        count = min(batch, n_blocks - first)
+        starts = (first + np.arange(count)) * step
+        segments = padded[:, starts[:, None] + np.arange(size)[None, :]]  # (rows, count, size)
+        out = scipy.fft.irfft(scipy.fft.rfft(segments, axis=-1) * spectrum, size, axis=-1)
+        y[:, first * step : (first + count) * step] = out[:, :, m - 1 :].reshape(x.shape[0], -1)
+    return y[:, :n].reshape(*lead, n)
 
 
-def sos_filter(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Filter with a stable biquad cascade from rest (``scipy.signal.sosfilt(sos, x)`` to
-    about 1e-13 relative).
+def sos_filter(sos: np.ndarray, x: np.ndarray, *, dtype=np.float64) -> np.ndarray:
+    """Filter with a stable biquad cascade from rest along the last axis
+    (``scipy.signal.sosfilt(sos, x)`` to about 1e-12 relative in float64).
 
     Parameters
     ----------
     sos : np.ndarray [shape=(n_sections, 6)]
-    x : np.ndarray [shape=(n,)]
+    x : np.ndarray [shape=(..., n)]
+    dtype : {np.float64, np.float32}
+        Working precision.
 
     Returns
     -------
-    y : np.ndarray [shape=(n,), dtype=float64]
+    y : np.ndarray [shape=(..., n), dtype=dtype]
     """
-    return fft_convolve(x, sos_impulse_response(sos))
+    return fft_convolve(x, _cached_impulse_response(tuple(np.asarray(sos).ravel())), dtype=dtype)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_impulse_response(flat_sos: tuple) -> np.ndarray:
+    return sos_impulse_response(np.array(flat_sos).reshape(-1, 6))
 
 
 def upsample_polyphase(x: np.ndarray, taps: np.ndarray, *, factor: int) -> np.ndarray:

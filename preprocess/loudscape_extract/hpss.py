@@ -92,24 +92,52 @@ def hpss_masks(
         raise ExtractError(f"margin must be >= 1, got {margin}")
     harmonic = median_filter_axis(magnitude, size=kernel_size, axis=1)
     percussive = median_filter_axis(magnitude, size=kernel_size, axis=0)
-    split_zeros = margin == 1
-    mask_harmonic = _softmask(harmonic, percussive * margin, power=power, split_zeros=split_zeros)
-    mask_percussive = _softmask(percussive, harmonic * margin, power=power, split_zeros=split_zeros)
+    if margin == 1:
+        return _softmask_pair(harmonic, percussive, power=power)
+    mask_harmonic = _softmask(harmonic, percussive * margin, power=power, split_zeros=False)
+    mask_percussive = _softmask(percussive, harmonic * margin, power=power, split_zeros=False)
     return mask_harmonic, mask_percussive
 
 
-def _softmask(x: np.ndarray, x_ref: np.ndarray, *, power: float, split_zeros: bool) -> np.ndarray:
-    """``librosa.util.softmask``: ``x**p / (x**p + x_ref**p)``, computed scaled by the maximum."""
+def _ratios(x: np.ndarray, x_ref: np.ndarray, power: float):
+    """``(x / z) ** power``, ``(x_ref / z) ** power`` with ``z = max(x, x_ref)`` (1 where z is
+    below the dtype's tiny), and the mask of those "bad" bins."""
     dtype = x.dtype if x.dtype in (np.float32, np.float64) else np.float64
-    z = np.maximum(x, x_ref).astype(dtype)
+    z = np.maximum(x, x_ref).astype(dtype, copy=False)
     bad = z < np.finfo(dtype).tiny
-    z[bad] = 1
-    mask = (x / z) ** power
-    ref_mask = (x_ref / z) ** power
-    good = ~bad
-    mask[good] /= mask[good] + ref_mask[good]
-    mask[bad] = 0.5 if split_zeros else 0.0
+    np.copyto(z, 1, where=bad)
+    mask = np.divide(x, z, dtype=dtype)
+    ref = np.divide(x_ref, z, out=z)
+    if power == 2:
+        mask *= mask
+        ref *= ref
+    else:
+        np.power(mask, power, out=mask)
+        np.power(ref, power, out=ref)
+    return mask, ref, bad
+
+
+def _softmask(x: np.ndarray, x_ref: np.ndarray, *, power: float, split_zeros: bool) -> np.ndarray:
+    """``librosa.util.softmask``: ``x**p / (x**p + x_ref**p)``, computed scaled by the maximum;
+    bins where both are zero get 0.5 with ``split_zeros``, else 0."""
+    mask, ref, bad = _ratios(x, x_ref, power)
+    ref += mask
+    np.copyto(ref, 1, where=bad)
+    mask /= ref
+    np.copyto(mask, 0.5 if split_zeros else 0.0, where=bad)
     return mask
+
+
+def _softmask_pair(harmonic: np.ndarray, percussive: np.ndarray, *, power: float):
+    """Both soft masks for margin 1 (they share the scaling), split zeros as librosa does."""
+    mask_h, mask_p, bad = _ratios(harmonic, percussive, power)
+    total = mask_h + mask_p
+    np.copyto(total, 1, where=bad)
+    mask_h /= total
+    mask_p /= total
+    np.copyto(mask_h, 0.5, where=bad)
+    np.copyto(mask_p, 0.5, where=bad)
+    return mask_h, mask_p
 
 
 def hp_ratio(

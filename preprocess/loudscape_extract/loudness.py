@@ -124,12 +124,12 @@ def _segment_energy(samples: np.ndarray, sample_rate: float) -> tuple[np.ndarray
         return energy, boundaries
     sos = k_weighting_sos(sample_rate=sample_rate)
     gains = channel_gains(n_channels)
-    for channel in range(n_channels):
-        if gains[channel] == 0:
-            continue
-        filtered = sos_filter(sos, samples[:, channel])
-        np.square(filtered, out=filtered)
-        energy += gains[channel] * np.add.reduceat(filtered[: boundaries[-1]], boundaries[:-1])
+    used = np.flatnonzero(gains)
+    # float32 working precision: relative error ~1e-7 of the signal, far below any gate.
+    filtered = sos_filter(sos, samples[:, used].T, dtype=np.float32)
+    for row, channel in enumerate(used):
+        squared = np.square(filtered[row, : boundaries[-1]], dtype=np.float64)
+        energy += gains[channel] * np.add.reduceat(squared, boundaries[:-1])
     return energy, boundaries
 
 

@@ -76,3 +76,11 @@ def test_click_train_is_percussive():
     features = _features(y)
     assert np.nanmedian(features.frames.hp_mean) < 0.1
     assert np.median(features.hp[5:-5, 20:-20]) < 0.1
+
+
+def test_masks_match_librosa_with_margin_and_power(rng):
+    magnitude = (rng.random((60, 70)) ** 3).astype(np.float32)
+    ours = hpss_masks(magnitude, kernel_size=11, power=1.0, margin=2.0)
+    theirs = librosa.decompose.hpss(magnitude, kernel_size=11, power=1.0, margin=2.0, mask=True)
+    for mask, ref in zip(ours, theirs, strict=True):
+        assert np.max(np.abs(mask - ref)) <= 1e-4
