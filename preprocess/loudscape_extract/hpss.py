@@ -1,0 +1,167 @@
+"""Harmonic-percussive separation masks, identical to librosa's but fast.
+
+librosa (``librosa.decompose.hpss``) median-filters the magnitude spectrogram along time (the
+harmonic estimate) and along frequency (the percussive estimate) with
+``scipy.ndimage.median_filter(..., mode="reflect")`` on the 2-D array, which takes scipy's
+generic n-d rank filter (about 17 s on a 3-minute song). Here each direction is one call to
+scipy's fast 1-D running-median path: every row is padded by half a kernel with numpy's
+``"symmetric"`` mode (scipy's ``"reflect"``: ``d c b a | a b c d | d c b a``), the padded rows
+are laid end to end into one 1-D array and filtered once. The padding is exactly half a kernel,
+so no window reaches across rows, and every median equals librosa's bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.ndimage
+
+from loudscape_extract.errors import ExtractError
+
+__all__ = ["HP_EPSILON", "hp_ratio", "hpss_masks", "median_filter_axis"]
+
+#: The epsilon of ``hp = |H| / (|H| + |P| + eps)``, in full-scale magnitude units (-200 dB).
+HP_EPSILON = 1e-10
+
+
+def median_filter_axis(data: np.ndarray, *, size: int, axis: int) -> np.ndarray:
+    """Running median along one axis with scipy's ``mode="reflect"`` edges.
+
+    Equals ``scipy.ndimage.median_filter(data, size=shape, mode="reflect")`` where ``shape``
+    is 1 everywhere except ``size`` on ``axis``.
+
+    Parameters
+    ----------
+    data : np.ndarray [shape=(d, n)]
+        2-D float array.
+    size : int
+        Odd kernel length >= 1.
+    axis : int
+        0 (down the columns) or 1 (along the rows); negative values count from the end.
+
+    Returns
+    -------
+    filtered : np.ndarray [shape=(d, n), dtype=data.dtype]
+    """
+    data = np.asarray(data)
+    if data.ndim != 2:
+        raise ExtractError(f"median_filter_axis expects a 2-D array, got shape {data.shape}")
+    if size < 1 or size % 2 == 0:
+        raise ExtractError(f"median kernel size must be odd and >= 1, got {size}")
+    if data.dtype not in (np.float32, np.float64):
+        data = data.astype(np.float64)
+    axis = axis % 2
+    rows = data if axis == 1 else data.T
+    if size == 1 or rows.shape[1] == 0:
+        return data.copy()
+    half = size // 2
+    n = rows.shape[1]
+    padded = np.pad(rows, ((0, 0), (half, half)), mode="symmetric")
+    flat = scipy.ndimage.median_filter(padded.ravel(), size=size, mode="reflect")
+    filtered = flat.reshape(padded.shape)[:, half : half + n]
+    return np.ascontiguousarray(filtered if axis == 1 else filtered.T)
+
+
+def hpss_masks(
+    magnitude: np.ndarray, *, kernel_size: int = 31, power: float = 2.0, margin: float = 1.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Soft HPSS masks with librosa's semantics (``librosa.decompose.hpss(S, mask=True)``).
+
+    Parameters
+    ----------
+    magnitude : np.ndarray [shape=(n_bins, n_frames)]
+        Magnitude spectrogram (frequency down, time across).
+    kernel_size : int
+        Odd median kernel length, the same for both directions (librosa's default 31).
+    power : float
+        Soft-mask exponent, > 0 (2: Wiener-like).
+    margin : float
+        Separation margin >= 1; with 1 the masks sum to 1 and bins where both filtered
+        spectrograms are zero get 0.5 in each.
+
+    Returns
+    -------
+    mask_harmonic, mask_percussive : np.ndarray [shape=(n_bins, n_frames)]
+        In [0, 1], dtype of ``magnitude`` (float32 or float64).
+    """
+    magnitude = np.asarray(magnitude)
+    if magnitude.ndim != 2:
+        raise ExtractError(f"magnitude must have shape (n_bins, n_frames), got {magnitude.shape}")
+    if not power > 0:
+        raise ExtractError(f"power must be > 0, got {power}")
+    if margin < 1:
+        raise ExtractError(f"margin must be >= 1, got {margin}")
+    harmonic = median_filter_axis(magnitude, size=kernel_size, axis=1)
+    percussive = median_filter_axis(magnitude, size=kernel_size, axis=0)
+    if margin == 1:
+        return _softmask_pair(harmonic, percussive, power=power)
+    mask_harmonic = _softmask(harmonic, percussive * margin, power=power, split_zeros=False)
+    mask_percussive = _softmask(percussive, harmonic * margin, power=power, split_zeros=False)
+    return mask_harmonic, mask_percussive
+
+
+def _ratios(x: np.ndarray, x_ref: np.ndarray, power: float):
+    """``(x / z) ** power``, ``(x_ref / z) ** power`` with ``z = max(x, x_ref)`` (1 where z is
+    below the dtype's tiny), and the mask of those "bad" bins."""
+    dtype = x.dtype if x.dtype in (np.float32, np.float64) else np.float64
+    z = np.maximum(x, x_ref).astype(dtype, copy=False)
+    bad = z < np.finfo(dtype).tiny
+    np.copyto(z, 1, where=bad)
+    mask = np.divide(x, z, dtype=dtype)
+    ref = np.divide(x_ref, z, out=z)
+    if power == 2:
+        mask *= mask
+        ref *= ref
+    else:
+        np.power(mask, power, out=mask)
+        np.power(ref, power, out=ref)
+    return mask, ref, bad
+
+
+def _softmask(x: np.ndarray, x_ref: np.ndarray, *, power: float, split_zeros: bool) -> np.ndarray:
+    """``librosa.util.softmask``: ``x**p / (x**p + x_ref**p)``, computed scaled by the maximum;
+    bins where both are zero get 0.5 with ``split_zeros``, else 0."""
+    mask, ref, bad = _ratios(x, x_ref, power)
+    ref += mask
+    np.copyto(ref, 1, where=bad)
+    mask /= ref
+    np.copyto(mask, 0.5 if split_zeros else 0.0, where=bad)
+    return mask
+
+
+def _softmask_pair(harmonic: np.ndarray, percussive: np.ndarray, *, power: float):
+    """Both soft masks for margin 1 (they share the scaling), split zeros as librosa does."""
+    mask_h, mask_p, bad = _ratios(harmonic, percussive, power)
+    total = mask_h + mask_p
+    np.copyto(total, 1, where=bad)
+    mask_h /= total
+    mask_p /= total
+    np.copyto(mask_h, 0.5, where=bad)
+    np.copyto(mask_p, 0.5, where=bad)
+    return mask_h, mask_p
+
+
+def hp_ratio(
+    magnitude: np.ndarray, mask_harmonic: np.ndarray, mask_percussive: np.ndarray
+) -> np.ndarray:
+    """Harmonic-percussive balance ``|H| / (|H| + |P| + eps)`` per bin (the paper's hp_ratio).
+
+    ``H = mask_harmonic * magnitude`` and ``P = mask_percussive * magnitude``; with margin 1 the
+    masks sum to 1, so this is the harmonic mask wherever the magnitude is well above
+    ``eps = 1e-10`` and tends to 0 where the bin is digitally silent.
+
+    Parameters
+    ----------
+    magnitude, mask_harmonic, mask_percussive : np.ndarray [shape=(n_bins, n_frames)]
+
+    Returns
+    -------
+    hp : np.ndarray [shape=(n_bins, n_frames), dtype=float32]
+        In [0, 1]: 1 is tonal (harmonic), 0 is percussive.
+    """
+    magnitude = np.asarray(magnitude, dtype=np.float32)
+    harmonic = mask_harmonic * magnitude
+    percussive = mask_percussive * magnitude
+    denominator = harmonic + percussive
+    denominator += np.float32(HP_EPSILON)
+    harmonic /= denominator
+    return np.clip(harmonic, 0.0, 1.0, out=harmonic).astype(np.float32, copy=False)

@@ -1,0 +1,252 @@
+"""Song mode: one point per surviving STFT bin, ``[x, y, z, scalar, hp]``, and its metadata."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from loudscape_extract.errors import ExtractError
+from loudscape_extract.features import HPSS_KERNEL, HPSS_MARGIN, HPSS_POWER, TrackFeatures
+
+__all__ = [
+    "DEFAULT_FLOOR_DB",
+    "FREQ_SCALES",
+    "SCALAR_MAX_DB",
+    "SCALAR_MIN_DB",
+    "SongCloud",
+    "song_metadata",
+    "song_points",
+]
+
+#: Bins more than this many dB below the track's loudest bin are dropped (0 keeps every bin).
+DEFAULT_FLOOR_DB = 80.0
+#: ``scalar`` maps the A-weighted bin level linearly from [-100 dB, 0 dB] to [0, 1], clipped.
+#: 0 dB is a full-scale sine in the bin (at 1 kHz, where A-weighting is 0 dB).
+SCALAR_MIN_DB = -100.0
+SCALAR_MAX_DB = 0.0
+FREQ_SCALES = ("linear", "log")
+_TICK_FREQUENCIES = (20, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000)
+
+
+@dataclass(frozen=True)
+class SongCloud:
+    """Song-mode points and what is needed to describe them.
+
+    Attributes
+    ----------
+    points : np.ndarray [shape=(n_points, 5), dtype=float32]
+        Columns x (time), y (level), z (frequency), scalar (A-weighted level), hp; frame-major
+        order (all points of the first kept frame by ascending frequency, then the next frame).
+    axes : dict
+        The ``axes`` metadata object (see docs/FORMAT.md).
+    frames_total, frames_kept : int
+        STFT frames, and frames left after dropping silent ones.
+    peak_level_db : float
+        Level of the loudest bin (dB re a full-scale sine).
+    floor_db : float
+        The floor used (0: disabled).
+    freq_scale : str
+    """
+
+    points: np.ndarray
+    axes: dict
+    frames_total: int
+    frames_kept: int
+    peak_level_db: float
+    floor_db: float
+    freq_scale: str
+
+
+def _normalize(values: np.ndarray, low: float, high: float) -> np.ndarray:
+    """Map [low, high] to [-1, 1] (0 when the range is empty)."""
+    if high <= low:
+        return np.zeros(values.shape, dtype=np.float32)
+    out = (values.astype(np.float64) - low) * (2.0 / (high - low)) - 1.0
+    return np.clip(out, -1.0, 1.0).astype(np.float32)
+
+
+def _frequency_label(hz: float) -> str:
+    return f"{hz / 1000:g} kHz" if hz >= 1000 else f"{hz:g} Hz"
+
+
+def _frequency_axis(frequencies: np.ndarray, scale: str) -> tuple[np.ndarray, dict]:
+    """z per bin (NaN for bins not drawn) and the z axis object."""
+    low = float(frequencies[0] if scale == "linear" else frequencies[1])
+    high = float(frequencies[-1])
+    z = np.full(frequencies.shape, np.nan)
+    if scale == "linear":
+        z[:] = _normalize(np.arange(frequencies.size, dtype=np.float64), 0, frequencies.size - 1)
+        position = lambda f: 2.0 * (f - low) / (high - low) - 1.0  # noqa: E731
+    else:
+        log_low, log_high = math.log10(low), math.log10(high)
+        z[1:] = 2.0 * (np.log10(frequencies[1:]) - log_low) / (log_high - log_low) - 1.0
+        position = lambda f: 2.0 * (math.log10(f) - log_low) / (log_high - log_low) - 1.0  # noqa: E731
+    ticks = [
+        {"at": round(position(f), 6), "label": _frequency_label(f)}
+        for f in _TICK_FREQUENCIES
+        if low <= f <= high
+    ]
+    axis = {
+        "label": "frequency",
+        "unit": "Hz",
+        "min": low,
+        "max": high,
+        "scale": scale,
+        "ticks": ticks,
+    }
+    return z, axis
+
+
+def song_points(
+    features: TrackFeatures, *, floor_db: float = DEFAULT_FLOOR_DB, freq_scale: str = "linear"
+) -> SongCloud:
+    """Turn per-bin features into Song-mode points.
+
+    Silent frames are dropped; x is the frame time mapped from [first, last] kept frame to
+    [-1, 1]. With ``freq_scale="log"`` the DC bin (0 Hz, no place on a log axis) is dropped.
+    Bins whose level is more than ``floor_db`` below the loudest remaining bin are dropped;
+    y maps [peak - floor_db, peak] (or [quietest, peak] with the floor disabled) to [-1, 1].
+
+    Parameters
+    ----------
+    features : TrackFeatures
+    floor_db : float
+        Noise floor below the track's peak bin level in dB, >= 0; 0 disables it.
+    freq_scale : {"linear", "log"}
+        z linear in bin index (the paper) or in log10 of frequency.
+
+    Returns
+    -------
+    cloud : SongCloud
+    """
+    if freq_scale not in FREQ_SCALES:
+        raise ExtractError(f"freq_scale must be one of {FREQ_SCALES}, got {freq_scale!r}")
+    if not (floor_db >= 0 and math.isfinite(floor_db)):
+        raise ExtractError(f"floor_db must be a finite number >= 0, got {floor_db}")
+    kept_frames = np.flatnonzero(~features.frames.silent)
+    if kept_frames.size == 0:
+        raise ExtractError("audio is entirely silent (no frame has a non-zero sample)")
+    first_bin = 0 if freq_scale == "linear" else 1
+    z_per_bin, z_axis = _frequency_axis(features.frequencies_hz, freq_scale)
+    z_per_bin = z_per_bin[first_bin:].astype(np.float32)
+
+    levels = features.level_db[first_bin:, kept_frames].T  # (n_kept, n_bins_drawn)
+    peak = float(levels.max())
+    if floor_db > 0:
+        y_low = peak - floor_db
+        keep = levels >= np.float32(y_low)
+    else:
+        y_low = float(levels.min())
+        keep = np.ones(levels.shape, dtype=bool)
+    n_points = int(np.count_nonzero(keep))
+    if n_points == 0:
+        raise ExtractError("no bin is left above the noise floor")
+
+    times = features.frames.times_s[kept_frames]
+    t_first, t_last = float(times[0]), float(times[-1])
+    points = np.empty((n_points, 5), dtype=np.float32)
+    x_per_frame = _normalize(times, t_first, t_last)
+    points[:, 0] = np.broadcast_to(x_per_frame[:, None], keep.shape)[keep]
+    points[:, 1] = _normalize(levels[keep], y_low, peak)
+    points[:, 2] = np.broadcast_to(z_per_bin[None, :], keep.shape)[keep]
+    levels_a = features.level_a_db[first_bin:, kept_frames].T[keep]
+    scalar = (levels_a.astype(np.float64) - SCALAR_MIN_DB) / (SCALAR_MAX_DB - SCALAR_MIN_DB)
+    points[:, 3] = np.clip(scalar, 0.0, 1.0)
+    points[:, 4] = features.hp[first_bin:, kept_frames].T[keep]
+
+    axes = {
+        "x": {"label": "time", "unit": "s", "min": t_first, "max": t_last, "scale": "linear"},
+        "y": {"label": "level", "unit": "dB", "min": y_low, "max": peak, "scale": "linear"},
+        "z": z_axis,
+        "scalar": {
+            "label": "A-weighted level",
+            "unit": "dB",
+            "min": SCALAR_MIN_DB,
+            "max": SCALAR_MAX_DB,
+            "scale": "linear",
+        },
+        "hp": {
+            "label": "harmonic-percussive ratio",
+            "unit": "",
+            "min": 0.0,
+            "max": 1.0,
+            "scale": "linear",
+        },
+    }
+    return SongCloud(
+        points=points,
+        axes=axes,
+        frames_total=int(features.frames.silent.size),
+        frames_kept=int(kept_frames.size),
+        peak_level_db=peak,
+        floor_db=float(floor_db),
+        freq_scale=freq_scale,
+    )
+
+
+def _rounded(value, digits: int):
+    """Round floats (recursively) for stable, readable metadata; NaN/inf become None."""
+    if isinstance(value, dict):
+        return {key: _rounded(item, digits) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_rounded(item, digits) for item in value]
+    if isinstance(value, bool | int | str) or value is None:
+        return value
+    number = float(value)
+    if not math.isfinite(number):
+        return None
+    rounded = round(number, digits)
+    return 0.0 if rounded == 0 else rounded
+
+
+def song_metadata(
+    features: TrackFeatures, cloud: SongCloud, *, generator: str, source_format: str = ""
+) -> dict:
+    """The ``comment loudscape-meta`` object for a Song-mode file (see docs/FORMAT.md).
+
+    Parameters
+    ----------
+    features : TrackFeatures
+    cloud : SongCloud
+    generator : str
+        Program name and version, e.g. ``"loudscape-extract 0.1.0"``.
+    source_format : str
+        Container/encoding of the source, e.g. ``"WAV/PCM_16"``.
+
+    Returns
+    -------
+    metadata : dict
+        JSON-ready; floats rounded to 6 decimals (metrics to 4).
+    """
+    from loudscape_extract import FORMAT_VERSION
+
+    return {
+        "format_version": FORMAT_VERSION,
+        "mode": "song",
+        "point_count": int(cloud.points.shape[0]),
+        "source": {
+            "path": features.path,
+            "format": source_format,
+            "sample_rate": features.sample_rate,
+            "channels": features.n_channels,
+            "duration_s": _rounded(features.duration_s, 6),
+        },
+        "stft": {
+            "n_fft": features.n_fft,
+            "hop_length": features.hop_length,
+            "window": "hann",
+            "center": True,
+            "frames": cloud.frames_total,
+            "frames_kept": cloud.frames_kept,
+        },
+        "axes": _rounded(cloud.axes, 6),
+        "metrics": _rounded(features.metrics, 4),
+        "extraction": {
+            "floor_db": _rounded(cloud.floor_db, 6),
+            "freq_scale": cloud.freq_scale,
+            "hpss": {"kernel_size": HPSS_KERNEL, "power": HPSS_POWER, "margin": HPSS_MARGIN},
+            "generator": generator,
+        },
+    }
