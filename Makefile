@@ -9,6 +9,9 @@ OUT     ?= out
 DEMO_SONG     := data/demo_song.ply
 DEMO_TIMELINE := data/demo_timeline.ply
 
+# Vulkan's window-system probing wants a runtime folder; give it one where the session has none.
+export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $$d && chmod 700 $$d && echo $$d)
+
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 

@@ -101,7 +101,10 @@ pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &[La
     let scale = rect.width() / view.width.max(1) as f32;
     let mut placed: Vec<Rect> = Vec::new();
     // Titles first, so ticks make way for them.
-    let ordered = labels.iter().filter(|l| l.title).chain(labels.iter().filter(|l| !l.title));
+    let ordered = labels
+        .iter()
+        .filter(|l| l.title)
+        .chain(labels.iter().filter(|l| !l.title));
     for label in ordered {
         let Some(pixel) = view.project(label.anchor) else {
             continue;
@@ -118,7 +121,10 @@ pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &[La
         // Skip a label that would overlap one already placed (crowded ticks at some angles).
         let galley = painter.layout_no_wrap(label.text.clone(), FontId::proportional(size), color);
         let text_rect = label.align.anchor_size(pos, galley.size());
-        if placed.iter().any(|r: &Rect| r.expand(2.0).intersects(text_rect)) {
+        if placed
+            .iter()
+            .any(|r: &Rect| r.expand(2.0).intersects(text_rect))
+        {
             continue;
         }
         placed.push(text_rect);
@@ -195,12 +201,55 @@ pub fn draw_headless(
         .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
 }
 
-/// Lines describing a cloud for the side panel: what it is and its loudness metrics.
+/// Lines describing a cloud for the side panel: where it came from and its loudness metrics.
 pub fn describe_cloud(cloud: &PointCloud) -> Vec<String> {
-    let mode = match cloud.meta.mode {
-        crate::cloud::DataMode::Song => "song",
-        crate::cloud::DataMode::Timeline => "timeline",
-        crate::cloud::DataMode::Generic => "generic point cloud",
-    };
-    vec![format!("mode: {mode}")]
+    let meta = &cloud.meta;
+    let mut lines = Vec::new();
+    match meta.mode {
+        crate::cloud::DataMode::Song => lines.push("Song".to_string()),
+        crate::cloud::DataMode::Timeline => {
+            lines.push(format!("Timeline of {} songs", meta.songs.len()))
+        }
+        crate::cloud::DataMode::Generic => {
+            lines.push("Generic point cloud (no loudscape metadata)".into())
+        }
+    }
+    if let Some(source) = &meta.source {
+        if let Some(path) = &source.path {
+            lines.push(format!("source: {path}"));
+        }
+        let mut parts = Vec::new();
+        if let Some(d) = source.duration_s {
+            parts.push(format!("{d:.1} s"));
+        }
+        if let Some(rate) = source.sample_rate {
+            parts.push(format!("{rate} Hz"));
+        }
+        if let Some(ch) = source.channels {
+            parts.push(format!("{ch} ch"));
+        }
+        if !parts.is_empty() {
+            lines.push(parts.join(", "));
+        }
+    }
+    if let Some(m) = &meta.metrics {
+        lines.extend(describe_metrics(m));
+    }
+    lines
+}
+
+/// Loudness metrics as "name: value unit" lines, leaving out the ones not measured.
+pub fn describe_metrics(m: &crate::cloud::Metrics) -> Vec<String> {
+    let rows = [
+        ("integrated loudness", m.integrated_lufs, "LUFS"),
+        ("loudness range", m.lra_lu, "LU"),
+        ("sample peak", m.sample_peak_dbfs, "dBFS"),
+        ("true peak", m.true_peak_dbtp, "dBTP"),
+        ("PLR", m.plr_db, "dB"),
+        ("crest factor, median", m.crest_median_db, "dB"),
+        ("crest factor, 95th pct", m.crest_p95_db, "dB"),
+    ];
+    rows.iter()
+        .filter_map(|(name, value, unit)| value.map(|v| format!("{name}: {v:.1} {unit}")))
+        .collect()
 }

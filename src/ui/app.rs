@@ -170,17 +170,18 @@ impl LoudscapeApp {
     /// Moves finished loads into their slots and uploads them.
     fn poll_loading(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
         let mut finished = Vec::new();
-        self.loading.retain(|loading| match loading.receiver.try_recv() {
-            Ok(result) => {
-                finished.push((loading.path.clone(), result));
-                false
-            }
-            Err(std::sync::mpsc::TryRecvError::Empty) => true,
-            Err(std::sync::mpsc::TryRecvError::Disconnected) => {
-                finished.push((loading.path.clone(), Err("the loader stopped".into())));
-                false
-            }
-        });
+        self.loading
+            .retain(|loading| match loading.receiver.try_recv() {
+                Ok(result) => {
+                    finished.push((loading.path.clone(), result));
+                    false
+                }
+                Err(std::sync::mpsc::TryRecvError::Empty) => true,
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                    finished.push((loading.path.clone(), Err("the loader stopped".into())));
+                    false
+                }
+            });
         if !self.loading.is_empty() {
             ctx.request_repaint_after(Duration::from_millis(50));
         }
@@ -276,8 +277,10 @@ impl LoudscapeApp {
                     view.available(),
                     egui::Button::selectable(self.settings.view == view, view.name()),
                 );
-                let response =
-                    response.on_disabled_hover_text(format!("The {} view is not yet available", view.name()));
+                let response = response.on_disabled_hover_text(format!(
+                    "The {} view is not yet available",
+                    view.name()
+                ));
                 if response.clicked() {
                     self.settings.view = view;
                 }
@@ -288,8 +291,7 @@ impl LoudscapeApp {
         ui.label(RichText::new("Points").strong());
         ui.add(egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0).text("size (px)"));
         ui.add(
-            egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0)
-                .text("min loudness"),
+            egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0).text("min loudness"),
         );
         hp_legend(ui);
 
@@ -373,7 +375,8 @@ impl LoudscapeApp {
                 moved = true;
             }
         }
-        if ui.ctx().input(|i| i.key_pressed(egui::Key::F)) && !ui.ctx().egui_wants_keyboard_input() {
+        if ui.ctx().input(|i| i.key_pressed(egui::Key::F)) && !ui.ctx().egui_wants_keyboard_input()
+        {
             self.fit();
             moved = true;
         }
@@ -525,7 +528,10 @@ fn cloud_info(ui: &mut egui::Ui, cloud: &PointCloud) {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     ui.label(RichText::new(name).strong());
-    ui.label(format!("{} points", group_thousands(cloud.points.len() as u64)));
+    ui.label(format!(
+        "{} points",
+        group_thousands(cloud.points.len() as u64)
+    ));
     for line in crate::overlay::describe_cloud(cloud) {
         ui.label(RichText::new(line).small());
     }

@@ -1,0 +1,124 @@
+//! The command line: bad input gets one clear line naming the file, a non-zero exit, no panic
+//! and no output file; good input writes the PNG.
+
+mod common;
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn loudscape(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .args(args)
+        .output()
+        .expect("start loudscape")
+}
+
+fn stderr_lines(output: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&output.stderr)
+        .lines()
+        .filter(|l| l.starts_with("loudscape"))
+        .map(str::to_string)
+        .collect()
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = common::output_dir().join("cli");
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    let path = dir.join(name);
+    let _ = std::fs::remove_file(&path);
+    path
+}
+
+#[test]
+fn render_writes_a_png() {
+    let out = temp("demo.png");
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let output = loudscape(&[
+        "render",
+        repo.join("data/demo_song.ply").to_str().unwrap(),
+        "--size",
+        "320x200",
+        "--camera",
+        "-30,20,4",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let image = image::open(&out).expect("png").to_rgba8();
+    assert_eq!(image.dimensions(), (320, 200));
+    assert!(common::coverage(&image) > 0.02);
+}
+
+#[test]
+fn bad_inputs_fail_cleanly() {
+    let bad = temp("not_a_ply.ply");
+    std::fs::write(&bad, b"hello world\n").unwrap();
+    let truncated = temp("truncated.ply");
+    let demo = std::fs::read(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply"))
+        .unwrap();
+    std::fs::write(&truncated, &demo[..demo.len() / 2]).unwrap();
+    let cases: Vec<(String, Vec<String>)> = vec![
+        ("missing".into(), vec!["no/such/file.ply".into()]),
+        ("not a ply".into(), vec![bad.display().to_string()]),
+        ("truncated".into(), vec![truncated.display().to_string()]),
+    ];
+    for (name, input) in cases {
+        let out = temp(&format!("{}.png", name.replace(' ', "_")));
+        let mut args = vec!["render".to_string()];
+        args.extend(input.iter().cloned());
+        args.extend(["-o".to_string(), out.display().to_string()]);
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let output = loudscape(&refs);
+        assert_eq!(output.status.code(), Some(1), "{name}: exit status");
+        let lines = stderr_lines(&output);
+        assert_eq!(
+            lines.len(),
+            1,
+            "{name}: expected one error line, got {lines:?}"
+        );
+        assert!(
+            lines[0].contains(&input[0]),
+            "{name}: error does not name the file: {}",
+            lines[0]
+        );
+        assert!(!lines[0].contains("panicked"), "{name}: {}", lines[0]);
+        assert!(!out.exists(), "{name}: an output file was written");
+    }
+}
+
+#[test]
+fn bad_flags_fail_cleanly() {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let demo = repo.join("data/demo_song.ply");
+    let out = temp("flags.png");
+    for flags in [
+        vec!["--size", "12"],
+        vec!["--camera", "1,2"],
+        vec!["--view", "hologram"],
+    ] {
+        let mut args = vec![
+            "render",
+            demo.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(flags.iter());
+        let output = loudscape(&args);
+        assert!(!output.status.success(), "{flags:?} succeeded");
+        assert_eq!(
+            stderr_lines(&output).len(),
+            1,
+            "{flags:?}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        assert!(!out.exists());
+    }
+    // An output folder that does not exist.
+    let output = loudscape(&["render", demo.to_str().unwrap(), "-o", "no/such/dir/x.png"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr_lines(&output)[0].contains("no/such/dir"));
+}

@@ -1,0 +1,57 @@
+//! The window opens on the demo under a display (Xvfb in CI: `make test` runs the tests under
+//! xvfb-run), draws the song, saves a screenshot of itself and closes.
+
+mod common;
+
+use std::path::PathBuf;
+use std::process::Command;
+
+#[test]
+fn window_opens_and_shows_the_demo() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "this test needs a display: run it through `make test` (which uses xvfb-run) or xvfb-run -a cargo test"
+    );
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let shot = common::output_dir().join("window_demo.png");
+    let _ = std::fs::remove_file(&shot);
+    let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .arg(repo.join("data/demo_song.ply"))
+        .arg("--screenshot")
+        .arg(&shot)
+        .output()
+        .expect("start loudscape");
+    assert!(
+        output.status.success(),
+        "loudscape exited with {}: {}",
+        output.status,
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let image = image::open(&shot)
+        .unwrap_or_else(|e| panic!("no screenshot at {}: {e}", shot.display()))
+        .to_rgba8();
+    assert!(
+        image.width() >= 640 && image.height() >= 400,
+        "window too small: {:?}",
+        image.dimensions()
+    );
+    // The 3D view (right of the side panel) must show the cloud: many pixels in the palette's
+    // red and blue, not only the background.
+    let (w, h) = image.dimensions();
+    let mut coloured = 0usize;
+    for y in 0..h {
+        for x in (w / 4)..w {
+            let p = image.get_pixel(x, y);
+            let (r, g, b) = (i32::from(p[0]), i32::from(p[1]), i32::from(p[2]));
+            if (r - b).abs() > 80 || (b - r) > 60 && b > 120 || r > 150 && g < 100 {
+                coloured += 1;
+            }
+        }
+    }
+    let share = coloured as f64 / f64::from((w - w / 4) * h);
+    assert!(
+        share > 0.05,
+        "the 3D view looks blank: {:.2}% coloured pixels",
+        share * 100.0
+    );
+}
