@@ -1,6 +1,106 @@
-//! `loudscape bench`: timings of every pass on this machine's GPU (being built).
+//! `loudscape bench`: timings of the passes on this machine's GPU, as medians of many runs.
+//! Figures, not pass/fail: compare them with docs/PERFORMANCE.md.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use loudscape::camera::Camera;
+use loudscape::render::context::GpuContext;
+use loudscape::render::frame::FrameView;
+use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
+use loudscape::render::target::RenderTarget;
+
 #[derive(clap::Args, Debug)]
-pub struct BenchArgs {}
-pub fn run(_args: BenchArgs) -> anyhow::Result<()> {
-    anyhow::bail!("bench is not built yet")
+pub struct BenchArgs {
+    /// The song cloud to measure with.
+    #[arg(default_value = "data/demo_song.ply")]
+    pub input: PathBuf,
+    /// Frame size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Frames per measurement.
+    #[arg(long, default_value_t = 60)]
+    pub frames: usize,
+}
+
+/// The median and 90th percentile of `samples` (milliseconds).
+pub fn summary(samples: &mut [f64]) -> (f64, f64) {
+    samples.sort_by(f64::total_cmp);
+    let at = |q: f64| samples[((samples.len() - 1) as f64 * q).round() as usize];
+    (at(0.5), at(0.9))
+}
+
+/// Renders one frame and waits for the GPU, returning milliseconds.
+fn timed_frame(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    target: &RenderTarget,
+    data: &SceneData,
+    view: &FrameView,
+    settings: &RenderSettings,
+) -> anyhow::Result<f64> {
+    let start = Instant::now();
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("bench::frame"),
+        });
+    renderer.render(&gpu.queue, &mut encoder, target, Some(data), view, settings);
+    gpu.queue.submit([encoder.finish()]);
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .context("waiting for the GPU")?;
+    Ok(start.elapsed().as_secs_f64() * 1e3)
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    let (width, height) = super::parse_size(&args.size)?;
+    let process_start = Instant::now();
+    let load_start = Instant::now();
+    let cloud = super::render::load_cloud(&args.input)?;
+    let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
+    let gpu = GpuContext::new_headless()?;
+    let renderer = Renderer::new(&gpu.device);
+    let data = SceneData::new(&gpu.device, &renderer, &cloud);
+    let target = RenderTarget::new(&gpu.device, width, height);
+    let mut camera = Camera::default();
+    let (min, max) = data.world_box();
+    camera.fit(min, max, width as f32 / height as f32);
+    let mut view = FrameView {
+        camera,
+        world_from_data: data.world_from_data,
+        width,
+        height,
+        frame_index: 0,
+        moving: false,
+    };
+    let settings = RenderSettings::default();
+    let first_ms = timed_frame(&gpu, &renderer, &target, &data, &view, &settings)?;
+    let to_first_frame = process_start.elapsed().as_secs_f64() * 1e3;
+
+    println!("adapter: {}", gpu.describe());
+    println!(
+        "cloud: {} ({} points), frame {width}x{height}",
+        args.input.display(),
+        cloud.points.len()
+    );
+    println!("load: {load_ms:.1} ms; first frame: {first_ms:.1} ms; start to first frame: {to_first_frame:.1} ms");
+
+    for (label, moving) in [("points, orbiting (level of detail)", true), ("points, at rest (every point)", false)] {
+        let mut samples = Vec::with_capacity(args.frames);
+        for i in 0..args.frames.max(1) {
+            view.camera.orbit(4.0, 0.0, height as f32);
+            view.moving = moving;
+            view.frame_index = i as u32;
+            samples.push(timed_frame(&gpu, &renderer, &target, &data, &view, &settings)?);
+        }
+        let (median, p90) = summary(&mut samples);
+        println!(
+            "{label}: median {median:.2} ms ({:.1} fps), p90 {p90:.2} ms over {} frames",
+            1e3 / median,
+            samples.len()
+        );
+    }
+    Ok(())
 }
