@@ -164,11 +164,12 @@ def frame_features(
     with np.errstate(divide="ignore", invalid="ignore"):
         rms_dbfs = 20.0 * np.log10(rms)
         crest_db = np.where(silent, np.nan, 20.0 * np.log10(peak / rms))
-        power = np.square(magnitude, dtype=np.float64)
-        a_power = (10.0 ** (a_gain_db / 10.0)) @ power
+        power = np.square(magnitude, dtype=np.float32)
+        a_power = (10.0 ** (a_gain_db / 10.0)).astype(np.float32) @ power
         loudness_a_db = np.where(silent, np.nan, 10.0 * np.log10(a_power / 3.0))
-        total = power.sum(axis=0)
-        hp_mean = np.where(silent | (total == 0), np.nan, (hp * power).sum(axis=0) / total)
+        total = np.ones(power.shape[0], dtype=np.float32) @ power
+        hp_power = np.einsum("ij,ij->j", hp, power, dtype=np.float64)
+        hp_mean = np.where(silent | (total == 0), np.nan, hp_power / total)
     return FrameFeatures(
         times_s=frame_times(rms.shape[0], sample_rate=sample_rate, hop_length=hop_length),
         rms_dbfs=rms_dbfs,
