@@ -50,8 +50,9 @@ def synthesize_song() -> np.ndarray:
     return module.synthesize(sample_rate=SAMPLE_RATE, duration_s=DURATION_S)
 
 
-def run_child(command: list[str]) -> tuple[float, float, str]:
-    """Run a child through a small wrapper; return (wall s, the child's peak RSS in MiB, stdout).
+def run_child(command: list[str]) -> tuple[float, float, float, str]:
+    """Run a child through a small wrapper; return (wall s, its peak RSS in MiB, its CPU s
+    (user + system), its stdout).
 
     The wrapper has only that one child, so ``RUSAGE_CHILDREN``'s ``ru_maxrss`` is its peak.
     """
@@ -61,15 +62,15 @@ def run_child(command: list[str]) -> tuple[float, float, str]:
         "r = subprocess.run(sys.argv[1:], capture_output=True, text=True)\n"
         "wall = time.perf_counter() - t\n"
         "if r.returncode: sys.exit(r.stderr)\n"
-        "rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss\n"
-        "print(json.dumps([wall, rss, r.stdout.strip()]))\n"
+        "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+        "print(json.dumps([wall, u.ru_maxrss, u.ru_utime + u.ru_stime, r.stdout.strip()]))\n"
     )
     result = subprocess.run(
         [sys.executable, "-c", wrapper, *command], capture_output=True, text=True, check=True
     )
-    wall, rss, stdout = json.loads(result.stdout)
+    wall, rss, cpu, stdout = json.loads(result.stdout)
     rss_bytes = rss if platform.system() == "Darwin" else rss * 1024  # macOS: bytes, Linux: KiB
-    return wall, rss_bytes / 2**20, stdout
+    return wall, rss_bytes / 2**20, cpu, stdout
 
 
 def main() -> int:
@@ -86,24 +87,29 @@ def main() -> int:
             f"input: synthesized song, {DURATION_S:.0f} s, {SAMPLE_RATE} Hz, stereo, 16-bit WAV; "
             f"{os.cpu_count()} CPUs; python {platform.python_version()}"
         )
-        ours_times, ours_rss = [], []
+        ours_times, ours_rss, ours_cpu = [], [], []
         for _ in range(args.runs):
-            wall, rss, _ = run_child([executable, "song", wav, "-o", ply, "--quiet"])
+            wall, rss, cpu, _ = run_child([executable, "song", wav, "-o", ply, "--quiet"])
             ours_times.append(wall)
             ours_rss.append(rss)
+            ours_cpu.append(cpu)
         size_mb = os.path.getsize(ply) / 1e6
         librosa_times, librosa_rss = [], []
         for _ in range(args.librosa_runs):
-            _, rss, stdout = run_child([sys.executable, "-c", LIBROSA_CHILD, wav])
+            _, rss, _, stdout = run_child([sys.executable, "-c", LIBROSA_CHILD, wav])
             librosa_times.append(float(stdout))
             librosa_rss.append(rss)
     print(f"ours (end to end, CLI):     runs {', '.join(f'{t:.2f}' for t in ours_times)} s")
-    print(f"  median {statistics.median(ours_times):.2f} s, peak RSS {max(ours_rss):.0f} MiB")
+    print(
+        f"  median {statistics.median(ours_times):.2f} s, peak RSS {max(ours_rss):.0f} MiB, "
+        f"CPU (user+sys) median {statistics.median(ours_cpu):.2f} s"
+    )
     print(f"  output {size_mb:.1f} MB")
     print(f"librosa (stft + hpss only): runs {', '.join(f'{t:.2f}' for t in librosa_times)} s")
     print(f"  median {statistics.median(librosa_times):.2f} s, peak RSS {max(librosa_rss):.0f} MiB")
     print(f"speed-up: {statistics.median(librosa_times) / statistics.median(ours_times):.1f}x")
-    print(f"at {time.strftime('%Y-%m-%d %H:%M')}")
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"at {time.strftime('%Y-%m-%d %H:%M')}, 1-minute load average {load:.2f}")
     return 0
 
 

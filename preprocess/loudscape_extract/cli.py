@@ -83,12 +83,9 @@ def extract_song(
     check_output_path(output)
     say(f"decoding {source}")
     audio = decode_audio(source)
-    say(
-        f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s); "
-        "spectrogram, HPSS, loudness"
-    )
+    say(f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s)")
     try:
-        features = track_features(audio, n_fft=n_fft, hop_length=hop_length)
+        features = track_features(audio, n_fft=n_fft, hop_length=hop_length, progress=say)
         say("building points")
         cloud = song_points(features, floor_db=floor, freq_scale=freq_scale)
     except ExtractError as exc:

@@ -8,6 +8,7 @@ point per bin; other commands (timeline, report) can use the per-frame series in
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -164,11 +165,12 @@ def frame_features(
     with np.errstate(divide="ignore", invalid="ignore"):
         rms_dbfs = 20.0 * np.log10(rms)
         crest_db = np.where(silent, np.nan, 20.0 * np.log10(peak / rms))
-        power = np.square(magnitude, dtype=np.float64)
-        a_power = (10.0 ** (a_gain_db / 10.0)) @ power
+        power = np.square(magnitude, dtype=np.float32)
+        a_power = (10.0 ** (a_gain_db / 10.0)).astype(np.float32) @ power
         loudness_a_db = np.where(silent, np.nan, 10.0 * np.log10(a_power / 3.0))
-        total = power.sum(axis=0)
-        hp_mean = np.where(silent | (total == 0), np.nan, (hp * power).sum(axis=0) / total)
+        total = np.ones(power.shape[0], dtype=np.float32) @ power
+        hp_power = np.einsum("ij,ij->j", hp, power, dtype=np.float64)
+        hp_mean = np.where(silent | (total == 0), np.nan, hp_power / total)
     return FrameFeatures(
         times_s=frame_times(rms.shape[0], sample_rate=sample_rate, hop_length=hop_length),
         rms_dbfs=rms_dbfs,
@@ -198,7 +200,12 @@ def crest_statistics(crest_db: np.ndarray) -> dict[str, float | None]:
 
 
 def track_features(
-    audio: Audio, *, n_fft: int = 2048, hop_length: int = 1024, kernel_size: int = HPSS_KERNEL
+    audio: Audio,
+    *,
+    n_fft: int = 2048,
+    hop_length: int = 1024,
+    kernel_size: int = HPSS_KERNEL,
+    progress: Callable[[str], None] | None = None,
 ) -> TrackFeatures:
     """Decode-to-features: spectrogram, A-weighting, HPSS, frame series and metrics.
 
@@ -212,6 +219,8 @@ def track_features(
         STFT hop in samples.
     kernel_size : int
         HPSS median kernel (odd).
+    progress : callable, optional
+        Called with a short message as each stage starts.
 
     Returns
     -------
@@ -233,20 +242,24 @@ def track_features(
         )
     if not np.any(samples):
         raise ExtractError("audio is entirely silent (every sample is 0)", path=audio.path)
+    say = progress or (lambda _message: None)
     mono = mix_to_mono(samples)
     if not np.any(mono):
         raise ExtractError("the mono mix is entirely silent (channels cancel)", path=audio.path)
+    say("spectrogram")
     magnitude = stft_magnitude(mono, n_fft=n_fft, hop_length=hop_length)
     frequencies = np.arange(magnitude.shape[0]) * (audio.sample_rate / n_fft)
     a_gain = a_weighting_db(frequencies)
     levels = level_db(magnitude)
     levels_a = levels + a_gain[:, None].astype(np.float32)
     np.maximum(levels_a, np.float32(LEVEL_FLOOR_DB), out=levels_a)
+    say("harmonic-percussive separation")
     mask_harmonic, mask_percussive = hpss_masks(
         magnitude, kernel_size=kernel_size, power=HPSS_POWER, margin=HPSS_MARGIN
     )
     hp = hp_ratio(magnitude, mask_harmonic, mask_percussive)
     del mask_harmonic, mask_percussive
+    say("frame features")
     frames = frame_features(
         mono,
         sample_rate=audio.sample_rate,
@@ -256,6 +269,7 @@ def track_features(
         hp=hp,
         a_gain_db=a_gain,
     )
+    say("loudness metrics (integrated, range, true peak)")
     metrics = loudness_metrics(samples, sample_rate=audio.sample_rate)
     metrics.update(crest_statistics(frames.crest_db))
     metrics = {

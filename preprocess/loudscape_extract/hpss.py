@@ -50,14 +50,23 @@ def median_filter_axis(data: np.ndarray, *, size: int, axis: int) -> np.ndarray:
     if data.dtype not in (np.float32, np.float64):
         data = data.astype(np.float64)
     axis = axis % 2
-    rows = data if axis == 1 else data.T
-    if size == 1 or rows.shape[1] == 0:
+    d = data.shape[axis]  # length filtered along
+    rows = data.shape[1 - axis]
+    if size == 1 or d == 0 or rows == 0:
         return data.copy()
     half = size // 2
-    n = rows.shape[1]
-    padded = np.pad(rows, ((0, 0), (half, half)), mode="symmetric")
+    if d >= half:
+        # One copy: rows (transposed when filtering down the columns) into the middle, then the
+        # symmetric edges (d c b a | a b c d | d c b a) mirrored from inside the array.
+        padded = np.empty((rows, d + 2 * half), dtype=data.dtype)
+        padded[:, half : half + d] = data if axis == 1 else data.T
+        padded[:, :half] = padded[:, half : 2 * half][:, ::-1]
+        padded[:, half + d :] = padded[:, d : d + half][:, ::-1]
+    else:
+        source = data if axis == 1 else data.T
+        padded = np.pad(source, ((0, 0), (half, half)), mode="symmetric")
     flat = scipy.ndimage.median_filter(padded.ravel(), size=size, mode="reflect")
-    filtered = flat.reshape(padded.shape)[:, half : half + n]
+    filtered = flat.reshape(padded.shape)[:, half : half + d]
     return np.ascontiguousarray(filtered if axis == 1 else filtered.T)
 
 

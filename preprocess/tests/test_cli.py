@@ -326,3 +326,17 @@ def test_sample_rate_outside_supported_range(tmp_path, capsys):
     out = tmp_path / "o.ply"
     status, err = run(["song", source, "-o", out], capsys)
     assert_clean_failure(status, err, names=source, reason="4000 Hz", out=out)
+
+
+def test_progress_only_on_a_tty_and_not_with_quiet(tmp_path, capsys, monkeypatch):
+    source = tmp_path / "t.wav"
+    write_music(source, duration_s=0.5)
+    out = tmp_path / "t.ply"
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    status, err = run(["song", source, "-o", out, "--n-fft", 256, "--hop", 128], capsys)
+    assert status == 0
+    for stage in ("decoding", "spectrogram", "harmonic-percussive", "loudness", "writing"):
+        assert stage in err
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    status, err = run(["song", source, "-o", out, "--n-fft", 256, "--hop", 128, "-q"], capsys)
+    assert status == 0 and err == ""
