@@ -29,10 +29,10 @@ fn vs_main(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance
     let position = vec3<f32>(cloud[base], cloud[base + 1u], cloud[base + 2u]);
     let scalar = cloud[base + 3u];
     let hp = cloud[base + 4u];
-    // Two triangles: corners of the unit square, as vertex 0..5.
-    let corners = array<vec2<f32>, 6>(
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    // One triangle around the unit disc (three vertices per point, not six: vertex work
+    // dominates on software rasterizers).
+    let corners = array<vec2<f32>, 3>(
+        vec2<f32>(0.0, 2.0), vec2<f32>(-1.7320508, -1.0), vec2<f32>(1.7320508, -1.0),
     );
     let corner = corners[vertex];
     var clip = frame.clip_from_data * vec4<f32>(position, 1.0);

@@ -85,15 +85,22 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         args.input.display(),
         cloud.points.len()
     );
-    println!("load: {load_ms:.1} ms; first frame: {first_ms:.1} ms; start to first frame: {to_first_frame:.1} ms");
+    println!(
+        "load: {load_ms:.1} ms; first frame: {first_ms:.1} ms; start to first frame: {to_first_frame:.1} ms"
+    );
 
-    for (label, moving) in [("points, orbiting (level of detail)", true), ("points, at rest (every point)", false)] {
+    for (label, moving) in [
+        ("points, orbiting (level of detail)", true),
+        ("points, at rest (every point)", false),
+    ] {
         let mut samples = Vec::with_capacity(args.frames);
         for i in 0..args.frames.max(1) {
             view.camera.orbit(4.0, 0.0, height as f32);
             view.moving = moving;
             view.frame_index = i as u32;
-            samples.push(timed_frame(&gpu, &renderer, &target, &data, &view, &settings)?);
+            samples.push(timed_frame(
+                &gpu, &renderer, &target, &data, &view, &settings,
+            )?);
         }
         let (median, p90) = summary(&mut samples);
         println!(

@@ -2,7 +2,8 @@
 //!
 //! Reads: the cloud uploaded by [`PointsGpu`] (one storage buffer per chunk, five f32 per point,
 //! the PLY record as is). Writes: colour and depth of the render target.
-//! Each point is an instance of six vertices (a quad); the fragment shader cuts the disc.
+//! Each point is an instance of three vertices (a triangle around the disc); the fragment
+//! shader cuts the disc.
 //! Clouds larger than one storage binding are split into chunks, each drawn on its own.
 //! While the camera moves, every `stride`-th point is drawn (a level-of-detail subset).
 
@@ -40,7 +41,7 @@ impl Default for PointStyle {
         Self {
             size_px: 2.0,
             min_scalar: 0.0,
-            max_points_moving: 250_000,
+            max_points_moving: 60_000,
         }
     }
 }
@@ -111,7 +112,9 @@ impl PointsGpu {
     /// The largest chunk one storage binding and one buffer can hold on this device.
     pub fn chunk_limit(device: &wgpu::Device) -> u64 {
         let limits = device.limits();
-        limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
     }
 
     pub fn chunk_count(&self) -> usize {
@@ -218,7 +221,7 @@ impl PointsPass {
         pass.set_bind_group(0, &frame.bind_group, &[]);
         for chunk in &points.chunks {
             pass.set_bind_group(1, &chunk.bind_group, &[]);
-            pass.draw(0..6, 0..chunk.count.div_ceil(stride));
+            pass.draw(0..3, 0..chunk.count.div_ceil(stride));
         }
     }
 }
