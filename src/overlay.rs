@@ -14,15 +14,23 @@ use crate::render::frame::FrameView;
 use crate::render::scene::SceneData;
 use crate::render::target::{COLOR_FORMAT, RenderTarget};
 
-/// A piece of text anchored at a point in data space.
+/// A tick label or an axis title, placed along one axis of the box.
 #[derive(Clone, Debug)]
 pub struct Label {
-    pub anchor: Vec3,
+    /// 0, 1, 2 for x, y, z.
+    pub axis: usize,
+    /// Normalized position along the axis, -1 to 1.
+    pub at: f32,
     pub text: String,
-    /// Pixel offset from the projected anchor.
-    pub offset: egui::Vec2,
-    pub align: Align2,
     pub title: bool,
+}
+
+/// The labels of a box: which edge carries them is chosen per frame, facing the camera.
+#[derive(Clone, Debug, Default)]
+pub struct AxisLabels {
+    pub box_min: Vec3,
+    pub box_max: Vec3,
+    pub labels: Vec<Label>,
 }
 
 /// "time (s)", or just "hp" for a unitless axis.
@@ -39,77 +47,95 @@ pub fn axis_title(axis: &Axis, fallback: &str) -> String {
     }
 }
 
-/// Tick labels and axis titles for the box drawn by the scene, on the same edges as its ticks.
-pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> Vec<Label> {
+/// Tick labels and axis titles for the box drawn by the scene.
+pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> AxisLabels {
     axis_labels_for_box(cloud, data.box_min, data.box_max)
 }
 
 /// Tick labels and axis titles for a box `[min, max]` in data space.
-pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> Vec<Label> {
-    let size = max - min;
+pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabels {
     let axes = &cloud.meta.axes;
-    let along = |t: f32, lo: f32, extent: f32| lo + (t + 1.0) * 0.5 * extent;
     let mut labels = Vec::new();
-    let mut push_axis = |axis: &Axis,
-                         fallback: &str,
-                         place: &dyn Fn(f32) -> Vec3,
-                         offset: egui::Vec2,
-                         align: Align2| {
+    for (index, (axis, fallback)) in [(&axes.x, "x"), (&axes.y, "y"), (&axes.z, "z")]
+        .into_iter()
+        .enumerate()
+    {
         for tick in axis.ticks(8) {
             labels.push(Label {
-                anchor: place(tick.at),
+                axis: index,
+                at: tick.at,
                 text: tick.label,
-                offset,
-                align,
                 title: false,
             });
         }
         labels.push(Label {
-            anchor: place(0.0),
+            axis: index,
+            at: 0.0,
             text: axis_title(axis, fallback),
-            offset: offset * 3.2,
-            align,
             title: true,
         });
-    };
-    push_axis(
-        &axes.x,
-        "x",
-        &|t| Vec3::new(along(t, min.x, size.x), min.y, max.z),
-        egui::vec2(0.0, 10.0),
-        Align2::CENTER_TOP,
-    );
-    push_axis(
-        &axes.y,
-        "y",
-        &|t| Vec3::new(min.x, along(t, min.y, size.y), max.z),
-        egui::vec2(-10.0, 0.0),
-        Align2::RIGHT_CENTER,
-    );
-    push_axis(
-        &axes.z,
-        "z",
-        &|t| Vec3::new(max.x, min.y, along(t, min.z, size.z)),
-        egui::vec2(10.0, 4.0),
-        Align2::LEFT_TOP,
-    );
-    labels
+    }
+    AxisLabels {
+        box_min: min,
+        box_max: max,
+        labels,
+    }
+}
+
+/// The box edge an axis is labelled on, as the two fixed coordinates of the other axes:
+/// x and z along the lowest edge on screen, y along the leftmost vertical edge.
+fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3> {
+    let (min, max) = (labels.box_min, labels.box_max);
+    let mid = (min + max) * 0.5;
+    let mut best: Option<(f32, Vec3)> = None;
+    for corner in 0..4u32 {
+        let mut point = mid;
+        let (a, b) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        point[a] = if corner & 1 == 0 { min[a] } else { max[a] };
+        point[b] = if corner & 2 == 0 { min[b] } else { max[b] };
+        let Some(pixel) = view.project(point) else {
+            continue;
+        };
+        // Lowest on screen for x and z, leftmost for y.
+        let score = if axis == 1 { -pixel.x } else { pixel.y };
+        if best.is_none_or(|(s, _)| score > s) {
+            best = Some((score, point));
+        }
+    }
+    best.map(|(_, p)| p)
 }
 
 /// Paints labels projected through `view` into `rect` (the 3D view's place on screen, points).
-pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &[Label]) {
+pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &AxisLabels) {
     let scale = rect.width() / view.width.max(1) as f32;
+    let edges: Vec<Option<Vec3>> = (0..3).map(|axis| label_edge(labels, view, axis)).collect();
     let mut placed: Vec<Rect> = Vec::new();
     // Titles first, so ticks make way for them.
     let ordered = labels
+        .labels
         .iter()
         .filter(|l| l.title)
-        .chain(labels.iter().filter(|l| !l.title));
+        .chain(labels.labels.iter().filter(|l| !l.title));
     for label in ordered {
-        let Some(pixel) = view.project(label.anchor) else {
+        let Some(mut anchor) = edges[label.axis] else {
             continue;
         };
-        let pos = rect.min + egui::vec2(pixel.x, pixel.y) * scale + label.offset;
+        let (lo, hi) = (labels.box_min[label.axis], labels.box_max[label.axis]);
+        anchor[label.axis] = lo + (label.at + 1.0) * 0.5 * (hi - lo);
+        let Some(pixel) = view.project(anchor) else {
+            continue;
+        };
+        let (offset, align) = if label.axis == 1 {
+            (egui::vec2(-10.0, 0.0), Align2::RIGHT_CENTER)
+        } else {
+            (egui::vec2(0.0, 8.0), Align2::CENTER_TOP)
+        };
+        let offset = if label.title { offset * 3.0 } else { offset };
+        let pos = rect.min + egui::vec2(pixel.x, pixel.y) * scale + offset;
         if !rect.expand(40.0).contains(pos) {
             continue;
         }
@@ -120,7 +146,7 @@ pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &[La
         };
         // Skip a label that would overlap one already placed (crowded ticks at some angles).
         let galley = painter.layout_no_wrap(label.text.clone(), FontId::proportional(size), color);
-        let text_rect = label.align.anchor_size(pos, galley.size());
+        let text_rect = align.anchor_size(pos, galley.size());
         if placed
             .iter()
             .any(|r: &Rect| r.expand(2.0).intersects(text_rect))

@@ -138,25 +138,29 @@ pub fn box_with_ticks(
             }
         }
     }
+    // Tick marks on all four edges parallel to each axis, pointing away from the box; the
+    // labels pick the edge facing the camera each frame.
     let size = max - min;
+    let center = (min + max) * 0.5;
     let tick_length = 0.03 * size.max_element().max(1e-3);
-    // x ticks along the front bottom edge (y = min, z = max), pointing toward +z.
-    for &t in ticks[0] {
-        let x = min.x + (t + 1.0) * 0.5 * size.x;
-        let a = glam::Vec3::new(x, min.y, max.z);
-        segment(a, a + glam::Vec3::Z * tick_length);
-    }
-    // y ticks along the left front edge (x = min, z = max), pointing toward -x.
-    for &t in ticks[1] {
-        let y = min.y + (t + 1.0) * 0.5 * size.y;
-        let a = glam::Vec3::new(min.x, y, max.z);
-        segment(a, a - glam::Vec3::X * tick_length);
-    }
-    // z ticks along the right bottom edge (x = max, y = min), pointing toward +x.
-    for &t in ticks[2] {
-        let z = min.z + (t + 1.0) * 0.5 * size.z;
-        let a = glam::Vec3::new(max.x, min.y, z);
-        segment(a, a + glam::Vec3::X * tick_length);
+    for (axis, positions) in ticks.iter().enumerate() {
+        let out_axis = if axis == 1 { 0 } else { 1 };
+        for &t in positions.iter() {
+            for corner in 0..4u32 {
+                let mut a = center;
+                let (p, q) = match axis {
+                    0 => (1, 2),
+                    1 => (0, 2),
+                    _ => (0, 1),
+                };
+                a[p] = if corner & 1 == 0 { min[p] } else { max[p] };
+                a[q] = if corner & 2 == 0 { min[q] } else { max[q] };
+                a[axis] = min[axis] + (t + 1.0) * 0.5 * size[axis];
+                let mut outward = glam::Vec3::ZERO;
+                outward[out_axis] = (a[out_axis] - center[out_axis]).signum() * tick_length;
+                segment(a, a + outward);
+            }
+        }
     }
     out
 }

@@ -52,7 +52,7 @@ impl Slot {
 struct Loaded {
     id: u64,
     cloud: Arc<PointCloud>,
-    labels: Vec<overlay::Label>,
+    labels: overlay::AxisLabels,
     world_from_data: glam::Mat4,
     world_box: (glam::Vec3, glam::Vec3),
 }
