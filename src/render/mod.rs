@@ -7,6 +7,7 @@ pub mod frame;
 pub mod grid;
 pub mod headless;
 pub mod lines;
+pub mod markers;
 pub mod palette;
 pub mod points;
 pub mod scene;

@@ -8,6 +8,7 @@ use glam::{Mat4, Vec3};
 use crate::cloud::{DataMode, PointCloud};
 use crate::render::frame::{FrameBinding, FrameView};
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
+use crate::render::markers::{MarkerBox, MarkersPass};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
 use crate::render::target::{BACKGROUND, RenderTarget};
 
@@ -48,6 +49,8 @@ pub struct RenderSettings {
     pub view: ViewKind,
     pub points: PointStyle,
     pub show_box: bool,
+    /// Translucent boxes and planes over the data: the playhead, a loop range, a timeline song.
+    pub markers: Vec<MarkerBox>,
 }
 
 impl Default for RenderSettings {
@@ -56,6 +59,7 @@ impl Default for RenderSettings {
             view: ViewKind::Points,
             points: PointStyle::default(),
             show_box: true,
+            markers: Vec::new(),
         }
     }
 }
@@ -131,6 +135,7 @@ pub struct Renderer {
     pub frame: FrameBinding,
     pub points: PointsPass,
     pub lines: LinesPass,
+    pub markers: MarkersPass,
 }
 
 impl Renderer {
@@ -139,6 +144,7 @@ impl Renderer {
         Self {
             points: PointsPass::new(device, &frame),
             lines: LinesPass::new(device, &frame),
+            markers: MarkersPass::new(device, &frame),
             frame,
         }
     }
@@ -154,6 +160,7 @@ impl Renderer {
         settings: &RenderSettings,
     ) {
         self.frame.write(queue, view);
+        self.markers.prepare(queue, &settings.markers);
         if let Some(data) = data {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
@@ -203,5 +210,8 @@ impl Renderer {
         if settings.show_box {
             self.lines.draw(&mut pass, &self.frame, &data.box_lines);
         }
+        // Last, so translucent markers blend over everything drawn before them.
+        self.markers
+            .draw(&mut pass, &self.frame, settings.markers.len());
     }
 }

@@ -8,6 +8,7 @@ pub const PALETTE: &str = include_str!("../../shaders/utils/palette.wgsl");
 pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
+pub const MARKERS: &str = include_str!("../../shaders/markers.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -22,6 +23,10 @@ pub fn lines() -> String {
     compose(&[FRAME, LINES])
 }
 
+pub fn markers() -> String {
+    compose(&[FRAME, MARKERS])
+}
+
 pub fn composite() -> String {
     COMPOSITE.to_string()
 }
@@ -32,6 +37,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("points", points()),
         ("lines", lines()),
         ("composite", composite()),
+        ("markers", markers()),
     ]
 }
 

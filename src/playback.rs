@@ -1,0 +1,518 @@
+//! Playback of the song a cloud was extracted from, and the clock the playhead follows.
+//!
+//! The song is decoded once into memory ([`decode`]). A [`Player`] hands it to an
+//! [`AudioBackend`] (rodio on the default output device in the app, mocks in tests) as a
+//! [`TrackSource`] that counts the frames it gives the device in a shared [`Transport`]. That
+//! count is the clock: the playhead reads it through [`AudioClock`], so picture and sound cannot
+//! drift apart however long the song, whatever the wall clock does. Seeking and pausing write the
+//! transport; the source reads it for every frame. Between two device callbacks the count stands
+//! still, so [`Playhead`] interpolates over at most one callback period with the wall clock.
+//!
+//! No device (CI machines, a headless server) is not an error of the app: [`Player::new`] keeps
+//! the reason in [`PlayerState::NoDevice`] and every other feature works.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use thiserror::Error;
+
+use crate::cloud::PointCloud;
+
+/// Why the song cannot be played.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum PlaybackError {
+    #[error("no audio device: {0}")]
+    NoDevice(String),
+    #[error("{path}: the audio file cannot be found (looked in: {tried})")]
+    NotFound { path: String, tried: String },
+    #[error("{path}: cannot open the audio file: {reason}")]
+    Open { path: PathBuf, reason: String },
+    #[error(
+        "{path}: playback cannot decode {format} files (it plays wav, flac, ogg vorbis and mp3); \
+         convert the song to one of those to hear it"
+    )]
+    Unsupported { path: PathBuf, format: String },
+    #[error("{path}: cannot decode the audio: {reason}")]
+    Decode { path: PathBuf, reason: String },
+    #[error("{path}: the audio file holds no samples")]
+    Empty { path: PathBuf },
+}
+
+/// A decoded song: interleaved samples in memory.
+#[derive(Clone, Debug)]
+pub struct Track {
+    pub path: PathBuf,
+    pub samples: Arc<[f32]>,
+    pub channels: u16,
+    pub sample_rate: u32,
+}
+
+impl Track {
+    pub fn frames(&self) -> u64 {
+        (self.samples.len() / usize::from(self.channels.max(1))) as u64
+    }
+
+    pub fn duration_s(&self) -> f64 {
+        self.frames() as f64 / f64::from(self.sample_rate.max(1))
+    }
+}
+
+/// Formats symphonia (as configured in Cargo.toml) decodes, by file extension.
+const PLAYABLE: [&str; 6] = ["wav", "wave", "flac", "ogg", "mp3", "oga"];
+
+/// Decodes a whole audio file into memory.
+pub fn decode(path: &Path) -> Result<Track, PlaybackError> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    let unsupported = || PlaybackError::Unsupported {
+        path: path.to_path_buf(),
+        format: if extension.is_empty() {
+            "this".into()
+        } else {
+            format!(".{extension}")
+        },
+    };
+    if ["opus", "m4a", "aac", "mp4", "wma", "aiff", "aif"].contains(&extension.as_str()) {
+        return Err(unsupported());
+    }
+    let file = std::fs::File::open(path).map_err(|e| PlaybackError::Open {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    let decoder = rodio::Decoder::try_from(file).map_err(|e| match e {
+        rodio::decoder::DecoderError::UnrecognizedFormat
+        | rodio::decoder::DecoderError::NoStreams => unsupported(),
+        other => PlaybackError::Decode {
+            path: path.to_path_buf(),
+            reason: other.to_string(),
+        },
+    })?;
+    use rodio::Source;
+    let channels = decoder.channels().get();
+    let sample_rate = decoder.sample_rate().get();
+    let samples: Vec<f32> = decoder.collect();
+    if samples.is_empty() {
+        return Err(if PLAYABLE.contains(&extension.as_str()) {
+            PlaybackError::Empty {
+                path: path.to_path_buf(),
+            }
+        } else {
+            unsupported()
+        });
+    }
+    Ok(Track {
+        path: path.to_path_buf(),
+        samples: samples.into(),
+        channels,
+        sample_rate,
+    })
+}
+
+/// Where the song of a cloud is: `source.path` as written (relative to the current directory),
+/// then relative to the .ply's folder, then its file name next to the .ply.
+pub fn resolve_source(cloud: &PointCloud) -> Result<PathBuf, PlaybackError> {
+    let Some(recorded) = cloud.meta.source.as_ref().and_then(|s| s.path.clone()) else {
+        return Err(PlaybackError::NotFound {
+            path: cloud.path.display().to_string(),
+            tried: "the file names no source audio (source.path)".into(),
+        });
+    };
+    let recorded_path = PathBuf::from(&recorded);
+    let folder = cloud.path.parent().unwrap_or(Path::new(""));
+    let mut candidates = vec![recorded_path.clone()];
+    if recorded_path.is_relative() {
+        candidates.push(folder.join(&recorded_path));
+    }
+    if let Some(name) = recorded_path.file_name() {
+        candidates.push(folder.join(name));
+    }
+    candidates.dedup();
+    for candidate in &candidates {
+        if candidate.is_file() {
+            return Ok(candidate.clone());
+        }
+    }
+    Err(PlaybackError::NotFound {
+        path: recorded,
+        tried: candidates
+            .iter()
+            .map(|c| c.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+    })
+}
+
+/// The playback position and state shared between the UI and the audio thread.
+#[derive(Debug)]
+pub struct Transport {
+    /// Frames handed to the device so far (the position in the track).
+    position: AtomicU64,
+    playing: AtomicBool,
+    /// Loop range in frames, `loop_end == 0` when not looping.
+    loop_start: AtomicU64,
+    loop_end: AtomicU64,
+    /// Set when the song is replaced: its source ends and leaves the mixer.
+    retired: AtomicBool,
+    frames: u64,
+}
+
+impl Transport {
+    pub fn new(frames: u64) -> Self {
+        Self {
+            position: AtomicU64::new(0),
+            playing: AtomicBool::new(false),
+            loop_start: AtomicU64::new(0),
+            loop_end: AtomicU64::new(0),
+            retired: AtomicBool::new(false),
+            frames,
+        }
+    }
+
+    pub fn position(&self) -> u64 {
+        self.position.load(Ordering::Acquire)
+    }
+
+    pub fn is_playing(&self) -> bool {
+        self.playing.load(Ordering::Acquire)
+    }
+
+    pub fn set_playing(&self, playing: bool) {
+        if playing && self.position() >= self.frames {
+            self.position.store(self.loop_start(), Ordering::Release);
+        }
+        self.playing.store(playing, Ordering::Release);
+    }
+
+    pub fn seek(&self, frame: u64) {
+        self.position
+            .store(frame.min(self.frames), Ordering::Release);
+    }
+
+    fn loop_start(&self) -> u64 {
+        if self.loop_end.load(Ordering::Acquire) > 0 {
+            self.loop_start.load(Ordering::Acquire)
+        } else {
+            0
+        }
+    }
+
+    /// Loops `[start, end)` frames; None plays to the end and stops.
+    pub fn set_loop(&self, range: Option<(u64, u64)>) {
+        match range {
+            Some((start, end)) if end > start => {
+                self.loop_start
+                    .store(start.min(self.frames), Ordering::Release);
+                self.loop_end.store(end.min(self.frames), Ordering::Release);
+            }
+            _ => self.loop_end.store(0, Ordering::Release),
+        }
+    }
+
+    /// Advances by one frame from `at` (unless a seek moved the position meanwhile), wrapping
+    /// at the loop end and stopping at the track's end. Returns the next frame to play.
+    fn advance(&self, at: u64) -> Option<u64> {
+        let loop_end = self.loop_end.load(Ordering::Acquire);
+        let mut next = at + 1;
+        if loop_end > 0 && next >= loop_end {
+            next = self.loop_start.load(Ordering::Acquire);
+        }
+        let _ = self
+            .position
+            .compare_exchange(at, next, Ordering::AcqRel, Ordering::Acquire);
+        let now = self.position();
+        if now >= self.frames {
+            self.playing.store(false, Ordering::Release);
+            self.position.store(self.frames, Ordering::Release);
+            return None;
+        }
+        Some(now)
+    }
+}
+
+/// How many frames the output device has taken: the clock the playhead follows.
+pub trait AudioClock {
+    fn frames_played(&self) -> u64;
+    fn is_running(&self) -> bool;
+}
+
+impl AudioClock for Transport {
+    fn frames_played(&self) -> u64 {
+        self.position()
+    }
+    fn is_running(&self) -> bool {
+        self.is_playing()
+    }
+}
+
+/// The track as a rodio source: plays from the transport's position while it is playing, and
+/// silence while paused (the stream stays open so resuming is instant).
+pub struct TrackSource {
+    track: Track,
+    transport: Arc<Transport>,
+    frame: u64,
+    channel: u16,
+}
+
+impl TrackSource {
+    pub fn new(track: Track, transport: Arc<Transport>) -> Self {
+        Self {
+            track,
+            transport,
+            frame: 0,
+            channel: 0,
+        }
+    }
+}
+
+impl Iterator for TrackSource {
+    type Item = f32;
+
+    fn next(&mut self) -> Option<f32> {
+        let channels = self.track.channels.max(1);
+        if self.channel == 0 {
+            if self.transport.retired.load(Ordering::Acquire) {
+                return None;
+            }
+            if !self.transport.is_playing() {
+                return Some(0.0);
+            }
+            self.frame = self.transport.position();
+            if self.frame >= self.track.frames() {
+                self.transport.set_playing(false);
+                return Some(0.0);
+            }
+        }
+        let index = self.frame as usize * usize::from(channels) + usize::from(self.channel);
+        let sample = self.track.samples.get(index).copied().unwrap_or(0.0);
+        self.channel += 1;
+        if self.channel == channels {
+            self.channel = 0;
+            if let Some(next) = self.transport.advance(self.frame) {
+                self.frame = next;
+            }
+        }
+        Some(sample)
+    }
+}
+
+impl rodio::Source for TrackSource {
+    fn current_span_len(&self) -> Option<usize> {
+        // Unknown length: the source lives until its song is replaced.
+        None
+    }
+    fn channels(&self) -> rodio::ChannelCount {
+        std::num::NonZero::new(self.track.channels.max(1)).unwrap_or(std::num::NonZero::<u16>::MIN)
+    }
+    fn sample_rate(&self) -> rodio::SampleRate {
+        std::num::NonZero::new(self.track.sample_rate.max(1))
+            .unwrap_or(std::num::NonZero::<u32>::MIN)
+    }
+    fn total_duration(&self) -> Option<Duration> {
+        None
+    }
+}
+
+/// An open audio output that plays sources.
+pub trait AudioOutput {
+    fn play(&mut self, source: TrackSource);
+}
+
+/// Opens audio outputs: the default device in the app, mocks in tests.
+pub trait AudioBackend {
+    fn open(&self) -> Result<Box<dyn AudioOutput>, PlaybackError>;
+}
+
+/// The default output device through rodio (cpal).
+pub struct RodioBackend;
+
+struct RodioOutput {
+    sink: rodio::MixerDeviceSink,
+}
+
+impl AudioOutput for RodioOutput {
+    fn play(&mut self, source: TrackSource) {
+        self.sink.mixer().add(source);
+    }
+}
+
+impl AudioBackend for RodioBackend {
+    fn open(&self) -> Result<Box<dyn AudioOutput>, PlaybackError> {
+        let mut sink = rodio::DeviceSinkBuilder::open_default_sink()
+            .map_err(|e| PlaybackError::NoDevice(e.to_string()))?;
+        sink.log_on_drop(false);
+        Ok(Box::new(RodioOutput { sink }))
+    }
+}
+
+/// Whether the app can play sound at all.
+pub enum PlayerState {
+    Ready(Box<dyn AudioOutput>),
+    NoDevice(String),
+}
+
+/// The song loaded into an output, with its transport.
+pub struct Loaded {
+    pub track_path: PathBuf,
+    pub duration_s: f64,
+    pub sample_rate: u32,
+    pub transport: Arc<Transport>,
+}
+
+/// Plays one song at a time.
+pub struct Player {
+    pub state: PlayerState,
+    pub loaded: Option<Loaded>,
+}
+
+impl Player {
+    /// Opens the backend's output; a failure becomes [`PlayerState::NoDevice`], never a panic.
+    pub fn new(backend: &dyn AudioBackend) -> Self {
+        let state = match backend.open() {
+            Ok(output) => PlayerState::Ready(output),
+            Err(e) => {
+                let reason = match e {
+                    PlaybackError::NoDevice(reason) => reason,
+                    other => other.to_string(),
+                };
+                log::warn!("no audio device: {reason}");
+                PlayerState::NoDevice(reason)
+            }
+        };
+        Self {
+            state,
+            loaded: None,
+        }
+    }
+
+    /// Why there is no sound, if there is none.
+    pub fn no_device(&self) -> Option<&str> {
+        match &self.state {
+            PlayerState::NoDevice(reason) => Some(reason),
+            PlayerState::Ready(_) => None,
+        }
+    }
+
+    /// Replaces the current song (stopping it) with `track`, paused at its start.
+    pub fn load(&mut self, track: Track) {
+        self.unload();
+        let transport = Arc::new(Transport::new(track.frames()));
+        let loaded = Loaded {
+            track_path: track.path.clone(),
+            duration_s: track.duration_s(),
+            sample_rate: track.sample_rate,
+            transport: transport.clone(),
+        };
+        if let PlayerState::Ready(output) = &mut self.state {
+            output.play(TrackSource::new(track, transport));
+        }
+        self.loaded = Some(loaded);
+    }
+
+    /// Stops and forgets the song.
+    pub fn unload(&mut self) {
+        if let Some(old) = self.loaded.take() {
+            // The old source keeps feeding silence; stop it from advancing.
+            old.transport.set_playing(false);
+            old.transport.retired.store(true, Ordering::Release);
+        }
+    }
+
+    pub fn is_playing(&self) -> bool {
+        self.loaded
+            .as_ref()
+            .is_some_and(|l| l.transport.is_playing())
+    }
+
+    /// Starts or pauses; without a device, nothing plays and the playhead stays.
+    pub fn toggle(&mut self) {
+        if self.no_device().is_some() {
+            return;
+        }
+        if let Some(loaded) = &self.loaded {
+            loaded.transport.set_playing(!loaded.transport.is_playing());
+        }
+    }
+
+    pub fn seek_s(&self, seconds: f64) {
+        if let Some(loaded) = &self.loaded {
+            loaded
+                .transport
+                .seek(seconds_to_frames(seconds, loaded.sample_rate));
+        }
+    }
+
+    pub fn set_loop_s(&self, range: Option<(f64, f64)>) {
+        if let Some(loaded) = &self.loaded {
+            let rate = loaded.sample_rate;
+            loaded.transport.set_loop(
+                range.map(|(a, b)| (seconds_to_frames(a, rate), seconds_to_frames(b, rate))),
+            );
+        }
+    }
+}
+
+fn seconds_to_frames(seconds: f64, sample_rate: u32) -> u64 {
+    (seconds.max(0.0) * f64::from(sample_rate)).round() as u64
+}
+
+/// The playhead's time, from an [`AudioClock`], smoothed between device callbacks: while the
+/// clock stands still the time runs on with the wall clock for at most `max_interpolation`, and
+/// it snaps back to the clock whenever the clock moves. It never drifts from the device.
+#[derive(Clone, Debug)]
+pub struct Playhead {
+    sample_rate: u32,
+    last_frames: u64,
+    last_change: Option<Instant>,
+    pub max_interpolation: Duration,
+}
+
+impl Playhead {
+    pub fn new(sample_rate: u32) -> Self {
+        Self {
+            sample_rate: sample_rate.max(1),
+            last_frames: 0,
+            last_change: None,
+            max_interpolation: Duration::from_millis(50),
+        }
+    }
+
+    /// The time in seconds at `now`.
+    pub fn time_s(&mut self, clock: &dyn AudioClock, now: Instant) -> f64 {
+        let frames = clock.frames_played();
+        if frames != self.last_frames || self.last_change.is_none() {
+            self.last_frames = frames;
+            self.last_change = Some(now);
+        }
+        let base = frames as f64 / f64::from(self.sample_rate);
+        if !clock.is_running() {
+            return base;
+        }
+        let since = self
+            .last_change
+            .map_or(Duration::ZERO, |t| now.saturating_duration_since(t))
+            .min(self.max_interpolation);
+        base + since.as_secs_f64()
+    }
+}
+
+/// Where time `seconds` lies on the cloud's x axis, normalized to [-1, 1] (clamped), for Song
+/// clouds whose x axis is time.
+pub fn time_to_x(axis: &crate::axes::Axis, seconds: f64) -> f32 {
+    axis.normalized_of(seconds).clamp(-1.0, 1.0) as f32
+}
+
+/// The time at a normalized x position.
+pub fn x_to_time(axis: &crate::axes::Axis, x: f32) -> f64 {
+    axis.value_at(f64::from(x.clamp(-1.0, 1.0)))
+}
+
+/// "1:05.3" for a playback position.
+pub fn format_clock(seconds: f64) -> String {
+    let seconds = seconds.max(0.0);
+    let minutes = (seconds / 60.0).floor();
+    format!("{}:{:04.1}", minutes as u64, seconds - minutes * 60.0)
+}

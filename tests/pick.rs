@@ -1,0 +1,150 @@
+//! Hover picking on clouds made in code: the point under the cursor is the bin drawn there, the
+//! read-out gives its values in physical units, and the ray finds the first dense voxel.
+
+use glam::{UVec3, Vec2, Vec3};
+
+use loudscape::camera::Camera;
+use loudscape::cloud::{DataMode, Point, PointCloud, SongInfo};
+use loudscape::pick::{CpuGrid, cursor_ray, pick_point, point_readings, song_at};
+use loudscape::render::frame::FrameView;
+use loudscape::render::scene::world_from_data;
+
+/// A 31 x 21 grid of bins over time and frequency, level rising with time.
+fn grid_cloud() -> PointCloud {
+    let mut points = Vec::new();
+    for i in 0..31 {
+        for k in 0..21 {
+            let x = -1.0 + 2.0 * i as f32 / 30.0;
+            let z = -1.0 + 2.0 * k as f32 / 20.0;
+            points.push(Point {
+                position: [x, 0.0, z],
+                scalar: 0.5 + 0.01 * i as f32,
+                hp: k as f32 / 20.0,
+            });
+        }
+    }
+    PointCloud::synthetic(points, DataMode::Song)
+}
+
+fn view_from(camera: Camera) -> FrameView {
+    FrameView {
+        camera,
+        world_from_data: world_from_data(DataMode::Song),
+        width: 640,
+        height: 400,
+        frame_index: 0,
+        moving: false,
+    }
+}
+
+#[test]
+fn hovering_a_bin_reads_its_values() {
+    let cloud = grid_cloud();
+    let mut camera = Camera::from_angles(20.0, 35.0, 4.0);
+    camera.fit(Vec3::new(-1.6, -0.8, -1.0), Vec3::new(1.6, 0.8, 1.0), 1.6);
+    let view = view_from(camera);
+    // Bin (i = 10, k = 15): 10 s, 16537.5 Hz.
+    let index = 10 * 21 + 15;
+    let target = view
+        .project(Vec3::from(cloud.points[index].position))
+        .expect("in view");
+    let picked = pick_point(
+        &cloud.points,
+        &view,
+        target + Vec2::new(1.5, -1.0),
+        4.0,
+        0.0,
+    );
+    assert_eq!(picked, Some(index));
+    let readings = point_readings(&cloud.meta.axes, &cloud.points[index]);
+    let text: Vec<String> = readings
+        .iter()
+        .map(|r| format!("{}: {}", r.name, r.value))
+        .collect();
+    assert!(text[0].starts_with("time: 10"), "{text:?}");
+    assert!(
+        text[1].contains("16.54 kHz") || text[1].contains("16537"),
+        "{text:?}"
+    );
+    assert!(text[1].contains('('), "nearest note given: {text:?}");
+    assert!(text[2].starts_with("level: -40"), "{text:?}");
+    assert!(
+        text[3].contains("-32"),
+        "loudness 0.6 of -80..0 dB: {text:?}"
+    );
+    assert!(text[4].starts_with("hp: 0.75"), "{text:?}");
+    // Hidden points are not picked; empty space picks nothing.
+    assert_ne!(
+        pick_point(&cloud.points, &view, target, 4.0, 0.61),
+        Some(index)
+    );
+    assert_eq!(
+        pick_point(&cloud.points, &view, Vec2::new(2.0, 2.0), 4.0, 0.0),
+        None
+    );
+}
+
+#[test]
+fn the_cursor_ray_passes_through_the_projected_point() {
+    let camera = Camera::from_angles(-30.0, 20.0, 5.0);
+    let view = view_from(camera);
+    let p = Vec3::new(0.3, -0.2, 0.6);
+    let px = view.project(p).expect("in view");
+    let (origin, dir) = cursor_ray(&view, px);
+    let closest = origin + dir * (p - origin).dot(dir);
+    assert!(closest.distance(p) < 1e-3, "{closest} vs {p}");
+}
+
+#[test]
+fn the_ray_stops_at_the_first_dense_voxel() {
+    let dims = UVec3::new(4, 4, 4);
+    let mut density = vec![0.0f32; 64];
+    let mut hp = vec![0.5f32; 64];
+    // Voxels (1, 2, 2) and (3, 2, 2): the ray along +x meets (1, 2, 2) first.
+    for (i, d, h) in [(1u32, 0.8f32, 0.9f32), (3, 1.0, 0.1)] {
+        let idx = (i + 4 * (2 + 4 * 2)) as usize;
+        density[idx] = d;
+        hp[idx] = h;
+    }
+    let grid = CpuGrid {
+        dims,
+        box_min: Vec3::splat(-1.0),
+        box_max: Vec3::splat(1.0),
+        density,
+        hp_mean: hp,
+    };
+    let hit = grid
+        .pick(Vec3::new(-3.0, 0.25, 0.25), Vec3::X, 0.5)
+        .expect("hit");
+    assert_eq!(hit.voxel, UVec3::new(1, 2, 2));
+    assert_eq!(hit.density, 0.8);
+    assert_eq!(hit.hp_mean, 0.9);
+    assert!((hit.position - Vec3::new(-0.25, 0.25, 0.25)).length() < 1e-6);
+    let hit = grid
+        .pick(Vec3::new(-3.0, 0.25, 0.25), Vec3::X, 0.9)
+        .expect("hit");
+    assert_eq!(hit.voxel, UVec3::new(3, 2, 2));
+    assert!(
+        grid.pick(Vec3::new(-3.0, 0.9, 0.25), Vec3::X, 0.5)
+            .is_none()
+    );
+}
+
+#[test]
+fn timeline_positions_find_their_song() {
+    let song = |title: &str, a: f64, b: f64| SongInfo {
+        title: title.into(),
+        x_min: Some(a),
+        x_max: Some(b),
+        ..Default::default()
+    };
+    let songs = vec![
+        song("one", -1.0, -0.2),
+        song("two", -0.2, 0.5),
+        song("three", 0.5, 1.0),
+    ];
+    assert_eq!(song_at(&songs, -0.9), Some(0));
+    assert_eq!(song_at(&songs, 0.0), Some(1));
+    assert_eq!(song_at(&songs, 0.99), Some(2));
+    assert_eq!(song_at(&songs, 1.5), None);
+}
