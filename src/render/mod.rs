@@ -2,10 +2,13 @@
 //! [`scene::Renderer`], which owns one instance of every pass.
 
 pub mod context;
+pub mod dual_contour;
 pub mod frame;
 pub mod grid;
 pub mod headless;
 pub mod lines;
+pub mod marching_tets;
+pub mod mesh;
 pub mod palette;
 pub mod points;
 pub mod scene;
