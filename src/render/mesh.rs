@@ -890,3 +890,46 @@ impl SurfacePass {
         }
     }
 }
+
+/// A song-like analytic field for benchmarks, golden images and the scikit-image comparison:
+/// (density, hp) on a `dims` grid over [-1, 1]^3, in [`VoxelGrid`] order (x fastest).
+/// x is time: a 4/4 pulse of percussive hits (hp near 0) over sustained harmonic partials
+/// (hp near 1); y is log amplitude: energy sits on a ridge that falls with frequency and rises
+/// on each hit; z is frequency: partials make stripes. bench/bench_surface.py reads the same
+/// field from the .npy file `loudscape bench --fields-dir` writes.
+pub fn song_like_field(dims: UVec3) -> (Vec<f32>, Vec<f32>) {
+    let n = (dims.x * dims.y * dims.z) as usize;
+    let mut density = Vec::with_capacity(n);
+    let mut hp = Vec::with_capacity(n);
+    let size = Vec3::splat(2.0) / dims.as_vec3();
+    for k in 0..dims.z {
+        for j in 0..dims.y {
+            for i in 0..dims.x {
+                let p = Vec3::new(-1.0, -1.0, -1.0) + (UVec3::new(i, j, k).as_vec3() + 0.5) * size;
+                let (d, h) = song_like_sample(p);
+                density.push(d);
+                hp.push(h);
+            }
+        }
+    }
+    (density, hp)
+}
+
+fn song_like_sample(p: Vec3) -> (f32, f32) {
+    let (x, y, z) = (p.x, p.y, p.z);
+    let freq = (z + 1.0) * 0.5;
+    // Percussive hits: 8 beats across the song, each decaying quickly.
+    let beat_phase = ((x + 1.0) * 4.0).fract();
+    let hit = (-beat_phase * 9.0).exp();
+    // Sections: a quieter intro and a louder chorus in the second half.
+    let section = 0.75 + 0.25 * (1.0 / (1.0 + (-(x - 0.1) * 8.0).exp()));
+    // The spectral ridge: loud lows, quieter highs; hits lift and widen it.
+    let ridge = 0.25 - 0.9 * freq + 0.35 * hit;
+    let width = 0.16 + 0.12 * hit;
+    let level = (-((y - ridge) / width).powi(2)).exp();
+    // Harmonic partials: stripes in frequency, strongest in the lows and mids.
+    let partials = 0.6 + 0.4 * (z * 28.0).cos().powi(2) * (1.0 - freq);
+    let density = (level * section * (partials * (1.0 - 0.5 * hit) + 0.8 * hit)).clamp(0.0, 1.0);
+    let hp = (0.85 - 0.8 * hit + 0.1 * (z * 28.0).cos()).clamp(0.0, 1.0);
+    (density, hp)
+}
