@@ -31,7 +31,7 @@ fn trilinear_weight(k: u32, x: vec3<f32>) -> f32 {
     return w.x * w.y * w.z;
 }
 
-@compute @workgroup_size(4, 4, 4)
+@compute @workgroup_size(16, 4, 1)
 fn cell_vertices(@builtin(global_invocation_id) id: vec3<u32>) {
     if (any(id > params.dims)) {
         return;
@@ -144,7 +144,7 @@ fn cell_vertices(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-@compute @workgroup_size(4, 4, 4)
+@compute @workgroup_size(16, 4, 1)
 fn quads(@builtin(global_invocation_id) id: vec3<u32>) {
     if (any(id > params.dims)) {
         return;

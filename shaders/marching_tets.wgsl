@@ -36,19 +36,21 @@ struct EdgePoint {
 
 // The crossing on the edge from sample pa to sample pb (pa the lower on every axis, so both
 // cells that share the edge compute exactly the same point).
-fn edge_point(pa: vec3<i32>, pb: vec3<i32>, va: f32, vb: f32) -> EdgePoint {
+// Gradients and hp at the ends come from the cell's cache (computed once per corner).
+fn edge_point(
+    pa: vec3<i32>, pb: vec3<i32>, va: f32, vb: f32, ga: vec3<f32>, gb: vec3<f32>, ha: f32, hb: f32,
+) -> EdgePoint {
     let t = clamp((params.iso_value - va) / (vb - va), 0.0, 1.0);
     let a = vec3<f32>(pa);
     let grid = a + (vec3<f32>(pb) - a) * t;
-    let ga = sample_gradient(pa);
-    let gradient = ga + (sample_gradient(pb) - ga) * t;
+    let gradient = ga + (gb - ga) * t;
     let wa = max(va, 0.0);
     let wb = max(vb, 0.0);
     var out: EdgePoint;
     out.grid = grid;
     out.vertex.position = data_position(grid);
     out.vertex.normal = outward_normal(gradient);
-    out.vertex.hp = weighted_hp(wa * sample_hp(pa) + wb * sample_hp(pb), wa + wb);
+    out.vertex.hp = weighted_hp(wa * ha + wb * hb, wa + wb);
     out.vertex.pad = 0.0;
     return out;
 }
@@ -58,7 +60,7 @@ fn tet_mask(tet: vec4<u32>, cell_mask: u32) -> u32 {
         | (((cell_mask >> tet.z) & 1u) << 2u) | (((cell_mask >> tet.w) & 1u) << 3u);
 }
 
-@compute @workgroup_size(4, 4, 4)
+@compute @workgroup_size(16, 4, 1)
 fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
     if (any(id > params.dims)) {
         return;
@@ -75,6 +77,13 @@ fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     if (mask == 0u || mask == 255u) {
         return;
+    }
+    // Gradient and hp at the eight corners, read once for all of the cell's vertices.
+    var gradients: array<vec3<f32>, 8>;
+    var hps: array<f32, 8>;
+    for (var k = 0u; k < 8u; k++) {
+        gradients[k] = sample_gradient(base + corner_offset(k));
+        hps[k] = sample_hp(base + corner_offset(k));
     }
     var triangles = 0u;
     for (var t = 0u; t < 6u; t++) {
@@ -111,7 +120,14 @@ fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
                 let ka = corners[EDGE_A[edge]];
                 let kb = corners[EDGE_B[edge]];
                 points[c] = edge_point(
-                    base + corner_offset(ka), base + corner_offset(kb), values[ka], values[kb],
+                    base + corner_offset(ka),
+                    base + corner_offset(kb),
+                    values[ka],
+                    values[kb],
+                    gradients[ka],
+                    gradients[kb],
+                    hps[ka],
+                    hps[kb],
                 );
             }
             var face = cross(points[1].grid - points[0].grid, points[2].grid - points[0].grid);

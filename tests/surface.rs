@@ -127,7 +127,12 @@ fn sphere_area_within_two_percent_for_both_methods() {
             mesh.triangle_count(),
             error * 100.0
         );
-        assert!(error < 0.02, "{}: area off by {:.2}%", method.name(), error * 100.0);
+        assert!(
+            error < 0.02,
+            "{}: area off by {:.2}%",
+            method.name(),
+            error * 100.0
+        );
     }
 }
 
@@ -194,7 +199,11 @@ fn dual_contour_vertices_lie_inside_straddling_cells() {
         }
     }
     let mesh = extract(&gpu, &pass, &grid, DC, iso);
-    assert_eq!(mesh.positions.len(), straddling, "one vertex per straddling cell");
+    assert_eq!(
+        mesh.positions.len(),
+        straddling,
+        "one vertex per straddling cell"
+    );
     let voxel = grid.voxel_size();
     for p in &mesh.positions {
         // Grid coordinates of the vertex; its cell is the floor, or a neighbour when it sits on
@@ -206,10 +215,12 @@ fn dual_contour_vertices_lie_inside_straddling_cells() {
             let hi = (v + eps).floor() as i32;
             lo..=hi
         };
-        let found = options(g.x).any(|x| {
-            options(g.y).any(|y| options(g.z).any(|z| straddles([x, y, z])))
-        });
-        assert!(found, "vertex {p} (grid {g}) is not inside a straddling cell");
+        let found =
+            options(g.x).any(|x| options(g.y).any(|y| options(g.z).any(|z| straddles([x, y, z]))));
+        assert!(
+            found,
+            "vertex {p} (grid {g}) is not inside a straddling cell"
+        );
     }
 }
 
@@ -261,7 +272,10 @@ fn isovalues_at_and_beyond_the_field_range_never_fail() {
     let empty = grid_from(&gpu, 16, |_| 0.0);
     for method in SurfaceMethod::ALL {
         for iso in [0.0, 0.5, 1.0] {
-            assert_eq!(extract(&gpu, &pass, &empty, method, iso).triangle_count(), 0);
+            assert_eq!(
+                extract(&gpu, &pass, &empty, method, iso).triangle_count(),
+                0
+            );
         }
     }
 }

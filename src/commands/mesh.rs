@@ -71,7 +71,9 @@ pub fn stand_in_grid(device: &wgpu::Device, cloud: &PointCloud, res: u32) -> Vox
     let mut hp_sum = vec![0.0f32; n];
     let scale = dims.as_vec3() / (box_max - box_min);
     for p in &cloud.points {
-        let g = ((Vec3::from(p.position) - box_min) * scale).as_uvec3().min(dims - 1);
+        let g = ((Vec3::from(p.position) - box_min) * scale)
+            .as_uvec3()
+            .min(dims - 1);
         let v = index(g.x, g.y, g.z);
         let w = p.scalar.max(0.0);
         loud[v] += w;
@@ -108,7 +110,13 @@ pub fn stand_in_grid(device: &wgpu::Device, cloud: &PointCloud, res: u32) -> Vox
     let hp: Vec<f32> = loud
         .iter()
         .zip(&hp_sum)
-        .map(|(&w, &h)| if w > 1e-12 { (h / w).clamp(0.0, 1.0) } else { 0.5 })
+        .map(|(&w, &h)| {
+            if w > 1e-12 {
+                (h / w).clamp(0.0, 1.0)
+            } else {
+                0.5
+            }
+        })
         .collect();
     VoxelGrid::from_fields(device, dims, box_min, box_max, &density, &hp)
 }
@@ -185,10 +193,7 @@ impl MeshFormat {
         {
             Some("ply") => Ok(Self::Ply),
             Some("obj") => Ok(Self::Obj),
-            _ => bail!(
-                "{}: the mesh file must end in .ply or .obj",
-                path.display()
-            ),
+            _ => bail!("{}: the mesh file must end in .ply or .obj", path.display()),
         }
     }
 }
@@ -253,7 +258,10 @@ fn write_ply(w: &mut impl Write, mesh: &CpuMesh, comment: &str) -> std::io::Resu
 
 fn write_obj(w: &mut impl Write, mesh: &CpuMesh, comment: &str) -> std::io::Result<()> {
     writeln!(w, "# {comment}")?;
-    writeln!(w, "# v x y z r g b (warm-to-cool hp colour), vn: unit normals")?;
+    writeln!(
+        w,
+        "# v x y z r g b (warm-to-cool hp colour), vn: unit normals"
+    )?;
     for (p, &hp) in mesh.positions.iter().zip(&mesh.hp) {
         let c = warm_cool(hp);
         writeln!(

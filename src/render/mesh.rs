@@ -59,7 +59,10 @@ impl SurfaceMethod {
 
     /// Parses "mt" / "dc" (or the full names, any case).
     pub fn parse(text: &str) -> Option<Self> {
-        let t = text.trim().to_ascii_lowercase().replace(['-', '_', ' '], "");
+        let t = text
+            .trim()
+            .to_ascii_lowercase()
+            .replace(['-', '_', ' '], "");
         match t.as_str() {
             "mt" | "marchingtetrahedra" | "marchingtets" => Some(Self::MarchingTetrahedra),
             "dc" | "dualcontouring" => Some(Self::DualContouring),
@@ -406,9 +409,13 @@ pub(crate) fn compute_pipeline(
     })
 }
 
-/// Workgroups (4x4x4 threads) covering one thread per padded cell: (dims + 1)^3.
+/// Workgroup shape of the per-cell dispatches (keep in sync with `@workgroup_size` in
+/// marching_tets.wgsl and dual_contour.wgsl): long in x, which llvmpipe vectorizes along.
+pub(crate) const CELL_WORKGROUP: UVec3 = UVec3::new(16, 4, 1);
+
+/// Workgroups covering one thread per padded cell: (dims + 1)^3.
 pub(crate) fn cell_workgroups(dims: UVec3) -> [u32; 3] {
-    ((dims + UVec3::ONE) + UVec3::splat(3)).to_array().map(|n| n / 4)
+    ((dims + UVec3::ONE + CELL_WORKGROUP - UVec3::ONE) / CELL_WORKGROUP).to_array()
 }
 
 /// Identifies the extracted surface: a change re-extracts it.
@@ -445,8 +452,13 @@ enum Readback {
     Idle,
     /// A copy into the staging buffer was recorded; it is mapped on the next frame, after the
     /// frame that holds the copy has been submitted.
-    Copied { generation: u64 },
-    Mapping { generation: u64, flag: Arc<AtomicU8> },
+    Copied {
+        generation: u64,
+    },
+    Mapping {
+        generation: u64,
+        flag: Arc<AtomicU8>,
+    },
 }
 
 struct SurfaceState {
@@ -596,7 +608,9 @@ impl SurfacePass {
     /// The largest number of `element_size`-byte elements one buffer binding may hold.
     fn element_limit(&self, element_size: u64) -> u64 {
         let limits = self.device.limits();
-        let bytes = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let bytes = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
         (bytes / element_size).min(u64::from(u32::MAX))
     }
 
@@ -624,12 +638,7 @@ impl SurfacePass {
             std::mem::size_of::<MeshVertex>() as u64,
         )?;
         let indices = if counts.method == SurfaceMethod::DualContouring {
-            grow_to(
-                counts.indices_needed,
-                counts.index_capacity,
-                "indices",
-                4,
-            )?
+            grow_to(counts.indices_needed, counts.index_capacity, "indices", 4)?
         } else {
             counts.index_capacity
         };
@@ -652,14 +661,22 @@ impl SurfacePass {
             .buffers
             .get_or_insert_with(|| MeshBuffers::new(&self.device, v, i));
         match settings.method {
-            SurfaceMethod::MarchingTetrahedra => {
-                self.marching_tets
-                    .record(&self.device, queue, encoder, grid, buffers, settings.iso_value)
-            }
-            SurfaceMethod::DualContouring => {
-                self.dual_contour
-                    .record(&self.device, queue, encoder, grid, buffers, settings.iso_value)
-            }
+            SurfaceMethod::MarchingTetrahedra => self.marching_tets.record(
+                &self.device,
+                queue,
+                encoder,
+                grid,
+                buffers,
+                settings.iso_value,
+            ),
+            SurfaceMethod::DualContouring => self.dual_contour.record(
+                &self.device,
+                queue,
+                encoder,
+                grid,
+                buffers,
+                settings.iso_value,
+            ),
         }
         state.key = Some(CacheKey::new(grid, settings));
         state.generation += 1;
@@ -801,8 +818,8 @@ impl SurfacePass {
             });
             encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
             queue.submit([encoder.finish()]);
-            let bytes =
-                map_buffer(&self.device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?;
+            let bytes = map_buffer(&self.device, &staging)
+                .map_err(|e| SurfaceError::Readback(e.to_string()))?;
             let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
             let counts = SurfaceCounts {
                 method: settings.method,
