@@ -65,7 +65,13 @@ pub fn run(
                 lit: true,
             };
             // Warm-up: compiles pipelines and grows the buffers to fit.
-            let counts = pass.extract_blocking(&gpu.queue, &grid, &settings)?;
+            let counts = match pass.extract_blocking(&gpu.queue, &grid, &settings) {
+                Ok(counts) => counts,
+                Err(e) => {
+                    println!("surface {name} {} error: {e}", method.short_name());
+                    continue;
+                }
+            };
             let mut times = Vec::with_capacity(runs);
             for _ in 0..runs {
                 let start = Instant::now();
