@@ -7,7 +7,9 @@ use glam::{Mat4, Vec3};
 
 use crate::cloud::{DataMode, PointCloud};
 use crate::render::frame::{FrameBinding, FrameView};
+use crate::render::grid::VoxelGrid;
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
+use crate::render::mesh::{SurfacePass, SurfaceSettings};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
 use crate::render::target::{BACKGROUND, RenderTarget};
 
@@ -32,7 +34,7 @@ impl ViewKind {
 
     /// Whether this build can draw the view; the others are shown as not yet available.
     pub fn available(self) -> bool {
-        matches!(self, ViewKind::Points)
+        matches!(self, ViewKind::Points | ViewKind::Surface)
     }
 
     pub fn parse(name: &str) -> Option<Self> {
@@ -48,6 +50,8 @@ pub struct RenderSettings {
     pub view: ViewKind,
     pub points: PointStyle,
     pub show_box: bool,
+    // Surface view.
+    pub surface: SurfaceSettings,
 }
 
 impl Default for RenderSettings {
@@ -56,6 +60,7 @@ impl Default for RenderSettings {
             view: ViewKind::Points,
             points: PointStyle::default(),
             show_box: true,
+            surface: SurfaceSettings::default(),
         }
     }
 }
@@ -79,6 +84,8 @@ pub struct SceneData {
     pub box_min: Vec3,
     pub box_max: Vec3,
     pub world_from_data: Mat4,
+    /// The voxelized fields the Surface (and Volume) views are built from; None until set.
+    pub grid: Option<VoxelGrid>,
 }
 
 impl SceneData {
@@ -110,6 +117,7 @@ impl SceneData {
             box_min,
             box_max,
             world_from_data: world_from_data(cloud.meta.mode),
+            grid: None,
         }
     }
 
@@ -131,6 +139,7 @@ pub struct Renderer {
     pub frame: FrameBinding,
     pub points: PointsPass,
     pub lines: LinesPass,
+    pub surface: SurfacePass,
 }
 
 impl Renderer {
@@ -139,6 +148,7 @@ impl Renderer {
         Self {
             points: PointsPass::new(device, &frame),
             lines: LinesPass::new(device, &frame),
+            surface: SurfacePass::new(device, &frame),
             frame,
         }
     }
@@ -157,6 +167,10 @@ impl Renderer {
         if let Some(data) = data {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
+            if settings.view == ViewKind::Surface {
+                self.surface
+                    .prepare(queue, encoder, data.grid.as_ref(), &settings.surface);
+            }
         }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("scene::main_pass"),
@@ -190,7 +204,8 @@ impl Renderer {
             return;
         };
         match settings.view {
-            ViewKind::Points | ViewKind::Surface | ViewKind::Volume => {
+            ViewKind::Surface => self.surface.draw(&mut pass, &self.frame),
+            ViewKind::Points | ViewKind::Volume => {
                 self.points.draw(
                     &mut pass,
                     &self.frame,
