@@ -425,9 +425,9 @@ def _tick_years(first: int, last: int) -> list[int]:
 
 def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
     first, last = entries[0].year, entries[-1].year
-    years = _tick_years(first, last)
     ticks = []
     if x_by == "year":
+        years = _tick_years(first, last)
         width = last + 1 - first
         for year in years:
             ticks.append({"at": round(2.0 * (year - first) / width - 1.0, 6), "label": str(year)})
@@ -439,10 +439,14 @@ def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
             "scale": "linear",
             "ticks": ticks,
         }
-    for year in years:
-        starts = [span[0] for e, span in zip(entries, spans, strict=True) if e.year >= year]
-        if starts and (not ticks or round(starts[0], 6) != ticks[-1]["at"]):
-            ticks.append({"at": round(starts[0], 6), "label": str(year)})
+    # By order: a tick at the first song of each year (short ranges) or decade, where one is.
+    step = 1 if last - first <= 12 else (10 if last - first <= 80 else 20)
+    seen = set()
+    for entry, span in zip(entries, spans, strict=True):
+        group = entry.year - entry.year % step
+        if group not in seen:
+            seen.add(group)
+            ticks.append({"at": round(span[0], 6), "label": str(max(group, first))})
     return {
         "label": "year",
         "unit": "year",
