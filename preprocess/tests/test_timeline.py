@@ -395,3 +395,15 @@ def test_bad_flags_exit_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["timeline", str(tmp_path), "--frames-per-song", "0"])
     assert exc.value.code == 2
+
+
+def test_progress_line_on_a_tty(tmp_path, capsys, monkeypatch):
+    tagged_folder(tmp_path / "m", [1990, 2000])
+    monkeypatch.setattr("sys.stderr.isatty", lambda: True)
+    status, err = cli_timeline(
+        [tmp_path / "m", "--x-by", "order"], tmp_path / "t.ply", capsys, tmp_path / "c"
+    )
+    assert status == 0 and "\r" in err and "[2/2]" in err
+    _, meta = read_ply(tmp_path / "t.ply")
+    assert [s["x_min"] for s in meta["songs"]] == [-1.0, 0.0]
+    assert meta["extraction"]["x_by"] == "order"
