@@ -370,9 +370,14 @@ def compute_all(
             collect(_job(path, n_fft, hop_length, cache_dir))
     else:
         with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
-            futures = [pool.submit(_job, p, n_fft, hop_length, cache_dir) for p in paths]
+            futures = {pool.submit(_job, p, n_fft, hop_length, cache_dir): p for p in paths}
             for future in as_completed(futures):
-                collect(future.result())
+                try:
+                    result = future.result()
+                except Exception as exc:  # noqa: BLE001 - e.g. a worker killed for memory
+                    reason = " ".join(str(exc).split()) or type(exc).__name__
+                    result = (futures[future], None, False, f"worker failed ({reason})")
+                collect(result)
     return songs, failed, n_cached
 
 
