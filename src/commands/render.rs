@@ -8,6 +8,7 @@ use loudscape::cloud::PointCloud;
 use loudscape::overlay;
 use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameView;
+use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 
 #[derive(clap::Args, Debug)]
@@ -23,9 +24,9 @@ pub struct RenderArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
-    /// Point disc diameter in pixels.
-    #[arg(long, default_value_t = 2.0)]
-    pub point_size: f32,
+    /// Point disc diameter in pixels (default: by the number of points).
+    #[arg(long)]
+    pub point_size: Option<f32>,
     /// Surface extraction method: mt (marching tetrahedra) or dc (dual contouring).
     #[arg(long, default_value = "mt")]
     pub method: String,
@@ -138,11 +139,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    if !(0.5..=64.0).contains(&args.point_size) {
-        bail!(
-            "point size {} is out of range 0.5 to 64 pixels",
-            args.point_size
-        );
+    if let Some(size) = args.point_size {
+        if !(0.5..=64.0).contains(&size) {
+            bail!("point size {size} is out of range 0.5 to 64 pixels");
+        }
     }
     let method = super::mesh::parse_method(&args.method)?;
     let iso_value = super::mesh::check_iso(args.iso)?;
@@ -154,7 +154,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         view,
         ..Default::default()
     };
-    settings.points.size_px = args.point_size;
+    settings.points.size_px = args
+        .point_size
+        .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
     settings.surface.method = method;
     settings.surface.iso_value = iso_value;
     if view == ViewKind::Surface {
@@ -214,10 +216,11 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
             let output = args
                 .out_dir
                 .join(format!("{stem}_{}.png", view.name().to_lowercase()));
-            let settings = RenderSettings {
+            let mut settings = RenderSettings {
                 view,
                 ..Default::default()
             };
+            settings.points.size_px = PointStyle::size_for(cloud.points.len());
             if view == ViewKind::Surface {
                 prepare_surface(&gpu, &renderer, &cloud, &mut data, &settings)?;
             }

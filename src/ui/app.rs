@@ -51,6 +51,8 @@ impl Slot {
 
 struct Loaded {
     id: u64,
+    /// Point size for this cloud (sparse timelines want larger discs than dense songs).
+    point_size: f32,
     cloud: Arc<PointCloud>,
     labels: overlay::AxisLabels,
     world_from_data: glam::Mat4,
@@ -221,6 +223,7 @@ impl LoudscapeApp {
         };
         let loaded = Loaded {
             id,
+            point_size: crate::render::points::PointStyle::size_for(cloud.points.len()),
             cloud: Arc::new(cloud),
             labels,
             world_from_data,
@@ -289,7 +292,19 @@ impl LoudscapeApp {
 
         ui.add_space(6.0);
         ui.label(RichText::new("Points").strong());
-        ui.add(egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0).text("size (px)"));
+        if let Some(size) = self.active().map(|l| l.point_size) {
+            self.settings.points.size_px = size;
+        }
+        let size_changed = ui
+            .add(egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0).text("size (px)"))
+            .changed();
+        if size_changed {
+            let size = self.settings.points.size_px;
+            match self.active {
+                Slot::Song => self.song.iter_mut().for_each(|l| l.point_size = size),
+                Slot::Timeline => self.timeline.iter_mut().for_each(|l| l.point_size = size),
+            }
+        }
         ui.add(
             egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0).text("min loudness"),
         );
