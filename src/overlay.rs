@@ -40,7 +40,7 @@ pub fn axis_title(axis: &Axis, fallback: &str) -> String {
     } else {
         &axis.label
     };
-    if axis.unit.is_empty() {
+    if axis.unit.is_empty() || axis.unit.eq_ignore_ascii_case(name) {
         name.to_string()
     } else {
         format!("{name} ({})", axis.unit)

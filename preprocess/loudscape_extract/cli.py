@@ -169,10 +169,129 @@ def build_parser() -> argparse.ArgumentParser:
         default="linear",
         help="z axis: linear in bin index (default) or log frequency (drops the 0 Hz bin)",
     )
-    for sub in (song,):
+    timeline = commands.add_parser(
+        "timeline",
+        help="many songs -> one chronological cloud (one point per sampled frame)",
+        description="Many songs -> one point cloud ordered by year: x song position (by year "
+        "or by order), y frame RMS level (-60..0 dBFS), z frame crest factor (1st-99th "
+        "percentile over all songs), scalar A-weighted frame level, hp frame hp ratio. Years, "
+        "titles and artists come from tags (mutagen) or from --manifest.",
+    )
+    timeline.add_argument(
+        "inputs", nargs="*", help="audio files and folders (searched recursively)"
+    )
+    timeline.add_argument(
+        "--manifest",
+        help="CSV with columns path, year[, title, artist]; paths relative to its folder",
+    )
+    timeline.add_argument("-o", "--output", default="timeline.ply", help="PLY file to write")
+    timeline.add_argument(
+        "--x-by",
+        choices=("year", "order"),
+        default="year",
+        help="x proportional to the year (default) or each song an equal span in order",
+    )
+    timeline.add_argument(
+        "--frames-per-song",
+        type=_positive_int,
+        default=1024,
+        help="frames sampled evenly per song (1024; fewer if a song has fewer)",
+    )
+    timeline.add_argument("--n-fft", type=_positive_even, default=2048, help="STFT size (2048)")
+    timeline.add_argument("--hop", type=_positive_int, default=1024, help="STFT hop (1024)")
+    timeline.add_argument(
+        "--cache-dir",
+        help="per-song feature cache (default $XDG_CACHE_HOME/loudscape or ~/.cache/loudscape)",
+    )
+    timeline.add_argument("--no-cache", action="store_true", help="neither read nor write it")
+    timeline.add_argument(
+        "--jobs",
+        "-j",
+        type=_positive_int,
+        default=os.cpu_count() or 1,
+        help="songs in parallel worker processes (default: number of cores)",
+    )
+
+    report = commands.add_parser(
+        "report",
+        help="plot a timeline's per-year loudness metrics (PNG, optional CSV)",
+        description="Per year: integrated loudness, crest factor (median and 5th-95th "
+        "percentile band over songs), loudness range and hp mean, from a timeline PLY.",
+    )
+    report.add_argument("input", help="timeline PLY written by the timeline command")
+    report.add_argument("-o", "--output", default="report.png", help="PNG file to write")
+    report.add_argument("--csv", help="also write the per-year table as CSV")
+
+    for sub in (song, timeline, report):
         sub.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
         sub.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     return parser
+
+
+def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
+    """The timeline subcommand: build, then a summary on stderr; 1 when any song failed."""
+    from loudscape_extract.timeline import build_timeline, default_cache_dir
+
+    width = [0]
+
+    def progress(done: int, total: int, path: str) -> None:
+        if tty:
+            line = f"{PROG}: [{done}/{total}] {os.path.basename(path)}"[:100]
+            print("\r" + line.ljust(width[0]), end="", file=sys.stderr, flush=True)
+            width[0] = len(line)
+
+    start = time.perf_counter()
+    cache_dir = None if args.no_cache else (args.cache_dir or default_cache_dir())
+    try:
+        result = build_timeline(
+            args.inputs,
+            args.output,
+            manifest=args.manifest,
+            x_by=args.x_by,
+            frames_per_song=args.frames_per_song,
+            n_fft=args.n_fft,
+            hop_length=args.hop,
+            cache_dir=cache_dir,
+            jobs=args.jobs,
+            progress=progress,
+        )
+    finally:
+        if tty and width[0]:
+            print("\r" + " " * width[0] + "\r", end="", file=sys.stderr, flush=True)
+    elapsed = time.perf_counter() - start
+    for path in result.without_year:
+        print(f"{PROG}: skipped: {path}: no year in its tags", file=sys.stderr)
+    for path, reason in sorted(result.failed.items()):
+        print(f"{PROG}: skipped: {path}: {reason}", file=sys.stderr)
+    if not args.quiet:
+        songs = result.metadata["songs"]
+        print(
+            f"{PROG}: wrote {args.output}: {len(songs)} song(s), "
+            f"{result.metadata['point_count']} points in {elapsed:.1f} s "
+            f"({result.cached} from cache)",
+            file=sys.stderr,
+        )
+        if result.few_frames:
+            print(
+                f"{PROG}: {len(result.few_frames)} song(s) have fewer than "
+                f"{args.frames_per_song} non-silent frames and use all they have: "
+                + ", ".join(result.few_frames[:5])
+                + (" ..." if len(result.few_frames) > 5 else ""),
+                file=sys.stderr,
+            )
+        if result.without_year:
+            print(
+                f"{PROG}: left out {len(result.without_year)} song(s) without a year",
+                file=sys.stderr,
+            )
+    if result.failed:
+        print(
+            f"{PROG}: {len(result.failed)} song(s) failed and were skipped: "
+            + ", ".join(sorted(result.failed)),
+            file=sys.stderr,
+        )
+        return 1
+    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -194,6 +313,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                 freq_scale=args.freq_scale,
                 progress=progress,
             )
+        elif args.command == "timeline":
+            return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
+        elif args.command == "report":
+            from loudscape_extract.report import write_report
+
+            write_report(args.input, args.output, csv_path=args.csv)
     except ExtractError as exc:
         if args.debug:
             raise
@@ -208,7 +333,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             raise
         reason = " ".join(str(exc).split()) or type(exc).__name__
-        print(f"{PROG}: error: {args.input}: internal error: {reason}", file=sys.stderr)
+        where = getattr(args, "input", None) or getattr(args, "output", "")
+        print(f"{PROG}: error: {where}: internal error: {reason}", file=sys.stderr)
         return 1
     return 0
 

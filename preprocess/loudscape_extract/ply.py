@@ -11,7 +11,7 @@ import numpy as np
 
 from loudscape_extract.errors import ExtractError
 
-__all__ = ["PROPERTIES", "encode_header", "read_ply", "write_ply"]
+__all__ = ["PROPERTIES", "encode_header", "read_ply", "read_ply_metadata", "write_ply"]
 
 PROPERTIES = ("x", "y", "z", "scalar", "hp")
 META_PREFIX = "comment loudscape-meta "
@@ -122,3 +122,35 @@ def read_ply(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
         raise ExtractError(f"body has {len(body)} bytes, expected {n_points * 20}", path=name)
     points = np.frombuffer(body, dtype="<f4").reshape(n_points, len(PROPERTIES))
     return points.astype(np.float32), metadata
+
+
+def read_ply_metadata(path: str | os.PathLike, *, max_header_bytes: int = 64 << 20) -> dict:
+    """The ``loudscape-meta`` object of a PLY file, reading only its header ({} when absent).
+
+    Raises
+    ------
+    ExtractError
+        Unreadable file, not a PLY, or a header without ``end_header``.
+    """
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as handle:
+            if handle.readline() != b"ply\n":
+                raise ExtractError("not a PLY file (no 'ply' line)", path=name)
+            read = 4
+            while read < max_header_bytes:
+                line = handle.readline()
+                if not line:
+                    break
+                read += len(line)
+                if line == b"end_header\n":
+                    return {}
+                text = line.decode("ascii", errors="replace").rstrip("\n")
+                if text.startswith(META_PREFIX):
+                    try:
+                        return json.loads(text[len(META_PREFIX) :])
+                    except ValueError as exc:
+                        raise ExtractError(f"bad loudscape-meta JSON ({exc})", path=name) from exc
+    except OSError as exc:
+        raise ExtractError(f"cannot read file ({exc.strerror or exc})", path=name) from exc
+    raise ExtractError("not a PLY file (no 'end_header')", path=name)

@@ -22,6 +22,18 @@ pub struct BenchArgs {
     /// Frames per measurement.
     #[arg(long, default_value_t = 60)]
     pub frames: usize,
+    /// Timed runs per pass measurement (the median is reported).
+    #[arg(long, default_value_t = 10)]
+    pub runs: usize,
+    /// Isovalue of the isosurface benchmarks.
+    #[arg(long, default_value_t = 0.3)]
+    pub iso: f32,
+    /// Write the benchmark fields here as .npy files (for bench/bench_surface.py).
+    #[arg(long)]
+    pub fields_dir: Option<PathBuf>,
+    /// Measure only these parts: points, surface (comma-separated); all when omitted.
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
 }
 
 /// The median and 90th percentile of `samples` (milliseconds).
@@ -55,6 +67,30 @@ fn timed_frame(
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    const PARTS: [&str; 2] = ["points", "surface"];
+    for part in &args.only {
+        if !PARTS.contains(&part.as_str()) {
+            anyhow::bail!("--only {part}: not one of {}", PARTS.join(", "));
+        }
+    }
+    let wants = |part: &str| args.only.is_empty() || args.only.iter().any(|p| p == part);
+    if let Some(dir) = &args.fields_dir {
+        if !dir.is_dir() {
+            anyhow::bail!("{}: the folder does not exist", dir.display());
+        }
+    }
+    if wants("points") {
+        bench_points(&args)?;
+    }
+    if wants("surface") {
+        let surfaces = super::bench_surface::run(args.runs, args.iso, args.fields_dir.as_deref())?;
+        super::bench_surface::print_paper_comparison(&surfaces);
+    }
+    Ok(())
+}
+
+/// Load, first frame and points frame times on the song cloud.
+fn bench_points(args: &BenchArgs) -> anyhow::Result<()> {
     let (width, height) = super::parse_size(&args.size)?;
     let process_start = Instant::now();
     let load_start = Instant::now();

@@ -8,6 +8,7 @@ use loudscape::cloud::PointCloud;
 use loudscape::overlay;
 use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameView;
+use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 
 #[derive(clap::Args, Debug)]
@@ -23,9 +24,15 @@ pub struct RenderArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
-    /// Point disc diameter in pixels.
-    #[arg(long, default_value_t = 2.0)]
-    pub point_size: f32,
+    /// Point disc diameter in pixels (default: by the number of points).
+    #[arg(long)]
+    pub point_size: Option<f32>,
+    /// Surface extraction method: mt (marching tetrahedra) or dc (dual contouring).
+    #[arg(long, default_value = "mt")]
+    pub method: String,
+    /// Surface isovalue in [0, 1] of the normalized loudness density.
+    #[arg(long, default_value_t = 0.3)]
+    pub iso: f32,
     /// Leave out the axis labels.
     #[arg(long)]
     pub no_labels: bool,
@@ -132,21 +139,29 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    if !(0.5..=64.0).contains(&args.point_size) {
-        bail!(
-            "point size {} is out of range 0.5 to 64 pixels",
-            args.point_size
-        );
+    if let Some(size) = args.point_size {
+        if !(0.5..=64.0).contains(&size) {
+            bail!("point size {size} is out of range 0.5 to 64 pixels");
+        }
     }
+    let method = super::mesh::parse_method(&args.method)?;
+    let iso_value = super::mesh::check_iso(args.iso)?;
     let cloud = load_cloud(&args.input)?;
     let gpu = GpuContext::new_headless()?;
     let renderer = Renderer::new(&gpu.device);
-    let data = SceneData::new(&gpu.device, &renderer, &cloud);
+    let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
     let mut settings = RenderSettings {
         view,
         ..Default::default()
     };
-    settings.points.size_px = args.point_size;
+    settings.points.size_px = args
+        .point_size
+        .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
+    settings.surface.method = method;
+    settings.surface.iso_value = iso_value;
+    if view == ViewKind::Surface {
+        prepare_surface(&gpu, &renderer, &cloud, &mut data, &settings)?;
+    }
     render_to_file(
         &gpu,
         &renderer,
@@ -162,6 +177,26 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Builds the grid (until the GPU voxelizer lands, the CPU stand-in) and extracts the surface,
+/// waiting for it, so the single headless frame shows the whole surface.
+fn prepare_surface(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    cloud: &PointCloud,
+    data: &mut SceneData,
+    settings: &RenderSettings,
+) -> anyhow::Result<()> {
+    let res = super::mesh::default_resolution(cloud.meta.mode);
+    let grid = data
+        .grid
+        .get_or_insert_with(|| super::mesh::stand_in_grid(&gpu.device, cloud, res));
+    renderer
+        .surface
+        .extract_blocking(&gpu.queue, grid, &settings.surface)
+        .with_context(|| format!("{}: extracting the surface", cloud.path.display()))?;
+    Ok(())
+}
+
 pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
     let size = super::parse_size(&args.size)?;
     std::fs::create_dir_all(&args.out_dir)
@@ -172,7 +207,7 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
     let mut written = Vec::new();
     for input in &args.inputs {
         let cloud = load_cloud(input)?;
-        let data = SceneData::new(&gpu.device, &renderer, &cloud);
+        let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
         let stem = input
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -181,10 +216,14 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
             let output = args
                 .out_dir
                 .join(format!("{stem}_{}.png", view.name().to_lowercase()));
-            let settings = RenderSettings {
+            let mut settings = RenderSettings {
                 view,
                 ..Default::default()
             };
+            settings.points.size_px = PointStyle::size_for(cloud.points.len());
+            if view == ViewKind::Surface {
+                prepare_surface(&gpu, &renderer, &cloud, &mut data, &settings)?;
+            }
             render_to_file(
                 &gpu, &renderer, &cloud, &data, None, size, &settings, true, &output,
             )?;

@@ -3,11 +3,14 @@
 
 pub mod composite;
 pub mod context;
+pub mod dual_contour;
 pub mod frame;
 pub mod grid;
 pub mod headless;
 pub mod lines;
+pub mod marching_tets;
 pub mod markers;
+pub mod mesh;
 pub mod palette;
 pub mod points;
 pub mod scene;

@@ -226,6 +226,18 @@ impl PointsPass {
     }
 }
 
+impl PointStyle {
+    /// A disc size that suits a cloud of `count` points: small discs for dense song clouds,
+    /// larger ones for sparse timelines.
+    pub fn size_for(count: usize) -> f32 {
+        match count {
+            0..=20_000 => 4.0,
+            20_001..=100_000 => 3.0,
+            _ => 2.0,
+        }
+    }
+}
+
 /// Every how many points one is drawn: 1 at rest, more while moving so that at most
 /// `style.max_points_moving` are drawn.
 pub fn lod_stride(total: u64, style: &PointStyle, moving: bool) -> u32 {

@@ -7,8 +7,10 @@ use glam::{Mat4, Vec3};
 
 use crate::cloud::{DataMode, PointCloud};
 use crate::render::frame::{FrameBinding, FrameView};
+use crate::render::grid::VoxelGrid;
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
 use crate::render::markers::{MarkerBox, MarkersPass};
+use crate::render::mesh::{SurfacePass, SurfaceSettings};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
 use crate::render::target::{BACKGROUND, RenderTarget};
 
@@ -33,7 +35,7 @@ impl ViewKind {
 
     /// Whether this build can draw the view; the others are shown as not yet available.
     pub fn available(self) -> bool {
-        matches!(self, ViewKind::Points)
+        matches!(self, ViewKind::Points | ViewKind::Surface)
     }
 
     pub fn parse(name: &str) -> Option<Self> {
@@ -51,6 +53,8 @@ pub struct RenderSettings {
     pub show_box: bool,
     /// Translucent boxes and planes over the data: the playhead, a loop range, a timeline song.
     pub markers: Vec<MarkerBox>,
+    // Surface view.
+    pub surface: SurfaceSettings,
 }
 
 impl Default for RenderSettings {
@@ -60,6 +64,7 @@ impl Default for RenderSettings {
             points: PointStyle::default(),
             show_box: true,
             markers: Vec::new(),
+            surface: SurfaceSettings::default(),
         }
     }
 }
@@ -83,6 +88,8 @@ pub struct SceneData {
     pub box_min: Vec3,
     pub box_max: Vec3,
     pub world_from_data: Mat4,
+    /// The voxelized fields the Surface (and Volume) views are built from; None until set.
+    pub grid: Option<VoxelGrid>,
 }
 
 impl SceneData {
@@ -114,6 +121,7 @@ impl SceneData {
             box_min,
             box_max,
             world_from_data: world_from_data(cloud.meta.mode),
+            grid: None,
         }
     }
 
@@ -136,6 +144,7 @@ pub struct Renderer {
     pub points: PointsPass,
     pub lines: LinesPass,
     pub markers: MarkersPass,
+    pub surface: SurfacePass,
 }
 
 impl Renderer {
@@ -145,6 +154,7 @@ impl Renderer {
             points: PointsPass::new(device, &frame),
             lines: LinesPass::new(device, &frame),
             markers: MarkersPass::new(device, &frame),
+            surface: SurfacePass::new(device, &frame),
             frame,
         }
     }
@@ -164,6 +174,10 @@ impl Renderer {
         if let Some(data) = data {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
+            if settings.view == ViewKind::Surface {
+                self.surface
+                    .prepare(queue, encoder, data.grid.as_ref(), &settings.surface);
+            }
         }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("scene::main_pass"),
@@ -197,7 +211,8 @@ impl Renderer {
             return;
         };
         match settings.view {
-            ViewKind::Points | ViewKind::Surface | ViewKind::Volume => {
+            ViewKind::Surface => self.surface.draw(&mut pass, &self.frame),
+            ViewKind::Points | ViewKind::Volume => {
                 self.points.draw(
                     &mut pass,
                     &self.frame,

@@ -9,6 +9,10 @@ pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 pub const MARKERS: &str = include_str!("../../shaders/markers.wgsl");
+pub const ISO_GRID: &str = include_str!("../../shaders/utils/iso_grid.wgsl");
+pub const MARCHING_TETS: &str = include_str!("../../shaders/marching_tets.wgsl");
+pub const DUAL_CONTOUR: &str = include_str!("../../shaders/dual_contour.wgsl");
+pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -31,6 +35,18 @@ pub fn composite() -> String {
     COMPOSITE.to_string()
 }
 
+pub fn marching_tets() -> String {
+    compose(&[ISO_GRID, MARCHING_TETS])
+}
+
+pub fn dual_contour() -> String {
+    compose(&[ISO_GRID, DUAL_CONTOUR])
+}
+
+pub fn mesh() -> String {
+    compose(&[FRAME, MESH])
+}
+
 /// Every shader module the app builds, by name, as handed to the GPU.
 pub fn all() -> Vec<(&'static str, String)> {
     vec![
@@ -38,6 +54,9 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("lines", lines()),
         ("composite", composite()),
         ("markers", markers()),
+        ("marching_tets", marching_tets()),
+        ("dual_contour", dual_contour()),
+        ("mesh", mesh()),
     ]
 }
 

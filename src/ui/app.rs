@@ -12,8 +12,11 @@ use eframe::egui_wgpu;
 use crate::camera::Camera;
 use crate::cloud::{DataMode, PointCloud};
 use crate::overlay;
+use crate::pick::{self, CpuGrid, Reading};
 use crate::render::frame::FrameView;
+use crate::render::markers::MarkerBox;
 use crate::render::scene::{RenderSettings, ViewKind, world_from_data};
+use crate::ui::audio::AudioPanel;
 use crate::ui::bridge::{ViewCallback, ViewResources};
 
 /// How long after the last input the view still counts as moving (drawn at reduced quality).
@@ -51,10 +54,45 @@ impl Slot {
 
 struct Loaded {
     id: u64,
+    /// Point size for this cloud (sparse timelines want larger discs than dense songs).
+    point_size: f32,
     cloud: Arc<PointCloud>,
     labels: overlay::AxisLabels,
     world_from_data: glam::Mat4,
     world_box: (glam::Vec3, glam::Vec3),
+    /// The voxel grid read back once for hover picking in the Surface and Volume views.
+    cpu_grid: Option<CpuGrid>,
+}
+
+/// What is under the cursor, recomputed only when the cursor or the view changed.
+#[derive(Clone, Debug, PartialEq)]
+struct HoverKey {
+    px: glam::Vec2,
+    camera: Camera,
+    size: (u32, u32),
+    view: ViewKind,
+    cloud_id: u64,
+    min_scalar: f32,
+}
+
+#[derive(Clone, Debug, Default)]
+struct Hover {
+    readings: Vec<Reading>,
+    /// Normalized x under the cursor (on the data, or where the ray enters the box).
+    x: Option<f32>,
+}
+
+/// What the app remembers between runs.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Remembered {
+    pub files: Vec<PathBuf>,
+    pub view: Option<ViewKind>,
+    pub camera: Option<Camera>,
+    pub iso_value: Option<f32>,
+    pub show_box: Option<bool>,
+    /// Audio picked by hand for a cloud whose recorded source moved: cloud path -> audio path.
+    pub audio_for: Vec<(PathBuf, PathBuf)>,
 }
 
 struct Loading {
@@ -84,6 +122,21 @@ pub struct LoudscapeApp {
     frame_ms: f32,
     view_aspect: f32,
     screenshot: Option<ScreenshotState>,
+    audio: AudioPanel,
+    hover: Option<(HoverKey, Hover)>,
+    hovered_song: Option<usize>,
+    selected_song: Option<usize>,
+    /// Screenshot path; empty saves `loudscape-<time>.png` in the current directory.
+    shot_path: String,
+    shot_custom_size: bool,
+    shot_size: [u32; 2],
+    shot_requested: bool,
+    last_view: Option<FrameView>,
+    audio_for: Vec<(PathBuf, PathBuf)>,
+    /// Whether to remember state (off for scripted screenshot runs).
+    persist: bool,
+    /// Loads that keep the remembered camera instead of fitting.
+    keep_camera_loads: usize,
 }
 
 /// Opens the window and runs until it closes.
@@ -111,14 +164,22 @@ pub fn run(options: WindowOptions) -> anyhow::Result<()> {
                 .as_ref()
                 .ok_or("no GPU render state: loudscape needs wgpu (Vulkan, Metal or DX12)")?;
             ViewResources::install(render_state);
-            Ok(Box::new(LoudscapeApp::new(options)))
+            // Scripted screenshot runs (tests) start from defaults and remember nothing.
+            let remembered = if options.screenshot.is_some() {
+                None
+            } else {
+                cc.storage
+                    .and_then(|s| eframe::get_value::<Remembered>(s, eframe::APP_KEY))
+            };
+            Ok(Box::new(LoudscapeApp::new(options, remembered)))
         }),
     )
     .map_err(|e| anyhow::anyhow!("cannot open the window: {e}"))
 }
 
 impl LoudscapeApp {
-    fn new(options: WindowOptions) -> Self {
+    fn new(options: WindowOptions, remembered: Option<Remembered>) -> Self {
+        let persist = options.screenshot.is_none();
         let mut app = Self {
             song: None,
             timeline: None,
@@ -139,11 +200,63 @@ impl LoudscapeApp {
                 requested: false,
                 done: Arc::new(AtomicBool::new(false)),
             }),
+            audio: AudioPanel::new(persist),
+            hover: None,
+            hovered_song: None,
+            selected_song: None,
+            shot_path: String::new(),
+            shot_custom_size: false,
+            shot_size: [1920, 1080],
+            shot_requested: false,
+            last_view: None,
+            audio_for: Vec::new(),
+            persist,
+            keep_camera_loads: 0,
         };
-        for file in options.files {
+        let mut files = options.files;
+        if let Some(r) = remembered {
+            if let Some(view) = r.view.filter(|v| v.available()) {
+                app.settings.view = view;
+            }
+            if let Some(iso) = r.iso_value {
+                app.settings.surface.iso_value = iso.clamp(0.0, 1.0);
+            }
+            if let Some(show) = r.show_box {
+                app.settings.show_box = show;
+            }
+            app.audio_for = r.audio_for;
+            // The camera and the files go together: the view comes back as it was left.
+            if files.is_empty() {
+                files = r.files.into_iter().filter(|f| f.is_file()).collect();
+                if let Some(camera) = r.camera
+                    && !files.is_empty()
+                {
+                    app.camera = camera;
+                    app.fit_pending = false;
+                    app.keep_camera_loads = files.len();
+                }
+            }
+        }
+        for file in files {
             app.start_loading(file);
         }
         app
+    }
+
+    fn remembered(&self) -> Remembered {
+        let files = [self.song.as_ref(), self.timeline.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(|l| std::path::absolute(&l.cloud.path).unwrap_or_else(|_| l.cloud.path.clone()))
+            .collect();
+        Remembered {
+            files,
+            view: Some(self.settings.view),
+            camera: Some(self.camera),
+            iso_value: Some(self.settings.surface.iso_value),
+            show_box: Some(self.settings.show_box),
+            audio_for: self.audio_for.clone(),
+        }
     }
 
     fn start_loading(&mut self, path: PathBuf) {
@@ -221,17 +334,37 @@ impl LoudscapeApp {
         };
         let loaded = Loaded {
             id,
+            point_size: crate::render::points::PointStyle::size_for(cloud.points.len()),
             cloud: Arc::new(cloud),
             labels,
             world_from_data,
             world_box: (a.min(b), a.max(b)),
+            cpu_grid: None,
         };
+        if slot == Slot::Song {
+            let remembered = self
+                .audio_for
+                .iter()
+                .find(|(cloud, _)| {
+                    std::path::absolute(&loaded.cloud.path).is_ok_and(|p| &p == cloud)
+                })
+                .map(|(_, audio)| audio.clone());
+            self.audio.load_for(&loaded.cloud, remembered);
+        } else {
+            self.selected_song = None;
+            self.hovered_song = None;
+        }
+        self.hover = None;
         match slot {
             Slot::Song => self.song = Some(loaded),
             Slot::Timeline => self.timeline = Some(loaded),
         }
         self.active = slot;
-        self.fit_pending = true;
+        if self.keep_camera_loads > 0 {
+            self.keep_camera_loads -= 1;
+        } else {
+            self.fit_pending = true;
+        }
     }
 
     fn fit(&mut self) {
@@ -289,11 +422,34 @@ impl LoudscapeApp {
 
         ui.add_space(6.0);
         ui.label(RichText::new("Points").strong());
-        ui.add(egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0).text("size (px)"));
+        if let Some(size) = self.active().map(|l| l.point_size) {
+            self.settings.points.size_px = size;
+        }
+        let size_changed = ui
+            .add(egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0).text("size (px)"))
+            .changed();
+        if size_changed {
+            let size = self.settings.points.size_px;
+            match self.active {
+                Slot::Song => self.song.iter_mut().for_each(|l| l.point_size = size),
+                Slot::Timeline => self.timeline.iter_mut().for_each(|l| l.point_size = size),
+            }
+        }
         ui.add(
             egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0).text("min loudness"),
         );
         hp_legend(ui);
+        if self.settings.view == ViewKind::Surface {
+            ui.label(RichText::new("Surface colour (mean hp)").small());
+            gradient_legend(ui, |t| {
+                crate::render::mesh::warm_cool(t).map(|c| (c * 255.0).round() as u8)
+            });
+            ui.horizontal(|ui| {
+                ui.label(RichText::new("percussive").small());
+                ui.add_space(60.0);
+                ui.label(RichText::new("harmonic").small());
+            });
+        }
 
         ui.add_space(6.0);
         ui.label(RichText::new("Camera").strong());
@@ -308,6 +464,13 @@ impl LoudscapeApp {
                 .small()
                 .weak(),
         );
+
+        ui.add_space(6.0);
+        self.screenshot_controls(ui);
+
+        if self.active == Slot::Timeline {
+            self.timeline_song(ui);
+        }
 
         if let Some(loaded) = self.active() {
             ui.add_space(8.0);
@@ -404,9 +567,20 @@ impl LoudscapeApp {
             frame_index,
             moving,
         };
+        self.last_view = Some(view);
+        let hover_px = response
+            .hover_pos()
+            .map(|p| glam::Vec2::new((p.x - rect.min.x) * ppp, (p.y - rect.min.y) * ppp));
+        self.update_hover(hover_px, &view, moving);
+        if response.clicked() {
+            self.click();
+        }
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
+        let active = self.active();
         let callback = ViewCallback {
             view,
-            settings: self.settings.clone(),
+            settings,
             cloud_id: active.map(|l| l.id),
         };
         let painter = ui.painter_at(rect);
@@ -414,6 +588,9 @@ impl LoudscapeApp {
         if let Some(loaded) = active {
             if self.settings.show_box {
                 overlay::paint(&painter, rect, &view, &loaded.labels);
+            }
+            if let (Some((_, hover)), Some(pos)) = (&self.hover, response.hover_pos()) {
+                paint_readings(&painter, rect, pos, &hover.readings);
             }
         } else {
             let text = if self.loading.is_empty() {
@@ -469,10 +646,17 @@ impl LoudscapeApp {
 }
 
 impl eframe::App for LoudscapeApp {
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        if self.persist {
+            eframe::set_value(storage, eframe::APP_KEY, &self.remembered());
+        }
+    }
+
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         self.frame_ms = self.frame_ms * 0.9 + ctx.input(|i| i.unstable_dt) * 1000.0 * 0.1;
         self.poll_loading(&ctx, frame);
+        self.fetch_grid(frame);
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
                 .dropped_files
@@ -490,9 +674,46 @@ impl eframe::App for LoudscapeApp {
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
             });
+        self.audio.poll(&ctx);
+        let keys_free = !ctx.egui_wants_keyboard_input();
+        if keys_free && ctx.input(|i| i.key_pressed(egui::Key::Space)) && self.active == Slot::Song
+        {
+            self.audio.toggle();
+        }
+        if ctx.input_mut(|i| i.consume_key(egui::Modifiers::COMMAND, egui::Key::S)) {
+            self.shot_requested = true;
+        }
+        if self.active == Slot::Song && self.song.is_some() {
+            egui::Panel::bottom("transport").show(ui, |ui| {
+                ui.add_space(3.0);
+                self.audio.bar(ui);
+                ui.add_space(2.0);
+            });
+        }
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.view_3d(ui));
+        if std::mem::take(&mut self.shot_requested) {
+            self.save_screenshot(frame);
+        }
+        if let Some(track) = self.audio.track_path()
+            && let Some(song) = &self.song
+        {
+            let cloud = std::path::absolute(&song.cloud.path).unwrap_or_default();
+            let track = std::path::absolute(&track).unwrap_or(track);
+            let recorded = crate::playback::resolve_source(&song.cloud)
+                .ok()
+                .and_then(|p| std::path::absolute(p).ok());
+            let entry = self.audio_for.iter().position(|(c, _)| c == &cloud);
+            match (entry, recorded.as_ref() == Some(&track)) {
+                (Some(i), true) => {
+                    self.audio_for.remove(i);
+                }
+                (Some(i), false) => self.audio_for[i].1 = track,
+                (None, false) => self.audio_for.push((cloud, track)),
+                (None, true) => {}
+            }
+        }
         self.handle_screenshot(&ctx);
     }
 }
@@ -561,4 +782,356 @@ fn save_color_image(image: &egui::ColorImage, path: &Path) -> anyhow::Result<()>
     img.save_with_format(&tmp, image::ImageFormat::Png)?;
     std::fs::rename(&tmp, path)?;
     Ok(())
+}
+
+impl LoudscapeApp {
+    /// The playhead plane, the loop range and the hovered or selected timeline song.
+    fn markers(&self) -> Vec<MarkerBox> {
+        let mut markers = Vec::new();
+        let Some(loaded) = self.active() else {
+            return markers;
+        };
+        let axis = &loaded.cloud.meta.axes.x;
+        match self.active {
+            Slot::Song => {
+                if let Some((a, b)) = self.audio.loop_shown() {
+                    markers.push(MarkerBox::x_span(
+                        crate::playback::time_to_x(axis, a),
+                        crate::playback::time_to_x(axis, b),
+                        [0.95, 0.8, 0.3, 0.06],
+                        [0.95, 0.8, 0.3, 0.5],
+                    ));
+                }
+                if let Some(t) = self.audio.time_s() {
+                    markers.push(MarkerBox::playhead(crate::playback::time_to_x(axis, t)));
+                }
+            }
+            Slot::Timeline => {
+                let songs = &loaded.cloud.meta.songs;
+                for (index, alpha) in [(self.selected_song, 0.16), (self.hovered_song, 0.09)] {
+                    let Some(song) = index.and_then(|i| songs.get(i)) else {
+                        continue;
+                    };
+                    if let (Some(a), Some(b)) = (song.x_min, song.x_max) {
+                        markers.push(MarkerBox::x_span(
+                            a as f32,
+                            b as f32,
+                            [1.0, 1.0, 1.0, alpha],
+                            [1.0, 1.0, 1.0, 0.7],
+                        ));
+                    }
+                }
+            }
+        }
+        markers
+    }
+
+    /// Recomputes what is under the cursor when the cursor or the view changed.
+    fn update_hover(&mut self, px: Option<glam::Vec2>, view: &FrameView, moving: bool) {
+        let (Some(px), false) = (px, moving) else {
+            if px.is_none() {
+                self.hover = None;
+                self.hovered_song = None;
+            }
+            return;
+        };
+        let Some(loaded) = self.active() else {
+            self.hover = None;
+            return;
+        };
+        let key = HoverKey {
+            px,
+            camera: view.camera,
+            size: (view.width, view.height),
+            view: self.settings.view,
+            cloud_id: loaded.id,
+            min_scalar: self.settings.points.min_scalar,
+        };
+        if self.hover.as_ref().is_some_and(|(k, _)| k == &key) {
+            return;
+        }
+        let cloud = loaded.cloud.clone();
+        let axes = &cloud.meta.axes;
+        let (origin, dir) = pick::cursor_ray(view, px);
+        let mut hover = Hover::default();
+        match self.settings.view {
+            ViewKind::Points => {
+                let ppp_radius = 5.0;
+                if let Some(i) = pick::pick_point(
+                    &cloud.points,
+                    view,
+                    px,
+                    ppp_radius,
+                    self.settings.points.min_scalar,
+                ) {
+                    hover.readings = pick::point_readings(axes, &cloud.points[i]);
+                    hover.x = Some(cloud.points[i].position[0]);
+                }
+            }
+            ViewKind::Surface | ViewKind::Volume => {
+                let threshold = if self.settings.view == ViewKind::Surface {
+                    self.settings.surface.iso_value
+                } else {
+                    VOLUME_PICK_DENSITY
+                };
+                if let Some(hit) = loaded
+                    .cpu_grid
+                    .as_ref()
+                    .and_then(|g| g.pick(origin, dir, threshold))
+                {
+                    hover.readings = pick::voxel_readings(axes, &hit);
+                    hover.x = Some(hit.position.x);
+                }
+            }
+        }
+        if hover.x.is_none()
+            && let Some((t, _)) =
+                pick::ray_box(origin, dir, glam::Vec3::splat(-1.0), glam::Vec3::ONE)
+        {
+            let p = origin + dir * t;
+            hover.x = Some(p.x.clamp(-1.0, 1.0));
+            let first = pick::position_readings(axes, p);
+            hover.readings = first.into_iter().take(1).collect();
+        }
+        self.hovered_song = match (self.active, hover.x) {
+            (Slot::Timeline, Some(x)) => pick::song_at(&cloud.meta.songs, x),
+            _ => None,
+        };
+        if let Some(song) = self.hovered_song.and_then(|i| cloud.meta.songs.get(i)) {
+            hover.readings.insert(
+                0,
+                Reading {
+                    name: "song".into(),
+                    value: song_title(song),
+                },
+            );
+        }
+        self.hover = Some((key, hover));
+    }
+
+    /// A click on the data: seek there (Song) or select the song (Timeline).
+    fn click(&mut self) {
+        let Some(x) = self.hover.as_ref().and_then(|(_, h)| h.x) else {
+            return;
+        };
+        match self.active {
+            Slot::Song => {
+                if let Some(loaded) = self.song.as_ref() {
+                    let t = crate::playback::x_to_time(&loaded.cloud.meta.axes.x, x);
+                    self.audio.seek(t);
+                }
+            }
+            Slot::Timeline => self.selected_song = self.hovered_song,
+        }
+    }
+
+    /// Reads the active cloud's voxel grid back once, when the view needs it for hovering.
+    fn fetch_grid(&mut self, frame: &eframe::Frame) {
+        if self.settings.view == ViewKind::Points {
+            return;
+        }
+        let Some(render_state) = frame.wgpu_render_state() else {
+            return;
+        };
+        let slot = match self.active {
+            Slot::Song => self.song.as_mut(),
+            Slot::Timeline => self.timeline.as_mut(),
+        };
+        if let Some(loaded) = slot
+            && loaded.cpu_grid.is_none()
+            && ViewResources::has_grid(render_state, loaded.id)
+        {
+            loaded.cpu_grid = ViewResources::read_grid(render_state, loaded.id);
+        }
+    }
+
+    fn screenshot_controls(&mut self, ui: &mut egui::Ui) {
+        ui.label(RichText::new("Screenshot").strong());
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.active().is_some(), egui::Button::new("Save PNG"))
+                .on_hover_text("Ctrl+S (Cmd+S): the 3D view as a PNG")
+                .clicked()
+            {
+                self.shot_requested = true;
+            }
+            ui.checkbox(&mut self.shot_custom_size, "size");
+        });
+        if self.shot_custom_size {
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut self.shot_size[0]).range(16..=8192));
+                ui.label("×");
+                ui.add(egui::DragValue::new(&mut self.shot_size[1]).range(16..=8192));
+                ui.label("px");
+            });
+        }
+        ui.add(
+            egui::TextEdit::singleline(&mut self.shot_path)
+                .hint_text("loudscape-<time>.png")
+                .desired_width(230.0),
+        );
+    }
+
+    /// Renders the current view offscreen (window size or the chosen size) and saves it.
+    fn save_screenshot(&mut self, frame: &eframe::Frame) {
+        let (Some(render_state), Some(mut view)) = (frame.wgpu_render_state(), self.last_view)
+        else {
+            return;
+        };
+        let Some(loaded) = self.active() else {
+            return;
+        };
+        if self.shot_custom_size {
+            view.width = self.shot_size[0].max(1);
+            view.height = self.shot_size[1].max(1);
+        }
+        let path = if self.shot_path.trim().is_empty() {
+            crate::screenshot::timestamped_name(std::time::SystemTime::now())
+        } else {
+            PathBuf::from(self.shot_path.trim())
+        };
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
+        let result =
+            ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
+                .and_then(|image| crate::screenshot::save_png(&image, &path));
+        match result {
+            Ok(()) => self.messages.push(format!(
+                "saved {} ({}×{})",
+                path.display(),
+                view.width,
+                view.height
+            )),
+            Err(e) => self.messages.push(e.to_string()),
+        }
+    }
+
+    /// The hovered or selected timeline song: who, when, how loud, and its own Song cloud.
+    fn timeline_song(&mut self, ui: &mut egui::Ui) {
+        let Some(loaded) = self.timeline.as_ref() else {
+            return;
+        };
+        let cloud = loaded.cloud.clone();
+        let index = self.hovered_song.or(self.selected_song);
+        ui.add_space(6.0);
+        ui.label(RichText::new("Song").strong());
+        let Some(song) = index.and_then(|i| cloud.meta.songs.get(i)) else {
+            ui.label(
+                RichText::new("Hover a song's span to see it; click to keep it.")
+                    .small()
+                    .weak(),
+            );
+            return;
+        };
+        ui.label(RichText::new(song_title(song)).strong());
+        for line in song
+            .metrics
+            .as_ref()
+            .map(overlay::describe_metrics)
+            .unwrap_or_default()
+        {
+            ui.label(RichText::new(line).small());
+        }
+        if let Some(path) = song_cloud_path(&cloud, song) {
+            if ui
+                .button("Open in Song mode")
+                .on_hover_text(path.display().to_string())
+                .clicked()
+            {
+                self.start_loading(path);
+            }
+        } else {
+            ui.label(
+                RichText::new("No Song cloud of it next to the song or the timeline.")
+                    .small()
+                    .weak(),
+            );
+        }
+    }
+}
+
+/// Density at which a hover ray stops in the Volume view.
+const VOLUME_PICK_DENSITY: f32 = 0.1;
+
+/// "Title — Artist (1984)".
+fn song_title(song: &crate::cloud::SongInfo) -> String {
+    let mut text = if song.title.is_empty() {
+        "untitled".to_string()
+    } else {
+        song.title.clone()
+    };
+    if !song.artist.is_empty() {
+        text.push_str(&format!(" — {}", song.artist));
+    }
+    if let Some(year) = song.year {
+        text.push_str(&format!(" ({year})"));
+    }
+    text
+}
+
+/// The song's own Song cloud: same stem .ply next to the song's audio, or next to the timeline.
+fn song_cloud_path(timeline: &PointCloud, song: &crate::cloud::SongInfo) -> Option<PathBuf> {
+    let audio = PathBuf::from(song.path.as_ref()?);
+    let stem = audio.file_stem()?;
+    let mut name = stem.to_os_string();
+    name.push(".ply");
+    let folder = timeline.path.parent().unwrap_or(Path::new(""));
+    let candidates = [
+        audio.with_file_name(&name),
+        folder
+            .join(audio.parent().unwrap_or(Path::new("")))
+            .join(&name),
+        folder.join(&name),
+    ];
+    candidates
+        .into_iter()
+        .find(|p| p.is_file() && p != &timeline.path)
+}
+
+/// The read-out next to the cursor.
+fn paint_readings(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    pos: egui::Pos2,
+    readings: &[Reading],
+) {
+    if readings.is_empty() {
+        return;
+    }
+    let text = readings
+        .iter()
+        .map(|r| format!("{}: {}", r.name, r.value))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let galley =
+        painter.layout_no_wrap(text, egui::FontId::monospace(12.0), Color32::from_gray(230));
+    let size = galley.size() + egui::vec2(12.0, 8.0);
+    let mut min = pos + egui::vec2(16.0, 12.0);
+    if min.x + size.x > rect.right() {
+        min.x = pos.x - 16.0 - size.x;
+    }
+    if min.y + size.y > rect.bottom() {
+        min.y = pos.y - 12.0 - size.y;
+    }
+    let frame = egui::Rect::from_min_size(min, size);
+    painter.rect_filled(frame, 4.0, Color32::from_black_alpha(200));
+    painter.galley(min + egui::vec2(6.0, 4.0), galley, Color32::from_gray(230));
+}
+
+/// A horizontal colour strip for a palette over [0, 1].
+fn gradient_legend(ui: &mut egui::Ui, color: impl Fn(f32) -> [u8; 3]) {
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(200.0, 12.0), egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    let steps = 50;
+    for i in 0..steps {
+        let t = i as f32 / (steps - 1) as f32;
+        let [r, g, b] = color(t);
+        let x0 = rect.left() + rect.width() * i as f32 / steps as f32;
+        let x1 = rect.left() + rect.width() * (i + 1) as f32 / steps as f32;
+        painter.rect_filled(
+            egui::Rect::from_x_y_ranges(x0..=x1 + 0.5, rect.y_range()),
+            0.0,
+            Color32::from_rgb(r, g, b),
+        );
+    }
 }

@@ -48,6 +48,67 @@ impl ViewResources {
         }
     }
 
+    /// Renders the cloud `id` offscreen at the view's size, labels included, for a screenshot.
+    pub fn screenshot(
+        render_state: &egui_wgpu::RenderState,
+        id: u64,
+        cloud: &PointCloud,
+        view: &FrameView,
+        settings: &RenderSettings,
+    ) -> Result<image::RgbaImage, crate::screenshot::ScreenshotError> {
+        let gpu = crate::render::context::GpuContext {
+            adapter: render_state.adapter.clone(),
+            device: render_state.device.clone(),
+            queue: render_state.queue.clone(),
+        };
+        let renderer = render_state.renderer.read();
+        let resources = renderer.callback_resources.get::<ViewResources>();
+        let scene = resources.and_then(|r| r.scenes.get(&id).map(|data| (r, data)));
+        match scene {
+            Some((r, data)) => crate::screenshot::render_view(
+                &gpu,
+                &r.renderer,
+                Some((cloud, data)),
+                view,
+                settings,
+            ),
+            None => {
+                let renderer = Renderer::new(&gpu.device);
+                crate::screenshot::render_view(&gpu, &renderer, None, view, settings)
+            }
+        }
+    }
+
+    /// The voxel grid of cloud `id` read back to the CPU (once per grid, for hover picking).
+    pub fn read_grid(
+        render_state: &egui_wgpu::RenderState,
+        id: u64,
+    ) -> Option<crate::pick::CpuGrid> {
+        let renderer = render_state.renderer.read();
+        let resources = renderer.callback_resources.get::<ViewResources>()?;
+        let grid = resources.scenes.get(&id)?.grid.as_ref()?;
+        let (device, queue) = (&render_state.device, &render_state.queue);
+        let density = grid.read_field(device, queue, &grid.density).ok()?;
+        let hp_mean = grid.read_field(device, queue, &grid.hp_mean).ok()?;
+        Some(crate::pick::CpuGrid {
+            dims: grid.dims,
+            box_min: grid.box_min,
+            box_max: grid.box_max,
+            density,
+            hp_mean,
+        })
+    }
+
+    /// Whether cloud `id` has a voxel grid on the GPU yet.
+    pub fn has_grid(render_state: &egui_wgpu::RenderState, id: u64) -> bool {
+        let renderer = render_state.renderer.read();
+        renderer
+            .callback_resources
+            .get::<ViewResources>()
+            .and_then(|r| r.scenes.get(&id))
+            .is_some_and(|s| s.grid.is_some())
+    }
+
     pub fn remove(render_state: &egui_wgpu::RenderState, id: u64) {
         let mut renderer = render_state.renderer.write();
         if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {

@@ -2,6 +2,7 @@
 //! render passes (an egui_wgpu paint callback: prepare renders offscreen, paint composites).
 
 pub mod app;
+pub mod audio;
 pub mod bridge;
 
 pub use app::{WindowOptions, run};

@@ -1,0 +1,92 @@
+"""Isosurface extraction: loudscape's GPU passes against scikit-image, on the same fields.
+
+Runs ``loudscape bench --fields-dir DIR`` (which times marching tetrahedra and dual contouring
+on a song-like field at 128^3 and 224^3 and writes each field as a .npy file: float32, C order,
+shape (nz, ny, nx), voxel centres at -1 + (index + 0.5) * 2 / n), then times
+``skimage.measure.marching_cubes`` on those fields at the same isovalue in the same run, padded
+by one zero voxel as loudscape closes surfaces at the grid border, and prints the ratios and the
+surface areas.
+
+Usage: python bench/bench_surface.py [--loudscape target/release/loudscape] [--runs 10]
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from skimage import measure
+
+
+def skimage_median_ms(
+    field: np.ndarray, iso: float, runs: int
+) -> tuple[float, int, float]:
+    """Median time (ms), triangle count and area (data units) of scikit-image's marching cubes."""
+    padded = np.pad(field, 1)
+    spacing = (2.0 / field.shape[0], 2.0 / field.shape[1], 2.0 / field.shape[2])
+    times = []
+    verts = faces = None
+    for _ in range(runs):
+        start = time.perf_counter()
+        verts, faces, _, _ = measure.marching_cubes(padded, iso, spacing=spacing)
+        times.append((time.perf_counter() - start) * 1e3)
+    area = float(measure.mesh_surface_area(verts, faces))
+    return float(np.median(times)), len(faces), area
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--loudscape", default="target/release/loudscape")
+    parser.add_argument("--runs", type=int, default=10)
+    parser.add_argument("--iso", type=float, default=0.3)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        command = [
+            args.loudscape,
+            "bench",
+            "--runs",
+            str(args.runs),
+            "--iso",
+            str(args.iso),
+            "--fields-dir",
+            tmp,
+        ]
+        done = subprocess.run(command, capture_output=True, text=True, check=False)
+        print(done.stdout, end="")
+        if done.returncode != 0:
+            print(done.stderr.strip().splitlines()[-1], file=sys.stderr)
+            return 1
+        ours = {}
+        pattern = (
+            r"surface (\S+) (mt|dc) median_ms=([\d.]+) triangles=(\d+) area=([\d.]+)"
+        )
+        for match in re.finditer(pattern, done.stdout):
+            name, method, ms, tris, area = match.groups()
+            ours[(name, method)] = (float(ms), int(tris), float(area))
+        print(f"\nscikit-image {args.runs} runs each, iso {args.iso}:")
+        for npy in sorted(Path(tmp).glob("*.npy")):
+            name = npy.stem
+            ms, tris, area = skimage_median_ms(np.load(npy), args.iso, args.runs)
+            print(
+                f"  {name}: marching_cubes {ms:.1f} ms, {tris} triangles, area {area:.4f}"
+            )
+            for method in ("mt", "dc"):
+                if (name, method) not in ours:
+                    print(f"    {method}: no result")
+                    continue
+                our_ms, _, our_area = ours[(name, method)]
+                print(
+                    f"    {method}: {our_ms:.1f} ms, {ms / our_ms:.2f}x scikit-image's speed, "
+                    f"area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
+                )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,84 @@
+"""The report subcommand, the header-only metadata reader and the committed demo timeline."""
+
+import csv
+import os
+
+import numpy as np
+import pytest
+
+from loudscape_extract.cli import main
+from loudscape_extract.ply import read_ply, read_ply_metadata, write_ply
+from loudscape_extract.report import per_year
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+DEMO = os.path.join(REPO, "data", "demo_timeline.ply")
+
+
+def song(year, lufs, crest, lra=5.0, hp=0.5):
+    metrics = {"integrated_lufs": lufs, "crest_median_db": crest, "lra_lu": lra, "hp_mean": hp}
+    return {"year": year, "title": "", "artist": "", "path": "x", "metrics": metrics}
+
+
+def timeline_file(path, songs):
+    meta = {"format_version": 1, "mode": "timeline", "point_count": 1, "songs": songs}
+    write_ply(path, points=np.zeros((1, 5), np.float32), metadata=meta)
+    return meta
+
+
+def test_read_ply_metadata_matches_read_ply(tmp_path):
+    path = tmp_path / "t.ply"
+    meta = timeline_file(path, [song(1980, -12.0, 8.0)])
+    assert read_ply_metadata(path) == meta == read_ply(path)[1]
+
+
+def test_per_year_statistics():
+    songs = [song(1980, -14.0, 10.0), song(1980, -12.0, 6.0, lra=None), song(1990, -8.0, 4.0)]
+    rows = per_year({"songs": songs})
+    assert [r["year"] for r in rows] == [1980, 1990]
+    first = rows[0]
+    assert first["songs"] == 2 and first["integrated_lufs_median"] == -13.0
+    assert first["crest_median_db"] == 8.0
+    assert first["crest_p5_db"] == pytest.approx(6.2) and first["crest_p95_db"] == pytest.approx(
+        9.8
+    )
+    assert first["lra_lu_median"] == 5.0
+
+
+def test_report_png_and_csv(tmp_path, capsys):
+    path = tmp_path / "t.ply"
+    timeline_file(path, [song(1975, -16.0, 9.0), song(2005, -7.0, 4.0), song(2005, -6.0, 3.0)])
+    png, table = tmp_path / "r.png", tmp_path / "r.csv"
+    assert main(["report", str(path), "-o", str(png), "--csv", str(table)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with open(table) as handle:
+        rows = list(csv.DictReader(handle))
+    assert [r["year"] for r in rows] == ["1975", "2005"]
+    assert float(rows[1]["integrated_lufs_median"]) == -6.5
+
+
+def test_report_bad_inputs(tmp_path, capsys):
+    song_mode = tmp_path / "song.ply"
+    write_ply(song_mode, points=np.zeros((1, 5)), metadata={"mode": "song"})
+    for source, needle in [
+        (tmp_path / "missing.ply", "no such file"),
+        (song_mode, "not a timeline"),
+    ]:
+        out = tmp_path / "r.png"
+        assert main(["report", str(source), "-o", str(out)]) == 1
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and needle in err and str(source) in err
+        assert not out.exists()
+
+
+def test_demo_timeline_shows_the_loudness_war():
+    points, meta = read_ply(DEMO)
+    assert os.path.getsize(DEMO) <= 3_000_000
+    assert meta["mode"] == "timeline" and meta["point_count"] == points.shape[0]
+    decades = [s["year"] // 10 * 10 for s in meta["songs"]]
+    assert all(decades.count(d) >= 2 for d in range(1970, 2020, 10))
+    assert all(not s["path"].startswith("/") for s in meta["songs"])
+    rows = per_year(meta)
+    lufs = [r["integrated_lufs_median"] for r in rows]
+    crest = [r["crest_median_db"] for r in rows]
+    assert lufs[-1] > lufs[0] + 6 and crest[-1] < crest[0] - 3
+    assert np.all(np.abs(points[:, :3]) <= 1)

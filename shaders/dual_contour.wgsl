@@ -1,0 +1,217 @@
+// Dual contouring (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling).
+// Reads the density and hp grids. `cell_vertices` gives every cell whose corners straddle the
+// isovalue one vertex, appended to `vertices` with its index kept in `cell_map`; `quads` appends
+// two triangles (six indices) for every grid edge that straddles the isovalue, joining the four
+// cells around it; `finalize` writes the indexed indirect draw.
+// The vertex minimises a QEF of the edge crossings' tangent planes (normals from the field's
+// gradient), biased toward the crossings' mass point and clamped into its cell (Schaefer and
+// Warren); its normal is the trilinearly interpolated gradient, negated so it points toward
+// lower density (the flip the paper makes), and quads are wound to face the same way.
+
+@group(1) @binding(6) var<storage, read_write> indices: array<u32>;
+// One entry per cell ((dims + 1)^3, cell c at index of c + 1): its vertex, or INVALID.
+@group(1) @binding(7) var<storage, read_write> cell_map: array<u32>;
+
+// The pull toward the mass point, relative to one unit-normal plane.
+const QEF_BIAS: f32 = 0.05;
+
+// The twelve cube edges as corner pairs (lower corner first).
+const CUBE_EDGE_A = array<u32, 12>(0u, 2u, 4u, 6u, 0u, 1u, 4u, 5u, 0u, 1u, 2u, 3u);
+const CUBE_EDGE_B = array<u32, 12>(1u, 3u, 5u, 7u, 2u, 3u, 6u, 7u, 4u, 5u, 6u, 7u);
+
+fn cell_slot(cell: vec3<i32>) -> u32 {
+    let q = vec3<u32>(cell + vec3<i32>(1));
+    let side = params.dims + vec3<u32>(1u);
+    return q.x + side.x * (q.y + side.y * q.z);
+}
+
+fn trilinear_weight(k: u32, x: vec3<f32>) -> f32 {
+    let c = vec3<f32>(corner_offset(k));
+    let w = c * x + (vec3<f32>(1.0) - c) * (vec3<f32>(1.0) - x);
+    return w.x * w.y * w.z;
+}
+
+@compute @workgroup_size(16, 4, 1)
+fn cell_vertices(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (any(id > params.dims)) {
+        return;
+    }
+    let base = vec3<i32>(id) - vec3<i32>(1);
+    var values: array<f32, 8>;
+    var mask = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        let v = sample_density(base + corner_offset(k));
+        values[k] = v;
+        if (v > params.iso_value) {
+            mask |= 1u << k;
+        }
+    }
+    if (mask == 0u || mask == 255u) {
+        return;
+    }
+    var gradients: array<vec3<f32>, 8>;
+    for (var k = 0u; k < 8u; k++) {
+        gradients[k] = sample_gradient(base + corner_offset(k));
+    }
+    // Edge crossings (in cell-local coordinates, [0, 1]^3) and their normals.
+    var points: array<vec3<f32>, 12>;
+    var normals: array<vec3<f32>, 12>;
+    var count = 0u;
+    var mass = vec3<f32>(0.0);
+    var normal_sum = vec3<f32>(0.0);
+    for (var e = 0u; e < 12u; e++) {
+        let a = CUBE_EDGE_A[e];
+        let b = CUBE_EDGE_B[e];
+        if (((mask >> a) & 1u) == ((mask >> b) & 1u)) {
+            continue;
+        }
+        let t = clamp((params.iso_value - values[a]) / (values[b] - values[a]), 0.0, 1.0);
+        let pa = vec3<f32>(corner_offset(a));
+        let p = pa + (vec3<f32>(corner_offset(b)) - pa) * t;
+        let g = gradients[a] + (gradients[b] - gradients[a]) * t;
+        var n = vec3<f32>(0.0);
+        if (length(g) > 1e-20) {
+            n = normalize(g);
+        }
+        points[count] = p;
+        normals[count] = n;
+        mass += p;
+        normal_sum += n;
+        count += 1u;
+    }
+    mass /= f32(max(count, 1u));
+    // Minimise sum (n.(x - p))^2 + bias |x - mass|^2: (A + bias I) y = sum n (n.(p - mass)),
+    // with y = x - mass; A + bias I is symmetric positive definite, solved by its adjugate.
+    var a00 = QEF_BIAS;
+    var a01 = 0.0;
+    var a02 = 0.0;
+    var a11 = QEF_BIAS;
+    var a12 = 0.0;
+    var a22 = QEF_BIAS;
+    var rhs = vec3<f32>(0.0);
+    for (var i = 0u; i < count; i++) {
+        let n = normals[i];
+        a00 += n.x * n.x;
+        a01 += n.x * n.y;
+        a02 += n.x * n.z;
+        a11 += n.y * n.y;
+        a12 += n.y * n.z;
+        a22 += n.z * n.z;
+        rhs += n * dot(n, points[i] - mass);
+    }
+    let c00 = a11 * a22 - a12 * a12;
+    let c01 = a02 * a12 - a01 * a22;
+    let c02 = a01 * a12 - a02 * a11;
+    let c11 = a00 * a22 - a02 * a02;
+    let c12 = a01 * a02 - a00 * a12;
+    let c22 = a00 * a11 - a01 * a01;
+    let det = a00 * c00 + a01 * c01 + a02 * c02;
+    var local = mass;
+    if (abs(det) > 1e-12) {
+        let y = vec3<f32>(
+            c00 * rhs.x + c01 * rhs.y + c02 * rhs.z,
+            c01 * rhs.x + c11 * rhs.y + c12 * rhs.z,
+            c02 * rhs.x + c12 * rhs.y + c22 * rhs.z,
+        ) / det;
+        local = mass + y;
+    }
+    local = clamp(local, vec3<f32>(0.0), vec3<f32>(1.0));
+
+    var gradient = vec3<f32>(0.0);
+    var hp_sum = 0.0;
+    var weight_sum = 0.0;
+    for (var k = 0u; k < 8u; k++) {
+        gradient += trilinear_weight(k, local) * gradients[k];
+        let w = max(values[k], 0.0);
+        hp_sum += w * sample_hp(base + corner_offset(k));
+        weight_sum += w;
+    }
+    var normal = outward_normal(gradient);
+    if (all(normal == vec3<f32>(0.0))) {
+        normal = outward_normal(normal_sum);
+    }
+    var vertex: MeshVertex;
+    vertex.position = data_position(vec3<f32>(base) + local);
+    vertex.hp = weighted_hp(hp_sum, weight_sum);
+    vertex.normal = normal;
+    vertex.pad = 0.0;
+    let index = atomicAdd(&counters.vertices, 1u);
+    if (index < params.vertex_capacity) {
+        vertices[index] = vertex;
+        cell_map[cell_slot(base)] = index;
+    } else {
+        cell_map[cell_slot(base)] = INVALID;
+    }
+}
+
+@compute @workgroup_size(16, 4, 1)
+fn quads(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (any(id > params.dims)) {
+        return;
+    }
+    // Sample s; the edges from s along +x, +y, +z.
+    let s = vec3<i32>(id) - vec3<i32>(1);
+    let inside0 = sample_density(s) > params.iso_value;
+    let units = array<vec3<i32>, 3>(vec3<i32>(1, 0, 0), vec3<i32>(0, 1, 0), vec3<i32>(0, 0, 1));
+    // Whole quads only: with reservations of six, a capacity rounded down to six is never split.
+    let capacity = params.index_capacity - params.index_capacity % 6u;
+    for (var axis = 0u; axis < 3u; axis++) {
+        let b = (axis + 1u) % 3u;
+        let c = (axis + 2u) % 3u;
+        // The four cells around the edge must exist: s[b], s[c] >= 0 (they are <= dims - 1).
+        if (s[b] < 0 || s[c] < 0) {
+            continue;
+        }
+        let inside1 = sample_density(s + units[axis]) > params.iso_value;
+        if (inside0 == inside1) {
+            continue;
+        }
+        let eb = units[b];
+        let ec = units[c];
+        // Counter-clockwise seen from +axis (b x c = axis).
+        var q = array<u32, 4>(
+            cell_map[cell_slot(s - eb - ec)],
+            cell_map[cell_slot(s - ec)],
+            cell_map[cell_slot(s)],
+            cell_map[cell_slot(s - eb)],
+        );
+        if (!inside0) {
+            // Inside beyond the edge: the surface faces -axis.
+            let swap = q[1];
+            q[1] = q[3];
+            q[3] = swap;
+        }
+        let first = atomicAdd(&counters.indices, 6u);
+        let valid = q[0] != INVALID && q[1] != INVALID && q[2] != INVALID && q[3] != INVALID;
+        if (first + 6u > capacity) {
+            continue;
+        }
+        if (!valid) {
+            // A cell's vertex did not fit (the CPU grows the buffers): a degenerate pair keeps
+            // the drawn range clean. Vertex 0 exists, since the vertex buffer overflowed.
+            q = array<u32, 4>(0u, 0u, 0u, 0u);
+        }
+        {
+            indices[first] = q[0];
+            indices[first + 1u] = q[1];
+            indices[first + 2u] = q[2];
+            indices[first + 3u] = q[0];
+            indices[first + 4u] = q[2];
+            indices[first + 5u] = q[3];
+        }
+    }
+}
+
+@compute @workgroup_size(1)
+fn finalize() {
+    let capacity = params.index_capacity - params.index_capacity % 6u;
+    indirect[0] = 0u;
+    indirect[1] = 1u;
+    indirect[2] = 0u;
+    indirect[3] = 0u;
+    indirect[4] = min(atomicLoad(&counters.indices), capacity);
+    indirect[5] = 1u;
+    indirect[6] = 0u;
+    indirect[7] = 0u;
+    indirect[8] = 0u;
+}

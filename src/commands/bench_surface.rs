@@ -1,0 +1,143 @@
+//! The isosurface part of `loudscape bench`: median extraction times of marching tetrahedra and
+//! dual contouring on a song-like field at 128^3 (song mode) and 224^3 (timeline mode), with
+//! triangle counts and surface areas. Optionally writes each field as a .npy file so
+//! bench/bench_surface.py can run scikit-image on exactly the same data.
+//!
+//! .npy layout: float32 little endian, C order, shape (nz, ny, nx), so `field[k, j, i]` is voxel
+//! (i, j, k) of the grid (x fastest, as in the GPU buffers); voxel centres at
+//! -1 + (index + 0.5) * 2 / n on each axis.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Context;
+use glam::{UVec3, Vec3};
+use loudscape::render::context::GpuContext;
+use loudscape::render::frame::FrameBinding;
+use loudscape::render::grid::VoxelGrid;
+use loudscape::render::mesh::{SurfaceMethod, SurfacePass, SurfaceSettings, song_like_field};
+
+/// One measured extraction.
+#[derive(Clone, Debug)]
+pub struct SurfaceTiming {
+    pub field: String,
+    pub method: SurfaceMethod,
+    pub median_ms: f64,
+    pub triangles: u32,
+}
+
+/// Runs the isosurface benchmarks `runs` times each and prints one line per result.
+pub fn run(
+    runs: usize,
+    iso_value: f32,
+    fields_dir: Option<&Path>,
+) -> anyhow::Result<Vec<SurfaceTiming>> {
+    let runs = runs.max(1);
+    let gpu = GpuContext::new_headless()?;
+    println!(
+        "isosurfaces on {} (iso {iso_value}, {runs} runs each)",
+        gpu.describe()
+    );
+    let frame = FrameBinding::new(&gpu.device);
+    let pass = SurfacePass::new(&gpu.device, &frame);
+    let mut results = Vec::new();
+    for (name, n) in [("song_128", 128u32), ("timeline_224", 224u32)] {
+        let dims = UVec3::splat(n);
+        let (density, hp) = song_like_field(dims);
+        if let Some(dir) = fields_dir {
+            let path = dir.join(format!("{name}.npy"));
+            write_npy(&path, &density, dims)
+                .with_context(|| format!("{}: cannot write the field", path.display()))?;
+        }
+        let grid = VoxelGrid::from_fields(
+            &gpu.device,
+            dims,
+            Vec3::splat(-1.0),
+            Vec3::ONE,
+            &density,
+            &hp,
+        );
+        for method in SurfaceMethod::ALL {
+            let settings = SurfaceSettings {
+                method,
+                iso_value,
+                lit: true,
+            };
+            // Warm-up: compiles pipelines and grows the buffers to fit.
+            let counts = match pass.extract_blocking(&gpu.queue, &grid, &settings) {
+                Ok(counts) => counts,
+                Err(e) => {
+                    println!("surface {name} {} error: {e}", method.short_name());
+                    continue;
+                }
+            };
+            let mut times = Vec::with_capacity(runs);
+            for _ in 0..runs {
+                let start = Instant::now();
+                pass.extract_blocking(&gpu.queue, &grid, &settings)?;
+                times.push(start.elapsed().as_secs_f64() * 1e3);
+            }
+            times.sort_by(f64::total_cmp);
+            let median_ms = times[times.len() / 2];
+            let area = pass.read_mesh(&gpu.queue)?.area();
+            println!(
+                "surface {name} {} median_ms={median_ms:.2} triangles={} area={area:.5}",
+                method.short_name(),
+                counts.triangles()
+            );
+            results.push(SurfaceTiming {
+                field: name.to_string(),
+                method,
+                median_ms,
+                triangles: counts.triangles(),
+            });
+        }
+    }
+    Ok(results)
+}
+
+/// The paper's figures (Metal, paper section 5) beside ours.
+pub fn print_paper_comparison(results: &[SurfaceTiming]) {
+    let paper = |field: &str, method: SurfaceMethod| match (field, method) {
+        ("song_128", SurfaceMethod::MarchingTetrahedra) => Some(13.4),
+        ("song_128", SurfaceMethod::DualContouring) => Some(16.2),
+        ("timeline_224", SurfaceMethod::MarchingTetrahedra) => Some(14.7),
+        ("timeline_224", SurfaceMethod::DualContouring) => Some(17.2),
+        _ => None,
+    };
+    for r in results {
+        if let Some(ms) = paper(&r.field, r.method) {
+            println!(
+                "  {} {}: {:.2} ms here, {ms} ms in the paper (Metal): {:.2}x, {} triangles",
+                r.field,
+                r.method.name(),
+                r.median_ms,
+                r.median_ms / ms,
+                r.triangles
+            );
+        }
+    }
+}
+
+/// Writes `field` as a version 1.0 .npy file of shape (nz, ny, nx), float32, C order.
+pub fn write_npy(path: &Path, field: &[f32], dims: UVec3) -> std::io::Result<()> {
+    let mut header = format!(
+        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}), }}",
+        dims.z, dims.y, dims.x
+    );
+    // Magic (6) + version (2) + header length (2) + header + newline, padded to 64 bytes.
+    let total = 10 + header.len() + 1;
+    header.push_str(&" ".repeat(total.div_ceil(64) * 64 - total));
+    header.push('\n');
+    let tmp = path.with_extension("npy.tmp");
+    {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        w.write_all(b"\x93NUMPY\x01\x00")?;
+        w.write_all(&(header.len() as u16).to_le_bytes())?;
+        w.write_all(header.as_bytes())?;
+        w.write_all(bytemuck::cast_slice(field))?;
+        w.flush()?;
+    }
+    std::fs::rename(&tmp, path)
+}

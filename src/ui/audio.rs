@@ -1,0 +1,245 @@
+//! The transport bar: plays the Song cloud's source audio, shows where the playhead is, seeks,
+//! loops a range, and says plainly when there is no device or the file cannot be found (with a
+//! path field to point at it instead).
+
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use eframe::egui::{self, Color32, RichText};
+
+use crate::cloud::PointCloud;
+use crate::playback::{self, PlaybackError, Player, Playhead, RodioBackend, Track};
+
+/// What the bar knows about the song of the current Song cloud.
+enum Source {
+    None,
+    Decoding(PathBuf, Receiver<Result<Track, PlaybackError>>),
+    Ready,
+    Failed(String),
+}
+
+pub struct AudioPanel {
+    player: Player,
+    source: Source,
+    playhead: Option<Playhead>,
+    /// Path typed by the user when the recorded source cannot be found or played.
+    pub path_field: String,
+    pub loop_enabled: bool,
+    pub loop_range: (f64, f64),
+    /// The playback time of the current frame, seconds.
+    time_s: f64,
+    no_device_said: bool,
+}
+
+impl AudioPanel {
+    pub fn new(open_device: bool) -> Self {
+        let player = if open_device {
+            Player::new(&RodioBackend)
+        } else {
+            Player::new(&NoBackend)
+        };
+        Self {
+            player,
+            source: Source::None,
+            playhead: None,
+            path_field: String::new(),
+            loop_enabled: false,
+            loop_range: (0.0, 0.0),
+            time_s: 0.0,
+            no_device_said: false,
+        }
+    }
+
+    /// Finds and decodes the song of a freshly loaded Song cloud (on a worker thread).
+    pub fn load_for(&mut self, cloud: &PointCloud, remembered: Option<PathBuf>) {
+        self.player.unload();
+        self.playhead = None;
+        self.time_s = 0.0;
+        let found = match remembered.filter(|p| p.is_file()) {
+            Some(path) => Ok(path),
+            None => playback::resolve_source(cloud),
+        };
+        match found {
+            Ok(path) => self.decode(path),
+            Err(e) => {
+                self.path_field = cloud
+                    .meta
+                    .source
+                    .as_ref()
+                    .and_then(|s| s.path.clone())
+                    .unwrap_or_default();
+                self.source = Source::Failed(e.to_string());
+            }
+        }
+    }
+
+    fn decode(&mut self, path: PathBuf) {
+        let (sender, receiver) = channel();
+        let thread_path = path.clone();
+        std::thread::spawn(move || {
+            let _ = sender.send(playback::decode(&thread_path));
+        });
+        self.path_field = path.display().to_string();
+        self.source = Source::Decoding(path, receiver);
+    }
+
+    /// The path of the song being played, when it decoded.
+    pub fn track_path(&self) -> Option<PathBuf> {
+        self.player.loaded.as_ref().map(|l| l.track_path.clone())
+    }
+
+    /// Takes a finished decode; keeps repainting while one runs or while playing.
+    pub fn poll(&mut self, ctx: &egui::Context) {
+        if let Source::Decoding(_, receiver) = &self.source {
+            match receiver.try_recv() {
+                Ok(Ok(track)) => {
+                    self.playhead = Some(Playhead::new(track.sample_rate));
+                    self.loop_range = (0.0, track.duration_s());
+                    self.player.load(track);
+                    self.source = Source::Ready;
+                }
+                Ok(Err(e)) => self.source = Source::Failed(e.to_string()),
+                Err(std::sync::mpsc::TryRecvError::Empty) => {
+                    ctx.request_repaint_after(Duration::from_millis(50));
+                }
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                    self.source = Source::Failed("the audio decoder stopped".into());
+                }
+            }
+        }
+        if let (Some(loaded), Some(playhead)) = (self.player.loaded.as_ref(), &mut self.playhead) {
+            self.time_s = playhead.time_s(loaded.transport.as_ref(), Instant::now());
+        }
+        if self.player.is_playing() {
+            ctx.request_repaint();
+        }
+    }
+
+    /// The playhead time, while a song is loaded.
+    pub fn time_s(&self) -> Option<f64> {
+        self.player.loaded.as_ref().map(|_| self.time_s)
+    }
+
+    pub fn loop_shown(&self) -> Option<(f64, f64)> {
+        (self.loop_enabled && self.player.loaded.is_some()).then_some(self.loop_range)
+    }
+
+    pub fn toggle(&mut self) {
+        self.player.toggle();
+    }
+
+    pub fn seek(&mut self, seconds: f64) {
+        self.player.seek_s(seconds);
+        if let Some(p) = self.playhead.as_mut() {
+            *p = Playhead::new(self.player.loaded.as_ref().map_or(1, |l| l.sample_rate));
+        }
+    }
+
+    /// The bar under the 3D view.
+    pub fn bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let loaded = self.player.loaded.as_ref().map(|l| l.duration_s);
+            let playing = self.player.is_playing();
+            let can_play = loaded.is_some() && self.player.no_device().is_none();
+            let label = if playing { "Pause" } else { "Play" };
+            if ui
+                .add_enabled(can_play, egui::Button::new(label))
+                .on_hover_text("Space")
+                .clicked()
+            {
+                self.toggle();
+            }
+            let duration = loaded.unwrap_or(0.0);
+            ui.label(
+                RichText::new(format!(
+                    "{} / {}",
+                    playback::format_clock(self.time_s),
+                    playback::format_clock(duration)
+                ))
+                .monospace(),
+            );
+            if loaded.is_some() {
+                let mut t = self.time_s;
+                let width = (ui.available_width() - 330.0).max(120.0);
+                ui.spacing_mut().slider_width = width;
+                let response =
+                    ui.add(egui::Slider::new(&mut t, 0.0..=duration.max(0.001)).show_value(false));
+                if response.changed() {
+                    self.seek(t);
+                }
+                let before = (self.loop_enabled, self.loop_range);
+                ui.checkbox(&mut self.loop_enabled, "loop");
+                if self.loop_enabled {
+                    let (a, b) = &mut self.loop_range;
+                    ui.add(
+                        egui::DragValue::new(a)
+                            .range(0.0..=duration)
+                            .speed(0.1)
+                            .suffix(" s"),
+                    );
+                    ui.label("–");
+                    ui.add(
+                        egui::DragValue::new(b)
+                            .range(0.0..=duration)
+                            .speed(0.1)
+                            .suffix(" s"),
+                    );
+                    if ui.small_button("from here").clicked() {
+                        *a = self.time_s;
+                        if *b <= *a {
+                            *b = duration;
+                        }
+                    }
+                }
+                if before != (self.loop_enabled, self.loop_range) {
+                    self.player
+                        .set_loop_s(self.loop_shown().filter(|(a, b)| b > a));
+                }
+            }
+        });
+        if let Some(reason) = self.player.no_device() {
+            if !self.no_device_said {
+                log::warn!("no audio device: {reason}");
+                self.no_device_said = true;
+            }
+            ui.label(
+                RichText::new(format!(
+                    "No audio device ({reason}): playback is off; everything else works."
+                ))
+                .small()
+                .color(Color32::from_rgb(230, 180, 90)),
+            );
+        }
+        match &self.source {
+            Source::Decoding(path, _) => {
+                ui.horizontal(|ui| {
+                    ui.spinner();
+                    ui.label(format!("decoding {}", path.display()));
+                });
+            }
+            Source::Failed(message) => {
+                let message = message.clone();
+                ui.colored_label(Color32::from_rgb(240, 120, 100), message);
+                ui.horizontal(|ui| {
+                    ui.label("audio file:");
+                    ui.add(egui::TextEdit::singleline(&mut self.path_field).desired_width(360.0));
+                    if ui.button("Use this file").clicked() {
+                        let path = PathBuf::from(self.path_field.trim());
+                        self.decode(path);
+                    }
+                });
+            }
+            Source::None | Source::Ready => {}
+        }
+    }
+}
+
+/// The backend used when the app must not touch the sound card (screenshot runs in tests).
+struct NoBackend;
+
+impl playback::AudioBackend for NoBackend {
+    fn open(&self) -> Result<Box<dyn playback::AudioOutput>, PlaybackError> {
+        Err(PlaybackError::NoDevice("audio is off for this run".into()))
+    }
+}

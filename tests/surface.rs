@@ -1,0 +1,405 @@
+//! Isosurfaces on the GPU (lavapipe where there is no GPU), read back and checked against
+//! analytic answers: sphere area, closed 2-manifolds of the right genus, dual-contouring vertices
+//! inside their cells, outward normals, degenerate isovalues, buffer growth, golden images.
+
+mod common;
+
+use std::collections::HashMap;
+
+use glam::{UVec3, Vec3};
+use loudscape::camera::Camera;
+use loudscape::cloud::{DataMode, PointCloud};
+use loudscape::render::context::GpuContext;
+use loudscape::render::frame::{FrameBinding, FrameView};
+use loudscape::render::grid::VoxelGrid;
+use loudscape::render::mesh::{
+    CpuMesh, SurfaceMethod, SurfacePass, SurfaceSettings, song_like_field,
+};
+use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+
+const MT: SurfaceMethod = SurfaceMethod::MarchingTetrahedra;
+const DC: SurfaceMethod = SurfaceMethod::DualContouring;
+
+/// A grid over [-1, 1]^3 sampling `field` at voxel centres; hp follows x.
+fn grid_from(gpu: &GpuContext, n: u32, field: impl Fn(Vec3) -> f32) -> VoxelGrid {
+    let dims = UVec3::splat(n);
+    let size = 2.0 / n as f32;
+    let mut density = Vec::new();
+    let mut hp = Vec::new();
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let p = Vec3::new(i as f32, j as f32, k as f32) * size + (size * 0.5 - 1.0);
+                density.push(field(p).clamp(0.0, 1.0));
+                hp.push((p.x + 1.0) * 0.5);
+            }
+        }
+    }
+    VoxelGrid::from_fields(
+        &gpu.device,
+        dims,
+        Vec3::splat(-1.0),
+        Vec3::ONE,
+        &density,
+        &hp,
+    )
+}
+
+const SPHERE_RADIUS: f32 = 0.6;
+
+/// 0.5 on a sphere, rising inward, falling outward, linear over about eight voxels at 128^3.
+fn sphere(p: Vec3) -> f32 {
+    0.5 - (p.length() - SPHERE_RADIUS) * 4.0
+}
+
+const TORUS_MAJOR: f32 = 0.5;
+const TORUS_MINOR: f32 = 0.2;
+
+fn torus(p: Vec3) -> f32 {
+    let ring = Vec3::new(p.x, 0.0, p.z).length() - TORUS_MAJOR;
+    let distance = (ring * ring + p.y * p.y).sqrt() - TORUS_MINOR;
+    0.5 - distance * 4.0
+}
+
+fn extract(
+    gpu: &GpuContext,
+    pass: &SurfacePass,
+    grid: &VoxelGrid,
+    method: SurfaceMethod,
+    iso_value: f32,
+) -> CpuMesh {
+    let settings = SurfaceSettings {
+        method,
+        iso_value,
+        lit: true,
+    };
+    let counts = pass
+        .extract_blocking(&gpu.queue, grid, &settings)
+        .expect("extraction");
+    assert!(counts.fits(), "{counts:?}");
+    pass.read_mesh(&gpu.queue).expect("read back")
+}
+
+fn surface_pass(gpu: &GpuContext) -> SurfacePass {
+    let frame = FrameBinding::new(&gpu.device);
+    SurfacePass::new(&gpu.device, &frame)
+}
+
+/// Every undirected edge of the welded mesh is in exactly two triangles, the two use it in
+/// opposite directions (consistent orientation); returns V - E + F.
+fn closed_manifold_euler(mesh: &CpuMesh) -> i64 {
+    let welded = mesh.welded();
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+    for tri in welded.indices.chunks_exact(3) {
+        for (a, b) in [(tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])] {
+            let entry = edges.entry((a.min(b), a.max(b))).or_default();
+            if a < b {
+                entry.0 += 1;
+            } else {
+                entry.1 += 1;
+            }
+        }
+    }
+    for (edge, (forward, backward)) in &edges {
+        assert_eq!(
+            (*forward, *backward),
+            (1, 1),
+            "edge {edge:?} is used {forward} times forward and {backward} backward"
+        );
+    }
+    let used: std::collections::HashSet<u32> = welded.indices.iter().copied().collect();
+    used.len() as i64 - edges.len() as i64 + welded.triangle_count() as i64
+}
+
+#[test]
+fn sphere_area_within_two_percent_for_both_methods() {
+    let gpu = common::gpu();
+    let pass = surface_pass(&gpu);
+    let grid = grid_from(&gpu, 128, sphere);
+    let expected = 4.0 * std::f64::consts::PI * f64::from(SPHERE_RADIUS).powi(2);
+    for method in SurfaceMethod::ALL {
+        let mesh = extract(&gpu, &pass, &grid, method, 0.5);
+        let area = mesh.area();
+        let error = (area - expected).abs() / expected;
+        println!(
+            "{}: {} triangles, area {area:.5} vs {expected:.5} ({:.3}%)",
+            method.name(),
+            mesh.triangle_count(),
+            error * 100.0
+        );
+        assert!(
+            error < 0.02,
+            "{}: area off by {:.2}%",
+            method.name(),
+            error * 100.0
+        );
+    }
+}
+
+#[test]
+fn marching_tets_sphere_is_a_closed_manifold_of_genus_zero() {
+    let gpu = common::gpu();
+    let pass = surface_pass(&gpu);
+    let grid = grid_from(&gpu, 48, sphere);
+    let mesh = extract(&gpu, &pass, &grid, MT, 0.5);
+    assert!(mesh.triangle_count() > 1000);
+    assert_eq!(closed_manifold_euler(&mesh), 2);
+}
+
+#[test]
+fn marching_tets_torus_is_a_closed_manifold_of_genus_one() {
+    let gpu = common::gpu();
+    let pass = surface_pass(&gpu);
+    let grid = grid_from(&gpu, 48, torus);
+    let mesh = extract(&gpu, &pass, &grid, MT, 0.5);
+    assert_eq!(closed_manifold_euler(&mesh), 0);
+}
+
+#[test]
+fn marching_tets_closes_surfaces_cut_by_the_grid_border() {
+    // A slab filling the grid's lower half: the border closes it into a box.
+    let gpu = common::gpu();
+    let pass = surface_pass(&gpu);
+    let grid = grid_from(&gpu, 24, |p| 0.5 - p.y * 3.0);
+    let mesh = extract(&gpu, &pass, &grid, MT, 0.5);
+    assert_eq!(closed_manifold_euler(&mesh), 2);
+}
+
+#[test]
+fn dual_contour_vertices_lie_inside_straddling_cells() {
+    let gpu = common::gpu();
+    let pass = surface_pass(&gpu);
+    let n = 40;
+    let field = |p: Vec3| torus(p) + 0.08 * (p.x * 9.0).sin() * (p.z * 7.0).cos();
+    let grid = grid_from(&gpu, n, field);
+    let values = grid
+        .read_field(&gpu.device, &gpu.queue, &grid.density)
+        .expect("density");
+    let iso = 0.5;
+    let sample = |q: [i32; 3]| -> f32 {
+        if q.iter().any(|&c| c < 0 || c >= n as i32) {
+            return 0.0;
+        }
+        values[(q[0] + n as i32 * (q[1] + n as i32 * q[2])) as usize]
+    };
+    let straddles = |c: [i32; 3]| -> bool {
+        let mut inside = 0;
+        for k in 0..8 {
+            let q = [c[0] + (k & 1), c[1] + ((k >> 1) & 1), c[2] + ((k >> 2) & 1)];
+            inside += i32::from(sample(q) > iso);
+        }
+        inside != 0 && inside != 8
+    };
+    let mut straddling = 0;
+    for z in -1..n as i32 {
+        for y in -1..n as i32 {
+            for x in -1..n as i32 {
+                straddling += usize::from(straddles([x, y, z]));
+            }
+        }
+    }
+    let mesh = extract(&gpu, &pass, &grid, DC, iso);
+    assert_eq!(
+        mesh.positions.len(),
+        straddling,
+        "one vertex per straddling cell"
+    );
+    let voxel = grid.voxel_size();
+    for p in &mesh.positions {
+        // Grid coordinates of the vertex; its cell is the floor, or a neighbour when it sits on
+        // a cell face.
+        let g = (*p - grid.box_min) / voxel - 0.5;
+        let eps = 1e-3;
+        let options = |v: f32| {
+            let lo = (v - eps).floor() as i32;
+            let hi = (v + eps).floor() as i32;
+            lo..=hi
+        };
+        let found =
+            options(g.x).any(|x| options(g.y).any(|y| options(g.z).any(|z| straddles([x, y, z]))));
+        assert!(
+            found,
+            "vertex {p} (grid {g}) is not inside a straddling cell"
+        );
+    }
+}
+
+#[test]
+fn normals_and_faces_point_outward_for_both_methods() {
+    let gpu = common::gpu();
+    let pass = surface_pass(&gpu);
+    let grid = grid_from(&gpu, 48, sphere);
+    for method in SurfaceMethod::ALL {
+        let mesh = extract(&gpu, &pass, &grid, method, 0.5);
+        for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
+            assert!((n.length() - 1.0).abs() < 1e-3, "normal {n} is not unit");
+            assert!(
+                n.dot(p.normalize()) > 0.9,
+                "{}: normal {n} at {p} does not point outward",
+                method.name()
+            );
+        }
+        for t in 0..mesh.triangle_count() {
+            let [a, b, c] = mesh.triangle(t);
+            let face = (b - a).cross(c - a);
+            if face.length() > 1e-9 {
+                assert!(
+                    face.dot(a + b + c) > 0.0,
+                    "{}: triangle {t} faces inward",
+                    method.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn isovalues_at_and_beyond_the_field_range_never_fail() {
+    let gpu = common::gpu();
+    let pass = surface_pass(&gpu);
+    let grid = grid_from(&gpu, 32, sphere);
+    for method in SurfaceMethod::ALL {
+        for iso in [1.0, 1.5, -0.5, f32::MAX, f32::NAN] {
+            let mesh = extract(&gpu, &pass, &grid, method, iso);
+            assert_eq!(mesh.triangle_count(), 0, "{} at {iso}", method.name());
+        }
+        // At 0 every voxel with any density is inside: the surface wraps the field's support,
+        // here the whole grid (closed by its border).
+        let mesh = extract(&gpu, &pass, &grid, method, 0.0);
+        assert!(mesh.triangle_count() > 0, "{} at 0", method.name());
+    }
+    // An empty field gives an empty surface at every isovalue.
+    let empty = grid_from(&gpu, 16, |_| 0.0);
+    for method in SurfaceMethod::ALL {
+        for iso in [0.0, 0.5, 1.0] {
+            assert_eq!(
+                extract(&gpu, &pass, &empty, method, iso).triangle_count(),
+                0
+            );
+        }
+    }
+}
+
+#[test]
+fn buffers_grow_until_the_surface_fits() {
+    let gpu = common::gpu();
+    let frame = FrameBinding::new(&gpu.device);
+    let grid = grid_from(&gpu, 40, torus);
+    let reference = extract(&gpu, &surface_pass(&gpu), &grid, DC, 0.5);
+    let reference_mt = extract(&gpu, &surface_pass(&gpu), &grid, MT, 0.5);
+    for (method, triangles) in [
+        (MT, reference_mt.triangle_count()),
+        (DC, reference.triangle_count()),
+    ] {
+        // Blocking path.
+        let small = SurfacePass::with_capacity(&gpu.device, &frame, 64, 96);
+        let mesh = extract(&gpu, &small, &grid, method, 0.5);
+        assert_eq!(mesh.triangle_count(), triangles);
+
+        // Interactive path: the size arrives a frame or two late, then the buffers grow.
+        let small = SurfacePass::with_capacity(&gpu.device, &frame, 64, 96);
+        let settings = SurfaceSettings {
+            method,
+            iso_value: 0.5,
+            lit: true,
+        };
+        let mut frames = 0;
+        loop {
+            let mut encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            small.prepare(&gpu.queue, &mut encoder, Some(&grid), &settings);
+            gpu.queue.submit([encoder.finish()]);
+            frames += 1;
+            if !small.needs_another_frame() {
+                break;
+            }
+            assert!(frames < 50, "{}: the surface never settled", method.name());
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let counts = small.counts().expect("counts");
+        assert!(counts.fits(), "{counts:?}");
+        assert_eq!(counts.triangles() as usize, triangles);
+        let mesh = small.read_mesh(&gpu.queue).expect("read");
+        assert_eq!(mesh.triangle_count(), triangles);
+    }
+}
+
+#[test]
+fn surface_shaders_translate_to_metal() {
+    use loudscape::render::shaders;
+    for (name, source) in [
+        ("marching_tets", shaders::marching_tets()),
+        ("dual_contour", shaders::dual_contour()),
+        ("mesh", shaders::mesh()),
+    ] {
+        let module = naga::front::wgsl::parse_str(&source)
+            .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        let options = naga::back::msl::Options::default();
+        let pipeline = naga::back::msl::PipelineOptions::default();
+        naga::back::msl::write_string(&module, &info, &options, &pipeline)
+            .unwrap_or_else(|e| panic!("{name}: MSL: {e:?}"));
+    }
+}
+
+/// The song-like field rendered as a surface, as the render command does.
+fn render_song_surface(method: SurfaceMethod) -> image::RgbaImage {
+    let gpu = common::gpu();
+    let renderer = Renderer::new(&gpu.device);
+    let cloud = PointCloud::synthetic(Vec::new(), DataMode::Song);
+    let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
+    let dims = UVec3::new(96, 64, 64);
+    let (density, hp) = song_like_field(dims);
+    data.grid = Some(VoxelGrid::from_fields(
+        &gpu.device,
+        dims,
+        Vec3::splat(-1.0),
+        Vec3::ONE,
+        &density,
+        &hp,
+    ));
+    let settings = RenderSettings {
+        view: ViewKind::Surface,
+        surface: SurfaceSettings {
+            method,
+            iso_value: 0.35,
+            lit: true,
+        },
+        ..Default::default()
+    };
+    let grid = data.grid.as_ref().expect("grid");
+    renderer
+        .surface
+        .extract_blocking(&gpu.queue, grid, &settings.surface)
+        .expect("extract");
+    let view = FrameView {
+        camera: Camera::from_angles(-35.0, 30.0, 5.2),
+        world_from_data: data.world_from_data,
+        width: 480,
+        height: 320,
+        frame_index: 0,
+        moving: false,
+    };
+    loudscape::render::headless::render_image(&gpu, &renderer, Some(&data), &view, &settings)
+        .expect("render")
+}
+
+#[test]
+fn golden_surface_marching_tets() {
+    let image = render_song_surface(MT);
+    assert!(common::coverage(&image) > 0.08, "the surface is missing");
+    common::assert_golden("surface_mt", &image, 0.01);
+}
+
+#[test]
+fn golden_surface_dual_contour() {
+    let image = render_song_surface(DC);
+    assert!(common::coverage(&image) > 0.08, "the surface is missing");
+    common::assert_golden("surface_dc", &image, 0.01);
+}
