@@ -571,7 +571,12 @@ impl LoudscapeApp {
         let hover_px = response
             .hover_pos()
             .map(|p| glam::Vec2::new((p.x - rect.min.x) * ppp, (p.y - rect.min.y) * ppp));
+        let song_before = self.hovered_song;
         self.update_hover(hover_px, &view, moving);
+        if self.hovered_song != song_before {
+            // The side panel, drawn before the view, shows the new song next frame.
+            ui.ctx().request_repaint();
+        }
         if response.clicked() {
             self.click();
         }
