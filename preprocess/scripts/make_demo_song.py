@@ -4,12 +4,12 @@
 
 Deterministic (numpy, fixed seed): 110 bpm, kick/snare/hat pattern, a bass line and an
 Am-F-C-G chord progression with harmonics and envelopes, a lead line in the second half, an
-intro, a breakdown and a fade-out so the loudness moves. Writes data/demo_song.wav (16-bit,
+intro, a breakdown and a fade-out so the loudness moves. Writes data/demo_song.flac (16-bit,
 stereo, 22.05 kHz; not committed, this script regenerates it) and data/demo_song.ply.
 
 Demo extraction parameters (to keep the PLY under 5 MB): the song is synthesized at
 22.05 kHz, n_fft 2048, hop 1024 (the defaults), noise floor 60 dB instead of the default 80,
-linear frequency. The metadata's source.path is ``data/demo_song.wav``: the script runs the
+linear frequency. The metadata's source.path is ``data/demo_song.flac``: the script runs the
 extractor from the repository root with that relative path.
 """
 
@@ -27,7 +27,7 @@ BPM = 110.0
 SEED = 20240611
 FLOOR_DB = 60.0
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-WAV = os.path.join("data", "demo_song.wav")
+WAV = os.path.join("data", "demo_song.flac")  # lossless and small enough to ship
 PLY = os.path.join("data", "demo_song.ply")
 
 BEAT = 60.0 / BPM
@@ -169,7 +169,7 @@ def main() -> int:
     sys.path.insert(0, os.path.join(REPO, "preprocess"))
     from loudscape_extract.cli import extract_song
 
-    os.chdir(REPO)  # so the metadata records the repo-relative path data/demo_song.wav
+    os.chdir(REPO)  # so the metadata records the repo-relative path data/demo_song.flac
     os.makedirs("data", exist_ok=True)
     soundfile.write(WAV, synthesize(), SAMPLE_RATE, subtype="PCM_16")
     metadata = extract_song(WAV, PLY, floor_db=FLOOR_DB)
