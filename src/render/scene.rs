@@ -10,6 +10,10 @@ use crate::render::frame::{FrameBinding, FrameView};
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
 use crate::render::target::{BACKGROUND, RenderTarget};
+// Volume view and voxel grid.
+use crate::render::grid::VoxelGrid;
+use crate::render::volume::{VolumeGpu, VolumePass, VolumeSettings};
+use crate::render::voxelize::{VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass};
 
 /// What the 3D view shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -32,7 +36,7 @@ impl ViewKind {
 
     /// Whether this build can draw the view; the others are shown as not yet available.
     pub fn available(self) -> bool {
-        matches!(self, ViewKind::Points)
+        matches!(self, ViewKind::Points | ViewKind::Volume)
     }
 
     pub fn parse(name: &str) -> Option<Self> {
@@ -48,6 +52,10 @@ pub struct RenderSettings {
     pub view: ViewKind,
     pub points: PointStyle,
     pub show_box: bool,
+    /// How the voxel grid is built (volume and surface views).
+    pub voxels: VoxelSettings,
+    /// How the volume view draws the grid.
+    pub volume: VolumeSettings,
 }
 
 impl Default for RenderSettings {
@@ -56,6 +64,8 @@ impl Default for RenderSettings {
             view: ViewKind::Points,
             points: PointStyle::default(),
             show_box: true,
+            voxels: VoxelSettings::default(),
+            volume: VolumeSettings::default(),
         }
     }
 }
@@ -79,6 +89,11 @@ pub struct SceneData {
     pub box_min: Vec3,
     pub box_max: Vec3,
     pub world_from_data: Mat4,
+    /// The voxel grid, built on demand by [`SceneData::ensure_grid`].
+    pub grid: Option<VoxelGrid>,
+    pub grid_stats: Option<VoxelStats>,
+    grid_key: Option<(u32, u32)>,
+    volume: Option<VolumeGpu>,
 }
 
 impl SceneData {
@@ -110,7 +125,44 @@ impl SceneData {
             box_min,
             box_max,
             world_from_data: world_from_data(cloud.meta.mode),
+            grid: None,
+            grid_stats: None,
+            grid_key: None,
+            volume: None,
         }
+    }
+
+    /// Builds the voxel grid of `cloud` (the cloud this data was made from) unless one with the
+    /// same resolution and smoothing exists. Returns whether it was rebuilt. Never per frame:
+    /// call when the view needs a grid, the cloud is loaded or the voxel settings change.
+    pub fn ensure_grid(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        renderer: &Renderer,
+        cloud: &PointCloud,
+        settings: &VoxelSettings,
+    ) -> Result<bool, VoxelizeError> {
+        let resolution = settings.resolution_for(cloud.meta.mode);
+        let key = (resolution, settings.smoothing_sigma.to_bits());
+        if self.grid.is_some() && self.grid_key == Some(key) {
+            return Ok(false);
+        }
+        // Free the old grid before building the new one.
+        self.volume = None;
+        self.grid = None;
+        let (grid, stats) = renderer.voxelize.voxelize(
+            device,
+            queue,
+            &cloud.points,
+            resolution,
+            settings.smoothing_sigma,
+        )?;
+        self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
+        self.grid = Some(grid);
+        self.grid_stats = Some(stats);
+        self.grid_key = Some(key);
+        Ok(true)
     }
 
     /// The data box in world space, for fitting the camera.
@@ -131,6 +183,8 @@ pub struct Renderer {
     pub frame: FrameBinding,
     pub points: PointsPass,
     pub lines: LinesPass,
+    pub voxelize: VoxelizePass,
+    pub volume: VolumePass,
 }
 
 impl Renderer {
@@ -139,6 +193,8 @@ impl Renderer {
         Self {
             points: PointsPass::new(device, &frame),
             lines: LinesPass::new(device, &frame),
+            voxelize: VoxelizePass::new(device, &frame),
+            volume: VolumePass::new(device, &frame),
             frame,
         }
     }
@@ -157,6 +213,10 @@ impl Renderer {
         if let Some(data) = data {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
+            if let (ViewKind::Volume, Some(volume)) = (settings.view, &data.volume) {
+                self.volume
+                    .prepare(queue, volume, &settings.volume, view.moving);
+            }
         }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("scene::main_pass"),
@@ -189,8 +249,12 @@ impl Renderer {
         let Some(data) = data else {
             return;
         };
-        match settings.view {
-            ViewKind::Points | ViewKind::Surface | ViewKind::Volume => {
+        match (settings.view, &data.volume) {
+            // The volume view; until its grid is built (ensure_grid), the points stand in.
+            (ViewKind::Volume, Some(volume)) => {
+                self.volume.draw(&mut pass, &self.frame, volume);
+            }
+            (ViewKind::Points | ViewKind::Surface | ViewKind::Volume, _) => {
                 self.points.draw(
                     &mut pass,
                     &self.frame,

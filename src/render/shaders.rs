@@ -8,6 +8,8 @@ pub const PALETTE: &str = include_str!("../../shaders/utils/palette.wgsl");
 pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
+pub const VOXELIZE: &str = include_str!("../../shaders/voxelize.wgsl");
+pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -22,6 +24,14 @@ pub fn lines() -> String {
     compose(&[FRAME, LINES])
 }
 
+pub fn voxelize() -> String {
+    compose(&[FRAME, VOXELIZE])
+}
+
+pub fn volume() -> String {
+    compose(&[FRAME, PALETTE, VOLUME])
+}
+
 pub fn composite() -> String {
     COMPOSITE.to_string()
 }
@@ -32,6 +42,8 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("points", points()),
         ("lines", lines()),
         ("composite", composite()),
+        ("voxelize", voxelize()),
+        ("volume", volume()),
     ]
 }
 
