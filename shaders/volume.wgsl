@@ -14,7 +14,8 @@ struct VolumeParams {
     // x: preset (0 Classic, 1 Ember, 2 Glacial), y: hp tint on, z: gradient shading on,
     // w: most steps per ray.
     options: vec4<u32>,
-    // x: density scale, y: opacity scale, z: step in voxels, w: opacity per voxel at alpha 1.
+    // x: density scale, y: opacity scale times the opacity per voxel at alpha 1, z: step in
+    // voxels, w: emission gain.
     controls: vec4<f32>,
 };
 
@@ -91,7 +92,7 @@ fn ramp(preset: u32, t: f32) -> vec3<f32> {
             vec3<f32>(0.55, 0.82, 0.98), vec3<f32>(0.93, 0.98, 1.00));
     } else {
         stops = array<vec3<f32>, 4>(
-            vec3<f32>(0.10, 0.16, 0.42), vec3<f32>(0.16, 0.56, 0.72),
+            vec3<f32>(0.14, 0.24, 0.58), vec3<f32>(0.16, 0.62, 0.78),
             vec3<f32>(0.96, 0.78, 0.32), vec3<f32>(1.00, 0.97, 0.88));
     }
     let x = clamp(t, 0.0, 1.0) * 3.0;
@@ -164,7 +165,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     let shading = params.options.z != 0u;
     let density_scale = params.controls.x;
     let step = params.controls.z;
-    let opacity = params.controls.y * params.controls.w;
+    let opacity = params.controls.y;
     let light = normalize(frame.light_direction.xyz);
 
     // Jittered start: hides the banding of fixed steps (changes every frame while moving).
@@ -183,8 +184,9 @@ fn fs_main(in: VertexOut) -> FragmentOut {
             if (a > 0.0005) {
                 var rgb = sample.rgb;
                 if (tint) {
-                    let luma = dot(rgb, vec3<f32>(0.299, 0.587, 0.114));
-                    rgb = mix(rgb, hp_palette(trilinear_hp(c)) * (0.35 + 0.8 * luma), 0.85);
+                    // The points' palette, brighter where denser.
+                    let tinted = hp_palette(trilinear_hp(c)) * (0.45 + 0.65 * clamp(value, 0.0, 1.0));
+                    rgb = mix(rgb, tinted, 0.85);
                 }
                 if (shading && a > 0.01) {
                     // Central differences in voxel space; the normal in data space.
@@ -204,7 +206,8 @@ fn fs_main(in: VertexOut) -> FragmentOut {
                         rgb = rgb * mix(1.0, lit, edge);
                     }
                 }
-                color += (1.0 - alpha) * a * rgb;
+                // Emission outweighs absorption a little, so the field glows.
+                color += (1.0 - alpha) * a * rgb * params.controls.w;
                 alpha += (1.0 - alpha) * a;
                 if (alpha > 0.5 && depth >= 1.0) {
                     let data = params.box_min.xyz + u / per_unit;

@@ -22,8 +22,8 @@ pub enum TransferPreset {
 
 /// Colour stops per preset (gamma-encoded RGB). Keep in sync with `ramp` in volume.wgsl.
 const CLASSIC: [[f32; 3]; 4] = [
-    [0.10, 0.16, 0.42],
-    [0.16, 0.56, 0.72],
+    [0.14, 0.24, 0.58],
+    [0.16, 0.62, 0.78],
     [0.96, 0.78, 0.32],
     [1.00, 0.97, 0.88],
 ];

@@ -18,7 +18,9 @@ pub use crate::render::transfer::TransferPreset;
 
 /// Opacity per voxel of ray length at transfer-function opacity 1 and opacity scale 1: a ray
 /// through ten voxels of the densest region becomes about 95 % opaque.
-pub const BASE_OPACITY: f32 = 0.26;
+pub const BASE_OPACITY: f32 = 0.3;
+/// Emitted light per unit of absorbed opacity: above 1 the field glows rather than fogs.
+pub const EMISSION_GAIN: f32 = 1.6;
 
 /// Keep in sync with `VolumeParams` in shaders/volume.wgsl.
 #[repr(C)]
@@ -29,7 +31,7 @@ struct VolumeParams {
     box_max: [f32; 4],
     /// x: preset, y: hp tint, z: shading, w: most steps.
     options: [u32; 4],
-    /// x: density scale, y: opacity scale, z: step in voxels, w: base opacity.
+    /// x: density scale, y: opacity scale times base opacity, z: step in voxels, w: emission.
     controls: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<VolumeParams>() == 80);
@@ -235,9 +237,9 @@ impl VolumePass {
                 settings.opacity_scale.clamp(
                     *VolumeSettings::OPACITY_RANGE.start(),
                     *VolumeSettings::OPACITY_RANGE.end(),
-                ),
+                ) * BASE_OPACITY,
                 step,
-                BASE_OPACITY,
+                EMISSION_GAIN,
             ],
         };
         queue.write_buffer(&volume.params, 0, bytemuck::bytes_of(&params));

@@ -84,7 +84,7 @@ impl Default for VoxelSettings {
     fn default() -> Self {
         Self {
             resolution: None,
-            smoothing_sigma: 0.7,
+            smoothing_sigma: 1.0,
         }
     }
 }
@@ -791,32 +791,43 @@ pub fn synthetic_song(count: usize, seed: u64) -> Vec<Point> {
         z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
         ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
     };
-    let beats: Vec<f32> = (0..12).map(|b| -0.92 + b as f32 * 0.16).collect();
+    // Onsets: a kick-and-snare pattern, twelve hits over the song.
+    let beats: Vec<(f32, bool)> = (0..12).map(|b| (-0.9 + b as f32 * 0.155, b % 2 == 1)).collect();
     (0..count)
         .map(|_| {
             let x = next() * 2.0 - 1.0;
             let z = next() * 2.0 - 1.0;
-            // Harmonic partials of a melody that rises and falls.
-            let melody = -0.55 + 0.18 * (x * 3.1).sin();
+            // A melody of held notes; partials at log-spaced heights above each (z is log
+            // frequency, an octave is 0.22).
+            let note = ((x * 2.6).sin() * 2.5).round() * 0.05;
+            let fundamental = -0.62 + note;
             let mut harmonic = 0.0f32;
-            for k in 0..5 {
-                let centre = melody + k as f32 * 0.28;
-                let width = 0.03;
-                let gain = 1.0 - k as f32 * 0.17;
-                harmonic += gain * (-((z - centre) / width).powi(2)).exp();
+            for k in 1..=6 {
+                let centre = fundamental + (k as f32).log2() * 0.22;
+                let gain = 1.0 / (k as f32).sqrt();
+                harmonic += gain * (-((z - centre) / 0.028).powi(2)).exp();
             }
-            // Verses and a loud chorus.
-            let section = 0.55 + 0.45 * ((x * 1.7 + 0.4).sin() * 0.5 + 0.5);
+            // Verses and a louder chorus.
+            let section = 0.5 + 0.5 * ((x * 1.7 + 0.4).sin() * 0.5 + 0.5);
             harmonic *= section;
             let mut percussive = 0.0f32;
-            for b in &beats {
-                let decay = (-((x - b) / 0.018).powi(2)).exp();
-                percussive += decay * (0.9 - 0.35 * (z + 1.0) * 0.5);
+            for &(at, snare) in &beats {
+                let dt = x - at;
+                if dt >= 0.0 {
+                    let decay = (-dt / 0.035).exp();
+                    // A kick is low; a snare is broadband and falls off toward the top.
+                    let spectrum = if snare {
+                        0.75 - 0.25 * z
+                    } else {
+                        (-((z + 0.8) / 0.25).powi(2)).exp()
+                    };
+                    percussive += decay * spectrum;
+                }
             }
-            let noise = next() * 0.08;
-            let tilt = -0.25 * z;
-            let level = (0.05 + 0.85 * harmonic + 0.8 * percussive + noise + tilt).clamp(0.0, 1.0);
-            let y = (level * 1.9 - 0.95 + (next() - 0.5) * 0.04).clamp(-1.0, 1.0);
+            let noise = next() * 0.1;
+            let tilt = -0.12 * (z + 1.0);
+            let level = (0.18 + 0.75 * harmonic + 0.7 * percussive + noise + tilt).clamp(0.0, 1.0);
+            let y = (level * 1.9 - 0.95 + (next() - 0.5) * 0.03).clamp(-1.0, 1.0);
             // A-weighting: the lowest bands count for less.
             let a_weight = 0.35 + 0.65 * ((z + 1.0) * 1.4).min(1.0);
             let scalar = (level * a_weight).clamp(0.0, 1.0);
