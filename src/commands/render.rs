@@ -9,6 +9,10 @@ use loudscape::overlay;
 use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameView;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::volume::{TransferPreset, VolumeSettings};
+use loudscape::render::voxelize::{
+    MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION, VoxelSettings,
+};
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
@@ -29,9 +33,88 @@ pub struct RenderArgs {
     /// Leave out the axis labels.
     #[arg(long)]
     pub no_labels: bool,
+    #[command(flatten)]
+    pub volume: VolumeArgs,
     /// The PNG file to write.
     #[arg(short, long)]
     pub output: PathBuf,
+}
+
+/// Volume view options (also used by `voxelize` for --res and --smooth).
+#[derive(clap::Args, Debug, Clone)]
+pub struct VolumeArgs {
+    /// Volume transfer function: classic, ember or glacial.
+    #[arg(long, default_value = "classic")]
+    pub tf: String,
+    /// Volume density scale (0.1 to 8).
+    #[arg(long, default_value_t = 1.0)]
+    pub density: f32,
+    /// Volume opacity scale (0.05 to 10).
+    #[arg(long, default_value_t = 1.0)]
+    pub opacity: f32,
+    /// Tint the volume by mean hp (the points' red-to-blue palette).
+    #[arg(long)]
+    pub hp_tint: bool,
+    /// Turn off the volume's gradient shading.
+    #[arg(long)]
+    pub no_shading: bool,
+    /// Ray step in voxels (0.25 to 4).
+    #[arg(long, default_value_t = 1.0)]
+    pub step: f32,
+    /// Grid resolution in voxels per side (64 to 384); by default 128 for a song, 224 for a
+    /// timeline.
+    #[arg(long)]
+    pub res: Option<u32>,
+    /// Gaussian smoothing of the grid, sigma in voxels (0 turns it off).
+    #[arg(long, default_value_t = 1.0)]
+    pub smooth: f32,
+}
+
+impl VolumeArgs {
+    /// Checks the values and writes them into `settings`.
+    pub fn apply(&self, settings: &mut RenderSettings) -> anyhow::Result<()> {
+        let preset = TransferPreset::parse(&self.tf).with_context(|| {
+            format!(
+                "transfer function '{}' is not one of classic, ember, glacial",
+                self.tf
+            )
+        })?;
+        let check = |value: f32, range: std::ops::RangeInclusive<f32>, what: &str| {
+            if !range.contains(&value) {
+                bail!(
+                    "{what} {value} is out of range {} to {}",
+                    range.start(),
+                    range.end()
+                );
+            }
+            Ok(())
+        };
+        check(self.density, VolumeSettings::DENSITY_RANGE, "density")?;
+        check(self.opacity, VolumeSettings::OPACITY_RANGE, "opacity")?;
+        check(self.step, VolumeSettings::STEP_RANGE, "step")?;
+        check(self.smooth, 0.0..=MAX_SMOOTHING_SIGMA, "smoothing sigma")?;
+        if let Some(res) = self.res {
+            if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&res) {
+                bail!(
+                    "resolution {res} is out of range {MIN_RESOLUTION} to {MAX_RESOLUTION} voxels per side"
+                );
+            }
+        }
+        settings.volume = VolumeSettings {
+            preset,
+            density_scale: self.density,
+            opacity_scale: self.opacity,
+            hp_tint: self.hp_tint,
+            shading: !self.no_shading,
+            step_voxels: self.step,
+            ..settings.volume
+        };
+        settings.voxels = VoxelSettings {
+            resolution: self.res,
+            smoothing_sigma: self.smooth,
+        };
+        Ok(())
+    }
 }
 
 #[derive(clap::Args, Debug)]
@@ -138,15 +221,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             args.point_size
         );
     }
-    let cloud = load_cloud(&args.input)?;
-    let gpu = GpuContext::new_headless()?;
-    let renderer = Renderer::new(&gpu.device);
-    let data = SceneData::new(&gpu.device, &renderer, &cloud);
     let mut settings = RenderSettings {
         view,
         ..Default::default()
     };
     settings.points.size_px = args.point_size;
+    args.volume.apply(&mut settings)?;
+    let cloud = load_cloud(&args.input)?;
+    let gpu = GpuContext::new_headless()?;
+    let renderer = Renderer::new(&gpu.device);
+    let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
+    if view == ViewKind::Volume {
+        data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &cloud, &settings.voxels)
+            .with_context(|| format!("{}", args.input.display()))?;
+    }
     render_to_file(
         &gpu,
         &renderer,
@@ -172,7 +260,7 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
     let mut written = Vec::new();
     for input in &args.inputs {
         let cloud = load_cloud(input)?;
-        let data = SceneData::new(&gpu.device, &renderer, &cloud);
+        let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
         let stem = input
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -185,6 +273,10 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
                 view,
                 ..Default::default()
             };
+            if view == ViewKind::Volume {
+                data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &cloud, &settings.voxels)
+                    .with_context(|| format!("{}", input.display()))?;
+            }
             render_to_file(
                 &gpu, &renderer, &cloud, &data, None, size, &settings, true, &output,
             )?;

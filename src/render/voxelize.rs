@@ -792,7 +792,9 @@ pub fn synthetic_song(count: usize, seed: u64) -> Vec<Point> {
         ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
     };
     // Onsets: a kick-and-snare pattern, twelve hits over the song.
-    let beats: Vec<(f32, bool)> = (0..12).map(|b| (-0.9 + b as f32 * 0.155, b % 2 == 1)).collect();
+    let beats: Vec<(f32, bool)> = (0..12)
+        .map(|b| (-0.9 + b as f32 * 0.155, b % 2 == 1))
+        .collect();
     (0..count)
         .map(|_| {
             let x = next() * 2.0 - 1.0;
