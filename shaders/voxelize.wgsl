@@ -1,6 +1,6 @@
 // Voxelization: points -> per-voxel sums -> normalized loudness density and mean hp.
 // Entry points, in the order src/render/voxelize.rs dispatches them:
-//   accumulate  one thread per point: adds scalar, hp and 1 to the point's voxel (fixed point)
+//   accumulate  one thread per point: adds scalar, hp and 1 to the point's voxel record
 //   resolve     one thread per voxel: density = loudness sum (as f32), hp mean = hp sum / count
 //   smooth_axis one thread per voxel: one axis of a separable Gaussian on the sums (optional)
 //   histogram   one thread per voxel: log2 histogram of the positive sums
@@ -15,9 +15,10 @@ struct VoxelParams {
     box_min: vec4<f32>,
     // dims / (box_max - box_min): voxel coordinates per data unit (w unused).
     voxels_per_unit: vec4<f32>,
-    // x: points in this chunk, y: fixed-point scale (units per 1.0), z: percentile (0..1), w: unused.
+    // x: points in this chunk, y: unused, z: percentile in parts per million, w: unused.
     counts: vec4<u32>,
-    // x: fixed-point scale as f32, y: log2 of the histogram's lowest bin edge, z: bins per octave.
+    // x: scalar fixed-point scale, y: log2 of the histogram's lowest bin edge, z: bins per octave,
+    // w: hp fixed-point scale.
     scales: vec4<f32>,
 };
 
@@ -40,18 +41,32 @@ const STATS_HISTOGRAM: u32 = 4u;
 @group(1) @binding(0) var<uniform> params: VoxelParams;
 // The cloud chunk as a flat array, five f32 per point (x, y, z, scalar, hp), the PLY record.
 @group(1) @binding(1) var<storage, read> cloud: array<f32>;
-// Fixed-point sums, two u32 per voxel (low word, high word: a 64-bit sum with manual carry).
-@group(1) @binding(2) var<storage, read_write> scalar_sum: array<atomic<u32>>;
-@group(1) @binding(3) var<storage, read_write> hp_sum: array<atomic<u32>>;
-@group(1) @binding(4) var<storage, read_write> point_count: array<atomic<u32>>;
-@group(1) @binding(5) var<storage, read_write> stats: array<atomic<u32>>;
-@group(1) @binding(6) var<storage, read_write> density: array<f32>;
-@group(1) @binding(7) var<storage, read_write> hp_mean: array<f32>;
+// Two 64-bit fixed-point numbers per voxel, each two u32 words (low, high) with manual carries,
+// in two buffers of 8 bytes per voxel (so a 224^3 grid fits a 128 MiB binding):
+//   loudness_sums: the loudness sum, scale 2^20
+//   hp_counts:     count * 2^40 + hp sum at scale 2^16; the count is the high word >> 8 (24
+//                  bits, exact below 2^24 points; the hp sum, at most count * 2^16, stays below
+//                  2^40 and never reaches the count's bits)
+@group(1) @binding(2) var<storage, read_write> loudness_sums: array<atomic<u32>>;
+@group(1) @binding(3) var<storage, read_write> hp_counts: array<atomic<u32>>;
+@group(1) @binding(4) var<storage, read_write> stats: array<atomic<u32>>;
+@group(1) @binding(5) var<storage, read_write> density: array<f32>;
+@group(1) @binding(6) var<storage, read_write> hp_mean: array<f32>;
+// [0] the reference sum, written by `percentile` for `normalize_density` to read without atomics.
+@group(1) @binding(7) var<storage, read_write> reference_sum: array<f32>;
 
 // The smoothing pass binds only group 2 (group 1 holds the density it would read and write).
 @group(2) @binding(0) var<uniform> smooth_params: SmoothParams;
 @group(2) @binding(1) var<storage, read> smooth_in: array<f32>;
 @group(2) @binding(2) var<storage, read_write> smooth_out: array<f32>;
+
+// The resolving pass reads the sums without atomics (much faster on CPU adapters), so it binds
+// them read-only in a group of its own and leaves out group 1, where they are atomic.
+@group(3) @binding(0) var<uniform> resolve_params: VoxelParams;
+@group(3) @binding(1) var<storage, read> loudness_words: array<vec2<u32>>;
+@group(3) @binding(2) var<storage, read> hp_count_words: array<vec2<u32>>;
+@group(3) @binding(3) var<storage, read_write> resolved_density: array<f32>;
+@group(3) @binding(4) var<storage, read_write> resolved_hp_mean: array<f32>;
 
 // Linear invocation index over a 2D dispatch (x up to 65535 workgroups, then rows of y).
 fn linear_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -60,35 +75,6 @@ fn linear_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
 
 fn voxel_total() -> u32 {
     return params.dims.x * params.dims.y * params.dims.z;
-}
-
-// 64-bit fixed-point sums: two u32 words per voxel, low word at 2 * voxel, high at 2 * voxel + 1.
-// Adding carries one into the high word when the low word wraps. (Two copies, one per buffer:
-// WGSL has no pointers to storage buffers as function arguments.)
-fn add_scalar(voxel: u32, value: u32) {
-    let old = atomicAdd(&scalar_sum[2u * voxel], value);
-    if (old > 0xffffffffu - value) {
-        atomicAdd(&scalar_sum[2u * voxel + 1u], 1u);
-    }
-}
-
-fn add_hp(voxel: u32, value: u32) {
-    let old = atomicAdd(&hp_sum[2u * voxel], value);
-    if (old > 0xffffffffu - value) {
-        atomicAdd(&hp_sum[2u * voxel + 1u], 1u);
-    }
-}
-
-fn fixed_to_float(low: u32, high: u32) -> f32 {
-    return (f32(high) * 4294967296.0 + f32(low)) / params.scales.x;
-}
-
-fn read_scalar(voxel: u32) -> f32 {
-    return fixed_to_float(atomicLoad(&scalar_sum[2u * voxel]), atomicLoad(&scalar_sum[2u * voxel + 1u]));
-}
-
-fn read_hp(voxel: u32) -> f32 {
-    return fixed_to_float(atomicLoad(&hp_sum[2u * voxel]), atomicLoad(&hp_sum[2u * voxel + 1u]));
 }
 
 // The voxel holding data-space point `p`: floor((p - box_min) * voxels_per_unit), clamped.
@@ -112,13 +98,17 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     if (any(p != p)) {
         return;
     }
-    let voxel = voxel_of(p);
-    let scale = params.scales.x;
-    let scalar = clamp(cloud[base + 3u], 0.0, 1.0);
-    let hp = clamp(cloud[base + 4u], 0.0, 1.0);
-    add_scalar(voxel, u32(round(scalar * scale)));
-    add_hp(voxel, u32(round(hp * scale)));
-    atomicAdd(&point_count[voxel], 1u);
+    let word = 2u * voxel_of(p);
+    let scalar = u32(round(clamp(cloud[base + 3u], 0.0, 1.0) * params.scales.x));
+    let hp = u32(round(clamp(cloud[base + 4u], 0.0, 1.0) * params.scales.w));
+    // Add to the low words; carry one into the high word where the low word wrapped.
+    let old_scalar = atomicAdd(&loudness_sums[word], scalar);
+    if (old_scalar > 0xffffffffu - scalar) {
+        atomicAdd(&loudness_sums[word + 1u], 1u);
+    }
+    let old_hp = atomicAdd(&hp_counts[word], hp);
+    // 256 in the high word is 2^40: one more point.
+    atomicAdd(&hp_counts[word + 1u], select(256u, 257u, old_hp > 0xffffffffu - hp));
 }
 
 // The histogram bin of a non-empty voxel's sum. Keep in sync with histogram_bin in voxelize.rs.
@@ -133,23 +123,30 @@ fn histogram_bin(sum: f32) -> u32 {
 @compute @workgroup_size(256)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let voxel = linear_index(id, groups);
-    if (voxel >= voxel_total()) {
+    let dims = resolve_params.dims;
+    if (voxel >= dims.x * dims.y * dims.z) {
         return;
     }
-    let count = atomicLoad(&point_count[voxel]);
+    let loudness = loudness_words[voxel];
+    let hp_count = hp_count_words[voxel];
+    let count = hp_count.y >> 8u;
     if (count == 0u) {
-        density[voxel] = 0.0;
-        hp_mean[voxel] = 0.5;
+        resolved_density[voxel] = 0.0;
+        resolved_hp_mean[voxel] = 0.5;
         return;
     }
-    density[voxel] = read_scalar(voxel);
-    hp_mean[voxel] = clamp(read_hp(voxel) / f32(count), 0.0, 1.0);
+    let scalar = (f32(loudness.y) * 4294967296.0 + f32(loudness.x)) / resolve_params.scales.x;
+    let hp = (f32(hp_count.y & 255u) * 4294967296.0 + f32(hp_count.x)) / resolve_params.scales.w;
+    resolved_density[voxel] = scalar;
+    resolved_hp_mean[voxel] = clamp(hp / f32(count), 0.0, 1.0);
 }
 
 var<workgroup> local_histogram: array<atomic<u32>, HISTOGRAM_BINS>;
 var<workgroup> local_nonempty: atomic<u32>;
 var<workgroup> local_max: atomic<u32>;
 
+// Grid-stride: a bounded number of workgroups each bins many voxels, so clearing and flushing
+// the workgroup histogram is paid a few hundred times, not once per 256 voxels.
 @compute @workgroup_size(256)
 fn histogram(
     @builtin(global_invocation_id) id: vec3<u32>,
@@ -164,8 +161,9 @@ fn histogram(
         atomicStore(&local_max, 0u);
     }
     workgroupBarrier();
-    let voxel = linear_index(id, groups);
-    if (voxel < voxel_total()) {
+    let total = voxel_total();
+    let stride = groups.x * groups.y * 256u;
+    for (var voxel = linear_index(id, groups); voxel < total; voxel += stride) {
         let sum = density[voxel];
         if (sum > 0.0) {
             atomicAdd(&local_histogram[histogram_bin(sum)], 1u);
@@ -213,6 +211,7 @@ fn percentile() {
         reference = min(exp2(params.scales.y + f32(bin + 1u) / params.scales.z), largest);
     }
     atomicStore(&stats[1], bitcast<u32>(reference));
+    reference_sum[0] = reference;
 }
 
 @compute @workgroup_size(256)
@@ -221,7 +220,7 @@ fn normalize_density(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_
     if (voxel >= voxel_total()) {
         return;
     }
-    let reference = bitcast<f32>(atomicLoad(&stats[1]));
+    let reference = reference_sum[0];
     let value = density[voxel] / reference;
     if (value > 1.0) {
         atomicAdd(&stats[2], 1u);

@@ -140,7 +140,11 @@ fn density_and_opacity_scales_change_the_image() {
         // More density lights more of the field; less lights less.
         if density != 1.0 {
             let (more, base_coverage) = (common::coverage(&image), common::coverage(&base));
-            assert_eq!(more > base_coverage, density > 1.0, "{more} vs {base_coverage}");
+            assert_eq!(
+                more > base_coverage,
+                density > 1.0,
+                "{more} vs {base_coverage}"
+            );
         }
     }
 }
@@ -152,7 +156,10 @@ fn moving_camera_uses_coarser_steps_but_keeps_the_picture() {
     let rest = render(&mut scene, &settings, false);
     let moving = render(&mut scene, &settings, true);
     let (_, mean) = common::difference(&rest, &moving, 32);
-    assert!(mean < 12.0, "the moving image strays from the still one: {mean:.1}");
+    assert!(
+        mean < 12.0,
+        "the moving image strays from the still one: {mean:.1}"
+    );
     assert!(common::coverage(&moving) > 0.15);
 }
 
@@ -171,7 +178,10 @@ fn grid_is_built_once_and_rebuilt_only_when_its_settings_change() {
     assert_eq!(data.grid.as_ref().map(|g| g.dims.x), Some(128));
     assert!(!ensure(data, &settings));
     settings.volume.opacity_scale = 2.0;
-    assert!(!ensure(data, &settings), "opacity must not rebuild the grid");
+    assert!(
+        !ensure(data, &settings),
+        "opacity must not rebuild the grid"
+    );
     settings.voxels.resolution = Some(64);
     assert!(ensure(data, &settings));
     assert_eq!(data.grid.as_ref().map(|g| g.dims.x), Some(64));
@@ -191,4 +201,3 @@ fn degenerate_clouds_render_without_failing() {
         assert_eq!(image.dimensions(), SIZE, "{n} points");
     }
 }
-

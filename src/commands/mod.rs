@@ -2,6 +2,7 @@
 //! `anyhow::Result`, so every failure reaches the user as one line.
 
 pub mod bench;
+pub mod bench_volume;
 pub mod mesh;
 pub mod render;
 pub mod voxelize;

@@ -4,8 +4,9 @@
 //! Reads: the points (uploaded here in chunks, five f32 per point, the PLY record). Writes: a
 //! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel.
 //! How: shaders/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
-//! and hp to its voxel as 64-bit fixed-point sums (two u32 atomics with a manual carry, scale
-//! [`FIXED_POINT_SCALE`]; portable to every adapter, no float atomics) and counts the points.
+//! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual
+//! carry; scale [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp, with the
+//! point count in the top 24 bits of the hp sum; portable to every adapter, no float atomics).
 //! `resolve` turns the sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally
 //! blurs the sums with a separable Gaussian; `histogram` bins the positive sums on a log2 scale,
 //! `percentile` finds the bin holding the 99th percentile, and `normalize_density` divides by
@@ -32,6 +33,11 @@ pub const MAX_RESOLUTION: u32 = 384;
 /// Fixed-point units per 1.0 of scalar or hp. One point adds at most 2^20 to a 64-bit sum, so no
 /// cloud that fits a GPU buffer can overflow it; the rounding error is at most 2^-21 per point.
 pub const FIXED_POINT_SCALE: u32 = 1 << 20;
+/// Fixed-point units per 1.0 of hp. The hp sum shares 64 bits with the point count (count times
+/// 2^40 plus the hp sum), so the count has 24 bits: exact for any cloud under 2^24 points.
+pub const HP_FIXED_POINT_SCALE: u32 = 1 << 16;
+/// Most points per voxelization (the per-voxel count has 24 bits).
+pub const MAX_POINTS: usize = (1 << 24) - 1;
 /// The density is normalized by this percentile of the voxels with a positive loudness sum.
 pub const PERCENTILE: f64 = 0.99;
 pub const HISTOGRAM_BINS: u32 = 1024;
@@ -53,9 +59,10 @@ struct VoxelParams {
     dims: [u32; 4],
     box_min: [f32; 4],
     voxels_per_unit: [f32; 4],
-    /// x: points in the chunk, y: fixed-point scale, z: percentile in parts per million.
+    /// x: points in the chunk, z: percentile in parts per million.
     counts: [u32; 4],
-    /// x: fixed-point scale, y: histogram log2 minimum, z: bins per octave.
+    /// x: loudness fixed-point scale, y: histogram log2 minimum, z: bins per octave,
+    /// w: hp fixed-point scale.
     scales: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<VoxelParams>() == 80);
@@ -120,7 +127,7 @@ pub enum VoxelizeError {
         limit_mib: u64,
         largest: u32,
     },
-    #[error("the cloud has {0} points; at most 4294967295 can be voxelized at once")]
+    #[error("the cloud has {0} points; at most 16777215 can be voxelized at once")]
     TooManyPoints(usize),
     #[error("voxelization: {0}")]
     Readback(#[from] ReadbackError),
@@ -334,13 +341,14 @@ pub struct VoxelizeJob {
     pub box_max: Vec3,
     pub point_count: usize,
     chunks: Vec<Chunk>,
-    scalar_sum: wgpu::Buffer,
-    hp_sum: wgpu::Buffer,
-    counts: wgpu::Buffer,
+    loudness_sums: wgpu::Buffer,
+    hp_counts: wgpu::Buffer,
     stats: wgpu::Buffer,
     density: wgpu::Buffer,
     hp_mean: wgpu::Buffer,
+    _reference: wgpu::Buffer,
     smoothing: Option<(wgpu::Buffer, [wgpu::BindGroup; 3])>,
+    resolve_group: wgpu::BindGroup,
 }
 
 impl VoxelizeJob {
@@ -353,6 +361,7 @@ impl VoxelizeJob {
 pub struct VoxelizePass {
     main_layout: wgpu::BindGroupLayout,
     smooth_layout: wgpu::BindGroupLayout,
+    resolve_layout: wgpu::BindGroupLayout,
     accumulate: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
     smooth: wgpu::ComputePipeline,
@@ -412,6 +421,22 @@ impl VoxelizePass {
                 storage_entry(2, false),
             ],
         });
+        let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("voxelize::resolve_layout"),
+            entries: &[
+                uniform_entry(0),
+                storage_entry(1, true),
+                storage_entry(2, true),
+                storage_entry(3, false),
+                storage_entry(4, false),
+            ],
+        });
+        let resolve_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("voxelize::resolve_pipeline_layout"),
+                bind_group_layouts: &[Some(&frame.layout), None, None, Some(&resolve_layout)],
+                immediate_size: 0,
+            });
         let main_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("voxelize::pipeline_layout"),
             bind_group_layouts: &[Some(&frame.layout), Some(&main_layout)],
@@ -435,13 +460,14 @@ impl VoxelizePass {
         };
         Self {
             accumulate: pipeline("accumulate", &main_pipeline_layout),
-            resolve: pipeline("resolve", &main_pipeline_layout),
+            resolve: pipeline("resolve", &resolve_pipeline_layout),
             smooth: pipeline("smooth_axis", &smooth_pipeline_layout),
             histogram: pipeline("histogram", &main_pipeline_layout),
             percentile: pipeline("percentile", &main_pipeline_layout),
             normalize: pipeline("normalize_density", &main_pipeline_layout),
             main_layout,
             smooth_layout,
+            resolve_layout,
             frame_bind_group: frame.bind_group.clone(),
         }
     }
@@ -457,7 +483,7 @@ impl VoxelizePass {
         if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&resolution) {
             return Err(VoxelizeError::Resolution(resolution));
         }
-        // The largest buffer holds a 64-bit sum per voxel.
+        // The largest buffers hold 8 bytes per voxel.
         let needed = u64::from(resolution).pow(3) * 8;
         let limit = Self::buffer_limit(device);
         if needed > limit {
@@ -484,7 +510,7 @@ impl VoxelizePass {
         if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
             return Err(VoxelizeError::Smoothing(smoothing_sigma));
         }
-        if u32::try_from(points.len()).is_err() {
+        if points.len() > MAX_POINTS {
             return Err(VoxelizeError::TooManyPoints(points.len()));
         }
         let dims = UVec3::splat(resolution);
@@ -500,10 +526,10 @@ impl VoxelizePass {
             })
         };
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let scalar_sum = storage("voxelize::scalar_sum", voxels * 8, copy);
-        let hp_sum = storage("voxelize::hp_sum", voxels * 8, copy);
-        let counts = storage("voxelize::point_count", voxels * 4, copy);
+        let loudness_sums = storage("voxelize::loudness_sums", voxels * 8, copy);
+        let hp_counts = storage("voxelize::hp_counts", voxels * 8, copy);
         let stats = storage("voxelize::stats", STATS_WORDS as u64 * 4, copy);
+        let reference = storage("voxelize::reference_sum", 16, copy);
         let density = storage("voxelize::density_grid", voxels * 4, copy);
         let hp_mean = storage("voxelize::hp_mean_grid", voxels * 4, copy);
 
@@ -536,17 +562,12 @@ impl VoxelizePass {
                 dims: [dims.x, dims.y, dims.z, 0],
                 box_min: box_min.extend(0.0).into(),
                 voxels_per_unit: per_unit.extend(0.0).into(),
-                counts: [
-                    slice.len() as u32,
-                    FIXED_POINT_SCALE,
-                    (PERCENTILE * 1e6).round() as u32,
-                    0,
-                ],
+                counts: [slice.len() as u32, 0, (PERCENTILE * 1e6).round() as u32, 0],
                 scales: [
                     FIXED_POINT_SCALE as f32,
                     HISTOGRAM_LOG2_MIN,
                     HISTOGRAM_BINS_PER_OCTAVE,
-                    0.0,
+                    HP_FIXED_POINT_SCALE as f32,
                 ],
             };
             let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -557,12 +578,12 @@ impl VoxelizePass {
             let buffers = [
                 &params_buffer,
                 &points_buffer,
-                &scalar_sum,
-                &hp_sum,
-                &counts,
+                &loudness_sums,
+                &hp_counts,
                 &stats,
                 &density,
                 &hp_mean,
+                &reference,
             ];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
@@ -584,6 +605,27 @@ impl VoxelizePass {
                 _params: params_buffer,
             });
         }
+
+        let resolve_buffers = [
+            &chunks[0]._params,
+            &loudness_sums,
+            &hp_counts,
+            &density,
+            &hp_mean,
+        ];
+        let resolve_entries: Vec<wgpu::BindGroupEntry> = resolve_buffers
+            .iter()
+            .enumerate()
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding: binding as u32,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect();
+        let resolve_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("voxelize::resolve_bind_group"),
+            layout: &self.resolve_layout,
+            entries: &resolve_entries,
+        });
 
         let smoothing = (smoothing_sigma > 0.0).then(|| {
             let scratch = storage("voxelize::smooth_scratch", voxels * 4, copy);
@@ -637,13 +679,14 @@ impl VoxelizePass {
             box_max,
             point_count: points.len(),
             chunks,
-            scalar_sum,
-            hp_sum,
-            counts,
+            loudness_sums,
+            hp_counts,
             stats,
             density,
             hp_mean,
+            _reference: reference,
             smoothing,
+            resolve_group,
         })
     }
 
@@ -655,9 +698,10 @@ impl VoxelizePass {
         job: &VoxelizeJob,
         timestamps: Option<(&wgpu::QuerySet, u32)>,
     ) {
-        for buffer in [&job.scalar_sum, &job.hp_sum, &job.counts, &job.stats] {
+        for buffer in [&job.loudness_sums, &job.hp_counts, &job.stats] {
             encoder.clear_buffer(buffer, 0, None);
         }
+
         let voxels = dispatch_size(job.voxel_count());
         let main_group = &job.chunks[0].bind_group;
         let begin_pass = |encoder: &mut wgpu::CommandEncoder, label: &str, first: bool, last| {
@@ -692,7 +736,7 @@ impl VoxelizePass {
             let mut pass = begin_pass(encoder, "voxelize::resolve", false, false);
             pass.set_pipeline(&self.resolve);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
-            pass.set_bind_group(1, main_group, &[]);
+            pass.set_bind_group(3, &job.resolve_group, &[]);
             pass.dispatch_workgroups(voxels.0, voxels.1, 1);
         }
         if let Some((scratch, groups)) = &job.smoothing {
@@ -707,7 +751,11 @@ impl VoxelizePass {
             encoder.copy_buffer_to_buffer(scratch, 0, &job.density, 0, None);
         }
         let stages: [(&str, &wgpu::ComputePipeline, (u32, u32)); 3] = [
-            ("voxelize::histogram", &self.histogram, voxels),
+            (
+                "voxelize::histogram",
+                &self.histogram,
+                (voxels.0.min(512), 1),
+            ),
             ("voxelize::percentile", &self.percentile, (1, 1)),
             ("voxelize::normalize_density", &self.normalize, voxels),
         ];
