@@ -24,9 +24,7 @@ import numpy as np
 from skimage import measure
 
 
-def skimage_median_ms(
-    field: np.ndarray, iso: float, runs: int
-) -> tuple[float, int, float]:
+def skimage_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, int, float]:
     """Median time (ms), triangle count and area (data units) of scikit-image's marching cubes."""
     padded = np.pad(field, 1)
     spacing = (2.0 / field.shape[0], 2.0 / field.shape[1], 2.0 / field.shape[2])
@@ -50,6 +48,8 @@ def main() -> int:
         command = [
             args.loudscape,
             "bench",
+            "--only",
+            "surface",
             "--runs",
             str(args.runs),
             "--iso",
@@ -63,9 +63,7 @@ def main() -> int:
             print(done.stderr.strip().splitlines()[-1], file=sys.stderr)
             return 1
         ours = {}
-        pattern = (
-            r"surface (\S+) (mt|dc) median_ms=([\d.]+) triangles=(\d+) area=([\d.]+)"
-        )
+        pattern = r"surface (\S+) (mt|dc) median_ms=([\d.]+) triangles=(\d+) area=([\d.]+)"
         for match in re.finditer(pattern, done.stdout):
             name, method, ms, tris, area = match.groups()
             ours[(name, method)] = (float(ms), int(tris), float(area))
@@ -73,9 +71,7 @@ def main() -> int:
         for npy in sorted(Path(tmp).glob("*.npy")):
             name = npy.stem
             ms, tris, area = skimage_median_ms(np.load(npy), args.iso, args.runs)
-            print(
-                f"  {name}: marching_cubes {ms:.1f} ms, {tris} triangles, area {area:.4f}"
-            )
+            print(f"  {name}: marching_cubes {ms:.1f} ms, {tris} triangles, area {area:.4f}")
             for method in ("mt", "dc"):
                 if (name, method) not in ours:
                     print(f"    {method}: no result")

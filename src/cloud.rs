@@ -1126,15 +1126,15 @@ impl<R: Read> Body<'_, R> {
             ];
             for (k, (&value, name)) in values.iter().zip(PROPERTY_NAMES).enumerate() {
                 let (lo, hi) = if k < 3 { (-1.0, 1.0) } else { (0.0, 1.0) };
-                if !(value >= lo && value <= hi) {
-                    if let Err(reason) = check_value(name, value, lo, hi) {
-                        return Err(CloudError::Point {
-                            path: self.path.to_owned(),
-                            index: index as u64,
-                            offset: header.byte_len + (index * POINT_BYTES + k * 4) as u64,
-                            reason,
-                        });
-                    }
+                if !(value >= lo && value <= hi)
+                    && let Err(reason) = check_value(name, value, lo, hi)
+                {
+                    return Err(CloudError::Point {
+                        path: self.path.to_owned(),
+                        index: index as u64,
+                        offset: header.byte_len + (index * POINT_BYTES + k * 4) as u64,
+                        reason,
+                    });
                 }
             }
         }

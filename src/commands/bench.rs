@@ -31,7 +31,11 @@ pub struct BenchArgs {
     /// Write the benchmark fields here as .npy files (for bench/bench_surface.py).
     #[arg(long)]
     pub fields_dir: Option<PathBuf>,
-    /// Measure only these parts: points, surface (comma-separated); all when omitted.
+    /// Also write the volume benchmark's point clouds (raw float32, five per point) to this
+    /// folder, for bench/bench_voxelize.py.
+    #[arg(long)]
+    pub export_points: Option<PathBuf>,
+    /// Measure only these parts: points, volume, surface (comma-separated); all when omitted.
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<String>,
 }
@@ -67,20 +71,23 @@ fn timed_frame(
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    const PARTS: [&str; 2] = ["points", "surface"];
+    const PARTS: [&str; 3] = ["points", "volume", "surface"];
     for part in &args.only {
         if !PARTS.contains(&part.as_str()) {
             anyhow::bail!("--only {part}: not one of {}", PARTS.join(", "));
         }
     }
     let wants = |part: &str| args.only.is_empty() || args.only.iter().any(|p| p == part);
-    if let Some(dir) = &args.fields_dir {
-        if !dir.is_dir() {
-            anyhow::bail!("{}: the folder does not exist", dir.display());
-        }
+    if let Some(dir) = &args.fields_dir
+        && !dir.is_dir()
+    {
+        anyhow::bail!("{}: the folder does not exist", dir.display());
     }
     if wants("points") {
         bench_points(&args)?;
+    }
+    if wants("volume") {
+        super::bench_volume::run(args.runs, args.export_points.as_ref())?;
     }
     if wants("surface") {
         let surfaces = super::bench_surface::run(args.runs, args.iso, args.fields_dir.as_deref())?;

@@ -5,12 +5,12 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use glam::{UVec3, Vec3};
 use loudscape::cloud::{DataMode, PointCloud};
 use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
 use loudscape::render::mesh::{CpuMesh, SurfaceMethod, SurfacePass, SurfaceSettings, warm_cool};
+use loudscape::render::voxelize::{MAX_RESOLUTION, MIN_RESOLUTION, VoxelSettings, VoxelizePass};
 
 #[derive(clap::Args, Debug)]
 pub struct MeshArgs {
@@ -20,7 +20,7 @@ pub struct MeshArgs {
     #[arg(long, default_value = "mt")]
     pub method: String,
     /// Isovalue in [0, 1] of the normalized loudness density.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.5)]
     pub iso: f32,
     /// Grid resolution per axis (default: 128 for a song, 224 for a timeline).
     #[arg(long)]
@@ -54,96 +54,49 @@ pub fn default_resolution(mode: DataMode) -> u32 {
     }
 }
 
-/// A stand-in for the GPU voxelizer, until it lands: bins the points' loudness into a `res`^3
-/// grid over the cloud's box (expanded by half a voxel), hp weighted by loudness, one 3-tap box
-/// blur per axis, density normalized to [0, 1] by its maximum.
-pub fn stand_in_grid(device: &wgpu::Device, cloud: &PointCloud, res: u32) -> VoxelGrid {
-    let dims = UVec3::splat(res);
-    let (mut lo, mut hi) = (cloud.bounds.min, cloud.bounds.max);
-    if cloud.points.is_empty() || !lo.is_finite() || !hi.is_finite() {
-        (lo, hi) = (Vec3::splat(-1.0), Vec3::ONE);
-    }
-    let pad = (hi - lo).max(Vec3::splat(1e-3)) / res as f32 * 0.5;
-    let (box_min, box_max) = (lo - pad, hi + pad);
-    let n = (res * res * res) as usize;
-    let index = |i: u32, j: u32, k: u32| (i + res * (j + res * k)) as usize;
-    let mut loud = vec![0.0f32; n];
-    let mut hp_sum = vec![0.0f32; n];
-    let scale = dims.as_vec3() / (box_max - box_min);
-    for p in &cloud.points {
-        let g = ((Vec3::from(p.position) - box_min) * scale)
-            .as_uvec3()
-            .min(dims - 1);
-        let v = index(g.x, g.y, g.z);
-        let w = p.scalar.max(0.0);
-        loud[v] += w;
-        hp_sum[v] += w * p.hp;
-    }
-    for axis in 0..3 {
-        for field in [&mut loud, &mut hp_sum] {
-            let src = field.clone();
-            for k in 0..res {
-                for j in 0..res {
-                    for i in 0..res {
-                        let c = [i, j, k];
-                        let mut sum = 0.0;
-                        for d in [-1i32, 0, 1] {
-                            let mut q = c;
-                            let moved = c[axis] as i32 + d;
-                            if moved < 0 || moved >= res as i32 {
-                                continue;
-                            }
-                            q[axis] = moved as u32;
-                            sum += src[index(q[0], q[1], q[2])];
-                        }
-                        field[index(i, j, k)] = sum / 3.0;
-                    }
-                }
-            }
-        }
-    }
-    let max = loud.iter().copied().fold(0.0f32, f32::max);
-    let density: Vec<f32> = loud
-        .iter()
-        .map(|&v| if max > 0.0 { v / max } else { 0.0 })
-        .collect();
-    let hp: Vec<f32> = loud
-        .iter()
-        .zip(&hp_sum)
-        .map(|(&w, &h)| {
-            if w > 1e-12 {
-                (h / w).clamp(0.0, 1.0)
-            } else {
-                0.5
-            }
-        })
-        .collect();
-    VoxelGrid::from_fields(device, dims, box_min, box_max, &density, &hp)
+/// The cloud's voxel grid, built by the GPU voxelizer with the default smoothing.
+pub fn voxel_grid(
+    gpu: &GpuContext,
+    frame: &FrameBinding,
+    cloud: &PointCloud,
+    res: u32,
+) -> anyhow::Result<VoxelGrid> {
+    let pass = VoxelizePass::new(&gpu.device, frame);
+    let (grid, _) = pass
+        .voxelize(
+            &gpu.device,
+            &gpu.queue,
+            &cloud.points,
+            res,
+            VoxelSettings::default().smoothing_sigma,
+        )
+        .with_context(|| format!("{}: voxelizing", cloud.path.display()))?;
+    Ok(grid)
 }
 
 pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     let method = parse_method(&args.method)?;
     let iso_value = check_iso(args.iso)?;
     let format = MeshFormat::from_path(&args.output)?;
-    if let Some(res) = args.res {
-        if !(4..=512).contains(&res) {
-            bail!("resolution {res} is out of range 4 to 512");
-        }
+    if let Some(res) = args.res
+        && !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&res)
+    {
+        bail!("resolution {res} is out of range {MIN_RESOLUTION} to {MAX_RESOLUTION}");
     }
-    if let Some(dir) = args.output.parent().filter(|p| !p.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            bail!(
-                "{}: the folder {} does not exist",
-                args.output.display(),
-                dir.display()
-            );
-        }
+    if let Some(dir) = args.output.parent().filter(|p| !p.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        bail!(
+            "{}: the folder {} does not exist",
+            args.output.display(),
+            dir.display()
+        );
     }
     let cloud = super::render::load_cloud(&args.input)?;
     let res = args.res.unwrap_or(default_resolution(cloud.meta.mode));
     let gpu = GpuContext::new_headless()?;
-    let grid = stand_in_grid(&gpu.device, &cloud, res);
     let frame = FrameBinding::new(&gpu.device);
+    let grid = voxel_grid(&gpu, &frame, &cloud, res)?;
     let pass = SurfacePass::new(&gpu.device, &frame);
     let settings = SurfaceSettings {
         method,
@@ -283,6 +236,7 @@ fn write_obj(w: &mut impl Write, mesh: &CpuMesh, comment: &str) -> std::io::Resu
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
     use loudscape::cloud::Point;
 
     /// A blob of points in the stand-in grid, meshed on the GPU and written both ways.
@@ -307,8 +261,8 @@ mod tests {
             Ok(gpu) => gpu,
             Err(e) => panic!("GPU tests need an adapter (lavapipe will do): {e}"),
         };
-        let grid = stand_in_grid(&gpu.device, &cloud, 32);
         let frame = FrameBinding::new(&gpu.device);
+        let grid = voxel_grid(&gpu, &frame, &cloud, 64).expect("voxelize");
         let pass = SurfacePass::new(&gpu.device, &frame);
         let settings = SurfaceSettings {
             method: SurfaceMethod::MarchingTetrahedra,

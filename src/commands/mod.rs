@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod bench_surface;
+pub mod bench_volume;
 pub mod mesh;
 pub mod render;
 pub mod voxelize;

@@ -10,6 +10,10 @@ use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameView;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::volume::{TransferPreset, VolumeSettings};
+use loudscape::render::voxelize::{
+    MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION, VoxelSettings,
+};
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
@@ -31,14 +35,93 @@ pub struct RenderArgs {
     #[arg(long, default_value = "mt")]
     pub method: String,
     /// Surface isovalue in [0, 1] of the normalized loudness density.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.5)]
     pub iso: f32,
     /// Leave out the axis labels.
     #[arg(long)]
     pub no_labels: bool,
+    #[command(flatten)]
+    pub volume: VolumeArgs,
     /// The PNG file to write.
     #[arg(short, long)]
     pub output: PathBuf,
+}
+
+/// Volume view options (also used by `voxelize` for --res and --smooth).
+#[derive(clap::Args, Debug, Clone)]
+pub struct VolumeArgs {
+    /// Volume transfer function: classic, ember or glacial.
+    #[arg(long, default_value = "classic")]
+    pub tf: String,
+    /// Volume density scale (0.1 to 8).
+    #[arg(long, default_value_t = 1.0)]
+    pub density: f32,
+    /// Volume opacity scale (0.05 to 10).
+    #[arg(long, default_value_t = 1.0)]
+    pub opacity: f32,
+    /// Tint the volume by mean hp (the points' red-to-blue palette).
+    #[arg(long)]
+    pub hp_tint: bool,
+    /// Turn off the volume's gradient shading.
+    #[arg(long)]
+    pub no_shading: bool,
+    /// Ray step in voxels (0.25 to 4).
+    #[arg(long, default_value_t = 1.0)]
+    pub step: f32,
+    /// Grid resolution in voxels per side (64 to 384); by default 128 for a song, 224 for a
+    /// timeline.
+    #[arg(long)]
+    pub res: Option<u32>,
+    /// Gaussian smoothing of the grid, sigma in voxels (0 turns it off).
+    #[arg(long, default_value_t = 1.0)]
+    pub smooth: f32,
+}
+
+impl VolumeArgs {
+    /// Checks the values and writes them into `settings`.
+    pub fn apply(&self, settings: &mut RenderSettings) -> anyhow::Result<()> {
+        let preset = TransferPreset::parse(&self.tf).with_context(|| {
+            format!(
+                "transfer function '{}' is not one of classic, ember, glacial",
+                self.tf
+            )
+        })?;
+        let check = |value: f32, range: std::ops::RangeInclusive<f32>, what: &str| {
+            if !range.contains(&value) {
+                bail!(
+                    "{what} {value} is out of range {} to {}",
+                    range.start(),
+                    range.end()
+                );
+            }
+            Ok(())
+        };
+        check(self.density, VolumeSettings::DENSITY_RANGE, "density")?;
+        check(self.opacity, VolumeSettings::OPACITY_RANGE, "opacity")?;
+        check(self.step, VolumeSettings::STEP_RANGE, "step")?;
+        check(self.smooth, 0.0..=MAX_SMOOTHING_SIGMA, "smoothing sigma")?;
+        if let Some(res) = self.res
+            && !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&res)
+        {
+            bail!(
+                "resolution {res} is out of range {MIN_RESOLUTION} to {MAX_RESOLUTION} voxels per side"
+            );
+        }
+        settings.volume = VolumeSettings {
+            preset,
+            density_scale: self.density,
+            opacity_scale: self.opacity,
+            hp_tint: self.hp_tint,
+            shading: !self.no_shading,
+            step_voxels: self.step,
+            ..settings.volume
+        };
+        settings.voxels = VoxelSettings {
+            resolution: self.res,
+            smoothing_sigma: self.smooth,
+        };
+        Ok(())
+    }
 }
 
 #[derive(clap::Args, Debug)]
@@ -100,14 +183,14 @@ fn render_to_file(
 /// Writes a PNG through a temporary file in the same folder, then renames it into place.
 pub fn save_png(image: &image::RgbaImage, output: &Path) -> anyhow::Result<()> {
     let dir = output.parent().filter(|p| !p.as_os_str().is_empty());
-    if let Some(dir) = dir {
-        if !dir.is_dir() {
-            bail!(
-                "{}: the folder {} does not exist",
-                output.display(),
-                dir.display()
-            );
-        }
+    if let Some(dir) = dir
+        && !dir.is_dir()
+    {
+        bail!(
+            "{}: the folder {} does not exist",
+            output.display(),
+            dir.display()
+        );
     }
     let tmp = output.with_extension("png.tmp");
     image
@@ -139,28 +222,29 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    if let Some(size) = args.point_size {
-        if !(0.5..=64.0).contains(&size) {
-            bail!("point size {size} is out of range 0.5 to 64 pixels");
-        }
+    if let Some(size) = args.point_size
+        && !(0.5..=64.0).contains(&size)
+    {
+        bail!("point size {size} is out of range 0.5 to 64 pixels");
     }
     let method = super::mesh::parse_method(&args.method)?;
     let iso_value = super::mesh::check_iso(args.iso)?;
-    let cloud = load_cloud(&args.input)?;
-    let gpu = GpuContext::new_headless()?;
-    let renderer = Renderer::new(&gpu.device);
-    let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
     let mut settings = RenderSettings {
         view,
         ..Default::default()
     };
+    settings.surface.method = method;
+    settings.surface.iso_value = iso_value;
+    args.volume.apply(&mut settings)?;
+    let cloud = load_cloud(&args.input)?;
     settings.points.size_px = args
         .point_size
         .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
-    settings.surface.method = method;
-    settings.surface.iso_value = iso_value;
-    if view == ViewKind::Surface {
-        prepare_surface(&gpu, &renderer, &cloud, &mut data, &settings)?;
+    let gpu = GpuContext::new_headless()?;
+    let renderer = Renderer::new(&gpu.device);
+    let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
+    if matches!(view, ViewKind::Volume | ViewKind::Surface) {
+        prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
     }
     render_to_file(
         &gpu,
@@ -179,21 +263,25 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
 
 /// Builds the grid (until the GPU voxelizer lands, the CPU stand-in) and extracts the surface,
 /// waiting for it, so the single headless frame shows the whole surface.
-fn prepare_surface(
+/// Builds the voxel grid the volume and surface views need, and extracts the surface when
+/// that is the view (headless rendering waits for it; the window does not).
+pub fn prepare_grid(
     gpu: &GpuContext,
     renderer: &Renderer,
     cloud: &PointCloud,
     data: &mut SceneData,
     settings: &RenderSettings,
 ) -> anyhow::Result<()> {
-    let res = super::mesh::default_resolution(cloud.meta.mode);
-    let grid = data
-        .grid
-        .get_or_insert_with(|| super::mesh::stand_in_grid(&gpu.device, cloud, res));
-    renderer
-        .surface
-        .extract_blocking(&gpu.queue, grid, &settings.surface)
-        .with_context(|| format!("{}: extracting the surface", cloud.path.display()))?;
+    data.ensure_grid(&gpu.device, &gpu.queue, renderer, cloud, &settings.voxels)
+        .with_context(|| format!("{}: voxelizing", cloud.path.display()))?;
+    if settings.view == ViewKind::Surface
+        && let Some(grid) = data.grid.as_ref()
+    {
+        renderer
+            .surface
+            .extract_blocking(&gpu.queue, grid, &settings.surface)
+            .with_context(|| format!("{}: extracting the surface", cloud.path.display()))?;
+    }
     Ok(())
 }
 
@@ -221,8 +309,8 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
                 ..Default::default()
             };
             settings.points.size_px = PointStyle::size_for(cloud.points.len());
-            if view == ViewKind::Surface {
-                prepare_surface(&gpu, &renderer, &cloud, &mut data, &settings)?;
+            if matches!(view, ViewKind::Volume | ViewKind::Surface) {
+                prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
             }
             render_to_file(
                 &gpu, &renderer, &cloud, &data, None, size, &settings, true, &output,

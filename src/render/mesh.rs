@@ -86,7 +86,7 @@ impl Default for SurfaceSettings {
     fn default() -> Self {
         Self {
             method: SurfaceMethod::MarchingTetrahedra,
-            iso_value: 0.3,
+            iso_value: 0.5,
             lit: true,
         }
     }
@@ -742,11 +742,11 @@ impl SurfacePass {
         };
         state.counts = Some(counts);
         state.error = None;
-        if !counts.fits() {
-            if let Err(e) = self.grow(state, &counts) {
-                log::warn!("{e}");
-                state.error = Some(e.to_string());
-            }
+        if !counts.fits()
+            && let Err(e) = self.grow(state, &counts)
+        {
+            log::warn!("{e}");
+            state.error = Some(e.to_string());
         }
     }
 
@@ -772,20 +772,15 @@ impl SurfacePass {
         if state.key.as_ref() != Some(&CacheKey::new(grid, settings)) {
             self.record_extraction(&mut state, queue, encoder, grid, settings);
         }
-        if state.counts_unchecked && matches!(state.readback, Readback::Idle) {
-            if let Some(buffers) = &state.buffers {
-                encoder.copy_buffer_to_buffer(
-                    &buffers.counters,
-                    0,
-                    &state.staging,
-                    0,
-                    COUNTERS_SIZE,
-                );
-                state.readback = Readback::Copied {
-                    generation: state.generation,
-                };
-                state.counts_unchecked = false;
-            }
+        if state.counts_unchecked
+            && matches!(state.readback, Readback::Idle)
+            && let Some(buffers) = &state.buffers
+        {
+            encoder.copy_buffer_to_buffer(&buffers.counters, 0, &state.staging, 0, COUNTERS_SIZE);
+            state.readback = Readback::Copied {
+                generation: state.generation,
+            };
+            state.counts_unchecked = false;
         }
     }
 

@@ -16,3 +16,6 @@ pub mod points;
 pub mod scene;
 pub mod shaders;
 pub mod target;
+pub mod transfer;
+pub mod volume;
+pub mod voxelize;

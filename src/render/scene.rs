@@ -7,12 +7,15 @@ use glam::{Mat4, Vec3};
 
 use crate::cloud::{DataMode, PointCloud};
 use crate::render::frame::{FrameBinding, FrameView};
-use crate::render::grid::VoxelGrid;
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
 use crate::render::markers::{MarkerBox, MarkersPass};
 use crate::render::mesh::{SurfacePass, SurfaceSettings};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
 use crate::render::target::{BACKGROUND, RenderTarget};
+// Volume view and voxel grid.
+use crate::render::grid::VoxelGrid;
+use crate::render::volume::{VolumeGpu, VolumePass, VolumeSettings};
+use crate::render::voxelize::{VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass};
 
 /// What the 3D view shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -35,7 +38,10 @@ impl ViewKind {
 
     /// Whether this build can draw the view; the others are shown as not yet available.
     pub fn available(self) -> bool {
-        matches!(self, ViewKind::Points | ViewKind::Surface)
+        matches!(
+            self,
+            ViewKind::Points | ViewKind::Surface | ViewKind::Volume
+        )
     }
 
     pub fn parse(name: &str) -> Option<Self> {
@@ -53,7 +59,11 @@ pub struct RenderSettings {
     pub show_box: bool,
     /// Translucent boxes and planes over the data: the playhead, a loop range, a timeline song.
     pub markers: Vec<MarkerBox>,
-    // Surface view.
+    /// How the voxel grid is built (volume and surface views).
+    pub voxels: VoxelSettings,
+    /// How the volume view draws the grid.
+    pub volume: VolumeSettings,
+    /// How the surface view extracts and lights the isosurface.
     pub surface: SurfaceSettings,
 }
 
@@ -64,6 +74,8 @@ impl Default for RenderSettings {
             points: PointStyle::default(),
             show_box: true,
             markers: Vec::new(),
+            voxels: VoxelSettings::default(),
+            volume: VolumeSettings::default(),
             surface: SurfaceSettings::default(),
         }
     }
@@ -88,8 +100,11 @@ pub struct SceneData {
     pub box_min: Vec3,
     pub box_max: Vec3,
     pub world_from_data: Mat4,
-    /// The voxelized fields the Surface (and Volume) views are built from; None until set.
+    /// The voxel grid, built on demand by [`SceneData::ensure_grid`].
     pub grid: Option<VoxelGrid>,
+    pub grid_stats: Option<VoxelStats>,
+    grid_key: Option<(u32, u32)>,
+    volume: Option<VolumeGpu>,
 }
 
 impl SceneData {
@@ -122,7 +137,43 @@ impl SceneData {
             box_max,
             world_from_data: world_from_data(cloud.meta.mode),
             grid: None,
+            grid_stats: None,
+            grid_key: None,
+            volume: None,
         }
+    }
+
+    /// Builds the voxel grid of `cloud` (the cloud this data was made from) unless one with the
+    /// same resolution and smoothing exists. Returns whether it was rebuilt. Never per frame:
+    /// call when the view needs a grid, the cloud is loaded or the voxel settings change.
+    pub fn ensure_grid(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        renderer: &Renderer,
+        cloud: &PointCloud,
+        settings: &VoxelSettings,
+    ) -> Result<bool, VoxelizeError> {
+        let resolution = settings.resolution_for(cloud.meta.mode);
+        let key = (resolution, settings.smoothing_sigma.to_bits());
+        if self.grid.is_some() && self.grid_key == Some(key) {
+            return Ok(false);
+        }
+        // Free the old grid before building the new one.
+        self.volume = None;
+        self.grid = None;
+        let (grid, stats) = renderer.voxelize.voxelize(
+            device,
+            queue,
+            &cloud.points,
+            resolution,
+            settings.smoothing_sigma,
+        )?;
+        self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
+        self.grid = Some(grid);
+        self.grid_stats = Some(stats);
+        self.grid_key = Some(key);
+        Ok(true)
     }
 
     /// The data box in world space, for fitting the camera.
@@ -144,6 +195,8 @@ pub struct Renderer {
     pub points: PointsPass,
     pub lines: LinesPass,
     pub markers: MarkersPass,
+    pub voxelize: VoxelizePass,
+    pub volume: VolumePass,
     pub surface: SurfacePass,
 }
 
@@ -154,6 +207,8 @@ impl Renderer {
             points: PointsPass::new(device, &frame),
             lines: LinesPass::new(device, &frame),
             markers: MarkersPass::new(device, &frame),
+            voxelize: VoxelizePass::new(device, &frame),
+            volume: VolumePass::new(device, &frame),
             surface: SurfacePass::new(device, &frame),
             frame,
         }
@@ -177,6 +232,10 @@ impl Renderer {
             if settings.view == ViewKind::Surface {
                 self.surface
                     .prepare(queue, encoder, data.grid.as_ref(), &settings.surface);
+            }
+            if let (ViewKind::Volume, Some(volume)) = (settings.view, &data.volume) {
+                self.volume
+                    .prepare(queue, volume, &settings.volume, view.moving);
             }
         }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -210,9 +269,15 @@ impl Renderer {
         let Some(data) = data else {
             return;
         };
-        match settings.view {
-            ViewKind::Surface => self.surface.draw(&mut pass, &self.frame),
-            ViewKind::Points | ViewKind::Volume => {
+        match (settings.view, &data.volume) {
+            (ViewKind::Surface, _) if data.grid.is_some() => {
+                self.surface.draw(&mut pass, &self.frame);
+            }
+            (ViewKind::Volume, Some(volume)) => {
+                self.volume.draw(&mut pass, &self.frame, volume);
+            }
+            // Until a grid is built (ensure_grid), the points stand in.
+            (ViewKind::Points | ViewKind::Surface | ViewKind::Volume, _) => {
                 self.points.draw(
                     &mut pass,
                     &self.frame,

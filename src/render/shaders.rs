@@ -13,6 +13,8 @@ pub const ISO_GRID: &str = include_str!("../../shaders/utils/iso_grid.wgsl");
 pub const MARCHING_TETS: &str = include_str!("../../shaders/marching_tets.wgsl");
 pub const DUAL_CONTOUR: &str = include_str!("../../shaders/dual_contour.wgsl");
 pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
+pub const VOXELIZE: &str = include_str!("../../shaders/voxelize.wgsl");
+pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -29,6 +31,14 @@ pub fn lines() -> String {
 
 pub fn markers() -> String {
     compose(&[FRAME, MARKERS])
+}
+
+pub fn voxelize() -> String {
+    compose(&[FRAME, VOXELIZE])
+}
+
+pub fn volume() -> String {
+    compose(&[FRAME, PALETTE, VOLUME])
 }
 
 pub fn composite() -> String {
@@ -57,6 +67,8 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("marching_tets", marching_tets()),
         ("dual_contour", dual_contour()),
         ("mesh", mesh()),
+        ("voxelize", voxelize()),
+        ("volume", volume()),
     ]
 }
 

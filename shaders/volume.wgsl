@@ -1,0 +1,227 @@
+// Volume view: a full-screen triangle whose fragments march their pixel's ray through the voxel
+// grid, front to back, mapping density through a transfer function (paper 3.3).
+// Reads the grid's density and hp_mean buffers (layout of src/render/grid.rs) with manual
+// trilinear filtering. Writes premultiplied colour (blended over the cleared background) and the
+// depth where the ray's opacity first passes one half, so box lines behind dense volume hide.
+// Keep VolumeParams in sync with src/render/volume.rs and `transfer` with src/render/transfer.rs.
+
+struct VolumeParams {
+    // Grid size in voxels (w unused).
+    dims: vec4<u32>,
+    // Grid box in data space (w unused).
+    box_min: vec4<f32>,
+    box_max: vec4<f32>,
+    // x: preset (0 Classic, 1 Ember, 2 Glacial), y: hp tint on, z: gradient shading on,
+    // w: most steps per ray.
+    options: vec4<u32>,
+    // x: density scale, y: opacity scale times the opacity per voxel at alpha 1, z: step in
+    // voxels, w: emission gain.
+    controls: vec4<f32>,
+};
+
+@group(1) @binding(0) var<uniform> params: VolumeParams;
+@group(1) @binding(1) var<storage, read> density: array<f32>;
+@group(1) @binding(2) var<storage, read> hp_mean: array<f32>;
+
+struct VertexOut {
+    @builtin(position) position: vec4<f32>,
+};
+
+@vertex
+fn vs_main(@builtin(vertex_index) vertex: u32) -> VertexOut {
+    // One triangle covering the screen: (-1, -1), (3, -1), (-1, 3).
+    let uv = vec2<f32>(f32((vertex << 1u) & 2u), f32(vertex & 2u));
+    var out: VertexOut;
+    out.position = vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+    return out;
+}
+
+fn voxel_index(ijk: vec3<u32>) -> u32 {
+    return ijk.x + params.dims.x * (ijk.y + params.dims.y * ijk.z);
+}
+
+struct Corners {
+    i0: vec3<u32>,
+    i1: vec3<u32>,
+    f: vec3<f32>,
+};
+
+// The eight voxels around voxel-space point `u` (voxel centres at ijk + 0.5), clamped to the
+// grid, and the interpolation weights.
+fn corners(u: vec3<f32>) -> Corners {
+    let top = vec3<f32>(params.dims.xyz) - 1.0;
+    let q = clamp(u - 0.5, vec3<f32>(0.0), top);
+    let base = floor(q);
+    var c: Corners;
+    c.i0 = vec3<u32>(base);
+    c.i1 = vec3<u32>(min(base + 1.0, top));
+    c.f = q - base;
+    return c;
+}
+
+fn trilinear_density(c: Corners) -> f32 {
+    let a = mix(density[voxel_index(c.i0)], density[voxel_index(vec3<u32>(c.i1.x, c.i0.y, c.i0.z))], c.f.x);
+    let b = mix(density[voxel_index(vec3<u32>(c.i0.x, c.i1.y, c.i0.z))], density[voxel_index(vec3<u32>(c.i1.x, c.i1.y, c.i0.z))], c.f.x);
+    let d = mix(density[voxel_index(vec3<u32>(c.i0.x, c.i0.y, c.i1.z))], density[voxel_index(vec3<u32>(c.i1.x, c.i0.y, c.i1.z))], c.f.x);
+    let e = mix(density[voxel_index(vec3<u32>(c.i0.x, c.i1.y, c.i1.z))], density[voxel_index(c.i1)], c.f.x);
+    return mix(mix(a, b, c.f.y), mix(d, e, c.f.y), c.f.z);
+}
+
+fn trilinear_hp(c: Corners) -> f32 {
+    let a = mix(hp_mean[voxel_index(c.i0)], hp_mean[voxel_index(vec3<u32>(c.i1.x, c.i0.y, c.i0.z))], c.f.x);
+    let b = mix(hp_mean[voxel_index(vec3<u32>(c.i0.x, c.i1.y, c.i0.z))], hp_mean[voxel_index(vec3<u32>(c.i1.x, c.i1.y, c.i0.z))], c.f.x);
+    let d = mix(hp_mean[voxel_index(vec3<u32>(c.i0.x, c.i0.y, c.i1.z))], hp_mean[voxel_index(vec3<u32>(c.i1.x, c.i0.y, c.i1.z))], c.f.x);
+    let e = mix(hp_mean[voxel_index(vec3<u32>(c.i0.x, c.i1.y, c.i1.z))], hp_mean[voxel_index(c.i1)], c.f.x);
+    return mix(mix(a, b, c.f.y), mix(d, e, c.f.y), c.f.z);
+}
+
+fn sample_density(u: vec3<f32>) -> f32 {
+    return trilinear_density(corners(u));
+}
+
+// Four-stop ramps, gamma-encoded. Keep in sync with the stops in src/render/transfer.rs.
+fn ramp(preset: u32, t: f32) -> vec3<f32> {
+    var stops: array<vec3<f32>, 4>;
+    if (preset == 1u) {
+        stops = array<vec3<f32>, 4>(
+            vec3<f32>(0.40, 0.05, 0.02), vec3<f32>(0.86, 0.26, 0.05),
+            vec3<f32>(1.00, 0.62, 0.16), vec3<f32>(1.00, 0.93, 0.66));
+    } else if (preset == 2u) {
+        stops = array<vec3<f32>, 4>(
+            vec3<f32>(0.05, 0.12, 0.36), vec3<f32>(0.14, 0.40, 0.80),
+            vec3<f32>(0.55, 0.82, 0.98), vec3<f32>(0.93, 0.98, 1.00));
+    } else {
+        stops = array<vec3<f32>, 4>(
+            vec3<f32>(0.14, 0.24, 0.58), vec3<f32>(0.16, 0.62, 0.78),
+            vec3<f32>(0.96, 0.78, 0.32), vec3<f32>(1.00, 0.97, 0.88));
+    }
+    let x = clamp(t, 0.0, 1.0) * 3.0;
+    let i = min(u32(floor(x)), 2u);
+    return mix(stops[i], stops[i + 1u], x - f32(i));
+}
+
+// Density (already scaled) -> colour and opacity per voxel. Keep in sync with
+// TransferPreset::shape in src/render/transfer.rs.
+fn transfer(preset: u32, density_value: f32) -> vec4<f32> {
+    let s = clamp(density_value, 0.0, 1.0);
+    var t = s;
+    var alpha = s;
+    if (preset == 1u) {
+        t = sqrt(s);
+        alpha = t;
+    } else if (preset == 2u) {
+        t = smoothstep(0.2, 1.0, s);
+        alpha = min(1.6 * t * t, 1.0);
+    }
+    return vec4<f32>(ramp(preset, t), alpha);
+}
+
+fn hash(pixel: vec2<u32>, frame_index: u32) -> f32 {
+    var h = pixel.x * 1973u + pixel.y * 9277u + frame_index * 26699u;
+    h = (h ^ (h >> 16u)) * 0x7feb352du;
+    h = (h ^ (h >> 15u)) * 0x846ca68bu;
+    h = h ^ (h >> 16u);
+    return f32(h >> 8u) / 16777216.0;
+}
+
+struct FragmentOut {
+    @location(0) color: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+};
+
+@fragment
+fn fs_main(in: VertexOut) -> FragmentOut {
+    var out: FragmentOut;
+    // The pixel's ray in data space, from the near plane to the far plane.
+    let ndc = vec2<f32>(
+        in.position.x * frame.viewport.z * 2.0 - 1.0,
+        1.0 - in.position.y * frame.viewport.w * 2.0,
+    );
+    let near4 = frame.data_from_clip * vec4<f32>(ndc, 0.0, 1.0);
+    let far4 = frame.data_from_clip * vec4<f32>(ndc, 1.0, 1.0);
+    let near = near4.xyz / near4.w;
+    let far = far4.xyz / far4.w;
+
+    // Into voxel space (one unit per voxel), where steps are measured.
+    let dims = vec3<f32>(params.dims.xyz);
+    let per_unit = dims / (params.box_max.xyz - params.box_min.xyz);
+    let origin = (near - params.box_min.xyz) * per_unit;
+    let span = (far - near) * per_unit;
+    let ray_length = length(span);
+    let dir = span / ray_length;
+
+    // Slab intersection with the box [0, dims].
+    let inv = 1.0 / dir;
+    let t0 = (vec3<f32>(0.0) - origin) * inv;
+    let t1 = (dims - origin) * inv;
+    let t_enter = max(max(max(min(t0.x, t1.x), min(t0.y, t1.y)), min(t0.z, t1.z)), 0.0);
+    let t_exit = min(min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)), ray_length);
+    if (t_enter >= t_exit) {
+        discard;
+    }
+
+    let preset = params.options.x;
+    let tint = params.options.y != 0u;
+    let shading = params.options.z != 0u;
+    let density_scale = params.controls.x;
+    let step = params.controls.z;
+    let opacity = params.controls.y;
+    let light = normalize(frame.light_direction.xyz);
+
+    // Jittered start: hides the banding of fixed steps (changes every frame while moving).
+    var t = t_enter + step * hash(vec2<u32>(in.position.xy), frame.flags.x);
+    var color = vec3<f32>(0.0);
+    var alpha = 0.0;
+    var depth = 1.0;
+    for (var i = 0u; i < params.options.w && t < t_exit; i += 1u) {
+        let u = origin + dir * t;
+        let c = corners(u);
+        let value = trilinear_density(c) * density_scale;
+        if (value > 0.002) {
+            let sample = transfer(preset, value);
+            // Opacity per step from opacity per voxel, so the look does not depend on the step.
+            let a = 1.0 - pow(1.0 - clamp(sample.a * opacity, 0.0, 0.999), step);
+            if (a > 0.0005) {
+                var rgb = sample.rgb;
+                if (tint) {
+                    // The points' palette, brighter where denser.
+                    let tinted = hp_palette(trilinear_hp(c)) * (0.45 + 0.65 * clamp(value, 0.0, 1.0));
+                    rgb = mix(rgb, tinted, 0.85);
+                }
+                if (shading && a > 0.01) {
+                    // Central differences in voxel space; the normal in data space.
+                    let gv = vec3<f32>(
+                        sample_density(u + vec3<f32>(1.0, 0.0, 0.0)) - sample_density(u - vec3<f32>(1.0, 0.0, 0.0)),
+                        sample_density(u + vec3<f32>(0.0, 1.0, 0.0)) - sample_density(u - vec3<f32>(0.0, 1.0, 0.0)),
+                        sample_density(u + vec3<f32>(0.0, 0.0, 1.0)) - sample_density(u - vec3<f32>(0.0, 0.0, 1.0)),
+                    );
+                    let g = gv * per_unit;
+                    let magnitude = length(g);
+                    if (magnitude > 1e-6) {
+                        // The normal points down the gradient (out of the dense region); flat
+                        // regions (small gradients) stay unshaded.
+                        let n = -g / magnitude;
+                        let lit = 0.5 + 0.7 * max(dot(n, light), 0.0);
+                        let edge = clamp(length(gv) * 4.0, 0.0, 1.0);
+                        rgb = rgb * mix(1.0, lit, edge);
+                    }
+                }
+                // Emission outweighs absorption a little, so the field glows.
+                color += (1.0 - alpha) * a * rgb * params.controls.w;
+                alpha += (1.0 - alpha) * a;
+                if (alpha > 0.5 && depth >= 1.0) {
+                    let data = params.box_min.xyz + u / per_unit;
+                    let clip = frame.clip_from_data * vec4<f32>(data, 1.0);
+                    depth = clamp(clip.z / clip.w, 0.0, 1.0);
+                }
+                if (alpha > 0.99) {
+                    break;
+                }
+            }
+        }
+        t += step;
+    }
+    out.color = vec4<f32>(color, alpha);
+    out.depth = depth;
+    return out;
+}

@@ -1,0 +1,225 @@
+//! The voxelization and volume part of `loudscape bench`: median GPU times of building grids
+//! and of drawing one volume frame. GPU timestamp queries where the adapter has them, otherwise
+//! the wall time of submit-and-wait.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use loudscape::camera::Camera;
+use loudscape::cloud::{DataMode, Point, PointCloud};
+use loudscape::render::context::GpuContext;
+use loudscape::render::frame::FrameView;
+use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::target::RenderTarget;
+use loudscape::render::voxelize::{VoxelizeJob, synthetic_song};
+
+/// Points of the synthetic stand-in for a song when data/demo_song.ply is absent.
+pub const SYNTHETIC_SONG_POINTS: usize = 700_000;
+pub const LARGE_CLOUD_POINTS: usize = 2_000_000;
+
+/// Times GPU work: timestamps around the recorded work where supported, else wall time.
+pub struct GpuTimer {
+    queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer, f64)>,
+}
+
+impl GpuTimer {
+    pub fn new(gpu: &GpuContext) -> Self {
+        let features = gpu.device.features();
+        let queries = features
+            .contains(
+                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            )
+            .then(|| {
+                let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("bench::timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                });
+                let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("bench::timestamps_resolve"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("bench::timestamps_read"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                });
+                let period = f64::from(gpu.queue.get_timestamp_period());
+                (set, resolve, read, period)
+            });
+        Self { queries }
+    }
+
+    pub fn method(&self) -> &'static str {
+        if self.queries.is_some() {
+            "GPU timestamp queries"
+        } else {
+            "submit-and-wait wall time (no timestamp queries on this adapter)"
+        }
+    }
+
+    /// Milliseconds of the work `record` adds to one encoder.
+    pub fn time(
+        &self,
+        gpu: &GpuContext,
+        record: impl FnOnce(&mut wgpu::CommandEncoder),
+    ) -> anyhow::Result<f64> {
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("bench::timed"),
+            });
+        if let Some((set, _, _, _)) = &self.queries {
+            encoder.write_timestamp(set, 0);
+        }
+        record(&mut encoder);
+        if let Some((set, resolve, read, _)) = &self.queries {
+            encoder.write_timestamp(set, 1);
+            encoder.resolve_query_set(set, 0..2, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+        }
+        let start = Instant::now();
+        gpu.queue.submit([encoder.finish()]);
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .context("waiting for the GPU")?;
+        let wall = start.elapsed().as_secs_f64() * 1e3;
+        match &self.queries {
+            Some((_, _, read, period)) => {
+                let bytes = loudscape::render::target::map_buffer(&gpu.device, read)?;
+                let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+                Ok(ticks[1].wrapping_sub(ticks[0]) as f64 * period / 1e6)
+            }
+            None => Ok(wall),
+        }
+    }
+}
+
+pub fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        (values[n / 2 - 1] + values[n / 2]) * 0.5
+    }
+}
+
+fn song_cloud() -> (PointCloud, String) {
+    let demo = Path::new("data/demo_song.ply");
+    if demo.is_file() {
+        match loudscape::cloud::load(demo) {
+            Ok(cloud) => return (cloud, demo.display().to_string()),
+            Err(e) => eprintln!("bench: {e}; using a synthetic song instead"),
+        }
+    }
+    let cloud = PointCloud::synthetic(synthetic_song(SYNTHETIC_SONG_POINTS, 1), DataMode::Song);
+    (cloud, "synthetic song".into())
+}
+
+fn export(points: &[Point], path: &Path) -> anyhow::Result<()> {
+    std::fs::write(path, bytemuck::cast_slice::<Point, u8>(points))
+        .with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// One line per stage: name, median ms, runs.
+pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
+    let runs = runs.max(1);
+    let gpu = GpuContext::new_headless()?;
+    let timer = GpuTimer::new(&gpu);
+    println!("adapter: {}", gpu.describe());
+    println!(
+        "timing: {}, median of {runs} runs after one warm-up",
+        timer.method()
+    );
+    let renderer = Renderer::new(&gpu.device);
+
+    let (song, song_name) = song_cloud();
+    println!("song: {song_name}");
+    let large = PointCloud::synthetic(synthetic_song(LARGE_CLOUD_POINTS, 2), DataMode::Timeline);
+    if let Some(dir) = export_points {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create the folder", dir.display()))?;
+        export(&song.points, &dir.join("song.f32"))?;
+        export(&large.points, &dir.join("large.f32"))?;
+        println!(
+            "exported points (x, y, z, scalar, hp float32) to {}",
+            dir.display()
+        );
+    }
+
+    let stages: [(&str, &PointCloud, u32, f32); 4] = [
+        ("voxelize song", &song, 128, 0.0),
+        ("voxelize song, smoothed (sigma 1)", &song, 128, 1.0),
+        ("voxelize 2M points", &large, 224, 0.0),
+        ("voxelize 2M points, smoothed (sigma 1)", &large, 224, 1.0),
+    ];
+    for (name, cloud, resolution, sigma) in stages {
+        let start = Instant::now();
+        let job: VoxelizeJob =
+            renderer
+                .voxelize
+                .prepare(&gpu.device, &cloud.points, resolution, sigma)?;
+        let upload = start.elapsed().as_secs_f64() * 1e3;
+        let mut times = Vec::new();
+        for i in 0..=runs {
+            let ms = timer.time(&gpu, |encoder| {
+                renderer.voxelize.encode(encoder, &job, None);
+            })?;
+            if i > 0 {
+                times.push(ms);
+            }
+        }
+        println!(
+            "{name}: {} points -> {resolution}^3: {:.2} ms (upload and allocation {upload:.1} ms)",
+            cloud.points.len(),
+            median(times)
+        );
+    }
+
+    // One volume frame of the song at 1280x720, at rest (full quality).
+    let mut data = SceneData::new(&gpu.device, &renderer, &song);
+    let settings = RenderSettings {
+        view: ViewKind::Volume,
+        ..Default::default()
+    };
+    data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &song, &settings.voxels)?;
+    let (width, height) = (1280, 720);
+    let target = RenderTarget::new(&gpu.device, width, height);
+    let mut camera = Camera::default();
+    let (min, max) = data.world_box();
+    camera.fit(min, max, width as f32 / height as f32);
+    for moving in [false, true] {
+        let view = FrameView {
+            camera,
+            world_from_data: data.world_from_data,
+            width,
+            height,
+            frame_index: 0,
+            moving,
+        };
+        let mut times = Vec::new();
+        for i in 0..=runs {
+            let ms = timer.time(&gpu, |encoder| {
+                renderer.render(&gpu.queue, encoder, &target, Some(&data), &view, &settings);
+            })?;
+            if i > 0 {
+                times.push(ms);
+            }
+        }
+        println!(
+            "volume frame {width}x{height} ({}, 128^3, step {} voxel): {:.2} ms",
+            if moving { "moving" } else { "at rest" },
+            settings.volume.step(moving),
+            median(times)
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,157 @@
+//! Transfer functions of the volume view (paper sections 3.3 and 5): density -> colour and
+//! opacity. This is the CPU mirror of `transfer` in shaders/volume.wgsl, for legends and tests;
+//! keep the two in sync (a test compares them through rendered images).
+//!
+//! Each preset reshapes the density `s` in [0, 1] to a ramp position `t`, looks the colour up on
+//! a four-stop ramp (gamma-encoded, like every colour of the render target) and takes the opacity
+//! per voxel of ray length from `t`:
+//! - Classic: `t = s`, opacity `t`; deep blue through teal and gold to near white: a balanced,
+//!   mostly linear view of the whole field.
+//! - Ember: `t = sqrt(s)`, which lifts low-to-mid densities; warm ramp from dark red through
+//!   orange to pale yellow.
+//! - Glacial: `t = smoothstep(0.2, 1, s)`, which suppresses the low densities; opacity `1.6 t^2`
+//!   ramps steeply toward the dense cores; cool ramp from navy through blue to ice white.
+
+/// A transfer-function preset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum TransferPreset {
+    Classic,
+    Ember,
+    Glacial,
+}
+
+/// Colour stops per preset (gamma-encoded RGB). Keep in sync with `ramp` in volume.wgsl.
+const CLASSIC: [[f32; 3]; 4] = [
+    [0.14, 0.24, 0.58],
+    [0.16, 0.62, 0.78],
+    [0.96, 0.78, 0.32],
+    [1.00, 0.97, 0.88],
+];
+const EMBER: [[f32; 3]; 4] = [
+    [0.40, 0.05, 0.02],
+    [0.86, 0.26, 0.05],
+    [1.00, 0.62, 0.16],
+    [1.00, 0.93, 0.66],
+];
+const GLACIAL: [[f32; 3]; 4] = [
+    [0.05, 0.12, 0.36],
+    [0.14, 0.40, 0.80],
+    [0.55, 0.82, 0.98],
+    [0.93, 0.98, 1.00],
+];
+
+impl TransferPreset {
+    pub const ALL: [TransferPreset; 3] = [
+        TransferPreset::Classic,
+        TransferPreset::Ember,
+        TransferPreset::Glacial,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TransferPreset::Classic => "Classic",
+            TransferPreset::Ember => "Ember",
+            TransferPreset::Glacial => "Glacial",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name().eq_ignore_ascii_case(name))
+    }
+
+    /// The index the shader switches on. Keep in sync with volume.wgsl.
+    pub fn index(self) -> u32 {
+        self as u32
+    }
+
+    fn stops(self) -> &'static [[f32; 3]; 4] {
+        match self {
+            TransferPreset::Classic => &CLASSIC,
+            TransferPreset::Ember => &EMBER,
+            TransferPreset::Glacial => &GLACIAL,
+        }
+    }
+
+    /// Ramp position and opacity (per voxel of ray length, before the opacity scale) of density
+    /// `s` (already multiplied by the density scale).
+    pub fn shape(self, s: f32) -> (f32, f32) {
+        let s = s.clamp(0.0, 1.0);
+        match self {
+            TransferPreset::Classic => (s, s),
+            TransferPreset::Ember => {
+                let t = s.sqrt();
+                (t, t)
+            }
+            TransferPreset::Glacial => {
+                let u = ((s - 0.2) / 0.8).clamp(0.0, 1.0);
+                let t = u * u * (3.0 - 2.0 * u);
+                (t, (1.6 * t * t).min(1.0))
+            }
+        }
+    }
+
+    /// Colour (gamma-encoded RGB) and opacity of density `s`.
+    pub fn sample(self, s: f32) -> [f32; 4] {
+        let (t, alpha) = self.shape(s);
+        let [r, g, b] = ramp(self.stops(), t);
+        [r, g, b, alpha]
+    }
+
+    /// `width` colours from density 0 to 1 as RGBA8 over black, for a legend strip (opacity
+    /// shown as brightness).
+    pub fn legend(self, width: usize) -> Vec<[u8; 4]> {
+        (0..width)
+            .map(|i| {
+                let s = i as f32 / (width.max(2) - 1) as f32;
+                let [r, g, b, a] = self.sample(s);
+                let k = 0.25 + 0.75 * a;
+                let byte = |v: f32| (v * k * 255.0).round().clamp(0.0, 255.0) as u8;
+                [byte(r), byte(g), byte(b), 255]
+            })
+            .collect()
+    }
+}
+
+/// Piecewise-linear ramp through four stops at t = 0, 1/3, 2/3, 1.
+fn ramp(stops: &[[f32; 3]; 4], t: f32) -> [f32; 3] {
+    let x = t.clamp(0.0, 1.0) * 3.0;
+    let i = (x.floor() as usize).min(2);
+    let f = x - i as f32;
+    let (a, b) = (stops[i], stops[i + 1]);
+    [
+        a[0] + (b[0] - a[0]) * f,
+        a[1] + (b[1] - a[1]) * f,
+        a[2] + (b[2] - a[2]) * f,
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_shape_density_as_documented() {
+        for preset in TransferPreset::ALL {
+            assert_eq!(preset.shape(0.0).1, 0.0, "{preset:?} empty is transparent");
+            let mut last = -1.0;
+            for i in 0..=100 {
+                let (_, a) = preset.shape(i as f32 / 100.0);
+                assert!(a >= last, "{preset:?} opacity must not fall with density");
+                last = a;
+            }
+        }
+        // Ember lifts the low-to-mid range above Classic; Glacial suppresses it.
+        let (classic, ember, glacial) = (
+            TransferPreset::Classic.shape(0.25).1,
+            TransferPreset::Ember.shape(0.25).1,
+            TransferPreset::Glacial.shape(0.25).1,
+        );
+        assert!(ember > classic && glacial < 0.05 && classic > glacial);
+        // Glacial is the steepest at the top.
+        assert!(TransferPreset::Glacial.shape(1.0).1 >= TransferPreset::Classic.shape(1.0).1);
+        assert_eq!(TransferPreset::parse("ember"), Some(TransferPreset::Ember));
+        assert_eq!(TransferPreset::Classic.legend(16).len(), 16);
+    }
+}
