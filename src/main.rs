@@ -18,6 +18,10 @@ struct Cli {
     /// Song and/or timeline point clouds (.ply) to open in the window.
     files: Vec<PathBuf>,
 
+    /// Open the window in this view: points, surface or volume.
+    #[arg(long, value_parser = parse_view)]
+    view: Option<loudscape::render::scene::ViewKind>,
+
     /// Save a screenshot of the window to this PNG once the data is shown, then close.
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
@@ -44,6 +48,11 @@ enum Command {
     Bench(commands::bench::BenchArgs),
 }
 
+fn parse_view(name: &str) -> Result<loudscape::render::scene::ViewKind, String> {
+    loudscape::render::scene::ViewKind::parse(name)
+        .ok_or_else(|| format!("'{name}' is not one of points, surface, volume"))
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if !cli.debug {
@@ -56,6 +65,7 @@ fn main() -> ExitCode {
         None => loudscape::ui::run(loudscape::ui::WindowOptions {
             files: cli.files,
             screenshot: cli.screenshot,
+            view: cli.view,
         }),
         Some(Command::Render(args)) => commands::render::run(args),
         Some(Command::RenderDemo(args)) => commands::render::run_demo(args),

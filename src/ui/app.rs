@@ -28,6 +28,8 @@ pub struct WindowOptions {
     pub files: Vec<PathBuf>,
     /// Save a screenshot of the window here once the data is shown, then close (for tests).
     pub screenshot: Option<PathBuf>,
+    /// The view to open in (otherwise the remembered one, or Points).
+    pub view: Option<ViewKind>,
 }
 
 /// Which of the two data slots.
@@ -91,6 +93,14 @@ pub struct Remembered {
     pub camera: Option<Camera>,
     pub iso_value: Option<f32>,
     pub show_box: Option<bool>,
+    /// Transfer function preset name (Classic, Ember, Glacial) and the volume's hp tint.
+    #[serde(default)]
+    pub transfer: Option<String>,
+    #[serde(default)]
+    pub hp_tint: Option<bool>,
+    /// Surface method short name (mt, dc).
+    #[serde(default)]
+    pub surface_method: Option<String>,
     /// Audio picked by hand for a cloud whose recorded source moved: cloud path -> audio path.
     pub audio_for: Vec<(PathBuf, PathBuf)>,
 }
@@ -137,6 +147,10 @@ pub struct LoudscapeApp {
     persist: bool,
     /// Loads that keep the remembered camera instead of fitting.
     keep_camera_loads: usize,
+    /// Why the surface could not be extracted, if it could not.
+    surface_error: Option<String>,
+    /// Draw again next frame (the surface is still growing its buffers).
+    needs_repaint: bool,
 }
 
 /// Opens the window and runs until it closes.
@@ -212,6 +226,8 @@ impl LoudscapeApp {
             audio_for: Vec::new(),
             persist,
             keep_camera_loads: 0,
+            surface_error: None,
+            needs_repaint: false,
         };
         let mut files = options.files;
         if let Some(r) = remembered {
@@ -223,6 +239,23 @@ impl LoudscapeApp {
             }
             if let Some(show) = r.show_box {
                 app.settings.show_box = show;
+            }
+            if let Some(preset) = r
+                .transfer
+                .as_deref()
+                .and_then(crate::render::transfer::TransferPreset::parse)
+            {
+                app.settings.volume.preset = preset;
+            }
+            if let Some(tint) = r.hp_tint {
+                app.settings.volume.hp_tint = tint;
+            }
+            if let Some(method) = r
+                .surface_method
+                .as_deref()
+                .and_then(crate::render::mesh::SurfaceMethod::parse)
+            {
+                app.settings.surface.method = method;
             }
             app.audio_for = r.audio_for;
             // The camera and the files go together: the view comes back as it was left.
@@ -236,6 +269,9 @@ impl LoudscapeApp {
                     app.keep_camera_loads = files.len();
                 }
             }
+        }
+        if let Some(view) = options.view {
+            app.settings.view = view;
         }
         for file in files {
             app.start_loading(file);
@@ -255,6 +291,9 @@ impl LoudscapeApp {
             camera: Some(self.camera),
             iso_value: Some(self.settings.surface.iso_value),
             show_box: Some(self.settings.show_box),
+            transfer: Some(self.settings.volume.preset.name().to_string()),
+            hp_tint: Some(self.settings.volume.hp_tint),
+            surface_method: Some(self.settings.surface.method.short_name().to_string()),
             audio_for: self.audio_for.clone(),
         }
     }
@@ -420,26 +459,39 @@ impl LoudscapeApp {
             }
         });
 
-        ui.add_space(6.0);
-        ui.label(RichText::new("Points").strong());
-        if let Some(size) = self.active().map(|l| l.point_size) {
-            self.settings.points.size_px = size;
-        }
-        let size_changed = ui
-            .add(egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0).text("size (px)"))
-            .changed();
-        if size_changed {
-            let size = self.settings.points.size_px;
-            match self.active {
-                Slot::Song => self.song.iter_mut().for_each(|l| l.point_size = size),
-                Slot::Timeline => self.timeline.iter_mut().for_each(|l| l.point_size = size),
+        if self.settings.view == ViewKind::Points {
+            ui.add_space(6.0);
+            ui.label(RichText::new("Points").strong());
+            if let Some(size) = self.active().map(|l| l.point_size) {
+                self.settings.points.size_px = size;
             }
+            let size_changed = ui
+                .add(
+                    egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0)
+                        .text("size (px)"),
+                )
+                .changed();
+            if size_changed {
+                let size = self.settings.points.size_px;
+                match self.active {
+                    Slot::Song => self.song.iter_mut().for_each(|l| l.point_size = size),
+                    Slot::Timeline => self.timeline.iter_mut().for_each(|l| l.point_size = size),
+                }
+            }
+            ui.add(
+                egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0)
+                    .text("min loudness"),
+            );
+            hp_legend(ui);
         }
-        ui.add(
-            egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0).text("min loudness"),
-        );
-        hp_legend(ui);
+        if self.settings.view != ViewKind::Points {
+            self.grid_controls(ui);
+        }
+        if self.settings.view == ViewKind::Volume {
+            self.volume_controls(ui);
+        }
         if self.settings.view == ViewKind::Surface {
+            self.surface_controls(ui);
             ui.label(RichText::new("Surface colour (mean hp)").small());
             gradient_legend(ui, |t| {
                 crate::render::mesh::warm_cool(t).map(|c| (c * 255.0).round() as u8)
@@ -662,6 +714,9 @@ impl eframe::App for LoudscapeApp {
         self.frame_ms = self.frame_ms * 0.9 + ctx.input(|i| i.unstable_dt) * 1000.0 * 0.1;
         self.poll_loading(&ctx, frame);
         self.fetch_grid(frame);
+        if std::mem::take(&mut self.needs_repaint) {
+            ctx.request_repaint();
+        }
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
                 .dropped_files
@@ -930,7 +985,8 @@ impl LoudscapeApp {
         }
     }
 
-    /// Reads the active cloud's voxel grid back once, when the view needs it for hovering.
+    /// Builds the active cloud's voxel grid when the view needs one (only when the cloud or the
+    /// grid settings changed), and reads it back once for hovering.
     fn fetch_grid(&mut self, frame: &eframe::Frame) {
         if self.settings.view == ViewKind::Points {
             return;
@@ -938,15 +994,105 @@ impl LoudscapeApp {
         let Some(render_state) = frame.wgpu_render_state() else {
             return;
         };
+        let voxels = self.settings.voxels;
         let slot = match self.active {
             Slot::Song => self.song.as_mut(),
             Slot::Timeline => self.timeline.as_mut(),
         };
-        if let Some(loaded) = slot
-            && loaded.cpu_grid.is_none()
-            && ViewResources::has_grid(render_state, loaded.id)
-        {
+        let Some(loaded) = slot else {
+            return;
+        };
+        let mut failure = None;
+        match ViewResources::ensure_grid(render_state, loaded.id, &loaded.cloud, &voxels) {
+            Ok(true) => loaded.cpu_grid = None,
+            Ok(false) => {}
+            Err(message) => failure = Some(message),
+        }
+        if loaded.cpu_grid.is_none() && ViewResources::has_grid(render_state, loaded.id) {
             loaded.cpu_grid = ViewResources::read_grid(render_state, loaded.id);
+        }
+        if let Some(message) = failure
+            && !self.messages.contains(&message)
+        {
+            self.messages.push(message);
+        }
+        let (_, error, again) = ViewResources::surface_status(render_state);
+        self.surface_error = error;
+        if again {
+            self.needs_repaint = true;
+        }
+    }
+
+    fn grid_controls(&mut self, ui: &mut egui::Ui) {
+        ui.add_space(6.0);
+        ui.label(RichText::new("Voxel grid").strong());
+        let mode = self.active().map_or(DataMode::Song, |l| l.cloud.meta.mode);
+        let mut resolution = self.settings.voxels.resolution_for(mode);
+        let changed = ui
+            .add(
+                egui::Slider::new(
+                    &mut resolution,
+                    crate::render::voxelize::MIN_RESOLUTION
+                        ..=crate::render::voxelize::MAX_RESOLUTION,
+                )
+                .step_by(16.0)
+                .text("voxels/side"),
+            )
+            .on_hover_text("128 for songs and 224 for timelines by default; rebuilt on release")
+            .drag_stopped();
+        if changed {
+            self.settings.voxels.resolution = Some(resolution);
+        }
+        let mut sigma = self.settings.voxels.smoothing_sigma;
+        if ui
+            .add(egui::Slider::new(&mut sigma, 0.0..=3.0).text("smoothing σ"))
+            .drag_stopped()
+        {
+            self.settings.voxels.smoothing_sigma = sigma;
+        }
+    }
+
+    fn volume_controls(&mut self, ui: &mut egui::Ui) {
+        use crate::render::transfer::TransferPreset;
+        ui.add_space(6.0);
+        ui.label(RichText::new("Volume").strong());
+        let volume = &mut self.settings.volume;
+        ui.horizontal(|ui| {
+            for preset in TransferPreset::ALL {
+                ui.selectable_value(&mut volume.preset, preset, preset.name());
+            }
+        });
+        transfer_legend(ui, volume.preset);
+        ui.add(egui::Slider::new(&mut volume.density_scale, 0.1..=4.0).text("density"));
+        ui.add(egui::Slider::new(&mut volume.opacity_scale, 0.1..=4.0).text("opacity scale"));
+        ui.add(
+            egui::Slider::new(&mut volume.step_voxels, 0.25..=4.0)
+                .logarithmic(true)
+                .text("step (voxels)"),
+        )
+        .on_hover_text("Smaller steps: finer detail, slower frames");
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut volume.hp_tint, "hp tint")
+                .on_hover_text("Colour by mean hp: red percussive to blue harmonic");
+            ui.checkbox(&mut volume.shading, "shading");
+        });
+    }
+
+    fn surface_controls(&mut self, ui: &mut egui::Ui) {
+        use crate::render::mesh::SurfaceMethod;
+        ui.add_space(6.0);
+        ui.label(RichText::new("Surface").strong());
+        let surface = &mut self.settings.surface;
+        ui.horizontal(|ui| {
+            for method in SurfaceMethod::ALL {
+                ui.selectable_value(&mut surface.method, method, method.name());
+            }
+        });
+        ui.add(egui::Slider::new(&mut surface.iso_value, 0.0..=1.0).text("isovalue"))
+            .on_hover_text("The loudness density the surface encloses");
+        ui.checkbox(&mut surface.lit, "lit from above");
+        if let Some(error) = &self.surface_error {
+            ui.colored_label(Color32::from_rgb(240, 120, 100), error);
         }
     }
 
@@ -1139,4 +1285,24 @@ fn gradient_legend(ui: &mut egui::Ui, color: impl Fn(f32) -> [u8; 3]) {
             Color32::from_rgb(r, g, b),
         );
     }
+}
+
+/// The transfer function's colour and opacity over density 0..1, over a checker so opacity shows.
+fn transfer_legend(ui: &mut egui::Ui, preset: crate::render::transfer::TransferPreset) {
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(200.0, 12.0), egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    let steps = 50;
+    let colours = preset.legend(steps);
+    for (i, [r, g, b, a]) in colours.into_iter().enumerate() {
+        let x0 = rect.left() + rect.width() * i as f32 / steps as f32;
+        let x1 = rect.left() + rect.width() * (i + 1) as f32 / steps as f32;
+        let cell = egui::Rect::from_x_y_ranges(x0..=x1 + 0.5, rect.y_range());
+        painter.rect_filled(cell, 0.0, Color32::from_gray(40));
+        painter.rect_filled(cell, 0.0, Color32::from_rgba_unmultiplied(r, g, b, a));
+    }
+    ui.horizontal(|ui| {
+        ui.label(RichText::new("density 0").small());
+        ui.add_space(120.0);
+        ui.label(RichText::new("1").small());
+    });
 }

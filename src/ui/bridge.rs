@@ -99,6 +99,54 @@ impl ViewResources {
         })
     }
 
+    /// Builds cloud `id`'s voxel grid unless one with these settings exists. Returns whether it
+    /// was rebuilt (then any CPU copy of the old grid is stale).
+    pub fn ensure_grid(
+        render_state: &egui_wgpu::RenderState,
+        id: u64,
+        cloud: &PointCloud,
+        voxels: &crate::render::voxelize::VoxelSettings,
+    ) -> Result<bool, String> {
+        let mut renderer = render_state.renderer.write();
+        let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() else {
+            return Ok(false);
+        };
+        let ViewResources {
+            renderer, scenes, ..
+        } = resources;
+        let Some(data) = scenes.get_mut(&id) else {
+            return Ok(false);
+        };
+        data.ensure_grid(
+            &render_state.device,
+            &render_state.queue,
+            renderer,
+            cloud,
+            voxels,
+        )
+        .map_err(|e| format!("{}: {e}", cloud.path.display()))
+    }
+
+    /// The surface pass's state: triangle counts of the last extraction, an error to show, and
+    /// whether it needs another frame to finish (buffers growing).
+    pub fn surface_status(
+        render_state: &egui_wgpu::RenderState,
+    ) -> (
+        Option<crate::render::mesh::SurfaceCounts>,
+        Option<String>,
+        bool,
+    ) {
+        let renderer = render_state.renderer.read();
+        match renderer.callback_resources.get::<ViewResources>() {
+            Some(r) => (
+                r.renderer.surface.counts(),
+                r.renderer.surface.error(),
+                r.renderer.surface.needs_another_frame(),
+            ),
+            None => (None, None, false),
+        }
+    }
+
     /// Whether cloud `id` has a voxel grid on the GPU yet.
     pub fn has_grid(render_state: &egui_wgpu::RenderState, id: u64) -> bool {
         let renderer = render_state.renderer.read();
