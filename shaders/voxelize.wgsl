@@ -3,7 +3,7 @@
 //   accumulate  one thread per point: adds scalar, hp and 1 to the point's voxel record
 //   resolve     one thread per voxel: density = loudness sum (as f32), hp mean = hp sum / count
 //   smooth_axis one thread per voxel: one axis of a separable Gaussian on the sums (optional)
-//   histogram   one thread per voxel: log2 histogram of the positive sums
+//   histogram   grid-stride over voxels: log2 histogram of the positive (smoothed) sums
 //   percentile  one thread: the reference sum (the 99th percentile of the positive sums)
 //   normalize_density  one thread per voxel: density = min(sum / reference, 1)
 // Keep VoxelParams and SmoothParams in sync with src/render/voxelize.rs.
@@ -112,12 +112,35 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
 }
 
 // The histogram bin of a non-empty voxel's sum. Keep in sync with histogram_bin in voxelize.rs.
-fn histogram_bin(sum: f32) -> u32 {
+// `scales` is VoxelParams.scales (y: log2 of the lowest edge, z: bins per octave).
+fn histogram_bin(sum: f32, scales: vec4<f32>) -> u32 {
     if (sum <= 0.0) {
         return 0u;
     }
-    let t = (log2(sum) - params.scales.y) * params.scales.z;
+    let t = (log2(sum) - scales.y) * scales.z;
     return u32(clamp(floor(t), 0.0, f32(HISTOGRAM_BINS - 1u)));
+}
+
+var<workgroup> local_histogram: array<atomic<u32>, HISTOGRAM_BINS>;
+var<workgroup> local_nonempty: atomic<u32>;
+var<workgroup> local_max: atomic<u32>;
+
+fn clear_local_histogram(local: u32) {
+    for (var b = local; b < HISTOGRAM_BINS; b += 256u) {
+        atomicStore(&local_histogram[b], 0u);
+    }
+    if (local == 0u) {
+        atomicStore(&local_nonempty, 0u);
+        atomicStore(&local_max, 0u);
+    }
+}
+
+fn bin_locally(sum: f32, scales: vec4<f32>) {
+    if (sum > 0.0) {
+        atomicAdd(&local_histogram[histogram_bin(sum, scales)], 1u);
+        atomicAdd(&local_nonempty, 1u);
+        atomicMax(&local_max, bitcast<u32>(sum));
+    }
 }
 
 @compute @workgroup_size(256)
@@ -141,11 +164,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     resolved_hp_mean[voxel] = clamp(hp / f32(count), 0.0, 1.0);
 }
 
-var<workgroup> local_histogram: array<atomic<u32>, HISTOGRAM_BINS>;
-var<workgroup> local_nonempty: atomic<u32>;
-var<workgroup> local_max: atomic<u32>;
-
-// Grid-stride: a bounded number of workgroups each bins many voxels, so clearing and flushing
+// Grid-stride: a bounded number of workgroups each bins many voxels, so clearing and merging
 // the workgroup histogram is paid a few hundred times, not once per 256 voxels.
 @compute @workgroup_size(256)
 fn histogram(
@@ -153,23 +172,12 @@ fn histogram(
     @builtin(local_invocation_index) local: u32,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    for (var b = local; b < HISTOGRAM_BINS; b += 256u) {
-        atomicStore(&local_histogram[b], 0u);
-    }
-    if (local == 0u) {
-        atomicStore(&local_nonempty, 0u);
-        atomicStore(&local_max, 0u);
-    }
+    clear_local_histogram(local);
     workgroupBarrier();
     let total = voxel_total();
     let stride = groups.x * groups.y * 256u;
     for (var voxel = linear_index(id, groups); voxel < total; voxel += stride) {
-        let sum = density[voxel];
-        if (sum > 0.0) {
-            atomicAdd(&local_histogram[histogram_bin(sum)], 1u);
-            atomicAdd(&local_nonempty, 1u);
-            atomicMax(&local_max, bitcast<u32>(sum));
-        }
+        bin_locally(density[voxel], params.scales);
     }
     workgroupBarrier();
     for (var b = local; b < HISTOGRAM_BINS; b += 256u) {

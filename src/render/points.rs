@@ -111,7 +111,9 @@ impl PointsGpu {
     /// The largest chunk one storage binding and one buffer can hold on this device.
     pub fn chunk_limit(device: &wgpu::Device) -> u64 {
         let limits = device.limits();
-        u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size)
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
     }
 
     pub fn chunk_count(&self) -> usize {
