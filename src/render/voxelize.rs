@@ -534,12 +534,16 @@ impl VoxelizePass {
             })
         };
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let loudness_sums = storage("voxelize::loudness_sums", voxels * 8, copy);
-        let hp_counts = storage("voxelize::hp_counts", voxels * 8, copy);
+        // Every per-voxel buffer is padded to whole groups of four voxels (16 bytes of f32, 32 of
+        // sums): the per-voxel passes read and write four voxels at a time. The padding stays
+        // zero (an empty voxel) and is never part of the grid.
+        let quads = voxels.div_ceil(4);
+        let loudness_sums = storage("voxelize::loudness_sums", quads * 32, copy);
+        let hp_counts = storage("voxelize::hp_counts", quads * 32, copy);
         let stats = storage("voxelize::stats", STATS_WORDS as u64 * 4, copy);
         let reference = storage("voxelize::reference_sum", 16, copy);
-        let density = storage("voxelize::density_grid", voxels * 4, copy);
-        let hp_mean = storage("voxelize::hp_mean_grid", voxels * 4, copy);
+        let density = storage("voxelize::density_grid", quads * 16, copy);
+        let hp_mean = storage("voxelize::hp_mean_grid", quads * 16, copy);
 
         let per_chunk = (Self::buffer_limit(device) / std::mem::size_of::<Point>() as u64)
             .clamp(1, u64::from(u32::MAX / 5)) as usize;
@@ -711,6 +715,7 @@ impl VoxelizePass {
             encoder.clear_buffer(buffer, 0, None);
         }
         let voxels = dispatch_size(job.voxel_count());
+        let quads = dispatch_size(job.voxel_count().div_ceil(4));
         let main_group = &job.chunks[0].bind_group;
         let mut names: Vec<&'static str> = Vec::new();
         let mut begin_pass = |encoder: &mut wgpu::CommandEncoder, label: &'static str| {
@@ -745,7 +750,7 @@ impl VoxelizePass {
             pass.set_pipeline(&self.resolve);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             pass.set_bind_group(3, &job.resolve_group, &[]);
-            pass.dispatch_workgroups(voxels.0, voxels.1, 1);
+            pass.dispatch_workgroups(quads.0, quads.1, 1);
         }
         if let Some((scratch, groups)) = &job.smoothing {
             for (axis, group) in groups.iter().enumerate() {
@@ -769,7 +774,7 @@ impl VoxelizePass {
                 (voxels.0.min(GRID_STRIDE_GROUPS), 1),
             ),
             ("voxelize::percentile", &self.percentile, (1, 1)),
-            ("voxelize::normalize_density", &self.normalize, voxels),
+            ("voxelize::normalize_density", &self.normalize, quads),
         ];
         for (label, pipeline, (x, y)) in stages {
             let mut pass = begin_pass(encoder, label);
