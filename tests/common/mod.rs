@@ -51,7 +51,10 @@ pub fn difference(a: &image::RgbaImage, b: &image::RgbaImage, threshold: u8) -> 
 /// Run with `UPDATE_GOLDEN=1` to write the golden after looking at the actual image.
 /// On failure the actual image and a difference image are written to tests/output/.
 pub fn assert_golden(name: &str, actual: &image::RgbaImage, max_share: f64) {
-    let golden_path = repo().join("tests").join("golden").join(format!("{name}.png"));
+    let golden_path = repo()
+        .join("tests")
+        .join("golden")
+        .join(format!("{name}.png"));
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
         actual.save(&golden_path).expect("write golden");
         return;
@@ -66,7 +69,11 @@ pub fn assert_golden(name: &str, actual: &image::RgbaImage, max_share: f64) {
             actual_path.display()
         ),
     };
-    assert_eq!(golden.dimensions(), actual.dimensions(), "{name}: size differs");
+    assert_eq!(
+        golden.dimensions(),
+        actual.dimensions(),
+        "{name}: size differs"
+    );
     let (share, mean) = difference(&golden, actual, 32);
     if share > max_share {
         let diff = image::RgbaImage::from_fn(actual.width(), actual.height(), |x, y| {
