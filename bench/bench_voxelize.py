@@ -85,7 +85,7 @@ def median_ms(fn, runs: int) -> float:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     target = os.environ.get("CARGO_TARGET_DIR", "target")
-    parser.add_argument("--loudscape", default=str(Path(target) / "release" / "loudscape"))
+    parser.add_argument("--loudscape", default=str(Path(target) / "debug" / "loudscape"))
     parser.add_argument("--runs", type=int, default=11)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:

@@ -67,12 +67,21 @@ fn trilinear_density(c: Corners) -> f32 {
     return mix(mix(a, b, c.f.y), mix(d, e, c.f.y), c.f.z);
 }
 
-fn trilinear_hp(c: Corners) -> f32 {
-    let a = mix(hp_mean[voxel_index(c.i0)], hp_mean[voxel_index(vec3<u32>(c.i1.x, c.i0.y, c.i0.z))], c.f.x);
-    let b = mix(hp_mean[voxel_index(vec3<u32>(c.i0.x, c.i1.y, c.i0.z))], hp_mean[voxel_index(vec3<u32>(c.i1.x, c.i1.y, c.i0.z))], c.f.x);
-    let d = mix(hp_mean[voxel_index(vec3<u32>(c.i0.x, c.i0.y, c.i1.z))], hp_mean[voxel_index(vec3<u32>(c.i1.x, c.i0.y, c.i1.z))], c.f.x);
-    let e = mix(hp_mean[voxel_index(vec3<u32>(c.i0.x, c.i1.y, c.i1.z))], hp_mean[voxel_index(c.i1)], c.f.x);
-    return mix(mix(a, b, c.f.y), mix(d, e, c.f.y), c.f.z);
+// Mean hp around a sample, weighted by density as well as distance, so empty voxels (hp 0.5,
+// "neither") do not wash the colour of the loud ones out toward white.
+fn weighted_hp(c: Corners) -> f32 {
+    var total = 0.0;
+    var weight_sum = 0.0;
+    for (var corner = 0u; corner < 8u; corner += 1u) {
+        let pick = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, corner >> 2u);
+        let ijk = select(c.i0, c.i1, pick == vec3<u32>(1u));
+        let f = select(1.0 - c.f, c.f, pick == vec3<u32>(1u));
+        let index = voxel_index(ijk);
+        let w = f.x * f.y * f.z * density[index];
+        total += w * hp_mean[index];
+        weight_sum += w;
+    }
+    return select(0.5, total / weight_sum, weight_sum > 1e-6);
 }
 
 fn sample_density(u: vec3<f32>) -> f32 {
@@ -185,7 +194,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
                 var rgb = sample.rgb;
                 if (tint) {
                     // The points' palette, brighter where denser.
-                    let tinted = hp_palette(trilinear_hp(c)) * (0.45 + 0.65 * clamp(value, 0.0, 1.0));
+                    let tinted = hp_palette(weighted_hp(c)) * (0.45 + 0.65 * clamp(value, 0.0, 1.0));
                     rgb = mix(rgb, tinted, 0.85);
                 }
                 if (shading && a > 0.01) {

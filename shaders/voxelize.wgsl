@@ -3,7 +3,7 @@
 //   accumulate  one thread per point: adds scalar, hp and 1 to the point's voxel record
 //   resolve     one thread per voxel: density = loudness sum (as f32), hp mean = hp sum / count
 //   smooth_axis one thread per voxel: one axis of a separable Gaussian on the sums (optional)
-//   histogram   one thread per voxel: log2 histogram of the positive sums
+//   histogram   grid-stride over voxels: log2 histogram of the positive (smoothed) sums
 //   percentile  one thread: the reference sum (the 99th percentile of the positive sums)
 //   normalize_density  one thread per voxel: density = min(sum / reference, 1)
 // Keep VoxelParams and SmoothParams in sync with src/render/voxelize.rs.
@@ -50,7 +50,8 @@ const STATS_HISTOGRAM: u32 = 4u;
 @group(1) @binding(2) var<storage, read_write> loudness_sums: array<atomic<u32>>;
 @group(1) @binding(3) var<storage, read_write> hp_counts: array<atomic<u32>>;
 @group(1) @binding(4) var<storage, read_write> stats: array<atomic<u32>>;
-@group(1) @binding(5) var<storage, read_write> density: array<f32>;
+// Four voxels per element (the buffer is padded to a multiple of 16 bytes with zeros).
+@group(1) @binding(5) var<storage, read_write> density: array<vec4<f32>>;
 @group(1) @binding(6) var<storage, read_write> hp_mean: array<f32>;
 // [0] the reference sum, written by `percentile` for `normalize_density` to read without atomics.
 @group(1) @binding(7) var<storage, read_write> reference_sum: array<f32>;
@@ -63,10 +64,12 @@ const STATS_HISTOGRAM: u32 = 4u;
 // The resolving pass reads the sums without atomics (much faster on CPU adapters), so it binds
 // them read-only in a group of its own and leaves out group 1, where they are atomic.
 @group(3) @binding(0) var<uniform> resolve_params: VoxelParams;
-@group(3) @binding(1) var<storage, read> loudness_words: array<vec2<u32>>;
-@group(3) @binding(2) var<storage, read> hp_count_words: array<vec2<u32>>;
-@group(3) @binding(3) var<storage, read_write> resolved_density: array<f32>;
-@group(3) @binding(4) var<storage, read_write> resolved_hp_mean: array<f32>;
+// Two voxels per element (low, high word each).
+@group(3) @binding(1) var<storage, read> loudness_words: array<vec4<u32>>;
+@group(3) @binding(2) var<storage, read> hp_count_words: array<vec4<u32>>;
+// Four voxels per element.
+@group(3) @binding(3) var<storage, read_write> resolved_density: array<vec4<f32>>;
+@group(3) @binding(4) var<storage, read_write> resolved_hp_mean: array<vec4<f32>>;
 
 // Linear invocation index over a 2D dispatch (x up to 65535 workgroups, then rows of y).
 fn linear_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -112,40 +115,63 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
 }
 
 // The histogram bin of a non-empty voxel's sum. Keep in sync with histogram_bin in voxelize.rs.
-fn histogram_bin(sum: f32) -> u32 {
+// `scales` is VoxelParams.scales (y: log2 of the lowest edge, z: bins per octave).
+fn histogram_bin(sum: f32, scales: vec4<f32>) -> u32 {
     if (sum <= 0.0) {
         return 0u;
     }
-    let t = (log2(sum) - params.scales.y) * params.scales.z;
+    let t = (log2(sum) - scales.y) * scales.z;
     return u32(clamp(floor(t), 0.0, f32(HISTOGRAM_BINS - 1u)));
 }
 
-@compute @workgroup_size(256)
-fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let voxel = linear_index(id, groups);
-    let dims = resolve_params.dims;
-    if (voxel >= dims.x * dims.y * dims.z) {
-        return;
+var<workgroup> local_histogram: array<atomic<u32>, HISTOGRAM_BINS>;
+var<workgroup> local_max: atomic<u32>;
+
+fn clear_local_histogram(local: u32) {
+    for (var b = local; b < HISTOGRAM_BINS; b += 256u) {
+        atomicStore(&local_histogram[b], 0u);
     }
-    let loudness = loudness_words[voxel];
-    let hp_count = hp_count_words[voxel];
+    if (local == 0u) {
+        atomicStore(&local_max, 0u);
+    }
+}
+
+fn bin_locally(sum: f32, scales: vec4<f32>) {
+    if (sum > 0.0) {
+        atomicAdd(&local_histogram[histogram_bin(sum, scales)], 1u);
+    }
+}
+
+fn resolve_one(loudness: vec2<u32>, hp_count: vec2<u32>) -> vec2<f32> {
     let count = hp_count.y >> 8u;
     if (count == 0u) {
-        resolved_density[voxel] = 0.0;
-        resolved_hp_mean[voxel] = 0.5;
-        return;
+        return vec2<f32>(0.0, 0.5);
     }
     let scalar = (f32(loudness.y) * 4294967296.0 + f32(loudness.x)) / resolve_params.scales.x;
     let hp = (f32(hp_count.y & 255u) * 4294967296.0 + f32(hp_count.x)) / resolve_params.scales.w;
-    resolved_density[voxel] = scalar;
-    resolved_hp_mean[voxel] = clamp(hp / f32(count), 0.0, 1.0);
+    return vec2<f32>(scalar, clamp(hp / f32(count), 0.0, 1.0));
 }
 
-var<workgroup> local_histogram: array<atomic<u32>, HISTOGRAM_BINS>;
-var<workgroup> local_nonempty: atomic<u32>;
-var<workgroup> local_max: atomic<u32>;
+// Four voxels per thread (whole 16-byte loads and stores; buffers are padded to groups of four).
+@compute @workgroup_size(256)
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let quad = linear_index(id, groups);
+    if (quad >= arrayLength(&resolved_density)) {
+        return;
+    }
+    let l01 = loudness_words[2u * quad];
+    let l23 = loudness_words[2u * quad + 1u];
+    let h01 = hp_count_words[2u * quad];
+    let h23 = hp_count_words[2u * quad + 1u];
+    let v0 = resolve_one(l01.xy, h01.xy);
+    let v1 = resolve_one(l01.zw, h01.zw);
+    let v2 = resolve_one(l23.xy, h23.xy);
+    let v3 = resolve_one(l23.zw, h23.zw);
+    resolved_density[quad] = vec4<f32>(v0.x, v1.x, v2.x, v3.x);
+    resolved_hp_mean[quad] = vec4<f32>(v0.y, v1.y, v2.y, v3.y);
+}
 
-// Grid-stride: a bounded number of workgroups each bins many voxels, so clearing and flushing
+// Grid-stride: a bounded number of workgroups each bins many voxels, so clearing and merging
 // the workgroup histogram is paid a few hundred times, not once per 256 voxels.
 @compute @workgroup_size(256)
 fn histogram(
@@ -153,24 +179,22 @@ fn histogram(
     @builtin(local_invocation_index) local: u32,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    for (var b = local; b < HISTOGRAM_BINS; b += 256u) {
-        atomicStore(&local_histogram[b], 0u);
-    }
-    if (local == 0u) {
-        atomicStore(&local_nonempty, 0u);
-        atomicStore(&local_max, 0u);
-    }
+    clear_local_histogram(local);
     workgroupBarrier();
-    let total = voxel_total();
     let stride = groups.x * groups.y * 256u;
-    for (var voxel = linear_index(id, groups); voxel < total; voxel += stride) {
-        let sum = density[voxel];
-        if (sum > 0.0) {
-            atomicAdd(&local_histogram[histogram_bin(sum)], 1u);
-            atomicAdd(&local_nonempty, 1u);
-            atomicMax(&local_max, bitcast<u32>(sum));
-        }
+    // Four voxels per element; the padding is zero and so not counted.
+    let quads = arrayLength(&density);
+    var largest = vec4<f32>(0.0);
+    for (var quad = linear_index(id, groups); quad < quads; quad += stride) {
+        let sums = density[quad];
+        largest = max(largest, sums);
+        bin_locally(sums.x, params.scales);
+        bin_locally(sums.y, params.scales);
+        bin_locally(sums.z, params.scales);
+        bin_locally(sums.w, params.scales);
     }
+    // Positive floats order as their bits do.
+    atomicMax(&local_max, bitcast<u32>(max(max(largest.x, largest.y), max(largest.z, largest.w))));
     workgroupBarrier();
     for (var b = local; b < HISTOGRAM_BINS; b += 256u) {
         let n = atomicLoad(&local_histogram[b]);
@@ -179,11 +203,7 @@ fn histogram(
         }
     }
     if (local == 0u) {
-        let n = atomicLoad(&local_nonempty);
-        if (n > 0u) {
-            atomicAdd(&stats[0], n);
-            atomicMax(&stats[3], atomicLoad(&local_max));
-        }
+        atomicMax(&stats[3], atomicLoad(&local_max));
     }
 }
 
@@ -193,7 +213,11 @@ fn histogram(
 // Keep in sync with reference_sum in src/render/voxelize.rs.
 @compute @workgroup_size(1)
 fn percentile() {
-    let nonempty = atomicLoad(&stats[0]);
+    var nonempty = 0u;
+    for (var b = 0u; b < HISTOGRAM_BINS; b += 1u) {
+        nonempty += atomicLoad(&stats[STATS_HISTOGRAM + b]);
+    }
+    atomicStore(&stats[0], nonempty);
     var reference = 1.0;
     if (nonempty > 0u) {
         let p = f32(params.counts.z) / 1000000.0;
@@ -216,16 +240,17 @@ fn percentile() {
 
 @compute @workgroup_size(256)
 fn normalize_density(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let voxel = linear_index(id, groups);
-    if (voxel >= voxel_total()) {
+    // Four voxels per thread.
+    let quad = linear_index(id, groups);
+    if (quad >= arrayLength(&density)) {
         return;
     }
-    let reference = reference_sum[0];
-    let value = density[voxel] / reference;
-    if (value > 1.0) {
-        atomicAdd(&stats[2], 1u);
+    let value = density[quad] / reference_sum[0];
+    let over = dot(vec4<u32>(value > vec4<f32>(1.0)), vec4<u32>(1u));
+    if (over > 0u) {
+        atomicAdd(&stats[2], over);
     }
-    density[voxel] = min(value, 1.0);
+    density[quad] = min(value, vec4<f32>(1.0));
 }
 
 @compute @workgroup_size(256)

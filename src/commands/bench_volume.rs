@@ -12,7 +12,7 @@ use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameView;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::target::RenderTarget;
-use loudscape::render::voxelize::{VoxelizeJob, synthetic_song};
+use loudscape::render::voxelize::{MAX_PASSES, VoxelizeJob, synthetic_song};
 
 /// Points of the synthetic stand-in for a song when data/demo_song.ply is absent.
 pub const SYNTHETIC_SONG_POINTS: usize = 700_000;
@@ -99,6 +99,25 @@ impl GpuTimer {
     }
 }
 
+/// Copies resolved pass timestamps to the CPU.
+fn read_pass_ticks(
+    gpu: &GpuContext,
+    passes: &Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+) -> anyhow::Result<Option<Vec<u64>>> {
+    let Some((_, resolve, read)) = passes else {
+        return Ok(None);
+    };
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("bench::pass_timestamps_copy"),
+        });
+    encoder.copy_buffer_to_buffer(resolve, 0, read, 0, None);
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = loudscape::render::target::map_buffer(&gpu.device, read)?;
+    Ok(Some(bytemuck::cast_slice(&bytes).to_vec()))
+}
+
 pub fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     let n = values.len();
@@ -155,6 +174,33 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
         );
     }
 
+    // Per-pass timestamps, where the adapter has them.
+    let period = f64::from(gpu.queue.get_timestamp_period()) / 1e6;
+    let passes = gpu
+        .device
+        .features()
+        .contains(wgpu::Features::TIMESTAMP_QUERY)
+        .then(|| {
+            let count = 2 * MAX_PASSES as u32;
+            let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("bench::pass_timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count,
+            });
+            let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bench::pass_timestamps_resolve"),
+                size: u64::from(count) * 8,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bench::pass_timestamps_read"),
+                size: u64::from(count) * 8,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            (set, resolve, read)
+        });
     let stages: [(&str, &PointCloud, u32, f32); 4] = [
         ("voxelize song", &song, 128, 0.0),
         ("voxelize song, smoothed (sigma 1)", &song, 128, 1.0),
@@ -169,12 +215,25 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
                 .prepare(&gpu.device, &cloud.points, resolution, sigma)?;
         let upload = start.elapsed().as_secs_f64() * 1e3;
         let mut times = Vec::new();
+        let mut pass_times: Vec<Vec<f64>> = Vec::new();
+        let mut pass_names = Vec::new();
         for i in 0..=runs {
             let ms = timer.time(&gpu, |encoder| {
-                renderer.voxelize.encode(encoder, &job, None);
+                pass_names = renderer
+                    .voxelize
+                    .encode(encoder, &job, passes.as_ref().map(|p| &p.0));
+                if let Some((set, resolve, _)) = &passes {
+                    encoder.resolve_query_set(set, 0..2 * pass_names.len() as u32, resolve, 0);
+                }
             })?;
             if i > 0 {
                 times.push(ms);
+                if let Some(ticks) = read_pass_ticks(&gpu, &passes)? {
+                    pass_times.resize(pass_names.len(), Vec::new());
+                    for (p, times) in pass_times.iter_mut().enumerate() {
+                        times.push(ticks[2 * p + 1].wrapping_sub(ticks[2 * p]) as f64 * period);
+                    }
+                }
             }
         }
         println!(
@@ -182,6 +241,16 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
             cloud.points.len(),
             median(times)
         );
+        if !pass_times.is_empty() {
+            let parts: Vec<String> = pass_names
+                .iter()
+                .zip(pass_times)
+                .map(|(name, t)| {
+                    format!("{} {:.1}", name.trim_start_matches("voxelize::"), median(t))
+                })
+                .collect();
+            println!("    passes (ms): {}", parts.join(", "));
+        }
     }
 
     // One volume frame of the song at 1280x720, at rest (full quality).

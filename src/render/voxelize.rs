@@ -51,6 +51,12 @@ const MAX_KERNEL_RADIUS: usize = 31;
 const STATS_HISTOGRAM: usize = 4;
 const STATS_WORDS: usize = STATS_HISTOGRAM + HISTOGRAM_BINS as usize;
 const WORKGROUP: u32 = 256;
+/// Workgroups of the grid-stride passes that build a histogram (each merges its workgroup
+/// histogram once).
+const GRID_STRIDE_GROUPS: u32 = 512;
+/// Most compute passes one build records (accumulate, resolve, 3 smoothing, histogram,
+/// percentile, normalize).
+pub const MAX_PASSES: usize = 8;
 
 /// Keep in sync with `VoxelParams` in shaders/voxelize.wgsl.
 #[repr(C)]
@@ -528,12 +534,16 @@ impl VoxelizePass {
             })
         };
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let loudness_sums = storage("voxelize::loudness_sums", voxels * 8, copy);
-        let hp_counts = storage("voxelize::hp_counts", voxels * 8, copy);
+        // Every per-voxel buffer is padded to whole groups of four voxels (16 bytes of f32, 32 of
+        // sums): the per-voxel passes read and write four voxels at a time. The padding stays
+        // zero (an empty voxel) and is never part of the grid.
+        let quads = voxels.div_ceil(4);
+        let loudness_sums = storage("voxelize::loudness_sums", quads * 32, copy);
+        let hp_counts = storage("voxelize::hp_counts", quads * 32, copy);
         let stats = storage("voxelize::stats", STATS_WORDS as u64 * 4, copy);
         let reference = storage("voxelize::reference_sum", 16, copy);
-        let density = storage("voxelize::density_grid", voxels * 4, copy);
-        let hp_mean = storage("voxelize::hp_mean_grid", voxels * 4, copy);
+        let density = storage("voxelize::density_grid", quads * 16, copy);
+        let hp_mean = storage("voxelize::hp_mean_grid", quads * 16, copy);
 
         let per_chunk = (Self::buffer_limit(device) / std::mem::size_of::<Point>() as u64)
             .clamp(1, u64::from(u32::MAX / 5)) as usize;
@@ -692,37 +702,38 @@ impl VoxelizePass {
         })
     }
 
-    /// Records the whole build. `timestamps` (query set, first index) receives the start of the
-    /// first pass and the end of the last, where the device has timestamp queries.
+    /// Records the whole build and returns the names of its compute passes, in order. With
+    /// `timestamps` (a query set of at least [`MAX_PASSES`] * 2 timestamps), pass `i` writes its
+    /// start and end to queries `2 i` and `2 i + 1` (the benchmark's per-stage timings).
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         job: &VoxelizeJob,
-        timestamps: Option<(&wgpu::QuerySet, u32)>,
-    ) {
+        timestamps: Option<&wgpu::QuerySet>,
+    ) -> Vec<&'static str> {
         for buffer in [&job.loudness_sums, &job.hp_counts, &job.stats] {
             encoder.clear_buffer(buffer, 0, None);
         }
-
         let voxels = dispatch_size(job.voxel_count());
+        let quads = dispatch_size(job.voxel_count().div_ceil(4));
         let main_group = &job.chunks[0].bind_group;
-        let begin_pass = |encoder: &mut wgpu::CommandEncoder, label: &str, first: bool, last| {
-            let timestamp_writes =
-                timestamps.map(|(set, index)| wgpu::ComputePassTimestampWrites {
-                    query_set: set,
-                    beginning_of_pass_write_index: first.then_some(index),
-                    end_of_pass_write_index: if last { Some(index + 1) } else { None },
-                });
-            let timestamp_writes = timestamp_writes.filter(|_| first || last);
+        let mut names: Vec<&'static str> = Vec::new();
+        let mut begin_pass = |encoder: &mut wgpu::CommandEncoder, label: &'static str| {
+            let index = 2 * names.len() as u32;
+            names.push(label);
             encoder
                 .begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(label),
-                    timestamp_writes,
+                    timestamp_writes: timestamps.map(|set| wgpu::ComputePassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: Some(index),
+                        end_of_pass_write_index: Some(index + 1),
+                    }),
                 })
                 .forget_lifetime()
         };
         {
-            let mut pass = begin_pass(encoder, "voxelize::accumulate", true, false);
+            let mut pass = begin_pass(encoder, "voxelize::accumulate");
             pass.set_pipeline(&self.accumulate);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             for chunk in &job.chunks {
@@ -735,16 +746,20 @@ impl VoxelizePass {
             }
         }
         {
-            let mut pass = begin_pass(encoder, "voxelize::resolve", false, false);
+            let mut pass = begin_pass(encoder, "voxelize::resolve");
             pass.set_pipeline(&self.resolve);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             pass.set_bind_group(3, &job.resolve_group, &[]);
-            pass.dispatch_workgroups(voxels.0, voxels.1, 1);
+            pass.dispatch_workgroups(quads.0, quads.1, 1);
         }
         if let Some((scratch, groups)) = &job.smoothing {
             for (axis, group) in groups.iter().enumerate() {
-                let mut pass =
-                    begin_pass(encoder, &format!("voxelize::smooth_{axis}"), false, false);
+                let label = [
+                    "voxelize::smooth_x",
+                    "voxelize::smooth_y",
+                    "voxelize::smooth_z",
+                ][axis];
+                let mut pass = begin_pass(encoder, label);
                 pass.set_pipeline(&self.smooth);
                 pass.set_bind_group(0, &self.frame_bind_group, &[]);
                 pass.set_bind_group(2, group, &[]);
@@ -752,22 +767,23 @@ impl VoxelizePass {
             }
             encoder.copy_buffer_to_buffer(scratch, 0, &job.density, 0, None);
         }
-        let stages: [(&str, &wgpu::ComputePipeline, (u32, u32)); 3] = [
+        let stages = [
             (
                 "voxelize::histogram",
                 &self.histogram,
-                (voxels.0.min(512), 1),
+                (voxels.0.min(GRID_STRIDE_GROUPS), 1),
             ),
             ("voxelize::percentile", &self.percentile, (1, 1)),
-            ("voxelize::normalize_density", &self.normalize, voxels),
+            ("voxelize::normalize_density", &self.normalize, quads),
         ];
-        for (i, (label, pipeline, (x, y))) in stages.into_iter().enumerate() {
-            let mut pass = begin_pass(encoder, label, false, i == 2);
+        for (label, pipeline, (x, y)) in stages {
+            let mut pass = begin_pass(encoder, label);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             pass.set_bind_group(1, main_group, &[]);
             pass.dispatch_workgroups(x, y, 1);
         }
+        names
     }
 
     /// Reads the normalization statistics of the last recorded build (waits for the GPU).
@@ -830,7 +846,9 @@ impl VoxelizePass {
 
 /// A deterministic song-like cloud for tests, benchmarks and demos: `count` points over a
 /// time (x) by log-frequency (z) plane, lifted to their level (y), with sustained harmonic
-/// ridges (hp near 1), broadband percussive hits (hp near 0) and a quiet noise floor.
+/// ridges (hp near 1), broadband percussive hits (hp near 0) and a quiet noise floor. Like the
+/// extractor's STFT clouds, points come frame by frame (x ascending), each frame's 1024 bins in
+/// frequency order; each point lies at a random place within its (frame, bin) cell.
 pub fn synthetic_song(count: usize, seed: u64) -> Vec<Point> {
     let mut state = seed ^ 0x9e37_79b9_7f4a_7c15;
     let mut next = move || {
@@ -845,10 +863,13 @@ pub fn synthetic_song(count: usize, seed: u64) -> Vec<Point> {
     let beats: Vec<(f32, bool)> = (0..12)
         .map(|b| (-0.9 + b as f32 * 0.155, b % 2 == 1))
         .collect();
+    const BINS: usize = 1024;
+    let frames = count.div_ceil(BINS).max(1);
     (0..count)
-        .map(|_| {
-            let x = next() * 2.0 - 1.0;
-            let z = next() * 2.0 - 1.0;
+        .map(|n| {
+            let (frame, bin) = (n / BINS, n % BINS);
+            let x = (frame as f32 + next()) / frames as f32 * 2.0 - 1.0;
+            let z = (bin as f32 + next()) / BINS as f32 * 2.0 - 1.0;
             // A melody of held notes; partials at log-spaced heights above each (z is log
             // frequency, an octave is 0.22).
             let note = ((x * 2.6).sin() * 2.5).round() * 0.05;
