@@ -1,8 +1,18 @@
-// Marching tetrahedra (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling).
-// Reads the density and hp grids; appends a triangle soup (three MeshVertex per triangle) to
-// `vertices` with one atomic reservation per cell, then `finalize` writes the indirect draw.
+// Marching tetrahedra (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling, the
+// active-cell list).
+// Reads the density and hp grids; writes an indexed mesh with one vertex per grid edge that
+// crosses the isovalue, shared by every triangle that uses it.
 // Every cell is split into six tetrahedra around its main diagonal (corner 0 to corner 7); the
 // split of each cube face is then the same seen from either side, so the surface is watertight.
+// Every tetrahedron edge runs from a corner to one with a superset of its offset bits, so each
+// edge is owned by its lower end: the cell whose corner 0 that is, which owns the seven edges
+// from its corner 0 to corners 1..7 (x, y, xy, z, xz, yz, xyz). A crossed edge's owner holds
+// both of its ends, so it straddles the isovalue and is an active cell.
+// Passes: `classify` (every cell) appends the active cells and reserves their vertices (one per
+// crossed owned edge) and indices (three per triangle of their tetrahedra); `dispatch_active`;
+// `edge_vertices` (per active cell) places the vertices; `triangles` (per active cell) looks the
+// vertices of its triangles up through `cell_map` and writes the indices; `finalize` writes the
+// indexed indirect draw.
 
 // The six tetrahedra of a cell as cube-corner indices, each a chain 0 -> 0+a -> 0+a+b -> 7, so
 // within a tetrahedron a lower corner index is also the lower point on every axis.
@@ -28,69 +38,128 @@ const TET_CASES = array<u32, 16>(
     0x01000210u, 0x00000000u,
 );
 
-struct EdgePoint {
-    // Grid coordinates of the crossing.
-    grid: vec3<f32>,
-    vertex: MeshVertex,
-};
-
-// The crossing on the edge from sample pa to sample pb (pa the lower on every axis, so both
-// cells that share the edge compute exactly the same point).
-// Gradients and hp at the ends come from the cell's cache (computed once per corner).
-fn edge_point(
-    pa: vec3<i32>, pb: vec3<i32>, va: f32, vb: f32, ga: vec3<f32>, gb: vec3<f32>, ha: f32, hb: f32,
-) -> EdgePoint {
-    let t = clamp((params.iso_value - va) / (vb - va), 0.0, 1.0);
-    let a = vec3<f32>(pa);
-    let grid = a + (vec3<f32>(pb) - a) * t;
-    let gradient = ga + (gb - ga) * t;
-    let wa = max(va, 0.0);
-    let wb = max(vb, 0.0);
-    var out: EdgePoint;
-    out.grid = grid;
-    out.vertex.position = data_position(grid);
-    out.vertex.normal = outward_normal(gradient);
-    out.vertex.hp = weighted_hp(wa * ha + wb * hb, wa + wb);
-    out.vertex.pad = 0.0;
-    return out;
-}
-
 fn tet_mask(tet: vec4<u32>, cell_mask: u32) -> u32 {
     return ((cell_mask >> tet.x) & 1u) | (((cell_mask >> tet.y) & 1u) << 1u)
         | (((cell_mask >> tet.z) & 1u) << 2u) | (((cell_mask >> tet.w) & 1u) << 3u);
 }
 
-@compute @workgroup_size(16, 4, 1)
-fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id > params.dims)) {
-        return;
-    }
-    let base = vec3<i32>(id) - vec3<i32>(1);
-    var values: array<f32, 8>;
-    var mask = 0u;
-    for (var k = 0u; k < 8u; k++) {
-        let v = sample_density(base + corner_offset(k));
-        values[k] = v;
-        if (v > params.iso_value) {
-            mask |= 1u << k;
-        }
-    }
-    if (mask == 0u || mask == 255u) {
-        return;
-    }
-    // Gradient and hp at the eight corners, read once for all of the cell's vertices.
-    var gradients: array<vec3<f32>, 8>;
-    var hps: array<f32, 8>;
-    for (var k = 0u; k < 8u; k++) {
-        gradients[k] = sample_gradient(base + corner_offset(k));
-        hps[k] = sample_hp(base + corner_offset(k));
-    }
+// Bit k (1..7) set when the owned edge from corner 0 to corner k crosses the isovalue.
+fn owned_edges(mask: u32) -> u32 {
+    let flip = select(0u, 0xffu, (mask & 1u) != 0u);
+    return (mask ^ flip) & 0xfeu;
+}
+
+fn cell_triangles(mask: u32) -> u32 {
     var triangles = 0u;
     for (var t = 0u; t < 6u; t++) {
         triangles += TET_CASES[tet_mask(TETS[t], mask)] >> 24u;
     }
-    let first = atomicAdd(&counters.vertices, triangles * 3u);
-    var out = first;
+    return triangles;
+}
+
+@compute @workgroup_size(16, 4, 1)
+fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (any(id > params.dims)) {
+        return;
+    }
+    let base = vec3<i32>(id) - vec3<i32>(1);
+    let mask = cell_mask(base);
+    if (mask == 0u || mask == 255u) {
+        return;
+    }
+    let vertex_count = countOneBits(owned_edges(mask));
+    var first_vertex = 0u;
+    if (vertex_count > 0u) {
+        first_vertex = atomicAdd(&counters.vertices, vertex_count);
+    }
+    let first_index = atomicAdd(&counters.indices, 3u * cell_triangles(mask));
+    append_active(base, mask, first_vertex, first_index);
+}
+
+@compute @workgroup_size(64)
+fn edge_vertices(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let i = active_thread(group, groups, lane);
+    if (i >= active_count()) {
+        return;
+    }
+    let entry = active_list[i];
+    let owned = owned_edges(entry.y);
+    if (owned == 0u || entry.z >= params.vertex_capacity) {
+        return;
+    }
+    let base = slot_cell(entry.x);
+    let v0 = sample_density(base);
+    let g0 = sample_gradient(base);
+    let h0 = sample_hp(base);
+    let w0 = max(v0, 0.0);
+    let inside0 = (entry.y & 1u) != 0u;
+    var out = entry.z;
+    for (var k = 1u; k < 8u; k++) {
+        if (((owned >> k) & 1u) == 0u) {
+            continue;
+        }
+        if (out >= params.vertex_capacity) {
+            break;
+        }
+        let offset = corner_offset(k);
+        let pk = base + offset;
+        let vk = sample_density(pk);
+        let gk = sample_gradient(pk);
+        let hk = sample_hp(pk);
+        let t = clamp((params.iso_value - v0) / (vk - v0), 0.0, 1.0);
+        let grid = vec3<f32>(base) + vec3<f32>(offset) * t;
+        var normal = outward_normal(g0 + (gk - g0) * t);
+        if (all(normal == vec3<f32>(0.0))) {
+            // No gradient: the edge's own direction, from its inside end to its outside end.
+            let along = normalize(vec3<f32>(offset) * params.voxel_size);
+            normal = select(-along, along, inside0);
+        }
+        let wk = max(vk, 0.0);
+        var vertex: MeshVertex;
+        vertex.position = data_position(grid);
+        vertex.hp = weighted_hp(w0 * h0 + wk * hk, w0 + wk);
+        vertex.normal = normal;
+        vertex.pad = 0.0;
+        vertices[out] = vertex;
+        out += 1u;
+    }
+}
+
+// The vertex on the edge from `lower` to lower + corner_offset(direction), owned by the cell
+// whose lowest sample is `lower`; INVALID when it was not written.
+fn edge_vertex(lower: vec3<i32>, direction: u32) -> u32 {
+    let j = cell_map[cell_slot(lower)];
+    if (j >= params.active_capacity) {
+        return INVALID;
+    }
+    let owner = active_list[j];
+    let index = owner.z + countOneBits(owned_edges(owner.y) & ((1u << direction) - 1u));
+    if (index >= params.vertex_capacity) {
+        return INVALID;
+    }
+    return index;
+}
+
+@compute @workgroup_size(64)
+fn triangles(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let i = active_thread(group, groups, lane);
+    if (i >= active_count()) {
+        return;
+    }
+    let entry = active_list[i];
+    let base = slot_cell(entry.x);
+    let mask = entry.y;
+    // Whole triangles only, so every index below the drawn count is written.
+    let capacity = params.index_capacity - params.index_capacity % 3u;
+    var out = entry.w;
     for (var t = 0u; t < 6u; t++) {
         let tet = TETS[t];
         let case_bits = TET_CASES[tet_mask(tet, mask)];
@@ -105,7 +174,7 @@ fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
         var inside_count = 0.0;
         for (var v = 0u; v < 4u; v++) {
             let p = vec3<f32>(corner_offset(corners[v]));
-            if (values[corners[v]] > params.iso_value) {
+            if (((mask >> corners[v]) & 1u) != 0u) {
                 inside_sum += p;
                 inside_count += 1.0;
             } else {
@@ -114,45 +183,33 @@ fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let outward = outside_sum / (4.0 - inside_count) - inside_sum / inside_count;
         for (var tri = 0u; tri < count; tri++) {
-            var points: array<EdgePoint, 3>;
-            for (var c = 0u; c < 3u; c++) {
-                let edge = (case_bits >> (4u * (tri * 3u + c))) & 0xfu;
-                let ka = corners[EDGE_A[edge]];
-                let kb = corners[EDGE_B[edge]];
-                points[c] = edge_point(
-                    base + corner_offset(ka),
-                    base + corner_offset(kb),
-                    values[ka],
-                    values[kb],
-                    gradients[ka],
-                    gradients[kb],
-                    hps[ka],
-                    hps[kb],
-                );
-            }
-            var face = cross(points[1].grid - points[0].grid, points[2].grid - points[0].grid);
-            if (dot(face, outward) < 0.0) {
-                let swap = points[1];
-                points[1] = points[2];
-                points[2] = swap;
-                face = -face;
-            }
-            // A triangle is written only when all of it fits; the count still grows, so the CPU
-            // learns how much room the surface needs.
-            if (out + 3u <= params.vertex_capacity) {
-                // The face normal in data space (a cross product scales by the cofactors).
-                let data_face = face * params.voxel_size.yzx * params.voxel_size.zxy;
-                var face_normal = vec3<f32>(0.0);
-                if (length(data_face) > 1e-30) {
-                    face_normal = normalize(data_face);
-                }
+            if (out + 3u <= capacity) {
+                var index: array<u32, 3>;
+                var mid: array<vec3<f32>, 3>;
+                var valid = true;
                 for (var c = 0u; c < 3u; c++) {
-                    var vertex = points[c].vertex;
-                    if (all(vertex.normal == vec3<f32>(0.0))) {
-                        vertex.normal = face_normal;
-                    }
-                    vertices[out + c] = vertex;
+                    let edge = (case_bits >> (4u * (tri * 3u + c))) & 0xfu;
+                    let ka = corners[EDGE_A[edge]];
+                    let kb = corners[EDGE_B[edge]];
+                    // The orientation of a triangle on these edges is the same wherever on the
+                    // edges its corners lie, so the edge midpoints decide it.
+                    mid[c] = 0.5 * vec3<f32>(corner_offset(ka) + corner_offset(kb));
+                    index[c] = edge_vertex(base + corner_offset(ka), ka ^ kb);
+                    valid = valid && index[c] != INVALID;
                 }
+                if (dot(cross(mid[1] - mid[0], mid[2] - mid[0]), outward) < 0.0) {
+                    let swap = index[1];
+                    index[1] = index[2];
+                    index[2] = swap;
+                }
+                if (!valid) {
+                    // A vertex did not fit (the CPU grows the buffers): a degenerate triangle
+                    // keeps the drawn range clean (index 0 is inside the vertex buffer).
+                    index = array<u32, 3>(0u, 0u, 0u);
+                }
+                indices[out] = index[0];
+                indices[out + 1u] = index[1];
+                indices[out + 2u] = index[2];
             }
             out += 3u;
         }
@@ -161,14 +218,6 @@ fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
 
 @compute @workgroup_size(1)
 fn finalize() {
-    let written = min(atomicLoad(&counters.vertices), params.vertex_capacity);
-    indirect[0] = written - written % 3u;
-    indirect[1] = 1u;
-    indirect[2] = 0u;
-    indirect[3] = 0u;
-    indirect[4] = 0u;
-    indirect[5] = 1u;
-    indirect[6] = 0u;
-    indirect[7] = 0u;
-    indirect[8] = 0u;
+    let capacity = params.index_capacity - params.index_capacity % 3u;
+    write_indexed_draw(atomicLoad(&counters.indices), capacity);
 }

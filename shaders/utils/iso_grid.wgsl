@@ -1,6 +1,12 @@
 // Shared by the isosurface extraction passes (marching_tets.wgsl, dual_contour.wgsl): the grid
-// they read, the mesh they write, and sampling helpers.
-// Keep IsoParams, MeshVertex and the binding numbers in sync with src/render/mesh.rs.
+// they read, the mesh they write, the active-cell list, and sampling helpers.
+// Keep IsoParams, MeshVertex, Counters and the binding numbers in sync with src/render/mesh.rs.
+//
+// Every extraction runs in the same shape: `classify` sweeps all cells (eight loads and a
+// compare each) and appends only the cells whose corners straddle the isovalue to `active`,
+// reserving their output with atomics; `dispatch_active` turns the count into indirect dispatch
+// arguments; the expensive passes then run one thread per active cell (a few % of the grid), so
+// SIMD lanes are not spent on empty cells.
 //
 // Grid coordinates: sample (voxel centre) p = (i, j, k) sits at box_min + (p + 0.5) * voxel_size
 // in data space. Samples outside [0, dims) read as density 0 (hp 0.5), so every surface closes at
@@ -14,6 +20,11 @@ struct IsoParams {
     iso_value: f32,
     voxel_size: vec3<f32>,
     index_capacity: u32,
+    // Entries of `active`.
+    active_capacity: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 };
 
 // One mesh vertex: data-space position, hp colour scalar, unit normal (toward lower density).
@@ -29,6 +40,9 @@ struct MeshVertex {
 struct Counters {
     vertices: atomic<u32>,
     indices: atomic<u32>,
+    // Cells whose corners straddle the isovalue.
+    active_cells: atomic<u32>,
+    pad: u32,
 };
 
 @group(1) @binding(0) var<uniform> params: IsoParams;
@@ -36,8 +50,16 @@ struct Counters {
 @group(1) @binding(2) var<storage, read> hp_mean: array<f32>;
 @group(1) @binding(3) var<storage, read_write> vertices: array<MeshVertex>;
 @group(1) @binding(4) var<storage, read_write> counters: Counters;
-// [0..4]: DrawIndirectArgs, [4..9]: DrawIndexedIndirectArgs (wgpu::util layouts).
+// [0..4]: DrawIndirectArgs, [4..9]: DrawIndexedIndirectArgs, [9..12]: DispatchIndirectArgs
+// over the active cells (wgpu::util layouts).
 @group(1) @binding(5) var<storage, read_write> indirect: array<u32, 12>;
+@group(1) @binding(6) var<storage, read_write> indices: array<u32>;
+// One entry per cell ((dims + 1)^3, cell c at cell_slot(c)): its index in `active`, or INVALID.
+// Written only for active cells, and only read for cells known to be active.
+@group(1) @binding(7) var<storage, read_write> cell_map: array<u32>;
+// One entry per active cell: (cell_slot, inside mask of its eight corners, first vertex, first
+// index) as reserved by `classify`.
+@group(1) @binding(8) var<storage, read_write> active_list: array<vec4<u32>>;
 
 const INVALID: u32 = 0xffffffffu;
 
@@ -102,4 +124,77 @@ fn weighted_hp(sum_weighted: f32, sum_weights: f32) -> f32 {
         return 0.5;
     }
     return clamp(sum_weighted / sum_weights, 0.0, 1.0);
+}
+
+// The cell's slot in `cell_map`: cells run from -1 to dims - 1 on each axis.
+fn cell_slot(cell: vec3<i32>) -> u32 {
+    let q = vec3<u32>(cell + vec3<i32>(1));
+    let side = params.dims + vec3<u32>(1u);
+    return q.x + side.x * (q.y + side.y * q.z);
+}
+
+// The cell (its lowest sample) of a slot.
+fn slot_cell(slot: u32) -> vec3<i32> {
+    let side = params.dims + vec3<u32>(1u);
+    let q = vec3<u32>(slot % side.x, (slot / side.x) % side.y, slot / (side.x * side.y));
+    return vec3<i32>(q) - vec3<i32>(1);
+}
+
+// The inside mask of the cell whose lowest sample is `base` (bit k: corner k is inside).
+fn cell_mask(base: vec3<i32>) -> u32 {
+    var mask = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        if (sample_density(base + corner_offset(k)) > params.iso_value) {
+            mask |= 1u << k;
+        }
+    }
+    return mask;
+}
+
+// Appends an active cell; records its index in `cell_map` (INVALID when the list is full).
+fn append_active(base: vec3<i32>, mask: u32, first_vertex: u32, first_index: u32) -> u32 {
+    let slot = cell_slot(base);
+    let i = atomicAdd(&counters.active_cells, 1u);
+    if (i < params.active_capacity) {
+        active_list[i] = vec4<u32>(slot, mask, first_vertex, first_index);
+        cell_map[slot] = i;
+    } else {
+        cell_map[slot] = INVALID;
+    }
+    return i;
+}
+
+// Threads of the passes over active cells: 64 per workgroup, workgroups in x then y.
+const ACTIVE_WORKGROUP: u32 = 64u;
+const ACTIVE_ROW: u32 = 32768u;
+
+fn active_count() -> u32 {
+    return min(atomicLoad(&counters.active_cells), params.active_capacity);
+}
+
+fn active_thread(group: vec3<u32>, groups: vec3<u32>, local: u32) -> u32 {
+    return (group.x + group.y * groups.x) * ACTIVE_WORKGROUP + local;
+}
+
+// The indirect dispatch over the active cells.
+@compute @workgroup_size(1)
+fn dispatch_active() {
+    let groups = (active_count() + ACTIVE_WORKGROUP - 1u) / ACTIVE_WORKGROUP;
+    let x = min(groups, ACTIVE_ROW);
+    indirect[9] = x;
+    indirect[10] = (groups + ACTIVE_ROW - 1u) / ACTIVE_ROW;
+    indirect[11] = 1u;
+}
+
+// The indexed indirect draw of the first `count` indices (at most `capacity`).
+fn write_indexed_draw(count: u32, capacity: u32) {
+    indirect[0] = 0u;
+    indirect[1] = 1u;
+    indirect[2] = 0u;
+    indirect[3] = 0u;
+    indirect[4] = min(count, capacity);
+    indirect[5] = 1u;
+    indirect[6] = 0u;
+    indirect[7] = 0u;
+    indirect[8] = 0u;
 }

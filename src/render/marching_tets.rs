@@ -1,55 +1,63 @@
 //! Marching tetrahedra on the GPU (paper 3.2).
 //!
-//! Reads: a [`VoxelGrid`]'s density and hp_mean. Writes: into [`MeshBuffers`] a triangle soup
-//! (three [`MeshVertex`](crate::render::mesh::MeshVertex) per triangle), the vertex counter and
-//! the non-indexed indirect draw arguments.
-//! One thread per cell (cells run from -1 to dims - 1, samples outside the grid read as zero so
-//! surfaces close at its border). A cell is split into six tetrahedra around its main diagonal,
-//! the same split in every cell, so neighbouring cells cut their shared face the same way and the
-//! surface is watertight. Each tetrahedron's inside mask indexes a 16-entry case table of up to
-//! two triangles; vertices are interpolated linearly on the edges, computed from the edge's lower
-//! end so both cells sharing an edge produce the bit-identical point. A cell reserves room for
-//! all its triangles with one atomic add. Normals: the central-difference gradient of the density
-//! interpolated along the edge, negated (toward lower density), so shading is smooth across the
-//! soup; a vanishing gradient falls back to the triangle's own normal.
+//! Reads: a [`VoxelGrid`]'s density and hp_mean. Writes: into [`MeshBuffers`] an indexed mesh
+//! with one [`MeshVertex`](crate::render::mesh::MeshVertex) per grid edge that crosses the
+//! isovalue (shared by all the triangles on it), the active-cell list and cell map, the counters
+//! and the indexed indirect draw arguments.
+//! Cells run from -1 to dims - 1 (samples outside the grid read as zero, so surfaces close at its
+//! border). A cell is split into six tetrahedra around its main diagonal, the same split in every
+//! cell, so neighbouring cells cut their shared face the same way and the surface is watertight.
+//! Each tetrahedron's inside mask indexes a 16-entry case table of up to two triangles.
+//! Passes (see shaders/marching_tets.wgsl): `classify` sweeps every cell (eight loads) and
+//! appends the straddling ones to the active list, reserving their vertices and indices with
+//! atomics; `dispatch_active` writes the indirect dispatch over them; `edge_vertices` places one
+//! vertex on each crossing edge a cell owns (the seven edges from its corner 0: three box edges,
+//! three face diagonals and the body diagonal, so every edge of every tetrahedron has exactly one
+//! owner); `triangles` writes three indices per triangle, finding each edge's vertex through the
+//! owner's entry in the cell map; `finalize` writes the draw. Vertex normals: the
+//! central-difference gradient of the density interpolated along the edge, negated (toward lower
+//! density); a vanishing gradient falls back to the edge's direction from inside to outside.
 
 use crate::render::grid::VoxelGrid;
 use crate::render::mesh::{
-    MeshBuffers, cell_workgroups, compute_pipeline, extraction_entries, extraction_layout,
+    ExtractionPipelines, MeshBuffers, compute_pipeline, extraction_layout, record_extraction_passes,
 };
 use crate::render::shaders;
 
 /// The marching tetrahedra pipelines, built once.
 pub struct MarchingTetsPass {
     layout: wgpu::BindGroupLayout,
-    extract: wgpu::ComputePipeline,
+    classify: wgpu::ComputePipeline,
+    dispatch_active: wgpu::ComputePipeline,
+    edge_vertices: wgpu::ComputePipeline,
+    triangles: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
 }
 
 impl MarchingTetsPass {
     pub fn new(device: &wgpu::Device) -> Self {
         let module = shaders::module(device, "marching_tets", &shaders::marching_tets());
-        let layout = extraction_layout(device, "marching_tets::layout", 0);
+        let layout = extraction_layout(device, "marching_tets::layout");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("marching_tets::pipeline_layout"),
             bind_group_layouts: &[None, Some(&layout)],
             immediate_size: 0,
         });
+        let pipeline = |entry: &str| {
+            compute_pipeline(
+                device,
+                &format!("marching_tets::{entry}"),
+                &pipeline_layout,
+                &module,
+                entry,
+            )
+        };
         Self {
-            extract: compute_pipeline(
-                device,
-                "marching_tets::extract",
-                &pipeline_layout,
-                &module,
-                "extract",
-            ),
-            finalize: compute_pipeline(
-                device,
-                "marching_tets::finalize",
-                &pipeline_layout,
-                &module,
-                "finalize",
-            ),
+            classify: pipeline("classify"),
+            dispatch_active: pipeline("dispatch_active"),
+            edge_vertices: pipeline("edge_vertices"),
+            triangles: pipeline("triangles"),
+            finalize: pipeline("finalize"),
             layout,
         }
     }
@@ -64,22 +72,21 @@ impl MarchingTetsPass {
         buffers: &mut MeshBuffers,
         iso_value: f32,
     ) {
-        buffers.write_params(queue, grid, iso_value);
-        encoder.clear_buffer(&buffers.counters, 0, None);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("marching_tets::bind_group"),
-            layout: &self.layout,
-            entries: &extraction_entries(grid, buffers),
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("marching_tets::pass"),
-            timestamp_writes: None,
-        });
-        pass.set_bind_group(1, &bind_group, &[]);
-        pass.set_pipeline(&self.extract);
-        let [x, y, z] = cell_workgroups(grid.dims);
-        pass.dispatch_workgroups(x, y, z);
-        pass.set_pipeline(&self.finalize);
-        pass.dispatch_workgroups(1, 1, 1);
+        record_extraction_passes(
+            device,
+            queue,
+            encoder,
+            &self.layout,
+            ExtractionPipelines {
+                label: "marching_tets::extract",
+                classify: &self.classify,
+                dispatch_active: &self.dispatch_active,
+                per_active: [&self.edge_vertices, &self.triangles],
+                finalize: &self.finalize,
+            },
+            grid,
+            buffers,
+            iso_value,
+        );
     }
 }
