@@ -42,22 +42,9 @@ fn quad_edges(base: vec3<i32>, mask: u32) -> u32 {
     return edges;
 }
 
-@compute @workgroup_size(16, 4, 1)
-fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id > params.dims)) {
-        return;
-    }
-    let base = vec3<i32>(id) - vec3<i32>(1);
-    let mask = cell_mask(base);
-    if (mask == 0u || mask == 255u) {
-        return;
-    }
-    let quad_count = countOneBits(quad_edges(base, mask));
-    var first_index = 0u;
-    if (quad_count > 0u) {
-        first_index = atomicAdd(&counters.indices, 6u * quad_count);
-    }
-    append_active(base, mask, 0u, first_index);
+// Indices of a cell: six per quad it owns (its vertex is its active index, counted apart).
+fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
+    return vec2<u32>(0u, 6u * countOneBits(quad_edges(base, mask)));
 }
 
 @compute @workgroup_size(64)

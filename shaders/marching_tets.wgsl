@@ -57,23 +57,9 @@ fn cell_triangles(mask: u32) -> u32 {
     return triangles;
 }
 
-@compute @workgroup_size(16, 4, 1)
-fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id > params.dims)) {
-        return;
-    }
-    let base = vec3<i32>(id) - vec3<i32>(1);
-    let mask = cell_mask(base);
-    if (mask == 0u || mask == 255u) {
-        return;
-    }
-    let vertex_count = countOneBits(owned_edges(mask));
-    var first_vertex = 0u;
-    if (vertex_count > 0u) {
-        first_vertex = atomicAdd(&counters.vertices, vertex_count);
-    }
-    let first_index = atomicAdd(&counters.indices, 3u * cell_triangles(mask));
-    append_active(base, mask, first_vertex, first_index);
+// Vertices (one per crossed owned edge) and indices (three per triangle) of a cell.
+fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
+    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * cell_triangles(mask));
 }
 
 @compute @workgroup_size(64)

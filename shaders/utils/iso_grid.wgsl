@@ -60,6 +60,8 @@ struct Counters {
 // One entry per active cell: (cell_slot, inside mask of its eight corners, first vertex, first
 // index) as reserved by `classify`.
 @group(1) @binding(8) var<storage, read_write> active_list: array<vec4<u32>>;
+// Whether each sample is inside, 32 to a word (see bit_words).
+@group(1) @binding(9) var<storage, read_write> inside_bits: array<u32>;
 
 const INVALID: u32 = 0xffffffffu;
 
@@ -140,31 +142,19 @@ fn slot_cell(slot: u32) -> vec3<i32> {
     return vec3<i32>(q) - vec3<i32>(1);
 }
 
-// The inside mask of the cell whose lowest sample is `base` (bit k: corner k is inside).
-fn cell_mask(base: vec3<i32>) -> u32 {
-    var mask = 0u;
-    for (var k = 0u; k < 8u; k++) {
-        if (sample_density(base + corner_offset(k)) > params.iso_value) {
-            mask |= 1u << k;
-        }
-    }
-    return mask;
-}
-
-// Appends an active cell; records its index in `cell_map` (INVALID when the list is full).
-fn append_active(base: vec3<i32>, mask: u32, first_vertex: u32, first_index: u32) -> u32 {
+// Records active cell i (INVALID in `cell_map` when the list is full).
+fn store_active(i: u32, base: vec3<i32>, mask: u32, first_vertex: u32, first_index: u32) {
     let slot = cell_slot(base);
-    let i = atomicAdd(&counters.active_cells, 1u);
     if (i < params.active_capacity) {
         active_list[i] = vec4<u32>(slot, mask, first_vertex, first_index);
         cell_map[slot] = i;
     } else {
         cell_map[slot] = INVALID;
     }
-    return i;
 }
 
-// Threads of the passes over active cells: 64 per workgroup, workgroups in x then y.
+// Threads of the one-dimensional passes: 64 per workgroup, workgroups in x then y (keep in sync
+// with FLAT_WORKGROUP and FLAT_ROW in src/render/mesh.rs).
 const ACTIVE_WORKGROUP: u32 = 64u;
 const ACTIVE_ROW: u32 = 32768u;
 
@@ -174,6 +164,142 @@ fn active_count() -> u32 {
 
 fn active_thread(group: vec3<u32>, groups: vec3<u32>, local: u32) -> u32 {
     return (group.x + group.y * groups.x) * ACTIVE_WORKGROUP + local;
+}
+
+// Inside bits: the samples padded by one on each side ((dims + 2)^3, sample p at p + 1), 32
+// along x per word; row (y, z) of the padded samples starts at word
+// bit_words() * (y + (dims.y + 2) * z).
+fn bit_words() -> u32 {
+    return (params.dims.x + 2u + 31u) / 32u;
+}
+
+fn bit_word(w: u32, y: u32, z: u32) -> u32 {
+    return inside_bits[w + bit_words() * (y + (params.dims.y + 2u) * z)];
+}
+
+// One thread per word of inside bits: 32 loads and compares, one store.
+@compute @workgroup_size(64)
+fn inside_bits_pass(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let t = active_thread(group, groups, lane);
+    let words = bit_words();
+    let side = params.dims + vec3<u32>(2u);
+    if (t >= words * side.y * side.z) {
+        return;
+    }
+    let w = t % words;
+    let row = t / words;
+    let y = i32(row % side.y) - 1;
+    let z = i32(row / side.y) - 1;
+    // Samples outside the grid read as density 0.
+    var bits = select(0u, 0xffffffffu, 0.0 > params.iso_value);
+    if (y >= 0 && y < i32(params.dims.y) && z >= 0 && z < i32(params.dims.z)) {
+        let x0 = i32(w * 32u) - 1;
+        let row_start = params.dims.x * (u32(y) + params.dims.y * u32(z));
+        let lo = u32(max(-x0, 0));
+        let hi = u32(clamp(i32(params.dims.x) - x0, 0, 32));
+        for (var b = lo; b < hi; b++) {
+            let inside = density[row_start + u32(x0 + i32(b))] > params.iso_value;
+            bits = (bits & ~(1u << b)) | (u32(inside) << b);
+        }
+    }
+    inside_bits[t] = bits;
+}
+
+// The bits of words r (x) and r shifted to x + 1 (`next`: the following word of the row).
+fn shifted(r: u32, next: u32) -> u32 {
+    return (r >> 1u) | (next << 31u);
+}
+
+// One thread per 32 cells along x: finds the cells whose eight corners straddle the isovalue
+// from the inside bits of four rows, asks the method how much output each needs
+// (`cell_output`: vertices, indices), reserves it for all 32 with one atomic add per counter
+// and appends the cells to the active list.
+@compute @workgroup_size(64)
+fn classify(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let t = active_thread(group, groups, lane);
+    let words = bit_words();
+    let cells = params.dims + vec3<u32>(1u);
+    if (t >= words * cells.y * cells.z) {
+        return;
+    }
+    let w = t % words;
+    let row = t / words;
+    let y = row % cells.y;
+    let z = row / cells.y;
+    var r: array<u32, 8>;
+    for (var k = 0u; k < 4u; k++) {
+        let ry = y + (k & 1u);
+        let rz = z + (k >> 1u);
+        let word = bit_word(w, ry, rz);
+        var next = 0u;
+        if (w + 1u < words) {
+            next = bit_word(w + 1u, ry, rz);
+        }
+        // Corner 2k: x, corner 2k + 1: x + 1.
+        r[2u * k] = word;
+        r[2u * k + 1u] = shifted(word, next);
+    }
+    var all_in = r[0];
+    var any_in = r[0];
+    for (var k = 1u; k < 8u; k++) {
+        all_in &= r[k];
+        any_in |= r[k];
+    }
+    // Cells 32w + b exist for 32w + b <= dims.x.
+    let count = params.dims.x + 1u - min(w * 32u, params.dims.x + 1u);
+    var valid = 0xffffffffu;
+    if (count < 32u) {
+        valid = (1u << count) - 1u;
+    }
+    let todo = any_in & ~all_in & valid;
+    if (todo == 0u) {
+        return;
+    }
+    var total = vec2<u32>(0u);
+    var bits = todo;
+    while (bits != 0u) {
+        let b = firstTrailingBit(bits);
+        bits &= bits - 1u;
+        total += cell_output(vec3<i32>(vec3<u32>(w * 32u + b, y, z)) - vec3<i32>(1), corner_bits(r, b));
+    }
+    var i = atomicAdd(&counters.active_cells, countOneBits(todo));
+    var first_vertex = 0u;
+    if (total.x > 0u) {
+        first_vertex = atomicAdd(&counters.vertices, total.x);
+    }
+    var first_index = 0u;
+    if (total.y > 0u) {
+        first_index = atomicAdd(&counters.indices, total.y);
+    }
+    bits = todo;
+    while (bits != 0u) {
+        let b = firstTrailingBit(bits);
+        bits &= bits - 1u;
+        let base = vec3<i32>(vec3<u32>(w * 32u + b, y, z)) - vec3<i32>(1);
+        let mask = corner_bits(r, b);
+        store_active(i, base, mask, first_vertex, first_index);
+        let out = cell_output(base, mask);
+        first_vertex += out.x;
+        first_index += out.y;
+        i += 1u;
+    }
+}
+
+// The inside mask of cell b of the eight corner words (bit k: corner k).
+fn corner_bits(r: array<u32, 8>, b: u32) -> u32 {
+    var mask = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        mask |= ((r[k] >> b) & 1u) << k;
+    }
+    return mask;
 }
 
 // The indirect dispatch over the active cells.

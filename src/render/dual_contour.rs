@@ -24,6 +24,7 @@ use crate::render::shaders;
 /// The dual contouring pipelines, built once.
 pub struct DualContourPass {
     layout: wgpu::BindGroupLayout,
+    inside_bits: wgpu::ComputePipeline,
     classify: wgpu::ComputePipeline,
     dispatch_active: wgpu::ComputePipeline,
     cell_vertices: wgpu::ComputePipeline,
@@ -50,6 +51,7 @@ impl DualContourPass {
             )
         };
         Self {
+            inside_bits: pipeline("inside_bits_pass"),
             classify: pipeline("classify"),
             dispatch_active: pipeline("dispatch_active"),
             cell_vertices: pipeline("cell_vertices"),
@@ -76,6 +78,7 @@ impl DualContourPass {
             &self.layout,
             ExtractionPipelines {
                 label: "dual_contour::extract",
+                inside_bits: &self.inside_bits,
                 classify: &self.classify,
                 dispatch_active: &self.dispatch_active,
                 per_active: [&self.cell_vertices, &self.quads],

@@ -27,6 +27,7 @@ use crate::render::shaders;
 /// The marching tetrahedra pipelines, built once.
 pub struct MarchingTetsPass {
     layout: wgpu::BindGroupLayout,
+    inside_bits: wgpu::ComputePipeline,
     classify: wgpu::ComputePipeline,
     dispatch_active: wgpu::ComputePipeline,
     edge_vertices: wgpu::ComputePipeline,
@@ -53,6 +54,7 @@ impl MarchingTetsPass {
             )
         };
         Self {
+            inside_bits: pipeline("inside_bits_pass"),
             classify: pipeline("classify"),
             dispatch_active: pipeline("dispatch_active"),
             edge_vertices: pipeline("edge_vertices"),
@@ -79,6 +81,7 @@ impl MarchingTetsPass {
             &self.layout,
             ExtractionPipelines {
                 label: "marching_tets::extract",
+                inside_bits: &self.inside_bits,
                 classify: &self.classify,
                 dispatch_active: &self.dispatch_active,
                 per_active: [&self.edge_vertices, &self.triangles],

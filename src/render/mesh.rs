@@ -275,6 +275,8 @@ pub struct MeshBuffers {
     pub active: wgpu::Buffer,
     /// Each cell's index in `active`; grown to the grid on demand.
     pub cell_map: Option<wgpu::Buffer>,
+    /// One bit per (padded) sample: inside or not; grown to the grid on demand.
+    pub inside_bits: Option<wgpu::Buffer>,
     pub vertex_capacity: u32,
     pub index_capacity: u32,
     pub active_capacity: u32,
@@ -331,24 +333,34 @@ impl MeshBuffers {
                 storage,
             ),
             cell_map: None,
+            inside_bits: None,
             vertex_capacity,
             index_capacity,
             active_capacity,
         }
     }
 
-    /// Makes sure `cell_map` has an entry for every cell of `grid` ((dims + 1)^3).
-    pub(crate) fn ensure_cell_map(&mut self, device: &wgpu::Device, grid: &VoxelGrid) {
+    /// Makes sure `cell_map` has an entry for every cell of `grid` ((dims + 1)^3) and
+    /// `inside_bits` a bit for every padded sample.
+    pub(crate) fn ensure_grid_buffers(&mut self, device: &wgpu::Device, grid: &VoxelGrid) {
+        let grow = |buffer: &mut Option<wgpu::Buffer>, label: &str, needed: u64| {
+            if buffer.as_ref().is_none_or(|b| b.size() < needed) {
+                *buffer = Some(device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: needed,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                }));
+            }
+        };
         let cells = (grid.dims.as_u64vec3() + glam::U64Vec3::ONE).element_product();
-        let needed = cells * 4;
-        if self.cell_map.as_ref().is_none_or(|b| b.size() < needed) {
-            self.cell_map = Some(device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("surface::cell_map"),
-                size: needed,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            }));
-        }
+        grow(&mut self.cell_map, "surface::cell_map", cells * 4);
+        let [words, rows] = bit_threads(grid.dims, 2);
+        grow(
+            &mut self.inside_bits,
+            "surface::inside_bits",
+            words * rows * 4,
+        );
     }
 
     /// Writes the extraction parameters for `grid` at `iso_value`.
@@ -367,7 +379,7 @@ impl MeshBuffers {
     }
 }
 
-/// Bind group layout shared by the extraction passes (group 1, bindings 0..=8 of
+/// Bind group layout shared by the extraction passes (group 1, bindings 0..=9 of
 /// shaders/utils/iso_grid.wgsl).
 pub(crate) fn extraction_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
@@ -397,7 +409,7 @@ pub(crate) fn extraction_layout(device: &wgpu::Device, label: &str) -> wgpu::Bin
         storage(4, false),
         storage(5, false),
     ];
-    for b in 6..=8 {
+    for b in 6..=9 {
         entries.push(storage(b, false));
     }
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -406,15 +418,14 @@ pub(crate) fn extraction_layout(device: &wgpu::Device, label: &str) -> wgpu::Bin
     })
 }
 
-/// The bind group entries for bindings 0..=8 (call [`MeshBuffers::ensure_cell_map`] first).
+/// The bind group entries for bindings 0..=9 (call [`MeshBuffers::ensure_grid_buffers`] first).
 pub(crate) fn extraction_entries<'a>(
     grid: &'a VoxelGrid,
     buffers: &'a MeshBuffers,
 ) -> Vec<wgpu::BindGroupEntry<'a>> {
-    let cell_map = buffers
-        .cell_map
-        .as_ref()
-        .expect("ensure_cell_map before binding");
+    let expect = "ensure_grid_buffers before binding";
+    let cell_map = buffers.cell_map.as_ref().expect(expect);
+    let inside_bits = buffers.inside_bits.as_ref().expect(expect);
     [
         &buffers.params,
         &grid.density,
@@ -425,6 +436,7 @@ pub(crate) fn extraction_entries<'a>(
         &buffers.indices,
         cell_map,
         &buffers.active,
+        inside_bits,
     ]
     .into_iter()
     .enumerate()
@@ -457,7 +469,9 @@ pub(crate) fn compute_pipeline(
 /// shaders/utils/iso_grid.wgsl).
 pub(crate) struct ExtractionPipelines<'a> {
     pub label: &'static str,
-    /// Over every cell: appends the active cells.
+    /// Over every sample: packs which are inside into bits.
+    pub inside_bits: &'a wgpu::ComputePipeline,
+    /// Over every 32 cells along x: appends the active cells.
     pub classify: &'a wgpu::ComputePipeline,
     /// One thread: the dispatch over the active cells.
     pub dispatch_active: &'a wgpu::ComputePipeline,
@@ -479,7 +493,7 @@ pub(crate) fn record_extraction_passes(
     iso_value: f32,
 ) {
     buffers.write_params(queue, grid, iso_value);
-    buffers.ensure_cell_map(device, grid);
+    buffers.ensure_grid_buffers(device, grid);
     encoder.clear_buffer(&buffers.counters, 0, None);
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(pipelines.label),
@@ -492,9 +506,12 @@ pub(crate) fn record_extraction_passes(
             timestamp_writes: None,
         });
         pass.set_bind_group(1, &bind_group, &[]);
-        pass.set_pipeline(pipelines.classify);
-        let [x, y, z] = cell_workgroups(grid.dims);
-        pass.dispatch_workgroups(x, y, z);
+        for (pipeline, pad) in [(pipelines.inside_bits, 2), (pipelines.classify, 1)] {
+            pass.set_pipeline(pipeline);
+            let [words, rows] = bit_threads(grid.dims, pad);
+            let [x, y] = flat_workgroups(words * rows);
+            pass.dispatch_workgroups(x, y, 1);
+        }
         pass.set_pipeline(pipelines.dispatch_active);
         pass.dispatch_workgroups(1, 1, 1);
     }
@@ -518,13 +535,23 @@ pub(crate) fn record_extraction_passes(
     pass.dispatch_workgroups(1, 1, 1);
 }
 
-/// Workgroup shape of the per-cell dispatches (keep in sync with `@workgroup_size` in
-/// marching_tets.wgsl and dual_contour.wgsl): long in x, which llvmpipe vectorizes along.
-pub(crate) const CELL_WORKGROUP: UVec3 = UVec3::new(16, 4, 1);
+/// Threads per workgroup and workgroups per row of the one-dimensional dispatches (keep in sync
+/// with ACTIVE_WORKGROUP and ACTIVE_ROW in shaders/utils/iso_grid.wgsl).
+const FLAT_WORKGROUP: u64 = 64;
+const FLAT_ROW: u64 = 32768;
 
-/// Workgroups covering one thread per padded cell: (dims + 1)^3.
-pub(crate) fn cell_workgroups(dims: UVec3) -> [u32; 3] {
-    ((dims + UVec3::ONE + CELL_WORKGROUP - UVec3::ONE) / CELL_WORKGROUP).to_array()
+/// Words of 32 along x and rows (y, z) of a grid padded to dims + `pad` on each axis.
+fn bit_threads(dims: UVec3, pad: u32) -> [u64; 2] {
+    let side = (dims + UVec3::splat(pad)).as_u64vec3();
+    let words = (u64::from(dims.x) + 2).div_ceil(32);
+    [words, side.y * side.z]
+}
+
+/// Workgroups (x, y) covering `threads` threads of a one-dimensional pass.
+fn flat_workgroups(threads: u64) -> [u32; 2] {
+    let groups = threads.div_ceil(FLAT_WORKGROUP);
+    let x = groups.min(FLAT_ROW);
+    [x as u32, groups.div_ceil(FLAT_ROW) as u32]
 }
 
 /// Identifies the extracted surface: a change re-extracts it.
