@@ -42,6 +42,11 @@ fn quad_edges(base: vec3<i32>, mask: u32) -> u32 {
     return edges;
 }
 
+// The cell map holds the cell's active index, which is its vertex.
+fn cell_map_entry(i: u32, mask: u32, first_vertex: u32) -> u32 {
+    return i;
+}
+
 // Indices of a cell: six per quad it owns (its vertex is its active index, counted apart).
 fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
     return vec2<u32>(0u, 6u * countOneBits(quad_edges(base, mask)));

@@ -14,34 +14,15 @@
 // vertices of its triangles up through `cell_map` and writes the indices; `finalize` writes the
 // indexed indirect draw.
 
-// The six tetrahedra of a cell as cube-corner indices, each a chain 0 -> 0+a -> 0+a+b -> 7, so
-// within a tetrahedron a lower corner index is also the lower point on every axis.
-const TETS = array<vec4<u32>, 6>(
-    vec4<u32>(0u, 1u, 3u, 7u),
-    vec4<u32>(0u, 1u, 5u, 7u),
-    vec4<u32>(0u, 2u, 3u, 7u),
-    vec4<u32>(0u, 2u, 6u, 7u),
-    vec4<u32>(0u, 4u, 5u, 7u),
-    vec4<u32>(0u, 4u, 6u, 7u),
-);
+// Per cell inside mask m (bit k: corner k inside), built on the CPU from the six tetrahedra of
+// the split (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) and their 16-entry case
+// table (src/render/marching_tets.rs, case_table): word 13m holds the triangle count (at most
+// 12), words 13m + 1.. one triangle each, three edges of six bits wound to face away from the
+// inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from corner ka to
+// corner ka + d, whose offset bits are a superset of ka's.
+@group(1) @binding(10) var<storage, read> cases: array<u32>;
 
-// Tetrahedron edges as vertex pairs: e0 = 01, e1 = 02, e2 = 03, e3 = 12, e4 = 13, e5 = 23.
-const EDGE_A = array<u32, 6>(0u, 0u, 0u, 1u, 1u, 2u);
-const EDGE_B = array<u32, 6>(1u, 2u, 3u, 2u, 3u, 3u);
-
-// Case table, indexed by the inside mask of the four vertices (bit v: vertex v inside): bits
-// 24.. hold the triangle count (0 to 2), bits 4i..4i+3 the i-th edge of the triangles. Winding is
-// fixed afterwards so every triangle faces away from the inside vertices.
-const TET_CASES = array<u32, 16>(
-    0x00000000u, 0x01000210u, 0x01000430u, 0x02241431u, 0x01000531u, 0x02250530u, 0x02450510u,
-    0x01000542u, 0x01000542u, 0x02150540u, 0x02350520u, 0x01000531u, 0x02341421u, 0x01000430u,
-    0x01000210u, 0x00000000u,
-);
-
-fn tet_mask(tet: vec4<u32>, cell_mask: u32) -> u32 {
-    return ((cell_mask >> tet.x) & 1u) | (((cell_mask >> tet.y) & 1u) << 1u)
-        | (((cell_mask >> tet.z) & 1u) << 2u) | (((cell_mask >> tet.w) & 1u) << 3u);
-}
+const CASE_STRIDE: u32 = 13u;
 
 // Bit k (1..7) set when the owned edge from corner 0 to corner k crosses the isovalue.
 fn owned_edges(mask: u32) -> u32 {
@@ -49,17 +30,21 @@ fn owned_edges(mask: u32) -> u32 {
     return (mask ^ flip) & 0xfeu;
 }
 
-fn cell_triangles(mask: u32) -> u32 {
-    var triangles = 0u;
-    for (var t = 0u; t < 6u; t++) {
-        triangles += TET_CASES[tet_mask(TETS[t], mask)] >> 24u;
-    }
-    return triangles;
-}
-
 // Vertices (one per crossed owned edge) and indices (three per triangle) of a cell.
 fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
-    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * cell_triangles(mask));
+    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * cases[mask * CASE_STRIDE]);
+}
+
+// The cell map holds an active cell's first vertex and its owned crossing edges (bits 1..7 of
+// owned_edges, shifted down by one); vertex indices from 2^25 on do not fit (the CPU never
+// grows the vertex buffer that far).
+const MAX_MAPPED_VERTICES: u32 = 0x2000000u;
+
+fn cell_map_entry(i: u32, mask: u32, first_vertex: u32) -> u32 {
+    if (first_vertex >= MAX_MAPPED_VERTICES) {
+        return INVALID;
+    }
+    return (first_vertex << 7u) | (owned_edges(mask) >> 1u);
 }
 
 @compute @workgroup_size(64)
@@ -115,15 +100,15 @@ fn edge_vertices(
     }
 }
 
-// The vertex on the edge from `lower` to lower + corner_offset(direction), owned by the cell
-// whose lowest sample is `lower`; INVALID when it was not written.
-fn edge_vertex(lower: vec3<i32>, direction: u32) -> u32 {
-    let j = cell_map[cell_slot(lower)];
-    if (j >= params.active_capacity) {
+// The vertex on edge code `edge` (see `cases`) of the cell whose lowest sample is `base`, owned
+// by the cell whose lowest sample is its lower end; INVALID when it was not written.
+fn edge_vertex(base: vec3<i32>, edge: u32) -> u32 {
+    let entry = cell_map[cell_slot(base + corner_offset(edge & 7u))];
+    if (entry == INVALID) {
         return INVALID;
     }
-    let owner = active_list[j];
-    let index = owner.z + countOneBits(owned_edges(owner.y) & ((1u << direction) - 1u));
+    let owned = (entry & 0x7fu) << 1u;
+    let index = (entry >> 7u) + countOneBits(owned & ((1u << (edge >> 3u)) - 1u));
     if (index >= params.vertex_capacity) {
         return INVALID;
     }
@@ -142,63 +127,30 @@ fn triangles(
     }
     let entry = active_list[i];
     let base = slot_cell(entry.x);
-    let mask = entry.y;
+    let row = entry.y * CASE_STRIDE;
+    let count = cases[row];
     // Whole triangles only, so every index below the drawn count is written.
     let capacity = params.index_capacity - params.index_capacity % 3u;
     var out = entry.w;
-    for (var t = 0u; t < 6u; t++) {
-        let tet = TETS[t];
-        let case_bits = TET_CASES[tet_mask(tet, mask)];
-        let count = case_bits >> 24u;
-        if (count == 0u) {
-            continue;
+    for (var tri = 0u; tri < count; tri++) {
+        if (out + 3u > capacity) {
+            break;
         }
-        let corners = array<u32, 4>(tet.x, tet.y, tet.z, tet.w);
-        // From the inside vertices toward the outside ones: the way triangles must face.
-        var inside_sum = vec3<f32>(0.0);
-        var outside_sum = vec3<f32>(0.0);
-        var inside_count = 0.0;
-        for (var v = 0u; v < 4u; v++) {
-            let p = vec3<f32>(corner_offset(corners[v]));
-            if (((mask >> corners[v]) & 1u) != 0u) {
-                inside_sum += p;
-                inside_count += 1.0;
-            } else {
-                outside_sum += p;
-            }
+        let code = cases[row + 1u + tri];
+        var a = edge_vertex(base, code & 0x3fu);
+        var b = edge_vertex(base, (code >> 6u) & 0x3fu);
+        var c = edge_vertex(base, (code >> 12u) & 0x3fu);
+        if (a == INVALID || b == INVALID || c == INVALID) {
+            // A vertex did not fit (the CPU grows the buffers): a degenerate triangle keeps the
+            // drawn range clean (index 0 is inside the vertex buffer).
+            a = 0u;
+            b = 0u;
+            c = 0u;
         }
-        let outward = outside_sum / (4.0 - inside_count) - inside_sum / inside_count;
-        for (var tri = 0u; tri < count; tri++) {
-            if (out + 3u <= capacity) {
-                var index: array<u32, 3>;
-                var mid: array<vec3<f32>, 3>;
-                var valid = true;
-                for (var c = 0u; c < 3u; c++) {
-                    let edge = (case_bits >> (4u * (tri * 3u + c))) & 0xfu;
-                    let ka = corners[EDGE_A[edge]];
-                    let kb = corners[EDGE_B[edge]];
-                    // The orientation of a triangle on these edges is the same wherever on the
-                    // edges its corners lie, so the edge midpoints decide it.
-                    mid[c] = 0.5 * vec3<f32>(corner_offset(ka) + corner_offset(kb));
-                    index[c] = edge_vertex(base + corner_offset(ka), ka ^ kb);
-                    valid = valid && index[c] != INVALID;
-                }
-                if (dot(cross(mid[1] - mid[0], mid[2] - mid[0]), outward) < 0.0) {
-                    let swap = index[1];
-                    index[1] = index[2];
-                    index[2] = swap;
-                }
-                if (!valid) {
-                    // A vertex did not fit (the CPU grows the buffers): a degenerate triangle
-                    // keeps the drawn range clean (index 0 is inside the vertex buffer).
-                    index = array<u32, 3>(0u, 0u, 0u);
-                }
-                indices[out] = index[0];
-                indices[out + 1u] = index[1];
-                indices[out + 2u] = index[2];
-            }
-            out += 3u;
-        }
+        indices[out] = a;
+        indices[out + 1u] = b;
+        indices[out + 2u] = c;
+        out += 3u;
     }
 }
 

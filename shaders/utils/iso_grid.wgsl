@@ -54,8 +54,9 @@ struct Counters {
 // over the active cells (wgpu::util layouts).
 @group(1) @binding(5) var<storage, read_write> indirect: array<u32, 12>;
 @group(1) @binding(6) var<storage, read_write> indices: array<u32>;
-// One entry per cell ((dims + 1)^3, cell c at cell_slot(c)): its index in `active`, or INVALID.
-// Written only for active cells, and only read for cells known to be active.
+// One entry per cell ((dims + 1)^3, cell c at cell_slot(c)): what the method's `cell_map_entry`
+// makes of an active cell, or INVALID when it did not fit in the active list. Written only for
+// active cells, and only read for cells known to be active.
 @group(1) @binding(7) var<storage, read_write> cell_map: array<u32>;
 // One entry per active cell: (cell_slot, inside mask of its eight corners, first vertex, first
 // index) as reserved by `classify`.
@@ -147,7 +148,7 @@ fn store_active(i: u32, base: vec3<i32>, mask: u32, first_vertex: u32, first_ind
     let slot = cell_slot(base);
     if (i < params.active_capacity) {
         active_list[i] = vec4<u32>(slot, mask, first_vertex, first_index);
-        cell_map[slot] = i;
+        cell_map[slot] = cell_map_entry(i, mask, first_vertex);
     } else {
         cell_map[slot] = INVALID;
     }

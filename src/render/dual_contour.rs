@@ -35,7 +35,7 @@ pub struct DualContourPass {
 impl DualContourPass {
     pub fn new(device: &wgpu::Device) -> Self {
         let module = shaders::module(device, "dual_contour", &shaders::dual_contour());
-        let layout = extraction_layout(device, "dual_contour::layout");
+        let layout = extraction_layout(device, "dual_contour::layout", 0);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("dual_contour::pipeline_layout"),
             bind_group_layouts: &[None, Some(&layout)],
@@ -84,6 +84,7 @@ impl DualContourPass {
                 per_active: [&self.cell_vertices, &self.quads],
                 finalize: &self.finalize,
             },
+            &[],
             grid,
             buffers,
             iso_value,

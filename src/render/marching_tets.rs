@@ -23,6 +23,94 @@ use crate::render::mesh::{
     ExtractionPipelines, MeshBuffers, compute_pipeline, extraction_layout, record_extraction_passes,
 };
 use crate::render::shaders;
+use wgpu::util::DeviceExt;
+
+/// The six tetrahedra of a cell as cube-corner indices (bit 0: x, bit 1: y, bit 2: z), each a
+/// chain 0 -> a -> a + b -> 7 around the main diagonal, so a lower corner index in a tetrahedron
+/// has a subset of the higher one's offset bits.
+const TETS: [[u32; 4]; 6] = [
+    [0, 1, 3, 7],
+    [0, 1, 5, 7],
+    [0, 2, 3, 7],
+    [0, 2, 6, 7],
+    [0, 4, 5, 7],
+    [0, 4, 6, 7],
+];
+
+/// Tetrahedron edges as vertex pairs: e0 = 01, e1 = 02, e2 = 03, e3 = 12, e4 = 13, e5 = 23.
+const EDGE_A: [usize; 6] = [0, 0, 0, 1, 1, 2];
+const EDGE_B: [usize; 6] = [1, 2, 3, 2, 3, 3];
+
+/// Per tetrahedron inside mask (bit v: vertex v inside): the triangles as edge triples.
+const TET_TRIANGLES: [&[[usize; 3]]; 16] = [
+    &[],
+    &[[0, 1, 2]],
+    &[[0, 3, 4]],
+    &[[1, 3, 4], [1, 4, 2]],
+    &[[1, 3, 5]],
+    &[[0, 3, 5], [0, 5, 2]],
+    &[[0, 1, 5], [0, 5, 4]],
+    &[[2, 4, 5]],
+    &[[2, 4, 5]],
+    &[[0, 4, 5], [0, 5, 1]],
+    &[[0, 2, 5], [0, 5, 3]],
+    &[[1, 3, 5]],
+    &[[1, 2, 4], [1, 4, 3]],
+    &[[0, 3, 4]],
+    &[[0, 1, 2]],
+    &[],
+];
+
+/// Words per cell mask in [`case_table`].
+pub(crate) const CASE_STRIDE: usize = 13;
+
+fn corner(k: u32) -> glam::Vec3 {
+    glam::Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32)
+}
+
+/// The triangles of a cell for each inside mask of its corners (bit k: corner k), as read by
+/// shaders/marching_tets.wgsl: word 13m holds the count, words 13m + 1.. one triangle each,
+/// three six-bit edges (lower corner | direction << 3), wound to face away from the inside
+/// corners. The winding is decided at the edge midpoints: a triangle on given tetrahedron edges
+/// keeps its orientation wherever on the open edges its corners lie.
+pub(crate) fn case_table() -> Vec<u32> {
+    let mut table = vec![0u32; 256 * CASE_STRIDE];
+    for mask in 0..256u32 {
+        let row = &mut table[mask as usize * CASE_STRIDE..][..CASE_STRIDE];
+        for tet in TETS {
+            let inside = |v: usize| (mask >> tet[v]) & 1 == 1;
+            let tet_mask = (0..4).fold(0, |m, v| m | (usize::from(inside(v)) << v));
+            let triangles = TET_TRIANGLES[tet_mask];
+            if triangles.is_empty() {
+                continue;
+            }
+            let (mut inside_sum, mut outside_sum, mut inside_count) =
+                (glam::Vec3::ZERO, glam::Vec3::ZERO, 0.0);
+            for (v, &k) in tet.iter().enumerate() {
+                if inside(v) {
+                    inside_sum += corner(k);
+                    inside_count += 1.0;
+                } else {
+                    outside_sum += corner(k);
+                }
+            }
+            let outward = outside_sum / (4.0 - inside_count) - inside_sum / inside_count;
+            for triangle in triangles {
+                let mut edges = triangle.map(|e| (tet[EDGE_A[e]], tet[EDGE_B[e]]));
+                let mid = edges.map(|(a, b)| (corner(a) + corner(b)) * 0.5);
+                if (mid[1] - mid[0]).cross(mid[2] - mid[0]).dot(outward) < 0.0 {
+                    edges.swap(1, 2);
+                }
+                let code = edges.iter().enumerate().fold(0, |code, (c, &(a, b))| {
+                    code | ((a | (a ^ b) << 3) << (6 * c))
+                });
+                row[0] += 1;
+                row[row[0] as usize] = code;
+            }
+        }
+    }
+    table
+}
 
 /// The marching tetrahedra pipelines, built once.
 pub struct MarchingTetsPass {
@@ -33,12 +121,14 @@ pub struct MarchingTetsPass {
     edge_vertices: wgpu::ComputePipeline,
     triangles: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
+    /// [`case_table`] on the GPU.
+    cases: wgpu::Buffer,
 }
 
 impl MarchingTetsPass {
     pub fn new(device: &wgpu::Device) -> Self {
         let module = shaders::module(device, "marching_tets", &shaders::marching_tets());
-        let layout = extraction_layout(device, "marching_tets::layout");
+        let layout = extraction_layout(device, "marching_tets::layout", 1);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("marching_tets::pipeline_layout"),
             bind_group_layouts: &[None, Some(&layout)],
@@ -60,6 +150,11 @@ impl MarchingTetsPass {
             edge_vertices: pipeline("edge_vertices"),
             triangles: pipeline("triangles"),
             finalize: pipeline("finalize"),
+            cases: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("marching_tets::cases"),
+                contents: bytemuck::cast_slice(&case_table()),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
             layout,
         }
     }
@@ -87,6 +182,10 @@ impl MarchingTetsPass {
                 per_active: [&self.edge_vertices, &self.triangles],
                 finalize: &self.finalize,
             },
+            &[wgpu::BindGroupEntry {
+                binding: 10,
+                resource: self.cases.as_entire_binding(),
+            }],
             grid,
             buffers,
             iso_value,

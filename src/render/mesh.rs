@@ -143,6 +143,9 @@ const INDEXED_ARGS_OFFSET: u64 = 16;
 /// indirect argument.
 const ACTIVE_DISPATCH_OFFSET: u64 = 36;
 const DISPATCH_SIZE: u64 = 12;
+/// Marching tetrahedra's cell map packs a first vertex index below this (keep in sync with
+/// MAX_MAPPED_VERTICES in shaders/marching_tets.wgsl).
+const MAX_MAPPED_VERTICES: u64 = 1 << 25;
 /// Bytes of one active-cell entry: cell, corner mask, first vertex, first index.
 const ACTIVE_ENTRY_SIZE: u64 = 16;
 
@@ -380,8 +383,12 @@ impl MeshBuffers {
 }
 
 /// Bind group layout shared by the extraction passes (group 1, bindings 0..=9 of
-/// shaders/utils/iso_grid.wgsl).
-pub(crate) fn extraction_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+/// shaders/utils/iso_grid.wgsl), plus `extra` read-only storage bindings from 10 on.
+pub(crate) fn extraction_layout(
+    device: &wgpu::Device,
+    label: &str,
+    extra: u32,
+) -> wgpu::BindGroupLayout {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -411,6 +418,9 @@ pub(crate) fn extraction_layout(device: &wgpu::Device, label: &str) -> wgpu::Bin
     ];
     for b in 6..=9 {
         entries.push(storage(b, false));
+    }
+    for b in 0..extra {
+        entries.push(storage(10 + b, true));
     }
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
@@ -488,6 +498,7 @@ pub(crate) fn record_extraction_passes(
     encoder: &mut wgpu::CommandEncoder,
     layout: &wgpu::BindGroupLayout,
     pipelines: ExtractionPipelines<'_>,
+    extra: &[wgpu::BindGroupEntry<'_>],
     grid: &VoxelGrid,
     buffers: &mut MeshBuffers,
     iso_value: f32,
@@ -495,10 +506,12 @@ pub(crate) fn record_extraction_passes(
     buffers.write_params(queue, grid, iso_value);
     buffers.ensure_grid_buffers(device, grid);
     encoder.clear_buffer(&buffers.counters, 0, None);
+    let mut entries = extraction_entries(grid, buffers);
+    entries.extend_from_slice(extra);
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(pipelines.label),
         layout,
-        entries: &extraction_entries(grid, buffers),
+        entries: &entries,
     });
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -756,7 +769,10 @@ impl SurfacePass {
             if needed <= capacity {
                 return Ok(capacity);
             }
-            let limit = self.element_limit(size);
+            let mut limit = self.element_limit(size);
+            if what == "vertices" && counts.method == SurfaceMethod::MarchingTetrahedra {
+                limit = limit.min(MAX_MAPPED_VERTICES);
+            }
             let wanted = u64::from(needed).next_power_of_two().min(limit);
             if wanted < u64::from(needed) {
                 return Err(SurfaceError::TooLarge {
