@@ -69,13 +69,11 @@ fn edge_vertices(
     let w0 = max(v0, 0.0);
     let inside0 = (entry.y & 1u) != 0u;
     var out = entry.z;
-    for (var k = 1u; k < 8u; k++) {
-        if (((owned >> k) & 1u) == 0u) {
-            continue;
-        }
-        if (out >= params.vertex_capacity) {
-            break;
-        }
+    // Only the crossed edges: SIMD lanes loop as often as the busiest lane has crossings.
+    var todo = owned;
+    while (todo != 0u && out < params.vertex_capacity) {
+        let k = firstTrailingBit(todo);
+        todo &= todo - 1u;
         let offset = corner_offset(k);
         let pk = base + offset;
         let vk = sample_density(pk);
