@@ -479,6 +479,10 @@ pub(crate) fn compute_pipeline(
 /// shaders/utils/iso_grid.wgsl).
 pub(crate) struct ExtractionPipelines<'a> {
     pub label: &'static str,
+    /// The method's layout of group 1 (see [`extraction_layout`]).
+    pub layout: &'a wgpu::BindGroupLayout,
+    /// The method's own bindings from 10 on.
+    pub extra: &'a [wgpu::BindGroupEntry<'a>],
     /// Over every sample: packs which are inside into bits.
     pub inside_bits: &'a wgpu::ComputePipeline,
     /// Over every 32 cells along x: appends the active cells.
@@ -496,9 +500,7 @@ pub(crate) fn record_extraction_passes(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     encoder: &mut wgpu::CommandEncoder,
-    layout: &wgpu::BindGroupLayout,
     pipelines: ExtractionPipelines<'_>,
-    extra: &[wgpu::BindGroupEntry<'_>],
     grid: &VoxelGrid,
     buffers: &mut MeshBuffers,
     iso_value: f32,
@@ -507,10 +509,10 @@ pub(crate) fn record_extraction_passes(
     buffers.ensure_grid_buffers(device, grid);
     encoder.clear_buffer(&buffers.counters, 0, None);
     let mut entries = extraction_entries(grid, buffers);
-    entries.extend_from_slice(extra);
+    entries.extend_from_slice(pipelines.extra);
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(pipelines.label),
-        layout,
+        layout: pipelines.layout,
         entries: &entries,
     });
     {
