@@ -2,11 +2,12 @@
 // they read, the mesh they write, the active-cell list, and sampling helpers.
 // Keep IsoParams, MeshVertex, Counters and the binding numbers in sync with src/render/mesh.rs.
 //
-// Every extraction runs in the same shape: `classify` sweeps all cells (eight loads and a
-// compare each) and appends only the cells whose corners straddle the isovalue to `active`,
-// reserving their output with atomics; `dispatch_active` turns the count into indirect dispatch
-// arguments; the expensive passes then run one thread per active cell (a few % of the grid), so
-// SIMD lanes are not spent on empty cells.
+// Every extraction runs in the same shape: `inside_bits_pass` packs which samples are inside
+// into bits (one load per sample); `classify` finds, 32 cells per thread, the cells whose
+// corners straddle the isovalue and appends only those to `active_list`, reserving their output
+// with atomics; `dispatch_active` turns the count into indirect dispatch arguments; the
+// expensive passes then run one thread per active cell (a few % of the grid), so SIMD lanes are
+// not spent on empty cells.
 //
 // Grid coordinates: sample (voxel centre) p = (i, j, k) sits at box_min + (p + 0.5) * voxel_size
 // in data space. Samples outside [0, dims) read as density 0 (hp 0.5), so every surface closes at

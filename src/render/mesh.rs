@@ -276,7 +276,9 @@ pub struct MeshBuffers {
     /// of them. A complete surface never has more active cells than marching tetrahedra has
     /// triangles or dual contouring has vertices, so the capacities bound it.
     pub active: wgpu::Buffer,
-    /// Each cell's index in `active`; grown to the grid on demand.
+    /// Per cell: what the method keeps of an active cell (its active index for dual
+    /// contouring, its first vertex and crossing edges for marching tetrahedra); grown to the
+    /// grid on demand.
     pub cell_map: Option<wgpu::Buffer>,
     /// One bit per (padded) sample: inside or not; grown to the grid on demand.
     pub inside_bits: Option<wgpu::Buffer>,
@@ -767,14 +769,11 @@ impl SurfacePass {
 
     /// Grows the buffers to hold `counts`; an error when the device cannot.
     fn grow(&self, state: &mut SurfaceState, counts: &SurfaceCounts) -> Result<(), SurfaceError> {
-        let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64| {
+        let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64, max: u64| {
             if needed <= capacity {
                 return Ok(capacity);
             }
-            let mut limit = self.element_limit(size);
-            if what == "vertices" && counts.method == SurfaceMethod::MarchingTetrahedra {
-                limit = limit.min(MAX_MAPPED_VERTICES);
-            }
+            let limit = self.element_limit(size).min(max);
             let wanted = u64::from(needed).next_power_of_two().min(limit);
             if wanted < u64::from(needed) {
                 return Err(SurfaceError::TooLarge {
@@ -785,13 +784,25 @@ impl SurfacePass {
             }
             Ok(wanted as u32)
         };
+        // Marching tetrahedra's cell map cannot address more vertices.
+        let max_vertices = match counts.method {
+            SurfaceMethod::MarchingTetrahedra => MAX_MAPPED_VERTICES,
+            SurfaceMethod::DualContouring => u64::MAX,
+        };
         let vertices = grow_to(
             counts.vertices_needed,
             counts.vertex_capacity,
             "vertices",
             std::mem::size_of::<MeshVertex>() as u64,
+            max_vertices,
         )?;
-        let indices = grow_to(counts.indices_needed, counts.index_capacity, "indices", 4)?;
+        let indices = grow_to(
+            counts.indices_needed,
+            counts.index_capacity,
+            "indices",
+            4,
+            u64::MAX,
+        )?;
         log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
         state.buffers = Some(MeshBuffers::new(&self.device, vertices, indices));
         state.key = None;
