@@ -88,20 +88,23 @@ fn edge_vertices(
             normal = select(-along, along, inside0);
         }
         let wk = max(vk, 0.0);
-        var vertex: MeshVertex;
-        vertex.position = data_position(grid);
-        vertex.hp = weighted_hp(w0 * h0 + wk * hk, w0 + wk);
-        vertex.normal = normal;
-        vertex.pad = 0.0;
-        vertices[out] = vertex;
+        // Member by member: the padding is never read, so it is not written.
+        vertices[out].position = data_position(grid);
+        vertices[out].hp = weighted_hp(w0 * h0 + wk * hk, w0 + wk);
+        vertices[out].normal = normal;
         out += 1u;
     }
 }
 
 // The vertex on edge code `edge` (see `cases`) of the cell whose lowest sample is `base`, owned
-// by the cell whose lowest sample is its lower end; INVALID when it was not written.
-fn edge_vertex(base: vec3<i32>, edge: u32) -> u32 {
-    let entry = cell_map[cell_slot(base + corner_offset(edge & 7u))];
+// by the cell whose lowest sample is its lower end (`own_entry`: the cell's own cell-map entry);
+// INVALID when it was not written.
+fn edge_vertex(base: vec3<i32>, edge: u32, own_entry: u32) -> u32 {
+    // About half the edges start at the cell's own corner 0: no load for those.
+    var entry = own_entry;
+    if ((edge & 7u) != 0u) {
+        entry = cell_map[cell_slot(base + corner_offset(edge & 7u))];
+    }
     if (entry == INVALID) {
         return INVALID;
     }
@@ -125,6 +128,7 @@ fn triangles(
     }
     let entry = active_list[i];
     let base = slot_cell(entry.x);
+    let own_entry = cell_map_entry(i, entry.y, entry.z);
     let row = entry.y * CASE_STRIDE;
     let count = cases[row];
     // Whole triangles only, so every index below the drawn count is written.
@@ -135,9 +139,9 @@ fn triangles(
             break;
         }
         let code = cases[row + 1u + tri];
-        var a = edge_vertex(base, code & 0x3fu);
-        var b = edge_vertex(base, (code >> 6u) & 0x3fu);
-        var c = edge_vertex(base, (code >> 12u) & 0x3fu);
+        var a = edge_vertex(base, code & 0x3fu, own_entry);
+        var b = edge_vertex(base, (code >> 6u) & 0x3fu, own_entry);
+        var c = edge_vertex(base, (code >> 12u) & 0x3fu, own_entry);
         if (a == INVALID || b == INVALID || c == INVALID) {
             // A vertex did not fit (the CPU grows the buffers): a degenerate triangle keeps the
             // drawn range clean (index 0 is inside the vertex buffer).
