@@ -96,14 +96,18 @@ fn edge_vertices(
     }
 }
 
-// The vertex on edge code `edge` (see `cases`) of the cell whose lowest sample is `base`, owned
+// The vertex on edge code `edge` (see `cases`) of the cell in cell-map slot `slot`, owned
 // by the cell whose lowest sample is its lower end (`own_entry`: the cell's own cell-map entry);
 // INVALID when it was not written.
-fn edge_vertex(base: vec3<i32>, edge: u32, own_entry: u32) -> u32 {
+fn edge_vertex(slot: u32, edge: u32, own_entry: u32) -> u32 {
     // About half the edges start at the cell's own corner 0: no load for those.
     var entry = own_entry;
-    if ((edge & 7u) != 0u) {
-        entry = cell_map[cell_slot(base + corner_offset(edge & 7u))];
+    let lower = edge & 7u;
+    if (lower != 0u) {
+        // The owner's slot, by strides (no division back to cell coordinates).
+        let sy = params.dims.x + 1u;
+        let sz = sy * (params.dims.y + 1u);
+        entry = cell_map[slot + (lower & 1u) + sy * ((lower >> 1u) & 1u) + sz * (lower >> 2u)];
     }
     if (entry == INVALID) {
         return INVALID;
@@ -127,7 +131,6 @@ fn triangles(
         return;
     }
     let entry = active_list[i];
-    let base = slot_cell(entry.x);
     let own_entry = cell_map_entry(i, entry.y, entry.z);
     let row = entry.y * CASE_STRIDE;
     let count = cases[row];
@@ -139,9 +142,9 @@ fn triangles(
             break;
         }
         let code = cases[row + 1u + tri];
-        var a = edge_vertex(base, code & 0x3fu, own_entry);
-        var b = edge_vertex(base, (code >> 6u) & 0x3fu, own_entry);
-        var c = edge_vertex(base, (code >> 12u) & 0x3fu, own_entry);
+        var a = edge_vertex(entry.x, code & 0x3fu, own_entry);
+        var b = edge_vertex(entry.x, (code >> 6u) & 0x3fu, own_entry);
+        var c = edge_vertex(entry.x, (code >> 12u) & 0x3fu, own_entry);
         if (a == INVALID || b == INVALID || c == INVALID) {
             // A vertex did not fit (the CPU grows the buffers): a degenerate triangle keeps the
             // drawn range clean (index 0 is inside the vertex buffer).
