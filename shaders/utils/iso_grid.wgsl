@@ -139,9 +139,13 @@ fn cell_slot(cell: vec3<i32>) -> u32 {
 
 // The cell (its lowest sample) of a slot.
 fn slot_cell(slot: u32) -> vec3<i32> {
+    // Two divisions (llvmpipe runs vector integer division lane by lane).
     let side = params.dims + vec3<u32>(1u);
-    let q = vec3<u32>(slot % side.x, (slot / side.x) % side.y, slot / (side.x * side.y));
-    return vec3<i32>(q) - vec3<i32>(1);
+    let layer = side.x * side.y;
+    let z = slot / layer;
+    let in_layer = slot - z * layer;
+    let y = in_layer / side.x;
+    return vec3<i32>(vec3<u32>(in_layer - y * side.x, y, z)) - vec3<i32>(1);
 }
 
 // Records active cell i (INVALID in `cell_map` when the list is full).
