@@ -1,16 +1,16 @@
-// Dual contouring (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling).
-// Reads the density and hp grids. `cell_vertices` gives every cell whose corners straddle the
-// isovalue one vertex, appended to `vertices` with its index kept in `cell_map`; `quads` appends
-// two triangles (six indices) for every grid edge that straddles the isovalue, joining the four
-// cells around it; `finalize` writes the indexed indirect draw.
+// Dual contouring (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling, the
+// active-cell list).
+// Reads the density and hp grids. `classify` (every cell) appends the cells whose corners
+// straddle the isovalue to the active list (the active index is the cell's vertex index) and
+// reserves six indices (two triangles) for each crossing edge from the cell's corner 0 along
+// +x, +y, +z whose four surrounding cells exist; `dispatch_active`; `cell_vertices` (per active
+// cell) places the vertex; `quads` (per active cell) joins the four cells around each of its
+// crossing edges through `cell_map`; `finalize` writes the vertex count and the indexed
+// indirect draw.
 // The vertex minimises a QEF of the edge crossings' tangent planes (normals from the field's
 // gradient), biased toward the crossings' mass point and clamped into its cell (Schaefer and
 // Warren); its normal is the trilinearly interpolated gradient, negated so it points toward
 // lower density (the flip the paper makes), and quads are wound to face the same way.
-
-@group(1) @binding(6) var<storage, read_write> indices: array<u32>;
-// One entry per cell ((dims + 1)^3, cell c at index of c + 1): its vertex, or INVALID.
-@group(1) @binding(7) var<storage, read_write> cell_map: array<u32>;
 
 // The pull toward the mass point, relative to one unit-normal plane.
 const QEF_BIAS: f32 = 0.05;
@@ -19,35 +19,55 @@ const QEF_BIAS: f32 = 0.05;
 const CUBE_EDGE_A = array<u32, 12>(0u, 2u, 4u, 6u, 0u, 1u, 4u, 5u, 0u, 1u, 2u, 3u);
 const CUBE_EDGE_B = array<u32, 12>(1u, 3u, 5u, 7u, 2u, 3u, 6u, 7u, 4u, 5u, 6u, 7u);
 
-fn cell_slot(cell: vec3<i32>) -> u32 {
-    let q = vec3<u32>(cell + vec3<i32>(1));
-    let side = params.dims + vec3<u32>(1u);
-    return q.x + side.x * (q.y + side.y * q.z);
-}
-
 fn trilinear_weight(k: u32, x: vec3<f32>) -> f32 {
     let c = vec3<f32>(corner_offset(k));
     let w = c * x + (vec3<f32>(1.0) - c) * (vec3<f32>(1.0) - x);
     return w.x * w.y * w.z;
 }
 
-@compute @workgroup_size(16, 4, 1)
-fn cell_vertices(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id > params.dims)) {
-        return;
-    }
-    let base = vec3<i32>(id) - vec3<i32>(1);
-    var values: array<f32, 8>;
-    var mask = 0u;
-    for (var k = 0u; k < 8u; k++) {
-        let v = sample_density(base + corner_offset(k));
-        values[k] = v;
-        if (v > params.iso_value) {
-            mask |= 1u << k;
+// Bit a (0..2) set when the edge from the cell's corner 0 along axis a crosses the isovalue and
+// the four cells around it exist (the cell's lowest sample is >= 0 on the other two axes).
+fn quad_edges(base: vec3<i32>, mask: u32) -> u32 {
+    var edges = 0u;
+    for (var axis = 0u; axis < 3u; axis++) {
+        let b = (axis + 1u) % 3u;
+        let c = (axis + 2u) % 3u;
+        if (base[b] < 0 || base[c] < 0) {
+            continue;
+        }
+        if (((mask >> (1u << axis)) & 1u) != (mask & 1u)) {
+            edges |= 1u << axis;
         }
     }
-    if (mask == 0u || mask == 255u) {
+    return edges;
+}
+
+// The cell map holds the cell's active index, which is its vertex.
+fn cell_map_entry(i: u32, mask: u32, first_vertex: u32) -> u32 {
+    return i;
+}
+
+// Indices of a cell: six per quad it owns (its vertex is its active index, counted apart).
+fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
+    return vec2<u32>(0u, 6u * countOneBits(quad_edges(base, mask)));
+}
+
+@compute @workgroup_size(64)
+fn cell_vertices(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let i = active_thread(group, groups, lane);
+    if (i >= active_count() || i >= params.vertex_capacity) {
         return;
+    }
+    let entry = active_list[i];
+    let base = slot_cell(entry.x);
+    let mask = entry.y;
+    var values: array<f32, 8>;
+    for (var k = 0u; k < 8u; k++) {
+        values[k] = sample_density(base + corner_offset(k));
     }
     var gradients: array<vec3<f32>, 8>;
     for (var k = 0u; k < 8u; k++) {
@@ -89,15 +109,15 @@ fn cell_vertices(@builtin(global_invocation_id) id: vec3<u32>) {
     var a12 = 0.0;
     var a22 = QEF_BIAS;
     var rhs = vec3<f32>(0.0);
-    for (var i = 0u; i < count; i++) {
-        let n = normals[i];
+    for (var p = 0u; p < count; p++) {
+        let n = normals[p];
         a00 += n.x * n.x;
         a01 += n.x * n.y;
         a02 += n.x * n.z;
         a11 += n.y * n.y;
         a12 += n.y * n.z;
         a22 += n.z * n.z;
-        rhs += n * dot(n, points[i] - mass);
+        rhs += n * dot(n, points[p] - mass);
     }
     let c00 = a11 * a22 - a12 * a12;
     let c01 = a02 * a12 - a01 * a22;
@@ -135,45 +155,51 @@ fn cell_vertices(@builtin(global_invocation_id) id: vec3<u32>) {
     vertex.hp = weighted_hp(hp_sum, weight_sum);
     vertex.normal = normal;
     vertex.pad = 0.0;
-    let index = atomicAdd(&counters.vertices, 1u);
-    if (index < params.vertex_capacity) {
-        vertices[index] = vertex;
-        cell_map[cell_slot(base)] = index;
-    } else {
-        cell_map[cell_slot(base)] = INVALID;
-    }
+    vertices[i] = vertex;
 }
 
-@compute @workgroup_size(16, 4, 1)
-fn quads(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id > params.dims)) {
+// The vertex of the cell whose lowest sample is `cell`; INVALID when it was not written.
+fn cell_vertex(cell: vec3<i32>) -> u32 {
+    let j = cell_map[cell_slot(cell)];
+    if (j >= params.active_capacity || j >= params.vertex_capacity) {
+        return INVALID;
+    }
+    return j;
+}
+
+@compute @workgroup_size(64)
+fn quads(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let i = active_thread(group, groups, lane);
+    if (i >= active_count()) {
         return;
     }
-    // Sample s; the edges from s along +x, +y, +z.
-    let s = vec3<i32>(id) - vec3<i32>(1);
-    let inside0 = sample_density(s) > params.iso_value;
+    let entry = active_list[i];
+    // Sample s, the cell's lowest; the edges from s along +x, +y, +z.
+    let s = slot_cell(entry.x);
+    let edges = quad_edges(s, entry.y);
+    let inside0 = (entry.y & 1u) != 0u;
     let units = array<vec3<i32>, 3>(vec3<i32>(1, 0, 0), vec3<i32>(0, 1, 0), vec3<i32>(0, 0, 1));
     // Whole quads only: with reservations of six, a capacity rounded down to six is never split.
     let capacity = params.index_capacity - params.index_capacity % 6u;
+    var first = entry.w;
     for (var axis = 0u; axis < 3u; axis++) {
+        if (((edges >> axis) & 1u) == 0u) {
+            continue;
+        }
         let b = (axis + 1u) % 3u;
         let c = (axis + 2u) % 3u;
-        // The four cells around the edge must exist: s[b], s[c] >= 0 (they are <= dims - 1).
-        if (s[b] < 0 || s[c] < 0) {
-            continue;
-        }
-        let inside1 = sample_density(s + units[axis]) > params.iso_value;
-        if (inside0 == inside1) {
-            continue;
-        }
         let eb = units[b];
         let ec = units[c];
         // Counter-clockwise seen from +axis (b x c = axis).
         var q = array<u32, 4>(
-            cell_map[cell_slot(s - eb - ec)],
-            cell_map[cell_slot(s - ec)],
-            cell_map[cell_slot(s)],
-            cell_map[cell_slot(s - eb)],
+            cell_vertex(s - eb - ec),
+            cell_vertex(s - ec),
+            cell_vertex(s),
+            cell_vertex(s - eb),
         );
         if (!inside0) {
             // Inside beyond the edge: the surface faces -axis.
@@ -181,17 +207,13 @@ fn quads(@builtin(global_invocation_id) id: vec3<u32>) {
             q[1] = q[3];
             q[3] = swap;
         }
-        let first = atomicAdd(&counters.indices, 6u);
         let valid = q[0] != INVALID && q[1] != INVALID && q[2] != INVALID && q[3] != INVALID;
-        if (first + 6u > capacity) {
-            continue;
-        }
-        if (!valid) {
-            // A cell's vertex did not fit (the CPU grows the buffers): a degenerate pair keeps
-            // the drawn range clean. Vertex 0 exists, since the vertex buffer overflowed.
-            q = array<u32, 4>(0u, 0u, 0u, 0u);
-        }
-        {
+        if (first + 6u <= capacity) {
+            if (!valid) {
+                // A cell's vertex did not fit (the CPU grows the buffers): a degenerate pair
+                // keeps the drawn range clean (index 0 is inside the vertex buffer).
+                q = array<u32, 4>(0u, 0u, 0u, 0u);
+            }
             indices[first] = q[0];
             indices[first + 1u] = q[1];
             indices[first + 2u] = q[2];
@@ -199,19 +221,14 @@ fn quads(@builtin(global_invocation_id) id: vec3<u32>) {
             indices[first + 4u] = q[2];
             indices[first + 5u] = q[3];
         }
+        first += 6u;
     }
 }
 
 @compute @workgroup_size(1)
 fn finalize() {
+    // One vertex per active cell.
+    atomicStore(&counters.vertices, atomicLoad(&counters.active_cells));
     let capacity = params.index_capacity - params.index_capacity % 6u;
-    indirect[0] = 0u;
-    indirect[1] = 1u;
-    indirect[2] = 0u;
-    indirect[3] = 0u;
-    indirect[4] = min(atomicLoad(&counters.indices), capacity);
-    indirect[5] = 1u;
-    indirect[6] = 0u;
-    indirect[7] = 0u;
-    indirect[8] = 0u;
+    write_indexed_draw(atomicLoad(&counters.indices), capacity);
 }

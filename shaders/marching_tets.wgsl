@@ -1,174 +1,166 @@
-// Marching tetrahedra (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling).
-// Reads the density and hp grids; appends a triangle soup (three MeshVertex per triangle) to
-// `vertices` with one atomic reservation per cell, then `finalize` writes the indirect draw.
+// Marching tetrahedra (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling, the
+// active-cell list).
+// Reads the density and hp grids; writes an indexed mesh with one vertex per grid edge that
+// crosses the isovalue, shared by every triangle that uses it.
 // Every cell is split into six tetrahedra around its main diagonal (corner 0 to corner 7); the
 // split of each cube face is then the same seen from either side, so the surface is watertight.
+// Every tetrahedron edge runs from a corner to one with a superset of its offset bits, so each
+// edge is owned by its lower end: the cell whose corner 0 that is, which owns the seven edges
+// from its corner 0 to corners 1..7 (x, y, xy, z, xz, yz, xyz). A crossed edge's owner holds
+// both of its ends, so it straddles the isovalue and is an active cell.
+// Passes: `classify` (every cell) appends the active cells and reserves their vertices (one per
+// crossed owned edge) and indices (three per triangle of their tetrahedra); `dispatch_active`;
+// `edge_vertices` (per active cell) places the vertices; `triangles` (per active cell) looks the
+// vertices of its triangles up through `cell_map` and writes the indices; `finalize` writes the
+// indexed indirect draw.
 
-// The six tetrahedra of a cell as cube-corner indices, each a chain 0 -> 0+a -> 0+a+b -> 7, so
-// within a tetrahedron a lower corner index is also the lower point on every axis.
-const TETS = array<vec4<u32>, 6>(
-    vec4<u32>(0u, 1u, 3u, 7u),
-    vec4<u32>(0u, 1u, 5u, 7u),
-    vec4<u32>(0u, 2u, 3u, 7u),
-    vec4<u32>(0u, 2u, 6u, 7u),
-    vec4<u32>(0u, 4u, 5u, 7u),
-    vec4<u32>(0u, 4u, 6u, 7u),
-);
+// Per cell inside mask m (bit k: corner k inside), built on the CPU from the six tetrahedra of
+// the split (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) and their 16-entry case
+// table (src/render/marching_tets.rs, case_table): word 13m holds the triangle count (at most
+// 12), words 13m + 1.. one triangle each, three edges of six bits wound to face away from the
+// inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from corner ka to
+// corner ka + d, whose offset bits are a superset of ka's.
+@group(1) @binding(10) var<storage, read> cases: array<u32>;
 
-// Tetrahedron edges as vertex pairs: e0 = 01, e1 = 02, e2 = 03, e3 = 12, e4 = 13, e5 = 23.
-const EDGE_A = array<u32, 6>(0u, 0u, 0u, 1u, 1u, 2u);
-const EDGE_B = array<u32, 6>(1u, 2u, 3u, 2u, 3u, 3u);
+const CASE_STRIDE: u32 = 13u;
 
-// Case table, indexed by the inside mask of the four vertices (bit v: vertex v inside): bits
-// 24.. hold the triangle count (0 to 2), bits 4i..4i+3 the i-th edge of the triangles. Winding is
-// fixed afterwards so every triangle faces away from the inside vertices.
-const TET_CASES = array<u32, 16>(
-    0x00000000u, 0x01000210u, 0x01000430u, 0x02241431u, 0x01000531u, 0x02250530u, 0x02450510u,
-    0x01000542u, 0x01000542u, 0x02150540u, 0x02350520u, 0x01000531u, 0x02341421u, 0x01000430u,
-    0x01000210u, 0x00000000u,
-);
-
-struct EdgePoint {
-    // Grid coordinates of the crossing.
-    grid: vec3<f32>,
-    vertex: MeshVertex,
-};
-
-// The crossing on the edge from sample pa to sample pb (pa the lower on every axis, so both
-// cells that share the edge compute exactly the same point).
-// Gradients and hp at the ends come from the cell's cache (computed once per corner).
-fn edge_point(
-    pa: vec3<i32>, pb: vec3<i32>, va: f32, vb: f32, ga: vec3<f32>, gb: vec3<f32>, ha: f32, hb: f32,
-) -> EdgePoint {
-    let t = clamp((params.iso_value - va) / (vb - va), 0.0, 1.0);
-    let a = vec3<f32>(pa);
-    let grid = a + (vec3<f32>(pb) - a) * t;
-    let gradient = ga + (gb - ga) * t;
-    let wa = max(va, 0.0);
-    let wb = max(vb, 0.0);
-    var out: EdgePoint;
-    out.grid = grid;
-    out.vertex.position = data_position(grid);
-    out.vertex.normal = outward_normal(gradient);
-    out.vertex.hp = weighted_hp(wa * ha + wb * hb, wa + wb);
-    out.vertex.pad = 0.0;
-    return out;
+// Bit k (1..7) set when the owned edge from corner 0 to corner k crosses the isovalue.
+fn owned_edges(mask: u32) -> u32 {
+    let flip = select(0u, 0xffu, (mask & 1u) != 0u);
+    return (mask ^ flip) & 0xfeu;
 }
 
-fn tet_mask(tet: vec4<u32>, cell_mask: u32) -> u32 {
-    return ((cell_mask >> tet.x) & 1u) | (((cell_mask >> tet.y) & 1u) << 1u)
-        | (((cell_mask >> tet.z) & 1u) << 2u) | (((cell_mask >> tet.w) & 1u) << 3u);
+// Vertices (one per crossed owned edge) and indices (three per triangle) of a cell.
+fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
+    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * cases[mask * CASE_STRIDE]);
 }
 
-@compute @workgroup_size(16, 4, 1)
-fn extract(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id > params.dims)) {
+// The cell map holds an active cell's first vertex and its owned crossing edges (bits 1..7 of
+// owned_edges, shifted down by one); vertex indices from 2^25 on do not fit (the CPU never
+// grows the vertex buffer that far).
+const MAX_MAPPED_VERTICES: u32 = 0x2000000u;
+
+fn cell_map_entry(i: u32, mask: u32, first_vertex: u32) -> u32 {
+    if (first_vertex >= MAX_MAPPED_VERTICES) {
+        return INVALID;
+    }
+    return (first_vertex << 7u) | (owned_edges(mask) >> 1u);
+}
+
+@compute @workgroup_size(64)
+fn edge_vertices(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let i = active_thread(group, groups, lane);
+    if (i >= active_count()) {
         return;
     }
-    let base = vec3<i32>(id) - vec3<i32>(1);
-    var values: array<f32, 8>;
-    var mask = 0u;
-    for (var k = 0u; k < 8u; k++) {
-        let v = sample_density(base + corner_offset(k));
-        values[k] = v;
-        if (v > params.iso_value) {
-            mask |= 1u << k;
-        }
-    }
-    if (mask == 0u || mask == 255u) {
+    let entry = active_list[i];
+    let owned = owned_edges(entry.y);
+    if (owned == 0u || entry.z >= params.vertex_capacity) {
         return;
     }
-    // Gradient and hp at the eight corners, read once for all of the cell's vertices.
-    var gradients: array<vec3<f32>, 8>;
-    var hps: array<f32, 8>;
-    for (var k = 0u; k < 8u; k++) {
-        gradients[k] = sample_gradient(base + corner_offset(k));
-        hps[k] = sample_hp(base + corner_offset(k));
+    let base = slot_cell(entry.x);
+    let v0 = sample_density(base);
+    let g0 = sample_gradient(base);
+    let h0 = sample_hp(base);
+    let w0 = max(v0, 0.0);
+    let inside0 = (entry.y & 1u) != 0u;
+    var out = entry.z;
+    // Only the crossed edges: SIMD lanes loop as often as the busiest lane has crossings.
+    var todo = owned;
+    while (todo != 0u && out < params.vertex_capacity) {
+        let k = firstTrailingBit(todo);
+        todo &= todo - 1u;
+        let offset = corner_offset(k);
+        let pk = base + offset;
+        let vk = sample_density(pk);
+        let gk = sample_gradient(pk);
+        let hk = sample_hp(pk);
+        let t = clamp((params.iso_value - v0) / (vk - v0), 0.0, 1.0);
+        let grid = vec3<f32>(base) + vec3<f32>(offset) * t;
+        var normal = outward_normal(g0 + (gk - g0) * t);
+        if (all(normal == vec3<f32>(0.0))) {
+            // No gradient: the edge's own direction, from its inside end to its outside end.
+            let along = normalize(vec3<f32>(offset) * params.voxel_size);
+            normal = select(-along, along, inside0);
+        }
+        let wk = max(vk, 0.0);
+        // Member by member: the padding is never read, so it is not written.
+        vertices[out].position = data_position(grid);
+        vertices[out].hp = weighted_hp(w0 * h0 + wk * hk, w0 + wk);
+        vertices[out].normal = normal;
+        out += 1u;
     }
-    var triangles = 0u;
-    for (var t = 0u; t < 6u; t++) {
-        triangles += TET_CASES[tet_mask(TETS[t], mask)] >> 24u;
+}
+
+// The vertex on edge code `edge` (see `cases`) of the cell in cell-map slot `slot`, owned
+// by the cell whose lowest sample is its lower end (`own_entry`: the cell's own cell-map entry);
+// INVALID when it was not written.
+fn edge_vertex(slot: u32, edge: u32, own_entry: u32) -> u32 {
+    // About half the edges start at the cell's own corner 0: no load for those.
+    var entry = own_entry;
+    let lower = edge & 7u;
+    if (lower != 0u) {
+        // The owner's slot, by strides (no division back to cell coordinates).
+        let sy = params.dims.x + 1u;
+        let sz = sy * (params.dims.y + 1u);
+        entry = cell_map[slot + (lower & 1u) + sy * ((lower >> 1u) & 1u) + sz * (lower >> 2u)];
     }
-    let first = atomicAdd(&counters.vertices, triangles * 3u);
-    var out = first;
-    for (var t = 0u; t < 6u; t++) {
-        let tet = TETS[t];
-        let case_bits = TET_CASES[tet_mask(tet, mask)];
-        let count = case_bits >> 24u;
-        if (count == 0u) {
-            continue;
+    if (entry == INVALID) {
+        return INVALID;
+    }
+    let owned = (entry & 0x7fu) << 1u;
+    let index = (entry >> 7u) + countOneBits(owned & ((1u << (edge >> 3u)) - 1u));
+    if (index >= params.vertex_capacity) {
+        return INVALID;
+    }
+    return index;
+}
+
+@compute @workgroup_size(64)
+fn triangles(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let i = active_thread(group, groups, lane);
+    if (i >= active_count()) {
+        return;
+    }
+    let entry = active_list[i];
+    let own_entry = cell_map_entry(i, entry.y, entry.z);
+    let row = entry.y * CASE_STRIDE;
+    let count = cases[row];
+    // Whole triangles only, so every index below the drawn count is written.
+    let capacity = params.index_capacity - params.index_capacity % 3u;
+    var out = entry.w;
+    for (var tri = 0u; tri < count; tri++) {
+        if (out + 3u > capacity) {
+            break;
         }
-        let corners = array<u32, 4>(tet.x, tet.y, tet.z, tet.w);
-        // From the inside vertices toward the outside ones: the way triangles must face.
-        var inside_sum = vec3<f32>(0.0);
-        var outside_sum = vec3<f32>(0.0);
-        var inside_count = 0.0;
-        for (var v = 0u; v < 4u; v++) {
-            let p = vec3<f32>(corner_offset(corners[v]));
-            if (values[corners[v]] > params.iso_value) {
-                inside_sum += p;
-                inside_count += 1.0;
-            } else {
-                outside_sum += p;
-            }
+        let code = cases[row + 1u + tri];
+        var a = edge_vertex(entry.x, code & 0x3fu, own_entry);
+        var b = edge_vertex(entry.x, (code >> 6u) & 0x3fu, own_entry);
+        var c = edge_vertex(entry.x, (code >> 12u) & 0x3fu, own_entry);
+        if (a == INVALID || b == INVALID || c == INVALID) {
+            // A vertex did not fit (the CPU grows the buffers): a degenerate triangle keeps the
+            // drawn range clean (index 0 is inside the vertex buffer).
+            a = 0u;
+            b = 0u;
+            c = 0u;
         }
-        let outward = outside_sum / (4.0 - inside_count) - inside_sum / inside_count;
-        for (var tri = 0u; tri < count; tri++) {
-            var points: array<EdgePoint, 3>;
-            for (var c = 0u; c < 3u; c++) {
-                let edge = (case_bits >> (4u * (tri * 3u + c))) & 0xfu;
-                let ka = corners[EDGE_A[edge]];
-                let kb = corners[EDGE_B[edge]];
-                points[c] = edge_point(
-                    base + corner_offset(ka),
-                    base + corner_offset(kb),
-                    values[ka],
-                    values[kb],
-                    gradients[ka],
-                    gradients[kb],
-                    hps[ka],
-                    hps[kb],
-                );
-            }
-            var face = cross(points[1].grid - points[0].grid, points[2].grid - points[0].grid);
-            if (dot(face, outward) < 0.0) {
-                let swap = points[1];
-                points[1] = points[2];
-                points[2] = swap;
-                face = -face;
-            }
-            // A triangle is written only when all of it fits; the count still grows, so the CPU
-            // learns how much room the surface needs.
-            if (out + 3u <= params.vertex_capacity) {
-                // The face normal in data space (a cross product scales by the cofactors).
-                let data_face = face * params.voxel_size.yzx * params.voxel_size.zxy;
-                var face_normal = vec3<f32>(0.0);
-                if (length(data_face) > 1e-30) {
-                    face_normal = normalize(data_face);
-                }
-                for (var c = 0u; c < 3u; c++) {
-                    var vertex = points[c].vertex;
-                    if (all(vertex.normal == vec3<f32>(0.0))) {
-                        vertex.normal = face_normal;
-                    }
-                    vertices[out + c] = vertex;
-                }
-            }
-            out += 3u;
-        }
+        indices[out] = a;
+        indices[out + 1u] = b;
+        indices[out + 2u] = c;
+        out += 3u;
     }
 }
 
 @compute @workgroup_size(1)
 fn finalize() {
-    let written = min(atomicLoad(&counters.vertices), params.vertex_capacity);
-    indirect[0] = written - written % 3u;
-    indirect[1] = 1u;
-    indirect[2] = 0u;
-    indirect[3] = 0u;
-    indirect[4] = 0u;
-    indirect[5] = 1u;
-    indirect[6] = 0u;
-    indirect[7] = 0u;
-    indirect[8] = 0u;
+    let capacity = params.index_capacity - params.index_capacity % 3u;
+    write_indexed_draw(atomicLoad(&counters.indices), capacity);
 }

@@ -1,55 +1,160 @@
 //! Marching tetrahedra on the GPU (paper 3.2).
 //!
-//! Reads: a [`VoxelGrid`]'s density and hp_mean. Writes: into [`MeshBuffers`] a triangle soup
-//! (three [`MeshVertex`](crate::render::mesh::MeshVertex) per triangle), the vertex counter and
-//! the non-indexed indirect draw arguments.
-//! One thread per cell (cells run from -1 to dims - 1, samples outside the grid read as zero so
-//! surfaces close at its border). A cell is split into six tetrahedra around its main diagonal,
-//! the same split in every cell, so neighbouring cells cut their shared face the same way and the
-//! surface is watertight. Each tetrahedron's inside mask indexes a 16-entry case table of up to
-//! two triangles; vertices are interpolated linearly on the edges, computed from the edge's lower
-//! end so both cells sharing an edge produce the bit-identical point. A cell reserves room for
-//! all its triangles with one atomic add. Normals: the central-difference gradient of the density
-//! interpolated along the edge, negated (toward lower density), so shading is smooth across the
-//! soup; a vanishing gradient falls back to the triangle's own normal.
+//! Reads: a [`VoxelGrid`]'s density and hp_mean. Writes: into [`MeshBuffers`] an indexed mesh
+//! with one [`MeshVertex`](crate::render::mesh::MeshVertex) per grid edge that crosses the
+//! isovalue (shared by all the triangles on it), the active-cell list and cell map, the counters
+//! and the indexed indirect draw arguments.
+//! Cells run from -1 to dims - 1 (samples outside the grid read as zero, so surfaces close at its
+//! border). A cell is split into six tetrahedra around its main diagonal, the same split in every
+//! cell, so neighbouring cells cut their shared face the same way and the surface is watertight.
+//! Each tetrahedron's inside mask indexes a 16-entry case table of up to two triangles.
+//! Passes (see shaders/marching_tets.wgsl): `classify` sweeps every cell (eight loads) and
+//! appends the straddling ones to the active list, reserving their vertices and indices with
+//! atomics; `dispatch_active` writes the indirect dispatch over them; `edge_vertices` places one
+//! vertex on each crossing edge a cell owns (the seven edges from its corner 0: three box edges,
+//! three face diagonals and the body diagonal, so every edge of every tetrahedron has exactly one
+//! owner); `triangles` writes three indices per triangle, finding each edge's vertex through the
+//! owner's entry in the cell map; `finalize` writes the draw. Vertex normals: the
+//! central-difference gradient of the density interpolated along the edge, negated (toward lower
+//! density); a vanishing gradient falls back to the edge's direction from inside to outside.
 
 use crate::render::grid::VoxelGrid;
 use crate::render::mesh::{
-    MeshBuffers, cell_workgroups, compute_pipeline, extraction_entries, extraction_layout,
+    ExtractionPipelines, MeshBuffers, compute_pipeline, extraction_layout, record_extraction_passes,
 };
 use crate::render::shaders;
+use wgpu::util::DeviceExt;
+
+/// The six tetrahedra of a cell as cube-corner indices (bit 0: x, bit 1: y, bit 2: z), each a
+/// chain 0 -> a -> a + b -> 7 around the main diagonal, so a lower corner index in a tetrahedron
+/// has a subset of the higher one's offset bits.
+const TETS: [[u32; 4]; 6] = [
+    [0, 1, 3, 7],
+    [0, 1, 5, 7],
+    [0, 2, 3, 7],
+    [0, 2, 6, 7],
+    [0, 4, 5, 7],
+    [0, 4, 6, 7],
+];
+
+/// Tetrahedron edges as vertex pairs: e0 = 01, e1 = 02, e2 = 03, e3 = 12, e4 = 13, e5 = 23.
+const EDGE_A: [usize; 6] = [0, 0, 0, 1, 1, 2];
+const EDGE_B: [usize; 6] = [1, 2, 3, 2, 3, 3];
+
+/// Per tetrahedron inside mask (bit v: vertex v inside): the triangles as edge triples.
+const TET_TRIANGLES: [&[[usize; 3]]; 16] = [
+    &[],
+    &[[0, 1, 2]],
+    &[[0, 3, 4]],
+    &[[1, 3, 4], [1, 4, 2]],
+    &[[1, 3, 5]],
+    &[[0, 3, 5], [0, 5, 2]],
+    &[[0, 1, 5], [0, 5, 4]],
+    &[[2, 4, 5]],
+    &[[2, 4, 5]],
+    &[[0, 4, 5], [0, 5, 1]],
+    &[[0, 2, 5], [0, 5, 3]],
+    &[[1, 3, 5]],
+    &[[1, 2, 4], [1, 4, 3]],
+    &[[0, 3, 4]],
+    &[[0, 1, 2]],
+    &[],
+];
+
+/// Words per cell mask in [`case_table`].
+pub(crate) const CASE_STRIDE: usize = 13;
+
+fn corner(k: u32) -> glam::Vec3 {
+    glam::Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32)
+}
+
+/// The triangles of a cell for each inside mask of its corners (bit k: corner k), as read by
+/// shaders/marching_tets.wgsl: word 13m holds the count, words 13m + 1.. one triangle each,
+/// three six-bit edges (lower corner | direction << 3), wound to face away from the inside
+/// corners. The winding is decided at the edge midpoints: a triangle on given tetrahedron edges
+/// keeps its orientation wherever on the open edges its corners lie.
+pub(crate) fn case_table() -> Vec<u32> {
+    let mut table = vec![0u32; 256 * CASE_STRIDE];
+    for mask in 0..256u32 {
+        let row = &mut table[mask as usize * CASE_STRIDE..][..CASE_STRIDE];
+        for tet in TETS {
+            let inside = |v: usize| (mask >> tet[v]) & 1 == 1;
+            let tet_mask = (0..4).fold(0, |m, v| m | (usize::from(inside(v)) << v));
+            let triangles = TET_TRIANGLES[tet_mask];
+            if triangles.is_empty() {
+                continue;
+            }
+            let (mut inside_sum, mut outside_sum, mut inside_count) =
+                (glam::Vec3::ZERO, glam::Vec3::ZERO, 0.0);
+            for (v, &k) in tet.iter().enumerate() {
+                if inside(v) {
+                    inside_sum += corner(k);
+                    inside_count += 1.0;
+                } else {
+                    outside_sum += corner(k);
+                }
+            }
+            let outward = outside_sum / (4.0 - inside_count) - inside_sum / inside_count;
+            for triangle in triangles {
+                let mut edges = triangle.map(|e| (tet[EDGE_A[e]], tet[EDGE_B[e]]));
+                let mid = edges.map(|(a, b)| (corner(a) + corner(b)) * 0.5);
+                if (mid[1] - mid[0]).cross(mid[2] - mid[0]).dot(outward) < 0.0 {
+                    edges.swap(1, 2);
+                }
+                let code = edges.iter().enumerate().fold(0, |code, (c, &(a, b))| {
+                    code | ((a | (a ^ b) << 3) << (6 * c))
+                });
+                row[0] += 1;
+                row[row[0] as usize] = code;
+            }
+        }
+    }
+    table
+}
 
 /// The marching tetrahedra pipelines, built once.
 pub struct MarchingTetsPass {
     layout: wgpu::BindGroupLayout,
-    extract: wgpu::ComputePipeline,
+    inside_bits: wgpu::ComputePipeline,
+    classify: wgpu::ComputePipeline,
+    dispatch_active: wgpu::ComputePipeline,
+    edge_vertices: wgpu::ComputePipeline,
+    triangles: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
+    /// [`case_table`] on the GPU.
+    cases: wgpu::Buffer,
 }
 
 impl MarchingTetsPass {
     pub fn new(device: &wgpu::Device) -> Self {
         let module = shaders::module(device, "marching_tets", &shaders::marching_tets());
-        let layout = extraction_layout(device, "marching_tets::layout", 0);
+        let layout = extraction_layout(device, "marching_tets::layout", 1);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("marching_tets::pipeline_layout"),
             bind_group_layouts: &[None, Some(&layout)],
             immediate_size: 0,
         });
+        let pipeline = |entry: &str| {
+            compute_pipeline(
+                device,
+                &format!("marching_tets::{entry}"),
+                &pipeline_layout,
+                &module,
+                entry,
+            )
+        };
         Self {
-            extract: compute_pipeline(
-                device,
-                "marching_tets::extract",
-                &pipeline_layout,
-                &module,
-                "extract",
-            ),
-            finalize: compute_pipeline(
-                device,
-                "marching_tets::finalize",
-                &pipeline_layout,
-                &module,
-                "finalize",
-            ),
+            inside_bits: pipeline("inside_bits_pass"),
+            classify: pipeline("classify"),
+            dispatch_active: pipeline("dispatch_active"),
+            edge_vertices: pipeline("edge_vertices"),
+            triangles: pipeline("triangles"),
+            finalize: pipeline("finalize"),
+            cases: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("marching_tets::cases"),
+                contents: bytemuck::cast_slice(&case_table()),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
             layout,
         }
     }
@@ -64,22 +169,26 @@ impl MarchingTetsPass {
         buffers: &mut MeshBuffers,
         iso_value: f32,
     ) {
-        buffers.write_params(queue, grid, iso_value);
-        encoder.clear_buffer(&buffers.counters, 0, None);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("marching_tets::bind_group"),
-            layout: &self.layout,
-            entries: &extraction_entries(grid, buffers),
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("marching_tets::pass"),
-            timestamp_writes: None,
-        });
-        pass.set_bind_group(1, &bind_group, &[]);
-        pass.set_pipeline(&self.extract);
-        let [x, y, z] = cell_workgroups(grid.dims);
-        pass.dispatch_workgroups(x, y, z);
-        pass.set_pipeline(&self.finalize);
-        pass.dispatch_workgroups(1, 1, 1);
+        record_extraction_passes(
+            device,
+            queue,
+            encoder,
+            ExtractionPipelines {
+                label: "marching_tets::extract",
+                layout: &self.layout,
+                extra: &[wgpu::BindGroupEntry {
+                    binding: 10,
+                    resource: self.cases.as_entire_binding(),
+                }],
+                inside_bits: &self.inside_bits,
+                classify: &self.classify,
+                dispatch_active: &self.dispatch_active,
+                per_active: [&self.edge_vertices, &self.triangles],
+                finalize: &self.finalize,
+            },
+            grid,
+            buffers,
+            iso_value,
+        );
     }
 }

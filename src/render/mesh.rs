@@ -1,10 +1,12 @@
 //! Surface view: the extracted isosurface, kept on the GPU and drawn lit and hp-coloured.
 //!
-//! Reads: a [`VoxelGrid`] (density, hp_mean). Writes: a mesh in [`MeshBuffers`] (vertex records
-//! [`MeshVertex`], an index buffer for dual contouring, atomic counters and indirect draw
-//! arguments), then colour and depth of the render target.
+//! Reads: a [`VoxelGrid`] (density, hp_mean). Writes: an indexed mesh in [`MeshBuffers`] (vertex
+//! records [`MeshVertex`], an index buffer, the active-cell list, atomic counters and indirect
+//! dispatch and draw arguments), then colour and depth of the render target.
 //! [`SurfacePass`] owns the two extraction passes ([`MarchingTetsPass`], [`DualContourPass`]) and
-//! the draw pipeline. Extraction appends into preallocated buffers with atomics and a one-thread
+//! the draw pipeline. Both first classify every cell and append only the cells that straddle the
+//! isovalue to an active list, then run their expensive passes over those cells alone through
+//! indirect dispatches; output is reserved in preallocated buffers with atomics and a one-thread
 //! pass turns the counters into indirect draw arguments, so the interactive path never waits on
 //! the GPU. The surface is re-extracted only when the method, isovalue or grid changes. The
 //! counters keep counting past capacity; they are copied into a staging buffer that is mapped
@@ -116,8 +118,10 @@ pub(crate) struct IsoParams {
     pub iso_value: f32,
     pub voxel_size: [f32; 3],
     pub index_capacity: u32,
+    pub active_capacity: u32,
+    pub pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<IsoParams>() == 48);
+const _: () = assert!(std::mem::size_of::<IsoParams>() == 64);
 
 /// Keep in sync with `MeshStyle` in shaders/mesh.wgsl.
 #[repr(C)]
@@ -128,11 +132,22 @@ struct MeshStyle {
 }
 const _: () = assert!(std::mem::size_of::<MeshStyle>() == 16);
 
-/// Bytes of the counters buffer: vertices, indices (atomics) and padding.
+/// Bytes of the counters buffer: vertices, indices, active cells (atomics) and padding.
 const COUNTERS_SIZE: u64 = 16;
-/// Bytes of the indirect buffer: DrawIndirectArgs at 0, DrawIndexedIndirectArgs at 16.
+/// Bytes of the indirect buffer: DrawIndirectArgs at 0, DrawIndexedIndirectArgs at 16,
+/// DispatchIndirectArgs over the active cells at 36.
 const INDIRECT_SIZE: u64 = 48;
 const INDEXED_ARGS_OFFSET: u64 = 16;
+/// Where `dispatch_active` writes the dispatch over the active cells; it is copied into
+/// [`MeshBuffers::dispatch`] because a buffer bound as storage cannot also be a dispatch's
+/// indirect argument.
+const ACTIVE_DISPATCH_OFFSET: u64 = 36;
+const DISPATCH_SIZE: u64 = 12;
+/// Marching tetrahedra's cell map packs a first vertex index below this (keep in sync with
+/// MAX_MAPPED_VERTICES in shaders/marching_tets.wgsl).
+const MAX_MAPPED_VERTICES: u64 = 1 << 25;
+/// Bytes of one active-cell entry: cell, corner mask, first vertex, first index.
+const ACTIVE_ENTRY_SIZE: u64 = 16;
 
 /// The warm-to-cool gradient of the mesh colour, as in shaders/mesh.wgsl (keep in sync):
 /// gamma-encoded RGB for `hp` (0 percussive, warm; 1 harmonic, cool).
@@ -180,17 +195,12 @@ pub struct SurfaceCounts {
 impl SurfaceCounts {
     /// True when the whole surface fitted in the buffers.
     pub fn fits(&self) -> bool {
-        self.vertices_needed <= self.vertex_capacity
-            && (self.method == SurfaceMethod::MarchingTetrahedra
-                || self.indices_needed <= self.index_capacity)
+        self.vertices_needed <= self.vertex_capacity && self.indices_needed <= self.index_capacity
     }
 
     /// Triangles in the (complete) surface.
     pub fn triangles(&self) -> u32 {
-        match self.method {
-            SurfaceMethod::MarchingTetrahedra => self.vertices_needed / 3,
-            SurfaceMethod::DualContouring => self.indices_needed / 3,
-        }
+        self.indices_needed / 3
     }
 }
 
@@ -227,9 +237,8 @@ impl CpuMesh {
             .sum()
     }
 
-    /// The same surface with vertices at bit-identical positions merged (marching tetrahedra
-    /// writes a triangle soup; cells sharing an edge compute the same crossing exactly), and
-    /// triangles that collapse to a line or point dropped.
+    /// The same surface with vertices at bit-identical positions merged (crossings that land
+    /// exactly on a shared grid sample), and triangles that collapse to a line or point dropped.
     pub fn welded(&self) -> CpuMesh {
         let mut map = std::collections::HashMap::new();
         let mut out = CpuMesh::default();
@@ -261,16 +270,28 @@ pub struct MeshBuffers {
     pub counters: wgpu::Buffer,
     pub indirect: wgpu::Buffer,
     pub params: wgpu::Buffer,
-    /// Dual contouring's vertex index per cell; grown to the grid on demand.
+    /// DispatchIndirectArgs over the active cells.
+    pub dispatch: wgpu::Buffer,
+    /// The cells that straddle the isovalue (16-byte entries), [`MeshBuffers::active_capacity`]
+    /// of them. A complete surface never has more active cells than marching tetrahedra has
+    /// triangles or dual contouring has vertices, so the capacities bound it.
+    pub active: wgpu::Buffer,
+    /// Per cell: what the method keeps of an active cell (its active index for dual
+    /// contouring, its first vertex and crossing edges for marching tetrahedra); grown to the
+    /// grid on demand.
     pub cell_map: Option<wgpu::Buffer>,
+    /// One bit per (padded) sample: inside or not; grown to the grid on demand.
+    pub inside_bits: Option<wgpu::Buffer>,
     pub vertex_capacity: u32,
     pub index_capacity: u32,
+    pub active_capacity: u32,
 }
 
 impl MeshBuffers {
     pub fn new(device: &wgpu::Device, vertex_capacity: u32, index_capacity: u32) -> Self {
         let vertex_capacity = vertex_capacity.max(3);
         let index_capacity = index_capacity.max(6);
+        let active_capacity = vertex_capacity.max(index_capacity / 3);
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let make = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -301,15 +322,50 @@ impl MeshBuffers {
                 INDIRECT_SIZE,
                 storage | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
             ),
+            dispatch: make(
+                "surface::dispatch_args",
+                16,
+                wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            ),
             params: make(
                 "surface::params",
                 std::mem::size_of::<IsoParams>() as u64,
                 wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
+            active: make(
+                "surface::active_cells",
+                u64::from(active_capacity) * ACTIVE_ENTRY_SIZE,
+                storage,
+            ),
             cell_map: None,
+            inside_bits: None,
             vertex_capacity,
             index_capacity,
+            active_capacity,
         }
+    }
+
+    /// Makes sure `cell_map` has an entry for every cell of `grid` ((dims + 1)^3) and
+    /// `inside_bits` a bit for every padded sample.
+    pub(crate) fn ensure_grid_buffers(&mut self, device: &wgpu::Device, grid: &VoxelGrid) {
+        let grow = |buffer: &mut Option<wgpu::Buffer>, label: &str, needed: u64| {
+            if buffer.as_ref().is_none_or(|b| b.size() < needed) {
+                *buffer = Some(device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: needed,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                }));
+            }
+        };
+        let cells = (grid.dims.as_u64vec3() + glam::U64Vec3::ONE).element_product();
+        grow(&mut self.cell_map, "surface::cell_map", cells * 4);
+        let [words, rows] = bit_threads(grid.dims, 2);
+        grow(
+            &mut self.inside_bits,
+            "surface::inside_bits",
+            words * rows * 4,
+        );
     }
 
     /// Writes the extraction parameters for `grid` at `iso_value`.
@@ -321,13 +377,15 @@ impl MeshBuffers {
             iso_value,
             voxel_size: grid.voxel_size().to_array(),
             index_capacity: self.index_capacity,
+            active_capacity: self.active_capacity,
+            pad: [0; 3],
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
     }
 }
 
-/// Bind group layout entries shared by the extraction passes (group 1, bindings 0..=5 of
-/// shaders/utils/iso_grid.wgsl), plus `extra` read-write storage bindings from 6 on.
+/// Bind group layout shared by the extraction passes (group 1, bindings 0..=9 of
+/// shaders/utils/iso_grid.wgsl), plus `extra` read-only storage bindings from 10 on.
 pub(crate) fn extraction_layout(
     device: &wgpu::Device,
     label: &str,
@@ -360,8 +418,11 @@ pub(crate) fn extraction_layout(
         storage(4, false),
         storage(5, false),
     ];
+    for b in 6..=9 {
+        entries.push(storage(b, false));
+    }
     for b in 0..extra {
-        entries.push(storage(6 + b, false));
+        entries.push(storage(10 + b, true));
     }
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
@@ -369,11 +430,14 @@ pub(crate) fn extraction_layout(
     })
 }
 
-/// The bind group entries for bindings 0..=5.
+/// The bind group entries for bindings 0..=9 (call [`MeshBuffers::ensure_grid_buffers`] first).
 pub(crate) fn extraction_entries<'a>(
     grid: &'a VoxelGrid,
     buffers: &'a MeshBuffers,
 ) -> Vec<wgpu::BindGroupEntry<'a>> {
+    let expect = "ensure_grid_buffers before binding";
+    let cell_map = buffers.cell_map.as_ref().expect(expect);
+    let inside_bits = buffers.inside_bits.as_ref().expect(expect);
     [
         &buffers.params,
         &grid.density,
@@ -381,6 +445,10 @@ pub(crate) fn extraction_entries<'a>(
         &buffers.vertices,
         &buffers.counters,
         &buffers.indirect,
+        &buffers.indices,
+        cell_map,
+        &buffers.active,
+        inside_bits,
     ]
     .into_iter()
     .enumerate()
@@ -409,13 +477,98 @@ pub(crate) fn compute_pipeline(
     })
 }
 
-/// Workgroup shape of the per-cell dispatches (keep in sync with `@workgroup_size` in
-/// marching_tets.wgsl and dual_contour.wgsl): long in x, which llvmpipe vectorizes along.
-pub(crate) const CELL_WORKGROUP: UVec3 = UVec3::new(16, 4, 1);
+/// The pipelines of one extraction method, in the order they run (see
+/// shaders/utils/iso_grid.wgsl).
+pub(crate) struct ExtractionPipelines<'a> {
+    pub label: &'static str,
+    /// The method's layout of group 1 (see [`extraction_layout`]).
+    pub layout: &'a wgpu::BindGroupLayout,
+    /// The method's own bindings from 10 on.
+    pub extra: &'a [wgpu::BindGroupEntry<'a>],
+    /// Over every sample: packs which are inside into bits.
+    pub inside_bits: &'a wgpu::ComputePipeline,
+    /// Over every 32 cells along x: appends the active cells.
+    pub classify: &'a wgpu::ComputePipeline,
+    /// One thread: the dispatch over the active cells.
+    pub dispatch_active: &'a wgpu::ComputePipeline,
+    /// Over the active cells, one after the other.
+    pub per_active: [&'a wgpu::ComputePipeline; 2],
+    /// One thread: the draw arguments.
+    pub finalize: &'a wgpu::ComputePipeline,
+}
 
-/// Workgroups covering one thread per padded cell: (dims + 1)^3.
-pub(crate) fn cell_workgroups(dims: UVec3) -> [u32; 3] {
-    ((dims + UVec3::ONE + CELL_WORKGROUP - UVec3::ONE) / CELL_WORKGROUP).to_array()
+/// Records an extraction: classify every cell, then the passes over the active cells only.
+pub(crate) fn record_extraction_passes(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    encoder: &mut wgpu::CommandEncoder,
+    pipelines: ExtractionPipelines<'_>,
+    grid: &VoxelGrid,
+    buffers: &mut MeshBuffers,
+    iso_value: f32,
+) {
+    buffers.write_params(queue, grid, iso_value);
+    buffers.ensure_grid_buffers(device, grid);
+    encoder.clear_buffer(&buffers.counters, 0, None);
+    let mut entries = extraction_entries(grid, buffers);
+    entries.extend_from_slice(pipelines.extra);
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(pipelines.label),
+        layout: pipelines.layout,
+        entries: &entries,
+    });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(pipelines.label),
+            timestamp_writes: None,
+        });
+        pass.set_bind_group(1, &bind_group, &[]);
+        for (pipeline, pad) in [(pipelines.inside_bits, 2), (pipelines.classify, 1)] {
+            pass.set_pipeline(pipeline);
+            let [words, rows] = bit_threads(grid.dims, pad);
+            let [x, y] = flat_workgroups(words * rows);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        pass.set_pipeline(pipelines.dispatch_active);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+    encoder.copy_buffer_to_buffer(
+        &buffers.indirect,
+        ACTIVE_DISPATCH_OFFSET,
+        &buffers.dispatch,
+        0,
+        DISPATCH_SIZE,
+    );
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(pipelines.label),
+        timestamp_writes: None,
+    });
+    pass.set_bind_group(1, &bind_group, &[]);
+    for pipeline in pipelines.per_active {
+        pass.set_pipeline(pipeline);
+        pass.dispatch_workgroups_indirect(&buffers.dispatch, 0);
+    }
+    pass.set_pipeline(pipelines.finalize);
+    pass.dispatch_workgroups(1, 1, 1);
+}
+
+/// Threads per workgroup and workgroups per row of the one-dimensional dispatches (keep in sync
+/// with ACTIVE_WORKGROUP and ACTIVE_ROW in shaders/utils/iso_grid.wgsl).
+const FLAT_WORKGROUP: u64 = 64;
+const FLAT_ROW: u64 = 32768;
+
+/// Words of 32 along x and rows (y, z) of a grid padded to dims + `pad` on each axis.
+fn bit_threads(dims: UVec3, pad: u32) -> [u64; 2] {
+    let side = (dims + UVec3::splat(pad)).as_u64vec3();
+    let words = (u64::from(dims.x) + 2).div_ceil(32);
+    [words, side.y * side.z]
+}
+
+/// Workgroups (x, y) covering `threads` threads of a one-dimensional pass.
+fn flat_workgroups(threads: u64) -> [u32; 2] {
+    let groups = threads.div_ceil(FLAT_WORKGROUP);
+    let x = groups.min(FLAT_ROW);
+    [x as u32, groups.div_ceil(FLAT_ROW) as u32]
 }
 
 /// Identifies the extracted surface: a change re-extracts it.
@@ -616,11 +769,11 @@ impl SurfacePass {
 
     /// Grows the buffers to hold `counts`; an error when the device cannot.
     fn grow(&self, state: &mut SurfaceState, counts: &SurfaceCounts) -> Result<(), SurfaceError> {
-        let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64| {
+        let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64, max: u64| {
             if needed <= capacity {
                 return Ok(capacity);
             }
-            let limit = self.element_limit(size);
+            let limit = self.element_limit(size).min(max);
             let wanted = u64::from(needed).next_power_of_two().min(limit);
             if wanted < u64::from(needed) {
                 return Err(SurfaceError::TooLarge {
@@ -631,17 +784,25 @@ impl SurfacePass {
             }
             Ok(wanted as u32)
         };
+        // Marching tetrahedra's cell map cannot address more vertices.
+        let max_vertices = match counts.method {
+            SurfaceMethod::MarchingTetrahedra => MAX_MAPPED_VERTICES,
+            SurfaceMethod::DualContouring => u64::MAX,
+        };
         let vertices = grow_to(
             counts.vertices_needed,
             counts.vertex_capacity,
             "vertices",
             std::mem::size_of::<MeshVertex>() as u64,
+            max_vertices,
         )?;
-        let indices = if counts.method == SurfaceMethod::DualContouring {
-            grow_to(counts.indices_needed, counts.index_capacity, "indices", 4)?
-        } else {
-            counts.index_capacity
-        };
+        let indices = grow_to(
+            counts.indices_needed,
+            counts.index_capacity,
+            "indices",
+            4,
+            u64::MAX,
+        )?;
         log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
         state.buffers = Some(MeshBuffers::new(&self.device, vertices, indices));
         state.key = None;
@@ -866,15 +1027,16 @@ impl SurfacePass {
             u64::from(vertex_count) * std::mem::size_of::<MeshVertex>() as u64,
         )?;
         let vertices: Vec<MeshVertex> = bytemuck::pod_collect_to_vec(&vertex_bytes);
-        let indices = match counts.method {
-            SurfaceMethod::MarchingTetrahedra => (0..vertex_count - vertex_count % 3).collect(),
-            SurfaceMethod::DualContouring => {
-                let capacity = buffers.index_capacity - buffers.index_capacity % 6;
-                let count = counts.indices_needed.min(capacity);
-                let bytes = read(&buffers.indices, u64::from(count) * 4)?;
-                bytemuck::pod_collect_to_vec(&bytes)
-            }
+        // Whole triangles (marching tetrahedra) or quads (dual contouring) only.
+        let whole = match counts.method {
+            SurfaceMethod::MarchingTetrahedra => 3,
+            SurfaceMethod::DualContouring => 6,
         };
+        let count = counts
+            .indices_needed
+            .min(buffers.index_capacity - buffers.index_capacity % whole);
+        let bytes = read(&buffers.indices, u64::from(count) * 4)?;
+        let indices = bytemuck::pod_collect_to_vec(&bytes);
         Ok(CpuMesh {
             positions: vertices.iter().map(|v| Vec3::from(v.position)).collect(),
             normals: vertices.iter().map(|v| Vec3::from(v.normal)).collect(),
@@ -886,20 +1048,15 @@ impl SurfacePass {
     /// Draws the extracted surface with the indirect arguments the GPU wrote.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &FrameBinding) {
         let state = self.lock();
-        let (Some(buffers), Some(key)) = (&state.buffers, &state.key) else {
+        let (Some(buffers), Some(_)) = (&state.buffers, &state.key) else {
             return;
         };
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &frame.bind_group, &[]);
         pass.set_bind_group(1, &self.style_bind_group, &[]);
         pass.set_vertex_buffer(0, buffers.vertices.slice(..));
-        match key.method {
-            SurfaceMethod::MarchingTetrahedra => pass.draw_indirect(&buffers.indirect, 0),
-            SurfaceMethod::DualContouring => {
-                pass.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed_indirect(&buffers.indirect, INDEXED_ARGS_OFFSET);
-            }
-        }
+        pass.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed_indirect(&buffers.indirect, INDEXED_ARGS_OFFSET);
     }
 }
 
