@@ -41,7 +41,7 @@ impl Default for PointStyle {
         Self {
             size_px: 2.0,
             min_scalar: 0.0,
-            max_points_moving: 60_000,
+            max_points_moving: 40_000,
         }
     }
 }
