@@ -65,6 +65,9 @@ pub struct RenderSettings {
     pub volume: VolumeSettings,
     /// How the surface view extracts and lights the isosurface.
     pub surface: SurfaceSettings,
+    /// Draw the points (level of detail) instead of the volume while the camera moves: for
+    /// devices where a volume frame takes too long to orbit smoothly (software rasterizers).
+    pub points_while_moving: bool,
 }
 
 impl Default for RenderSettings {
@@ -77,6 +80,7 @@ impl Default for RenderSettings {
             voxels: VoxelSettings::default(),
             volume: VolumeSettings::default(),
             surface: SurfaceSettings::default(),
+            points_while_moving: false,
         }
     }
 }
@@ -273,7 +277,8 @@ impl Renderer {
             (ViewKind::Surface, _) if data.grid.is_some() => {
                 self.surface.draw(&mut pass, &self.frame);
             }
-            (ViewKind::Volume, Some(volume)) => {
+            // A slow device may ask for the points as a stand-in while the camera moves.
+            (ViewKind::Volume, Some(volume)) if !(view.moving && settings.points_while_moving) => {
                 self.volume.draw(&mut pass, &self.frame, volume);
             }
             // Until a grid is built (ensure_grid), the points stand in.

@@ -21,6 +21,8 @@ use crate::ui::bridge::{ViewCallback, ViewResources};
 
 /// How long after the last input the view still counts as moving (drawn at reduced quality).
 const SETTLE: Duration = Duration::from_millis(180);
+/// Volume frames slower than this at rest are replaced by the points while the camera moves.
+const VOLUME_PROXY_MS: f32 = 80.0;
 
 /// Options from the command line.
 #[derive(Clone, Debug, Default)]
@@ -151,6 +153,8 @@ pub struct LoudscapeApp {
     surface_error: Option<String>,
     /// Draw again next frame (the surface is still growing its buffers).
     needs_repaint: bool,
+    /// Smoothed time of a volume frame at rest (ms), to decide whether orbiting needs a stand-in.
+    volume_rest_ms: f32,
 }
 
 /// Opens the window and runs until it closes.
@@ -228,6 +232,7 @@ impl LoudscapeApp {
             keep_camera_loads: 0,
             surface_error: None,
             needs_repaint: false,
+            volume_rest_ms: 0.0,
         };
         let mut files = options.files;
         if let Some(r) = remembered {
@@ -600,6 +605,17 @@ impl LoudscapeApp {
             self.last_motion = Some(now);
         }
         let moving = self.last_motion.is_some_and(|t| now - t < SETTLE);
+        // When volume frames are too slow to orbit with (software rasterizers), show the points
+        // while the camera moves and the volume again once it settles.
+        if self.settings.view == ViewKind::Volume && !moving {
+            let dt = ui.ctx().input(|i| i.unstable_dt) * 1000.0;
+            self.volume_rest_ms = if self.volume_rest_ms == 0.0 {
+                dt
+            } else {
+                self.volume_rest_ms * 0.8 + dt * 0.2
+            };
+        }
+        self.settings.points_while_moving = self.volume_rest_ms > VOLUME_PROXY_MS;
         if moving {
             ui.ctx().request_repaint();
         } else if self.last_motion.take().is_some() {
