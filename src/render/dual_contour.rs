@@ -16,48 +16,24 @@
 //! (trilinearly interpolated at the vertex), negated so they point toward lower density.
 
 use crate::render::grid::VoxelGrid;
-use crate::render::mesh::{
-    ExtractionPipelines, MeshBuffers, compute_pipeline, extraction_layout, record_extraction_passes,
-};
+use crate::render::mesh::{ExtractionPipelines, MeshBuffers};
 use crate::render::shaders;
 
 /// The dual contouring pipelines, built once.
 pub struct DualContourPass {
-    layout: wgpu::BindGroupLayout,
-    inside_bits: wgpu::ComputePipeline,
-    classify: wgpu::ComputePipeline,
-    dispatch_active: wgpu::ComputePipeline,
-    cell_vertices: wgpu::ComputePipeline,
-    quads: wgpu::ComputePipeline,
-    finalize: wgpu::ComputePipeline,
+    pipelines: ExtractionPipelines,
 }
 
 impl DualContourPass {
     pub fn new(device: &wgpu::Device) -> Self {
-        let module = shaders::module(device, "dual_contour", &shaders::dual_contour());
-        let layout = extraction_layout(device, "dual_contour::layout", 0);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("dual_contour::pipeline_layout"),
-            bind_group_layouts: &[None, Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            compute_pipeline(
-                device,
-                &format!("dual_contour::{entry}"),
-                &pipeline_layout,
-                &module,
-                entry,
-            )
-        };
         Self {
-            inside_bits: pipeline("inside_bits_pass"),
-            classify: pipeline("classify"),
-            dispatch_active: pipeline("dispatch_active"),
-            cell_vertices: pipeline("cell_vertices"),
-            quads: pipeline("quads"),
-            finalize: pipeline("finalize"),
-            layout,
+            pipelines: ExtractionPipelines::new(
+                device,
+                "dual_contour",
+                &shaders::dual_contour(),
+                0,
+                ["cell_vertices", "quads"],
+            ),
         }
     }
 
@@ -71,23 +47,7 @@ impl DualContourPass {
         buffers: &mut MeshBuffers,
         iso_value: f32,
     ) {
-        record_extraction_passes(
-            device,
-            queue,
-            encoder,
-            ExtractionPipelines {
-                label: "dual_contour::extract",
-                layout: &self.layout,
-                extra: &[],
-                inside_bits: &self.inside_bits,
-                classify: &self.classify,
-                dispatch_active: &self.dispatch_active,
-                per_active: [&self.cell_vertices, &self.quads],
-                finalize: &self.finalize,
-            },
-            grid,
-            buffers,
-            iso_value,
-        );
+        self.pipelines
+            .record(device, queue, encoder, &[], grid, buffers, iso_value);
     }
 }

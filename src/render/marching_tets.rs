@@ -19,9 +19,7 @@
 //! density); a vanishing gradient falls back to the edge's direction from inside to outside.
 
 use crate::render::grid::VoxelGrid;
-use crate::render::mesh::{
-    ExtractionPipelines, MeshBuffers, compute_pipeline, extraction_layout, record_extraction_passes,
-};
+use crate::render::mesh::{ExtractionPipelines, MeshBuffers};
 use crate::render::shaders;
 use wgpu::util::DeviceExt;
 
@@ -114,48 +112,26 @@ pub(crate) fn case_table() -> Vec<u32> {
 
 /// The marching tetrahedra pipelines, built once.
 pub struct MarchingTetsPass {
-    layout: wgpu::BindGroupLayout,
-    inside_bits: wgpu::ComputePipeline,
-    classify: wgpu::ComputePipeline,
-    dispatch_active: wgpu::ComputePipeline,
-    edge_vertices: wgpu::ComputePipeline,
-    triangles: wgpu::ComputePipeline,
-    finalize: wgpu::ComputePipeline,
+    pipelines: ExtractionPipelines,
     /// [`case_table`] on the GPU.
     cases: wgpu::Buffer,
 }
 
 impl MarchingTetsPass {
     pub fn new(device: &wgpu::Device) -> Self {
-        let module = shaders::module(device, "marching_tets", &shaders::marching_tets());
-        let layout = extraction_layout(device, "marching_tets::layout", 1);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("marching_tets::pipeline_layout"),
-            bind_group_layouts: &[None, Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            compute_pipeline(
-                device,
-                &format!("marching_tets::{entry}"),
-                &pipeline_layout,
-                &module,
-                entry,
-            )
-        };
         Self {
-            inside_bits: pipeline("inside_bits_pass"),
-            classify: pipeline("classify"),
-            dispatch_active: pipeline("dispatch_active"),
-            edge_vertices: pipeline("edge_vertices"),
-            triangles: pipeline("triangles"),
-            finalize: pipeline("finalize"),
+            pipelines: ExtractionPipelines::new(
+                device,
+                "marching_tets",
+                &shaders::marching_tets(),
+                1,
+                ["edge_vertices", "triangles"],
+            ),
             cases: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("marching_tets::cases"),
                 contents: bytemuck::cast_slice(&case_table()),
                 usage: wgpu::BufferUsages::STORAGE,
             }),
-            layout,
         }
     }
 
@@ -169,26 +145,11 @@ impl MarchingTetsPass {
         buffers: &mut MeshBuffers,
         iso_value: f32,
     ) {
-        record_extraction_passes(
-            device,
-            queue,
-            encoder,
-            ExtractionPipelines {
-                label: "marching_tets::extract",
-                layout: &self.layout,
-                extra: &[wgpu::BindGroupEntry {
-                    binding: 10,
-                    resource: self.cases.as_entire_binding(),
-                }],
-                inside_bits: &self.inside_bits,
-                classify: &self.classify,
-                dispatch_active: &self.dispatch_active,
-                per_active: [&self.edge_vertices, &self.triangles],
-                finalize: &self.finalize,
-            },
-            grid,
-            buffers,
-            iso_value,
-        );
+        let cases = [wgpu::BindGroupEntry {
+            binding: 10,
+            resource: self.cases.as_entire_binding(),
+        }];
+        self.pipelines
+            .record(device, queue, encoder, &cases, grid, buffers, iso_value);
     }
 }

@@ -386,11 +386,7 @@ impl MeshBuffers {
 
 /// Bind group layout shared by the extraction passes (group 1, bindings 0..=9 of
 /// shaders/utils/iso_grid.wgsl), plus `extra` read-only storage bindings from 10 on.
-pub(crate) fn extraction_layout(
-    device: &wgpu::Device,
-    label: &str,
-    extra: u32,
-) -> wgpu::BindGroupLayout {
+fn extraction_layout(device: &wgpu::Device, label: &str, extra: u32) -> wgpu::BindGroupLayout {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -460,7 +456,7 @@ pub(crate) fn extraction_entries<'a>(
 }
 
 /// A compute pipeline for one entry point of an extraction shader.
-pub(crate) fn compute_pipeline(
+fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::PipelineLayout,
@@ -478,78 +474,122 @@ pub(crate) fn compute_pipeline(
 }
 
 /// The pipelines of one extraction method, in the order they run (see
-/// shaders/utils/iso_grid.wgsl).
-pub(crate) struct ExtractionPipelines<'a> {
-    pub label: &'static str,
+/// shaders/utils/iso_grid.wgsl). Both methods share this skeleton: pack the inside bits, list
+/// the active cells, then two passes over the active cells only and one that writes the draw
+/// arguments.
+pub(crate) struct ExtractionPipelines {
+    /// The method's name, the prefix of every label ("marching_tets").
+    name: &'static str,
     /// The method's layout of group 1 (see [`extraction_layout`]).
-    pub layout: &'a wgpu::BindGroupLayout,
-    /// The method's own bindings from 10 on.
-    pub extra: &'a [wgpu::BindGroupEntry<'a>],
+    layout: wgpu::BindGroupLayout,
     /// Over every sample: packs which are inside into bits.
-    pub inside_bits: &'a wgpu::ComputePipeline,
+    inside_bits: wgpu::ComputePipeline,
     /// Over every 32 cells along x: appends the active cells.
-    pub classify: &'a wgpu::ComputePipeline,
+    classify: wgpu::ComputePipeline,
     /// One thread: the dispatch over the active cells.
-    pub dispatch_active: &'a wgpu::ComputePipeline,
+    dispatch_active: wgpu::ComputePipeline,
     /// Over the active cells, one after the other.
-    pub per_active: [&'a wgpu::ComputePipeline; 2],
+    per_active: [wgpu::ComputePipeline; 2],
     /// One thread: the draw arguments.
-    pub finalize: &'a wgpu::ComputePipeline,
+    finalize: wgpu::ComputePipeline,
 }
 
-/// Records an extraction: classify every cell, then the passes over the active cells only.
-pub(crate) fn record_extraction_passes(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    encoder: &mut wgpu::CommandEncoder,
-    pipelines: ExtractionPipelines<'_>,
-    grid: &VoxelGrid,
-    buffers: &mut MeshBuffers,
-    iso_value: f32,
-) {
-    buffers.write_params(queue, grid, iso_value);
-    buffers.ensure_grid_buffers(device, grid);
-    encoder.clear_buffer(&buffers.counters, 0, None);
-    let mut entries = extraction_entries(grid, buffers);
-    entries.extend_from_slice(pipelines.extra);
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(pipelines.label),
-        layout: pipelines.layout,
-        entries: &entries,
-    });
-    {
+impl ExtractionPipelines {
+    /// Builds a method's pipelines from its composed shader `source`, whose entry points are
+    /// `inside_bits_pass`, `classify`, `dispatch_active`, the two `per_active` ones and
+    /// `finalize`; `extra` bindings from 10 on belong to the method.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        name: &'static str,
+        source: &str,
+        extra: u32,
+        per_active: [&str; 2],
+    ) -> Self {
+        let module = shaders::module(device, name, source);
+        let layout = extraction_layout(device, &format!("{name}::layout"), extra);
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(&format!("{name}::pipeline_layout")),
+            bind_group_layouts: &[None, Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            compute_pipeline(
+                device,
+                &format!("{name}::{entry}"),
+                &pipeline_layout,
+                &module,
+                entry,
+            )
+        };
+        Self {
+            name,
+            inside_bits: pipeline("inside_bits_pass"),
+            classify: pipeline("classify"),
+            dispatch_active: pipeline("dispatch_active"),
+            per_active: per_active.map(pipeline),
+            finalize: pipeline("finalize"),
+            layout,
+        }
+    }
+
+    /// Records an extraction at `iso_value` into `buffers`: classify every cell, then the passes
+    /// over the active cells only. `extra` are the method's own bindings (from 10 on).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        extra: &[wgpu::BindGroupEntry<'_>],
+        grid: &VoxelGrid,
+        buffers: &mut MeshBuffers,
+        iso_value: f32,
+    ) {
+        let label = format!("{}::extract", self.name);
+        buffers.write_params(queue, grid, iso_value);
+        buffers.ensure_grid_buffers(device, grid);
+        encoder.clear_buffer(&buffers.counters, 0, None);
+        let mut entries = extraction_entries(grid, buffers);
+        entries.extend_from_slice(extra);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&label),
+            layout: &self.layout,
+            entries: &entries,
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(&label),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(1, &bind_group, &[]);
+            for (pipeline, pad) in [(&self.inside_bits, 2), (&self.classify, 1)] {
+                pass.set_pipeline(pipeline);
+                let [words, rows] = bit_threads(grid.dims, pad);
+                let [x, y] = flat_workgroups(words * rows);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            pass.set_pipeline(&self.dispatch_active);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        encoder.copy_buffer_to_buffer(
+            &buffers.indirect,
+            ACTIVE_DISPATCH_OFFSET,
+            &buffers.dispatch,
+            0,
+            DISPATCH_SIZE,
+        );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(pipelines.label),
+            label: Some(&label),
             timestamp_writes: None,
         });
         pass.set_bind_group(1, &bind_group, &[]);
-        for (pipeline, pad) in [(pipelines.inside_bits, 2), (pipelines.classify, 1)] {
+        for pipeline in &self.per_active {
             pass.set_pipeline(pipeline);
-            let [words, rows] = bit_threads(grid.dims, pad);
-            let [x, y] = flat_workgroups(words * rows);
-            pass.dispatch_workgroups(x, y, 1);
+            pass.dispatch_workgroups_indirect(&buffers.dispatch, 0);
         }
-        pass.set_pipeline(pipelines.dispatch_active);
+        pass.set_pipeline(&self.finalize);
         pass.dispatch_workgroups(1, 1, 1);
     }
-    encoder.copy_buffer_to_buffer(
-        &buffers.indirect,
-        ACTIVE_DISPATCH_OFFSET,
-        &buffers.dispatch,
-        0,
-        DISPATCH_SIZE,
-    );
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(pipelines.label),
-        timestamp_writes: None,
-    });
-    pass.set_bind_group(1, &bind_group, &[]);
-    for pipeline in pipelines.per_active {
-        pass.set_pipeline(pipeline);
-        pass.dispatch_workgroups_indirect(&buffers.dispatch, 0);
-    }
-    pass.set_pipeline(pipelines.finalize);
-    pass.dispatch_workgroups(1, 1, 1);
 }
 
 /// Threads per workgroup and workgroups per row of the one-dimensional dispatches (keep in sync
