@@ -256,44 +256,10 @@ def test_cache_hit_does_not_decode(tmp_path, capsys, monkeypatch):
 def test_parallel_jobs_match_serial(tmp_path, capsys):
     tagged_folder(tmp_path / "m", [1990, 2000, 1980])
     a, b = tmp_path / "a.ply", tmp_path / "b.ply"
-    assert (
-        run(
-            [
-                "timeline",
-                tmp_path / "m",
-                "-o",
-                a,
-                "--no-cache",
-                "--n-fft",
-                256,
-                "--hop",
-                128,
-                "--jobs",
-                1,
-            ],
-            capsys,
-        )[0]
-        == 0
-    )
-    assert (
-        run(
-            [
-                "timeline",
-                tmp_path / "m",
-                "-o",
-                b,
-                "--no-cache",
-                "--n-fft",
-                256,
-                "--hop",
-                128,
-                "--jobs",
-                2,
-            ],
-            capsys,
-        )[0]
-        == 0
-    )
+    for out, jobs in [(a, 1), (b, 2)]:
+        argv = ["timeline", tmp_path / "m", "-o", out, "--no-cache"]
+        argv += ["--n-fft", 256, "--hop", 128, "--jobs", jobs]
+        assert run(argv, capsys)[0] == 0
     assert a.read_bytes() == b.read_bytes()
 
 
