@@ -180,7 +180,8 @@ fn render_to_file(
     save_png(&image, output)
 }
 
-/// Writes a PNG through a temporary file in the same folder, then renames it into place.
+/// Writes a PNG (through a temporary file, see [`loudscape::screenshot::save_png`]), first
+/// saying plainly when the folder is missing.
 pub fn save_png(image: &image::RgbaImage, output: &Path) -> anyhow::Result<()> {
     let dir = output.parent().filter(|p| !p.as_os_str().is_empty());
     if let Some(dir) = dir
@@ -192,12 +193,7 @@ pub fn save_png(image: &image::RgbaImage, output: &Path) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let tmp = output.with_extension("png.tmp");
-    image
-        .save_with_format(&tmp, image::ImageFormat::Png)
-        .with_context(|| format!("{}: cannot write the image", output.display()))?;
-    std::fs::rename(&tmp, output).with_context(|| format!("{}: cannot write", output.display()))?;
-    Ok(())
+    Ok(loudscape::screenshot::save_png(image, output)?)
 }
 
 fn parse_view(name: &str) -> anyhow::Result<ViewKind> {

@@ -182,10 +182,15 @@ impl SceneData {
 
     /// The data box in world space, for fitting the camera.
     pub fn world_box(&self) -> (Vec3, Vec3) {
-        let a = self.world_from_data.transform_point3(self.box_min);
-        let b = self.world_from_data.transform_point3(self.box_max);
-        (a.min(b), a.max(b))
+        world_box(self.world_from_data, self.box_min, self.box_max)
     }
+}
+
+/// The data-space box `[min, max]` in world space, for fitting the camera.
+pub fn world_box(world_from_data: Mat4, min: Vec3, max: Vec3) -> (Vec3, Vec3) {
+    let a = world_from_data.transform_point3(min);
+    let b = world_from_data.transform_point3(max);
+    (a.min(b), a.max(b))
 }
 
 /// The box the axes are drawn on: the full normalized cube, where tick positions live.

@@ -368,21 +368,16 @@ impl LoudscapeApp {
             ViewResources::remove(render_state, old.id);
         }
         ViewResources::upload(render_state, id, &cloud);
-        let scene = crate::render::scene::data_box(&cloud);
+        let (box_min, box_max) = crate::render::scene::data_box(&cloud);
         let world_from_data = world_from_data(cloud.meta.mode);
-        let a = world_from_data.transform_point3(scene.0);
-        let b = world_from_data.transform_point3(scene.1);
-        let labels = {
-            let render_data_box = scene;
-            overlay::axis_labels_for_box(&cloud, render_data_box.0, render_data_box.1)
-        };
+        let labels = overlay::axis_labels_for_box(&cloud, box_min, box_max);
         let loaded = Loaded {
             id,
             point_size: crate::render::points::PointStyle::size_for(cloud.points.len()),
             cloud: Arc::new(cloud),
             labels,
             world_from_data,
-            world_box: (a.min(b), a.max(b)),
+            world_box: crate::render::scene::world_box(world_from_data, box_min, box_max),
             cpu_grid: None,
         };
         if slot == Slot::Song {
@@ -854,10 +849,7 @@ fn save_color_image(image: &egui::ColorImage, path: &Path) -> anyhow::Result<()>
     }
     let img = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
         .ok_or_else(|| anyhow::anyhow!("screenshot has the wrong size"))?;
-    let tmp = path.with_extension("png.tmp");
-    img.save_with_format(&tmp, image::ImageFormat::Png)?;
-    std::fs::rename(&tmp, path)?;
-    Ok(())
+    Ok(crate::screenshot::save_png(&img, path)?)
 }
 
 impl LoudscapeApp {
