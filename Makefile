@@ -15,7 +15,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py demo clean
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh demo clean
 
 system:
 	@bash scripts/setup-system.sh
@@ -48,13 +48,18 @@ test-rust: system
 	$(XVFB) $(CARGO) test
 
 lint-py: venv
-	$(VENV)/bin/ruff check preprocess bench
-	$(VENV)/bin/ruff format --check preprocess bench
+	$(VENV)/bin/ruff check preprocess bench tests/python
+	$(VENV)/bin/ruff format --check preprocess bench tests/python
 
 test-py: venv
 	$(VENV)/bin/pytest -q preprocess/tests
 
-test: system lint-rust lint-py test-rust test-py
+# The app's isosurfaces against scikit-image, through the `loudscape` binary.
+test-mesh: system venv
+	$(CARGO) build
+	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
+
+test: system lint-rust lint-py test-rust test-py test-mesh
 
 clean:
 	$(CARGO) clean

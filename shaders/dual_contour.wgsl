@@ -8,21 +8,30 @@
 // crossing edges through `cell_map`; `finalize` writes the vertex count and the indexed
 // indirect draw.
 // The vertex minimises a QEF of the edge crossings' tangent planes (normals from the field's
-// gradient), biased toward the crossings' mass point and clamped into its cell (Schaefer and
-// Warren); its normal is the trilinearly interpolated gradient, negated so it points toward
-// lower density (the flip the paper makes), and quads are wound to face the same way.
+// trilinear gradient: the gradient of the trilinear interpolant of the cell's eight samples),
+// biased toward the crossings' mass point and clamped into its cell (Schaefer and Warren); its
+// normal is the trilinear gradient at the vertex, negated so it points toward lower density
+// (the flip the paper makes), and quads are wound to face the same way.
 
 // The pull toward the mass point, relative to one unit-normal plane.
-const QEF_BIAS: f32 = 0.05;
+const QEF_BIAS: f32 = 0.5;
 
-// The twelve cube edges as corner pairs (lower corner first).
-const CUBE_EDGE_A = array<u32, 12>(0u, 2u, 4u, 6u, 0u, 1u, 4u, 5u, 0u, 1u, 2u, 3u);
-const CUBE_EDGE_B = array<u32, 12>(1u, 3u, 5u, 7u, 2u, 3u, 6u, 7u, 4u, 5u, 6u, 7u);
-
-fn trilinear_weight(k: u32, x: vec3<f32>) -> f32 {
-    let c = vec3<f32>(corner_offset(k));
-    let w = c * x + (vec3<f32>(1.0) - c) * (vec3<f32>(1.0) - x);
-    return w.x * w.y * w.z;
+// The lower corner of cube edge e (0..11): edges 4a .. 4a + 3 run along axis a, from the four
+// corners whose bit a is clear (computed, not read from a constant array, which llvmpipe
+// copies into every invocation when it is indexed dynamically).
+fn cube_edge_start(e: u32) -> u32 {
+    let j = e & 3u;
+    switch (e >> 2u) {
+        case 0u: {
+            return j << 1u;
+        }
+        case 1u: {
+            return (j & 1u) | ((j & 2u) << 1u);
+        }
+        default: {
+            return j;
+        }
+    }
 }
 
 // Bit a (0..2) set when the edge from the cell's corner 0 along axis a crosses the isovalue and
@@ -65,60 +74,64 @@ fn cell_vertices(
     let entry = active_list[i];
     let base = slot_cell(entry.x);
     let mask = entry.y;
-    var values: array<f32, 8>;
-    for (var k = 0u; k < 8u; k++) {
-        values[k] = sample_density(base + corner_offset(k));
-    }
+    let c0 = cell_corners(base, 0u);
+    let c1 = cell_corners(base, 4u);
+    // Central-difference gradients at the corners (24 loads beyond the corners' eight).
     var gradients: array<vec3<f32>, 8>;
     for (var k = 0u; k < 8u; k++) {
-        gradients[k] = sample_gradient(base + corner_offset(k));
+        gradients[k] = corner_gradient(base, c0, c1, k);
     }
-    // Edge crossings (in cell-local coordinates, [0, 1]^3) and their normals.
-    var points: array<vec3<f32>, 12>;
-    var normals: array<vec3<f32>, 12>;
+    // The QEF sum (n.(x - p))^2 over the edge crossings p with unit normals n (the field's
+    // trilinear gradient there), accumulated as A = sum n n^T and b = sum n (n.p), with the
+    // crossings' mass point; cell-local coordinates, [0, 1]^3.
     var count = 0u;
     var mass = vec3<f32>(0.0);
     var normal_sum = vec3<f32>(0.0);
+    var a00 = 0.0;
+    var a01 = 0.0;
+    var a02 = 0.0;
+    var a11 = 0.0;
+    var a12 = 0.0;
+    var a22 = 0.0;
+    var b = vec3<f32>(0.0);
     for (var e = 0u; e < 12u; e++) {
-        let a = CUBE_EDGE_A[e];
-        let b = CUBE_EDGE_B[e];
-        if (((mask >> a) & 1u) == ((mask >> b) & 1u)) {
+        let ka = cube_edge_start(e);
+        let kb = ka | (1u << (e >> 2u));
+        if (((mask >> ka) & 1u) == ((mask >> kb) & 1u)) {
             continue;
         }
-        let t = clamp((params.iso_value - values[a]) / (values[b] - values[a]), 0.0, 1.0);
-        let pa = vec3<f32>(corner_offset(a));
-        let p = pa + (vec3<f32>(corner_offset(b)) - pa) * t;
-        let g = gradients[a] + (gradients[b] - gradients[a]) * t;
+        let va = corner_value(c0, c1, ka);
+        let vb = corner_value(c0, c1, kb);
+        let t = clamp((params.iso_value - va) / (vb - va), 0.0, 1.0);
+        let pa = vec3<f32>(corner_offset(ka));
+        let p = pa + (vec3<f32>(corner_offset(kb)) - pa) * t;
+        let g = gradients[ka] + (gradients[kb] - gradients[ka]) * t;
         var n = vec3<f32>(0.0);
         if (length(g) > 1e-20) {
             n = normalize(g);
         }
-        points[count] = p;
-        normals[count] = n;
-        mass += p;
-        normal_sum += n;
-        count += 1u;
-    }
-    mass /= f32(max(count, 1u));
-    // Minimise sum (n.(x - p))^2 + bias |x - mass|^2: (A + bias I) y = sum n (n.(p - mass)),
-    // with y = x - mass; A + bias I is symmetric positive definite, solved by its adjugate.
-    var a00 = QEF_BIAS;
-    var a01 = 0.0;
-    var a02 = 0.0;
-    var a11 = QEF_BIAS;
-    var a12 = 0.0;
-    var a22 = QEF_BIAS;
-    var rhs = vec3<f32>(0.0);
-    for (var p = 0u; p < count; p++) {
-        let n = normals[p];
         a00 += n.x * n.x;
         a01 += n.x * n.y;
         a02 += n.x * n.z;
         a11 += n.y * n.y;
         a12 += n.y * n.z;
         a22 += n.z * n.z;
-        rhs += n * dot(n, points[p] - mass);
+        b += n * dot(n, p);
+        mass += p;
+        normal_sum += n;
+        count += 1u;
     }
+    mass /= f32(max(count, 1u));
+    // Minimise sum (n.(x - p))^2 + bias |x - mass|^2: (A + bias I) y = b - A mass, with
+    // y = x - mass; A + bias I is symmetric positive definite, solved by its adjugate.
+    let rhs = b - vec3<f32>(
+        a00 * mass.x + a01 * mass.y + a02 * mass.z,
+        a01 * mass.x + a11 * mass.y + a12 * mass.z,
+        a02 * mass.x + a12 * mass.y + a22 * mass.z,
+    );
+    a00 += QEF_BIAS;
+    a11 += QEF_BIAS;
+    a22 += QEF_BIAS;
     let c00 = a11 * a22 - a12 * a12;
     let c01 = a02 * a12 - a01 * a22;
     let c02 = a01 * a12 - a02 * a11;
@@ -141,8 +154,10 @@ fn cell_vertices(
     var hp_sum = 0.0;
     var weight_sum = 0.0;
     for (var k = 0u; k < 8u; k++) {
-        gradient += trilinear_weight(k, local) * gradients[k];
-        let w = max(values[k], 0.0);
+        let c = vec3<f32>(corner_offset(k));
+        let weights = c * local + (vec3<f32>(1.0) - c) * (vec3<f32>(1.0) - local);
+        gradient += weights.x * weights.y * weights.z * gradients[k];
+        let w = max(corner_value(c0, c1, k), 0.0);
         hp_sum += w * sample_hp(base + corner_offset(k));
         weight_sum += w;
     }

@@ -17,7 +17,8 @@
 // Per cell inside mask m (bit k: corner k inside), built on the CPU from the six tetrahedra of
 // the split (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) and their 16-entry case
 // table (src/render/marching_tets.rs, case_table): word 13m holds the triangle count (at most
-// 12), words 13m + 1.. one triangle each, three edges of six bits wound to face away from the
+// 12) in its low byte and from bit 8 the corners that are the lower end of some triangle's edge
+// (corner 7 never is), words 13m + 1.. one triangle each, three edges of six bits wound to face away from the
 // inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from corner ka to
 // corner ka + d, whose offset bits are a superset of ka's.
 @group(1) @binding(10) var<storage, read> cases: array<u32>;
@@ -32,7 +33,7 @@ fn owned_edges(mask: u32) -> u32 {
 
 // Vertices (one per crossed owned edge) and indices (three per triangle) of a cell.
 fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
-    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * cases[mask * CASE_STRIDE]);
+    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * (cases[mask * CASE_STRIDE] & 0xffu));
 }
 
 // The cell map holds an active cell's first vertex and its owned crossing edges (bits 1..7 of
@@ -63,8 +64,12 @@ fn edge_vertices(
         return;
     }
     let base = slot_cell(entry.x);
-    let v0 = sample_density(base);
-    let g0 = sample_gradient(base);
+    // The cell's eight corner values, loaded once: every owned edge lies in the cell, so they
+    // hold each vertex's far end and half of the central differences at both ends.
+    let c0 = cell_corners(base, 0u);
+    let c1 = cell_corners(base, 4u);
+    let v0 = c0.x;
+    let g0 = corner_gradient(base, c0, c1, 0u);
     let h0 = sample_hp(base);
     let w0 = max(v0, 0.0);
     let inside0 = (entry.y & 1u) != 0u;
@@ -75,12 +80,11 @@ fn edge_vertices(
         let k = firstTrailingBit(todo);
         todo &= todo - 1u;
         let offset = corner_offset(k);
-        let pk = base + offset;
-        let vk = sample_density(pk);
-        let gk = sample_gradient(pk);
-        let hk = sample_hp(pk);
+        let vk = corner_value(c0, c1, k);
+        let hk = sample_hp(base + offset);
         let t = clamp((params.iso_value - v0) / (vk - v0), 0.0, 1.0);
-        let grid = vec3<f32>(base) + vec3<f32>(offset) * t;
+        let local = vec3<f32>(offset) * t;
+        let gk = corner_gradient(base, c0, c1, k);
         var normal = outward_normal(g0 + (gk - g0) * t);
         if (all(normal == vec3<f32>(0.0))) {
             // No gradient: the edge's own direction, from its inside end to its outside end.
@@ -88,27 +92,22 @@ fn edge_vertices(
             normal = select(-along, along, inside0);
         }
         let wk = max(vk, 0.0);
-        // Member by member: the padding is never read, so it is not written.
-        vertices[out].position = data_position(grid);
-        vertices[out].hp = weighted_hp(w0 * h0 + wk * hk, w0 + wk);
-        vertices[out].normal = normal;
+        vertices[out] = MeshVertex(
+            data_position(vec3<f32>(base) + local),
+            weighted_hp(w0 * h0 + wk * hk, w0 + wk),
+            normal,
+            0.0,
+        );
         out += 1u;
     }
 }
 
-// The vertex on edge code `edge` (see `cases`) of the cell in cell-map slot `slot`, owned
-// by the cell whose lowest sample is its lower end (`own_entry`: the cell's own cell-map entry);
-// INVALID when it was not written.
-fn edge_vertex(slot: u32, edge: u32, own_entry: u32) -> u32 {
-    // About half the edges start at the cell's own corner 0: no load for those.
-    var entry = own_entry;
+// The vertex on edge code `edge` (see `cases`), given the cell-map entries of the cells whose
+// corner 0 is the cell's corner c (entries: corners 0..3, entries_hi: corners 4..6), the
+// owners of the edges starting there; INVALID when it was not written.
+fn edge_vertex(edge: u32, entries: vec4<u32>, entries_hi: vec4<u32>) -> u32 {
     let lower = edge & 7u;
-    if (lower != 0u) {
-        // The owner's slot, by strides (no division back to cell coordinates).
-        let sy = params.dims.x + 1u;
-        let sz = sy * (params.dims.y + 1u);
-        entry = cell_map[slot + (lower & 1u) + sy * ((lower >> 1u) & 1u) + sz * (lower >> 2u)];
-    }
+    let entry = select(entries, entries_hi, lower >= 4u)[lower & 3u];
     if (entry == INVALID) {
         return INVALID;
     }
@@ -131,9 +130,35 @@ fn triangles(
         return;
     }
     let entry = active_list[i];
-    let own_entry = cell_map_entry(i, entry.y, entry.z);
     let row = entry.y * CASE_STRIDE;
-    let count = cases[row];
+    let header = cases[row];
+    let count = header & 0xffu;
+    // The owners' cell-map entries, each loaded once (by strides, with no division back to
+    // cell coordinates); the cell's own entry needs no load.
+    let needed = header >> 8u;
+    let sy = params.dims.x + 1u;
+    let sz = sy * (params.dims.y + 1u);
+    let slot = entry.x;
+    var entries = vec4<u32>(cell_map_entry(i, entry.y, entry.z), INVALID, INVALID, INVALID);
+    var entries_hi = vec4<u32>(INVALID);
+    if ((needed & 2u) != 0u) {
+        entries.y = cell_map[slot + 1u];
+    }
+    if ((needed & 4u) != 0u) {
+        entries.z = cell_map[slot + sy];
+    }
+    if ((needed & 8u) != 0u) {
+        entries.w = cell_map[slot + 1u + sy];
+    }
+    if ((needed & 16u) != 0u) {
+        entries_hi.x = cell_map[slot + sz];
+    }
+    if ((needed & 32u) != 0u) {
+        entries_hi.y = cell_map[slot + 1u + sz];
+    }
+    if ((needed & 64u) != 0u) {
+        entries_hi.z = cell_map[slot + sy + sz];
+    }
     // Whole triangles only, so every index below the drawn count is written.
     let capacity = params.index_capacity - params.index_capacity % 3u;
     var out = entry.w;
@@ -142,9 +167,9 @@ fn triangles(
             break;
         }
         let code = cases[row + 1u + tri];
-        var a = edge_vertex(entry.x, code & 0x3fu, own_entry);
-        var b = edge_vertex(entry.x, (code >> 6u) & 0x3fu, own_entry);
-        var c = edge_vertex(entry.x, (code >> 12u) & 0x3fu, own_entry);
+        var a = edge_vertex(code & 0x3fu, entries, entries_hi);
+        var b = edge_vertex((code >> 6u) & 0x3fu, entries, entries_hi);
+        var c = edge_vertex((code >> 12u) & 0x3fu, entries, entries_hi);
         if (a == INVALID || b == INVALID || c == INVALID) {
             // A vertex did not fit (the CPU grows the buffers): a degenerate triangle keeps the
             // drawn range clean (index 0 is inside the vertex buffer).

@@ -122,3 +122,102 @@ fn bad_flags_fail_cleanly() {
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr_lines(&output)[0].contains("no/such/dir"));
 }
+
+/// A minimal .npy file (format 1.0) holding `values` as `descr` with the given shape text.
+fn npy_bytes(descr: &str, shape: &str, values: &[f32]) -> Vec<u8> {
+    let header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}\n");
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in values {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    bytes
+}
+
+#[test]
+fn mesh_reads_npy_fields_and_rejects_bad_ones() {
+    // A ball of radius 5 voxels in a 16^3 field, in voxel units (no .json box beside it).
+    let n = 16usize;
+    let ball: Vec<f32> = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, i / n % n, i / (n * n));
+            let d = [x, y, z].map(|c| c as f32 - 7.5);
+            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            (0.5 - (r - 5.0) / 4.0).clamp(0.0, 1.0)
+        })
+        .collect();
+    let field = temp("ball.npy");
+    std::fs::write(&field, npy_bytes("<f4", "(16, 16, 16)", &ball)).unwrap();
+    let out = temp("ball.obj");
+    let output = loudscape(&[
+        "mesh",
+        field.to_str().unwrap(),
+        "--method",
+        "dc",
+        "--iso",
+        "0.5",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    // Every vertex lies on the sphere of radius 5 around the field's centre, in voxel units.
+    let text = std::fs::read_to_string(&out).unwrap();
+    let radii: Vec<f32> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let p: Vec<f32> = l
+                .split_whitespace()
+                .take(3)
+                .map(|v| v.parse().unwrap())
+                .collect();
+            ((p[0] - 7.5).powi(2) + (p[1] - 7.5).powi(2) + (p[2] - 7.5).powi(2)).sqrt()
+        })
+        .collect();
+    assert!(radii.len() > 100, "{} vertices", radii.len());
+    assert!(radii.iter().all(|r| (r - 5.0).abs() < 0.25), "{radii:?}");
+
+    let cases = [
+        (
+            "int.npy",
+            npy_bytes("<i4", "(2, 2, 2)", &[0.0; 8]),
+            "float32",
+        ),
+        ("flat.npy", npy_bytes("<f4", "(8,)", &[0.0; 8]), "shape"),
+        (
+            "short.npy",
+            npy_bytes("<f4", "(4, 4, 4)", &[0.0; 8]),
+            "cut short",
+        ),
+        (
+            "thin.npy",
+            npy_bytes("<f4", "(1, 4, 2)", &[0.0; 8]),
+            "at least 2",
+        ),
+        (
+            "nan.npy",
+            npy_bytes("<f4", "(2, 2, 2)", &[f32::NAN; 8]),
+            "not finite",
+        ),
+    ];
+    for (name, bytes, reason) in cases {
+        let input = temp(name);
+        std::fs::write(&input, bytes).unwrap();
+        let out = temp(&format!("{name}.ply"));
+        let output = loudscape(&["mesh", input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+        assert_eq!(output.status.code(), Some(1), "{name}: exit status");
+        let lines = stderr_lines(&output);
+        assert_eq!(lines.len(), 1, "{name}: {lines:?}");
+        assert!(
+            lines[0].contains(name) && lines[0].contains(reason),
+            "{name}: {}",
+            lines[0]
+        );
+        assert!(!out.exists(), "{name}: an output file was written");
+    }
+}

@@ -76,30 +76,16 @@ fn voxel_index(p: vec3<i32>) -> u32 {
     return q.x + params.dims.x * (q.y + params.dims.y * q.z);
 }
 
+// Branch-free: the load is clamped into the grid and its value dropped outside (SIMD lanes on
+// CPU adapters then run one straight path).
 fn sample_density(p: vec3<i32>) -> f32 {
-    if (!in_grid(p)) {
-        return 0.0;
-    }
-    return density[voxel_index(p)];
+    let q = clamp(p, vec3<i32>(0), vec3<i32>(params.dims) - vec3<i32>(1));
+    return select(0.0, density[voxel_index(q)], all(p == q));
 }
 
 fn sample_hp(p: vec3<i32>) -> f32 {
-    if (!in_grid(p)) {
-        return 0.5;
-    }
-    return hp_mean[voxel_index(p)];
-}
-
-// Central-difference gradient of the density at a sample, in grid units.
-fn sample_gradient(p: vec3<i32>) -> vec3<f32> {
-    let x = vec3<i32>(1, 0, 0);
-    let y = vec3<i32>(0, 1, 0);
-    let z = vec3<i32>(0, 0, 1);
-    return 0.5 * vec3<f32>(
-        sample_density(p + x) - sample_density(p - x),
-        sample_density(p + y) - sample_density(p - y),
-        sample_density(p + z) - sample_density(p - z),
-    );
+    let q = clamp(p, vec3<i32>(0), vec3<i32>(params.dims) - vec3<i32>(1));
+    return select(0.5, hp_mean[voxel_index(q)], all(p == q));
 }
 
 fn data_position(grid: vec3<f32>) -> vec3<f32> {
@@ -120,6 +106,45 @@ fn outward_normal(grid_gradient: vec3<f32>) -> vec3<f32> {
 // Cube corner k (bit 0: x, bit 1: y, bit 2: z) as an offset from the cell's lowest sample.
 fn corner_offset(k: u32) -> vec3<i32> {
     return vec3<i32>(i32(k & 1u), i32((k >> 1u) & 1u), i32((k >> 2u) & 1u));
+}
+
+// The densities at corners first .. first + 3 of the cell whose lowest sample is `base`
+// (first 0: corners 0..3, first 4: corners 4..7).
+fn cell_corners(base: vec3<i32>, first: u32) -> vec4<f32> {
+    return vec4<f32>(
+        sample_density(base + corner_offset(first)),
+        sample_density(base + corner_offset(first + 1u)),
+        sample_density(base + corner_offset(first + 2u)),
+        sample_density(base + corner_offset(first + 3u)),
+    );
+}
+
+// The value at corner k of a cell whose corner values are c0 (corners 0..3) and c1 (4..7).
+fn corner_value(c0: vec4<f32>, c1: vec4<f32>, k: u32) -> f32 {
+    return select(c0, c1, k >= 4u)[k & 3u];
+}
+
+// The central-difference gradient (grid units) at corner k of the cell whose lowest sample is
+// `base`, from the cell's corner values c0 (corners 0..3) and c1 (4..7) and the three samples
+// beyond the cell next to the corner (three loads instead of six).
+fn corner_gradient(base: vec3<i32>, c0: vec4<f32>, c1: vec4<f32>, k: u32) -> vec3<f32> {
+    let offset = corner_offset(k);
+    let p = base + offset;
+    // Along each axis the neighbour inside the cell is the corner with that bit flipped; the
+    // one outside lies one sample further out.
+    let inside = vec3<f32>(
+        corner_value(c0, c1, k ^ 1u),
+        corner_value(c0, c1, k ^ 2u),
+        corner_value(c0, c1, k ^ 4u),
+    );
+    let step = vec3<i32>(1) - 2 * offset;
+    let outside = vec3<f32>(
+        sample_density(p - vec3<i32>(step.x, 0, 0)),
+        sample_density(p - vec3<i32>(0, step.y, 0)),
+        sample_density(p - vec3<i32>(0, 0, step.z)),
+    );
+    // Toward +axis: (value at +1) - (value at -1); the inside neighbour sits at +step.
+    return 0.5 * (inside - outside) * vec3<f32>(step);
 }
 
 // The hp of a set of samples, weighted by their density (empty voxels carry no colour).

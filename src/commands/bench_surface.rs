@@ -7,11 +7,9 @@
 //! (i, j, k) of the grid (x fastest, as in the GPU buffers); voxel centres at
 //! -1 + (index + 0.5) * 2 / n on each axis.
 
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::Context;
 use glam::{UVec3, Vec3};
 use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameBinding;
@@ -41,14 +39,27 @@ pub fn run(
     );
     let frame = FrameBinding::new(&gpu.device);
     let pass = SurfacePass::new(&gpu.device, &frame);
+    // A second pass object times each dispatch apart (which adds pass boundaries), so the
+    // wall-clock figures above come from the untimed one.
+    let mut timed_pass = SurfacePass::new(&gpu.device, &frame);
+    let timed = timed_pass.enable_pass_timing(&gpu.queue);
+    println!(
+        "  times: submit to read-back of the counts, wall clock{}",
+        if timed {
+            "; per pass: GPU timestamps, in separate runs with each pass on its own"
+        } else {
+            " (no timestamp queries on this adapter: no per-pass times)"
+        }
+    );
     let mut results = Vec::new();
     for (name, n) in [("song_128", 128u32), ("timeline_224", 224u32)] {
         let dims = UVec3::splat(n);
         let (density, hp) = song_like_field(dims);
         if let Some(dir) = fields_dir {
             let path = dir.join(format!("{name}.npy"));
-            write_npy(&path, &density, dims)
-                .with_context(|| format!("{}: cannot write the field", path.display()))?;
+            super::voxelize::write_atomically(&path, |out| {
+                Ok(super::npy::write(out, &[&density], dims)?)
+            })?;
         }
         let grid = VoxelGrid::from_fields(
             &gpu.device,
@@ -78,14 +89,35 @@ pub fn run(
                 pass.extract_blocking(&gpu.queue, &grid, &settings)?;
                 times.push(start.elapsed().as_secs_f64() * 1e3);
             }
-            times.sort_by(f64::total_cmp);
-            let median_ms = times[times.len() / 2];
+            let mut per_pass: Vec<(&str, Vec<f64>)> = Vec::new();
+            for _ in 0..if timed { runs + 1 } else { 0 } {
+                timed_pass.extract_blocking(&gpu.queue, &grid, &settings)?;
+                for (i, (name, ms)) in timed_pass
+                    .pass_times_ms(method)?
+                    .into_iter()
+                    .flatten()
+                    .enumerate()
+                {
+                    if per_pass.len() <= i {
+                        per_pass.push((name, Vec::new()));
+                    }
+                    per_pass[i].1.push(ms);
+                }
+            }
+            let median_ms = median(&mut times);
             let area = pass.read_mesh(&gpu.queue)?.area();
             println!(
                 "surface {name} {} median_ms={median_ms:.2} triangles={} area={area:.5}",
                 method.short_name(),
                 counts.triangles()
             );
+            if !per_pass.is_empty() {
+                let passes: Vec<String> = per_pass
+                    .iter_mut()
+                    .map(|(name, ms)| format!("{name} {:.2}", median(ms)))
+                    .collect();
+                println!("  per pass (ms, median): {}", passes.join(", "));
+            }
             results.push(SurfaceTiming {
                 field: name.to_string(),
                 method,
@@ -120,24 +152,8 @@ pub fn print_paper_comparison(results: &[SurfaceTiming]) {
     }
 }
 
-/// Writes `field` as a version 1.0 .npy file of shape (nz, ny, nx), float32, C order.
-pub fn write_npy(path: &Path, field: &[f32], dims: UVec3) -> std::io::Result<()> {
-    let mut header = format!(
-        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}), }}",
-        dims.z, dims.y, dims.x
-    );
-    // Magic (6) + version (2) + header length (2) + header + newline, padded to 64 bytes.
-    let total = 10 + header.len() + 1;
-    header.push_str(&" ".repeat(total.div_ceil(64) * 64 - total));
-    header.push('\n');
-    let tmp = path.with_extension("npy.tmp");
-    {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-        w.write_all(b"\x93NUMPY\x01\x00")?;
-        w.write_all(&(header.len() as u16).to_le_bytes())?;
-        w.write_all(header.as_bytes())?;
-        w.write_all(bytemuck::cast_slice(field))?;
-        w.flush()?;
-    }
-    std::fs::rename(&tmp, path)
+/// The median of `values` (sorts them).
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
 }

@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
+use glam::{UVec3, Vec3};
 use loudscape::cloud::{DataMode, PointCloud};
 use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameBinding;
@@ -14,7 +15,8 @@ use loudscape::render::voxelize::{MAX_RESOLUTION, MIN_RESOLUTION, VoxelSettings,
 
 #[derive(clap::Args, Debug)]
 pub struct MeshArgs {
-    /// The point cloud (.ply).
+    /// The point cloud (.ply), or a density field (.npy: float32 or float64, shape (nz, ny, nx),
+    /// or (fields, nz, ny, nx) with the mean hp as field 1, as `loudscape voxelize` writes).
     pub input: PathBuf,
     /// Extraction method: mt (marching tetrahedra) or dc (dual contouring).
     #[arg(long, default_value = "mt")]
@@ -22,7 +24,8 @@ pub struct MeshArgs {
     /// Isovalue in [0, 1] of the normalized loudness density.
     #[arg(long, default_value_t = 0.5)]
     pub iso: f32,
-    /// Grid resolution per axis (default: 128 for a song, 224 for a timeline).
+    /// Grid resolution per axis for a point cloud (default: 128 for a song, 224 for a
+    /// timeline); a .npy field is meshed at its own.
     #[arg(long)]
     pub res: Option<u32>,
     /// The mesh file to write: .ply (binary) or .obj.
@@ -92,11 +95,39 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let cloud = super::render::load_cloud(&args.input)?;
-    let res = args.res.unwrap_or(default_resolution(cloud.meta.mode));
-    let gpu = GpuContext::new_headless()?;
-    let frame = FrameBinding::new(&gpu.device);
-    let grid = voxel_grid(&gpu, &frame, &cloud, res)?;
+    let is_field = args
+        .input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+    let gpu;
+    let frame;
+    let grid;
+    if is_field {
+        if args.res.is_some() {
+            bail!(
+                "{}: --res applies to point clouds; a .npy field is meshed at its own resolution",
+                args.input.display()
+            );
+        }
+        let field = read_field(&args.input)?;
+        gpu = GpuContext::new_headless()?;
+        frame = FrameBinding::new(&gpu.device);
+        grid = VoxelGrid::from_fields(
+            &gpu.device,
+            field.dims,
+            field.box_min,
+            field.box_max,
+            &field.density,
+            &field.hp_mean,
+        );
+    } else {
+        let cloud = super::render::load_cloud(&args.input)?;
+        let res = args.res.unwrap_or(default_resolution(cloud.meta.mode));
+        gpu = GpuContext::new_headless()?;
+        frame = FrameBinding::new(&gpu.device);
+        grid = voxel_grid(&gpu, &frame, &cloud, res)?;
+    }
+    let dims = grid.dims;
     let pass = SurfacePass::new(&gpu.device, &frame);
     let settings = SurfaceSettings {
         method,
@@ -113,12 +144,15 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         mesh = mesh.welded();
     }
     let comment = format!(
-        "loudscape isosurface of {} method={} iso={iso_value} grid={res}^3",
+        "loudscape isosurface of {} method={} iso={iso_value} grid={}x{}x{}",
         args.input
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default(),
-        method.short_name()
+        method.short_name(),
+        dims.x,
+        dims.y,
+        dims.z
     );
     write_mesh(&mesh, format, &comment, &args.output)?;
     println!(
@@ -129,6 +163,87 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         counts.triangles()
     );
     Ok(())
+}
+
+/// A density field from a .npy file, with its box in data space.
+#[derive(Debug)]
+pub struct Field {
+    pub dims: UVec3,
+    pub box_min: Vec3,
+    pub box_max: Vec3,
+    pub density: Vec<f32>,
+    pub hp_mean: Vec<f32>,
+}
+
+/// Reads a .npy density field (field 0; field 1, when present, is the mean hp, else 0.5).
+/// The box comes from the `FIELD.npy.json` that `loudscape voxelize` writes beside it; without
+/// one, voxel (i, j, k) is centred on the point (i, j, k), so the mesh is in voxel units.
+pub fn read_field(path: &Path) -> anyhow::Result<Field> {
+    let npy = super::npy::read(path)?;
+    if npy.dims.min_element() < 2 {
+        bail!(
+            "{}: the field is {}x{}x{} voxels; a surface needs at least 2 along each axis",
+            path.display(),
+            npy.dims.x,
+            npy.dims.y,
+            npy.dims.z
+        );
+    }
+    if npy.dims.max_element() > MAX_RESOLUTION {
+        bail!(
+            "{}: the field is {}x{}x{} voxels; at most {MAX_RESOLUTION} along each axis",
+            path.display(),
+            npy.dims.x,
+            npy.dims.y,
+            npy.dims.z
+        );
+    }
+    let mut fields = npy.fields.into_iter();
+    let density = fields.next().expect("at least one field");
+    let hp_mean = fields.next().unwrap_or_else(|| vec![0.5; density.len()]);
+    for (name, values) in [("density", &density), ("hp", &hp_mean)] {
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            let (x, y, z) = (
+                i as u32 % npy.dims.x,
+                i as u32 / npy.dims.x % npy.dims.y,
+                i as u32 / (npy.dims.x * npy.dims.y),
+            );
+            bail!(
+                "{}: the {name} is not finite at voxel (x {x}, y {y}, z {z})",
+                path.display()
+            );
+        }
+    }
+    let (box_min, box_max) = field_box(path, npy.dims)?;
+    Ok(Field {
+        dims: npy.dims,
+        box_min,
+        box_max,
+        density,
+        hp_mean,
+    })
+}
+
+/// The box of a field: from `FIELD.npy.json` when there is one, else voxel units.
+fn field_box(path: &Path, dims: UVec3) -> anyhow::Result<(Vec3, Vec3)> {
+    let meta_path = PathBuf::from(format!("{}.json", path.display()));
+    if !meta_path.exists() {
+        return Ok((Vec3::splat(-0.5), dims.as_vec3() - 0.5));
+    }
+    let text = std::fs::read_to_string(&meta_path)
+        .with_context(|| format!("{}: cannot read", meta_path.display()))?;
+    let meta: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not JSON", meta_path.display()))?;
+    let corner = |key: &str| -> anyhow::Result<Vec3> {
+        let v: [f32; 3] = serde_json::from_value(meta[key].clone())
+            .with_context(|| format!("{}: '{key}' is not three numbers", meta_path.display()))?;
+        Ok(Vec3::from_array(v))
+    };
+    let (min, max) = (corner("box_min")?, corner("box_max")?);
+    if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
+        bail!("{}: the box is empty or not finite", meta_path.display());
+    }
+    Ok((min, max))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

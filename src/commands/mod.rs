@@ -5,6 +5,7 @@ pub mod bench;
 pub mod bench_surface;
 pub mod bench_volume;
 pub mod mesh;
+pub mod npy;
 pub mod render;
 pub mod voxelize;
 

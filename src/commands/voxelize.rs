@@ -95,7 +95,7 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
     match format {
         Format::Npy => {
             write_atomically(&args.output, |out| {
-                write_npy(out, [&density, &hp_mean], grid.dims)
+                Ok(super::npy::write(out, &[&density, &hp_mean], grid.dims)?)
             })?;
             written.push(args.output.clone());
         }
@@ -159,7 +159,7 @@ fn hp_nrrd_path(path: &Path) -> PathBuf {
 }
 
 /// Writes through `PATH.tmp` and renames, so no half-written file is left under the name.
-fn write_atomically(
+pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
@@ -176,30 +176,6 @@ fn write_atomically(
         return Err(e.context(format!("{}: cannot write", path.display())));
     }
     std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
-}
-
-/// NumPy format 1.0: float32, shape (fields, z, y, x), C order.
-pub fn write_npy(out: &mut impl Write, fields: [&[f32]; 2], dims: UVec3) -> anyhow::Result<()> {
-    let mut header = format!(
-        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}, {}), }}",
-        fields.len(),
-        dims.z,
-        dims.y,
-        dims.x
-    );
-    // Magic (6) + version (2) + length (2) + header + newline, padded to 64 bytes.
-    let unpadded = 10 + header.len() + 1;
-    header.push_str(&" ".repeat(unpadded.next_multiple_of(64) - unpadded));
-    header.push('\n');
-    out.write_all(b"\x93NUMPY\x01\x00")?;
-    out.write_all(&(header.len() as u16).to_le_bytes())?;
-    out.write_all(header.as_bytes())?;
-    for field in fields {
-        for v in field {
-            out.write_all(&v.to_le_bytes())?;
-        }
-    }
-    Ok(())
 }
 
 /// NRRD 4: one float field, raw little-endian, x fastest, with spacing and origin.
@@ -235,7 +211,7 @@ mod tests {
         let density: Vec<f32> = (0..24).map(|i| i as f32).collect();
         let hp = vec![0.5f32; 24];
         let mut bytes = Vec::new();
-        write_npy(&mut bytes, [&density, &hp], dims).unwrap();
+        crate::commands::npy::write(&mut bytes, &[&density, &hp], dims).unwrap();
         let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
         assert_eq!((10 + header_len) % 64, 0);
         let header = std::str::from_utf8(&bytes[10..10 + header_len]).unwrap();

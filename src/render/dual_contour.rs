@@ -37,7 +37,14 @@ impl DualContourPass {
         }
     }
 
-    /// Records the extraction of the surface at `iso_value` into `buffers`.
+    /// The names of the passes an extraction records, in order.
+    pub fn pass_names(&self) -> [&'static str; crate::render::mesh::EXTRACTION_PASSES] {
+        self.pipelines.pass_names()
+    }
+
+    /// Records the extraction of the surface at `iso_value` into `buffers`; with `timestamps`,
+    /// each pass writes its start and end (see [`ExtractionPipelines::record`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         device: &wgpu::Device,
@@ -46,8 +53,17 @@ impl DualContourPass {
         grid: &VoxelGrid,
         buffers: &mut MeshBuffers,
         iso_value: f32,
+        timestamps: Option<&wgpu::QuerySet>,
     ) {
-        self.pipelines
-            .record(device, queue, encoder, &[], grid, buffers, iso_value);
+        self.pipelines.record(
+            device,
+            queue,
+            encoder,
+            &[],
+            grid,
+            buffers,
+            iso_value,
+            timestamps,
+        );
     }
 }

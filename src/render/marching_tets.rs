@@ -67,9 +67,10 @@ fn corner(k: u32) -> glam::Vec3 {
 }
 
 /// The triangles of a cell for each inside mask of its corners (bit k: corner k), as read by
-/// shaders/marching_tets.wgsl: word 13m holds the count, words 13m + 1.. one triangle each,
-/// three six-bit edges (lower corner | direction << 3), wound to face away from the inside
-/// corners. The winding is decided at the edge midpoints: a triangle on given tetrahedron edges
+/// shaders/marching_tets.wgsl: word 13m holds the count in its low byte and, from bit 8, which
+/// corners (bit c: corner c) are the lower end of some triangle's edge, so the shader loads
+/// those owners' cell-map entries once per cell; words 13m + 1.. one triangle each, three
+/// six-bit edges (lower corner | direction << 3), wound to face away from the inside corners. The winding is decided at the edge midpoints: a triangle on given tetrahedron edges
 /// keeps its orientation wherever on the open edges its corners lie.
 pub(crate) fn case_table() -> Vec<u32> {
     let mut table = vec![0u32; 256 * CASE_STRIDE];
@@ -103,7 +104,11 @@ pub(crate) fn case_table() -> Vec<u32> {
                     code | ((a | (a ^ b) << 3) << (6 * c))
                 });
                 row[0] += 1;
-                row[row[0] as usize] = code;
+                let slot = (row[0] & 0xff) as usize;
+                row[slot] = code;
+                for (a, _) in edges {
+                    row[0] |= 1 << (8 + a);
+                }
             }
         }
     }
@@ -135,7 +140,14 @@ impl MarchingTetsPass {
         }
     }
 
-    /// Records the extraction of the surface at `iso_value` into `buffers`.
+    /// The names of the passes an extraction records, in order.
+    pub fn pass_names(&self) -> [&'static str; crate::render::mesh::EXTRACTION_PASSES] {
+        self.pipelines.pass_names()
+    }
+
+    /// Records the extraction of the surface at `iso_value` into `buffers`; with `timestamps`,
+    /// each pass writes its start and end (see [`ExtractionPipelines::record`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         device: &wgpu::Device,
@@ -144,12 +156,14 @@ impl MarchingTetsPass {
         grid: &VoxelGrid,
         buffers: &mut MeshBuffers,
         iso_value: f32,
+        timestamps: Option<&wgpu::QuerySet>,
     ) {
         let cases = [wgpu::BindGroupEntry {
             binding: 10,
             resource: self.cases.as_entire_binding(),
         }];
-        self.pipelines
-            .record(device, queue, encoder, &cases, grid, buffers, iso_value);
+        self.pipelines.record(
+            device, queue, encoder, &cases, grid, buffers, iso_value, timestamps,
+        );
     }
 }

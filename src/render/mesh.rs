@@ -490,6 +490,8 @@ pub(crate) struct ExtractionPipelines {
     dispatch_active: wgpu::ComputePipeline,
     /// Over the active cells, one after the other.
     per_active: [wgpu::ComputePipeline; 2],
+    /// Their entry points.
+    per_active_names: [&'static str; 2],
     /// One thread: the draw arguments.
     finalize: wgpu::ComputePipeline,
 }
@@ -503,7 +505,7 @@ impl ExtractionPipelines {
         name: &'static str,
         source: &str,
         extra: u32,
-        per_active: [&str; 2],
+        per_active: [&'static str; 2],
     ) -> Self {
         let module = shaders::module(device, name, source);
         let layout = extraction_layout(device, &format!("{name}::layout"), extra);
@@ -527,13 +529,30 @@ impl ExtractionPipelines {
             classify: pipeline("classify"),
             dispatch_active: pipeline("dispatch_active"),
             per_active: per_active.map(pipeline),
+            per_active_names: per_active,
             finalize: pipeline("finalize"),
             layout,
         }
     }
 
+    /// The names of the dispatches [`ExtractionPipelines::record`] records, in order.
+    pub fn pass_names(&self) -> [&'static str; EXTRACTION_PASSES] {
+        let [a, b] = self.per_active_names;
+        [
+            "inside_bits",
+            "classify",
+            "dispatch_active",
+            a,
+            b,
+            "finalize",
+        ]
+    }
+
     /// Records an extraction at `iso_value` into `buffers`: classify every cell, then the passes
-    /// over the active cells only. `extra` are the method's own bindings (from 10 on).
+    /// over the active cells only. `extra` are the method's own bindings (from 10 on). With
+    /// `timestamps` (a query set of at least 2 * [`EXTRACTION_PASSES`] timestamps) every
+    /// dispatch runs in a compute pass of its own and writes its start and end there (queries
+    /// 2i and 2i + 1 for the i-th of [`ExtractionPipelines::pass_names`]).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record(
         &self,
@@ -544,6 +563,7 @@ impl ExtractionPipelines {
         grid: &VoxelGrid,
         buffers: &mut MeshBuffers,
         iso_value: f32,
+        timestamps: Option<&wgpu::QuerySet>,
     ) {
         let label = format!("{}::extract", self.name);
         buffers.write_params(queue, grid, iso_value);
@@ -556,21 +576,22 @@ impl ExtractionPipelines {
             layout: &self.layout,
             entries: &entries,
         });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(&label),
-                timestamp_writes: None,
-            });
-            pass.set_bind_group(1, &bind_group, &[]);
-            for (pipeline, pad) in [(&self.inside_bits, 2), (&self.classify, 1)] {
-                pass.set_pipeline(pipeline);
-                let [words, rows] = bit_threads(grid.dims, pad);
-                let [x, y] = flat_workgroups(words * rows);
-                pass.dispatch_workgroups(x, y, 1);
-            }
-            pass.set_pipeline(&self.dispatch_active);
-            pass.dispatch_workgroups(1, 1, 1);
-        }
+        let sweep = |pad| {
+            let [words, rows] = bit_threads(grid.dims, pad);
+            Dispatch::Direct(flat_workgroups(words * rows))
+        };
+        let before = [
+            (&self.inside_bits, sweep(2)),
+            (&self.classify, sweep(1)),
+            (&self.dispatch_active, Dispatch::Direct([1, 1])),
+        ];
+        let [first, second] = &self.per_active;
+        let after = [
+            (first, Dispatch::Indirect(&buffers.dispatch)),
+            (second, Dispatch::Indirect(&buffers.dispatch)),
+            (&self.finalize, Dispatch::Direct([1, 1])),
+        ];
+        record_dispatches(encoder, &label, &bind_group, &before, timestamps, 0);
         encoder.copy_buffer_to_buffer(
             &buffers.indirect,
             ACTIVE_DISPATCH_OFFSET,
@@ -578,17 +599,67 @@ impl ExtractionPipelines {
             0,
             DISPATCH_SIZE,
         );
+        record_dispatches(encoder, &label, &bind_group, &after, timestamps, 3);
+    }
+}
+
+/// Dispatches recorded by an extraction.
+pub const EXTRACTION_PASSES: usize = 6;
+
+/// How a pass is dispatched.
+enum Dispatch<'a> {
+    /// Workgroups (x, y).
+    Direct([u32; 2]),
+    /// From dispatch arguments in a buffer.
+    Indirect(&'a wgpu::Buffer),
+}
+
+/// Records `work` in one compute pass, or, with `timestamps`, one pass per dispatch writing
+/// queries 2 (first + i) and 2 (first + i) + 1 around the i-th.
+fn record_dispatches(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    bind_group: &wgpu::BindGroup,
+    work: &[(&wgpu::ComputePipeline, Dispatch<'_>)],
+    timestamps: Option<&wgpu::QuerySet>,
+    first: u32,
+) {
+    let begin = |encoder: &mut wgpu::CommandEncoder, writes| {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(&label),
-            timestamp_writes: None,
+            label: Some(label),
+            timestamp_writes: writes,
         });
-        pass.set_bind_group(1, &bind_group, &[]);
-        for pipeline in &self.per_active {
-            pass.set_pipeline(pipeline);
-            pass.dispatch_workgroups_indirect(&buffers.dispatch, 0);
+        pass.set_bind_group(1, bind_group, &[]);
+        pass.forget_lifetime()
+    };
+    let dispatch = |pass: &mut wgpu::ComputePass<'_>, pipeline, how: &Dispatch<'_>| {
+        pass.set_pipeline(pipeline);
+        match how {
+            Dispatch::Direct([x, y]) => pass.dispatch_workgroups(*x, *y, 1),
+            Dispatch::Indirect(buffer) => pass.dispatch_workgroups_indirect(buffer, 0),
         }
-        pass.set_pipeline(&self.finalize);
-        pass.dispatch_workgroups(1, 1, 1);
+    };
+    match timestamps {
+        None => {
+            let mut pass = begin(encoder, None);
+            for (pipeline, how) in work {
+                dispatch(&mut pass, pipeline, how);
+            }
+        }
+        Some(set) => {
+            for (i, (pipeline, how)) in work.iter().enumerate() {
+                let query = 2 * (first + i as u32);
+                let mut pass = begin(
+                    encoder,
+                    Some(wgpu::ComputePassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: Some(query),
+                        end_of_pass_write_index: Some(query + 1),
+                    }),
+                );
+                dispatch(&mut pass, pipeline, how);
+            }
+        }
     }
 }
 
@@ -676,7 +747,20 @@ pub struct SurfacePass {
     style_bind_group: wgpu::BindGroup,
     initial_capacity: (u32, u32),
     state: Mutex<SurfaceState>,
+    /// Per-pass GPU timestamps of blocking extractions (benchmarks), when enabled.
+    timing: Option<PassTiming>,
 }
+
+/// Timestamp queries around each extraction pass, resolved and copied for reading.
+struct PassTiming {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+    /// Nanoseconds per tick.
+    period: f64,
+}
+
+const TIMESTAMPS: u32 = 2 * EXTRACTION_PASSES as u32;
 
 impl SurfacePass {
     /// Initial room: 1 Mi vertices (32 MiB) and 3 Mi indices; buffers grow as surfaces need.
@@ -774,7 +858,71 @@ impl SurfacePass {
                 counts: None,
                 error: None,
             }),
+            timing: None,
         }
+    }
+
+    /// Makes [`SurfacePass::extract_blocking`] time each pass with GPU timestamps, for
+    /// [`SurfacePass::pass_times_ms`]; false (and nothing changes) when the device has no
+    /// timestamp queries. Splits the extraction into one compute pass per dispatch.
+    pub fn enable_pass_timing(&mut self, queue: &wgpu::Queue) -> bool {
+        if !self
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+        {
+            return false;
+        }
+        let buffer = |label, usage| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: u64::from(TIMESTAMPS) * 8,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        self.timing = Some(PassTiming {
+            set: self.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("surface::pass_timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: TIMESTAMPS,
+            }),
+            resolve: buffer(
+                "surface::pass_timestamps_resolve",
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            ),
+            read: buffer(
+                "surface::pass_timestamps_read",
+                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            ),
+            period: f64::from(queue.get_timestamp_period()),
+        });
+        true
+    }
+
+    /// The GPU time of each pass of the last blocking extraction, in milliseconds, by name
+    /// (None unless [`SurfacePass::enable_pass_timing`] succeeded).
+    pub fn pass_times_ms(
+        &self,
+        method: SurfaceMethod,
+    ) -> Result<Option<Vec<(&'static str, f64)>>, SurfaceError> {
+        let Some(timing) = &self.timing else {
+            return Ok(None);
+        };
+        let bytes = map_buffer(&self.device, &timing.read)
+            .map_err(|e| SurfaceError::Readback(e.to_string()))?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let names = match method {
+            SurfaceMethod::MarchingTetrahedra => self.marching_tets.pass_names(),
+            SurfaceMethod::DualContouring => self.dual_contour.pass_names(),
+        };
+        Ok(Some(
+            names
+                .iter()
+                .zip(ticks.chunks_exact(2))
+                .map(|(&name, t)| (name, t[1].wrapping_sub(t[0]) as f64 * timing.period / 1e6))
+                .collect(),
+        ))
     }
 
     fn lock(&self) -> MutexGuard<'_, SurfaceState> {
@@ -861,6 +1009,7 @@ impl SurfacePass {
         let buffers = state
             .buffers
             .get_or_insert_with(|| MeshBuffers::new(&self.device, v, i));
+        let timestamps = self.timing.as_ref().map(|t| &t.set);
         match settings.method {
             SurfaceMethod::MarchingTetrahedra => self.marching_tets.record(
                 &self.device,
@@ -869,6 +1018,7 @@ impl SurfacePass {
                 grid,
                 buffers,
                 settings.iso_value,
+                timestamps,
             ),
             SurfaceMethod::DualContouring => self.dual_contour.record(
                 &self.device,
@@ -877,6 +1027,7 @@ impl SurfacePass {
                 grid,
                 buffers,
                 settings.iso_value,
+                timestamps,
             ),
         }
         state.key = Some(CacheKey::new(grid, settings));
@@ -1013,6 +1164,10 @@ impl SurfacePass {
                 mapped_at_creation: false,
             });
             encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
+            if let Some(timing) = &self.timing {
+                encoder.resolve_query_set(&timing.set, 0..TIMESTAMPS, &timing.resolve, 0);
+                encoder.copy_buffer_to_buffer(&timing.resolve, 0, &timing.read, 0, None);
+            }
             queue.submit([encoder.finish()]);
             let bytes = map_buffer(&self.device, &staging)
                 .map_err(|e| SurfaceError::Readback(e.to_string()))?;
