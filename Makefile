@@ -54,9 +54,10 @@ lint-py: venv
 test-py: venv
 	$(VENV)/bin/pytest -q preprocess/tests
 
-# The app's isosurfaces against scikit-image, through the `loudscape` binary.
+# The app's isosurfaces against scikit-image, through the `loudscape` binary (the one the Rust
+# tests use: `cargo build` would rebuild with other features).
 test-mesh: system venv
-	$(CARGO) build
+	$(CARGO) test --no-run -q
 	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
 
 test: system lint-rust lint-py test-rust test-py test-mesh
