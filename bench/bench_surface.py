@@ -5,7 +5,8 @@ on a song-like field at 128^3 and 224^3 and writes each field as a .npy file: fl
 shape (nz, ny, nx), voxel centres at -1 + (index + 0.5) * 2 / n), then times
 ``skimage.measure.marching_cubes`` on those fields at the same isovalue in the same run, padded
 by one zero voxel as loudscape closes surfaces at the grid border, and prints the ratios and the
-surface areas.
+surface areas. When VTK is installed (``pip install vtk``) its flying edges
+(``vtkFlyingEdges3D``) runs on the same padded fields too.
 
 Usage: python bench/bench_surface.py [--loudscape target/release/loudscape] [--runs 10]
 """
@@ -36,6 +37,35 @@ def skimage_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, 
         times.append((time.perf_counter() - start) * 1e3)
     area = float(measure.mesh_surface_area(verts, faces))
     return float(np.median(times)), len(faces), area
+
+
+def vtk_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, int] | None:
+    """Median time (ms) and triangle count of VTK's flying edges, or None without VTK."""
+    try:
+        from vtkmodules.util.numpy_support import numpy_to_vtk
+        from vtkmodules.vtkCommonDataModel import vtkImageData
+        from vtkmodules.vtkFiltersCore import vtkFlyingEdges3D
+    except ImportError:
+        return None
+    padded = np.ascontiguousarray(np.pad(field, 1))
+    image = vtkImageData()
+    # VTK's x varies fastest, as in the (z, y, x) C-order array.
+    image.SetDimensions(padded.shape[2], padded.shape[1], padded.shape[0])
+    image.GetPointData().SetScalars(numpy_to_vtk(padded.ravel(), deep=True))
+    times = []
+    triangles = 0
+    for _ in range(runs):
+        edges = vtkFlyingEdges3D()
+        edges.SetInputData(image)
+        edges.SetValue(0, iso)
+        edges.ComputeNormalsOff()
+        edges.ComputeGradientsOff()
+        edges.ComputeScalarsOff()
+        start = time.perf_counter()
+        edges.Update()
+        times.append((time.perf_counter() - start) * 1e3)
+        triangles = edges.GetOutput().GetNumberOfPolys()
+    return float(np.median(times)), triangles
 
 
 def main() -> int:
@@ -70,16 +100,23 @@ def main() -> int:
         print(f"\nscikit-image {args.runs} runs each, iso {args.iso}:")
         for npy in sorted(Path(tmp).glob("*.npy")):
             name = npy.stem
-            ms, tris, area = skimage_median_ms(np.load(npy), args.iso, args.runs)
+            field = np.load(npy)
+            ms, tris, area = skimage_median_ms(field, args.iso, args.runs)
             print(f"  {name}: marching_cubes {ms:.1f} ms, {tris} triangles, area {area:.4f}")
+            flying = vtk_median_ms(field, args.iso, args.runs)
+            if flying is None:
+                print("    VTK flying edges: not installed (pip install vtk)")
+            else:
+                print(f"    VTK flying edges: {flying[0]:.1f} ms, {flying[1]} triangles")
             for method in ("mt", "dc"):
                 if (name, method) not in ours:
                     print(f"    {method}: no result")
                     continue
                 our_ms, _, our_area = ours[(name, method)]
+                versus_vtk = "" if flying is None else f", {flying[0] / our_ms:.2f}x VTK's"
                 print(
-                    f"    {method}: {our_ms:.1f} ms, {ms / our_ms:.2f}x scikit-image's speed, "
-                    f"area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
+                    f"    {method}: {our_ms:.1f} ms, {ms / our_ms:.2f}x scikit-image's speed"
+                    f"{versus_vtk}, area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
                 )
     return 0
 
