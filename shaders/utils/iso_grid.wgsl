@@ -76,16 +76,18 @@ fn voxel_index(p: vec3<i32>) -> u32 {
     return q.x + params.dims.x * (q.y + params.dims.y * q.z);
 }
 
-// Branch-free: the load is clamped into the grid and its value dropped outside (SIMD lanes on
-// CPU adapters then run one straight path).
 fn sample_density(p: vec3<i32>) -> f32 {
-    let q = clamp(p, vec3<i32>(0), vec3<i32>(params.dims) - vec3<i32>(1));
-    return select(0.0, density[voxel_index(q)], all(p == q));
+    if (!in_grid(p)) {
+        return 0.0;
+    }
+    return density[voxel_index(p)];
 }
 
 fn sample_hp(p: vec3<i32>) -> f32 {
-    let q = clamp(p, vec3<i32>(0), vec3<i32>(params.dims) - vec3<i32>(1));
-    return select(0.5, hp_mean[voxel_index(q)], all(p == q));
+    if (!in_grid(p)) {
+        return 0.5;
+    }
+    return hp_mean[voxel_index(p)];
 }
 
 fn data_position(grid: vec3<f32>) -> vec3<f32> {
