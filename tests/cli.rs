@@ -13,6 +13,15 @@ fn loudscape(args: &[&str]) -> Output {
         .expect("start loudscape")
 }
 
+/// Fails with the command's error output unless it succeeded.
+fn assert_success(output: &Output) {
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
 fn stderr_lines(output: &Output) -> Vec<String> {
     String::from_utf8_lossy(&output.stderr)
         .lines()
@@ -43,11 +52,7 @@ fn render_writes_a_png() {
         "-o",
         out.to_str().unwrap(),
     ]);
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    assert_success(&output);
     let image = image::open(&out).expect("png").to_rgba8();
     assert_eq!(image.dimensions(), (320, 200));
     assert!(common::coverage(&image) > 0.02);
@@ -160,11 +165,7 @@ fn mesh_reads_npy_fields_and_rejects_bad_ones() {
         "-o",
         out.to_str().unwrap(),
     ]);
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    assert_success(&output);
     // Every vertex lies on the sphere of radius 5 around the field's centre, in voxel units.
     let text = std::fs::read_to_string(&out).unwrap();
     let radii: Vec<f32> = text
