@@ -7,14 +7,16 @@
 //! Cells run from -1 to dims - 1 (samples outside the grid read as zero, so surfaces close at its
 //! border). A cell is split into six tetrahedra around its main diagonal, the same split in every
 //! cell, so neighbouring cells cut their shared face the same way and the surface is watertight.
-//! Each tetrahedron's inside mask indexes a 16-entry case table of up to two triangles.
-//! Passes (see shaders/marching_tets.wgsl): `classify` sweeps every cell (eight loads) and
-//! appends the straddling ones to the active list, reserving their vertices and indices with
-//! atomics; `dispatch_active` writes the indirect dispatch over them; `edge_vertices` places one
+//! Each tetrahedron's inside mask indexes a 16-entry case table of up to two triangles; the six
+//! are folded into one 256-entry table per cell mask ([`case_table`]).
+//! Passes (see shaders/marching_tets.wgsl and utils/iso_grid.wgsl): `inside_bits_pass` packs
+//! which samples are inside into bits; `classify` sweeps 32 cells per thread with bitwise
+//! operations and appends the straddling ones to the active list, reserving their vertices and
+//! indices with atomics; `dispatch_active` writes the indirect dispatch over them; `edge_vertices` places one
 //! vertex on each crossing edge a cell owns (the seven edges from its corner 0: three box edges,
 //! three face diagonals and the body diagonal, so every edge of every tetrahedron has exactly one
 //! owner); `triangles` writes three indices per triangle, finding each edge's vertex through the
-//! owner's entry in the cell map; `finalize` writes the draw. Vertex normals: the
+//! owner's entry in the cell map (each owner's entry loaded once per cell); `finalize` writes the draw. Vertex normals: the
 //! central-difference gradient of the density interpolated along the edge, negated (toward lower
 //! density); a vanishing gradient falls back to the edge's direction from inside to outside.
 
