@@ -18,8 +18,8 @@
 // the split (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) and their 16-entry case
 // table (src/render/marching_tets.rs, case_table): word 13m holds the triangle count (at most
 // 12) in its low byte and from bit 8 the corners that are the lower end of some triangle's edge
-// (corner 7 never is), words 13m + 1.. one triangle each, three edges of six bits wound to face away from the
-// inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from corner ka to
+// (corner 7 never is), words 13m + 1.. one triangle each, three edges of six bits wound to face
+// away from the inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from corner ka to
 // corner ka + d, whose offset bits are a superset of ka's.
 @group(1) @binding(10) var<storage, read> cases: array<u32>;
 
