@@ -14,6 +14,7 @@ Usage: python bench/bench_surface.py [--loudscape target/release/loudscape] [--r
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import subprocess
 import sys
@@ -68,12 +69,20 @@ def vtk_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, int]
     return float(np.median(times)), triangles
 
 
+def load_average() -> str:
+    """The 1-minute load average and the CPU count, for reading the figures."""
+    if not hasattr(os, "getloadavg"):
+        return "unknown"
+    return f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs"
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--loudscape", default="target/release/loudscape")
     parser.add_argument("--runs", type=int, default=10)
     parser.add_argument("--iso", type=float, default=0.3)
     args = parser.parse_args()
+    print(f"load average before: {load_average()}")
     with tempfile.TemporaryDirectory() as tmp:
         command = [
             args.loudscape,
@@ -118,6 +127,9 @@ def main() -> int:
                     f"    {method}: {our_ms:.1f} ms, {ms / our_ms:.2f}x scikit-image's speed"
                     f"{versus_vtk}, area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
                 )
+    # The ratio moves with the machine's load: llvmpipe's threads share the cores with any
+    # other work, single-threaded scikit-image less so.
+    print(f"load average after: {load_average()}")
     return 0
 
 
