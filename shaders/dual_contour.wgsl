@@ -8,10 +8,10 @@
 // crossing edges through `cell_map`; `finalize` writes the vertex count and the indexed
 // indirect draw.
 // The vertex minimises a QEF of the edge crossings' tangent planes (normals from the field's
-// trilinear gradient: the gradient of the trilinear interpolant of the cell's eight samples),
-// biased toward the crossings' mass point and clamped into its cell (Schaefer and Warren); its
-// normal is the trilinear gradient at the vertex, negated so it points toward lower density
-// (the flip the paper makes), and quads are wound to face the same way.
+// central-difference gradient, interpolated along each edge), biased toward the crossings' mass
+// point and clamped into its cell (Schaefer and Warren); its normal is the corner gradients
+// interpolated trilinearly at the vertex, negated so it points toward lower density (the flip
+// the paper makes), and quads are wound to face the same way.
 
 // The pull toward the mass point, relative to one unit-normal plane.
 const QEF_BIAS: f32 = 0.5;
@@ -81,8 +81,8 @@ fn cell_vertices(
     for (var k = 0u; k < 8u; k++) {
         gradients[k] = corner_gradient(base, c0, c1, k);
     }
-    // The QEF sum (n.(x - p))^2 over the edge crossings p with unit normals n (the field's
-    // trilinear gradient there), accumulated as A = sum n n^T and b = sum n (n.p), with the
+    // The QEF sum (n.(x - p))^2 over the edge crossings p with unit normals n (the corner
+    // gradients interpolated along the edge), accumulated as A = sum n n^T and b = sum n (n.p), with the
     // crossings' mass point; cell-local coordinates, [0, 1]^3.
     var count = 0u;
     var mass = vec3<f32>(0.0);

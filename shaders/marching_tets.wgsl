@@ -19,8 +19,8 @@
 // table (src/render/marching_tets.rs, case_table): word 13m holds the triangle count (at most
 // 12) in its low byte and from bit 8 the corners that are the lower end of some triangle's edge
 // (corner 7 never is), words 13m + 1.. one triangle each, three edges of six bits wound to face
-// away from the inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from corner ka to
-// corner ka + d, whose offset bits are a superset of ka's.
+// away from the inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from
+// corner ka to corner ka + d, whose offset bits are a superset of ka's.
 @group(1) @binding(10) var<storage, read> cases: array<u32>;
 
 const CASE_STRIDE: u32 = 13u;
@@ -83,7 +83,6 @@ fn edge_vertices(
         let vk = corner_value(c0, c1, k);
         let hk = sample_hp(base + offset);
         let t = clamp((params.iso_value - v0) / (vk - v0), 0.0, 1.0);
-        let local = vec3<f32>(offset) * t;
         let gk = corner_gradient(base, c0, c1, k);
         var normal = outward_normal(g0 + (gk - g0) * t);
         if (all(normal == vec3<f32>(0.0))) {
@@ -93,7 +92,7 @@ fn edge_vertices(
         }
         let wk = max(vk, 0.0);
         vertices[out] = MeshVertex(
-            data_position(vec3<f32>(base) + local),
+            data_position(vec3<f32>(base) + vec3<f32>(offset) * t),
             weighted_hp(w0 * h0 + wk * hk, w0 + wk),
             normal,
             0.0,
@@ -133,31 +132,24 @@ fn triangles(
     let row = entry.y * CASE_STRIDE;
     let header = cases[row];
     let count = header & 0xffu;
-    // The owners' cell-map entries, each loaded once (by strides, with no division back to
-    // cell coordinates); the cell's own entry needs no load.
+    // The owners' cell-map entries (the cells whose corner 0 is this cell's corner c), each
+    // loaded once, by strides with no division back to cell coordinates; the cell's own entry
+    // needs no load.
     let needed = header >> 8u;
     let sy = params.dims.x + 1u;
     let sz = sy * (params.dims.y + 1u);
-    let slot = entry.x;
     var entries = vec4<u32>(cell_map_entry(i, entry.y, entry.z), INVALID, INVALID, INVALID);
     var entries_hi = vec4<u32>(INVALID);
-    if ((needed & 2u) != 0u) {
-        entries.y = cell_map[slot + 1u];
-    }
-    if ((needed & 4u) != 0u) {
-        entries.z = cell_map[slot + sy];
-    }
-    if ((needed & 8u) != 0u) {
-        entries.w = cell_map[slot + 1u + sy];
-    }
-    if ((needed & 16u) != 0u) {
-        entries_hi.x = cell_map[slot + sz];
-    }
-    if ((needed & 32u) != 0u) {
-        entries_hi.y = cell_map[slot + 1u + sz];
-    }
-    if ((needed & 64u) != 0u) {
-        entries_hi.z = cell_map[slot + sy + sz];
+    for (var c = 1u; c < 7u; c++) {
+        if (((needed >> c) & 1u) == 0u) {
+            continue;
+        }
+        let owner = cell_map[entry.x + (c & 1u) + sy * ((c >> 1u) & 1u) + sz * (c >> 2u)];
+        if (c < 4u) {
+            entries[c] = owner;
+        } else {
+            entries_hi[c - 4u] = owner;
+        }
     }
     // Whole triangles only, so every index below the drawn count is written.
     let capacity = params.index_capacity - params.index_capacity % 3u;

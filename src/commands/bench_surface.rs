@@ -57,9 +57,7 @@ pub fn run(
         let (density, hp) = song_like_field(dims);
         if let Some(dir) = fields_dir {
             let path = dir.join(format!("{name}.npy"));
-            super::voxelize::write_atomically(&path, |out| {
-                Ok(super::npy::write(out, &[&density], dims)?)
-            })?;
+            super::write_atomically(&path, |out| Ok(super::npy::write(out, &[&density], dims)?))?;
         }
         let grid = VoxelGrid::from_fields(
             &gpu.device,
@@ -89,19 +87,18 @@ pub fn run(
                 pass.extract_blocking(&gpu.queue, &grid, &settings)?;
                 times.push(start.elapsed().as_secs_f64() * 1e3);
             }
+            // Per pass: the timed pass object, warmed up like the untimed one.
             let mut per_pass: Vec<(&str, Vec<f64>)> = Vec::new();
-            for _ in 0..if timed { runs + 1 } else { 0 } {
+            if timed {
                 timed_pass.extract_blocking(&gpu.queue, &grid, &settings)?;
-                for (i, (name, ms)) in timed_pass
-                    .pass_times_ms(method)?
-                    .into_iter()
-                    .flatten()
-                    .enumerate()
-                {
-                    if per_pass.len() <= i {
-                        per_pass.push((name, Vec::new()));
+                for _ in 0..runs {
+                    timed_pass.extract_blocking(&gpu.queue, &grid, &settings)?;
+                    let passes = timed_pass.pass_times_ms(method)?.unwrap_or_default();
+                    per_pass.resize_with(passes.len(), || ("", Vec::new()));
+                    for ((name, times), (pass_name, ms)) in per_pass.iter_mut().zip(passes) {
+                        *name = pass_name;
+                        times.push(ms);
                     }
-                    per_pass[i].1.push(ms);
                 }
             }
             let median_ms = median(&mut times);

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use glam::{UVec3, Vec3};
 use loudscape::cloud::{DataMode, PointCloud};
+use loudscape::pick::CpuGrid;
 use loudscape::render::context::GpuContext;
 use loudscape::render::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
@@ -99,34 +100,38 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         .input
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
-    let gpu;
-    let frame;
-    let grid;
-    if is_field {
+    // Read and check the input before starting the GPU.
+    enum Input {
+        Field(CpuGrid),
+        Cloud(Box<PointCloud>),
+    }
+    let input = if is_field {
         if args.res.is_some() {
             bail!(
                 "{}: --res applies to point clouds; a .npy field is meshed at its own resolution",
                 args.input.display()
             );
         }
-        let field = read_field(&args.input)?;
-        gpu = GpuContext::new_headless()?;
-        frame = FrameBinding::new(&gpu.device);
-        grid = VoxelGrid::from_fields(
+        Input::Field(read_field(&args.input)?)
+    } else {
+        Input::Cloud(Box::new(super::render::load_cloud(&args.input)?))
+    };
+    let gpu = GpuContext::new_headless()?;
+    let frame = FrameBinding::new(&gpu.device);
+    let grid = match input {
+        Input::Field(field) => VoxelGrid::from_fields(
             &gpu.device,
             field.dims,
             field.box_min,
             field.box_max,
             &field.density,
             &field.hp_mean,
-        );
-    } else {
-        let cloud = super::render::load_cloud(&args.input)?;
-        let res = args.res.unwrap_or(default_resolution(cloud.meta.mode));
-        gpu = GpuContext::new_headless()?;
-        frame = FrameBinding::new(&gpu.device);
-        grid = voxel_grid(&gpu, &frame, &cloud, res)?;
-    }
+        ),
+        Input::Cloud(cloud) => {
+            let res = args.res.unwrap_or(default_resolution(cloud.meta.mode));
+            voxel_grid(&gpu, &frame, &cloud, res)?
+        }
+    };
     let dims = grid.dims;
     let pass = SurfacePass::new(&gpu.device, &frame);
     let settings = SurfaceSettings {
@@ -165,33 +170,15 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A density field from a .npy file, with its box in data space.
-#[derive(Debug)]
-pub struct Field {
-    pub dims: UVec3,
-    pub box_min: Vec3,
-    pub box_max: Vec3,
-    pub density: Vec<f32>,
-    pub hp_mean: Vec<f32>,
-}
-
 /// Reads a .npy density field (field 0; field 1, when present, is the mean hp, else 0.5).
 /// The box comes from the `FIELD.npy.json` that `loudscape voxelize` writes beside it; without
 /// one, voxel (i, j, k) is centred on the point (i, j, k), so the mesh is in voxel units.
-pub fn read_field(path: &Path) -> anyhow::Result<Field> {
+pub fn read_field(path: &Path) -> anyhow::Result<CpuGrid> {
     let npy = super::npy::read(path)?;
-    if npy.dims.min_element() < 2 {
+    if npy.dims.min_element() < 2 || npy.dims.max_element() > MAX_RESOLUTION {
         bail!(
-            "{}: the field is {}x{}x{} voxels; a surface needs at least 2 along each axis",
-            path.display(),
-            npy.dims.x,
-            npy.dims.y,
-            npy.dims.z
-        );
-    }
-    if npy.dims.max_element() > MAX_RESOLUTION {
-        bail!(
-            "{}: the field is {}x{}x{} voxels; at most {MAX_RESOLUTION} along each axis",
+            "{}: the field is {}x{}x{} voxels; a surface needs at least 2 and at most \
+             {MAX_RESOLUTION} along each axis",
             path.display(),
             npy.dims.x,
             npy.dims.y,
@@ -215,7 +202,7 @@ pub fn read_field(path: &Path) -> anyhow::Result<Field> {
         }
     }
     let (box_min, box_max) = field_box(path, npy.dims)?;
-    Ok(Field {
+    Ok(CpuGrid {
         dims: npy.dims,
         box_min,
         box_max,
@@ -273,24 +260,13 @@ pub fn write_mesh(
     comment: &str,
     output: &Path,
 ) -> anyhow::Result<()> {
-    let tmp = output.with_extension(match format {
-        MeshFormat::Ply => "ply.tmp",
-        MeshFormat::Obj => "obj.tmp",
-    });
-    let result = (|| -> std::io::Result<()> {
-        let file = std::fs::File::create(&tmp)?;
-        let mut w = std::io::BufWriter::new(file);
+    super::write_atomically(output, |w| {
         match format {
-            MeshFormat::Ply => write_ply(&mut w, mesh, comment)?,
-            MeshFormat::Obj => write_obj(&mut w, mesh, comment)?,
+            MeshFormat::Ply => write_ply(w, mesh, comment)?,
+            MeshFormat::Obj => write_obj(w, mesh, comment)?,
         }
-        w.flush()
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        bail!("{}: cannot write the mesh: {e}", output.display());
-    }
-    std::fs::rename(&tmp, output).with_context(|| format!("{}: cannot write", output.display()))
+        Ok(())
+    })
 }
 
 fn rgb8(hp: f32) -> [u8; 3] {

@@ -110,18 +110,19 @@ pub fn parse(bytes: &[u8]) -> anyhow::Result<NpyFields> {
             body.len()
         );
     }
-    let values: Vec<f32> = if size == 4 {
-        body[..expected]
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect()
-    } else {
-        body[..expected]
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")) as f32)
-            .collect()
-    };
-    let fields = values.chunks_exact(voxels).map(<[f32]>::to_vec).collect();
+    // One field at a time, straight from the bytes.
+    let fields = body[..expected]
+        .chunks_exact(voxels * size)
+        .map(|field| {
+            field
+                .chunks_exact(size)
+                .map(|c| match *c {
+                    [a, b, c, d] => f32::from_le_bytes([a, b, c, d]),
+                    _ => f64::from_le_bytes(c.try_into().expect("8 bytes")) as f32,
+                })
+                .collect()
+        })
+        .collect();
     Ok(NpyFields { dims, fields })
 }
 

@@ -94,7 +94,7 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
     let mut written = Vec::new();
     match format {
         Format::Npy => {
-            write_atomically(&args.output, |out| {
+            super::write_atomically(&args.output, |out| {
                 Ok(super::npy::write(out, &[&density, &hp_mean], grid.dims)?)
             })?;
             written.push(args.output.clone());
@@ -107,7 +107,7 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
                 (&args.output, &density, "normalized loudness density"),
                 (&hp_path, &hp_mean, "mean hp (0 percussive, 1 harmonic)"),
             ] {
-                write_atomically(path, |out| {
+                super::write_atomically(path, |out| {
                     write_nrrd(out, field, grid.dims, origin, spacing, what)
                 })?;
                 written.push(path.clone());
@@ -132,7 +132,7 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
         "points": cloud.points.len(),
     });
     let meta_path = PathBuf::from(format!("{}.json", args.output.display()));
-    write_atomically(&meta_path, |out| {
+    super::write_atomically(&meta_path, |out| {
         out.write_all(serde_json::to_string_pretty(&meta)?.as_bytes())?;
         Ok(())
     })?;
@@ -156,26 +156,6 @@ fn hp_nrrd_path(path: &Path) -> PathBuf {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "grid".into());
     path.with_file_name(format!("{stem}_hp.nrrd"))
-}
-
-/// Writes through `PATH.tmp` and renames, so no half-written file is left under the name.
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
-    let tmp = PathBuf::from(format!("{}.tmp", path.display()));
-    let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        let mut out = std::io::BufWriter::new(file);
-        write(&mut out)?;
-        out.flush()?;
-        Ok::<_, anyhow::Error>(())
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e.context(format!("{}: cannot write", path.display())));
-    }
-    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// NRRD 4: one float field, raw little-endian, x fastest, with spacing and origin.

@@ -109,6 +109,12 @@ def skimage_mesh(field: np.ndarray, iso: float) -> tuple[np.ndarray, np.ndarray]
     return vertices[:, ::-1] - 1.0, faces.astype(np.int64)
 
 
+def sample(points: np.ndarray, rng: np.random.Generator, most: int = 4000) -> np.ndarray:
+    """At most `most` of `points`, drawn without repeats: a few thousand points each way keep
+    the distance query fast."""
+    return points[rng.choice(len(points), min(len(points), most), replace=False)]
+
+
 def compare(loudscape: Path, tmp: Path, npy: Path, field, iso, to_voxels=None) -> dict:
     """Meshes `npy` with both methods and `field` with scikit-image; returns, per method, the
     area ratio and the mean and largest distance between the meshes, both ways, in voxels.
@@ -129,13 +135,8 @@ def compare(loudscape: Path, tmp: Path, npy: Path, field, iso, to_voxels=None) -
         vertices, faces = read_mesh_ply(out)
         if to_voxels is not None:
             vertices = to_voxels(vertices)
-        # A few thousand points each way keep the distance query fast.
-        ours = vertices[rng.choice(len(vertices), min(len(vertices), 4000), replace=False)]
-        theirs = ref_vertices[
-            rng.choice(len(ref_vertices), min(len(ref_vertices), 4000), replace=False)
-        ]
-        there = mesh_distance(ours, ref_vertices, ref_faces)
-        back = mesh_distance(theirs, vertices, faces)
+        there = mesh_distance(sample(vertices, rng), ref_vertices, ref_faces)
+        back = mesh_distance(sample(ref_vertices, rng), vertices, faces)
         results[method] = {
             "area_ratio": area(vertices, faces) / ref_area,
             "mean_distance": float(np.concatenate([there, back]).mean()),
