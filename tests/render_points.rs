@@ -4,12 +4,12 @@ mod common;
 
 use std::path::PathBuf;
 
-use loudscape::camera::Camera;
-use loudscape::cloud::{self, DataMode, Point, PointCloud};
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::{self, DataMode, Point, PointCloud};
+use loudscape::render::gpu::frame::FrameView;
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointStyle, lod_stride};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
+use loudscape::view::camera::Camera;
 
 fn demo_song() -> PointCloud {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply");

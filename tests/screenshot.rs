@@ -4,14 +4,14 @@ mod common;
 
 use std::path::PathBuf;
 
-use loudscape::camera::Camera;
-use loudscape::cloud;
-use loudscape::overlay;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud;
+use loudscape::render::gpu::frame::FrameView;
 use loudscape::render::headless::render_frame;
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
-use loudscape::screenshot;
+use loudscape::ui::labels;
+use loudscape::ui::screenshot;
+use loudscape::view::camera::Camera;
 
 #[test]
 fn saved_screenshot_matches_the_headless_render() {
@@ -45,7 +45,7 @@ fn saved_screenshot_matches_the_headless_render() {
     assert_eq!(saved.dimensions(), (w, h));
 
     let target = render_frame(&gpu, &renderer, Some(&data), &view, &settings);
-    overlay::draw_headless(&gpu, &target, &view, &cloud, &data);
+    labels::draw_headless(&gpu, &target, &view, &cloud, &data);
     let reference = target.read_rgba(&gpu.device, &gpu.queue).expect("read");
     let (share, mean) = common::difference(&saved, &reference, 8);
     assert!(

@@ -7,15 +7,17 @@ mod common;
 use std::collections::HashMap;
 
 use glam::{UVec3, Vec3};
-use loudscape::camera::Camera;
-use loudscape::cloud::{DataMode, PointCloud};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::{FrameBinding, FrameView};
+use loudscape::data::cloud::{DataMode, PointCloud};
+use loudscape::data::synthetic::song_like_field;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::{FrameBinding, FrameView};
 use loudscape::render::grid::VoxelGrid;
-use loudscape::render::mesh::{
-    CpuMesh, SurfaceMethod, SurfacePass, SurfaceSettings, song_like_field,
-};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::surface::cpu_mesh::CpuMesh;
+use loudscape::render::surface::pass::SurfacePass;
+use loudscape::render::surface::state::ExtractedSurface;
+use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
+use loudscape::view::camera::Camera;
 
 const MT: SurfaceMethod = SurfaceMethod::MarchingTetrahedra;
 const DC: SurfaceMethod = SurfaceMethod::DualContouring;
@@ -73,11 +75,12 @@ fn extract(
         iso_value,
         lit: true,
     };
+    let surface = ExtractedSurface::new();
     let counts = pass
-        .extract_blocking(&gpu.queue, grid, &settings)
+        .extract_blocking(&gpu.queue, &surface, grid, &settings)
         .expect("extraction");
     assert!(counts.fits(), "{counts:?}");
-    pass.read_mesh(&gpu.queue).expect("read back")
+    pass.read_mesh(&gpu.queue, &surface).expect("read back")
 }
 
 fn surface_pass(gpu: &GpuContext) -> SurfacePass {
@@ -303,24 +306,25 @@ fn buffers_grow_until_the_surface_fits() {
             iso_value: 0.5,
             lit: true,
         };
+        let surface = ExtractedSurface::new();
         let mut frames = 0;
         loop {
             let mut encoder = gpu
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            small.prepare(&gpu.queue, &mut encoder, Some(&grid), &settings);
+            small.prepare(&gpu.queue, &mut encoder, &surface, Some(&grid), &settings);
             gpu.queue.submit([encoder.finish()]);
             frames += 1;
-            if !small.needs_another_frame() {
+            if !surface.needs_another_frame() {
                 break;
             }
             assert!(frames < 50, "{}: the surface never settled", method.name());
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
-        let counts = small.counts().expect("counts");
+        let counts = surface.counts().expect("counts");
         assert!(counts.fits(), "{counts:?}");
         assert_eq!(counts.triangles() as usize, triangles);
-        let mesh = small.read_mesh(&gpu.queue).expect("read");
+        let mesh = small.read_mesh(&gpu.queue, &surface).expect("read");
         assert_eq!(mesh.triangle_count(), triangles);
     }
 }
@@ -376,7 +380,7 @@ fn render_song_surface(method: SurfaceMethod) -> image::RgbaImage {
     let grid = data.grid.as_ref().expect("grid");
     renderer
         .surface
-        .extract_blocking(&gpu.queue, grid, &settings.surface)
+        .extract_blocking(&gpu.queue, &data.surface, grid, &settings.surface)
         .expect("extract");
     let view = FrameView {
         camera: Camera::from_angles(-35.0, 30.0, 5.2),

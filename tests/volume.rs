@@ -3,14 +3,14 @@
 
 mod common;
 
-use loudscape::camera::Camera;
-use loudscape::cloud::{DataMode, Point, PointCloud};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::{DataMode, Point, PointCloud};
+use loudscape::data::synthetic::synthetic_song;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameView;
 use loudscape::render::headless::render_image;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::TransferPreset;
-use loudscape::render::voxelize::synthetic_song;
+use loudscape::view::camera::Camera;
 
 const SIZE: (u32, u32) = (320, 200);
 

@@ -6,13 +6,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use loudscape::camera::Camera;
-use loudscape::cloud::{DataMode, Point, PointCloud};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::{DataMode, Point, PointCloud};
+use loudscape::data::synthetic::synthetic_song;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameView;
+use loudscape::render::gpu::target::RenderTarget;
+use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
-use loudscape::render::target::RenderTarget;
-use loudscape::render::voxelize::{MAX_PASSES, VoxelizeJob, synthetic_song};
+use loudscape::view::camera::Camera;
 
 /// Points of the synthetic stand-in for a song when data/demo_song.ply is absent.
 pub const SYNTHETIC_SONG_POINTS: usize = 700_000;
@@ -90,7 +91,7 @@ impl GpuTimer {
         let wall = start.elapsed().as_secs_f64() * 1e3;
         match &self.queries {
             Some((_, _, read, period)) => {
-                let bytes = loudscape::render::target::map_buffer(&gpu.device, read)?;
+                let bytes = loudscape::render::gpu::target::map_buffer(&gpu.device, read)?;
                 let ticks: &[u64] = bytemuck::cast_slice(&bytes);
                 Ok(ticks[1].wrapping_sub(ticks[0]) as f64 * period / 1e6)
             }
@@ -114,7 +115,7 @@ fn read_pass_ticks(
         });
     encoder.copy_buffer_to_buffer(resolve, 0, read, 0, None);
     gpu.queue.submit([encoder.finish()]);
-    let bytes = loudscape::render::target::map_buffer(&gpu.device, read)?;
+    let bytes = loudscape::render::gpu::target::map_buffer(&gpu.device, read)?;
     Ok(Some(bytemuck::cast_slice(&bytes).to_vec()))
 }
 
@@ -134,7 +135,7 @@ pub fn median(mut values: Vec<f64>) -> f64 {
 fn song_cloud() -> (PointCloud, String) {
     let demo = Path::new("data/demo_song.ply");
     if demo.is_file() {
-        match loudscape::cloud::load(demo) {
+        match loudscape::data::cloud::load(demo) {
             Ok(cloud) => return (cloud, demo.display().to_string()),
             Err(e) => eprintln!("bench: {e}; using a synthetic song instead"),
         }

@@ -2,20 +2,15 @@
 //! [`scene::Renderer`], which owns one instance of every pass.
 
 pub mod composite;
-pub mod context;
-pub mod dual_contour;
-pub mod frame;
+pub mod gpu;
 pub mod grid;
 pub mod headless;
 pub mod lines;
-pub mod marching_tets;
 pub mod markers;
-pub mod mesh;
 pub mod palette;
 pub mod points;
 pub mod scene;
 pub mod shaders;
-pub mod target;
+pub mod surface;
 pub mod transfer;
 pub mod volume;
-pub mod voxelize;

@@ -9,10 +9,10 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::cloud::Point;
-use crate::render::frame::FrameBinding;
+use crate::data::cloud::Point;
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::shaders;
-use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
 
 /// Keep in sync with `PointParams` in shaders/points.wgsl.
 #[repr(C)]

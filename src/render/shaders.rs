@@ -9,11 +9,11 @@ pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 pub const MARKERS: &str = include_str!("../../shaders/markers.wgsl");
-pub const ISO_GRID: &str = include_str!("../../shaders/utils/iso_grid.wgsl");
-pub const MARCHING_TETS: &str = include_str!("../../shaders/marching_tets.wgsl");
-pub const DUAL_CONTOUR: &str = include_str!("../../shaders/dual_contour.wgsl");
-pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
-pub const VOXELIZE: &str = include_str!("../../shaders/voxelize.wgsl");
+pub const ISO_GRID: &str = include_str!("../../shaders/surface/extraction.wgsl");
+pub const MARCHING_TETS: &str = include_str!("../../shaders/surface/marching_tets.wgsl");
+pub const DUAL_CONTOUR: &str = include_str!("../../shaders/surface/dual_contour.wgsl");
+pub const MESH: &str = include_str!("../../shaders/surface/draw.wgsl");
+pub const VOXELIZE: &str = include_str!("../../shaders/grid/voxelize.wgsl");
 pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.

@@ -10,10 +10,10 @@
 //! composites front to back until the opacity passes 0.99. Depth is written where the opacity
 //! first passes one half, so lines drawn afterwards hide behind dense volume only.
 
-use crate::render::frame::FrameBinding;
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
-use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
 pub use crate::render::transfer::TransferPreset;
 
 /// Opacity per voxel of ray length at transfer-function opacity 1 and opacity scale 1: a ray

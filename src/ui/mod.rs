@@ -4,5 +4,14 @@
 pub mod app;
 pub mod audio;
 pub mod bridge;
+mod hover;
+pub mod labels;
+mod legends;
+mod panels;
+mod persistence;
+pub mod screenshot;
+mod slots;
+mod state;
+mod window_screenshot;
 
 pub use app::{WindowOptions, run};

@@ -4,7 +4,7 @@
 //! cell that straddles the isovalue (the cell's index in the active list), the cell map, six
 //! indices (two triangles) per grid edge that straddles it, the counters and the indexed
 //! indirect draw arguments.
-//! Passes (see shaders/dual_contour.wgsl): `classify` sweeps every cell (cells from -1 to
+//! Passes (see shaders/surface/dual_contour.wgsl): `classify` sweeps every cell (cells from -1 to
 //! dims - 1 with samples outside the grid reading zero, so surfaces close at the border) and
 //! appends the straddling ones to the active list, reserving six indices for each crossing edge
 //! from the cell's corner 0 along +x, +y, +z; `dispatch_active` writes the indirect dispatch over
@@ -16,8 +16,9 @@
 //! (trilinearly interpolated at the vertex), negated so they point toward lower density.
 
 use crate::render::grid::VoxelGrid;
-use crate::render::mesh::{ExtractionPipelines, MeshBuffers};
 use crate::render::shaders;
+use crate::render::surface::buffers::MeshBuffers;
+use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines};
 
 /// The dual contouring pipelines, built once.
 pub struct DualContourPass {
@@ -38,7 +39,7 @@ impl DualContourPass {
     }
 
     /// The names of the passes an extraction records, in order.
-    pub fn pass_names(&self) -> [&'static str; crate::render::mesh::EXTRACTION_PASSES] {
+    pub fn pass_names(&self) -> [&'static str; EXTRACTION_PASSES] {
         self.pipelines.pass_names()
     }
 

@@ -1,9 +1,9 @@
 // Surface view: draws an extracted isosurface (marching tetrahedra or dual contouring).
 // Prepended: utils/frame.wgsl. Reads MeshVertex records as a vertex buffer (position, hp,
-// normal; see utils/iso_grid.wgsl) and MeshStyle; writes colour and depth.
+// normal; see surface/extraction.wgsl) and MeshStyle; writes colour and depth.
 // Colour: hp on a warm (percussive) to cool (harmonic) gradient, paper 3.4, optionally
 // Phong-lit by the frame's directional light from above. Keep MeshStyle and warm_cool in sync
-// with src/render/mesh.rs.
+// with src/render/surface/draw.rs.
 
 struct MeshStyle {
     // 1: Phong lighting, 0: flat hp colour.

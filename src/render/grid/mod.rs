@@ -7,10 +7,13 @@
 //! `density` holds the normalized loudness density in [0, 1]; `hp_mean` the mean hp of the points
 //! in the voxel (0.5 where a voxel holds none).
 
+pub mod reference;
+pub mod voxelize;
+
 use glam::{UVec3, Vec3};
 use wgpu::util::DeviceExt;
 
-use crate::render::target::{ReadbackError, map_buffer};
+use crate::render::gpu::target::{ReadbackError, map_buffer};
 
 pub struct VoxelGrid {
     pub dims: UVec3,

@@ -2,7 +2,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::camera::Camera;
+use crate::view::camera::Camera;
 
 /// Keep in sync with `Frame` in shaders/utils/frame.wgsl.
 #[repr(C)]

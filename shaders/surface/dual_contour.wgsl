@@ -1,4 +1,4 @@
-// Dual contouring (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling, the
+// Dual contouring (paper 3.2). Prepended: surface/extraction.wgsl (bindings, sampling, the
 // active-cell list).
 // Reads the density and hp grids. `classify` (every cell) appends the cells whose corners
 // straddle the isovalue to the active list (the active index is the cell's vertex index) and

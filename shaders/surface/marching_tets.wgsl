@@ -1,4 +1,4 @@
-// Marching tetrahedra (paper 3.2). Prepended: utils/iso_grid.wgsl (bindings, sampling, the
+// Marching tetrahedra (paper 3.2). Prepended: surface/extraction.wgsl (bindings, sampling, the
 // active-cell list).
 // Reads the density and hp grids; writes an indexed mesh with one vertex per grid edge that
 // crosses the isovalue, shared by every triangle that uses it.
@@ -16,7 +16,7 @@
 
 // Per cell inside mask m (bit k: corner k inside), built on the CPU from the six tetrahedra of
 // the split (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) and their 16-entry case
-// table (src/render/marching_tets.rs, case_table): word 13m holds the triangle count (at most
+// table (src/render/surface/marching_tets.rs, case_table): word 13m holds the triangle count (at most
 // 12) in its low byte and from bit 8 the corners that are the lower end of some triangle's edge
 // (corner 7 never is), words 13m + 1.. one triangle each, three edges of six bits wound to face
 // away from the inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from

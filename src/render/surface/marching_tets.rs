@@ -1,14 +1,14 @@
 //! Marching tetrahedra on the GPU (paper 3.2).
 //!
 //! Reads: a [`VoxelGrid`]'s density and hp_mean. Writes: into [`MeshBuffers`] an indexed mesh with
-//! one [`MeshVertex`](crate::render::mesh::MeshVertex) per grid edge that crosses the isovalue
+//! one [`MeshVertex`](crate::render::surface::buffers::MeshVertex) per grid edge that crosses the isovalue
 //! (shared by all the triangles on it), the active-cell list and cell map, the counters and the
 //! indexed indirect draw arguments. Cells run from -1 to dims - 1 (samples outside the grid read as
 //! zero, so surfaces close at its border). A cell is split into six tetrahedra around its main
 //! diagonal, the same split in every cell, so neighbouring cells cut their shared face the same way
 //! and the surface is watertight. Each tetrahedron's inside mask indexes a 16-entry case table of
 //! up to two triangles; the six are folded into one 256-entry table per cell mask ([`case_table`]).
-//! Passes (see shaders/marching_tets.wgsl and utils/iso_grid.wgsl): `inside_bits_pass` packs which
+//! Passes (see shaders/surface/marching_tets.wgsl and surface/extraction.wgsl): `inside_bits_pass` packs which
 //! samples are inside into bits; `classify` sweeps 32 cells per thread with bitwise operations and
 //! appends the straddling ones to the active list, reserving their vertices and indices with
 //! atomics; `dispatch_active` writes the indirect dispatch over them; `edge_vertices` places one
@@ -21,8 +21,9 @@
 //! from inside to outside.
 
 use crate::render::grid::VoxelGrid;
-use crate::render::mesh::{ExtractionPipelines, MeshBuffers};
 use crate::render::shaders;
+use crate::render::surface::buffers::MeshBuffers;
+use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines};
 use wgpu::util::DeviceExt;
 
 /// The six tetrahedra of a cell as cube-corner indices (bit 0: x, bit 1: y, bit 2: z), each a
@@ -69,7 +70,7 @@ fn corner(k: u32) -> glam::Vec3 {
 }
 
 /// The triangles of a cell for each inside mask of its corners (bit k: corner k), as read by
-/// shaders/marching_tets.wgsl: word 13m holds the count in its low byte and, from bit 8, which
+/// shaders/surface/marching_tets.wgsl: word 13m holds the count in its low byte and, from bit 8, which
 /// corners (bit c: corner c) are the lower end of some triangle's edge, so the shader loads those
 /// owners' cell-map entries once per cell; words 13m + 1.. one triangle each, three six-bit edges
 /// (lower corner | direction << 3), wound to face away from the inside corners. The winding is
@@ -144,7 +145,7 @@ impl MarchingTetsPass {
     }
 
     /// The names of the passes an extraction records, in order.
-    pub fn pass_names(&self) -> [&'static str; crate::render::mesh::EXTRACTION_PASSES] {
+    pub fn pass_names(&self) -> [&'static str; EXTRACTION_PASSES] {
         self.pipelines.pass_names()
     }
 
