@@ -2,10 +2,15 @@
 //! the declared count, then every value checked in place. Also the body reader's shared checks.
 
 use std::io::{self, BufReader, Read};
+
+use bytemuck::Zeroable;
 use std::path::Path;
 
 use super::header::{Element, Encoding, Header, PropertyKind, ScalarType};
-use super::*;
+use super::{
+    CHUNK_RECORDS, CloudError, CloudMeta, META_KEYWORD, POINT_BYTES, PROPERTY_NAMES, Point,
+    RANGE_EPSILON,
+};
 
 pub(super) struct Body<'a, R> {
     pub(super) reader: BufReader<R>,

@@ -8,7 +8,10 @@ use serde_json::Value;
 
 use super::body::{Body, read_full};
 use super::header::{Element, Encoding, PropertyKind, excerpt};
-use super::*;
+use super::{
+    Axes, CHUNK_RECORDS, CloudError, CloudMeta, DataMode, GENERIC_HP, GENERIC_SCALAR,
+    MAX_ASCII_LINE_BYTES, POINT_BYTES, Point,
+};
 
 impl<R: Read> Body<'_, R> {
     pub(super) fn read_generic(&mut self) -> Result<(Vec<Point>, CloudMeta), CloudError> {

@@ -5,7 +5,9 @@ use std::path::Path;
 use serde::{Deserialize, Deserializer};
 use serde_json::Value;
 
-use super::*;
+use super::{
+    Axes, Axis, CloudError, CloudMeta, DataMode, FORMAT_VERSION, Metrics, SongInfo, Source, Stft,
+};
 
 pub(super) fn lenient_u32<'de, D: Deserializer<'de>>(
     deserializer: D,

@@ -17,6 +17,14 @@
 //!
 //! Every failure is a [`CloudError`] whose message names the file, the place (header line or
 //! byte offset, and point index) and the reason, on one line. No input makes the loader panic.
+//!
+//! Files: this one holds the types ([`PointCloud`], [`Point`], [`CloudMeta`], [`CloudError`]) and
+//! the entry points ([`load`], [`load_from_bytes`], [`load_from_reader`]); `header.rs` parses the
+//! header, `meta.rs` types the `loudscape-meta` JSON, `body.rs` is the fast path for loudscape
+//! bodies (and the checks every body shares), `generic.rs` reads other PLY point clouds and
+//! `write.rs` writes loudscape files. A new format version belongs in `meta.rs` (the
+//! `format_version` check and any new keys) and, if its records differ, a body reader of its own
+//! beside `body.rs`.
 
 use std::fs::File;
 use std::io::{self, BufReader, Read};

@@ -4,7 +4,7 @@ use std::io::{self, Write};
 
 use serde_json::Value;
 
-use super::*;
+use super::{META_KEYWORD, PROPERTY_NAMES, Point};
 
 /// Writes a loudscape header for `point_count` points, with `meta` as the `loudscape-meta`
 /// comment (non-ASCII escaped, one line). Follow it with [`write_points`].
