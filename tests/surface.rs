@@ -335,7 +335,7 @@ fn surface_shaders_translate_to_metal() {
     for (name, source) in [
         ("marching_tets", shaders::marching_tets()),
         ("dual_contour", shaders::dual_contour()),
-        ("mesh", shaders::mesh()),
+        ("surface_draw", shaders::surface_draw()),
     ] {
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));

@@ -8,7 +8,8 @@
 // edge is owned by its lower end: the cell whose corner 0 that is, which owns the seven edges
 // from its corner 0 to corners 1..7 (x, y, xy, z, xz, yz, xyz). A crossed edge's owner holds
 // both of its ends, so it straddles the isovalue and is an active cell.
-// Passes: `classify` (every cell) appends the active cells and reserves their vertices (one per
+// Passes: `inside_bits_pass` packs which samples are inside into bits and `classify` (32 cells
+// per thread, both in surface/extraction.wgsl) appends the active cells and reserves their vertices (one per
 // crossed owned edge) and indices (three per triangle of their tetrahedra); `dispatch_active`;
 // `edge_vertices` (per active cell) places the vertices; `triangles` (per active cell) looks the
 // vertices of its triangles up through `cell_map` and writes the indices; `finalize` writes the

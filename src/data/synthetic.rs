@@ -118,7 +118,7 @@ pub fn synthetic_song(count: usize, seed: u64) -> Vec<Point> {
 }
 
 /// A song-like analytic field for benchmarks, golden images and the scikit-image comparison:
-/// (density, hp) on a `dims` grid over [-1, 1]^3, in [`VoxelGrid`] order (x fastest).
+/// (density, hp) on a `dims` grid over [-1, 1]^3, in [`VoxelGrid`](crate::render::grid::VoxelGrid) order (x fastest).
 /// x is time: a 4/4 pulse of percussive hits (hp near 0) over sustained harmonic partials
 /// (hp near 1); y is log amplitude: energy sits on a ridge that falls with frequency and rises
 /// on each hit; z is frequency: partials make stripes. bench/bench_surface.py reads the same

@@ -14,7 +14,7 @@ use crate::render::surface::buffers::{
     COUNTERS_SIZE, INDEXED_ARGS_OFFSET, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
 };
 use crate::render::surface::cpu_mesh::CpuMesh;
-use crate::render::surface::draw::MeshStyle;
+use crate::render::surface::draw::SurfaceStyle;
 use crate::render::surface::dual_contour::DualContourPass;
 use crate::render::surface::extraction::EXTRACTION_PASSES;
 use crate::render::surface::marching_tets::MarchingTetsPass;
@@ -60,9 +60,9 @@ impl SurfacePass {
         vertices: u32,
         indices: u32,
     ) -> Self {
-        let module = shaders::module(device, "mesh", &shaders::mesh());
+        let module = shaders::module(device, "surface_draw", &shaders::surface_draw());
         let style_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mesh::style_layout"),
+            label: Some("surface::style_layout"),
             entries: &[wgpu::BindGroupLayoutEntry {
                 binding: 0,
                 visibility: wgpu::ShaderStages::FRAGMENT,
@@ -75,13 +75,13 @@ impl SurfacePass {
             }],
         });
         let style = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("mesh::style"),
-            size: std::mem::size_of::<MeshStyle>() as u64,
+            label: Some("surface::style"),
+            size: std::mem::size_of::<SurfaceStyle>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let style_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mesh::style_bind_group"),
+            label: Some("surface::style_bind_group"),
             layout: &style_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
@@ -89,7 +89,7 @@ impl SurfacePass {
             }],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mesh::pipeline_layout"),
+            label: Some("surface::draw_pipeline_layout"),
             bind_group_layouts: &[Some(&frame.layout), Some(&style_layout)],
             immediate_size: 0,
         });
@@ -99,7 +99,7 @@ impl SurfacePass {
             attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x3],
         };
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("mesh::pipeline"),
+            label: Some("surface::draw_pipeline"),
             layout: Some(&layout),
             vertex: wgpu::VertexState {
                 module: &module,
@@ -361,7 +361,7 @@ impl SurfacePass {
         grid: Option<&VoxelGrid>,
         settings: &SurfaceSettings,
     ) {
-        let style = MeshStyle {
+        let style = SurfaceStyle {
             lit: u32::from(settings.lit),
             pad: [0; 3],
         };
