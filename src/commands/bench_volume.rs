@@ -9,11 +9,11 @@ use anyhow::Context;
 use loudscape::data::cloud::{DataMode, Point, PointCloud};
 use loudscape::data::synthetic::synthetic_song;
 use loudscape::render::gpu::context::GpuContext;
-use loudscape::render::gpu::frame::FrameView;
 use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 /// Points of the synthetic stand-in for a song when data/demo_song.ply is absent.
 pub const SYNTHETIC_SONG_POINTS: usize = 700_000;
@@ -263,18 +263,15 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
     data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &song, &settings.voxels)?;
     let (width, height) = (1280, 720);
     let target = RenderTarget::new(&gpu.device, width, height);
-    let mut camera = Camera::default();
-    let (min, max) = data.world_box();
-    camera.fit(min, max, width as f32 / height as f32);
+    let at_rest = FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
+        width,
+        height,
+    );
     for moving in [false, true] {
-        let view = FrameView {
-            camera,
-            world_from_data: data.world_from_data,
-            width,
-            height,
-            frame_index: 0,
-            moving,
-        };
+        let view = FrameView { moving, ..at_rest };
         let mut times = Vec::new();
         for i in 0..=runs {
             let ms = timer.time(&gpu, |encoder| {

@@ -10,6 +10,7 @@
 use wgpu::util::DeviceExt;
 
 use crate::data::cloud::Point;
+use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::shaders;
@@ -111,10 +112,7 @@ impl PointsGpu {
 
     /// The largest chunk one storage binding and one buffer can hold on this device.
     pub fn chunk_limit(device: &wgpu::Device) -> u64 {
-        let limits = device.limits();
-        limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size)
+        storage_binding_limit(device)
     }
 
     pub fn chunk_count(&self) -> usize {

@@ -10,7 +10,6 @@ use std::time::{Duration, Instant};
 use eframe::egui::{self, Color32};
 use eframe::egui_wgpu;
 
-use crate::render::gpu::frame::FrameView;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::ui::audio::AudioPanel;
 use crate::ui::bridge::{ViewCallback, ViewResources};
@@ -19,6 +18,7 @@ use crate::ui::labels;
 use crate::ui::persistence::Remembered;
 use crate::ui::state::{LoudscapeApp, SaveShot, ScreenshotState, Slot};
 use crate::view::camera::Camera;
+use crate::view::frame_view::FrameView;
 
 /// How long after the last input the view still counts as moving (drawn at reduced quality).
 const SETTLE: Duration = Duration::from_millis(180);

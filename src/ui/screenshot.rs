@@ -9,8 +9,8 @@ use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
 use crate::render::gpu::context::GpuContext;
-use crate::render::gpu::frame::FrameView;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::view::frame_view::FrameView;
 
 #[derive(Debug, Error)]
 pub enum ScreenshotError {

@@ -19,6 +19,7 @@ use thiserror::Error;
 use wgpu::util::DeviceExt;
 
 use crate::data::cloud::{DataMode, Point};
+use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::target::{ReadbackError, map_buffer};
 use crate::render::grid::VoxelGrid;
@@ -396,14 +397,6 @@ impl VoxelizePass {
         }
     }
 
-    /// The largest buffer this device can bind for storage.
-    pub fn buffer_limit(device: &wgpu::Device) -> u64 {
-        let limits = device.limits();
-        limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size)
-    }
-
     /// Checks a resolution against the allowed range and this device's buffer limits.
     pub fn check_resolution(device: &wgpu::Device, resolution: u32) -> Result<(), VoxelizeError> {
         if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&resolution) {
@@ -411,7 +404,7 @@ impl VoxelizePass {
         }
         // The largest buffers hold 8 bytes per voxel.
         let needed = u64::from(resolution).pow(3) * 8;
-        let limit = Self::buffer_limit(device);
+        let limit = storage_binding_limit(device);
         if needed > limit {
             let largest = ((limit / 8) as f64).cbrt().floor() as u32;
             return Err(VoxelizeError::TooLarge {
@@ -463,7 +456,7 @@ impl VoxelizePass {
         let density = storage("voxelize::density_grid", group4_count * 16, copy);
         let hp_mean = storage("voxelize::hp_mean_grid", group4_count * 16, copy);
 
-        let per_chunk = (Self::buffer_limit(device) / std::mem::size_of::<Point>() as u64)
+        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
             .clamp(1, u64::from(u32::MAX / 5)) as usize;
         // An empty cloud still binds one (zero) point, with a count of 0.
         let zero = [Point {

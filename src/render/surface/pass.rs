@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 
 use glam::Vec3;
 
+use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::target::{COLOR_FORMAT, map_buffer};
 use crate::render::grid::VoxelGrid;
@@ -196,11 +197,7 @@ impl SurfacePass {
 
     /// The largest number of `element_size`-byte elements one buffer binding may hold.
     fn element_limit(&self, element_size: u64) -> u64 {
-        let limits = self.device.limits();
-        let bytes = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
-        (bytes / element_size).min(u64::from(u32::MAX))
+        (storage_binding_limit(&self.device) / element_size).min(u64::from(u32::MAX))
     }
 
     /// Grows the buffers to hold `counts`; an error when the device cannot.
