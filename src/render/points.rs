@@ -12,6 +12,7 @@ use wgpu::util::DeviceExt;
 use crate::data::cloud::Point;
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::layouts::{storage_entry, uniform_entry};
 use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::shaders;
 
@@ -132,26 +133,8 @@ impl PointsPass {
         let cloud_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("points::cloud_layout"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::VERTEX,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                storage_entry(0, wgpu::ShaderStages::VERTEX, true),
+                uniform_entry(1, wgpu::ShaderStages::VERTEX),
             ],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -3,4 +3,5 @@
 
 pub mod context;
 pub mod frame;
+pub mod layouts;
 pub mod target;

@@ -21,6 +21,7 @@ use wgpu::util::DeviceExt;
 use crate::data::cloud::{DataMode, Point};
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::layouts::{storage_entry, uniform_entry};
 use crate::render::gpu::target::{ReadbackError, map_buffer};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
@@ -296,31 +297,7 @@ pub struct VoxelizePass {
     frame_bind_group: wgpu::BindGroup,
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
+const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 
 impl VoxelizePass {
     pub fn new(device: &wgpu::Device, frame: &FrameBinding) -> Self {
@@ -328,32 +305,32 @@ impl VoxelizePass {
         let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::main_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, false),
-                storage_entry(3, false),
-                storage_entry(4, false),
-                storage_entry(5, false),
-                storage_entry(6, false),
-                storage_entry(7, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, false),
+                storage_entry(3, COMPUTE, false),
+                storage_entry(4, COMPUTE, false),
+                storage_entry(5, COMPUTE, false),
+                storage_entry(6, COMPUTE, false),
+                storage_entry(7, COMPUTE, false),
             ],
         });
         let smooth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::smooth_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, false),
             ],
         });
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::resolve_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, false),
-                storage_entry(4, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, true),
+                storage_entry(3, COMPUTE, false),
+                storage_entry(4, COMPUTE, false),
             ],
         });
         let resolve_pipeline_layout =

@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::layouts::uniform_entry;
 use crate::render::gpu::target::{COLOR_FORMAT, map_buffer};
 use crate::render::grid::VoxelGrid;
 use crate::render::points::depth_state;
@@ -64,16 +65,7 @@ impl SurfacePass {
         let module = shaders::module(device, "surface_draw", &shaders::surface_draw());
         let style_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("surface::style_layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[uniform_entry(0, wgpu::ShaderStages::FRAGMENT)],
         });
         let style = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("surface::style"),
