@@ -91,7 +91,7 @@ impl GpuTimer {
         let wall = start.elapsed().as_secs_f64() * 1e3;
         match &self.queries {
             Some((_, _, read, period)) => {
-                let bytes = loudscape::render::gpu::target::map_buffer(&gpu.device, read)?;
+                let bytes = loudscape::render::gpu::readback::map_buffer(&gpu.device, read)?;
                 let ticks: &[u64] = bytemuck::cast_slice(&bytes);
                 Ok(ticks[1].wrapping_sub(ticks[0]) as f64 * period / 1e6)
             }
@@ -115,7 +115,7 @@ fn read_pass_ticks(
         });
     encoder.copy_buffer_to_buffer(resolve, 0, read, 0, None);
     gpu.queue.submit([encoder.finish()]);
-    let bytes = loudscape::render::gpu::target::map_buffer(&gpu.device, read)?;
+    let bytes = loudscape::render::gpu::readback::map_buffer(&gpu.device, read)?;
     Ok(Some(bytemuck::cast_slice(&bytes).to_vec()))
 }
 

@@ -1,7 +1,8 @@
 //! Rendering without a window: the same passes into an offscreen target, read back as an image.
 
 use crate::render::gpu::context::GpuContext;
-use crate::render::gpu::target::{ReadbackError, RenderTarget};
+use crate::render::gpu::readback::ReadbackError;
+use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
 use crate::view::frame_view::FrameView;
 

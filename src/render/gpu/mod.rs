@@ -4,4 +4,5 @@
 pub mod context;
 pub mod frame;
 pub mod layouts;
+pub mod readback;
 pub mod target;

@@ -22,7 +22,7 @@ use crate::data::cloud::{DataMode, Point};
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry};
-use crate::render::gpu::target::{ReadbackError, map_buffer};
+use crate::render::gpu::readback::{ReadbackError, read_buffer};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
 
@@ -681,18 +681,7 @@ impl VoxelizePass {
         queue: &wgpu::Queue,
         job: &VoxelizeJob,
     ) -> Result<VoxelStats, VoxelizeError> {
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("voxelize::stats_readback"),
-            size: 16,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("voxelize::stats_readback"),
-        });
-        encoder.copy_buffer_to_buffer(&job.stats, 0, &staging, 0, 16);
-        queue.submit([encoder.finish()]);
-        let bytes = map_buffer(device, &staging)?;
+        let bytes = read_buffer(device, queue, "voxelize::stats_readback", &job.stats, 16)?;
         let words: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(VoxelStats {
             nonempty: words[0],

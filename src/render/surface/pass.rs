@@ -8,7 +8,8 @@ use glam::Vec3;
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::uniform_entry;
-use crate::render::gpu::target::{COLOR_FORMAT, map_buffer};
+use crate::render::gpu::readback::{map_buffer, read_buffer};
+use crate::render::gpu::target::COLOR_FORMAT;
 use crate::render::grid::VoxelGrid;
 use crate::render::points::depth_state;
 use crate::render::shaders;
@@ -451,23 +452,8 @@ impl SurfacePass {
             return Err(SurfaceError::NotExtracted);
         };
         let read = |buffer: &wgpu::Buffer, bytes: u64| -> Result<Vec<u8>, SurfaceError> {
-            if bytes == 0 {
-                return Ok(Vec::new());
-            }
-            let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("surface::mesh_readback"),
-                size: bytes,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            let mut encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("surface::mesh_readback"),
-                });
-            encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-            queue.submit([encoder.finish()]);
-            map_buffer(&self.device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))
+            read_buffer(&self.device, queue, "surface::mesh_readback", buffer, bytes)
+                .map_err(|e| SurfaceError::Readback(e.to_string()))
         };
         let vertex_count = counts.vertices_needed.min(buffers.vertex_capacity);
         let vertex_bytes = read(
