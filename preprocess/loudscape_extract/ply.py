@@ -239,7 +239,9 @@ def _meta_from_lines(lines: Iterable[tuple[int, str]], name: str) -> dict:
             raise ValueError("not a JSON object")
         return decode_metadata(metadata)
     except ValueError as exc:
-        raise ExtractError(f"header line {number}: bad loudscape-meta JSON ({exc})", path=name)
+        raise ExtractError(
+            f"header line {number}: bad loudscape-meta JSON ({exc})", path=name
+        ) from exc
 
 
 # --- writing -----------------------------------------------------------------------------------
