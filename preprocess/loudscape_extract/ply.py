@@ -34,6 +34,7 @@ __all__ = [
     "decode_metadata",
     "encode_header",
     "encode_metadata",
+    "map_ply",
     "read_ply",
     "read_ply_metadata",
     "write_atomically",
@@ -409,3 +410,49 @@ def read_ply_metadata(path: str | os.PathLike, *, max_header_bytes: int = 64 << 
             return _meta_from_lines(_header_line_iter(handle, name, max_header_bytes), name)
     except OSError as exc:
         raise ExtractError(f"cannot read file ({exc.strerror or exc})", path=name) from exc
+
+
+def map_ply(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
+    """Like :func:`read_ply`, but the points are a read-only memory map of the file's body,
+    so a cloud of any size costs no memory until it is read.
+
+    Returns
+    -------
+    points : np.ndarray [shape=(n_points, 5), dtype='<f4']
+        Read-only.
+    metadata : dict
+    """
+    name = os.fspath(path)
+    lines: list[tuple[int, str]] = []
+    try:
+        with open(name, "rb") as handle:
+            if handle.readline() not in (b"ply\n", b"ply\r\n"):
+                raise ExtractError("not a PLY file (no 'ply' line)", path=name)
+            lines = list(_header_line_iter(handle, name, 1 << 40))
+            offset = handle.tell()
+            size = os.fstat(handle.fileno()).st_size
+    except OSError as exc:
+        raise ExtractError(f"cannot read file ({exc.strerror or exc})", path=name) from exc
+    texts = [text for _, text in lines]
+    if "format binary_little_endian 1.0" not in texts:
+        raise ExtractError("not a binary little-endian PLY", path=name)
+    metadata = _meta_from_lines(lines, name)
+    counts = [text.split() for text in texts if text.startswith("element ")]
+    properties = [tuple(text.split()[1:]) for text in texts if text.startswith("property ")]
+    if (
+        len(counts) != 1
+        or counts[0][:2] != ["element", "vertex"]
+        or properties != [("float", p) for p in PROPERTIES]
+    ):
+        raise ExtractError(f"unexpected vertex layout {properties}", path=name)
+    try:
+        n_points = int(counts[0][2])
+    except (IndexError, ValueError):
+        raise ExtractError(f"bad vertex count {counts[0][2:]}", path=name) from None
+    expected = n_points * 4 * len(PROPERTIES)
+    if size - offset != expected:
+        raise ExtractError(f"body has {size - offset} bytes, expected {expected}", path=name)
+    if n_points == 0:
+        return np.zeros((0, len(PROPERTIES)), "<f4"), metadata
+    points = np.memmap(name, dtype="<f4", mode="r", offset=offset, shape=(n_points, 5))
+    return points, metadata

@@ -13,7 +13,6 @@ import soundfile
 from loudscape_extract import ExtractError
 from loudscape_extract.ply import (
     MAX_LINE_BYTES,
-    encode_header,
     encode_metadata,
     read_ply,
     read_ply_metadata,
@@ -130,13 +129,6 @@ def test_other_comments_and_order_of_parts(tmp_path):
         ],
     )
     assert read_ply(path)[1] == {"a": 1} == read_ply_metadata(path)
-
-
-def test_header_of_a_10000_song_timeline(tmp_path):
-    header = encode_header(n_points=10, metadata=big_metadata(10_000))
-    assert len(header) > 4_000_000
-    lines = header.split(b"\n")
-    assert max(len(line) + 1 for line in lines) <= MAX_LINE_BYTES
 
 
 def test_timeline_with_a_non_utf8_file_name(tmp_path):
