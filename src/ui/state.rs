@@ -51,10 +51,18 @@ pub(super) struct LoudscapeApp {
     pub(super) keep_camera_loads: usize,
     /// Why the surface could not be extracted, if it could not.
     pub(super) surface_error: Option<String>,
+    /// The last extraction found no surface (the isovalue is above every voxel).
+    pub(super) surface_empty: bool,
+    /// A line of news that is not an error (where a screenshot went), in the normal colour.
+    pub(super) notice: Option<String>,
     /// Draw again next frame (the surface is still growing its buffers).
     pub(super) needs_repaint: bool,
-    /// Smoothed time of a volume frame at rest (ms), to decide whether orbiting needs a stand-in.
-    pub(super) volume_rest_ms: f32,
+    /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
+    pub(super) moving_divisor: [u32; 3],
+    /// The camera each data slot (Song, Timeline) was left with.
+    pub(super) slot_cameras: [Option<Camera>; 2],
+    /// Scene renders counted by the view and the frame they were last seen to change.
+    pub(super) renders_seen: (u64, u32),
 }
 
 /// Which of the two data slots.
