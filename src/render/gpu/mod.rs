@@ -1,5 +1,6 @@
-//! GPU plumbing shared by every pass: the device, render targets and read-back, the per-frame
-//! uniforms.
+//! GPU plumbing shared by every pass: the device and its limits ([`context`]), render targets
+//! ([`target`]), waiting read-back ([`readback`]), bind-group layout entries ([`layouts`]) and the
+//! per-frame uniforms ([`frame`]).
 
 pub mod context;
 pub mod frame;
