@@ -1,6 +1,6 @@
 //! GPU plumbing shared by every pass: the device and its limits ([`context`]), render targets
-//! ([`target`]), waiting read-back ([`readback`]), bind-group layout entries ([`layouts`]), GPU timestamps
-//! ([`timing`]) and the per-frame uniforms ([`frame`]).
+//! ([`target`]), waiting read-back ([`readback`]), bind-group layout entries ([`layouts`]), GPU
+//! timestamps ([`timing`]) and the per-frame uniforms ([`frame`]).
 
 pub mod context;
 pub mod frame;
