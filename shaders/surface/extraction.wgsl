@@ -1,6 +1,6 @@
-// Shared by the isosurface extraction passes (marching_tets.wgsl, dual_contour.wgsl): the grid
-// they read, the mesh they write, the active-cell list, and sampling helpers.
-// Keep IsoParams, MeshVertex, Counters and the binding numbers in sync with src/render/mesh.rs.
+// Shared by the isosurface extraction passes (marching_tets.wgsl, dual_contour.wgsl): the grid they
+// read, the mesh they write, the active-cell list, and sampling helpers. Keep IsoParams,
+// MeshVertex, Counters and the binding numbers in sync with src/render/surface/buffers.rs.
 //
 // Every extraction runs in the same shape: `inside_bits_pass` packs which samples are inside
 // into bits (one load per sample); `classify` finds, 32 cells per thread, the cells whose
@@ -187,7 +187,7 @@ fn store_active(i: u32, base: vec3<i32>, mask: u32, first_vertex: u32, first_ind
 }
 
 // Threads of the one-dimensional passes: 64 per workgroup, workgroups in x then y (keep in sync
-// with FLAT_WORKGROUP and FLAT_ROW in src/render/mesh.rs).
+// with FLAT_WORKGROUP and FLAT_ROW in src/render/surface/buffers.rs).
 const ACTIVE_WORKGROUP: u32 = 64u;
 const ACTIVE_ROW: u32 = 32768u;
 

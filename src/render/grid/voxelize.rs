@@ -2,27 +2,29 @@
 //! read (paper sections 3.1 and 3.4).
 //!
 //! Reads: the points (uploaded here in chunks, five f32 per point, the PLY record). Writes: a
-//! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel.
-//! How: shaders/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
-//! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual
-//! carry; scale [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp, with the
-//! point count in the top 24 bits of the hp sum; portable to every adapter, no float atomics).
-//! `resolve` turns the sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally
-//! blurs the sums with a separable Gaussian; `histogram` bins the positive sums on a log2 scale,
-//! `percentile` finds the bin holding the 99th percentile, and `normalize_density` divides by
-//! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field.
-//! The grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only
-//! when the cloud or the settings change (see `SceneData::ensure_grid`).
+//! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
+//! shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
+//! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual carry; scale
+//! [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp, with the point count in the
+//! top 24 bits of the hp sum; portable to every adapter, no float atomics). `resolve` turns the
+//! sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally blurs the sums with a
+//! separable Gaussian; `histogram` bins the positive sums on a log2 scale, `percentile` finds the
+//! bin holding the 99th percentile, and `normalize_density` divides by that reference sum and
+//! clamps to 1, so one hot voxel cannot flatten the rest of the field. The grid box is the cloud's
+//! bounding box, padded ([`grid_box`]); the grid is rebuilt only when the cloud or the settings
+//! change (see `SceneData::ensure_grid`).
 
 use glam::{UVec3, Vec3};
 use thiserror::Error;
 use wgpu::util::DeviceExt;
 
-use crate::cloud::{DataMode, Point};
-use crate::render::frame::FrameBinding;
+use crate::data::cloud::{DataMode, Point};
+use crate::render::gpu::context::storage_binding_limit;
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::layouts::{storage_entry, uniform_entry};
+use crate::render::gpu::readback::{ReadbackError, read_buffer};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
-use crate::render::target::{ReadbackError, map_buffer};
 
 /// Default grid resolution (voxels per side) for a song (paper 3.1).
 pub const SONG_RESOLUTION: u32 = 128;
@@ -58,7 +60,7 @@ const GRID_STRIDE_GROUPS: u32 = 512;
 /// percentile, normalize).
 pub const MAX_PASSES: usize = 8;
 
-/// Keep in sync with `VoxelParams` in shaders/voxelize.wgsl.
+/// Keep in sync with `VoxelParams` in shaders/grid/voxelize.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct VoxelParams {
@@ -73,7 +75,7 @@ struct VoxelParams {
 }
 const _: () = assert!(std::mem::size_of::<VoxelParams>() == 80);
 
-/// Keep in sync with `SmoothParams` in shaders/voxelize.wgsl.
+/// Keep in sync with `SmoothParams` in shaders/grid/voxelize.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct SmoothParams {
@@ -179,7 +181,7 @@ pub fn voxels_per_unit(dims: UVec3, box_min: Vec3, box_max: Vec3) -> Vec3 {
     dims.as_vec3() / (box_max - box_min)
 }
 
-/// The voxel (i, j, k) holding `p`. Keep in sync with `voxel_of` in shaders/voxelize.wgsl: the
+/// The voxel (i, j, k) holding `p`. Keep in sync with `voxel_of` in shaders/grid/voxelize.wgsl: the
 /// same f32 operations, so the CPU reference puts points on voxel faces where the GPU does.
 pub fn voxel_of(p: Vec3, box_min: Vec3, per_unit: Vec3, dims: UVec3) -> UVec3 {
     let u = ((p - box_min) * per_unit).floor();
@@ -242,88 +244,6 @@ pub fn gaussian_weights(sigma: f32) -> Vec<f32> {
         .collect()
 }
 
-/// A CPU reference of the whole build in f64, for tests: loudness sums, mean hp and counts per
-/// voxel, in the grid's layout.
-pub struct ReferenceGrid {
-    pub dims: UVec3,
-    pub box_min: Vec3,
-    pub box_max: Vec3,
-    pub sums: Vec<f64>,
-    pub hp_mean: Vec<f64>,
-    pub counts: Vec<u32>,
-}
-
-impl ReferenceGrid {
-    pub fn build(points: &[Point], resolution: u32) -> Self {
-        let dims = UVec3::splat(resolution);
-        let (box_min, box_max) = grid_box(points);
-        let per_unit = voxels_per_unit(dims, box_min, box_max);
-        let n = (resolution as usize).pow(3);
-        let (mut sums, mut hp_sums, mut counts) = (vec![0.0; n], vec![0.0; n], vec![0u32; n]);
-        for p in points {
-            let q = Vec3::from(p.position);
-            if q.is_nan() {
-                continue;
-            }
-            let v = voxel_of(q, box_min, per_unit, dims);
-            let i = (v.x + dims.x * (v.y + dims.y * v.z)) as usize;
-            sums[i] += f64::from(p.scalar.clamp(0.0, 1.0));
-            hp_sums[i] += f64::from(p.hp.clamp(0.0, 1.0));
-            counts[i] += 1;
-        }
-        let hp_mean = hp_sums
-            .iter()
-            .zip(&counts)
-            .map(|(h, &c)| if c == 0 { 0.5 } else { h / f64::from(c) })
-            .collect();
-        Self {
-            dims,
-            box_min,
-            box_max,
-            sums,
-            hp_mean,
-            counts,
-        }
-    }
-
-    /// Smooths the sums as the GPU does: three 1D passes x, y, z, weights renormalized at edges.
-    pub fn smooth(&mut self, sigma: f32) {
-        if sigma <= 0.0 {
-            return;
-        }
-        let weights = gaussian_weights(sigma);
-        let radius = weights.len() as i64 - 1;
-        let d = [self.dims.x as i64, self.dims.y as i64, self.dims.z as i64];
-        for axis in 0..3 {
-            let input = self.sums.clone();
-            for k in 0..d[2] {
-                for j in 0..d[1] {
-                    for i in 0..d[0] {
-                        let ijk = [i, j, k];
-                        let (mut total, mut wsum) = (0.0, 0.0);
-                        for o in -radius..=radius {
-                            let mut q = ijk;
-                            q[axis] += o;
-                            if q[axis] < 0 || q[axis] >= d[axis] {
-                                continue;
-                            }
-                            let w = f64::from(weights[o.unsigned_abs() as usize]);
-                            total += w * input[(q[0] + d[0] * (q[1] + d[1] * q[2])) as usize];
-                            wsum += w;
-                        }
-                        self.sums[(i + d[0] * (j + d[1] * k)) as usize] = total / wsum;
-                    }
-                }
-            }
-        }
-    }
-
-    /// The normalized density, given the reference sum.
-    pub fn density(&self, reference: f64) -> Vec<f64> {
-        self.sums.iter().map(|s| (s / reference).min(1.0)).collect()
-    }
-}
-
 /// Workgroups for `invocations` threads of a 256-wide workgroup, split over x and y so no
 /// dimension exceeds 65535 (the shaders rebuild the linear index).
 fn dispatch_size(invocations: u32) -> (u32, u32) {
@@ -377,31 +297,7 @@ pub struct VoxelizePass {
     frame_bind_group: wgpu::BindGroup,
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
+const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 
 impl VoxelizePass {
     pub fn new(device: &wgpu::Device, frame: &FrameBinding) -> Self {
@@ -409,32 +305,32 @@ impl VoxelizePass {
         let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::main_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, false),
-                storage_entry(3, false),
-                storage_entry(4, false),
-                storage_entry(5, false),
-                storage_entry(6, false),
-                storage_entry(7, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, false),
+                storage_entry(3, COMPUTE, false),
+                storage_entry(4, COMPUTE, false),
+                storage_entry(5, COMPUTE, false),
+                storage_entry(6, COMPUTE, false),
+                storage_entry(7, COMPUTE, false),
             ],
         });
         let smooth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::smooth_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, false),
             ],
         });
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::resolve_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, false),
-                storage_entry(4, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, true),
+                storage_entry(3, COMPUTE, false),
+                storage_entry(4, COMPUTE, false),
             ],
         });
         let resolve_pipeline_layout =
@@ -478,14 +374,6 @@ impl VoxelizePass {
         }
     }
 
-    /// The largest buffer this device can bind for storage.
-    pub fn buffer_limit(device: &wgpu::Device) -> u64 {
-        let limits = device.limits();
-        limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size)
-    }
-
     /// Checks a resolution against the allowed range and this device's buffer limits.
     pub fn check_resolution(device: &wgpu::Device, resolution: u32) -> Result<(), VoxelizeError> {
         if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&resolution) {
@@ -493,7 +381,7 @@ impl VoxelizePass {
         }
         // The largest buffers hold 8 bytes per voxel.
         let needed = u64::from(resolution).pow(3) * 8;
-        let limit = Self::buffer_limit(device);
+        let limit = storage_binding_limit(device);
         if needed > limit {
             let largest = ((limit / 8) as f64).cbrt().floor() as u32;
             return Err(VoxelizeError::TooLarge {
@@ -537,15 +425,15 @@ impl VoxelizePass {
         // Every per-voxel buffer is padded to whole groups of four voxels (16 bytes of f32, 32 of
         // sums): the per-voxel passes read and write four voxels at a time. The padding stays
         // zero (an empty voxel) and is never part of the grid.
-        let quads = voxels.div_ceil(4);
-        let loudness_sums = storage("voxelize::loudness_sums", quads * 32, copy);
-        let hp_counts = storage("voxelize::hp_counts", quads * 32, copy);
+        let group4_count = voxels.div_ceil(4);
+        let loudness_sums = storage("voxelize::loudness_sums", group4_count * 32, copy);
+        let hp_counts = storage("voxelize::hp_counts", group4_count * 32, copy);
         let stats = storage("voxelize::stats", STATS_WORDS as u64 * 4, copy);
         let reference = storage("voxelize::reference_sum", 16, copy);
-        let density = storage("voxelize::density_grid", quads * 16, copy);
-        let hp_mean = storage("voxelize::hp_mean_grid", quads * 16, copy);
+        let density = storage("voxelize::density_grid", group4_count * 16, copy);
+        let hp_mean = storage("voxelize::hp_mean_grid", group4_count * 16, copy);
 
-        let per_chunk = (Self::buffer_limit(device) / std::mem::size_of::<Point>() as u64)
+        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
             .clamp(1, u64::from(u32::MAX / 5)) as usize;
         // An empty cloud still binds one (zero) point, with a count of 0.
         let zero = [Point {
@@ -715,7 +603,7 @@ impl VoxelizePass {
             encoder.clear_buffer(buffer, 0, None);
         }
         let voxels = dispatch_size(job.voxel_count());
-        let quads = dispatch_size(job.voxel_count().div_ceil(4));
+        let group4_count = dispatch_size(job.voxel_count().div_ceil(4));
         let main_group = &job.chunks[0].bind_group;
         let mut names: Vec<&'static str> = Vec::new();
         let mut begin_pass = |encoder: &mut wgpu::CommandEncoder, label: &'static str| {
@@ -750,7 +638,7 @@ impl VoxelizePass {
             pass.set_pipeline(&self.resolve);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             pass.set_bind_group(3, &job.resolve_group, &[]);
-            pass.dispatch_workgroups(quads.0, quads.1, 1);
+            pass.dispatch_workgroups(group4_count.0, group4_count.1, 1);
         }
         if let Some((scratch, groups)) = &job.smoothing {
             for (axis, group) in groups.iter().enumerate() {
@@ -774,7 +662,7 @@ impl VoxelizePass {
                 (voxels.0.min(GRID_STRIDE_GROUPS), 1),
             ),
             ("voxelize::percentile", &self.percentile, (1, 1)),
-            ("voxelize::normalize_density", &self.normalize, quads),
+            ("voxelize::normalize_density", &self.normalize, group4_count),
         ];
         for (label, pipeline, (x, y)) in stages {
             let mut pass = begin_pass(encoder, label);
@@ -793,18 +681,7 @@ impl VoxelizePass {
         queue: &wgpu::Queue,
         job: &VoxelizeJob,
     ) -> Result<VoxelStats, VoxelizeError> {
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("voxelize::stats_readback"),
-            size: 16,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("voxelize::stats_readback"),
-        });
-        encoder.copy_buffer_to_buffer(&job.stats, 0, &staging, 0, 16);
-        queue.submit([encoder.finish()]);
-        let bytes = map_buffer(device, &staging)?;
+        let bytes = read_buffer(device, queue, "voxelize::stats_readback", &job.stats, 16)?;
         let words: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(VoxelStats {
             nonempty: words[0],
@@ -842,75 +719,4 @@ impl VoxelizePass {
         let stats = self.read_stats(device, queue, &job)?;
         Ok((Self::finish(job), stats))
     }
-}
-
-/// A deterministic song-like cloud for tests, benchmarks and demos: `count` points over a
-/// time (x) by log-frequency (z) plane, lifted to their level (y), with sustained harmonic
-/// ridges (hp near 1), broadband percussive hits (hp near 0) and a quiet noise floor. Like the
-/// extractor's STFT clouds, points come frame by frame (x ascending), each frame's 1024 bins in
-/// frequency order; each point lies at a random place within its (frame, bin) cell.
-pub fn synthetic_song(count: usize, seed: u64) -> Vec<Point> {
-    let mut state = seed ^ 0x9e37_79b9_7f4a_7c15;
-    let mut next = move || {
-        // splitmix64
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    };
-    // Onsets: a kick-and-snare pattern, twelve hits over the song.
-    let beats: Vec<(f32, bool)> = (0..12)
-        .map(|b| (-0.9 + b as f32 * 0.155, b % 2 == 1))
-        .collect();
-    const BINS: usize = 1024;
-    let frames = count.div_ceil(BINS).max(1);
-    (0..count)
-        .map(|n| {
-            let (frame, bin) = (n / BINS, n % BINS);
-            let x = (frame as f32 + next()) / frames as f32 * 2.0 - 1.0;
-            let z = (bin as f32 + next()) / BINS as f32 * 2.0 - 1.0;
-            // A melody of held notes; partials at log-spaced heights above each (z is log
-            // frequency, an octave is 0.22).
-            let note = ((x * 2.6).sin() * 2.5).round() * 0.05;
-            let fundamental = -0.62 + note;
-            let mut harmonic = 0.0f32;
-            for k in 1..=6 {
-                let centre = fundamental + (k as f32).log2() * 0.22;
-                let gain = 1.0 / (k as f32).sqrt();
-                harmonic += gain * (-((z - centre) / 0.028).powi(2)).exp();
-            }
-            // Verses and a louder chorus.
-            let section = 0.5 + 0.5 * ((x * 1.7 + 0.4).sin() * 0.5 + 0.5);
-            harmonic *= section;
-            let mut percussive = 0.0f32;
-            for &(at, snare) in &beats {
-                let dt = x - at;
-                if dt >= 0.0 {
-                    let decay = (-dt / 0.035).exp();
-                    // A kick is low; a snare is broadband and falls off toward the top.
-                    let spectrum = if snare {
-                        0.75 - 0.25 * z
-                    } else {
-                        (-((z + 0.8) / 0.25).powi(2)).exp()
-                    };
-                    percussive += decay * spectrum;
-                }
-            }
-            let noise = next() * 0.1;
-            let tilt = -0.12 * (z + 1.0);
-            let level = (0.18 + 0.75 * harmonic + 0.7 * percussive + noise + tilt).clamp(0.0, 1.0);
-            let y = (level * 1.9 - 0.95 + (next() - 0.5) * 0.03).clamp(-1.0, 1.0);
-            // A-weighting: the lowest bands count for less.
-            let a_weight = 0.35 + 0.65 * ((z + 1.0) * 1.4).min(1.0);
-            let scalar = (level * a_weight).clamp(0.0, 1.0);
-            let hp = ((harmonic + 0.04) / (harmonic + percussive + 0.08) + (next() - 0.5) * 0.1)
-                .clamp(0.0, 1.0);
-            Point {
-                position: [x, y, z],
-                scalar,
-                hp,
-            }
-        })
-        .collect()
 }

@@ -7,9 +7,10 @@
 
 use glam::{UVec3, Vec2, Vec3, Vec4Swizzles};
 
-use crate::axes::{Axes, Axis, note_name};
-use crate::cloud::{Point, SongInfo};
-use crate::render::frame::FrameView;
+use crate::data::axes::{Axes, Axis, note_name};
+use crate::data::cloud::{Point, SongInfo};
+use crate::data::field::Field;
+use crate::view::frame_view::FrameView;
 
 /// The ray under pixel `px` (origin top left) in data space: origin on the near plane, unit
 /// direction away from the camera.
@@ -79,17 +80,6 @@ pub fn pick_point(
     best.map(|(index, _, _)| index)
 }
 
-/// A voxel grid's fields on the CPU (read back once after voxelization), same layout as
-/// [`crate::render::grid::VoxelGrid`].
-#[derive(Clone, Debug, Default)]
-pub struct CpuGrid {
-    pub dims: UVec3,
-    pub box_min: Vec3,
-    pub box_max: Vec3,
-    pub density: Vec<f32>,
-    pub hp_mean: Vec<f32>,
-}
-
 /// The voxel a ray stopped at.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VoxelHit {
@@ -100,21 +90,7 @@ pub struct VoxelHit {
     pub hp_mean: f32,
 }
 
-impl CpuGrid {
-    fn index(&self, v: UVec3) -> usize {
-        (v.x + self.dims.x * (v.y + self.dims.y * v.z)) as usize
-    }
-
-    fn voxel_of(&self, p: Vec3) -> Option<UVec3> {
-        let size = (self.box_max - self.box_min) / self.dims.as_vec3();
-        let f = ((p - self.box_min) / size).floor();
-        if f.min_element() < 0.0 {
-            return None;
-        }
-        let v = f.as_uvec3();
-        (v.x < self.dims.x && v.y < self.dims.y && v.z < self.dims.z).then_some(v)
-    }
-
+impl Field {
     /// The first voxel along the ray whose density is at least `threshold`, sampled every
     /// quarter voxel.
     pub fn pick(&self, origin: Vec3, dir: Vec3, threshold: f32) -> Option<VoxelHit> {

@@ -7,15 +7,15 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use thiserror::Error;
 
-use crate::cloud::PointCloud;
-use crate::render::context::GpuContext;
-use crate::render::frame::FrameView;
+use crate::data::cloud::PointCloud;
+use crate::render::gpu::context::GpuContext;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::view::frame_view::FrameView;
 
 #[derive(Debug, Error)]
 pub enum ScreenshotError {
     #[error("cannot read the screenshot back from the GPU: {0}")]
-    Readback(#[from] crate::render::target::ReadbackError),
+    Readback(#[from] crate::render::gpu::readback::ReadbackError),
     #[error("{path}: cannot write the screenshot: {reason}")]
     Write { path: PathBuf, reason: String },
 }
@@ -40,7 +40,7 @@ pub fn render_view(
     if let Some((cloud, data)) = scene
         && settings.show_box
     {
-        crate::overlay::draw_headless(gpu, &target, &view, cloud, data);
+        crate::ui::labels::draw_headless(gpu, &target, &view, cloud, data);
     }
     Ok(target.read_rgba(&gpu.device, &gpu.queue)?)
 }

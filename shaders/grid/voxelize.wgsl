@@ -1,12 +1,12 @@
 // Voxelization: points -> per-voxel sums -> normalized loudness density and mean hp.
-// Entry points, in the order src/render/voxelize.rs dispatches them:
+// Entry points, in the order src/render/grid/voxelize.rs dispatches them:
 //   accumulate  one thread per point: adds scalar, hp and 1 to the point's voxel record
 //   resolve     one thread per voxel: density = loudness sum (as f32), hp mean = hp sum / count
 //   smooth_axis one thread per voxel: one axis of a separable Gaussian on the sums (optional)
 //   histogram   grid-stride over voxels: log2 histogram of the positive (smoothed) sums
 //   percentile  one thread: the reference sum (the 99th percentile of the positive sums)
 //   normalize_density  one thread per voxel: density = min(sum / reference, 1)
-// Keep VoxelParams and SmoothParams in sync with src/render/voxelize.rs.
+// Keep VoxelParams and SmoothParams in sync with src/render/grid/voxelize.rs.
 
 struct VoxelParams {
     // Grid size in voxels (w unused).
@@ -81,7 +81,7 @@ fn voxel_total() -> u32 {
 }
 
 // The voxel holding data-space point `p`: floor((p - box_min) * voxels_per_unit), clamped.
-// Keep in sync with voxel_of in src/render/voxelize.rs (the CPU reference).
+// Keep in sync with voxel_of in src/render/grid/voxelize.rs (the CPU reference).
 fn voxel_of(p: vec3<f32>) -> u32 {
     let u = (p - params.box_min.xyz) * params.voxels_per_unit.xyz;
     let top = vec3<i32>(params.dims.xyz) - vec3<i32>(1);
@@ -155,20 +155,20 @@ fn resolve_one(loudness: vec2<u32>, hp_count: vec2<u32>) -> vec2<f32> {
 // Four voxels per thread (whole 16-byte loads and stores; buffers are padded to groups of four).
 @compute @workgroup_size(256)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let quad = linear_index(id, groups);
-    if (quad >= arrayLength(&resolved_density)) {
+    let group4 = linear_index(id, groups);
+    if (group4 >= arrayLength(&resolved_density)) {
         return;
     }
-    let l01 = loudness_words[2u * quad];
-    let l23 = loudness_words[2u * quad + 1u];
-    let h01 = hp_count_words[2u * quad];
-    let h23 = hp_count_words[2u * quad + 1u];
+    let l01 = loudness_words[2u * group4];
+    let l23 = loudness_words[2u * group4 + 1u];
+    let h01 = hp_count_words[2u * group4];
+    let h23 = hp_count_words[2u * group4 + 1u];
     let v0 = resolve_one(l01.xy, h01.xy);
     let v1 = resolve_one(l01.zw, h01.zw);
     let v2 = resolve_one(l23.xy, h23.xy);
     let v3 = resolve_one(l23.zw, h23.zw);
-    resolved_density[quad] = vec4<f32>(v0.x, v1.x, v2.x, v3.x);
-    resolved_hp_mean[quad] = vec4<f32>(v0.y, v1.y, v2.y, v3.y);
+    resolved_density[group4] = vec4<f32>(v0.x, v1.x, v2.x, v3.x);
+    resolved_hp_mean[group4] = vec4<f32>(v0.y, v1.y, v2.y, v3.y);
 }
 
 // Grid-stride: a bounded number of workgroups each bins many voxels, so clearing and merging
@@ -183,10 +183,10 @@ fn histogram(
     workgroupBarrier();
     let stride = groups.x * groups.y * 256u;
     // Four voxels per element; the padding is zero and so not counted.
-    let quads = arrayLength(&density);
+    let group4_count = arrayLength(&density);
     var largest = vec4<f32>(0.0);
-    for (var quad = linear_index(id, groups); quad < quads; quad += stride) {
-        let sums = density[quad];
+    for (var group4 = linear_index(id, groups); group4 < group4_count; group4 += stride) {
+        let sums = density[group4];
         largest = max(largest, sums);
         bin_locally(sums.x, params.scales);
         bin_locally(sums.y, params.scales);
@@ -210,7 +210,7 @@ fn histogram(
 // The reference sum: the upper edge of the bin holding the percentile's rank among the
 // voxels with a positive sum (rank ceil(p * n), 1-based), so at most 1 - p of them exceed it;
 // capped at the largest sum (so a lone voxel, or a field of equal voxels, reaches exactly 1).
-// Keep in sync with reference_sum in src/render/voxelize.rs.
+// Keep in sync with reference_sum in src/render/grid/voxelize.rs.
 @compute @workgroup_size(1)
 fn percentile() {
     var nonempty = 0u;
@@ -241,16 +241,16 @@ fn percentile() {
 @compute @workgroup_size(256)
 fn normalize_density(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     // Four voxels per thread.
-    let quad = linear_index(id, groups);
-    if (quad >= arrayLength(&density)) {
+    let group4 = linear_index(id, groups);
+    if (group4 >= arrayLength(&density)) {
         return;
     }
-    let value = density[quad] / reference_sum[0];
+    let value = density[group4] / reference_sum[0];
     let over = dot(vec4<u32>(value > vec4<f32>(1.0)), vec4<u32>(1u));
     if (over > 0u) {
         atomicAdd(&stats[2], over);
     }
-    density[quad] = min(value, vec4<f32>(1.0));
+    density[group4] = min(value, vec4<f32>(1.0));
 }
 
 @compute @workgroup_size(256)

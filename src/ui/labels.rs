@@ -7,12 +7,12 @@ use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect};
 use eframe::egui_wgpu;
 use glam::Vec3;
 
-use crate::axes::Axis;
-use crate::cloud::PointCloud;
-use crate::render::context::GpuContext;
-use crate::render::frame::FrameView;
+use crate::data::axes::Axis;
+use crate::data::cloud::PointCloud;
+use crate::render::gpu::context::GpuContext;
+use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
 use crate::render::scene::SceneData;
-use crate::render::target::{COLOR_FORMAT, RenderTarget};
+use crate::view::frame_view::FrameView;
 
 /// A tick label or an axis title, placed along one axis of the box.
 #[derive(Clone, Debug)]
@@ -198,14 +198,14 @@ pub fn draw_headless(
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("overlay::labels"),
+            label: Some("labels::labels"),
         });
     let extra =
         renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
     {
         let mut pass = encoder
             .begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("overlay::labels"),
+                label: Some("labels::labels"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: &target.color_view,
                     depth_slice: None,
@@ -232,11 +232,11 @@ pub fn describe_cloud(cloud: &PointCloud) -> Vec<String> {
     let meta = &cloud.meta;
     let mut lines = Vec::new();
     match meta.mode {
-        crate::cloud::DataMode::Song => lines.push("Song".to_string()),
-        crate::cloud::DataMode::Timeline => {
+        crate::data::cloud::DataMode::Song => lines.push("Song".to_string()),
+        crate::data::cloud::DataMode::Timeline => {
             lines.push(format!("Timeline of {} songs", meta.songs.len()))
         }
-        crate::cloud::DataMode::Generic => {
+        crate::data::cloud::DataMode::Generic => {
             lines.push("Generic point cloud (no loudscape metadata)".into())
         }
     }
@@ -265,7 +265,7 @@ pub fn describe_cloud(cloud: &PointCloud) -> Vec<String> {
 }
 
 /// Loudness metrics as "name: value unit" lines, leaving out the ones not measured.
-pub fn describe_metrics(m: &crate::cloud::Metrics) -> Vec<String> {
+pub fn describe_metrics(m: &crate::data::cloud::Metrics) -> Vec<String> {
     let rows = [
         ("integrated loudness", m.integrated_lufs, "LUFS"),
         ("loudness range", m.lra_lu, "LU"),
