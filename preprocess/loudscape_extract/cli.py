@@ -1,7 +1,8 @@
 """Command line: ``loudscape-extract song track.mp3 -o track.ply``.
 
-Subcommands are thin: they parse flags, call the pipeline functions and turn
-:class:`ExtractError` into one line on stderr and exit status 1 (2 for bad flags).
+Argument parsing only: subcommands parse flags, call the library (:func:`extract_song`,
+:func:`build_timeline`, :func:`write_report`) and turn :class:`ExtractError` into one line on
+stderr and exit status 1 (2 for bad flags). Nothing in the library imports this module.
 """
 
 from __future__ import annotations
@@ -10,97 +11,17 @@ import argparse
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
+from loudscape_extract.progress import Progress
+from loudscape_extract.report import write_report
+from loudscape_extract.song import extract_song
+from loudscape_extract.timeline import build_timeline, default_cache_dir
+from loudscape_extract.version import PROG, __version__
 
-PROG = "loudscape-extract"
-
-
-class Progress:
-    """Per-stage progress lines on stderr, only when enabled (stderr is a TTY and not quiet)."""
-
-    def __init__(self, *, enabled: bool) -> None:
-        self.enabled = enabled
-        self.start = time.perf_counter()
-
-    def __call__(self, message: str) -> None:
-        if self.enabled:
-            elapsed = time.perf_counter() - self.start
-            print(f"{PROG}: [{elapsed:6.2f} s] {message}", file=sys.stderr, flush=True)
-
-
-def check_output_path(output: str) -> None:
-    """Fail early when the output cannot be created (missing directory, or a directory)."""
-    directory = os.path.dirname(os.path.abspath(output))
-    if os.path.isdir(output):
-        raise ExtractError("output path is a directory", path=output)
-    if not os.path.isdir(directory):
-        raise ExtractError(f"output directory {directory!r} does not exist", path=output)
-    if not os.access(directory, os.W_OK):
-        raise ExtractError(f"output directory {directory!r} is not writable", path=output)
-
-
-def extract_song(
-    source: str,
-    output: str,
-    *,
-    n_fft: int = 2048,
-    hop_length: int = 1024,
-    floor_db: float | None = None,
-    freq_scale: str = "linear",
-    progress: Callable[[str], None] | None = None,
-) -> dict:
-    """Song mode end to end: decode, features, points, atomic PLY write.
-
-    Parameters
-    ----------
-    source : str
-        Audio file; recorded in the metadata exactly as given.
-    output : str
-        PLY file to write.
-    n_fft, hop_length : int
-        STFT parameters.
-    floor_db : float, optional
-        Noise floor below the peak bin (default :data:`DEFAULT_FLOOR_DB`); 0 disables it.
-    freq_scale : {"linear", "log"}
-    progress : callable, optional
-        Called with a short message before each stage.
-
-    Returns
-    -------
-    metadata : dict
-        What was written into the file's ``loudscape-meta`` comment.
-    """
-    from loudscape_extract import __version__
-    from loudscape_extract.audio import decode_audio
-    from loudscape_extract.features import track_features
-    from loudscape_extract.ply import write_ply
-    from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata, song_points
-
-    say = progress or (lambda _message: None)
-    floor = DEFAULT_FLOOR_DB if floor_db is None else floor_db
-    check_output_path(output)
-    say(f"decoding {source}")
-    audio = decode_audio(source)
-    say(f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s)")
-    try:
-        features = track_features(audio, n_fft=n_fft, hop_length=hop_length, progress=say)
-        say("building points")
-        cloud = song_points(features, floor_db=floor, freq_scale=freq_scale)
-    except ExtractError as exc:
-        if exc.path is None:
-            exc.path = source
-        raise
-    source_format = f"{audio.format}/{audio.subtype}"
-    del audio
-    metadata = song_metadata(
-        features, cloud, generator=f"{PROG} {__version__}", source_format=source_format
-    )
-    say(f"writing {cloud.points.shape[0]} points to {output}")
-    write_ply(output, points=cloud.points, metadata=metadata)
-    say("done")
-    return metadata
+__all__ = ["build_parser", "main"]
 
 
 def _positive_even(text: str) -> int:
@@ -134,9 +55,6 @@ def _non_negative_db(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from loudscape_extract import __version__
-    from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
-
     parser = argparse.ArgumentParser(
         prog=PROG, description="Turn audio into loudscape point clouds (PLY)."
     )
@@ -230,8 +148,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
     """The timeline subcommand: build, then a summary on stderr; 1 when any song failed."""
-    from loudscape_extract.timeline import build_timeline, default_cache_dir
-
     width = [0]
 
     def progress(done: int, total: int, path: str) -> None:
@@ -316,8 +232,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "timeline":
             return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
         elif args.command == "report":
-            from loudscape_extract.report import write_report
-
             write_report(args.input, args.output, csv_path=args.csv)
     except ExtractError as exc:
         if args.debug:

@@ -21,6 +21,10 @@ import sys
 import tempfile
 
 import numpy as np
+import soundfile
+
+from loudscape_extract.ply import read_ply
+from loudscape_extract.song import extract_song
 
 FIXTURE_STEM = "fixture_song"
 SAMPLE_RATE = 8000
@@ -77,11 +81,6 @@ def write_fixture(out_dir: str) -> tuple[str, str]:
     paths : tuple of str
         The PLY and JSON paths.
     """
-    import soundfile
-
-    from loudscape_extract.cli import extract_song
-    from loudscape_extract.ply import read_ply
-
     out_dir = os.path.abspath(out_dir)
     ply_path = os.path.join(out_dir, FIXTURE_STEM + ".ply")
     json_path = os.path.join(out_dir, FIXTURE_STEM + ".expected.json")

@@ -18,6 +18,8 @@ import os
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.paths import check_output_path
+from loudscape_extract.ply import read_ply_metadata
 
 __all__ = ["REPORT_COLUMNS", "per_year", "write_report"]
 
@@ -75,9 +77,6 @@ def write_report(path: str, output: str, *, csv_path: str | None = None) -> list
     ExtractError
         Not a readable PLY, not a timeline, no songs, or an output directory that is missing.
     """
-    from loudscape_extract.cli import check_output_path
-    from loudscape_extract.ply import read_ply_metadata
-
     if not os.path.isfile(path):
         raise ExtractError("no such file", path=path)
     metadata = read_ply_metadata(path)
