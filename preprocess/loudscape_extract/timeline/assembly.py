@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from loudscape_extract.contract import check_cloud
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import FORMAT_VERSION, MODE_TIMELINE
 from loudscape_extract.paths import check_output_path
@@ -31,6 +32,8 @@ class TimelineResult:
     without_year: list
     few_frames: list
     cached: int
+    #: One line each: repaired cache entries, files listed twice, truncated or corrupt songs.
+    notes: list = field(default_factory=list)
 
 
 def build_timeline(
@@ -44,12 +47,16 @@ def build_timeline(
     hop_length: int = 1024,
     cache_dir: str | None = None,
     jobs: int = 1,
+    strict: bool = False,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> TimelineResult:
     """Timeline mode end to end; writes ``output`` unless no song at all could be placed.
 
     Songs that fail to decode are skipped and listed in ``result.failed`` (and in the
     metadata's ``extraction.skipped``); songs without a year likewise in ``without_year``.
+    A truncated or corrupt song is used as far as it decodes, with a line in ``result.notes``
+    (``strict``: it fails instead). The output is checked first: it must end with .ply and be
+    none of the inputs (the songs, the manifest).
 
     Raises
     ------
@@ -60,8 +67,10 @@ def build_timeline(
     if x_by not in X_BY:
         raise ExtractError(f"--x-by must be one of {', '.join(X_BY)}, got {x_by!r}")
     check_output_path(output)
-    entries, without_year, tag_failures = collect_entries(inputs, manifest=manifest)
+    entries, without_year, tag_failures, notes = collect_entries(inputs, manifest=manifest)
     paths = [e.path for e in entries]
+    sources = [*paths, *tag_failures, *without_year] + ([manifest] if manifest else [])
+    check_output_path(output, inputs=sources)
     total = len(paths)
 
     def on_done(done, path):
@@ -74,8 +83,13 @@ def build_timeline(
         hop_length=hop_length,
         cache_dir=cache_dir,
         jobs=jobs,
+        strict=strict,
         on_done=on_done,
+        notes=notes,
     )
+    notes += [
+        f"{path}: {songs[path].warning}" for path in paths if path in songs and songs[path].warning
+    ]
     failed.update(tag_failures)
     good = [e for e in entries if e.path in songs]
     if not good:
@@ -103,6 +117,7 @@ def build_timeline(
             "generator": GENERATOR,
         },
     }
+    check_cloud(points, metadata, path=output)
     write_ply(output, points=points, metadata=metadata)
     return TimelineResult(
         metadata=metadata,
@@ -111,4 +126,5 @@ def build_timeline(
         without_year=without_year,
         few_frames=few,
         cached=n_cached,
+        notes=notes,
     )

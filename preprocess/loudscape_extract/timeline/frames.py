@@ -24,6 +24,8 @@ class SongFrames:
         All STFT frames, silent ones included.
     metrics : dict
         The Song metrics plus ``hp_mean`` (mean over non-silent frames of the frame hp).
+    warning : str
+        :attr:`Audio.warning` of the decode: non-empty for a truncated or corrupt file.
     """
 
     rms_dbfs: np.ndarray
@@ -32,11 +34,15 @@ class SongFrames:
     hp_mean: np.ndarray
     n_frames_total: int
     metrics: dict = field(default_factory=dict)
+    warning: str = ""
 
 
-def compute_song_frames(path: str, *, n_fft: int, hop_length: int) -> SongFrames:
+def compute_song_frames(
+    path: str, *, n_fft: int, hop_length: int, strict: bool = False
+) -> SongFrames:
     """Decode and run :func:`track_features` (the Song pipeline), keep frames and metrics."""
-    audio = decode_audio(path)
+    audio = decode_audio(path, strict=strict)
+    warning = audio.warning
     features = track_features(audio, n_fft=n_fft, hop_length=hop_length)
     del audio
     frames = features.frames
@@ -52,4 +58,5 @@ def compute_song_frames(path: str, *, n_fft: int, hop_length: int) -> SongFrames
         hp_mean=hp.astype(np.float32),
         n_frames_total=int(frames.silent.shape[0]),
         metrics=metrics,
+        warning=warning,
     )

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import axis, hp_axis, level_axis, scalar_axis
 from loudscape_extract.timeline.frames import SongFrames
@@ -105,7 +106,8 @@ def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
         if group not in seen:
             seen.add(group)
             ticks.append({"at": round(span[0], 6), "label": str(max(group, first))})
-    return axis("year", "year", first, last, ticks=ticks)
+    # All songs of one year: the axis ends where that year does, as with x by year.
+    return axis("year", "year", first, last if last > first else last + 1, ticks=ticks)
 
 
 def _round(value, digits=4):
@@ -176,7 +178,10 @@ def timeline_points(
     axes = {
         "x": x_axis(entries, spans, x_by),
         "y": level_axis(LEVEL_MIN_DBFS, LEVEL_MAX_DBFS),
-        "z": axis("crest factor", "dB", round(crest_low, 6), round(crest_high, 6)),
+        # A constant crest factor: every z is 0, the axis spans half a dB either side.
+        "z": axis(
+            "crest factor", "dB", *(round(v, 6) for v in spread_range(crest_low, crest_high, 0.5))
+        ),
         "scalar": scalar_axis(SCALAR_FLOOR_DB, 0.0),
         "hp": hp_axis(),
     }
