@@ -32,7 +32,7 @@ MAX_SAMPLE_RATE = 192_000
 #: Float files may exceed full scale, but not by more than this (+60 dBFS): beyond it the
 #: file is corrupt or not audio, and levels would overflow.
 MAX_SAMPLE_MAGNITUDE = 1000.0
-_BLOCK_FRAMES = 1 << 14
+_BLOCK_FRAMES = 1 << 15
 SUPPORTED_EXTENSIONS = (".wav", ".flac", ".ogg", ".oga", ".opus", ".mp3", ".aif", ".aiff")
 
 
@@ -152,9 +152,9 @@ def decode_audio(path: str | os.PathLike, *, strict: bool = False) -> Audio:
         raise ExtractError(
             f"NaN or infinite sample at sample {first} ({first / sample_rate:.3f} s)", path=name
         )
-    peak_index = int(np.argmax(np.abs(samples).max(axis=1)))
-    peak = float(np.abs(samples[peak_index]).max())
-    if peak > MAX_SAMPLE_MAGNITUDE:
+    if max(float(samples.max()), -float(samples.min())) > MAX_SAMPLE_MAGNITUDE:
+        peak_index = int(np.argmax(np.abs(samples).max(axis=1)))
+        peak = float(np.abs(samples[peak_index]).max())
         raise ExtractError(
             f"sample value {peak:.3g} at {peak_index / sample_rate:.3f} s is beyond "
             f"+/-{MAX_SAMPLE_MAGNITUDE:g} ({20 * math.log10(MAX_SAMPLE_MAGNITUDE):+.0f} dBFS): "

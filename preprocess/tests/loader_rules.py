@@ -19,12 +19,17 @@ def loader_problems(path):
     """Why the app's loader would refuse ``path`` (empty list: it loads)."""
     problems = []
     header, metadata, records = tiny_read(path)
-    meta_line = next(line for line in header if line.startswith("comment loudscape-meta "))
+    # The JSON text as written: one line (format 1) or numbered chunks (format 2).
+    v1 = [line.split(" ", 2)[2] for line in header if line.startswith("comment loudscape-meta ")]
+    v2 = [line.split(" ")[3] for line in header if line.startswith("comment loudscape-meta-v2 ")]
     try:
-        json.loads(meta_line.split(" ", 2)[2], parse_constant=_no_constants)
+        json.loads("".join(v2) if v2 else v1[0], parse_constant=_no_constants)
     except ValueError as exc:
         problems.append(str(exc))
-    if metadata.get("format_version") != 1 or metadata.get("mode") not in ("song", "timeline"):
+    if metadata.get("format_version") not in (1, 2) or metadata.get("mode") not in (
+        "song",
+        "timeline",
+    ):
         problems.append("format_version or mode")
     if metadata.get("point_count") != records.shape[0]:
         problems.append("point_count")

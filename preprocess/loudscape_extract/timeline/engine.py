@@ -121,6 +121,8 @@ def _worker_start(parent: int) -> None:
 
 def _stop_pool(pool: ProcessPoolExecutor, cache_dir: str | None) -> None:
     """Cancel queued songs, terminate running workers, remove their cache temporaries."""
+    # The executor has no public way to stop running calls: its worker processes are
+    # terminated directly (``_processes``, present in CPython 3.10 to 3.14).
     processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
