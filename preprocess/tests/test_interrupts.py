@@ -44,6 +44,13 @@ def alive(pid):
         return False
 
 
+def catches_sigterm(pid):
+    """True once ``pid`` has a SIGTERM handler (bit 15 of SigCgt in /proc/PID/status)."""
+    with open(f"/proc/{pid}/status") as handle:
+        caught = next(line for line in handle if line.startswith("SigCgt:")).split()[1]
+    return bool(int(caught, 16) & (1 << (signal.SIGTERM - 1)))
+
+
 def wait_for(condition, timeout, what):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -217,3 +224,28 @@ def test_sigterm_during_a_write_leaves_no_temporary(tmp_path, kind, name):
             process.kill()
     assert "Terminated" in err  # the exception SIGTERM became
     assert os.listdir(folder) == []
+
+
+def test_sigterm_to_song_exits_143_and_writes_nothing(tmp_path):
+    source = tmp_path / "long.wav"
+    y = musical_signal(sample_rate=RATE, duration_s=600.0) * 0.4
+    soundfile.write(source, y.astype(np.float32), RATE)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "loudscape_extract.cli", "song", str(source)],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        # Signal once the command has installed its handler (before that, the default
+        # action ends it, writing nothing either), then a little into the work.
+        wait_for(lambda: catches_sigterm(process.pid), 60, "the SIGTERM handler")
+        time.sleep(0.5)
+        assert process.poll() is None, "finished before the signal: make the song longer"
+        process.send_signal(signal.SIGTERM)
+        _, err = process.communicate(timeout=10)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 143
+    assert err == "loudscape-extract: terminated; no file written\n"
+    assert sorted(os.listdir(tmp_path)) == ["long.wav"]
