@@ -7,8 +7,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.features import HPSS_KERNEL, HPSS_MARGIN, HPSS_POWER, TrackFeatures
+from loudscape_extract.format import (
+    FORMAT_VERSION,
+    MODE_SONG,
+    axis,
+    frequency_axis,
+    hp_axis,
+    level_axis,
+    rounded,
+    scalar_axis,
+)
 
 __all__ = [
     "DEFAULT_FLOOR_DB",
@@ -27,7 +38,6 @@ DEFAULT_FLOOR_DB = 80.0
 SCALAR_MIN_DB = -100.0
 SCALAR_MAX_DB = 0.0
 FREQ_SCALES = ("linear", "log")
-_TICK_FREQUENCIES = (20, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000)
 
 
 @dataclass(frozen=True)
@@ -67,38 +77,6 @@ def _normalize(values: np.ndarray, low: float, high: float) -> np.ndarray:
     return np.clip(out, -1.0, 1.0).astype(np.float32)
 
 
-def _frequency_label(hz: float) -> str:
-    return f"{hz / 1000:g} kHz" if hz >= 1000 else f"{hz:g} Hz"
-
-
-def _frequency_axis(frequencies: np.ndarray, scale: str) -> tuple[np.ndarray, dict]:
-    """z per bin (NaN for bins not drawn) and the z axis object."""
-    low = float(frequencies[0] if scale == "linear" else frequencies[1])
-    high = float(frequencies[-1])
-    z = np.full(frequencies.shape, np.nan)
-    if scale == "linear":
-        z[:] = _normalize(np.arange(frequencies.size, dtype=np.float64), 0, frequencies.size - 1)
-        position = lambda f: 2.0 * (f - low) / (high - low) - 1.0  # noqa: E731
-    else:
-        log_low, log_high = math.log10(low), math.log10(high)
-        z[1:] = 2.0 * (np.log10(frequencies[1:]) - log_low) / (log_high - log_low) - 1.0
-        position = lambda f: 2.0 * (math.log10(f) - log_low) / (log_high - log_low) - 1.0  # noqa: E731
-    ticks = [
-        {"at": round(position(f), 6), "label": _frequency_label(f)}
-        for f in _TICK_FREQUENCIES
-        if low <= f <= high
-    ]
-    axis = {
-        "label": "frequency",
-        "unit": "Hz",
-        "min": low,
-        "max": high,
-        "scale": scale,
-        "ticks": ticks,
-    }
-    return z, axis
-
-
 def song_points(
     features: TrackFeatures, *, floor_db: float = DEFAULT_FLOOR_DB, freq_scale: str = "linear"
 ) -> SongCloud:
@@ -129,7 +107,7 @@ def song_points(
     if kept_frames.size == 0:
         raise ExtractError("audio is entirely silent (no frame has a non-zero sample)")
     first_bin = 0 if freq_scale == "linear" else 1
-    z_per_bin, z_axis = _frequency_axis(features.frequencies_hz, freq_scale)
+    z_per_bin, z_axis = frequency_axis(features.frequencies_hz, freq_scale)
     z_per_bin = z_per_bin[first_bin:].astype(np.float32)
 
     levels = features.level_db[first_bin:, kept_frames].T  # (n_kept, n_bins_drawn)
@@ -156,24 +134,16 @@ def song_points(
     points[:, 3] = np.clip(scalar, 0.0, 1.0)
     points[:, 4] = features.hp[first_bin:, kept_frames].T[keep]
 
+    # One kept frame, or one level everywhere: the axis gets a range around the single value
+    # (half a hop of time, half a dB) and the points sit at its middle (docs/FORMAT.md).
+    x_low, x_high = spread_range(t_first, t_last, features.hop_length / features.sample_rate / 2)
+    y_axis_low, y_axis_high = spread_range(y_low, peak, 0.5)
     axes = {
-        "x": {"label": "time", "unit": "s", "min": t_first, "max": t_last, "scale": "linear"},
-        "y": {"label": "level", "unit": "dB", "min": y_low, "max": peak, "scale": "linear"},
+        "x": axis("time", "s", x_low, x_high),
+        "y": level_axis(y_axis_low, y_axis_high),
         "z": z_axis,
-        "scalar": {
-            "label": "A-weighted level",
-            "unit": "dB",
-            "min": SCALAR_MIN_DB,
-            "max": SCALAR_MAX_DB,
-            "scale": "linear",
-        },
-        "hp": {
-            "label": "harmonic-percussive ratio",
-            "unit": "",
-            "min": 0.0,
-            "max": 1.0,
-            "scale": "linear",
-        },
+        "scalar": scalar_axis(SCALAR_MIN_DB, SCALAR_MAX_DB),
+        "hp": hp_axis(),
     }
     return SongCloud(
         points=points,
@@ -184,21 +154,6 @@ def song_points(
         floor_db=float(floor_db),
         freq_scale=freq_scale,
     )
-
-
-def _rounded(value, digits: int):
-    """Round floats (recursively) for stable, readable metadata; NaN/inf become None."""
-    if isinstance(value, dict):
-        return {key: _rounded(item, digits) for key, item in value.items()}
-    if isinstance(value, list | tuple):
-        return [_rounded(item, digits) for item in value]
-    if isinstance(value, bool | int | str) or value is None:
-        return value
-    number = float(value)
-    if not math.isfinite(number):
-        return None
-    rounded = round(number, digits)
-    return 0.0 if rounded == 0 else rounded
 
 
 def song_metadata(
@@ -220,18 +175,16 @@ def song_metadata(
     metadata : dict
         JSON-ready; floats rounded to 6 decimals (metrics to 4).
     """
-    from loudscape_extract import FORMAT_VERSION
-
     return {
         "format_version": FORMAT_VERSION,
-        "mode": "song",
+        "mode": MODE_SONG,
         "point_count": int(cloud.points.shape[0]),
         "source": {
             "path": features.path,
             "format": source_format,
             "sample_rate": features.sample_rate,
             "channels": features.n_channels,
-            "duration_s": _rounded(features.duration_s, 6),
+            "duration_s": rounded(features.duration_s, 6),
         },
         "stft": {
             "n_fft": features.n_fft,
@@ -241,10 +194,10 @@ def song_metadata(
             "frames": cloud.frames_total,
             "frames_kept": cloud.frames_kept,
         },
-        "axes": _rounded(cloud.axes, 6),
-        "metrics": _rounded(features.metrics, 4),
+        "axes": rounded(cloud.axes, 6),
+        "metrics": rounded(features.metrics, 4),
         "extraction": {
-            "floor_db": _rounded(cloud.floor_db, 6),
+            "floor_db": rounded(cloud.floor_db, 6),
             "freq_scale": cloud.freq_scale,
             "hpss": {"kernel_size": HPSS_KERNEL, "power": HPSS_POWER, "margin": HPSS_MARGIN},
             "generator": generator,

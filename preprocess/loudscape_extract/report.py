@@ -18,6 +18,9 @@ import os
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.messages import shorten
+from loudscape_extract.paths import atomic_output, check_output_path, check_regular_input
+from loudscape_extract.ply import read_ply_metadata
 
 __all__ = ["REPORT_COLUMNS", "per_year", "write_report"]
 
@@ -63,6 +66,37 @@ def per_year(metadata: dict) -> list[dict]:
     return rows
 
 
+def _checked_songs(metadata, path: str) -> list[dict]:
+    """The metadata's songs, each with an int year and a metrics object, or a clear error."""
+    if not isinstance(metadata, dict):
+        raise ExtractError("loudscape-meta is not a JSON object", path=path)
+    mode = metadata.get("mode")
+    if mode != "timeline":
+        raise ExtractError(
+            f"not a timeline file (mode {shorten(mode, 40) if mode else 'missing'}); "
+            "write one with loudscape-extract timeline",
+            path=path,
+        )
+    songs = metadata.get("songs")
+    if not isinstance(songs, list) or not songs:
+        raise ExtractError("the timeline lists no songs", path=path)
+    checked = []
+    for index, song in enumerate(songs):
+        year = song.get("year") if isinstance(song, dict) else None
+        metrics = song.get("metrics") if isinstance(song, dict) else None
+        if isinstance(year, bool) or not isinstance(year, int) or not isinstance(metrics, dict):
+            raise ExtractError(
+                f"songs[{index}] needs an integer year and a metrics object", path=path
+            )
+        clean = {
+            key: value
+            for key, value in metrics.items()
+            if isinstance(value, int | float) and not isinstance(value, bool) and np.isfinite(value)
+        }
+        checked.append({**song, "metrics": clean})
+    return checked
+
+
 def _column(rows, key):
     return np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
 
@@ -75,27 +109,20 @@ def write_report(path: str, output: str, *, csv_path: str | None = None) -> list
     ExtractError
         Not a readable PLY, not a timeline, no songs, or an output directory that is missing.
     """
-    from loudscape_extract.cli import check_output_path
-    from loudscape_extract.ply import read_ply_metadata
-
-    if not os.path.isfile(path):
-        raise ExtractError("no such file", path=path)
+    check_regular_input(path)
+    check_output_path(output, inputs=[path], extensions=(".png",))
+    if csv_path:
+        check_output_path(csv_path, inputs=[path, output], extensions=(".csv",), flag="--csv")
     metadata = read_ply_metadata(path)
-    if metadata.get("mode") != "timeline":
-        raise ExtractError(
-            f"not a timeline file (mode {metadata.get('mode')!r}); "
-            "write one with loudscape-extract timeline",
-            path=path,
-        )
-    if not metadata.get("songs"):
-        raise ExtractError("the timeline lists no songs", path=path)
-    check_output_path(output)
+    songs = _checked_songs(metadata, path)
+    rows = per_year({"songs": songs})
+    with atomic_output(output) as temporary:
+        _plot(rows, songs, temporary, title=os.path.basename(path))
     if csv_path:
-        check_output_path(csv_path)
-    rows = per_year(metadata)
-    _plot(rows, metadata["songs"], output, title=os.path.basename(path))
-    if csv_path:
-        with open(csv_path, "w", newline="", encoding="utf-8") as handle:
+        with (
+            atomic_output(csv_path) as temporary,
+            open(temporary, "w", newline="", encoding="utf-8") as handle,
+        ):
             writer = csv.DictWriter(handle, fieldnames=REPORT_COLUMNS)
             writer.writeheader()
             for row in rows:
@@ -143,8 +170,6 @@ def _plot(rows, songs, output, *, title):
     for ax in axes:
         ax.grid(True, alpha=0.3)
     try:
-        fig.savefig(output, dpi=110)
-    except OSError as exc:
-        raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=output) from exc
+        fig.savefig(output, dpi=110, format="png")  # OSError: atomic_output names the file
     finally:
         plt.close(fig)
