@@ -25,6 +25,9 @@ const SETTLE: Duration = Duration::from_millis(180);
 /// While the camera moves, the Volume and Surface views render at a reduced resolution, chosen
 /// so a frame takes about this long (the device's pace measured while moving).
 const MOVING_FRAME_MS: f32 = 45.0;
+/// How far (in wheel notches) the window's fit steps back from a tight fit of the box, so the
+/// labels outside the box stay in view: 0.9^-1 = 11 % farther.
+const LABEL_MARGIN_STEPS: f32 = 1.0;
 /// The coarsest reduction while moving: one pixel in `MAX_MOVING_DIVISOR` per side.
 const MAX_MOVING_DIVISOR: u32 = 4;
 /// A press shorter than this still counts as a click. egui measures it in frame times, so on a
@@ -115,6 +118,7 @@ impl LoudscapeApp {
             keep_camera_loads: 0,
             surface_error: None,
             surface_empty: false,
+            camera_fitted: false,
             notice: None,
             needs_repaint: false,
             moving_divisor: [1; 3],
@@ -137,6 +141,9 @@ impl LoudscapeApp {
             let (min, max) = loaded.world_box;
             let aspect = self.view_aspect;
             self.camera.fit(min, max, aspect);
+            // Room around the box for the tick labels and axis titles drawn outside it (in a
+            // small window a tight fit put them under the side panel).
+            self.camera.zoom(-LABEL_MARGIN_STEPS);
         }
     }
 
@@ -144,6 +151,7 @@ impl LoudscapeApp {
     pub(super) fn reset_view(&mut self) {
         self.camera = Camera::default();
         self.fit();
+        self.camera_fitted = true;
     }
 
     /// Makes `slot` the active one. Each data mode keeps its own camera: the one left behind is
@@ -174,10 +182,17 @@ impl LoudscapeApp {
         let ppp = ui.ctx().pixels_per_point();
         let width = (rect.width() * ppp).round().max(1.0) as u32;
         let height = (rect.height() * ppp).round().max(1.0) as u32;
-        self.view_aspect = width as f32 / height as f32;
+        let aspect = width as f32 / height as f32;
+        if (aspect - self.view_aspect).abs() > 1e-3 && self.camera_fitted {
+            // The window was resized and the camera not moved by hand since it was fitted:
+            // fit again so the data stays in view (an 800x600 window cut the labels off).
+            self.fit_pending = true;
+        }
+        self.view_aspect = aspect;
         if self.fit_pending && self.active().is_some() {
             self.fit();
             self.fit_pending = false;
+            self.camera_fitted = true;
         }
 
         // Camera input.
@@ -200,17 +215,19 @@ impl LoudscapeApp {
             }
         }
         let keys_free = !ui.ctx().egui_wants_keyboard_input();
+        let mut fitted_now = false;
         if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::F)) {
             self.fit();
-            moved = true;
+            (moved, fitted_now) = (true, true);
         }
         if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::R)) {
             self.reset_view();
-            moved = true;
+            (moved, fitted_now) = (true, true);
         }
         let now = Instant::now();
         if moved {
             self.last_motion = Some(now);
+            self.camera_fitted = fitted_now;
         }
         let moving = self.last_motion.is_some_and(|t| now - t < SETTLE);
         // The volume and the surface are drawn while moving too, at a resolution the device can
@@ -278,7 +295,10 @@ impl LoudscapeApp {
             if self.settings.show_box {
                 labels::paint(&painter, rect, &view, &loaded.labels);
             }
-            if let (Some((_, hover)), Some(pos)) = (&self.hover, response.hover_pos()) {
+            // While the camera moves the read-out would describe where the cursor was.
+            if let (Some((_, hover)), Some(pos), false) =
+                (&self.hover, response.hover_pos(), moving)
+            {
                 paint_readings(&painter, rect, pos, &hover.readings);
             }
         } else {

@@ -157,20 +157,21 @@ impl LoudscapeApp {
             }
         }
 
-        ui.with_layout(egui::Layout::bottom_up(egui::Align::LEFT), |ui| {
-            ui.label(
-                RichText::new(format!(
-                    "{:.1} ms/frame · {} scene renders",
-                    self.frame_ms, self.renders_seen.0
-                ))
-                .small()
-                .weak(),
-            )
-            .on_hover_text(
-                "Time of frames drawn one after another (waiting for input not counted); \
-                 the scene renders only when the camera, the data or a setting changed",
-            );
-        });
+        // At the end of the scrolling panel (a bottom-up layout inside the scroll area drew it
+        // over the last lines when the window was small).
+        ui.add_space(8.0);
+        ui.label(
+            RichText::new(format!(
+                "{:.1} ms/frame · {} scene renders",
+                self.frame_ms, self.renders_seen.0
+            ))
+            .small()
+            .weak(),
+        )
+        .on_hover_text(
+            "Time of frames drawn one after another (waiting for input not counted); \
+             the scene renders only when the camera, the data or a setting changed",
+        );
     }
 
     pub(super) fn grid_controls(&mut self, ui: &mut egui::Ui) {
@@ -245,7 +246,7 @@ impl LoudscapeApp {
             ui.colored_label(Color32::from_rgb(240, 120, 100), error);
         } else if self.surface_empty {
             ui.label(
-                RichText::new("no surface at this isovalue: no voxel is that dense")
+                RichText::new("no surface at this isovalue: the density crosses it nowhere")
                     .color(Color32::from_rgb(230, 190, 110)),
             );
         }

@@ -51,6 +51,8 @@ pub(super) struct LoudscapeApp {
     pub(super) keep_camera_loads: usize,
     /// Why the surface could not be extracted, if it could not.
     pub(super) surface_error: Option<String>,
+    /// The camera is as the last fit left it (not moved by hand since): refit on resize.
+    pub(super) camera_fitted: bool,
     /// The last extraction found no surface (the isovalue is above every voxel).
     pub(super) surface_empty: bool,
     /// A line of news that is not an error (where a screenshot went), in the normal colour.
