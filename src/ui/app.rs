@@ -119,6 +119,8 @@ impl LoudscapeApp {
             surface_error: None,
             surface_empty: false,
             camera_fitted: false,
+            busy: None,
+            busy_shown: false,
             notice: None,
             needs_repaint: false,
             moving_divisor: [1; 3],

@@ -234,6 +234,21 @@ impl ViewResources {
         }
     }
 
+    /// Whether cloud `id` has a voxel grid built with these settings (no build needed).
+    pub fn grid_matches(
+        render_state: &egui_wgpu::RenderState,
+        id: u64,
+        cloud: &PointCloud,
+        voxels: &crate::render::grid::voxelize::VoxelSettings,
+    ) -> bool {
+        let renderer = render_state.renderer.read();
+        renderer
+            .callback_resources
+            .get::<ViewResources>()
+            .and_then(|r| r.scenes.get(&id))
+            .is_none_or(|s| s.grid_matches(cloud, voxels))
+    }
+
     /// Whether cloud `id` has a voxel grid on the GPU yet.
     pub fn has_grid(render_state: &egui_wgpu::RenderState, id: u64) -> bool {
         let renderer = render_state.renderer.read();

@@ -130,6 +130,12 @@ impl LoudscapeApp {
             cloud_info(ui, &loaded.cloud);
         }
 
+        if let Some(busy) = &self.busy {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(busy);
+            });
+        }
         for loading in &self.loading {
             ui.horizontal(|ui| {
                 ui.spinner();

@@ -142,6 +142,18 @@ impl LoudscapeApp {
         let Some(loaded) = slot else {
             return;
         };
+        // Building a grid blocks the window for a while on slow devices: say so first, and
+        // build on the next frame, once the notice is on screen.
+        let needs_build =
+            !ViewResources::grid_matches(render_state, loaded.id, &loaded.cloud, &voxels);
+        if needs_build && !self.busy_shown {
+            self.busy = Some("building the voxel grid…".into());
+            self.busy_shown = true;
+            self.needs_repaint = true;
+            return;
+        }
+        self.busy_shown = false;
+        self.busy = None;
         let mut failure = None;
         match ViewResources::ensure_grid(render_state, loaded.id, &loaded.cloud, &voxels) {
             Ok(true) => loaded.cpu_grid = None,

@@ -51,6 +51,10 @@ pub(super) struct LoudscapeApp {
     pub(super) keep_camera_loads: usize,
     /// Why the surface could not be extracted, if it could not.
     pub(super) surface_error: Option<String>,
+    /// Work that blocks the window, announced a frame before it runs (shown with a spinner).
+    pub(super) busy: Option<String>,
+    /// The busy notice has been on screen for a frame: the work may start.
+    pub(super) busy_shown: bool,
     /// The camera is as the last fit left it (not moved by hand since): refit on resize.
     pub(super) camera_fitted: bool,
     /// The last extraction found no surface (the isovalue is above every voxel).
