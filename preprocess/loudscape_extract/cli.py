@@ -13,12 +13,18 @@ import sys
 import time
 from collections.abc import Sequence
 
+from loudscape_extract.dynamics import HIGHPASS_HZ, dc_warning
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
 from loudscape_extract.progress import Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
-from loudscape_extract.timeline import build_timeline, default_cache_dir
+from loudscape_extract.timeline import (
+    DEFAULT_Z_MEASURE,
+    Z_MEASURES,
+    build_timeline,
+    default_cache_dir,
+)
 from loudscape_extract.version import PROG, __version__
 
 __all__ = ["build_parser", "main"]
@@ -87,13 +93,20 @@ def build_parser() -> argparse.ArgumentParser:
         default="linear",
         help="z axis: linear in bin index (default) or log frequency (drops the 0 Hz bin)",
     )
+    song.add_argument(
+        "--highpass",
+        action="store_true",
+        help=f"also high-pass at {HIGHPASS_HZ:g} Hz (infrasound) before frame level, crest, "
+        "PSR and DR (DC is always removed)",
+    )
     timeline = commands.add_parser(
         "timeline",
         help="many songs -> one chronological cloud (one point per sampled frame)",
         description="Many songs -> one point cloud ordered by year: x song position (by year "
-        "or by order), y frame RMS level (-60..0 dBFS), z frame crest factor (1st-99th "
-        "percentile over all songs), scalar A-weighted frame level, hp frame hp ratio. Years, "
-        "titles and artists come from tags (mutagen) or from --manifest.",
+        "or by order), y frame RMS level (-60..0 dBFS), z the dynamics of the 3 s around each "
+        "frame (PSR by default; see --z-measure; 1st-99th percentile over all songs), scalar "
+        "A-weighted frame level, hp frame hp ratio. Years, titles and artists come from tags "
+        "(mutagen) or from --manifest.",
     )
     timeline.add_argument(
         "inputs", nargs="*", help="audio files and folders (searched recursively)"
@@ -107,7 +120,21 @@ def build_parser() -> argparse.ArgumentParser:
         "--x-by",
         choices=("year", "order"),
         default="year",
-        help="x proportional to the year (default) or each song an equal span in order",
+        help="x proportional to the year (default) or each song an equal span in order "
+        "(songs without a year then come last instead of being left out)",
+    )
+    timeline.add_argument(
+        "--z-measure",
+        choices=Z_MEASURES,
+        default=DEFAULT_Z_MEASURE,
+        help="z axis: psr (true peak minus short-term loudness over the 3 s around the frame; "
+        "default), crest-3s (peak/RMS over those 3 s) or crest-frame (the paper's crest "
+        "factor of the STFT frame alone, which measures waveform shape, not compression)",
+    )
+    timeline.add_argument(
+        "--highpass",
+        action="store_true",
+        help=f"also high-pass each song at {HIGHPASS_HZ:g} Hz before its dynamics",
     )
     timeline.add_argument(
         "--frames-per-song",
@@ -169,6 +196,8 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
             hop_length=args.hop,
             cache_dir=cache_dir,
             jobs=args.jobs,
+            z_measure=args.z_measure,
+            highpass_hz=HIGHPASS_HZ if args.highpass else None,
             progress=progress,
         )
     finally:
@@ -179,6 +208,8 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
         print(f"{PROG}: skipped: {path}: no year in its tags", file=sys.stderr)
     for path, reason in sorted(result.failed.items()):
         print(f"{PROG}: skipped: {path}: {reason}", file=sys.stderr)
+    for path, offset in result.dc_offsets:
+        print(f"{PROG}: {dc_warning(path, offset)}", file=sys.stderr)
     if not args.quiet:
         songs = result.metadata["songs"]
         print(
@@ -227,7 +258,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 hop_length=args.hop,
                 floor_db=args.floor_db,
                 freq_scale=args.freq_scale,
+                highpass_hz=HIGHPASS_HZ if args.highpass else None,
                 progress=progress,
+                warn=lambda message: print(f"{PROG}: {message}", file=sys.stderr),
             )
         elif args.command == "timeline":
             return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())

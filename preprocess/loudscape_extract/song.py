@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from loudscape_extract.audio import decode_audio
+from loudscape_extract.dynamics import DC_WARN_THRESHOLD, dc_warning
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.features import track_features
 from loudscape_extract.paths import check_output_path
@@ -23,7 +24,9 @@ def extract_song(
     hop_length: int = 1024,
     floor_db: float | None = None,
     freq_scale: str = "linear",
+    highpass_hz: float | None = None,
     progress: Callable[[str], None] | None = None,
+    warn: Callable[[str], None] | None = None,
 ) -> dict:
     """Song mode end to end: decode, features, points, atomic PLY write.
 
@@ -38,8 +41,12 @@ def extract_song(
     floor_db : float, optional
         Noise floor below the peak bin (default :data:`DEFAULT_FLOOR_DB`); 0 disables it.
     freq_scale : {"linear", "log"}
+    highpass_hz : float, optional
+        High-pass (e.g. 20 Hz) the DC-free signal before frame level, crest, DR and PSR.
     progress : callable, optional
         Called with a short message before each stage.
+    warn : callable, optional
+        Called with a message about the input worth knowing (a large DC offset).
 
     Returns
     -------
@@ -53,13 +60,18 @@ def extract_song(
     audio = decode_audio(source)
     say(f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s)")
     try:
-        features = track_features(audio, n_fft=n_fft, hop_length=hop_length, progress=say)
+        features = track_features(
+            audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, progress=say
+        )
         say("building points")
         cloud = song_points(features, floor_db=floor, freq_scale=freq_scale)
     except ExtractError as exc:
         if exc.path is None:
             exc.path = source
         raise
+    offset = features.metrics.get("dc_offset") or 0.0
+    if warn and offset > DC_WARN_THRESHOLD:
+        warn(dc_warning(source, offset))
     source_format = f"{audio.format}/{audio.subtype}"
     del audio
     metadata = song_metadata(features, cloud, generator=GENERATOR, source_format=source_format)

@@ -54,6 +54,13 @@ def test_song_end_to_end(tmp_path, capsys):
         "plr_db",
         "crest_median_db",
         "crest_p95_db",
+        "dc_offset",
+        "dr_db",
+        "psr_median_db",
+        "psr_p10_db",
+        "psr_p90_db",
+        "psr_spread_db",
+        "crest_3s_median_db",
     }
     assert np.all(np.abs(records[:, :3]) <= 1) and np.all(
         (records[:, 3:] >= 0) & (records[:, 3:] <= 1)

@@ -115,6 +115,8 @@ def fake_song(n, *, rms=-20.0, crest=10.0):
         hp_mean=np.full(n, 0.25, np.float32),
         n_frames_total=n + 2,
         metrics={"integrated_lufs": -14.0, "hp_mean": 0.25},
+        psr_db=np.full(n, crest + 1.0, np.float32),
+        crest_3s_db=np.full(n, crest + 2.0, np.float32),
     )
 
 
@@ -140,7 +142,9 @@ def test_layout_order_spans_and_axes():
     ]
     songs = {e.path: fake_song(50 + i * 10) for i, e in enumerate(entries)}
     songs["d"] = fake_song(50, rms=-90.0, crest=40.0)  # below -60 dBFS, crest outlier
-    points, layout = timeline_points(entries, songs, frames_per_song=20, x_by="year")
+    points, layout = timeline_points(
+        entries, songs, frames_per_song=20, x_by="year", z_measure="crest-frame"
+    )
     described = layout["songs"]
     assert [s["path"] for s in described] == ["a", "d", "b", "c"]  # year, artist, title
     assert points.shape == (80, 5) and all(s["point_count"] == 20 for s in described)
@@ -169,7 +173,9 @@ def test_order_mode_equal_spans():
     spans = song_spans(entries, "order")
     assert np.allclose([b - a for a, b in spans], 2 / 3)
     songs = {e.path: fake_song(30) for e in entries}
-    _, layout = timeline_points(entries, songs, frames_per_song=8, x_by="order")
+    _, layout = timeline_points(
+        entries, songs, frames_per_song=8, x_by="order", z_measure="crest-frame"
+    )
     axis = layout["axes"]["x"]
     assert (axis["min"], axis["max"]) == (1970, 2010)
     assert [(t["label"], round(t["at"], 4)) for t in axis["ticks"]] == [
@@ -196,7 +202,8 @@ def test_timeline_from_tags(tmp_path, capsys):
     assert np.all(np.abs(points[:, :3]) <= 1) and np.all(
         (points[:, 3:] >= 0) & (points[:, 3:] <= 1)
     )
-    assert meta["axes"]["z"]["label"] == "crest factor"
+    assert meta["axes"]["z"]["label"] == "PSR (true peak - short-term loudness, 3 s)"
+    assert meta["axes"]["z"]["measure"] == meta["extraction"]["z_measure"] == "psr"
 
 
 def test_manifest_and_fewer_frames(tmp_path, capsys):

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from loudscape_extract.dynamics import DC_WARN_THRESHOLD
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import FORMAT_VERSION, MODE_TIMELINE
 from loudscape_extract.paths import check_output_path
@@ -13,9 +14,11 @@ from loudscape_extract.timeline.engine import compute_all
 from loudscape_extract.timeline.inputs import collect_entries
 from loudscape_extract.timeline.layout import (
     CREST_PERCENTILES,
+    DEFAULT_Z_MEASURE,
     LEVEL_MAX_DBFS,
     LEVEL_MIN_DBFS,
     X_BY,
+    Z_MEASURES,
     timeline_points,
 )
 from loudscape_extract.version import GENERATOR
@@ -31,6 +34,8 @@ class TimelineResult:
     without_year: list
     few_frames: list
     cached: int
+    #: (path, DC offset) of songs whose offset is over DC_WARN_THRESHOLD.
+    dc_offsets: list = field(default_factory=list)
 
 
 def build_timeline(
@@ -44,12 +49,17 @@ def build_timeline(
     hop_length: int = 1024,
     cache_dir: str | None = None,
     jobs: int = 1,
+    z_measure: str = DEFAULT_Z_MEASURE,
+    highpass_hz: float | None = None,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> TimelineResult:
     """Timeline mode end to end; writes ``output`` unless no song at all could be placed.
 
     Songs that fail to decode are skipped and listed in ``result.failed`` (and in the
-    metadata's ``extraction.skipped``); songs without a year likewise in ``without_year``.
+    metadata's ``extraction.skipped``); songs without a year likewise in ``without_year``
+    (with ``x_by="order"`` they are placed after the dated songs instead). ``z_measure`` is
+    one of :data:`Z_MEASURES`; ``highpass_hz`` high-pass filters each song before its dynamics
+    (see :func:`track_features`).
 
     Raises
     ------
@@ -59,8 +69,12 @@ def build_timeline(
     """
     if x_by not in X_BY:
         raise ExtractError(f"--x-by must be one of {', '.join(X_BY)}, got {x_by!r}")
+    if z_measure not in Z_MEASURES:
+        raise ExtractError(f"--z-measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
     check_output_path(output)
-    entries, without_year, tag_failures = collect_entries(inputs, manifest=manifest)
+    entries, without_year, tag_failures = collect_entries(
+        inputs, manifest=manifest, need_year=x_by == "year"
+    )
     paths = [e.path for e in entries]
     total = len(paths)
 
@@ -74,6 +88,7 @@ def build_timeline(
         hop_length=hop_length,
         cache_dir=cache_dir,
         jobs=jobs,
+        highpass_hz=highpass_hz,
         on_done=on_done,
     )
     failed.update(tag_failures)
@@ -83,7 +98,14 @@ def build_timeline(
         raise ExtractError(
             f"none of the {len(failed)} song(s) could be extracted (first: {first[0]}: {first[1]})"
         )
-    points, layout = timeline_points(good, songs, frames_per_song=frames_per_song, x_by=x_by)
+    points, layout = timeline_points(
+        good, songs, frames_per_song=frames_per_song, x_by=x_by, z_measure=z_measure
+    )
+    dc_offsets = [
+        (s["path"], s["metrics"]["dc_offset"])
+        for s in layout["songs"]
+        if (s["metrics"].get("dc_offset") or 0.0) > DC_WARN_THRESHOLD
+    ]
     few = [s["path"] for s in layout["songs"] if s["point_count"] < frames_per_song]
     metadata = {
         "format_version": FORMAT_VERSION,
@@ -98,6 +120,10 @@ def build_timeline(
             "hop_length": hop_length,
             "level_range_dbfs": [LEVEL_MIN_DBFS, LEVEL_MAX_DBFS],
             "crest_percentiles": list(CREST_PERCENTILES),
+            "z_measure": z_measure,
+            "z_percentiles": list(CREST_PERCENTILES),
+            "dc_removed": True,
+            "highpass_hz": highpass_hz,
             "skipped": [{"path": p, "reason": r} for p, r in sorted(failed.items())]
             + [{"path": p, "reason": "no year in tags"} for p in without_year],
             "generator": GENERATOR,
@@ -111,4 +137,5 @@ def build_timeline(
         without_year=without_year,
         few_frames=few,
         cached=n_cached,
+        dc_offsets=dc_offsets,
     )

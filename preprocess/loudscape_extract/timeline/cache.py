@@ -21,7 +21,7 @@ __all__ = [
 ]
 
 #: Bump when what is cached (or how it is computed) changes: old entries are then ignored.
-CACHE_VERSION = 1
+CACHE_VERSION = 2
 
 
 def default_cache_dir() -> str:
@@ -41,9 +41,10 @@ def file_sha256(path: str) -> str:
     return digest.hexdigest()
 
 
-def cache_key(path: str, *, n_fft: int, hop_length: int) -> str:
+def cache_key(path: str, *, n_fft: int, hop_length: int, highpass_hz: float | None = None) -> str:
     """Content hash of the file plus everything the cached features depend on."""
-    return f"{file_sha256(path)}-n{n_fft}-h{hop_length}-v{CACHE_VERSION}"
+    highpass = "" if highpass_hz is None else f"-hp{highpass_hz:g}"
+    return f"{file_sha256(path)}-n{n_fft}-h{hop_length}{highpass}-v{CACHE_VERSION}"
 
 
 def save_entry(path: str, song: SongFrames) -> None:
@@ -56,6 +57,8 @@ def save_entry(path: str, song: SongFrames) -> None:
         crest_db=song.crest_db,
         loudness_a_db=song.loudness_a_db,
         hp_mean=song.hp_mean,
+        psr_db=song.psr_db,
+        crest_3s_db=song.crest_3s_db,
         n_frames_total=np.array(song.n_frames_total),
         metrics=np.array(json.dumps(song.metrics)),
     )
@@ -70,6 +73,8 @@ def load_entry(path: str) -> SongFrames | None:
                 crest_db=data["crest_db"],
                 loudness_a_db=data["loudness_a_db"],
                 hp_mean=data["hp_mean"],
+                psr_db=data["psr_db"],
+                crest_3s_db=data["crest_3s_db"],
                 n_frames_total=int(data["n_frames_total"]),
                 metrics=json.loads(str(data["metrics"])),
             )

@@ -14,7 +14,12 @@ __all__ = ["compute_all", "song_frames"]
 
 
 def song_frames(
-    path: str, *, n_fft: int, hop_length: int, cache_dir: str | None
+    path: str,
+    *,
+    n_fft: int,
+    hop_length: int,
+    cache_dir: str | None,
+    highpass_hz: float | None = None,
 ) -> tuple[SongFrames, bool]:
     """One song's frames, from the cache when its content and parameters match.
 
@@ -25,12 +30,17 @@ def song_frames(
         True when read from the cache (no decoding).
     """
     if cache_dir is None:
-        return compute_song_frames(path, n_fft=n_fft, hop_length=hop_length), False
-    entry = os.path.join(cache_dir, cache_key(path, n_fft=n_fft, hop_length=hop_length) + ".npz")
+        return compute_song_frames(
+            path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz
+        ), False
+    entry = os.path.join(
+        cache_dir,
+        cache_key(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz) + ".npz",
+    )
     song = load_entry(entry) if os.path.exists(entry) else None
     if song is not None:
         return song, True
-    song = compute_song_frames(path, n_fft=n_fft, hop_length=hop_length)
+    song = compute_song_frames(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
     try:
         save_entry(entry, song)
     except OSError:
@@ -38,10 +48,12 @@ def song_frames(
     return song, False
 
 
-def _job(path: str, n_fft: int, hop_length: int, cache_dir: str | None):
+def _job(path: str, n_fft: int, hop_length: int, cache_dir: str | None, highpass_hz=None):
     """Worker: (path, SongFrames or None, cached, error message or None)."""
     try:
-        song, cached = song_frames(path, n_fft=n_fft, hop_length=hop_length, cache_dir=cache_dir)
+        song, cached = song_frames(
+            path, n_fft=n_fft, hop_length=hop_length, cache_dir=cache_dir, highpass_hz=highpass_hz
+        )
         return path, song, cached, None
     except ExtractError as exc:
         return path, None, False, exc.message
@@ -58,6 +70,7 @@ def compute_all(
     hop_length: int,
     cache_dir: str | None,
     jobs: int,
+    highpass_hz: float | None = None,
     on_done: Callable[[int, str], None] | None = None,
 ) -> tuple[dict[str, SongFrames], dict[str, str], int]:
     """Features of every path, ``jobs`` worker processes at a time.
@@ -88,10 +101,12 @@ def compute_all(
 
     if jobs <= 1 or len(paths) <= 1:
         for path in paths:
-            collect(_job(path, n_fft, hop_length, cache_dir))
+            collect(_job(path, n_fft, hop_length, cache_dir, highpass_hz))
     else:
         with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
-            futures = {pool.submit(_job, p, n_fft, hop_length, cache_dir): p for p in paths}
+            futures = {
+                pool.submit(_job, p, n_fft, hop_length, cache_dir, highpass_hz): p for p in paths
+            }
             for future in as_completed(futures):
                 try:
                     result = future.result()

@@ -18,8 +18,9 @@ class SongFrames:
 
     Attributes
     ----------
-    rms_dbfs, crest_db, loudness_a_db, hp_mean : np.ndarray [shape=(n_frames,)]
-        :class:`FrameFeatures` series restricted to the non-silent frames, in time order.
+    rms_dbfs, crest_db, loudness_a_db, hp_mean, psr_db, crest_3s_db : np.ndarray [shape=(n_frames,)]
+        :class:`FrameFeatures` series restricted to the non-silent frames, in time order
+        (``psr_db`` and ``crest_3s_db`` of the 3 s window centred on each frame).
     n_frames_total : int
         All STFT frames, silent ones included.
     metrics : dict
@@ -32,12 +33,16 @@ class SongFrames:
     hp_mean: np.ndarray
     n_frames_total: int
     metrics: dict = field(default_factory=dict)
+    psr_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
+    crest_3s_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
 
 
-def compute_song_frames(path: str, *, n_fft: int, hop_length: int) -> SongFrames:
+def compute_song_frames(
+    path: str, *, n_fft: int, hop_length: int, highpass_hz: float | None = None
+) -> SongFrames:
     """Decode and run :func:`track_features` (the Song pipeline), keep frames and metrics."""
     audio = decode_audio(path)
-    features = track_features(audio, n_fft=n_fft, hop_length=hop_length)
+    features = track_features(audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
     del audio
     frames = features.frames
     keep = ~frames.silent
@@ -52,4 +57,6 @@ def compute_song_frames(path: str, *, n_fft: int, hop_length: int) -> SongFrames
         hp_mean=hp.astype(np.float32),
         n_frames_total=int(frames.silent.shape[0]),
         metrics=metrics,
+        psr_db=frames.psr_db[keep].astype(np.float32),
+        crest_3s_db=frames.crest_3s_db[keep].astype(np.float32),
     )
