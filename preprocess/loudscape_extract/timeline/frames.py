@@ -7,9 +7,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from loudscape_extract.audio import decode_audio
-from loudscape_extract.features import track_features
+from loudscape_extract.features import TrackFeatures, track_features
 
-__all__ = ["SongFrames", "compute_song_frames"]
+__all__ = ["SongFrames", "compute_song_frames", "frames_of"]
 
 
 @dataclass(frozen=True)
@@ -44,6 +44,11 @@ def compute_song_frames(
     audio = decode_audio(path)
     features = track_features(audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
     del audio
+    return frames_of(features)
+
+
+def frames_of(features: TrackFeatures) -> SongFrames:
+    """What the timeline keeps of a track's features (also for audio that is not a file)."""
     frames = features.frames
     keep = ~frames.silent
     hp = frames.hp_mean[keep]
