@@ -14,6 +14,7 @@ import time
 from collections.abc import Sequence
 
 from loudscape_extract import export
+from loudscape_extract.dynamics import HIGHPASS_HZ, dc_warning
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
@@ -21,7 +22,12 @@ from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
 from loudscape_extract.progress import Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
-from loudscape_extract.timeline import build_timeline, default_cache_dir
+from loudscape_extract.timeline import (
+    DEFAULT_Z_MEASURE,
+    Z_MEASURES,
+    build_timeline,
+    default_cache_dir,
+)
 from loudscape_extract.version import PROG, __version__
 
 __all__ = ["build_parser", "main"]
@@ -90,13 +96,20 @@ def build_parser() -> argparse.ArgumentParser:
         default="linear",
         help="z axis: linear in bin index (default) or log frequency (drops the 0 Hz bin)",
     )
+    song.add_argument(
+        "--highpass",
+        action="store_true",
+        help=f"also high-pass at {HIGHPASS_HZ:g} Hz (infrasound) before frame level, crest, "
+        "PSR and DR (DC is always removed)",
+    )
     timeline = commands.add_parser(
         "timeline",
         help="many songs -> one chronological cloud (one point per sampled frame)",
         description="Many songs -> one point cloud ordered by year: x song position (by year "
-        "or by order), y frame RMS level (-60..0 dBFS), z frame crest factor (1st-99th "
-        "percentile over all songs), scalar A-weighted frame level, hp frame hp ratio. Years, "
-        "titles and artists come from tags (mutagen) or from --manifest.",
+        "or by order), y frame RMS level (-60..0 dBFS), z the dynamics of the 3 s around each "
+        "frame (PSR by default; see --z-measure; 1st-99th percentile over all songs), scalar "
+        "A-weighted frame level, hp frame hp ratio. Years, titles and artists come from tags "
+        "(mutagen) or from --manifest.",
     )
     timeline.add_argument(
         "inputs", nargs="*", help="audio files and folders (searched recursively)"
@@ -110,7 +123,21 @@ def build_parser() -> argparse.ArgumentParser:
         "--x-by",
         choices=("year", "order"),
         default="year",
-        help="x proportional to the year (default) or each song an equal span in order",
+        help="x proportional to the year (default) or each song an equal span in order "
+        "(songs without a year then come last instead of being left out)",
+    )
+    timeline.add_argument(
+        "--z-measure",
+        choices=Z_MEASURES,
+        default=DEFAULT_Z_MEASURE,
+        help="z axis: psr (true peak minus short-term loudness over the 3 s around the frame; "
+        "default), crest-3s (peak/RMS over those 3 s) or crest-frame (the paper's crest "
+        "factor of the STFT frame alone, which measures waveform shape, not compression)",
+    )
+    timeline.add_argument(
+        "--highpass",
+        action="store_true",
+        help=f"also high-pass each song at {HIGHPASS_HZ:g} Hz before its dynamics",
     )
     timeline.add_argument(
         "--frames-per-song",
@@ -182,6 +209,7 @@ def run_song(args: argparse.Namespace, progress: Progress) -> int:
         floor_db=args.floor_db,
         freq_scale=args.freq_scale,
         strict=args.strict,
+        highpass_hz=HIGHPASS_HZ if args.highpass else None,
         progress=progress,
         warn=lambda text: _say(f"warning: {text}"),
     )
@@ -219,6 +247,8 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
             cache_dir=cache_dir,
             jobs=args.jobs,
             strict=args.strict,
+            z_measure=args.z_measure,
+            highpass_hz=HIGHPASS_HZ if args.highpass else None,
             progress=progress,
         )
     finally:
@@ -231,6 +261,8 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
         _say(f"skipped: {path}: no year in its tags")
     for path, reason in sorted(result.failed.items()):
         _say(f"skipped: {path}: {reason}")
+    for path, offset in result.dc_offsets:
+        _say(f"warning: {dc_warning(path, offset)}")
     if not args.quiet:
         songs = result.metadata["songs"]
         _say(

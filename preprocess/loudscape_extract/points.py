@@ -20,10 +20,12 @@ from loudscape_extract.format import (
     rounded,
     scalar_axis,
 )
+from loudscape_extract.spectrogram import a_weighting_db
 
 __all__ = [
     "DEFAULT_FLOOR_DB",
     "FREQ_SCALES",
+    "AUDIBLE_HZ",
     "SCALAR_MAX_DB",
     "SCALAR_MIN_DB",
     "SongCloud",
@@ -33,10 +35,16 @@ __all__ = [
 
 #: Bins more than this many dB below the track's loudest bin are dropped (0 keeps every bin).
 DEFAULT_FLOOR_DB = 80.0
-#: ``scalar`` maps the A-weighted bin level linearly from [-100 dB, 0 dB] to [0, 1], clipped.
-#: 0 dB is a full-scale sine in the bin (at 1 kHz, where A-weighting is 0 dB).
+#: ``scalar`` maps the A-weighted bin level linearly to [0, 1] over a range that holds every
+#: drawn bin at or above :data:`AUDIBLE_HZ`: ``[y_min + A_min, y_max + A_max]``, with ``A_min``,
+#: ``A_max`` the A-weighting gains' range over those bins, widened to at least
+#: [SCALAR_MIN_DB, SCALAR_MAX_DB]. 0 dB is a full-scale sine in the bin (at 1 kHz, where
+#: A-weighting is 0 dB). The noise floor is the one rule that drops bins; no drawn audible bin
+#: is clipped to 0 (the paper's low-frequency cliff), whatever the track's level.
 SCALAR_MIN_DB = -100.0
 SCALAR_MAX_DB = 0.0
+#: Bins below this have no meaningful A-weighted level (0 Hz: -inf); their scalar clips to 0.
+AUDIBLE_HZ = 20.0
 FREQ_SCALES = ("linear", "log")
 
 
@@ -75,6 +83,18 @@ def _normalize(values: np.ndarray, low: float, high: float) -> np.ndarray:
         return np.zeros(values.shape, dtype=np.float32)
     out = (values.astype(np.float64) - low) * (2.0 / (high - low)) - 1.0
     return np.clip(out, -1.0, 1.0).astype(np.float32)
+
+
+def scalar_range(frequencies: np.ndarray, y_low: float, y_high: float) -> tuple[float, float]:
+    """The scalar's dB range for drawn levels in ``[y_low, y_high]`` (see :data:`AUDIBLE_HZ`).
+
+    Rounded outward to whole dB so the axis reads cleanly.
+    """
+    audible = frequencies[frequencies >= AUDIBLE_HZ]
+    gains = a_weighting_db(audible) if audible.size else np.zeros(1)
+    low = min(SCALAR_MIN_DB, math.floor(y_low + float(gains.min())))
+    high = max(SCALAR_MAX_DB, math.ceil(y_high + float(gains.max())))
+    return float(low), float(high)
 
 
 def song_points(
@@ -130,7 +150,8 @@ def song_points(
     points[:, 1] = _normalize(levels[keep], y_low, peak)
     points[:, 2] = np.broadcast_to(z_per_bin[None, :], keep.shape)[keep]
     levels_a = features.level_a_db[first_bin:, kept_frames].T[keep]
-    scalar = (levels_a.astype(np.float64) - SCALAR_MIN_DB) / (SCALAR_MAX_DB - SCALAR_MIN_DB)
+    s_low, s_high = scalar_range(features.frequencies_hz[first_bin:], y_low, peak)
+    scalar = (levels_a.astype(np.float64) - s_low) / (s_high - s_low)
     points[:, 3] = np.clip(scalar, 0.0, 1.0)
     points[:, 4] = features.hp[first_bin:, kept_frames].T[keep]
 
@@ -142,7 +163,7 @@ def song_points(
         "x": axis("time", "s", x_low, x_high),
         "y": level_axis(y_axis_low, y_axis_high),
         "z": z_axis,
-        "scalar": scalar_axis(SCALAR_MIN_DB, SCALAR_MAX_DB),
+        "scalar": scalar_axis(s_low, s_high),
         "hp": hp_axis(),
     }
     return SongCloud(
@@ -199,6 +220,8 @@ def song_metadata(
         "extraction": {
             "floor_db": rounded(cloud.floor_db, 6),
             "freq_scale": cloud.freq_scale,
+            "dc_removed": True,
+            "highpass_hz": features.highpass_hz,
             "hpss": {"kernel_size": HPSS_KERNEL, "power": HPSS_POWER, "margin": HPSS_MARGIN},
             "generator": generator,
         },

@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 from loudscape_extract.audio import decode_audio
 from loudscape_extract.contract import check_cloud
+from loudscape_extract.dynamics import DC_WARN_THRESHOLD, dc_warning
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.features import track_features
 from loudscape_extract.paths import check_output_path
@@ -26,6 +27,7 @@ def extract_song(
     floor_db: float | None = None,
     freq_scale: str = "linear",
     strict: bool = False,
+    highpass_hz: float | None = None,
     progress: Callable[[str], None] | None = None,
     warn: Callable[[str], None] | None = None,
 ) -> dict:
@@ -44,11 +46,13 @@ def extract_song(
     freq_scale : {"linear", "log"}
     strict : bool
         Refuse a truncated or corrupt file instead of extracting what decodes.
+    highpass_hz : float, optional
+        High-pass (e.g. 20 Hz) the DC-free signal before frame level, crest, DR and PSR.
     progress : callable, optional
         Called with a short message before each stage.
     warn : callable, optional
-        Called with a one-line warning (a truncated or corrupt file); default
-        :func:`warnings.warn`.
+        Called with a one-line warning about the input (a truncated or corrupt file, a large
+        DC offset); default :func:`warnings.warn`.
 
     Returns
     -------
@@ -64,13 +68,18 @@ def extract_song(
         (warn or (lambda text: warnings.warn(text, stacklevel=3)))(f"{source}: {audio.warning}")
     say(f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s)")
     try:
-        features = track_features(audio, n_fft=n_fft, hop_length=hop_length, progress=say)
+        features = track_features(
+            audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, progress=say
+        )
         say("building points")
         cloud = song_points(features, floor_db=floor, freq_scale=freq_scale)
     except ExtractError as exc:
         if exc.path is None:
             exc.path = source
         raise
+    offset = features.metrics.get("dc_offset") or 0.0
+    if offset > DC_WARN_THRESHOLD:
+        (warn or (lambda text: warnings.warn(text, stacklevel=3)))(dc_warning(source, offset))
     source_format = f"{audio.format}/{audio.subtype}"
     del audio
     metadata = song_metadata(features, cloud, generator=GENERATOR, source_format=source_format)

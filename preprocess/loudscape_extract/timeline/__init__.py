@@ -5,7 +5,8 @@ package keeps only each song's per-frame series and metrics (cached on disk by c
 orders the songs by year, samples a fixed number of frames per song and lays them out::
 
     x  song position (by order or by year)      y  frame RMS level, -60..0 dBFS
-    z  frame crest factor (1st..99th pct)       scalar  A-weighted frame level   hp  frame hp
+    z  dynamics of the 3 s around the frame: PSR by default, or 3 s or frame crest factor
+       (1st..99th pct over all songs)           scalar  A-weighted frame level   hp  frame hp
 
 Modules, in data-flow order: ``inputs`` (discovery, tags, manifest), ``frames`` (what is kept
 of one song), ``cache`` (keys, save/load), ``engine`` (cache-or-compute, worker pool),
@@ -15,7 +16,7 @@ of one song), ``cache`` (keys, save/load), ``engine`` (cache-or-compute, worker 
 from loudscape_extract.timeline.assembly import TimelineResult, build_timeline
 from loudscape_extract.timeline.cache import CACHE_VERSION, cache_key, default_cache_dir
 from loudscape_extract.timeline.engine import compute_all, song_frames
-from loudscape_extract.timeline.frames import SongFrames, compute_song_frames
+from loudscape_extract.timeline.frames import SongFrames, compute_song_frames, frames_of
 from loudscape_extract.timeline.inputs import (
     SongEntry,
     collect_entries,
@@ -26,11 +27,13 @@ from loudscape_extract.timeline.inputs import (
 )
 from loudscape_extract.timeline.layout import (
     CREST_PERCENTILES,
+    DEFAULT_Z_MEASURE,
     LEVEL_MAX_DBFS,
     LEVEL_MIN_DBFS,
     METRIC_KEYS,
     SCALAR_FLOOR_DB,
     X_BY,
+    Z_MEASURES,
     percentile_map,
     sample_frames,
     song_spans,
@@ -42,11 +45,13 @@ from loudscape_extract.timeline.layout import (
 __all__ = [
     "CACHE_VERSION",
     "CREST_PERCENTILES",
+    "DEFAULT_Z_MEASURE",
     "LEVEL_MAX_DBFS",
     "LEVEL_MIN_DBFS",
     "METRIC_KEYS",
     "SCALAR_FLOOR_DB",
     "X_BY",
+    "Z_MEASURES",
     "SongEntry",
     "SongFrames",
     "TimelineResult",
@@ -57,6 +62,7 @@ __all__ = [
     "compute_song_frames",
     "default_cache_dir",
     "discover_audio",
+    "frames_of",
     "parse_year",
     "percentile_map",
     "read_manifest",

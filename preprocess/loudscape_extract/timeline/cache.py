@@ -24,9 +24,9 @@ __all__ = [
 ]
 
 #: Bump when what is cached (or how it is computed) changes: old entries are then ignored.
-CACHE_VERSION = 1
+CACHE_VERSION = 2
 TEMPORARY_SUFFIX = ".tmp.npz"
-_SERIES = ("rms_dbfs", "crest_db", "loudness_a_db", "hp_mean")
+_SERIES = ("rms_dbfs", "crest_db", "loudness_a_db", "hp_mean", "psr_db", "crest_3s_db")
 
 
 def default_cache_dir() -> str:
@@ -46,9 +46,10 @@ def file_sha256(path: str) -> str:
     return digest.hexdigest()
 
 
-def cache_key(path: str, *, n_fft: int, hop_length: int) -> str:
+def cache_key(path: str, *, n_fft: int, hop_length: int, highpass_hz: float | None = None) -> str:
     """Content hash of the file plus everything the cached features depend on."""
-    return f"{file_sha256(path)}-n{n_fft}-h{hop_length}-v{CACHE_VERSION}"
+    highpass = "" if highpass_hz is None else f"-hp{highpass_hz:g}"
+    return f"{file_sha256(path)}-n{n_fft}-h{hop_length}{highpass}-v{CACHE_VERSION}"
 
 
 def save_entry(path: str, song: SongFrames) -> None:
@@ -60,10 +61,7 @@ def save_entry(path: str, song: SongFrames) -> None:
     try:
         np.savez(
             temporary,
-            rms_dbfs=song.rms_dbfs,
-            crest_db=song.crest_db,
-            loudness_a_db=song.loudness_a_db,
-            hp_mean=song.hp_mean,
+            **{key: getattr(song, key) for key in _SERIES},
             n_frames_total=np.array(song.n_frames_total),
             metrics=np.array(json.dumps(song.metrics)),
             warning=np.array(song.warning),

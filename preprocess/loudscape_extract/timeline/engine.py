@@ -47,6 +47,7 @@ def song_frames(
     cache_dir: str | None,
     strict: bool = False,
     notes: list[str] | None = None,
+    highpass_hz: float | None = None,
 ) -> tuple[SongFrames, bool]:
     """One song's frames, from the cache when its content and parameters match.
 
@@ -60,9 +61,14 @@ def song_frames(
         True when read from the cache (no decoding).
     """
     if cache_dir is None:
-        song = compute_song_frames(path, n_fft=n_fft, hop_length=hop_length, strict=strict)
+        song = compute_song_frames(
+            path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict
+        )
         return song, False
-    entry = os.path.join(cache_dir, cache_key(path, n_fft=n_fft, hop_length=hop_length) + ".npz")
+    entry = os.path.join(
+        cache_dir,
+        cache_key(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz) + ".npz",
+    )
     if os.path.exists(entry):
         song, problem = read_entry(entry)
         if song is not None:
@@ -72,7 +78,9 @@ def song_frames(
                 f"{path}: its cache entry {entry} could not be read ({problem}); "
                 "recomputed and replaced"
             )
-    song = compute_song_frames(path, n_fft=n_fft, hop_length=hop_length, strict=strict)
+    song = compute_song_frames(
+        path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict
+    )
     try:
         save_entry(entry, song)
     except OSError:
@@ -80,7 +88,14 @@ def song_frames(
     return song, False
 
 
-def _job(path: str, n_fft: int, hop_length: int, cache_dir: str | None, strict: bool = False):
+def _job(
+    path: str,
+    n_fft: int,
+    hop_length: int,
+    cache_dir: str | None,
+    strict: bool = False,
+    highpass_hz: float | None = None,
+):
     """Worker: one song's :class:`SongOutcome`; never raises for a bad song."""
     outcome = SongOutcome(path)
     try:
@@ -90,6 +105,7 @@ def _job(path: str, n_fft: int, hop_length: int, cache_dir: str | None, strict: 
             hop_length=hop_length,
             cache_dir=cache_dir,
             strict=strict,
+            highpass_hz=highpass_hz,
             notes=outcome.notes,
         )
         if strict and song.warning:
@@ -146,6 +162,7 @@ def compute_all(
     cache_dir: str | None,
     jobs: int,
     strict: bool = False,
+    highpass_hz: float | None = None,
     on_done: Callable[[int, str], None] | None = None,
     notes: list[str] | None = None,
 ) -> tuple[dict[str, SongFrames], dict[str, str], int]:
@@ -185,13 +202,16 @@ def compute_all(
 
     if jobs <= 1 or len(paths) <= 1:
         for path in paths:
-            collect(_job(path, n_fft, hop_length, cache_dir, strict))
+            collect(_job(path, n_fft, hop_length, cache_dir, strict, highpass_hz))
         return songs, failed, n_cached
     pool = ProcessPoolExecutor(
         max_workers=min(jobs, len(paths)), initializer=_worker_start, initargs=(os.getpid(),)
     )
     try:
-        futures = {pool.submit(_job, p, n_fft, hop_length, cache_dir, strict): p for p in paths}
+        futures = {
+            pool.submit(_job, p, n_fft, hop_length, cache_dir, strict, highpass_hz): p
+            for p in paths
+        }
         for future in as_completed(futures):
             try:
                 outcome = future.result()

@@ -33,10 +33,11 @@ _YEAR = re.compile(r"(?<!\d)(\d{4})(?!\d)")
 
 @dataclass(frozen=True)
 class SongEntry:
-    """One song to place: its file, year and (possibly empty) title and artist."""
+    """One song to place: its file, year (None only when placed by order) and (possibly
+    empty) title and artist."""
 
     path: str
-    year: int
+    year: int | None
     title: str = ""
     artist: str = ""
 
@@ -236,7 +237,7 @@ def _drop_duplicates(entries, describe) -> tuple[list, list[str]]:
 
 
 def collect_entries(
-    inputs: Sequence[str], *, manifest: str | None = None
+    inputs: Sequence[str], *, manifest: str | None = None, need_year: bool = True
 ) -> tuple[list[SongEntry], list[str], dict[str, str], list[str]]:
     """The songs to place, from ``manifest`` or from the tags of the files under ``inputs``.
 
@@ -245,7 +246,8 @@ def collect_entries(
     entries : list of SongEntry
         Songs with a year, in discovery (or manifest) order.
     without_year : list of str
-        Files whose tags have no year (left out).
+        Files whose tags have no year (left out when ``need_year``; with ``need_year=False``,
+        for ``x_by="order"``, they are placed after the dated songs and this is empty).
     tag_failures : dict path -> reason
         Files whose tags could not be read or give an implausible year.
     duplicates : list of str
@@ -286,7 +288,7 @@ def collect_entries(
                 tag_failures[path] = (
                     f"{year_problem} (from its tags); fix the tag or use --manifest"
                 )
-            elif tags["year"] is None:
+            elif tags["year"] is None and need_year:
                 without_year.append(path)
             else:
                 entries.append(SongEntry(path, tags["year"], tags["title"], tags["artist"]))

@@ -19,7 +19,9 @@ __all__ = [
     "LEVEL_MIN_DBFS",
     "METRIC_KEYS",
     "SCALAR_FLOOR_DB",
+    "DEFAULT_Z_MEASURE",
     "X_BY",
+    "Z_MEASURES",
     "percentile_map",
     "sample_frames",
     "song_spans",
@@ -33,6 +35,17 @@ LEVEL_MAX_DBFS = 0.0
 SCALAR_FLOOR_DB = -100.0
 CREST_PERCENTILES = (1.0, 99.0)
 X_BY = ("year", "order")
+#: The z axis: PSR of the 3 s window centred on the frame (default), the 3 s crest factor, or
+#: the paper's crest factor of the STFT frame itself (46 ms at 44.1 kHz; measures waveform
+#: shape rather than compression, see docs/DYNAMICS.md).
+Z_MEASURES = ("psr", "crest-3s", "crest-frame")
+DEFAULT_Z_MEASURE = "psr"
+_Z_SERIES = {"psr": "psr_db", "crest-3s": "crest_3s_db", "crest-frame": "crest_db"}
+_Z_LABELS = {
+    "psr": "PSR (true peak - short-term loudness, 3 s)",
+    "crest-3s": "crest factor (3 s)",
+    "crest-frame": "crest factor (frame)",
+}
 METRIC_KEYS = (
     "integrated_lufs",
     "lra_lu",
@@ -41,6 +54,13 @@ METRIC_KEYS = (
     "plr_db",
     "crest_median_db",
     "crest_p95_db",
+    "dc_offset",
+    "dr_db",
+    "psr_median_db",
+    "psr_p10_db",
+    "psr_p90_db",
+    "psr_spread_db",
+    "crest_3s_median_db",
     "hp_mean",
 )
 
@@ -53,8 +73,18 @@ def sample_frames(n_frames: int, count: int) -> np.ndarray:
 
 
 def sort_entries(entries: Sequence[SongEntry]) -> list[SongEntry]:
-    """By year, then artist, then title (case-insensitive), then path."""
-    return sorted(entries, key=lambda e: (e.year, e.artist.casefold(), e.title.casefold(), e.path))
+    """By year, then artist, then title (case-insensitive), then path; songs without a year
+    (only with ``x_by="order"``) last."""
+    return sorted(
+        entries,
+        key=lambda e: (
+            e.year is None,
+            e.year or 0,
+            e.artist.casefold(),
+            e.title.casefold(),
+            e.path,
+        ),
+    )
 
 
 def percentile_map(values: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -90,7 +120,10 @@ def _tick_years(first: int, last: int) -> list[int]:
 
 def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
     """The x axis object: years proportional (``x_by="year"``) or a tick per year group."""
-    first, last = entries[0].year, entries[-1].year
+    dated = [e.year for e in entries if e.year is not None]
+    if not dated:  # by order, no song has a year: the axis counts songs, song k in [k-1, k]
+        return axis("song", "", 0, len(entries), ticks=[])
+    first, last = min(dated), max(dated)
     ticks = []
     if x_by == "year":
         years = _tick_years(first, last)
@@ -102,12 +135,25 @@ def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
     step = 1 if last - first <= 12 else (10 if last - first <= 80 else 20)
     seen = set()
     for entry, span in zip(entries, spans, strict=True):
+        if entry.year is None:
+            continue
         group = entry.year - entry.year % step
         if group not in seen:
             seen.add(group)
             ticks.append({"at": round(span[0], 6), "label": str(max(group, first))})
     # All songs of one year: the axis ends where that year does, as with x by year.
     return axis("year", "year", first, last if last > first else last + 1, ticks=ticks)
+
+
+def _scalar_range(levels: Sequence[np.ndarray]) -> tuple[float, float]:
+    """[-100, 0] dB, widened to whole dB so that no drawn frame's level is clipped."""
+    values = np.concatenate([np.asarray(v, dtype=np.float64) for v in levels]) if levels else []
+    values = np.asarray(values)[np.isfinite(values)] if len(values) else np.zeros(0)
+    low, high = SCALAR_FLOOR_DB, 0.0
+    if values.size:
+        low = min(low, math.floor(float(values.min())))
+        high = max(high, math.ceil(float(values.max())))
+    return float(low), float(high)
 
 
 def _round(value, digits=4):
@@ -122,6 +168,7 @@ def timeline_points(
     *,
     frames_per_song: int,
     x_by: str = "year",
+    z_measure: str = DEFAULT_Z_MEASURE,
 ) -> tuple[np.ndarray, dict]:
     """Points and the ``axes`` / ``songs`` metadata for songs that all have features.
 
@@ -133,29 +180,41 @@ def timeline_points(
     """
     if x_by not in X_BY:
         raise ExtractError(f"x_by must be one of {', '.join(X_BY)}, got {x_by!r}")
+    if z_measure not in Z_MEASURES:
+        raise ExtractError(f"z_measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
+    if x_by == "year" and any(e.year is None for e in entries):
+        raise ExtractError("x_by='year' needs a year for every song")
     entries = sort_entries(entries)
-    all_crest = np.concatenate([songs[e.path].crest_db for e in entries]).astype(np.float64)
+    series = _Z_SERIES[z_measure]
+    all_crest = np.concatenate([getattr(songs[e.path], series) for e in entries])
+    all_crest = all_crest.astype(np.float64)
     all_crest = all_crest[np.isfinite(all_crest)]
     if all_crest.size:
         crest_low, crest_high = (float(v) for v in np.percentile(all_crest, CREST_PERCENTILES))
     else:
         crest_low = crest_high = 0.0
     spans = song_spans(entries, x_by)
+    sampled = [sample_frames(songs[e.path].rms_dbfs.shape[0], frames_per_song) for e in entries]
+    s_low, s_high = _scalar_range(
+        [songs[e.path].loudness_a_db[i] for e, i in zip(entries, sampled, strict=True)]
+    )
     blocks, described = [], []
     offset = 0
-    for entry, (x_min, x_max) in zip(entries, spans, strict=True):
+    for entry, index, (x_min, x_max) in zip(entries, sampled, spans, strict=True):
         song = songs[entry.path]
-        index = sample_frames(song.rms_dbfs.shape[0], frames_per_song)
         m = index.shape[0]
         x = x_min + (x_max - x_min) * (np.arange(m) + 0.5) / max(m, 1)
         rms = np.nan_to_num(song.rms_dbfs[index].astype(np.float64), nan=-200.0, neginf=-200.0)
         y = np.clip(
             2.0 * (rms - LEVEL_MIN_DBFS) / (LEVEL_MAX_DBFS - LEVEL_MIN_DBFS) - 1.0, -1.0, 1.0
         )
-        crest = song.crest_db[index].astype(np.float64)
-        z = percentile_map(np.nan_to_num(crest, nan=crest_low), crest_low, crest_high)
+        measure = getattr(song, series).astype(np.float64)
+        finite = measure[np.isfinite(measure)]
+        # A frame without a value (a 3 s window under -70 LUFS) takes the song's median.
+        neutral = float(np.median(finite)) if finite.size else crest_low
+        z = percentile_map(np.nan_to_num(measure[index], nan=neutral), crest_low, crest_high)
         la = np.nan_to_num(song.loudness_a_db[index].astype(np.float64), nan=-200.0, neginf=-200)
-        scalar = np.clip((la - SCALAR_FLOOR_DB) / -SCALAR_FLOOR_DB, 0.0, 1.0)
+        scalar = np.clip((la - s_low) / (s_high - s_low), 0.0, 1.0)
         hp = np.clip(np.nan_to_num(song.hp_mean[index].astype(np.float64), nan=0.5), 0.0, 1.0)
         blocks.append(np.stack([x, y, z, scalar, hp], axis=1))
         described.append(
@@ -178,11 +237,16 @@ def timeline_points(
     axes = {
         "x": x_axis(entries, spans, x_by),
         "y": level_axis(LEVEL_MIN_DBFS, LEVEL_MAX_DBFS),
-        # A constant crest factor: every z is 0, the axis spans half a dB either side.
-        "z": axis(
-            "crest factor", "dB", *(round(v, 6) for v in spread_range(crest_low, crest_high, 0.5))
-        ),
-        "scalar": scalar_axis(SCALAR_FLOOR_DB, 0.0),
+        "z": {
+            **axis(
+                _Z_LABELS[z_measure],
+                "dB",
+                # A constant z: every z is 0, the axis spans half a dB either side.
+                *(round(v, 6) for v in spread_range(crest_low, crest_high, 0.5)),
+            ),
+            "measure": z_measure,
+        },
+        "scalar": scalar_axis(s_low, s_high),
         "hp": hp_axis(),
     }
     return points, {"axes": axes, "songs": described}
