@@ -10,7 +10,7 @@ use glam::{UVec3, Vec3};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::synthetic::song_like_field;
 use loudscape::render::gpu::context::GpuContext;
-use loudscape::render::gpu::frame::{FrameBinding, FrameView};
+use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::surface::cpu_mesh::CpuMesh;
@@ -18,6 +18,7 @@ use loudscape::render::surface::pass::SurfacePass;
 use loudscape::render::surface::state::ExtractedSurface;
 use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
 use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 const MT: SurfaceMethod = SurfaceMethod::MarchingTetrahedra;
 const DC: SurfaceMethod = SurfaceMethod::DualContouring;
@@ -335,7 +336,7 @@ fn surface_shaders_translate_to_metal() {
     for (name, source) in [
         ("marching_tets", shaders::marching_tets()),
         ("dual_contour", shaders::dual_contour()),
-        ("mesh", shaders::mesh()),
+        ("surface_draw", shaders::surface_draw()),
     ] {
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
@@ -382,14 +383,12 @@ fn render_song_surface(method: SurfaceMethod) -> image::RgbaImage {
         .surface
         .extract_blocking(&gpu.queue, &data.surface, grid, &settings.surface)
         .expect("extract");
-    let view = FrameView {
-        camera: Camera::from_angles(-35.0, 30.0, 5.2),
-        world_from_data: data.world_from_data,
-        width: 480,
-        height: 320,
-        frame_index: 0,
-        moving: false,
-    };
+    let view = FrameView::at_rest(
+        Camera::from_angles(-35.0, 30.0, 5.2),
+        data.world_from_data,
+        480,
+        320,
+    );
     loudscape::render::headless::render_image(&gpu, &renderer, Some(&data), &view, &settings)
         .expect("render")
 }

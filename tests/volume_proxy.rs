@@ -6,10 +6,10 @@ mod common;
 use std::path::PathBuf;
 
 use loudscape::data::cloud;
-use loudscape::render::gpu::frame::FrameView;
 use loudscape::render::headless::render_image;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 #[test]
 fn points_stand_in_for_the_volume_only_while_moving_and_when_asked() {

@@ -1,11 +1,11 @@
 // Surface view: draws an extracted isosurface (marching tetrahedra or dual contouring).
 // Prepended: utils/frame.wgsl. Reads MeshVertex records as a vertex buffer (position, hp,
-// normal; see surface/extraction.wgsl) and MeshStyle; writes colour and depth.
+// normal; see surface/extraction.wgsl) and SurfaceStyle; writes colour and depth.
 // Colour: hp on a warm (percussive) to cool (harmonic) gradient, paper 3.4, optionally
-// Phong-lit by the frame's directional light from above. Keep MeshStyle and warm_cool in sync
+// Phong-lit by the frame's directional light from above. Keep SurfaceStyle and warm_cool in sync
 // with src/render/surface/draw.rs.
 
-struct MeshStyle {
+struct SurfaceStyle {
     // 1: Phong lighting, 0: flat hp colour.
     lit: u32,
     pad0: u32,
@@ -13,7 +13,7 @@ struct MeshStyle {
     pad2: u32,
 };
 
-@group(1) @binding(0) var<uniform> style: MeshStyle;
+@group(1) @binding(0) var<uniform> style: SurfaceStyle;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,

@@ -1,9 +1,10 @@
 // Dual contouring (paper 3.2). Prepended: surface/extraction.wgsl (bindings, sampling, the
 // active-cell list).
-// Reads the density and hp grids. `classify` (every cell) appends the cells whose corners
-// straddle the isovalue to the active list (the active index is the cell's vertex index) and
-// reserves six indices (two triangles) for each crossing edge from the cell's corner 0 along
-// +x, +y, +z whose four surrounding cells exist; `dispatch_active`; `cell_vertices` (per active
+// Reads the density and hp grids. `inside_bits_pass` and `classify` (32 cells per thread, from
+// surface/extraction.wgsl) append the cells whose corners straddle the isovalue to the active
+// list (the active index is the cell's vertex index) and reserve six indices (two triangles) for
+// each crossing edge from the cell's corner 0 along +x, +y, +z whose four surrounding cells
+// exist; `dispatch_active`; `cell_vertices` (per active
 // cell) places the vertex; `quads` (per active cell) joins the four cells around each of its
 // crossing edges through `cell_map`; `finalize` writes the vertex count and the indexed
 // indirect draw.

@@ -6,10 +6,10 @@ use std::time::Instant;
 
 use anyhow::Context;
 use loudscape::render::gpu::context::GpuContext;
-use loudscape::render::gpu::frame::FrameView;
 use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
 use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -107,17 +107,13 @@ fn bench_points(args: &BenchArgs) -> anyhow::Result<()> {
     let renderer = Renderer::new(&gpu.device);
     let data = SceneData::new(&gpu.device, &renderer, &cloud);
     let target = RenderTarget::new(&gpu.device, width, height);
-    let mut camera = Camera::default();
-    let (min, max) = data.world_box();
-    camera.fit(min, max, width as f32 / height as f32);
-    let mut view = FrameView {
-        camera,
-        world_from_data: data.world_from_data,
+    let mut view = FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
         width,
         height,
-        frame_index: 0,
-        moving: false,
-    };
+    );
     let settings = RenderSettings::default();
     let first_ms = timed_frame(&gpu, &renderer, &target, &data, &view, &settings)?;
     let to_first_frame = process_start.elapsed().as_secs_f64() * 1e3;

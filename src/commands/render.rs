@@ -5,13 +5,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use loudscape::data::cloud::PointCloud;
 use loudscape::render::gpu::context::GpuContext;
-use loudscape::render::gpu::frame::FrameView;
 use loudscape::render::grid::voxelize::VoxelSettings;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::{TransferPreset, VolumeSettings};
 use loudscape::ui::labels;
 use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 use crate::commands::args::{
     check_iso, check_output_folder, check_range, check_resolution, check_smoothing, load_cloud,
@@ -137,19 +137,15 @@ fn render_to_file(
     labels: bool,
     output: &Path,
 ) -> anyhow::Result<()> {
-    let camera = camera.unwrap_or_else(|| {
-        let mut camera = Camera::default();
-        let (min, max) = data.world_box();
-        camera.fit(min, max, size.0 as f32 / size.1 as f32);
-        camera
-    });
-    let view = FrameView {
-        camera,
-        world_from_data: data.world_from_data,
-        width: size.0,
-        height: size.1,
-        frame_index: 0,
-        moving: false,
+    let view = match camera {
+        Some(camera) => FrameView::at_rest(camera, data.world_from_data, size.0, size.1),
+        None => FrameView::fitted(
+            Camera::default(),
+            data.world_from_data,
+            data.world_box(),
+            size.0,
+            size.1,
+        ),
     };
     let target =
         loudscape::render::headless::render_frame(gpu, renderer, Some(data), &view, settings);

@@ -6,7 +6,7 @@
 use glam::{Mat4, Vec3};
 
 use crate::data::cloud::{DataMode, PointCloud};
-use crate::render::gpu::frame::{FrameBinding, FrameView};
+use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::target::{BACKGROUND, RenderTarget};
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
 use crate::render::markers::{MarkerBox, MarkersPass};
@@ -14,6 +14,7 @@ use crate::render::points::{PointStyle, PointsGpu, PointsPass};
 use crate::render::surface::SurfaceSettings;
 use crate::render::surface::pass::SurfacePass;
 use crate::render::surface::state::ExtractedSurface;
+use crate::view::frame_view::FrameView;
 // Volume view and voxel grid.
 use crate::render::grid::VoxelGrid;
 use crate::render::grid::voxelize::{VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass};

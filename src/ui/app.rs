@@ -1,4 +1,4 @@
-//! The loudscape window's wiring: [`LoudscapeApp`]'s state, opening the window, one frame (side
+//! The loudscape window's wiring: `LoudscapeApp`'s state, opening the window, one frame (side
 //! panel, transport bar, 3D view) and the camera input of the 3D view. The panels, hover
 //! read-outs, data slots, persistence and screenshots each have their own file in `ui/`.
 
@@ -10,7 +10,6 @@ use std::time::{Duration, Instant};
 use eframe::egui::{self, Color32};
 use eframe::egui_wgpu;
 
-use crate::render::gpu::frame::FrameView;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::ui::audio::AudioPanel;
 use crate::ui::bridge::{ViewCallback, ViewResources};
@@ -19,6 +18,7 @@ use crate::ui::labels;
 use crate::ui::persistence::Remembered;
 use crate::ui::state::{LoudscapeApp, SaveShot, ScreenshotState, Slot};
 use crate::view::camera::Camera;
+use crate::view::frame_view::FrameView;
 
 /// How long after the last input the view still counts as moving (drawn at reduced quality).
 const SETTLE: Duration = Duration::from_millis(180);

@@ -10,9 +10,9 @@ use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor
 
 use crate::data::cloud::PointCloud;
 use crate::render::composite::CompositePass;
-use crate::render::gpu::frame::FrameView;
 use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::view::frame_view::FrameView;
 
 /// GPU state owned by the window, kept in egui_wgpu's callback resources.
 pub struct ViewResources {

@@ -4,10 +4,10 @@
 
 use eframe::egui::{self, Color32};
 
-use crate::render::gpu::frame::FrameView;
 use crate::render::markers::MarkerBox;
 use crate::render::scene::ViewKind;
 use crate::ui::state::{Hover, HoverKey, LoudscapeApp, Slot};
+use crate::view::frame_view::FrameView;
 use crate::view::pick::{self, Reading};
 
 /// Density at which a hover ray stops in the Volume view.

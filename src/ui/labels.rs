@@ -10,9 +10,9 @@ use glam::Vec3;
 use crate::data::axes::Axis;
 use crate::data::cloud::PointCloud;
 use crate::render::gpu::context::GpuContext;
-use crate::render::gpu::frame::FrameView;
 use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
 use crate::render::scene::SceneData;
+use crate::view::frame_view::FrameView;
 
 /// A tick label or an axis title, placed along one axis of the box.
 #[derive(Clone, Debug)]

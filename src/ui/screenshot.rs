@@ -9,13 +9,13 @@ use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
 use crate::render::gpu::context::GpuContext;
-use crate::render::gpu::frame::FrameView;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::view::frame_view::FrameView;
 
 #[derive(Debug, Error)]
 pub enum ScreenshotError {
     #[error("cannot read the screenshot back from the GPU: {0}")]
-    Readback(#[from] crate::render::gpu::target::ReadbackError),
+    Readback(#[from] crate::render::gpu::readback::ReadbackError),
     #[error("{path}: cannot write the screenshot: {reason}")]
     Write { path: PathBuf, reason: String },
 }

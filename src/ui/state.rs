@@ -13,11 +13,11 @@ use std::time::Instant;
 
 use crate::data::cloud::{DataMode, PointCloud};
 use crate::data::field::Field;
-use crate::render::gpu::frame::FrameView;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::ui::audio::AudioPanel;
 use crate::ui::labels;
 use crate::view::camera::Camera;
+use crate::view::frame_view::FrameView;
 use crate::view::pick::Reading;
 
 /// The window's state: the two data slots, the render settings, the camera and what each

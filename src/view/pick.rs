@@ -10,7 +10,7 @@ use glam::{UVec3, Vec2, Vec3, Vec4Swizzles};
 use crate::data::axes::{Axes, Axis, note_name};
 use crate::data::cloud::{Point, SongInfo};
 use crate::data::field::Field;
-use crate::render::gpu::frame::FrameView;
+use crate::view::frame_view::FrameView;
 
 /// The ray under pixel `px` (origin top left) in data space: origin on the near plane, unit
 /// direction away from the camera.

@@ -81,6 +81,15 @@ impl GpuContext {
 }
 
 /// "llvmpipe (LLVM 15.0.6, 256 bits) on Vulkan (Cpu)".
+/// The largest buffer, in bytes, that this device can both create and bind for storage: the
+/// size limit of every storage buffer the passes allocate or split their data by.
+pub fn storage_binding_limit(device: &wgpu::Device) -> u64 {
+    let limits = device.limits();
+    limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size)
+}
+
 pub fn describe_adapter(adapter: &wgpu::Adapter) -> String {
     let info = adapter.get_info();
     format!(

@@ -1,8 +1,9 @@
-//! Per-frame uniforms shared by every pass (bind group 0), and the view a frame is drawn from.
+//! Per-frame uniforms shared by every pass (bind group 0), built from a [`FrameView`].
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 
-use crate::view::camera::Camera;
+use crate::render::gpu::layouts::uniform_entry;
+use crate::view::frame_view::FrameView;
 
 /// Keep in sync with `Frame` in shaders/utils/frame.wgsl.
 #[repr(C)]
@@ -17,29 +18,7 @@ pub struct FrameUniforms {
 }
 const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 192);
 
-/// Everything about the point of view that a pass may need.
-#[derive(Clone, Copy, Debug)]
-pub struct FrameView {
-    pub camera: Camera,
-    /// World space from data space: scales the normalized cloud (a timeline is wider than tall).
-    pub world_from_data: Mat4,
-    pub width: u32,
-    pub height: u32,
-    /// Counts frames; seeds the volume's ray jitter.
-    pub frame_index: u32,
-    /// True while the camera moves: passes may trade quality for speed.
-    pub moving: bool,
-}
-
 impl FrameView {
-    pub fn aspect(&self) -> f32 {
-        self.width as f32 / self.height.max(1) as f32
-    }
-
-    pub fn clip_from_data(&self) -> Mat4 {
-        self.camera.view_projection(self.aspect()) * self.world_from_data
-    }
-
     pub fn uniforms(&self) -> FrameUniforms {
         let clip_from_data = self.clip_from_data();
         let data_from_world = self.world_from_data.inverse();
@@ -56,19 +35,6 @@ impl FrameView {
             light_direction: [light.x, light.y, light.z, 0.0],
             flags: [self.frame_index, u32::from(self.moving), 0, 0],
         }
-    }
-
-    /// Pixel position (origin top left) of a data-space point, or None behind the camera.
-    pub fn project(&self, data: Vec3) -> Option<glam::Vec2> {
-        let clip = self.clip_from_data() * data.extend(1.0);
-        if clip.w <= 1e-6 {
-            return None;
-        }
-        let ndc = clip.truncate() / clip.w;
-        Some(glam::Vec2::new(
-            (ndc.x * 0.5 + 0.5) * self.width as f32,
-            (0.5 - ndc.y * 0.5) * self.height as f32,
-        ))
     }
 }
 
@@ -89,16 +55,10 @@ impl FrameBinding {
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame::layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[uniform_entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            )],
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("frame::bind_group"),

@@ -1,21 +1,15 @@
-//! The offscreen colour and depth textures every pass draws into, and reading them back.
+//! The offscreen colour and depth textures every pass draws into, and reading the colour back.
 //!
 //! The window composites the colour texture into egui's frame; the headless renderer reads it
 //! back to an RGBA image. Colours are gamma-encoded (`Rgba8Unorm`), as egui's are, so what the
 //! passes write is what lands on screen and in the PNG.
 
-use thiserror::Error;
+use crate::render::gpu::readback::{ReadbackError, map_buffer};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The background the scene is cleared to (gamma-encoded RGB).
 pub const BACKGROUND: [f64; 3] = [0.055, 0.063, 0.078];
-
-#[derive(Debug, Error)]
-pub enum ReadbackError {
-    #[error("reading the rendered image back from the GPU failed: {0}")]
-    Map(String),
-}
 
 pub struct RenderTarget {
     pub color: wgpu::Texture,
@@ -113,26 +107,4 @@ impl RenderTarget {
         image::RgbaImage::from_raw(self.width, self.height, pixels)
             .ok_or_else(|| ReadbackError::Map("image size mismatch".into()))
     }
-}
-
-/// Maps a MAP_READ buffer after the queue's work is done and returns a copy of its bytes.
-pub fn map_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, ReadbackError> {
-    let slice = buffer.slice(..);
-    let (sender, receiver) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |result| {
-        let _ = sender.send(result);
-    });
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| ReadbackError::Map(e.to_string()))?;
-    receiver
-        .recv()
-        .map_err(|e| ReadbackError::Map(e.to_string()))?
-        .map_err(|e| ReadbackError::Map(e.to_string()))?;
-    let bytes = slice
-        .get_mapped_range()
-        .map_err(|e| ReadbackError::Map(e.to_string()))?
-        .to_vec();
-    buffer.unmap();
-    Ok(bytes)
 }

@@ -13,7 +13,7 @@ pub mod voxelize;
 use glam::{UVec3, Vec3};
 use wgpu::util::DeviceExt;
 
-use crate::render::gpu::target::{ReadbackError, map_buffer};
+use crate::render::gpu::readback::{ReadbackError, read_buffer};
 
 pub struct VoxelGrid {
     pub dims: UVec3,
@@ -75,19 +75,13 @@ impl VoxelGrid {
         queue: &wgpu::Queue,
         field: &wgpu::Buffer,
     ) -> Result<Vec<f32>, ReadbackError> {
-        let size = self.voxel_count() * 4;
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("grid::readback"),
-            size,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("grid::readback"),
-        });
-        encoder.copy_buffer_to_buffer(field, 0, &staging, 0, size);
-        queue.submit([encoder.finish()]);
-        let bytes = map_buffer(device, &staging)?;
+        let bytes = read_buffer(
+            device,
+            queue,
+            "grid::readback",
+            field,
+            self.voxel_count() * 4,
+        )?;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 }

@@ -2,26 +2,27 @@
 //! read (paper sections 3.1 and 3.4).
 //!
 //! Reads: the points (uploaded here in chunks, five f32 per point, the PLY record). Writes: a
-//! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel.
-//! How: shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
-//! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual
-//! carry; scale [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp) and counts
-//! it in a u32 of its own (so any cloud up to [`MAX_POINTS`]; portable to every adapter, no float
-//! atomics).
+//! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
+//! shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
+//! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual carry; scale
+//! [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp) and counts it in a u32 of
+//! its own (so any cloud up to [`MAX_POINTS`]; portable to every adapter, no float atomics).
 //! `resolve` turns the sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally
 //! blurs the sums with a separable Gaussian; `histogram` bins the positive sums on a log2 scale,
 //! `percentile` finds the bin holding the 99th percentile, and `normalize_density` divides by
-//! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field.
-//! The grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only
-//! when the cloud or the settings change (see `SceneData::ensure_grid`).
+//! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field. The
+//! grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only when the
+//! cloud or the settings change (see `SceneData::ensure_grid`).
 
 use glam::{UVec3, Vec3};
 use thiserror::Error;
 use wgpu::util::DeviceExt;
 
 use crate::data::cloud::{DataMode, Point};
+use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
-use crate::render::gpu::target::{ReadbackError, map_buffer};
+use crate::render::gpu::layouts::{storage_entry, uniform_entry};
+use crate::render::gpu::readback::{ReadbackError, read_buffer};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
 
@@ -297,31 +298,7 @@ pub struct VoxelizePass {
     frame_bind_group: wgpu::BindGroup,
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
+const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 
 impl VoxelizePass {
     pub fn new(device: &wgpu::Device, frame: &FrameBinding) -> Self {
@@ -329,34 +306,34 @@ impl VoxelizePass {
         let main_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::main_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, false),
-                storage_entry(3, false),
-                storage_entry(4, false),
-                storage_entry(5, false),
-                storage_entry(6, false),
-                storage_entry(7, false),
-                storage_entry(8, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, false),
+                storage_entry(3, COMPUTE, false),
+                storage_entry(4, COMPUTE, false),
+                storage_entry(5, COMPUTE, false),
+                storage_entry(6, COMPUTE, false),
+                storage_entry(7, COMPUTE, false),
+                storage_entry(8, COMPUTE, false),
             ],
         });
         let smooth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::smooth_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, false),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, false),
             ],
         });
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("voxelize::resolve_layout"),
             entries: &[
-                uniform_entry(0),
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, false),
-                storage_entry(4, false),
-                storage_entry(5, true),
+                uniform_entry(0, COMPUTE),
+                storage_entry(1, COMPUTE, true),
+                storage_entry(2, COMPUTE, true),
+                storage_entry(3, COMPUTE, false),
+                storage_entry(4, COMPUTE, false),
+                storage_entry(5, COMPUTE, true),
             ],
         });
         let resolve_pipeline_layout =
@@ -400,14 +377,6 @@ impl VoxelizePass {
         }
     }
 
-    /// The largest buffer this device can bind for storage.
-    pub fn buffer_limit(device: &wgpu::Device) -> u64 {
-        let limits = device.limits();
-        limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size)
-    }
-
     /// Checks a resolution against the allowed range and this device's buffer limits.
     pub fn check_resolution(device: &wgpu::Device, resolution: u32) -> Result<(), VoxelizeError> {
         if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&resolution) {
@@ -415,7 +384,7 @@ impl VoxelizePass {
         }
         // The largest buffers hold 8 bytes per voxel.
         let needed = u64::from(resolution).pow(3) * 8;
-        let limit = Self::buffer_limit(device);
+        let limit = storage_binding_limit(device);
         if needed > limit {
             let largest = ((limit / 8) as f64).cbrt().floor() as u32;
             return Err(VoxelizeError::TooLarge {
@@ -468,7 +437,7 @@ impl VoxelizePass {
         let density = storage("voxelize::density_grid", group4_count * 16, copy);
         let hp_mean = storage("voxelize::hp_mean_grid", group4_count * 16, copy);
 
-        let per_chunk = (Self::buffer_limit(device) / std::mem::size_of::<Point>() as u64)
+        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
             .clamp(1, u64::from(u32::MAX / 5)) as usize;
         // An empty cloud still binds one (zero) point, with a count of 0.
         let zero = [Point {
@@ -724,18 +693,7 @@ impl VoxelizePass {
         queue: &wgpu::Queue,
         job: &VoxelizeJob,
     ) -> Result<VoxelStats, VoxelizeError> {
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("voxelize::stats_readback"),
-            size: 16,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("voxelize::stats_readback"),
-        });
-        encoder.copy_buffer_to_buffer(&job.stats, 0, &staging, 0, 16);
-        queue.submit([encoder.finish()]);
-        let bytes = map_buffer(device, &staging)?;
+        let bytes = read_buffer(device, queue, "voxelize::stats_readback", &job.stats, 16)?;
         let words: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(VoxelStats {
             nonempty: words[0],

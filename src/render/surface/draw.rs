@@ -1,13 +1,13 @@
 //! The CPU side of shaders/surface/draw.wgsl: the style uniform and the colour gradient.
 
-/// Keep in sync with `MeshStyle` in shaders/surface/draw.wgsl.
+/// Keep in sync with `SurfaceStyle` in shaders/surface/draw.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct MeshStyle {
+pub(crate) struct SurfaceStyle {
     pub(crate) lit: u32,
     pub(crate) pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<MeshStyle>() == 16);
+const _: () = assert!(std::mem::size_of::<SurfaceStyle>() == 16);
 
 /// The warm-to-cool gradient of the mesh colour, as in shaders/surface/draw.wgsl (keep in sync):
 /// gamma-encoded RGB for `hp` (0 percussive, warm; 1 harmonic, cool).

@@ -3,6 +3,7 @@
 //! classify, the dispatch over the active cells, two passes over the active cells only, the draw
 //! arguments) and their recording, with optional per-pass timestamps.
 
+use crate::render::gpu::layouts::{storage_entry, uniform_entry};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
 use crate::render::surface::buffers::{
@@ -12,27 +13,11 @@ use crate::render::surface::buffers::{
 /// Bind group layout shared by the extraction passes (group 1, bindings 0..=9 of
 /// shaders/surface/extraction.wgsl), plus `extra` read-only storage bindings from 10 on.
 fn extraction_layout(device: &wgpu::Device, label: &str, extra: u32) -> wgpu::BindGroupLayout {
-    let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
+    let storage = |binding: u32, read_only: bool| {
+        storage_entry(binding, wgpu::ShaderStages::COMPUTE, read_only)
     };
     let mut entries = vec![
-        wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        },
+        uniform_entry(0, wgpu::ShaderStages::COMPUTE),
         storage(1, true),
         storage(2, true),
         storage(3, false),

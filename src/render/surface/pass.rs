@@ -5,8 +5,12 @@ use std::sync::atomic::{AtomicU8, Ordering};
 
 use glam::Vec3;
 
+use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
-use crate::render::gpu::target::{COLOR_FORMAT, map_buffer};
+use crate::render::gpu::layouts::uniform_entry;
+use crate::render::gpu::readback::{map_buffer, read_buffer};
+use crate::render::gpu::target::COLOR_FORMAT;
+use crate::render::gpu::timing::Timestamps;
 use crate::render::grid::VoxelGrid;
 use crate::render::points::depth_state;
 use crate::render::shaders;
@@ -14,7 +18,7 @@ use crate::render::surface::buffers::{
     COUNTERS_SIZE, INDEXED_ARGS_OFFSET, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
 };
 use crate::render::surface::cpu_mesh::CpuMesh;
-use crate::render::surface::draw::MeshStyle;
+use crate::render::surface::draw::SurfaceStyle;
 use crate::render::surface::dual_contour::DualContourPass;
 use crate::render::surface::extraction::EXTRACTION_PASSES;
 use crate::render::surface::marching_tets::MarchingTetsPass;
@@ -33,16 +37,7 @@ pub struct SurfacePass {
     style_bind_group: wgpu::BindGroup,
     initial_capacity: (u32, u32),
     /// Per-pass GPU timestamps of blocking extractions (benchmarks), when enabled.
-    timing: Option<PassTiming>,
-}
-
-/// Timestamp queries around each extraction pass, resolved and copied for reading.
-struct PassTiming {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    read: wgpu::Buffer,
-    /// Nanoseconds per tick.
-    period: f64,
+    timing: Option<Timestamps>,
 }
 
 const TIMESTAMPS: u32 = 2 * EXTRACTION_PASSES as u32;
@@ -60,28 +55,19 @@ impl SurfacePass {
         vertices: u32,
         indices: u32,
     ) -> Self {
-        let module = shaders::module(device, "mesh", &shaders::mesh());
+        let module = shaders::module(device, "surface_draw", &shaders::surface_draw());
         let style_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mesh::style_layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            label: Some("surface::style_layout"),
+            entries: &[uniform_entry(0, wgpu::ShaderStages::FRAGMENT)],
         });
         let style = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("mesh::style"),
-            size: std::mem::size_of::<MeshStyle>() as u64,
+            label: Some("surface::style"),
+            size: std::mem::size_of::<SurfaceStyle>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let style_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mesh::style_bind_group"),
+            label: Some("surface::style_bind_group"),
             layout: &style_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
@@ -89,7 +75,7 @@ impl SurfacePass {
             }],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mesh::pipeline_layout"),
+            label: Some("surface::draw_pipeline_layout"),
             bind_group_layouts: &[Some(&frame.layout), Some(&style_layout)],
             immediate_size: 0,
         });
@@ -99,7 +85,7 @@ impl SurfacePass {
             attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x3],
         };
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("mesh::pipeline"),
+            label: Some("surface::draw_pipeline"),
             layout: Some(&layout),
             vertex: wgpu::VertexState {
                 module: &module,
@@ -135,38 +121,14 @@ impl SurfacePass {
     /// [`SurfacePass::pass_times_ms`]; false (and nothing changes) when the device has no
     /// timestamp queries. Splits the extraction into one compute pass per dispatch.
     pub fn enable_pass_timing(&mut self, queue: &wgpu::Queue) -> bool {
-        if !self
-            .device
-            .features()
-            .contains(wgpu::Features::TIMESTAMP_QUERY)
-        {
-            return false;
-        }
-        let buffer = |label, usage| {
-            self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: u64::from(TIMESTAMPS) * 8,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        self.timing = Some(PassTiming {
-            set: self.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("surface::pass_timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: TIMESTAMPS,
-            }),
-            resolve: buffer(
-                "surface::pass_timestamps_resolve",
-                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            ),
-            read: buffer(
-                "surface::pass_timestamps_read",
-                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            ),
-            period: f64::from(queue.get_timestamp_period()),
-        });
-        true
+        self.timing = Timestamps::new(
+            &self.device,
+            queue,
+            "surface::pass_timestamps",
+            TIMESTAMPS,
+            wgpu::Features::TIMESTAMP_QUERY,
+        );
+        self.timing.is_some()
     }
 
     /// The GPU time of each pass of the last blocking extraction, in milliseconds, by name
@@ -178,9 +140,9 @@ impl SurfacePass {
         let Some(timing) = &self.timing else {
             return Ok(None);
         };
-        let bytes = map_buffer(&self.device, &timing.read)
+        let ticks = timing
+            .read_ticks(&self.device)
             .map_err(|e| SurfaceError::Readback(e.to_string()))?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
         let names = match method {
             SurfaceMethod::MarchingTetrahedra => self.marching_tets.pass_names(),
             SurfaceMethod::DualContouring => self.dual_contour.pass_names(),
@@ -189,18 +151,14 @@ impl SurfacePass {
             names
                 .iter()
                 .zip(ticks.chunks_exact(2))
-                .map(|(&name, t)| (name, t[1].wrapping_sub(t[0]) as f64 * timing.period / 1e6))
+                .map(|(&name, t)| (name, timing.ms(t[0], t[1])))
                 .collect(),
         ))
     }
 
     /// The largest number of `element_size`-byte elements one buffer binding may hold.
     fn element_limit(&self, element_size: u64) -> u64 {
-        let limits = self.device.limits();
-        let bytes = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
-        (bytes / element_size).min(u64::from(u32::MAX))
+        (storage_binding_limit(&self.device) / element_size).min(u64::from(u32::MAX))
     }
 
     /// Grows the buffers to hold `counts`; an error when the device cannot.
@@ -361,7 +319,7 @@ impl SurfacePass {
         grid: Option<&VoxelGrid>,
         settings: &SurfaceSettings,
     ) {
-        let style = MeshStyle {
+        let style = SurfaceStyle {
             lit: u32::from(settings.lit),
             pad: [0; 3],
         };
@@ -425,8 +383,7 @@ impl SurfacePass {
             });
             encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
             if let Some(timing) = &self.timing {
-                encoder.resolve_query_set(&timing.set, 0..TIMESTAMPS, &timing.resolve, 0);
-                encoder.copy_buffer_to_buffer(&timing.resolve, 0, &timing.read, 0, None);
+                timing.resolve(&mut encoder, TIMESTAMPS);
             }
             queue.submit([encoder.finish()]);
             let bytes = map_buffer(&self.device, &staging)
@@ -462,23 +419,8 @@ impl SurfacePass {
             return Err(SurfaceError::NotExtracted);
         };
         let read = |buffer: &wgpu::Buffer, bytes: u64| -> Result<Vec<u8>, SurfaceError> {
-            if bytes == 0 {
-                return Ok(Vec::new());
-            }
-            let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("surface::mesh_readback"),
-                size: bytes,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            let mut encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("surface::mesh_readback"),
-                });
-            encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-            queue.submit([encoder.finish()]);
-            map_buffer(&self.device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))
+            read_buffer(&self.device, queue, "surface::mesh_readback", buffer, bytes)
+                .map_err(|e| SurfaceError::Readback(e.to_string()))
         };
         let vertex_count = counts.vertices_needed.min(buffers.vertex_capacity);
         let vertex_bytes = read(
