@@ -517,4 +517,18 @@ fn a_10000_song_timeline_header_of_megabytes_loads() {
     assert_eq!(cloud.meta.songs.len(), 10_000);
     assert_eq!(cloud.meta.songs[9_999].title, "Song number 9999");
     assert_eq!(cloud.len(), 20_000);
+    // The hover's song lookup (once per cursor move): finds every song, and is cheap.
+    let songs = &cloud.meta.songs;
+    let started = std::time::Instant::now();
+    for i in (0..10_000).step_by(10) {
+        let centre = (songs[i].x_min.unwrap() + songs[i].x_max.unwrap()) / 2.0;
+        assert_eq!(
+            loudscape::view::pick::song_at(songs, centre as f32),
+            Some(i)
+        );
+    }
+    eprintln!(
+        "song_at over 10,000 songs: {:?} a lookup",
+        started.elapsed() / 1000
+    );
 }
