@@ -336,7 +336,7 @@ pub(super) fn song_cloud_path(
     timeline: &PointCloud,
     song: &crate::data::cloud::SongInfo,
 ) -> Option<PathBuf> {
-    let audio = PathBuf::from(song.path.as_ref()?);
+    let audio = song.open_path()?;
     let stem = audio.file_stem()?;
     let mut name = stem.to_os_string();
     name.push(".ply");
