@@ -169,6 +169,12 @@ def build_parser() -> argparse.ArgumentParser:
         default="linear",
         help="z axis: linear in bin index (default) or log frequency (drops the 0 Hz bin)",
     )
+    song.add_argument(
+        "--progress",
+        choices=("text", "json"),
+        default="text",
+        help="json: one JSON object a line on stdout (stage, fraction; done or error last)",
+    )
     timeline = commands.add_parser(
         "timeline",
         help="many songs -> one chronological cloud (one point per sampled frame)",
@@ -303,6 +309,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "song" and args.hop > args.n_fft:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
+    if getattr(args, "progress", "text") == "json":
+        from loudscape_extract.progress import JsonProgress
+
+        progress = JsonProgress()
     try:
         if args.command == "song":
             output = args.output or os.path.splitext(args.input)[0] + ".ply"
@@ -315,6 +325,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 freq_scale=args.freq_scale,
                 progress=progress,
             )
+            if hasattr(progress, "done"):
+                progress.done(output)
         elif args.command == "timeline":
             return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
         elif args.command == "report":
@@ -329,6 +341,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             raise
         print(f"{PROG}: error: {exc}", file=sys.stderr)
+        if hasattr(progress, "error"):
+            progress.error(str(exc))
         return 1
     except KeyboardInterrupt:
         if args.debug:
@@ -341,6 +355,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         reason = " ".join(str(exc).split()) or type(exc).__name__
         where = getattr(args, "input", None) or getattr(args, "output", "")
         print(f"{PROG}: error: {where}: internal error: {reason}", file=sys.stderr)
+        if hasattr(progress, "error"):
+            progress.error(f"{where}: internal error: {reason}")
         return 1
     return 0
 
