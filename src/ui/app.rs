@@ -108,6 +108,7 @@ impl LoudscapeApp {
             surface_error: None,
             needs_repaint: false,
             volume_rest_ms: 0.0,
+            open: Default::default(),
         };
         let files = app.apply_remembered(options.files, remembered);
         if let Some(view) = options.view {
@@ -230,7 +231,7 @@ impl LoudscapeApp {
             }
         } else {
             let text = if self.loading.is_empty() {
-                "Drop a loudscape .ply file here, or run: loudscape song.ply [timeline.ply]"
+                "Drop a song or a loudscape .ply file here, or run: loudscape song.ogg [timeline.ply]"
             } else {
                 "Loading…"
             };

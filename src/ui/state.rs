@@ -55,6 +55,8 @@ pub(super) struct LoudscapeApp {
     pub(super) needs_repaint: bool,
     /// Smoothed time of a volume frame at rest (ms), to decide whether orbiting needs a stand-in.
     pub(super) volume_rest_ms: f32,
+    /// The Open row (`open.rs`).
+    pub(super) open: crate::ui::open::OpenPanel,
 }
 
 /// Which of the two data slots.
@@ -94,6 +96,8 @@ pub(super) struct Loaded {
 pub(super) struct Loading {
     pub(super) path: PathBuf,
     pub(super) receiver: Receiver<Result<PointCloud, String>>,
+    /// Progress and cancel of an extraction (`open.rs`).
+    pub(super) shared: crate::ui::open::Shared,
 }
 
 /// What is under the cursor, recomputed only when the cursor or the view changed.
