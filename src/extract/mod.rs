@@ -208,6 +208,7 @@ pub fn open_reporting(
     also: &mut dyn FnMut(&Progress),
 ) -> Result<PointCloud, ExtractError> {
     let name = path.display().to_string();
+    let start = std::time::Instant::now();
     let mut last_stage = String::new();
     let mut report = |progress: &Progress| {
         also(progress);
@@ -224,7 +225,11 @@ pub fn open_reporting(
     let opened = open_any(path, settings, cancel, &mut report)?;
     if let Some((ply, hit)) = &opened.extracted {
         let how = if *hit { "from the cache" } else { "extracted" };
-        eprintln!("loudscape: {name}: cloud {how}: {}", ply.display());
+        let seconds = start.elapsed().as_secs_f32();
+        eprintln!(
+            "loudscape: {name}: cloud {how} in {seconds:.2} s: {}",
+            ply.display()
+        );
     }
     Ok(opened.cloud)
 }
