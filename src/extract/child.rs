@@ -64,6 +64,26 @@ fn remove_partial(partial: &Path) {
     }
 }
 
+/// Removes partial clouds older than a day beside `output`: left by a run whose app was killed
+/// before it could clean up (a live run's partial is minutes old at most).
+fn remove_stale_partials(output: &Path) {
+    let Some(dir) = output.parent() else { return };
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let stale = entry
+            .metadata()
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > Duration::from_secs(24 * 3600));
+        if stale && entry.file_name().to_string_lossy().contains(".partial-") {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
 /// Runs `extractor` on `audio`, writing `output` when it succeeds; errors name the audio as
 /// `name`.
 pub fn run(
@@ -75,6 +95,7 @@ pub fn run(
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> Result<(), ExtractError> {
+    remove_stale_partials(output);
     let mut partial_name = output.file_name().unwrap_or_default().to_os_string();
     partial_name.push(format!(".partial-{}.ply", std::process::id()));
     let partial: PathBuf = output.with_file_name(partial_name);

@@ -124,8 +124,12 @@ pub fn open_any(
         });
     }
     let (ply, hit) = cloud_for_audio(path, settings, cancel, on_progress)?;
+    let mut cloud = crate::data::cloud::load(&ply)?;
+    // The song names the cloud (panel, messages, what the window remembers: reopened through
+    // the cache), not the cache file's hash.
+    cloud.path = path.to_owned();
     Ok(Opened {
-        cloud: crate::data::cloud::load(&ply)?,
+        cloud,
         extracted: Some((ply, hit)),
     })
 }
