@@ -1,11 +1,13 @@
 //! Opening songs and clouds from the window: the thread that opens a path (a PLY is read, audio
 //! goes through the extractor and the cloud cache in `crate::extract`), its progress bar with the
-//! stage and a Cancel button, and the "Open" row of the side panel. The command-line argument, a
-//! dropped file and the Open row all end in [`LoudscapeApp::start_loading`], which calls
-//! [`open_path`] on a thread; the old view stays until the new cloud is installed.
+//! stage and a Cancel button, and the "Open" row of the side panel (a path field, and a native
+//! file dialog through `rfd`). The command-line argument, a dropped file, the path field and the
+//! dialog all end in [`LoudscapeApp::start_loading`], which calls [`open_path`] on a thread; the
+//! old view stays until the new cloud is installed.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 
 use eframe::egui::{self, RichText};
@@ -14,10 +16,17 @@ use crate::data::cloud::PointCloud;
 use crate::extract::{self, Progress, Settings};
 use crate::ui::state::LoudscapeApp;
 
-/// The Open row's text field.
+/// Audio the dialog offers (the extractor reads these); clouds are `.ply`.
+const AUDIO_EXTENSIONS: [&str; 9] = [
+    "wav", "flac", "ogg", "oga", "opus", "mp3", "aiff", "aif", "aifc",
+];
+
+/// The Open row: its text field and the file dialog while it is open.
 #[derive(Default)]
 pub(super) struct OpenPanel {
     pub(super) path: String,
+    /// The dialog's answer (`None`: closed without a choice).
+    pub(super) dialog: Option<Receiver<Option<PathBuf>>>,
 }
 
 /// What a loading thread shares with the window.
@@ -40,6 +49,26 @@ pub fn open_path(path: &Path, settings: &Settings, shared: &Shared) -> Result<Po
     extract::open_reporting(path, settings, &shared.cancel, &mut report).map_err(|e| e.to_string())
 }
 
+/// The native Open dialog, built here (macOS wants dialogs made on the main thread) and awaited
+/// on a thread so the window keeps drawing; the answer comes through the receiver.
+fn open_dialog() -> Receiver<Option<PathBuf>> {
+    let (sender, receiver) = channel();
+    let dialog = rfd::AsyncFileDialog::new()
+        .set_title("Open a song or a loudscape cloud")
+        .add_filter(
+            "Songs and clouds",
+            &[&AUDIO_EXTENSIONS[..], &["ply"]].concat(),
+        )
+        .add_filter("Songs", &AUDIO_EXTENSIONS)
+        .add_filter("Clouds (.ply)", &["ply"])
+        .pick_file();
+    std::thread::spawn(move || {
+        let picked = pollster::block_on(dialog).map(|file| file.path().to_path_buf());
+        let _ = sender.send(picked);
+    });
+    receiver
+}
+
 fn file_name(path: &Path) -> String {
     path.file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -56,11 +85,33 @@ impl LoudscapeApp {
                     .desired_width(170.0),
             );
             let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-            if (ui.button("Open").clicked() || enter) && !self.open.path.trim().is_empty() {
+            if enter && !self.open.path.trim().is_empty() {
                 let path = PathBuf::from(self.open.path.trim());
                 self.start_loading(path);
             }
+            let button = ui
+                .add_enabled(self.open.dialog.is_none(), egui::Button::new("Open…"))
+                .on_hover_text("a song (wav, flac, ogg, opus, mp3, aiff) or a .ply cloud");
+            if button.clicked() {
+                self.open.dialog = Some(open_dialog());
+            }
         });
+        let answer = self.open.dialog.as_ref().map(|r| r.try_recv());
+        match answer {
+            Some(Ok(picked)) => {
+                self.open.dialog = None;
+                if let Some(path) = picked {
+                    self.open.path = path.display().to_string();
+                    self.start_loading(path);
+                }
+            }
+            Some(Err(std::sync::mpsc::TryRecvError::Disconnected)) => self.open.dialog = None,
+            Some(Err(std::sync::mpsc::TryRecvError::Empty)) => {
+                ui.ctx()
+                    .request_repaint_after(std::time::Duration::from_millis(100));
+            }
+            None => {}
+        }
     }
 
     /// One row a load: the file, the extractor's stage and share done, and Cancel.
