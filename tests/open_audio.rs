@@ -114,11 +114,8 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
     let first = loudscape(&args, &cache, &extractor());
     let err = String::from_utf8_lossy(&first.stderr);
     assert!(first.status.success(), "render of a song failed: {err}");
-    assert!(
-        err.contains("hpss"),
-        "no extractor progress on stderr: {err}"
-    );
-    assert!(err.contains("cloud extracted"), "{err}");
+    // stderr is not a terminal: no progress lines, as the extractor does (the window tells).
+    assert!(err.trim().is_empty(), "{err}");
     let cached = files_in(&cache);
     assert_eq!(
         cached.len(),
@@ -145,8 +142,7 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
     let second = loudscape(&args, &cache, Path::new("/nonexistent/loudscape-extract"));
     let err = String::from_utf8_lossy(&second.stderr);
     assert!(second.status.success(), "cached render failed: {err}");
-    assert!(err.contains("cloud from the cache"), "{err}");
-    assert!(!err.contains("hpss"), "the extractor ran again: {err}");
+    assert!(err.trim().is_empty(), "{err}");
     assert_eq!(
         std::fs::metadata(&cloud_file).unwrap().modified().unwrap(),
         written
@@ -199,7 +195,8 @@ fn bad_audio_is_one_line_naming_the_file_and_leaves_no_partial_cloud() {
     );
     let err = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
-    let last = err.trim().lines().last().unwrap_or_default();
+    assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+    let last = err.trim();
     assert!(last.starts_with("loudscape: error: "), "{err}");
     assert!(
         last.contains("noise.ogg") && last.contains("extractor failed"),

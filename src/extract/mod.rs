@@ -97,16 +97,18 @@ pub struct Opened {
     pub extracted: Option<(PathBuf, bool)>,
 }
 
-/// True unless the file is a PLY (by its first bytes, or its `.ply` name when it cannot be
-/// read: the PLY reader then says why).
+/// True unless the file is a PLY: named `.ply` (a broken one gets the PLY reader's error, not
+/// the extractor's) or starting with the PLY magic `ply` whatever its name.
 pub fn is_audio(path: &Path) -> bool {
-    let mut magic = [0u8; 3];
-    match File::open(path).and_then(|mut f| f.read_exact(&mut magic)) {
-        Ok(()) => &magic != b"ply",
-        Err(_) => !path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("ply")),
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ply"))
+    {
+        return false;
     }
+    let mut magic = [0u8; 3];
+    let read = File::open(path).and_then(|mut f| f.read_exact(&mut magic));
+    !(read.is_ok() && &magic == b"ply")
 }
 
 /// Opens a cloud file, or extracts (or finds in the cache) the cloud of an audio file and opens
@@ -193,22 +195,23 @@ pub fn cloud_for_audio_with(
     Ok((ply, false))
 }
 
-/// [`open_any`] with default settings for the command line (see [`open_reporting`]).
+/// [`open_any`] with default settings for the command line: progress lines (see
+/// [`open_reporting`]) only when stderr is a terminal, as the extractor does, so that scripts
+/// see one line on failure and nothing on success.
 pub fn open_for_command(path: &Path) -> Result<PointCloud, ExtractError> {
-    open_reporting(
-        path,
-        &Settings::default(),
-        &AtomicBool::new(false),
-        &mut |_| {},
-    )
+    use std::io::IsTerminal;
+    let verbose = std::io::stderr().is_terminal();
+    let cancel = AtomicBool::new(false);
+    open_reporting(path, &Settings::default(), &cancel, verbose, &mut |_| {})
 }
 
-/// [`open_any`] telling stderr about it: one line a stage, and for audio where the cloud came
-/// from (extracted, or from the cache); `also` hears every progress report too.
+/// [`open_any`] telling stderr about it when `verbose`: one line a stage, and for audio where
+/// the cloud came from (extracted, or from the cache); `also` hears every progress report.
 pub fn open_reporting(
     path: &Path,
     settings: &Settings,
     cancel: &AtomicBool,
+    verbose: bool,
     also: &mut dyn FnMut(&Progress),
 ) -> Result<PointCloud, ExtractError> {
     let name = path.display().to_string();
@@ -217,7 +220,7 @@ pub fn open_reporting(
     let mut report = |progress: &Progress| {
         also(progress);
         // Hashing is local and quick; stderr hears only the extractor's stages.
-        if progress.stage != last_stage && progress.stage != "hashing" {
+        if verbose && progress.stage != last_stage && progress.stage != "hashing" {
             eprintln!(
                 "loudscape: {name}: {} ({:.0}%)",
                 progress.stage,
@@ -227,7 +230,7 @@ pub fn open_reporting(
         }
     };
     let opened = open_any(path, settings, cancel, &mut report)?;
-    if let Some((ply, hit)) = &opened.extracted {
+    if let Some((ply, hit)) = opened.extracted.as_ref().filter(|_| verbose) {
         let how = if *hit { "from the cache" } else { "extracted" };
         let seconds = start.elapsed().as_secs_f32();
         eprintln!(
@@ -250,8 +253,11 @@ mod tests {
         std::fs::write(&cloud, b"ply\nformat binary_little_endian 1.0\n").unwrap();
         let audio = dir.join("song.ply.wav");
         std::fs::write(&audio, b"RIFF....WAVE").unwrap();
+        let broken = dir.join("broken.PLY");
+        std::fs::write(&broken, b"hello world\n").unwrap();
         assert!(!is_audio(&cloud));
         assert!(is_audio(&audio));
+        assert!(!is_audio(&broken));
         assert!(!is_audio(&dir.join("missing.ply")));
         assert!(is_audio(&dir.join("missing.flac")));
         std::fs::remove_dir_all(&dir).unwrap();

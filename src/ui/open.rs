@@ -46,7 +46,9 @@ pub fn open_path(path: &Path, settings: &Settings, shared: &Shared) -> Result<Po
             *slot = Some(progress.clone());
         }
     };
-    extract::open_reporting(path, settings, &shared.cancel, &mut report).map_err(|e| e.to_string())
+    // The window always tells stderr: there it is a log, not a script's input.
+    extract::open_reporting(path, settings, &shared.cancel, true, &mut report)
+        .map_err(|e| e.to_string())
 }
 
 /// The native Open dialog, built here (macOS wants dialogs made on the main thread) and awaited
