@@ -15,7 +15,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh demo clean
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music demo clean
 
 system:
 	@bash scripts/setup-system.sh
@@ -52,7 +52,12 @@ lint-py: venv
 	$(VENV)/bin/ruff check preprocess bench tests/python
 	$(VENV)/bin/ruff format --check preprocess bench tests/python
 
-test-py: venv
+# Freely licensed game soundtracks from Debian packages (cached in data/real-music/) for
+# preprocess/tests/test_real_music.py; fails with one line if a download fails.
+real-music:
+	@bash scripts/fetch-real-music.sh data/real-music
+
+test-py: venv real-music
 	$(VENV)/bin/pytest -q preprocess/tests
 
 # The app's isosurfaces against scikit-image, through the `loudscape` binary (the one the Rust

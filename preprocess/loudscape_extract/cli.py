@@ -1,7 +1,8 @@
 """Command line: ``loudscape-extract song track.mp3 -o track.ply``.
 
-Subcommands are thin: they parse flags, call the pipeline functions and turn
-:class:`ExtractError` into one line on stderr and exit status 1 (2 for bad flags).
+Argument parsing only: subcommands parse flags, call the library (:func:`extract_song`,
+:func:`build_timeline`, :func:`write_report`) and turn :class:`ExtractError` into one line on
+stderr and exit status 1 (2 for bad flags). Nothing in the library imports this module.
 """
 
 from __future__ import annotations
@@ -10,97 +11,26 @@ import argparse
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
+from loudscape_extract import export
+from loudscape_extract.dynamics import HIGHPASS_HZ, dc_warning
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.interrupts import Terminated, sigterm_raises
+from loudscape_extract.messages import one_line
+from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
+from loudscape_extract.progress import Progress
+from loudscape_extract.report import write_report
+from loudscape_extract.song import extract_song
+from loudscape_extract.timeline import (
+    DEFAULT_Z_MEASURE,
+    Z_MEASURES,
+    build_timeline,
+    default_cache_dir,
+)
+from loudscape_extract.version import PROG, __version__
 
-PROG = "loudscape-extract"
-
-
-class Progress:
-    """Per-stage progress lines on stderr, only when enabled (stderr is a TTY and not quiet)."""
-
-    def __init__(self, *, enabled: bool) -> None:
-        self.enabled = enabled
-        self.start = time.perf_counter()
-
-    def __call__(self, message: str) -> None:
-        if self.enabled:
-            elapsed = time.perf_counter() - self.start
-            print(f"{PROG}: [{elapsed:6.2f} s] {message}", file=sys.stderr, flush=True)
-
-
-def check_output_path(output: str) -> None:
-    """Fail early when the output cannot be created (missing directory, or a directory)."""
-    directory = os.path.dirname(os.path.abspath(output))
-    if os.path.isdir(output):
-        raise ExtractError("output path is a directory", path=output)
-    if not os.path.isdir(directory):
-        raise ExtractError(f"output directory {directory!r} does not exist", path=output)
-    if not os.access(directory, os.W_OK):
-        raise ExtractError(f"output directory {directory!r} is not writable", path=output)
-
-
-def extract_song(
-    source: str,
-    output: str,
-    *,
-    n_fft: int = 2048,
-    hop_length: int = 1024,
-    floor_db: float | None = None,
-    freq_scale: str = "linear",
-    progress: Callable[[str], None] | None = None,
-) -> dict:
-    """Song mode end to end: decode, features, points, atomic PLY write.
-
-    Parameters
-    ----------
-    source : str
-        Audio file; recorded in the metadata exactly as given.
-    output : str
-        PLY file to write.
-    n_fft, hop_length : int
-        STFT parameters.
-    floor_db : float, optional
-        Noise floor below the peak bin (default :data:`DEFAULT_FLOOR_DB`); 0 disables it.
-    freq_scale : {"linear", "log"}
-    progress : callable, optional
-        Called with a short message before each stage.
-
-    Returns
-    -------
-    metadata : dict
-        What was written into the file's ``loudscape-meta`` comment.
-    """
-    from loudscape_extract import __version__
-    from loudscape_extract.audio import decode_audio
-    from loudscape_extract.features import track_features
-    from loudscape_extract.ply import write_ply
-    from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata, song_points
-
-    say = progress or (lambda _message: None)
-    floor = DEFAULT_FLOOR_DB if floor_db is None else floor_db
-    check_output_path(output)
-    say(f"decoding {source}")
-    audio = decode_audio(source)
-    say(f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s)")
-    try:
-        features = track_features(audio, n_fft=n_fft, hop_length=hop_length, progress=say)
-        say("building points")
-        cloud = song_points(features, floor_db=floor, freq_scale=freq_scale)
-    except ExtractError as exc:
-        if exc.path is None:
-            exc.path = source
-        raise
-    source_format = f"{audio.format}/{audio.subtype}"
-    del audio
-    metadata = song_metadata(
-        features, cloud, generator=f"{PROG} {__version__}", source_format=source_format
-    )
-    say(f"writing {cloud.points.shape[0]} points to {output}")
-    write_ply(output, points=cloud.points, metadata=metadata)
-    say("done")
-    return metadata
+__all__ = ["build_parser", "main"]
 
 
 def _positive_even(text: str) -> int:
@@ -134,9 +64,6 @@ def _non_negative_db(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from loudscape_extract import __version__
-    from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
-
     parser = argparse.ArgumentParser(
         prog=PROG, description="Turn audio into loudscape point clouds (PLY)."
     )
@@ -175,13 +102,20 @@ def build_parser() -> argparse.ArgumentParser:
         default="text",
         help="json: one JSON object a line on stdout (stage, fraction; done or error last)",
     )
+    song.add_argument(
+        "--highpass",
+        action="store_true",
+        help=f"also high-pass at {HIGHPASS_HZ:g} Hz (infrasound) before frame level, crest, "
+        "PSR and DR (DC is always removed)",
+    )
     timeline = commands.add_parser(
         "timeline",
         help="many songs -> one chronological cloud (one point per sampled frame)",
         description="Many songs -> one point cloud ordered by year: x song position (by year "
-        "or by order), y frame RMS level (-60..0 dBFS), z frame crest factor (1st-99th "
-        "percentile over all songs), scalar A-weighted frame level, hp frame hp ratio. Years, "
-        "titles and artists come from tags (mutagen) or from --manifest.",
+        "or by order), y frame RMS level (-60..0 dBFS), z the dynamics of the 3 s around each "
+        "frame (PSR by default; see --z-measure; 1st-99th percentile over all songs), scalar "
+        "A-weighted frame level, hp frame hp ratio. Years, titles and artists come from tags "
+        "(mutagen) or from --manifest.",
     )
     timeline.add_argument(
         "inputs", nargs="*", help="audio files and folders (searched recursively)"
@@ -190,12 +124,26 @@ def build_parser() -> argparse.ArgumentParser:
         "--manifest",
         help="CSV with columns path, year[, title, artist]; paths relative to its folder",
     )
-    timeline.add_argument("-o", "--output", default="timeline.ply", help="PLY file to write")
+    timeline.add_argument("-o", "--output", default="timeline.ply", help="PLY file to write (.ply)")
     timeline.add_argument(
         "--x-by",
         choices=("year", "order"),
         default="year",
-        help="x proportional to the year (default) or each song an equal span in order",
+        help="x proportional to the year (default) or each song an equal span in order "
+        "(songs without a year then come last instead of being left out)",
+    )
+    timeline.add_argument(
+        "--z-measure",
+        choices=Z_MEASURES,
+        default=DEFAULT_Z_MEASURE,
+        help="z axis: psr (true peak minus short-term loudness over the 3 s around the frame; "
+        "default), crest-3s (peak/RMS over those 3 s) or crest-frame (the paper's crest "
+        "factor of the STFT frame alone, which measures waveform shape, not compression)",
+    )
+    timeline.add_argument(
+        "--highpass",
+        action="store_true",
+        help=f"also high-pass each song at {HIGHPASS_HZ:g} Hz before its dynamics",
     )
     timeline.add_argument(
         "--frames-per-song",
@@ -225,21 +173,66 @@ def build_parser() -> argparse.ArgumentParser:
         "percentile band over songs), loudness range and hp mean, from a timeline PLY.",
     )
     report.add_argument("input", help="timeline PLY written by the timeline command")
-    report.add_argument("-o", "--output", default="report.png", help="PNG file to write")
-    report.add_argument("--csv", help="also write the per-year table as CSV")
+    report.add_argument("-o", "--output", default="report.png", help="PNG file to write (.png)")
+    report.add_argument("--csv", help="also write the per-year table as CSV (.csv)")
 
-    from loudscape_extract import export
-
+    for sub in (song, timeline):
+        sub.add_argument(
+            "--strict",
+            action="store_true",
+            help="refuse truncated or corrupt audio instead of using what decodes (with a warning)",
+        )
     for sub in (song, timeline, report, export.add_parser(commands)):
-        sub.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+        sub.add_argument(
+            "-q",
+            "--quiet",
+            action="store_true",
+            help="no progress or 'wrote' summaries on stderr (warnings and errors still show)",
+        )
         sub.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     return parser
 
 
+def _say(text: str) -> None:
+    """One line on stderr, prefixed with the program's name, whitespace collapsed, capped."""
+    print(one_line(f"{PROG}: {text}"), file=sys.stderr, flush=True)
+
+
+def _list(items, limit: int = 5) -> str:
+    shown = ", ".join(str(item) for item in items[:limit])
+    return shown + (f" and {len(items) - limit} more" if len(items) > limit else "")
+
+
+def run_song(args: argparse.Namespace, progress: Progress) -> int:
+    """The song subcommand: extract, then a ``wrote ...`` summary."""
+    output = args.output or os.path.splitext(args.input)[0] + ".ply"
+    start = time.perf_counter()
+    metadata = extract_song(
+        args.input,
+        output,
+        n_fft=args.n_fft,
+        hop_length=args.hop,
+        floor_db=args.floor_db,
+        freq_scale=args.freq_scale,
+        strict=args.strict,
+        highpass_hz=HIGHPASS_HZ if args.highpass else None,
+        progress=progress,
+        warn=lambda text: _say(f"warning: {text}"),
+    )
+    if hasattr(progress, "done"):
+        progress.done(output)
+    if not args.quiet:
+        _say(
+            f"wrote {output} ({metadata['point_count']} points, "
+            f"{metadata['stft']['frames_kept']} of {metadata['stft']['frames']} frames, "
+            f"{metadata['source']['duration_s']:.1f} s of audio, "
+            f"{time.perf_counter() - start:.1f} s)"
+        )
+    return 0
+
+
 def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
     """The timeline subcommand: build, then a summary on stderr; 1 when any song failed."""
-    from loudscape_extract.timeline import build_timeline, default_cache_dir
-
     width = [0]
 
     def progress(done: int, total: int, path: str) -> None:
@@ -261,49 +254,70 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
             hop_length=args.hop,
             cache_dir=cache_dir,
             jobs=args.jobs,
+            strict=args.strict,
+            z_measure=args.z_measure,
+            highpass_hz=HIGHPASS_HZ if args.highpass else None,
             progress=progress,
         )
     finally:
         if tty and width[0]:
             print("\r" + " " * width[0] + "\r", end="", file=sys.stderr, flush=True)
     elapsed = time.perf_counter() - start
+    for note in result.notes:
+        _say(f"warning: {note}")
     for path in result.without_year:
-        print(f"{PROG}: skipped: {path}: no year in its tags", file=sys.stderr)
+        _say(f"skipped: {path}: no year in its tags")
     for path, reason in sorted(result.failed.items()):
-        print(f"{PROG}: skipped: {path}: {reason}", file=sys.stderr)
+        _say(f"skipped: {path}: {reason}")
+    for path, offset in result.dc_offsets:
+        _say(f"warning: {dc_warning(path, offset)}")
     if not args.quiet:
         songs = result.metadata["songs"]
-        print(
-            f"{PROG}: wrote {args.output}: {len(songs)} song(s), "
-            f"{result.metadata['point_count']} points in {elapsed:.1f} s "
-            f"({result.cached} from cache)",
-            file=sys.stderr,
+        _say(
+            f"wrote {args.output} ({result.metadata['point_count']} points, "
+            f"{len(songs)} song(s), {result.cached} from cache, {elapsed:.1f} s)"
         )
         if result.few_frames:
-            print(
-                f"{PROG}: {len(result.few_frames)} song(s) have fewer than "
-                f"{args.frames_per_song} non-silent frames and use all they have: "
-                + ", ".join(result.few_frames[:5])
-                + (" ..." if len(result.few_frames) > 5 else ""),
-                file=sys.stderr,
+            _say(
+                f"{len(result.few_frames)} song(s) have fewer than {args.frames_per_song} "
+                f"non-silent frames and use all they have: {_list(result.few_frames)}"
             )
         if result.without_year:
-            print(
-                f"{PROG}: left out {len(result.without_year)} song(s) without a year",
-                file=sys.stderr,
-            )
+            _say(f"left out {len(result.without_year)} song(s) without a year")
     if result.failed:
-        print(
-            f"{PROG}: {len(result.failed)} song(s) failed and were skipped: "
-            + ", ".join(sorted(result.failed)),
-            file=sys.stderr,
+        _say(
+            f"{len(result.failed)} song(s) failed and were skipped: " + _list(sorted(result.failed))
         )
         return 1
     return 0
 
 
+def run_export(args: argparse.Namespace) -> int:
+    """The export subcommand: one VTK XML PolyData file, then the ``wrote ...`` summary."""
+    output = args.output or os.path.splitext(args.input)[0] + ".vtp"
+    n_points = export.export_vtp(args.input, output)
+    if not args.quiet:
+        _say(f"wrote {output} ({n_points} points, VTK XML PolyData)")
+    return 0
+
+
+def run_report(args: argparse.Namespace) -> int:
+    """The report subcommand: PNG (and CSV), then ``wrote ...`` summaries."""
+    rows = write_report(args.input, args.output, csv_path=args.csv)
+    if not args.quiet:
+        songs = sum(row["songs"] for row in rows)
+        _say(f"wrote {args.output} ({songs} song(s), {len(rows)} year(s))")
+        if args.csv:
+            _say(f"wrote {args.csv} ({len(rows)} row(s), one per year)")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``loudscape-extract``; returns the exit status."""
+    """Entry point of ``loudscape-extract``; returns the exit status.
+
+    Every message is one line on stderr. SIGTERM is turned into an exception so temporaries
+    are removed and worker processes stopped; exit status 130 after Ctrl+C, 143 after SIGTERM.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "song" and args.hop > args.n_fft:
@@ -314,51 +328,37 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         progress = JsonProgress()
     try:
-        if args.command == "song":
-            output = args.output or os.path.splitext(args.input)[0] + ".ply"
-            extract_song(
-                args.input,
-                output,
-                n_fft=args.n_fft,
-                hop_length=args.hop,
-                floor_db=args.floor_db,
-                freq_scale=args.freq_scale,
-                progress=progress,
-            )
-            if hasattr(progress, "done"):
-                progress.done(output)
-        elif args.command == "timeline":
-            return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
-        elif args.command == "report":
-            from loudscape_extract.report import write_report
-
-            write_report(args.input, args.output, csv_path=args.csv)
-        elif args.command == "export":
-            from loudscape_extract import export
-
-            return export.run(args)
+        with sigterm_raises():
+            if args.command == "song":
+                return run_song(args, progress)
+            if args.command == "timeline":
+                return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
+            if args.command == "export":
+                return run_export(args)
+            return run_report(args)
     except ExtractError as exc:
         if args.debug:
             raise
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        _say(f"error: {exc}")
         if hasattr(progress, "error"):
             progress.error(str(exc))
         return 1
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         if args.debug:
             raise
-        print(f"{PROG}: interrupted; no file written", file=sys.stderr)
-        return 130
+        what = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        kept = "; songs finished so far stay in the cache" if args.command == "timeline" else ""
+        _say(f"{what}; no file written{kept}")
+        return 143 if isinstance(exc, Terminated) else 130
     except Exception as exc:  # noqa: BLE001 - one line, no traceback, unless --debug
         if args.debug:
             raise
         reason = " ".join(str(exc).split()) or type(exc).__name__
         where = getattr(args, "input", None) or getattr(args, "output", "")
-        print(f"{PROG}: error: {where}: internal error: {reason}", file=sys.stderr)
+        _say(f"error: {where}: internal error: {reason}")
         if hasattr(progress, "error"):
             progress.error(f"{where}: internal error: {reason}")
         return 1
-    return 0
 
 
 if __name__ == "__main__":

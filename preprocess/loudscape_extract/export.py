@@ -23,15 +23,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 from collections.abc import Iterator
 
 import numpy as np
 
-from loudscape_extract.errors import ExtractError
+from loudscape_extract.paths import check_output_path, check_regular_input
 from loudscape_extract.ply import encode_metadata, map_ply, write_atomically
 
-__all__ = ["add_parser", "export_vtp", "run", "vtp_parts"]
+__all__ = ["add_parser", "export_vtp", "vtp_parts"]
 
 #: Points converted per block while writing, so memory stays bounded for any cloud.
 BLOCK_POINTS = 1 << 20
@@ -104,15 +103,6 @@ def vtp_parts(points: np.ndarray, metadata: dict) -> Iterator[bytes | np.ndarray
     yield b"\n  </AppendedData>\n</VTKFile>\n"
 
 
-def _same_file(a: str, b: str) -> bool:
-    if os.path.exists(b):
-        try:
-            return os.path.samefile(a, b)
-        except OSError:
-            return False
-    return os.path.realpath(a) == os.path.realpath(b)
-
-
 def export_vtp(source: str, output: str) -> int:
     """Write the cloud in ``source`` (a loudscape PLY, version 1 or 2) as VTK XML PolyData.
 
@@ -126,14 +116,8 @@ def export_vtp(source: str, output: str) -> int:
         Unreadable or malformed input, an output that is the input, an output not ending in
         ``.vtp``, or an output that cannot be written.
     """
-    if not os.path.exists(source):
-        raise ExtractError("no such file", path=source)
-    if _same_file(source, output):
-        raise ExtractError("output is the input file; choose another name", path=output)
-    if not os.path.splitext(output)[1].lower() == ".vtp":
-        raise ExtractError("the export is VTK XML PolyData: name it NAME.vtp", path=output)
-    if os.path.isdir(output):
-        raise ExtractError("output path is a directory", path=output)
+    check_regular_input(source)
+    check_output_path(output, inputs=[source], extensions=(".vtp",))
     points, metadata = map_ply(source)
     write_atomically(output, vtp_parts(points, metadata))
     return int(points.shape[0])
@@ -152,14 +136,3 @@ def add_parser(commands) -> argparse.ArgumentParser:
     export.add_argument("input", help="loudscape PLY file (format version 1 or 2)")
     export.add_argument("-o", "--output", help="VTP file (default: the input's name with .vtp)")
     return export
-
-
-def run(args: argparse.Namespace) -> int:
-    """The ``export`` subcommand; raises :class:`ExtractError` on bad input."""
-    import sys
-
-    output = args.output or os.path.splitext(args.input)[0] + ".vtp"
-    n_points = export_vtp(args.input, output)
-    if not args.quiet:
-        print(f"loudscape-extract: wrote {output}: {n_points} points", file=sys.stderr)
-    return 0

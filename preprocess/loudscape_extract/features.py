@@ -9,17 +9,30 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from loudscape_extract.audio import Audio, mix_to_mono
+from loudscape_extract.dynamics import (
+    dc_and_highpass,
+    dr_meter,
+    frame_windows,
+    short_term_dynamics,
+    song_dynamics_metrics,
+)
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.hpss import hp_ratio, hpss_masks
-from loudscape_extract.loudness import loudness_metrics
+from loudscape_extract.loudness import (
+    loudness_from_energy,
+    sample_peak_dbfs,
+    segment_energy,
+    true_peak_dbtp,
+)
 from loudscape_extract.spectrogram import (
     LEVEL_FLOOR_DB,
     a_weighting_db,
+    frame_count,
     frame_signal,
     frame_times,
     level_db,
@@ -43,21 +56,27 @@ class FrameFeatures:
     times_s : np.ndarray [shape=(n_frames,)]
         Frame centre times in seconds.
     rms_dbfs : np.ndarray [shape=(n_frames,)]
-        ``20 log10(RMS)`` of the frame's samples (amplitude 1 = 0 dBFS, so a full-scale sine
-        is -3.01 dBFS); ``-inf`` for silent frames.
+        ``20 log10(RMS)`` of the frame's samples of the DC-free mono mix (amplitude 1 = 0 dBFS,
+        so a full-scale sine is -3.01 dBFS); ``-inf`` for silent frames.
     peak : np.ndarray [shape=(n_frames,)]
         Largest absolute sample (linear).
     crest_db : np.ndarray [shape=(n_frames,)]
         ``20 log10(peak / RMS)``; NaN for silent frames.
     loudness_a_db : np.ndarray [shape=(n_frames,)]
-        A-weighted mean-square level of the frame in dBFS (same reference as ``rms_dbfs``),
-        from the spectrum: ``10 log10(sum_k (m_k a_k)^2 / 3)``, where ``m_k`` is the bin
-        magnitude (full-scale sine = 1) and ``a_k`` the A-weighting gain; NaN when silent.
+        A-weighted level of the frame in dB re a full-scale sine (Song mode's scalar
+        reference: a full-scale 1 kHz sine reads 0 dB in both), from the spectrum:
+        ``10 log10(sum_k (m_k a_k)^2 / 1.5)``, where ``m_k`` is the bin magnitude (full-scale
+        sine = 1), ``a_k`` the A-weighting gain and 1.5 the Hann window's power sum of one
+        sine over its bins; NaN when silent.
     hp_mean : np.ndarray [shape=(n_frames,)]
         Power-weighted mean hp over the frame's bins, ``sum(hp m^2) / sum(m^2)``; NaN when
         silent.
     silent : np.ndarray [shape=(n_frames,), dtype=bool]
         True where every sample of the frame is exactly 0.
+    psr_db, crest_3s_db, short_term_lufs : np.ndarray [shape=(n_frames,)]
+        PSR, 3 s crest factor and short-term loudness of the 3 s window centred on the frame
+        (:mod:`loudscape_extract.dynamics`); NaN where not measurable. Empty arrays when
+        built by :func:`frame_features` alone.
     """
 
     times_s: np.ndarray
@@ -67,6 +86,9 @@ class FrameFeatures:
     loudness_a_db: np.ndarray
     hp_mean: np.ndarray
     silent: np.ndarray
+    psr_db: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    crest_3s_db: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    short_term_lufs: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 @dataclass(frozen=True)
@@ -94,7 +116,9 @@ class TrackFeatures:
     frames : FrameFeatures
     metrics : dict
         ``integrated_lufs``, ``lra_lu``, ``sample_peak_dbfs``, ``true_peak_dbtp``, ``plr_db``,
-        ``crest_median_db``, ``crest_p95_db`` (float or None).
+        ``crest_median_db``, ``crest_p95_db``, ``dc_offset``, ``dr_db``, ``psr_median_db``,
+        ``psr_p10_db``, ``psr_p90_db``, ``psr_spread_db``, ``crest_3s_median_db`` (float or
+        None); see docs/FORMAT.md.
     """
 
     path: str
@@ -110,6 +134,7 @@ class TrackFeatures:
     hp: np.ndarray
     frames: FrameFeatures
     metrics: dict
+    highpass_hz: float | None = None
 
     @property
     def duration_s(self) -> float:
@@ -128,6 +153,16 @@ def _frame_rms_peak(mono: np.ndarray, *, n_fft: int, hop_length: int):
     return rms, peak
 
 
+def _silent_frames(mono: np.ndarray, *, n_fft: int, hop_length: int) -> np.ndarray:
+    """Frames (centred, zero-padded, as the STFT's) whose every sample is exactly 0."""
+    nonzero = np.concatenate([[0], np.cumsum(mono != 0, dtype=np.int64)])
+    n_frames = frame_count(mono.shape[0], n_fft=n_fft, hop_length=hop_length)
+    start = np.arange(n_frames, dtype=np.int64) * hop_length - n_fft // 2
+    first = np.clip(start, 0, mono.shape[0])
+    last = np.clip(start + n_fft, 0, mono.shape[0])
+    return nonzero[last] == nonzero[first]
+
+
 def frame_features(
     mono: np.ndarray,
     *,
@@ -137,13 +172,14 @@ def frame_features(
     magnitude: np.ndarray,
     hp: np.ndarray,
     a_gain_db: np.ndarray,
+    silent: np.ndarray | None = None,
 ) -> FrameFeatures:
     """Per-frame RMS, peak, crest factor, A-weighted level and mean hp.
 
     Parameters
     ----------
     mono : np.ndarray [shape=(n_samples,)]
-        The mono mix the spectrogram came from.
+        The mono mix for level, peak and crest (DC removed by :func:`track_features`).
     sample_rate : float
     n_fft, hop_length : int
     magnitude : np.ndarray [shape=(n_bins, n_frames)]
@@ -151,6 +187,9 @@ def frame_features(
     hp : np.ndarray [shape=(n_bins, n_frames)]
     a_gain_db : np.ndarray [shape=(n_bins,)]
         A-weighting gain per bin.
+    silent : np.ndarray [shape=(n_frames,), dtype=bool], optional
+        Which frames are digital silence in the file as decoded (after DC removal they are
+        not exactly 0); default: where ``mono``'s frame is all zeros.
 
     Returns
     -------
@@ -161,13 +200,13 @@ def frame_features(
         raise ExtractError(
             f"magnitude {magnitude.shape} and hp {hp.shape} do not match {rms.shape[0]} frames"
         )
-    silent = peak == 0
+    silent = (peak == 0) if silent is None else np.asarray(silent, dtype=bool)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rms_dbfs = 20.0 * np.log10(rms)
+        rms_dbfs = np.where(silent, -np.inf, 20.0 * np.log10(rms))
         crest_db = np.where(silent, np.nan, 20.0 * np.log10(peak / rms))
         power = np.square(magnitude, dtype=np.float32)
         a_power = (10.0 ** (a_gain_db / 10.0)).astype(np.float32) @ power
-        loudness_a_db = np.where(silent, np.nan, 10.0 * np.log10(a_power / 3.0))
+        loudness_a_db = np.where(silent, np.nan, 10.0 * np.log10(a_power / 1.5))
         total = np.ones(power.shape[0], dtype=np.float32) @ power
         hp_power = np.einsum("ij,ij->j", hp, power, dtype=np.float64)
         hp_mean = np.where(silent | (total == 0), np.nan, hp_power / total)
@@ -205,6 +244,7 @@ def track_features(
     n_fft: int = 2048,
     hop_length: int = 1024,
     kernel_size: int = HPSS_KERNEL,
+    highpass_hz: float | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> TrackFeatures:
     """Decode-to-features: spectrogram, A-weighting, HPSS, frame series and metrics.
@@ -219,6 +259,11 @@ def track_features(
         STFT hop in samples.
     kernel_size : int
         HPSS median kernel (odd).
+    highpass_hz : float, optional
+        Also high-pass the DC-free signal at this frequency (e.g. 20 Hz) before the frame
+        level, crest factors, DR, PSR and loudness. The spectrogram always sees the signal as
+        decoded (its DC bin shows an offset), and so do ``sample_peak_dbfs`` and
+        ``true_peak_dbtp``.
     progress : callable, optional
         Called with a short message as each stage starts.
 
@@ -260,18 +305,48 @@ def track_features(
     hp = hp_ratio(magnitude, mask_harmonic, mask_percussive)
     del mask_harmonic, mask_percussive
     say("frame features")
+    clean, dc = dc_and_highpass(samples, sample_rate=audio.sample_rate, highpass_hz=highpass_hz)
+    if highpass_hz is None:  # the mean of DC-free channels is the mono mix minus its mean DC
+        mono_clean = mono - np.float32(dc.mean())
+    else:
+        mono_clean = mix_to_mono(clean)
     frames = frame_features(
-        mono,
+        mono_clean,
         sample_rate=audio.sample_rate,
         n_fft=n_fft,
         hop_length=hop_length,
         magnitude=magnitude,
         hp=hp,
         a_gain_db=a_gain,
+        silent=_silent_frames(mono, n_fft=n_fft, hop_length=hop_length),
     )
-    say("loudness metrics (integrated, range, true peak)")
-    metrics = loudness_metrics(samples, sample_rate=audio.sample_rate)
+    say("dynamics and loudness (short-term loudness, PSR, DR, integrated, range, true peak)")
+    energy = segment_energy(clean, audio.sample_rate)
+    dynamics = short_term_dynamics(clean, mono_clean, sample_rate=audio.sample_rate, energy=energy)
+    window = frame_windows(frames.times_s, dynamics)
+    has_windows = dynamics.start_s.shape[0] > 0
+    per_frame = lambda series: series[window] if has_windows else np.full(window.shape, np.nan)  # noqa: E731
+    frames = replace(
+        frames,
+        psr_db=np.where(frames.silent, np.nan, per_frame(dynamics.psr_db)),
+        crest_3s_db=np.where(frames.silent, np.nan, per_frame(dynamics.crest_3s_db)),
+        short_term_lufs=np.where(frames.silent, np.nan, per_frame(dynamics.short_term_lufs)),
+    )
+    # Loudness, LRA and PLR of the DC-free (and high-passed) signal; the peaks of the file as
+    # decoded, as any meter reads them.
+    integrated, lra = loudness_from_energy(*energy)
+    clean_peak = 20.0 * math.log10(dynamics.true_peak) if dynamics.true_peak > 0 else None
+    metrics = {
+        "integrated_lufs": integrated,
+        "lra_lu": lra,
+        "sample_peak_dbfs": sample_peak_dbfs(samples),
+        "true_peak_dbtp": true_peak_dbtp(samples, sample_rate=audio.sample_rate),
+        "plr_db": None if integrated is None or clean_peak is None else clean_peak - integrated,
+    }
     metrics.update(crest_statistics(frames.crest_db))
+    metrics["dc_offset"] = float(np.max(np.abs(dc)))
+    metrics["dr_db"] = dr_meter(clean, sample_rate=audio.sample_rate)
+    metrics.update(song_dynamics_metrics(dynamics))
     metrics = {
         key: (None if v is None or not math.isfinite(v) else v) for key, v in metrics.items()
     }
@@ -289,4 +364,5 @@ def track_features(
         hp=hp,
         frames=frames,
         metrics=metrics,
+        highpass_hz=highpass_hz,
     )

@@ -25,6 +25,10 @@ import sys
 import tempfile
 
 import numpy as np
+import soundfile
+
+from loudscape_extract.ply import read_ply, write_ply
+from loudscape_extract.song import extract_song
 
 FIXTURE_STEM = "fixture_song"
 SAMPLE_RATE = 8000
@@ -82,11 +86,6 @@ def write_fixture(out_dir: str, *, format_version: int = FORMAT_VERSION) -> tupl
     paths : tuple of str
         The PLY and JSON paths.
     """
-    import soundfile
-
-    from loudscape_extract.cli import extract_song
-    from loudscape_extract.ply import read_ply, write_ply
-
     out_dir = os.path.abspath(out_dir)
     ply_path = os.path.join(out_dir, FIXTURE_STEM + ".ply")
     json_path = os.path.join(out_dir, FIXTURE_STEM + ".expected.json")

@@ -21,10 +21,14 @@ __all__ = [
     "channel_gains",
     "integrated_loudness",
     "k_weighting_sos",
+    "loudness_from_energy",
     "loudness_metrics",
     "loudness_range",
+    "interpolator_taps",
     "sample_peak_dbfs",
+    "segment_energy",
     "short_term_loudness",
+    "valid_interpolated_samples",
     "true_peak_dbtp",
 ]
 
@@ -109,7 +113,7 @@ def channel_gains(n_channels: int) -> np.ndarray:
     return gains
 
 
-def _segment_energy(samples: np.ndarray, sample_rate: float) -> tuple[np.ndarray, np.ndarray]:
+def segment_energy(samples: np.ndarray, sample_rate: float) -> tuple[np.ndarray, np.ndarray]:
     """Channel-weighted sum of squared K-weighted samples per complete 100 ms segment.
 
     Returns ``(energy [n_segments], boundaries [n_segments + 1])`` with boundaries in samples.
@@ -156,7 +160,7 @@ def block_loudness(samples: np.ndarray, *, sample_rate: float) -> np.ndarray:
     loudness : np.ndarray [shape=(n_blocks,)]
         LUFS of each complete block (``-inf`` for digital silence).
     """
-    energy, boundaries = _segment_energy(samples, sample_rate)
+    energy, boundaries = segment_energy(samples, sample_rate)
     return _blocks(energy, boundaries, 4)
 
 
@@ -168,7 +172,7 @@ def short_term_loudness(samples: np.ndarray, *, sample_rate: float) -> np.ndarra
     loudness : np.ndarray [shape=(n_blocks,)]
         LUFS of each complete 3 s block.
     """
-    energy, boundaries = _segment_energy(samples, sample_rate)
+    energy, boundaries = segment_energy(samples, sample_rate)
     return _blocks(energy, boundaries, 30)
 
 
@@ -202,7 +206,7 @@ def integrated_loudness(samples: np.ndarray, *, sample_rate: float) -> float | N
     lufs : float or None
         None when there is no complete 400 ms block or every block is below -70 LUFS.
     """
-    energy, boundaries = _segment_energy(samples, sample_rate)
+    energy, boundaries = segment_energy(samples, sample_rate)
     return _gated_integrated(energy, boundaries)
 
 
@@ -240,9 +244,25 @@ def sample_peak_dbfs(samples: np.ndarray) -> float | None:
     return 20.0 * math.log10(peak) if peak > 0 else None
 
 
-def _interpolator(oversampling: int) -> np.ndarray:
+def interpolator_taps(oversampling: int) -> np.ndarray:
+    """The true-peak interpolator: ``oversampling * 24 + 1`` taps, gain ``oversampling``."""
     numtaps = oversampling * _TRUE_PEAK_TAPS_PER_PHASE + 1
     return kaiser_lowpass(numtaps, 1.0 / oversampling, beta=8.0) * oversampling
+
+
+_interpolator = interpolator_taps
+
+
+def valid_interpolated_samples(n_samples: int, *, oversampling: int) -> int:
+    """How many leading samples have interpolated values whose window lies inside the signal.
+
+    The interpolator needs ``half`` samples after the one it interpolates around; past the
+    last of them, zero padding would invent a step to zero and an overshoot at an abrupt end.
+    libebur128 never evaluates those positions (its filter is not flushed), and neither do we.
+    """
+    per_phase = -(-(oversampling * _TRUE_PEAK_TAPS_PER_PHASE + 1) // oversampling)
+    half = (per_phase - 1) // 2
+    return max(0, n_samples - (per_phase - 1 - half))
 
 
 def true_peak_dbtp(
@@ -257,6 +277,9 @@ def true_peak_dbtp(
     signal is cut into blocks, and a block is interpolated only if its largest sample (and its
     neighbours') times the interpolator's largest per-phase absolute gain could still beat the
     largest value found so far; skipped blocks cannot hold the maximum, so the result is exact.
+    Near the end only positions whose interpolation window lies inside the signal count (see
+    :func:`valid_interpolated_samples`, libebur128's behaviour), and the true peak is never
+    below the sample peak, so a file that stops abruptly at full scale reads 0.0 dBTP.
 
     Parameters
     ----------
@@ -275,7 +298,7 @@ def true_peak_dbtp(
     _check_rate(sample_rate)
     if oversampling < 1:
         raise ExtractError(f"oversampling must be >= 1, got {oversampling}")
-    taps = _interpolator(oversampling).astype(np.float32)
+    taps = interpolator_taps(oversampling).astype(np.float32)
     bound_gain = max(float(np.abs(taps[p::oversampling]).sum()) for p in range(oversampling))
     half = _TRUE_PEAK_TAPS_PER_PHASE // 2
     margin = _TRUE_PEAK_TAPS_PER_PHASE
@@ -283,6 +306,7 @@ def true_peak_dbtp(
     n_samples = samples.shape[0]
     n_blocks = -(-n_samples // block)
     first = (margin - half) * oversampling
+    valid = valid_interpolated_samples(n_samples, oversampling=oversampling)
     best = 0.0
     for channel in range(samples.shape[1]):
         x = np.zeros(n_blocks * block + 2 * margin, dtype=np.float32)
@@ -301,9 +325,24 @@ def true_peak_dbtp(
             position += _TRUE_PEAK_BATCH
             starts = batch[:, None] * block + np.arange(block + 2 * margin)[None, :]
             upsampled = upsample_polyphase(x[starts], taps, factor=oversampling)
-            peak = float(np.abs(upsampled[:, first : first + block * oversampling]).max())
-            best = max(best, peak)
+            upsampled = np.abs(upsampled[:, first : first + block * oversampling])
+            # Sample s of a block is valid while s + block start < `valid` (no invented end).
+            sample = (
+                batch[:, None] * block + np.arange(block * oversampling)[None, :] // oversampling
+            )
+            upsampled[sample >= valid] = 0.0
+            best = max(best, float(upsampled.max()))
+    best = max(best, float(np.abs(samples).max()) if n_samples else 0.0)
     return 20.0 * math.log10(best) if best > 0 else None
+
+
+def loudness_from_energy(
+    energy: np.ndarray, boundaries: np.ndarray
+) -> tuple[float | None, float | None]:
+    """Integrated loudness and LRA from :func:`segment_energy`'s output (one K-weighting)."""
+    return _gated_integrated(energy, boundaries), _range_from_short_term(
+        _blocks(energy, boundaries, 30)
+    )
 
 
 def loudness_metrics(samples: np.ndarray, *, sample_rate: float) -> dict[str, float | None]:
@@ -323,7 +362,7 @@ def loudness_metrics(samples: np.ndarray, *, sample_rate: float) -> dict[str, fl
     """
     samples = _as_channels(samples)
     _check_rate(sample_rate)
-    energy, boundaries = _segment_energy(samples, sample_rate)
+    energy, boundaries = segment_energy(samples, sample_rate)
     integrated = _gated_integrated(energy, boundaries)
     lra = _range_from_short_term(_blocks(energy, boundaries, 30))
     true_peak = true_peak_dbtp(samples, sample_rate=sample_rate)

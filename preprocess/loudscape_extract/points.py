@@ -7,12 +7,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.features import HPSS_KERNEL, HPSS_MARGIN, HPSS_POWER, TrackFeatures
+from loudscape_extract.format import (
+    FORMAT_VERSION,
+    MODE_SONG,
+    axis,
+    frequency_axis,
+    hp_axis,
+    level_axis,
+    rounded,
+    scalar_axis,
+)
+from loudscape_extract.spectrogram import a_weighting_db
 
 __all__ = [
     "DEFAULT_FLOOR_DB",
     "FREQ_SCALES",
+    "AUDIBLE_HZ",
     "SCALAR_MAX_DB",
     "SCALAR_MIN_DB",
     "SongCloud",
@@ -22,12 +35,17 @@ __all__ = [
 
 #: Bins more than this many dB below the track's loudest bin are dropped (0 keeps every bin).
 DEFAULT_FLOOR_DB = 80.0
-#: ``scalar`` maps the A-weighted bin level linearly from [-100 dB, 0 dB] to [0, 1], clipped.
-#: 0 dB is a full-scale sine in the bin (at 1 kHz, where A-weighting is 0 dB).
+#: ``scalar`` maps the A-weighted bin level linearly to [0, 1] over a range that holds every
+#: drawn bin at or above :data:`AUDIBLE_HZ`: ``[y_min + A_min, y_max + A_max]``, with ``A_min``,
+#: ``A_max`` the A-weighting gains' range over those bins, widened to at least
+#: [SCALAR_MIN_DB, SCALAR_MAX_DB]. 0 dB is a full-scale sine in the bin (at 1 kHz, where
+#: A-weighting is 0 dB). The noise floor is the one rule that drops bins; no drawn audible bin
+#: is clipped to 0 (the paper's low-frequency cliff), whatever the track's level.
 SCALAR_MIN_DB = -100.0
 SCALAR_MAX_DB = 0.0
+#: Bins below this have no meaningful A-weighted level (0 Hz: -inf); their scalar clips to 0.
+AUDIBLE_HZ = 20.0
 FREQ_SCALES = ("linear", "log")
-_TICK_FREQUENCIES = (20, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000)
 
 
 @dataclass(frozen=True)
@@ -67,36 +85,16 @@ def _normalize(values: np.ndarray, low: float, high: float) -> np.ndarray:
     return np.clip(out, -1.0, 1.0).astype(np.float32)
 
 
-def _frequency_label(hz: float) -> str:
-    return f"{hz / 1000:g} kHz" if hz >= 1000 else f"{hz:g} Hz"
+def scalar_range(frequencies: np.ndarray, y_low: float, y_high: float) -> tuple[float, float]:
+    """The scalar's dB range for drawn levels in ``[y_low, y_high]`` (see :data:`AUDIBLE_HZ`).
 
-
-def _frequency_axis(frequencies: np.ndarray, scale: str) -> tuple[np.ndarray, dict]:
-    """z per bin (NaN for bins not drawn) and the z axis object."""
-    low = float(frequencies[0] if scale == "linear" else frequencies[1])
-    high = float(frequencies[-1])
-    z = np.full(frequencies.shape, np.nan)
-    if scale == "linear":
-        z[:] = _normalize(np.arange(frequencies.size, dtype=np.float64), 0, frequencies.size - 1)
-        position = lambda f: 2.0 * (f - low) / (high - low) - 1.0  # noqa: E731
-    else:
-        log_low, log_high = math.log10(low), math.log10(high)
-        z[1:] = 2.0 * (np.log10(frequencies[1:]) - log_low) / (log_high - log_low) - 1.0
-        position = lambda f: 2.0 * (math.log10(f) - log_low) / (log_high - log_low) - 1.0  # noqa: E731
-    ticks = [
-        {"at": round(position(f), 6), "label": _frequency_label(f)}
-        for f in _TICK_FREQUENCIES
-        if low <= f <= high
-    ]
-    axis = {
-        "label": "frequency",
-        "unit": "Hz",
-        "min": low,
-        "max": high,
-        "scale": scale,
-        "ticks": ticks,
-    }
-    return z, axis
+    Rounded outward to whole dB so the axis reads cleanly.
+    """
+    audible = frequencies[frequencies >= AUDIBLE_HZ]
+    gains = a_weighting_db(audible) if audible.size else np.zeros(1)
+    low = min(SCALAR_MIN_DB, math.floor(y_low + float(gains.min())))
+    high = max(SCALAR_MAX_DB, math.ceil(y_high + float(gains.max())))
+    return float(low), float(high)
 
 
 def song_points(
@@ -129,7 +127,7 @@ def song_points(
     if kept_frames.size == 0:
         raise ExtractError("audio is entirely silent (no frame has a non-zero sample)")
     first_bin = 0 if freq_scale == "linear" else 1
-    z_per_bin, z_axis = _frequency_axis(features.frequencies_hz, freq_scale)
+    z_per_bin, z_axis = frequency_axis(features.frequencies_hz, freq_scale)
     z_per_bin = z_per_bin[first_bin:].astype(np.float32)
 
     levels = features.level_db[first_bin:, kept_frames].T  # (n_kept, n_bins_drawn)
@@ -152,28 +150,21 @@ def song_points(
     points[:, 1] = _normalize(levels[keep], y_low, peak)
     points[:, 2] = np.broadcast_to(z_per_bin[None, :], keep.shape)[keep]
     levels_a = features.level_a_db[first_bin:, kept_frames].T[keep]
-    scalar = (levels_a.astype(np.float64) - SCALAR_MIN_DB) / (SCALAR_MAX_DB - SCALAR_MIN_DB)
+    s_low, s_high = scalar_range(features.frequencies_hz[first_bin:], y_low, peak)
+    scalar = (levels_a.astype(np.float64) - s_low) / (s_high - s_low)
     points[:, 3] = np.clip(scalar, 0.0, 1.0)
     points[:, 4] = features.hp[first_bin:, kept_frames].T[keep]
 
+    # One kept frame, or one level everywhere: the axis gets a range around the single value
+    # (half a hop of time, half a dB) and the points sit at its middle (docs/FORMAT.md).
+    x_low, x_high = spread_range(t_first, t_last, features.hop_length / features.sample_rate / 2)
+    y_axis_low, y_axis_high = spread_range(y_low, peak, 0.5)
     axes = {
-        "x": {"label": "time", "unit": "s", "min": t_first, "max": t_last, "scale": "linear"},
-        "y": {"label": "level", "unit": "dB", "min": y_low, "max": peak, "scale": "linear"},
+        "x": axis("time", "s", x_low, x_high),
+        "y": level_axis(y_axis_low, y_axis_high),
         "z": z_axis,
-        "scalar": {
-            "label": "A-weighted level",
-            "unit": "dB",
-            "min": SCALAR_MIN_DB,
-            "max": SCALAR_MAX_DB,
-            "scale": "linear",
-        },
-        "hp": {
-            "label": "harmonic-percussive ratio",
-            "unit": "",
-            "min": 0.0,
-            "max": 1.0,
-            "scale": "linear",
-        },
+        "scalar": scalar_axis(s_low, s_high),
+        "hp": hp_axis(),
     }
     return SongCloud(
         points=points,
@@ -184,21 +175,6 @@ def song_points(
         floor_db=float(floor_db),
         freq_scale=freq_scale,
     )
-
-
-def _rounded(value, digits: int):
-    """Round floats (recursively) for stable, readable metadata; NaN/inf become None."""
-    if isinstance(value, dict):
-        return {key: _rounded(item, digits) for key, item in value.items()}
-    if isinstance(value, list | tuple):
-        return [_rounded(item, digits) for item in value]
-    if isinstance(value, bool | int | str) or value is None:
-        return value
-    number = float(value)
-    if not math.isfinite(number):
-        return None
-    rounded = round(number, digits)
-    return 0.0 if rounded == 0 else rounded
 
 
 def song_metadata(
@@ -220,18 +196,16 @@ def song_metadata(
     metadata : dict
         JSON-ready; floats rounded to 6 decimals (metrics to 4).
     """
-    from loudscape_extract import FORMAT_VERSION
-
     return {
         "format_version": FORMAT_VERSION,
-        "mode": "song",
+        "mode": MODE_SONG,
         "point_count": int(cloud.points.shape[0]),
         "source": {
             "path": features.path,
             "format": source_format,
             "sample_rate": features.sample_rate,
             "channels": features.n_channels,
-            "duration_s": _rounded(features.duration_s, 6),
+            "duration_s": rounded(features.duration_s, 6),
         },
         "stft": {
             "n_fft": features.n_fft,
@@ -241,11 +215,13 @@ def song_metadata(
             "frames": cloud.frames_total,
             "frames_kept": cloud.frames_kept,
         },
-        "axes": _rounded(cloud.axes, 6),
-        "metrics": _rounded(features.metrics, 4),
+        "axes": rounded(cloud.axes, 6),
+        "metrics": rounded(features.metrics, 4),
         "extraction": {
-            "floor_db": _rounded(cloud.floor_db, 6),
+            "floor_db": rounded(cloud.floor_db, 6),
             "freq_scale": cloud.freq_scale,
+            "dc_removed": True,
+            "highpass_hz": features.highpass_hz,
             "hpss": {"kernel_size": HPSS_KERNEL, "power": HPSS_POWER, "margin": HPSS_MARGIN},
             "generator": generator,
         },

@@ -1,6 +1,8 @@
-"""Machine-readable progress: one JSON object a line, for programs that run the extractor.
+"""Progress: per-stage lines on stderr for people, and JSON lines for programs.
 
-``loudscape-extract song IN -o OUT --progress json`` prints on stdout, one object a line::
+``Progress`` prints a line a stage on stderr when it is a terminal.
+``loudscape-extract song IN -o OUT --progress json`` (``JsonProgress``) prints on stdout, one
+object a line::
 
     {"stage": "decode", "fraction": 0.0, "message": "decoding IN"}
     {"stage": "spectrogram", "fraction": 0.12, "message": "spectrogram"}
@@ -16,7 +18,26 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from typing import TextIO
+
+from loudscape_extract.version import PROG
+
+__all__ = ["STAGES", "JsonProgress", "Progress"]
+
+
+class Progress:
+    """Per-stage progress lines on stderr, only when enabled (stderr is a TTY and not quiet)."""
+
+    def __init__(self, *, enabled: bool) -> None:
+        self.enabled = enabled
+        self.start = time.perf_counter()
+
+    def __call__(self, message: str) -> None:
+        if self.enabled:
+            elapsed = time.perf_counter() - self.start
+            print(f"{PROG}: [{elapsed:6.2f} s] {message}", file=sys.stderr, flush=True)
+
 
 #: (message prefix, stage name, fraction of the work done when the stage starts), in order.
 STAGES: tuple[tuple[str, str, float], ...] = (

@@ -79,8 +79,9 @@ def frame_signal(y: np.ndarray, *, n_fft: int, hop_length: int) -> np.ndarray:
 def stft_magnitude(y: np.ndarray, *, n_fft: int = 2048, hop_length: int = 1024) -> np.ndarray:
     """Magnitude STFT with a periodic Hann window, scaled so a full-scale sine reads 1.
 
-    Frames are centred (librosa's ``center=True`` with zero padding), so this equals
-    ``np.abs(librosa.stft(y, n_fft=n_fft, hop_length=hop_length)) / (window.sum() / 2)``.
+    Frames are centred (librosa's ``center=True`` with zero padding), so bins 1 to
+    ``n_fft / 2 - 1`` equal ``np.abs(librosa.stft(y, n_fft=n_fft, hop_length=hop_length)) /
+    (window.sum() / 2)`` and bins 0 and ``n_fft / 2`` half of that.
 
     Parameters
     ----------
@@ -92,7 +93,9 @@ def stft_magnitude(y: np.ndarray, *, n_fft: int = 2048, hop_length: int = 1024) 
     Returns
     -------
     magnitude : np.ndarray [shape=(1 + n_fft // 2, n_frames), dtype=float32]
-        A sine of amplitude 1 whose frequency is a bin centre gives 1.0 (0 dB) in that bin.
+        A sine of amplitude 1 whose frequency is a bin centre gives 1.0 (0 dB) in that bin; a
+        constant (DC) of amplitude A gives A in bin 0, and likewise the Nyquist bin (they are
+        scaled by ``1 / sum(window)``, the other bins by ``2 / sum(window)``).
     """
     frames = frame_signal(np.asarray(y, dtype=np.float32), n_fft=n_fft, hop_length=hop_length)
     window = hann_window(n_fft).astype(np.float32)
@@ -103,6 +106,10 @@ def stft_magnitude(y: np.ndarray, *, n_fft: int = 2048, hop_length: int = 1024) 
         stop = min(start + _CHUNK_FRAMES, n_frames)
         spectrum = scipy.fft.rfft(frames[start:stop] * window_scaled, axis=1)
         magnitude[:, start:stop] = np.abs(spectrum).T
+    # DC and Nyquist have no negative-frequency twin: the one-sided factor 2 does not apply,
+    # so a constant of amplitude A reads A in bin 0 (not 2 A, 6.02 dB too high).
+    magnitude[0] *= np.float32(0.5)
+    magnitude[-1] *= np.float32(0.5)
     return magnitude
 
 

@@ -167,7 +167,7 @@ def synthesize(*, sample_rate: int = SAMPLE_RATE, duration_s: float = DURATION_S
 
 def main() -> int:
     sys.path.insert(0, os.path.join(REPO, "preprocess"))
-    from loudscape_extract.cli import extract_song
+    from loudscape_extract.song import extract_song
 
     os.chdir(REPO)  # so the metadata records the repo-relative path data/demo_song.flac
     os.makedirs("data", exist_ok=True)

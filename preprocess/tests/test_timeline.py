@@ -115,6 +115,8 @@ def fake_song(n, *, rms=-20.0, crest=10.0):
         hp_mean=np.full(n, 0.25, np.float32),
         n_frames_total=n + 2,
         metrics={"integrated_lufs": -14.0, "hp_mean": 0.25},
+        psr_db=np.full(n, crest + 1.0, np.float32),
+        crest_3s_db=np.full(n, crest + 2.0, np.float32),
     )
 
 
@@ -140,7 +142,9 @@ def test_layout_order_spans_and_axes():
     ]
     songs = {e.path: fake_song(50 + i * 10) for i, e in enumerate(entries)}
     songs["d"] = fake_song(50, rms=-90.0, crest=40.0)  # below -60 dBFS, crest outlier
-    points, layout = timeline_points(entries, songs, frames_per_song=20, x_by="year")
+    points, layout = timeline_points(
+        entries, songs, frames_per_song=20, x_by="year", z_measure="crest-frame"
+    )
     described = layout["songs"]
     assert [s["path"] for s in described] == ["a", "d", "b", "c"]  # year, artist, title
     assert points.shape == (80, 5) and all(s["point_count"] == 20 for s in described)
@@ -169,7 +173,9 @@ def test_order_mode_equal_spans():
     spans = song_spans(entries, "order")
     assert np.allclose([b - a for a, b in spans], 2 / 3)
     songs = {e.path: fake_song(30) for e in entries}
-    _, layout = timeline_points(entries, songs, frames_per_song=8, x_by="order")
+    _, layout = timeline_points(
+        entries, songs, frames_per_song=8, x_by="order", z_measure="crest-frame"
+    )
     axis = layout["axes"]["x"]
     assert (axis["min"], axis["max"]) == (1970, 2010)
     assert [(t["label"], round(t["at"], 4)) for t in axis["ticks"]] == [
@@ -196,7 +202,8 @@ def test_timeline_from_tags(tmp_path, capsys):
     assert np.all(np.abs(points[:, :3]) <= 1) and np.all(
         (points[:, 3:] >= 0) & (points[:, 3:] <= 1)
     )
-    assert meta["axes"]["z"]["label"] == "crest factor"
+    assert meta["axes"]["z"]["label"] == "PSR (true peak - short-term loudness, 3 s)"
+    assert meta["axes"]["z"]["measure"] == meta["extraction"]["z_measure"] == "psr"
 
 
 def test_manifest_and_fewer_frames(tmp_path, capsys):
@@ -225,10 +232,10 @@ def test_cache_hit_does_not_decode(tmp_path, capsys, monkeypatch):
     first = out.read_bytes()
     assert len(os.listdir(tmp_path / "cache")) == 2
 
-    def no_decode(path):
+    def no_decode(path, **_options):
         raise AssertionError(f"decoded {path} despite the cache")
 
-    monkeypatch.setattr(timeline, "_decode", no_decode)
+    monkeypatch.setattr(timeline.frames, "decode_audio", no_decode)
     status, err = cli_timeline([tmp_path / "m"], out, capsys, tmp_path / "cache")
     assert status == 0 and "2 from cache" in err
     assert out.read_bytes() == first
@@ -373,3 +380,61 @@ def test_progress_line_on_a_tty(tmp_path, capsys, monkeypatch):
     _, meta = read_ply(tmp_path / "t.ply")
     assert [s["x_min"] for s in meta["songs"]] == [-1.0, 0.0]
     assert meta["extraction"]["x_by"] == "order"
+
+
+# ----------------------------------------------------------------------------- dynamics options
+
+
+def test_order_mode_places_songs_without_a_year_last(tmp_path, capsys):
+    paths = tagged_folder(tmp_path / "m", [1990, 1980])
+    write_song(tmp_path / "m" / "untagged.wav", seed=7)
+    out = tmp_path / "t.ply"
+    status, err = cli_timeline([tmp_path / "m", "--x-by", "order"], out, capsys, tmp_path / "c")
+    assert status == 0, err
+    assert "no year" not in err
+    _, meta = read_ply(out)
+    assert [s["year"] for s in meta["songs"]] == [1980, 1990, None]
+    assert meta["songs"][2]["path"].endswith("untagged.wav")
+    assert [t["label"] for t in meta["axes"]["x"]["ticks"]] == ["1980", "1990"]
+    assert meta["extraction"]["skipped"] == []
+    # No year at all: the songs still make a timeline by order.
+    for path in paths:
+        path.unlink()
+    status, err = cli_timeline([tmp_path / "m", "--x-by", "order"], out, capsys, tmp_path / "c")
+    assert status == 0, err
+    _, meta = read_ply(out)
+    assert meta["axes"]["x"]["label"] == "song" and len(meta["songs"]) == 1
+
+
+@pytest.mark.parametrize(
+    ("measure", "label"),
+    [("crest-3s", "crest factor (3 s)"), ("crest-frame", "crest factor (frame)")],
+)
+def test_z_measure_option(tmp_path, capsys, measure, label):
+    tagged_folder(tmp_path / "m", [1990, 2000])
+    out = tmp_path / "t.ply"
+    status, err = cli_timeline(
+        [tmp_path / "m", "--z-measure", measure], out, capsys, tmp_path / "c"
+    )
+    assert status == 0, err
+    _, meta = read_ply(out)
+    assert meta["axes"]["z"]["label"] == label
+    assert meta["axes"]["z"]["measure"] == meta["extraction"]["z_measure"] == measure
+
+
+def test_dc_offset_is_warned_about_and_highpass_recorded(tmp_path, capsys):
+    folder = tmp_path / "m"
+    folder.mkdir()
+    y = musical_signal(sample_rate=RATE, duration_s=1.5, seed=1) * 0.3 + 0.3
+    soundfile.write(str(folder / "dc.flac"), y.astype(np.float32), RATE)
+    tag(folder / "dc.flac", year=1999, title="DC")
+    out = tmp_path / "t.ply"
+    status, err = cli_timeline([folder, "--highpass"], out, capsys, tmp_path / "c")
+    assert status == 0, err
+    assert "dc.flac: DC offset 0.3" in err and "warning" in err
+    _, meta = read_ply(out)
+    assert meta["songs"][0]["metrics"]["dc_offset"] == pytest.approx(0.3, abs=0.01)
+    assert meta["extraction"]["highpass_hz"] == 20.0 and meta["extraction"]["dc_removed"]
+    # A full-scale sine's A-weighted frame level is 0 dB in both modes: the scalar references
+    # agree (the timeline's used to read 3.01 dB lower).
+    assert meta["axes"]["scalar"]["label"] == "A-weighted level"

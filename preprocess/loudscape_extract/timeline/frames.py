@@ -1,0 +1,78 @@
+"""What the timeline keeps of one song (:class:`SongFrames`), computed by the Song pipeline."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from loudscape_extract.audio import decode_audio
+from loudscape_extract.features import TrackFeatures, track_features
+
+__all__ = ["SongFrames", "compute_song_frames", "frames_of"]
+
+
+@dataclass(frozen=True)
+class SongFrames:
+    """What the timeline keeps of one song: its non-silent frames and metrics.
+
+    Attributes
+    ----------
+    rms_dbfs, crest_db, loudness_a_db, hp_mean, psr_db, crest_3s_db : np.ndarray [shape=(n_frames,)]
+        :class:`FrameFeatures` series restricted to the non-silent frames, in time order
+        (``psr_db`` and ``crest_3s_db`` of the 3 s window centred on each frame).
+    n_frames_total : int
+        All STFT frames, silent ones included.
+    metrics : dict
+        The Song metrics plus ``hp_mean`` (mean over non-silent frames of the frame hp).
+    warning : str
+        :attr:`Audio.warning` of the decode: non-empty for a truncated or corrupt file.
+    """
+
+    rms_dbfs: np.ndarray
+    crest_db: np.ndarray
+    loudness_a_db: np.ndarray
+    hp_mean: np.ndarray
+    n_frames_total: int
+    metrics: dict = field(default_factory=dict)
+    warning: str = ""
+    psr_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
+    crest_3s_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
+
+
+def compute_song_frames(
+    path: str,
+    *,
+    n_fft: int,
+    hop_length: int,
+    highpass_hz: float | None = None,
+    strict: bool = False,
+) -> SongFrames:
+    """Decode and run :func:`track_features` (the Song pipeline), keep frames and metrics."""
+    audio = decode_audio(path, strict=strict)
+    warning = audio.warning
+    features = track_features(audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
+    del audio
+    return frames_of(features, warning=warning)
+
+
+def frames_of(features: TrackFeatures, *, warning: str = "") -> SongFrames:
+    """What the timeline keeps of a track's features (also for audio that is not a file);
+    ``warning`` is the decoder's note on a damaged file."""
+    frames = features.frames
+    keep = ~frames.silent
+    hp = frames.hp_mean[keep]
+    metrics = dict(features.metrics)
+    finite = hp[np.isfinite(hp)]
+    metrics["hp_mean"] = float(finite.mean()) if finite.size else None
+    return SongFrames(
+        rms_dbfs=frames.rms_dbfs[keep].astype(np.float32),
+        crest_db=frames.crest_db[keep].astype(np.float32),
+        loudness_a_db=frames.loudness_a_db[keep].astype(np.float32),
+        hp_mean=hp.astype(np.float32),
+        n_frames_total=int(frames.silent.shape[0]),
+        metrics=metrics,
+        warning=warning,
+        psr_db=frames.psr_db[keep].astype(np.float32),
+        crest_3s_db=frames.crest_3s_db[keep].astype(np.float32),
+    )

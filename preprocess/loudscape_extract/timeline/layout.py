@@ -1,0 +1,252 @@
+"""Timeline layout: song order and spans on x, the x axis, frame sampling, and the points."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from loudscape_extract.contract import spread_range
+from loudscape_extract.errors import ExtractError
+from loudscape_extract.format import axis, hp_axis, level_axis, scalar_axis
+from loudscape_extract.timeline.frames import SongFrames
+from loudscape_extract.timeline.inputs import SongEntry
+
+__all__ = [
+    "CREST_PERCENTILES",
+    "LEVEL_MAX_DBFS",
+    "LEVEL_MIN_DBFS",
+    "METRIC_KEYS",
+    "SCALAR_FLOOR_DB",
+    "DEFAULT_Z_MEASURE",
+    "X_BY",
+    "Z_MEASURES",
+    "percentile_map",
+    "sample_frames",
+    "song_spans",
+    "sort_entries",
+    "timeline_points",
+    "x_axis",
+]
+
+LEVEL_MIN_DBFS = -60.0
+LEVEL_MAX_DBFS = 0.0
+SCALAR_FLOOR_DB = -100.0
+CREST_PERCENTILES = (1.0, 99.0)
+X_BY = ("year", "order")
+#: The z axis: PSR of the 3 s window centred on the frame (default), the 3 s crest factor, or
+#: the paper's crest factor of the STFT frame itself (46 ms at 44.1 kHz; measures waveform
+#: shape rather than compression, see docs/DYNAMICS.md).
+Z_MEASURES = ("psr", "crest-3s", "crest-frame")
+DEFAULT_Z_MEASURE = "psr"
+_Z_SERIES = {"psr": "psr_db", "crest-3s": "crest_3s_db", "crest-frame": "crest_db"}
+_Z_LABELS = {
+    "psr": "PSR (true peak - short-term loudness, 3 s)",
+    "crest-3s": "crest factor (3 s)",
+    "crest-frame": "crest factor (frame)",
+}
+METRIC_KEYS = (
+    "integrated_lufs",
+    "lra_lu",
+    "sample_peak_dbfs",
+    "true_peak_dbtp",
+    "plr_db",
+    "crest_median_db",
+    "crest_p95_db",
+    "dc_offset",
+    "dr_db",
+    "psr_median_db",
+    "psr_p10_db",
+    "psr_p90_db",
+    "psr_spread_db",
+    "crest_3s_median_db",
+    "hp_mean",
+)
+
+
+def sample_frames(n_frames: int, count: int) -> np.ndarray:
+    """Indices of ``count`` frames spread evenly over ``n_frames`` (all of them if fewer)."""
+    if n_frames <= count:
+        return np.arange(n_frames)
+    return np.round(np.linspace(0, n_frames - 1, count)).astype(np.int64)
+
+
+def sort_entries(entries: Sequence[SongEntry]) -> list[SongEntry]:
+    """By year, then artist, then title (case-insensitive), then path; songs without a year
+    (only with ``x_by="order"``) last."""
+    return sorted(
+        entries,
+        key=lambda e: (
+            e.year is None,
+            e.year or 0,
+            e.artist.casefold(),
+            e.title.casefold(),
+            e.path,
+        ),
+    )
+
+
+def percentile_map(values: np.ndarray, low: float, high: float) -> np.ndarray:
+    """``[low, high] -> [-1, 1]``, clamped outside; 0 everywhere when ``low == high``."""
+    if not high > low:
+        return np.zeros_like(values, dtype=np.float64)
+    return np.clip(2.0 * (values - low) / (high - low) - 1.0, -1.0, 1.0)
+
+
+def song_spans(entries: Sequence[SongEntry], x_by: str) -> list[tuple[float, float]]:
+    """Normalized ``(x_min, x_max)`` of each song (entries already sorted)."""
+    n = len(entries)
+    if x_by == "order":
+        return [(2.0 * i / n - 1.0, 2.0 * (i + 1) / n - 1.0) for i in range(n)]
+    first, last = entries[0].year, entries[-1].year
+    width = last + 1 - first
+    spans = []
+    for i, entry in enumerate(entries):
+        same = [e for e in entries if e.year == entry.year]
+        k = sum(1 for e in entries[:i] if e.year == entry.year)
+        start = entry.year - first + k / len(same)
+        end = entry.year - first + (k + 1) / len(same)
+        spans.append((2.0 * start / width - 1.0, 2.0 * end / width - 1.0))
+    return spans
+
+
+def _tick_years(first: int, last: int) -> list[int]:
+    if last - first <= 12:
+        return list(range(first, last + 1))
+    step = 10 if last - first <= 80 else 20
+    return [y for y in range(first - first % step, last + 1, step) if y >= first]
+
+
+def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
+    """The x axis object: years proportional (``x_by="year"``) or a tick per year group."""
+    dated = [e.year for e in entries if e.year is not None]
+    if not dated:  # by order, no song has a year: the axis counts songs, song k in [k-1, k]
+        return axis("song", "", 0, len(entries), ticks=[])
+    first, last = min(dated), max(dated)
+    ticks = []
+    if x_by == "year":
+        years = _tick_years(first, last)
+        width = last + 1 - first
+        for year in years:
+            ticks.append({"at": round(2.0 * (year - first) / width - 1.0, 6), "label": str(year)})
+        return axis("year", "year", first, last + 1, ticks=ticks)
+    # By order: a tick at the first song of each year (short ranges) or decade, where one is.
+    step = 1 if last - first <= 12 else (10 if last - first <= 80 else 20)
+    seen = set()
+    for entry, span in zip(entries, spans, strict=True):
+        if entry.year is None:
+            continue
+        group = entry.year - entry.year % step
+        if group not in seen:
+            seen.add(group)
+            ticks.append({"at": round(span[0], 6), "label": str(max(group, first))})
+    # All songs of one year: the axis ends where that year does, as with x by year.
+    return axis("year", "year", first, last if last > first else last + 1, ticks=ticks)
+
+
+def _scalar_range(levels: Sequence[np.ndarray]) -> tuple[float, float]:
+    """[-100, 0] dB, widened to whole dB so that no drawn frame's level is clipped."""
+    values = np.concatenate([np.asarray(v, dtype=np.float64) for v in levels]) if levels else []
+    values = np.asarray(values)[np.isfinite(values)] if len(values) else np.zeros(0)
+    low, high = SCALAR_FLOOR_DB, 0.0
+    if values.size:
+        low = min(low, math.floor(float(values.min())))
+        high = max(high, math.ceil(float(values.max())))
+    return float(low), float(high)
+
+
+def _round(value, digits=4):
+    if value is None or not math.isfinite(value):
+        return None
+    return round(float(value), digits)
+
+
+def timeline_points(
+    entries: Sequence[SongEntry],
+    songs: dict[str, SongFrames],
+    *,
+    frames_per_song: int,
+    x_by: str = "year",
+    z_measure: str = DEFAULT_Z_MEASURE,
+) -> tuple[np.ndarray, dict]:
+    """Points and the ``axes`` / ``songs`` metadata for songs that all have features.
+
+    Returns
+    -------
+    points : np.ndarray [shape=(n_points, 5), dtype=float32]
+    layout : dict
+        ``axes``, ``songs`` (one object per song, in order), ``crest_percentiles_db``.
+    """
+    if x_by not in X_BY:
+        raise ExtractError(f"x_by must be one of {', '.join(X_BY)}, got {x_by!r}")
+    if z_measure not in Z_MEASURES:
+        raise ExtractError(f"z_measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
+    if x_by == "year" and any(e.year is None for e in entries):
+        raise ExtractError("x_by='year' needs a year for every song")
+    entries = sort_entries(entries)
+    series = _Z_SERIES[z_measure]
+    all_crest = np.concatenate([getattr(songs[e.path], series) for e in entries])
+    all_crest = all_crest.astype(np.float64)
+    all_crest = all_crest[np.isfinite(all_crest)]
+    if all_crest.size:
+        crest_low, crest_high = (float(v) for v in np.percentile(all_crest, CREST_PERCENTILES))
+    else:
+        crest_low = crest_high = 0.0
+    spans = song_spans(entries, x_by)
+    sampled = [sample_frames(songs[e.path].rms_dbfs.shape[0], frames_per_song) for e in entries]
+    s_low, s_high = _scalar_range(
+        [songs[e.path].loudness_a_db[i] for e, i in zip(entries, sampled, strict=True)]
+    )
+    blocks, described = [], []
+    offset = 0
+    for entry, index, (x_min, x_max) in zip(entries, sampled, spans, strict=True):
+        song = songs[entry.path]
+        m = index.shape[0]
+        x = x_min + (x_max - x_min) * (np.arange(m) + 0.5) / max(m, 1)
+        rms = np.nan_to_num(song.rms_dbfs[index].astype(np.float64), nan=-200.0, neginf=-200.0)
+        y = np.clip(
+            2.0 * (rms - LEVEL_MIN_DBFS) / (LEVEL_MAX_DBFS - LEVEL_MIN_DBFS) - 1.0, -1.0, 1.0
+        )
+        measure = getattr(song, series).astype(np.float64)
+        finite = measure[np.isfinite(measure)]
+        # A frame without a value (a 3 s window under -70 LUFS) takes the song's median.
+        neutral = float(np.median(finite)) if finite.size else crest_low
+        z = percentile_map(np.nan_to_num(measure[index], nan=neutral), crest_low, crest_high)
+        la = np.nan_to_num(song.loudness_a_db[index].astype(np.float64), nan=-200.0, neginf=-200)
+        scalar = np.clip((la - s_low) / (s_high - s_low), 0.0, 1.0)
+        hp = np.clip(np.nan_to_num(song.hp_mean[index].astype(np.float64), nan=0.5), 0.0, 1.0)
+        blocks.append(np.stack([x, y, z, scalar, hp], axis=1))
+        described.append(
+            {
+                "path": entry.path,
+                "year": entry.year,
+                "title": entry.title,
+                "artist": entry.artist,
+                "x_min": round(x_min, 6),
+                "x_max": round(x_max, 6),
+                "point_offset": offset,
+                "point_count": int(m),
+                "frames_non_silent": int(song.rms_dbfs.shape[0]),
+                "frames_total": int(song.n_frames_total),
+                "metrics": {k: _round(song.metrics.get(k)) for k in METRIC_KEYS},
+            }
+        )
+        offset += m
+    points = np.concatenate(blocks).astype(np.float32) if blocks else np.zeros((0, 5), np.float32)
+    axes = {
+        "x": x_axis(entries, spans, x_by),
+        "y": level_axis(LEVEL_MIN_DBFS, LEVEL_MAX_DBFS),
+        "z": {
+            **axis(
+                _Z_LABELS[z_measure],
+                "dB",
+                # A constant z: every z is 0, the axis spans half a dB either side.
+                *(round(v, 6) for v in spread_range(crest_low, crest_high, 0.5)),
+            ),
+            "measure": z_measure,
+        },
+        "scalar": scalar_axis(s_low, s_high),
+        "hp": hp_axis(),
+    }
+    return points, {"axes": axes, "songs": described}
