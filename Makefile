@@ -32,7 +32,8 @@ build: system
 	$(CARGO) build --release
 
 # Opens the demo in a window; with no display, renders every view of the demo to PNG files.
-run: build
+# The venv holds the extractor the app runs when it is given a song instead of a cloud.
+run: build venv
 	@if [ -n "$(DISPLAY)$(WAYLAND_DISPLAY)" ] || [ "$$(uname -s)" = Darwin ]; then \
 		./target/release/loudscape $(DEMO_SONG) $(wildcard $(DEMO_TIMELINE)); \
 	else \
@@ -44,7 +45,7 @@ lint-rust:
 	$(CARGO) fmt --check
 	$(CARGO) clippy --all-targets -- -D warnings
 
-test-rust: system
+test-rust: system venv
 	$(XVFB) $(CARGO) test
 
 lint-py: venv

@@ -16,6 +16,7 @@
 //! The binary (`src/main.rs`) adds the command line (`src/commands/`).
 
 pub mod data;
+pub mod extract;
 pub mod playback;
 pub mod render;
 pub mod ui;

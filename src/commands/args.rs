@@ -10,9 +10,10 @@ use loudscape::data::cloud::PointCloud;
 use loudscape::render::grid::voxelize::{MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION};
 use loudscape::render::surface::SurfaceMethod;
 
-/// Loads a cloud, with the file named in the error.
+/// Loads a cloud, with the file named in the error; audio (anything not a PLY) is extracted
+/// first, or found in the cloud cache.
 pub fn load_cloud(path: &Path) -> anyhow::Result<PointCloud> {
-    Ok(loudscape::data::cloud::load(path)?)
+    Ok(loudscape::extract::open_for_command(path)?)
 }
 
 /// Fails, naming the output, when the folder it would be written into does not exist.

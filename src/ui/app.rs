@@ -126,6 +126,7 @@ impl LoudscapeApp {
             moving_divisor: [1; 3],
             slot_cameras: [None, None],
             renders_seen: (0, 0),
+            open: Default::default(),
         };
         let files = app.apply_remembered(options.files, remembered);
         if let Some(view) = options.view {
@@ -305,7 +306,7 @@ impl LoudscapeApp {
             }
         } else {
             let text = if self.loading.is_empty() {
-                "Drop a loudscape .ply file here, or run: loudscape song.ply [timeline.ply]"
+                "Drop a song or a loudscape .ply file here, or run: loudscape song.ogg [timeline.ply]"
             } else {
                 "Loading…"
             };

@@ -17,6 +17,7 @@ impl LoudscapeApp {
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("loudscape");
         ui.add_space(4.0);
+        self.open_controls(ui);
 
         ui.label(RichText::new("Data").strong());
         ui.horizontal(|ui| {
@@ -136,12 +137,7 @@ impl LoudscapeApp {
                 ui.label(busy);
             });
         }
-        for loading in &self.loading {
-            ui.horizontal(|ui| {
-                ui.spinner();
-                ui.label(format!("loading {}", loading.path.display()));
-            });
-        }
+        self.loading_progress(ui);
         if let Some(notice) = self.notice.clone() {
             ui.separator();
             ui.label(notice);

@@ -19,11 +19,18 @@ impl LoudscapeApp {
     pub(super) fn start_loading(&mut self, path: PathBuf) {
         let (sender, receiver) = channel();
         let thread_path = path.clone();
+        let shared = crate::ui::open::Shared::default();
+        let thread_shared = shared.clone();
         std::thread::spawn(move || {
-            let result = crate::data::cloud::load(&thread_path).map_err(|e| e.to_string());
+            let settings = crate::extract::Settings::default();
+            let result = crate::ui::open::open_path(&thread_path, &settings, &thread_shared);
             let _ = sender.send(result);
         });
-        self.loading.push(Loading { path, receiver });
+        self.loading.push(Loading {
+            path,
+            receiver,
+            shared,
+        });
     }
 
     pub(super) fn slot(&self, slot: Slot) -> Option<&Loaded> {

@@ -69,6 +69,8 @@ pub(super) struct LoudscapeApp {
     pub(super) slot_cameras: [Option<Camera>; 2],
     /// Scene renders counted by the view and the frame they were last seen to change.
     pub(super) renders_seen: (u64, u32),
+    /// The Open row (`open.rs`).
+    pub(super) open: crate::ui::open::OpenPanel,
 }
 
 /// Which of the two data slots.
@@ -108,6 +110,8 @@ pub(super) struct Loaded {
 pub(super) struct Loading {
     pub(super) path: PathBuf,
     pub(super) receiver: Receiver<Result<PointCloud, String>>,
+    /// Progress and cancel of an extraction (`open.rs`).
+    pub(super) shared: crate::ui::open::Shared,
 }
 
 /// What is under the cursor, recomputed only when the cursor or the view changed.
