@@ -26,7 +26,7 @@ from loudscape_extract.spectrogram import a_weighting_db, frame_signal, level_db
 from loudscape_extract.timeline import build_timeline
 
 __version__ = "0.1.0"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 __all__ = [
     "FORMAT_VERSION",

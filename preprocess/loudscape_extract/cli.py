@@ -222,7 +222,9 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("-o", "--output", default="report.png", help="PNG file to write")
     report.add_argument("--csv", help="also write the per-year table as CSV")
 
-    for sub in (song, timeline, report):
+    from loudscape_extract import export
+
+    for sub in (song, timeline, report, export.add_parser(commands)):
         sub.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
         sub.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     return parser
@@ -319,6 +321,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from loudscape_extract.report import write_report
 
             write_report(args.input, args.output, csv_path=args.csv)
+        elif args.command == "export":
+            from loudscape_extract import export
+
+            return export.run(args)
     except ExtractError as exc:
         if args.debug:
             raise

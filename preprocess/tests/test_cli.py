@@ -36,7 +36,7 @@ def test_song_end_to_end(tmp_path, capsys):
     status, err = run(["song", source, "-o", out, "--n-fft", 256, "--hop", 128], capsys)
     assert status == 0 and err == ""  # stderr is not a TTY under pytest: no progress
     header, metadata, records = tiny_read(out)
-    assert metadata["mode"] == "song" and metadata["format_version"] == 1
+    assert metadata["mode"] == "song" and metadata["format_version"] == 2
     assert metadata["point_count"] == records.shape[0] > 0
     assert metadata["source"] == {
         "path": str(source),
