@@ -1,6 +1,6 @@
-// Shared by the isosurface extraction passes (marching_tets.wgsl, dual_contour.wgsl): the grid
-// they read, the mesh they write, the active-cell list, and sampling helpers.
-// Keep IsoParams, MeshVertex, Counters and the binding numbers in sync with src/render/surface/buffers.rs.
+// Shared by the isosurface extraction passes (marching_tets.wgsl, dual_contour.wgsl): the grid they
+// read, the mesh they write, the active-cell list, and sampling helpers. Keep IsoParams,
+// MeshVertex, Counters and the binding numbers in sync with src/render/surface/buffers.rs.
 //
 // Every extraction runs in the same shape: `inside_bits_pass` packs which samples are inside
 // into bits (one load per sample); `classify` finds, 32 cells per thread, the cells whose

@@ -1,27 +1,25 @@
 // Marching tetrahedra (paper 3.2). Prepended: surface/extraction.wgsl (bindings, sampling, the
-// active-cell list).
-// Reads the density and hp grids; writes an indexed mesh with one vertex per grid edge that
-// crosses the isovalue, shared by every triangle that uses it.
-// Every cell is split into six tetrahedra around its main diagonal (corner 0 to corner 7); the
-// split of each cube face is then the same seen from either side, so the surface is watertight.
-// Every tetrahedron edge runs from a corner to one with a superset of its offset bits, so each
-// edge is owned by its lower end: the cell whose corner 0 that is, which owns the seven edges
-// from its corner 0 to corners 1..7 (x, y, xy, z, xz, yz, xyz). A crossed edge's owner holds
-// both of its ends, so it straddles the isovalue and is an active cell.
-// Passes: `inside_bits_pass` packs which samples are inside into bits and `classify` (32 cells
-// per thread, both in surface/extraction.wgsl) appends the active cells and reserves their vertices (one per
-// crossed owned edge) and indices (three per triangle of their tetrahedra); `dispatch_active`;
-// `edge_vertices` (per active cell) places the vertices; `triangles` (per active cell) looks the
-// vertices of its triangles up through `cell_map` and writes the indices; `finalize` writes the
-// indexed indirect draw.
+// active-cell list). Reads the density and hp grids; writes an indexed mesh with one vertex per
+// grid edge that crosses the isovalue, shared by every triangle that uses it. Every cell is split
+// into six tetrahedra around its main diagonal (corner 0 to corner 7); the split of each cube face
+// is then the same seen from either side, so the surface is watertight. Every tetrahedron edge runs
+// from a corner to one with a superset of its offset bits, so each edge is owned by its lower end:
+// the cell whose corner 0 that is, which owns the seven edges from its corner 0 to corners 1..7 (x,
+// y, xy, z, xz, yz, xyz). A crossed edge's owner holds both of its ends, so it straddles the
+// isovalue and is an active cell. Passes: `inside_bits_pass` packs which samples are inside into
+// bits and `classify` (32 cells per thread, both in surface/extraction.wgsl) appends the active
+// cells and reserves their vertices (one per crossed owned edge) and indices (three per triangle of
+// their tetrahedra); `dispatch_active`; `edge_vertices` (per active cell) places the vertices;
+// `triangles` (per active cell) looks the vertices of its triangles up through `cell_map` and
+// writes the indices; `finalize` writes the indexed indirect draw.
 
-// Per cell inside mask m (bit k: corner k inside), built on the CPU from the six tetrahedra of
-// the split (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) and their 16-entry case
-// table (src/render/surface/marching_tets.rs, case_table): word 13m holds the triangle count (at most
-// 12) in its low byte and from bit 8 the corners that are the lower end of some triangle's edge
-// (corner 7 never is), words 13m + 1.. one triangle each, three edges of six bits wound to face
-// away from the inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from
-// corner ka to corner ka + d, whose offset bits are a superset of ka's.
+// Per cell inside mask m (bit k: corner k inside), built on the CPU from the six tetrahedra of the
+// split (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) and their 16-entry case table
+// (src/render/surface/marching_tets.rs, case_table): word 13m holds the triangle count (at most 12)
+// in its low byte and from bit 8 the corners that are the lower end of some triangle's edge (corner
+// 7 never is), words 13m + 1.. one triangle each, three edges of six bits wound to face away from
+// the inside corners. An edge is (lower corner ka) | (direction d) << 3: it runs from corner ka to
+// corner ka + d, whose offset bits are a superset of ka's.
 @group(1) @binding(10) var<storage, read> cases: array<u32>;
 
 const CASE_STRIDE: u32 = 13u;

@@ -10,6 +10,7 @@ use loudscape::data::cloud::{DataMode, Point, PointCloud};
 use loudscape::data::synthetic::synthetic_song;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::target::RenderTarget;
+use loudscape::render::gpu::timing::Timestamps;
 use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::view::camera::Camera;
@@ -21,37 +22,18 @@ pub const LARGE_CLOUD_POINTS: usize = 2_000_000;
 
 /// Times GPU work: timestamps around the recorded work where supported, else wall time.
 pub struct GpuTimer {
-    queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer, f64)>,
+    queries: Option<Timestamps>,
 }
 
 impl GpuTimer {
     pub fn new(gpu: &GpuContext) -> Self {
-        let features = gpu.device.features();
-        let queries = features
-            .contains(
-                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
-            )
-            .then(|| {
-                let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("bench::timestamps"),
-                    ty: wgpu::QueryType::Timestamp,
-                    count: 2,
-                });
-                let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("bench::timestamps_resolve"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("bench::timestamps_read"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                });
-                let period = f64::from(gpu.queue.get_timestamp_period());
-                (set, resolve, read, period)
-            });
+        let queries = Timestamps::new(
+            &gpu.device,
+            &gpu.queue,
+            "bench::timestamps",
+            2,
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        );
         Self { queries }
     }
 
@@ -74,14 +56,13 @@ impl GpuTimer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("bench::timed"),
             });
-        if let Some((set, _, _, _)) = &self.queries {
-            encoder.write_timestamp(set, 0);
+        if let Some(queries) = &self.queries {
+            encoder.write_timestamp(&queries.set, 0);
         }
         record(&mut encoder);
-        if let Some((set, resolve, read, _)) = &self.queries {
-            encoder.write_timestamp(set, 1);
-            encoder.resolve_query_set(set, 0..2, resolve, 0);
-            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+        if let Some(queries) = &self.queries {
+            encoder.write_timestamp(&queries.set, 1);
+            queries.resolve(&mut encoder, 2);
         }
         let start = Instant::now();
         gpu.queue.submit([encoder.finish()]);
@@ -90,33 +71,13 @@ impl GpuTimer {
             .context("waiting for the GPU")?;
         let wall = start.elapsed().as_secs_f64() * 1e3;
         match &self.queries {
-            Some((_, _, read, period)) => {
-                let bytes = loudscape::render::gpu::readback::map_buffer(&gpu.device, read)?;
-                let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-                Ok(ticks[1].wrapping_sub(ticks[0]) as f64 * period / 1e6)
+            Some(queries) => {
+                let ticks = queries.read_ticks(&gpu.device)?;
+                Ok(queries.ms(ticks[0], ticks[1]))
             }
             None => Ok(wall),
         }
     }
-}
-
-/// Copies resolved pass timestamps to the CPU.
-fn read_pass_ticks(
-    gpu: &GpuContext,
-    passes: &Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
-) -> anyhow::Result<Option<Vec<u64>>> {
-    let Some((_, resolve, read)) = passes else {
-        return Ok(None);
-    };
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("bench::pass_timestamps_copy"),
-        });
-    encoder.copy_buffer_to_buffer(resolve, 0, read, 0, None);
-    gpu.queue.submit([encoder.finish()]);
-    let bytes = loudscape::render::gpu::readback::map_buffer(&gpu.device, read)?;
-    Ok(Some(bytemuck::cast_slice(&bytes).to_vec()))
 }
 
 pub fn median(mut values: Vec<f64>) -> f64 {
@@ -183,32 +144,13 @@ pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow
     }
 
     // Per-pass timestamps, where the adapter has them.
-    let period = f64::from(gpu.queue.get_timestamp_period()) / 1e6;
-    let passes = gpu
-        .device
-        .features()
-        .contains(wgpu::Features::TIMESTAMP_QUERY)
-        .then(|| {
-            let count = 2 * MAX_PASSES as u32;
-            let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("bench::pass_timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count,
-            });
-            let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bench::pass_timestamps_resolve"),
-                size: u64::from(count) * 8,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bench::pass_timestamps_read"),
-                size: u64::from(count) * 8,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            (set, resolve, read)
-        });
+    let passes = Timestamps::new(
+        &gpu.device,
+        &gpu.queue,
+        "bench::pass_timestamps",
+        2 * MAX_PASSES as u32,
+        wgpu::Features::TIMESTAMP_QUERY,
+    );
     let stages: [(&str, &PointCloud, u32, f32); 4] = [
         ("voxelize song", &song, 128, 0.0),
         ("voxelize song, smoothed (sigma 1)", &song, 128, 1.0),
@@ -227,19 +169,21 @@ pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow
         let mut pass_names = Vec::new();
         for i in 0..=runs {
             let ms = timer.time(&gpu, |encoder| {
-                pass_names = renderer
-                    .voxelize
-                    .encode(encoder, &job, passes.as_ref().map(|p| &p.0));
-                if let Some((set, resolve, _)) = &passes {
-                    encoder.resolve_query_set(set, 0..2 * pass_names.len() as u32, resolve, 0);
+                pass_names =
+                    renderer
+                        .voxelize
+                        .encode(encoder, &job, passes.as_ref().map(|p| &p.set));
+                if let Some(passes) = &passes {
+                    passes.resolve(encoder, 2 * pass_names.len() as u32);
                 }
             })?;
             if i > 0 {
                 times.push(ms);
-                if let Some(ticks) = read_pass_ticks(&gpu, &passes)? {
+                if let Some(passes) = &passes {
+                    let ticks = passes.read_ticks(&gpu.device)?;
                     pass_times.resize(pass_names.len(), Vec::new());
                     for (p, times) in pass_times.iter_mut().enumerate() {
-                        times.push(ticks[2 * p + 1].wrapping_sub(ticks[2 * p]) as f64 * period);
+                        times.push(passes.ms(ticks[2 * p], ticks[2 * p + 1]));
                     }
                 }
             }

@@ -118,10 +118,10 @@ pub fn synthetic_song(count: usize, seed: u64) -> Vec<Point> {
 }
 
 /// A song-like analytic field for benchmarks, golden images and the scikit-image comparison:
-/// (density, hp) on a `dims` grid over [-1, 1]^3, in [`VoxelGrid`](crate::render::grid::VoxelGrid) order (x fastest).
-/// x is time: a 4/4 pulse of percussive hits (hp near 0) over sustained harmonic partials
-/// (hp near 1); y is log amplitude: energy sits on a ridge that falls with frequency and rises
-/// on each hit; z is frequency: partials make stripes. bench/bench_surface.py reads the same
+/// (density, hp) on a `dims` grid over [-1, 1]^3, in [`VoxelGrid`](crate::render::grid::VoxelGrid)
+/// order (x fastest). x is time: a 4/4 pulse of percussive hits (hp near 0) over sustained harmonic
+/// partials (hp near 1); y is log amplitude: energy sits on a ridge that falls with frequency and
+/// rises on each hit; z is frequency: partials make stripes. bench/bench_surface.py reads the same
 /// field from the .npy file `loudscape bench --fields-dir` writes.
 pub fn song_like_field(dims: UVec3) -> (Vec<f32>, Vec<f32>) {
     let n = (dims.x * dims.y * dims.z) as usize;

@@ -1,4 +1,4 @@
-//! The loudscape window's wiring: [`LoudscapeApp`]'s state, opening the window, one frame (side
+//! The loudscape window's wiring: `LoudscapeApp`'s state, opening the window, one frame (side
 //! panel, transport bar, 3D view) and the camera input of the 3D view. The panels, hover
 //! read-outs, data slots, persistence and screenshots each have their own file in `ui/`.
 

@@ -2,17 +2,17 @@
 //! read (paper sections 3.1 and 3.4).
 //!
 //! Reads: the points (uploaded here in chunks, five f32 per point, the PLY record). Writes: a
-//! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel.
-//! How: shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
-//! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual
-//! carry; scale [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp, with the
-//! point count in the top 24 bits of the hp sum; portable to every adapter, no float atomics).
-//! `resolve` turns the sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally
-//! blurs the sums with a separable Gaussian; `histogram` bins the positive sums on a log2 scale,
-//! `percentile` finds the bin holding the 99th percentile, and `normalize_density` divides by
-//! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field.
-//! The grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only
-//! when the cloud or the settings change (see `SceneData::ensure_grid`).
+//! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
+//! shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
+//! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual carry; scale
+//! [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp, with the point count in the
+//! top 24 bits of the hp sum; portable to every adapter, no float atomics). `resolve` turns the
+//! sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally blurs the sums with a
+//! separable Gaussian; `histogram` bins the positive sums on a log2 scale, `percentile` finds the
+//! bin holding the 99th percentile, and `normalize_density` divides by that reference sum and
+//! clamps to 1, so one hot voxel cannot flatten the rest of the field. The grid box is the cloud's
+//! bounding box, padded ([`grid_box`]); the grid is rebuilt only when the cloud or the settings
+//! change (see `SceneData::ensure_grid`).
 
 use glam::{UVec3, Vec3};
 use thiserror::Error;

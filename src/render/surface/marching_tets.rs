@@ -1,24 +1,24 @@
 //! Marching tetrahedra on the GPU (paper 3.2).
 //!
 //! Reads: a [`VoxelGrid`]'s density and hp_mean. Writes: into [`MeshBuffers`] an indexed mesh with
-//! one [`MeshVertex`](crate::render::surface::buffers::MeshVertex) per grid edge that crosses the isovalue
-//! (shared by all the triangles on it), the active-cell list and cell map, the counters and the
-//! indexed indirect draw arguments. Cells run from -1 to dims - 1 (samples outside the grid read as
-//! zero, so surfaces close at its border). A cell is split into six tetrahedra around its main
-//! diagonal, the same split in every cell, so neighbouring cells cut their shared face the same way
-//! and the surface is watertight. Each tetrahedron's inside mask indexes a 16-entry case table of
-//! up to two triangles; the six are folded into one 256-entry table per cell mask ([`case_table`]).
-//! Passes (see shaders/surface/marching_tets.wgsl and surface/extraction.wgsl): `inside_bits_pass` packs which
-//! samples are inside into bits; `classify` sweeps 32 cells per thread with bitwise operations and
-//! appends the straddling ones to the active list, reserving their vertices and indices with
-//! atomics; `dispatch_active` writes the indirect dispatch over them; `edge_vertices` places one
-//! vertex on each crossing edge a cell owns (the seven edges from its corner 0: three box edges,
-//! three face diagonals and the body diagonal, so every edge of every tetrahedron has exactly one
-//! owner); `triangles` writes three indices per triangle, finding each edge's vertex through the
-//! owner's entry in the cell map (each owner's entry loaded once per cell); `finalize` writes the
-//! draw. Vertex normals: the central-difference gradient of the density interpolated along the
-//! edge, negated (toward lower density); a vanishing gradient falls back to the edge's direction
-//! from inside to outside.
+//! one [`MeshVertex`](crate::render::surface::buffers::MeshVertex) per grid edge that crosses the
+//! isovalue (shared by all the triangles on it), the active-cell list and cell map, the counters
+//! and the indexed indirect draw arguments. Cells run from -1 to dims - 1 (samples outside the grid
+//! read as zero, so surfaces close at its border). A cell is split into six tetrahedra around its
+//! main diagonal, the same split in every cell, so neighbouring cells cut their shared face the
+//! same way and the surface is watertight. Each tetrahedron's inside mask indexes a 16-entry case
+//! table of up to two triangles; the six are folded into one 256-entry table per cell mask
+//! ([`case_table`]). Passes (see shaders/surface/marching_tets.wgsl and surface/extraction.wgsl):
+//! `inside_bits_pass` packs which samples are inside into bits; `classify` sweeps 32 cells per
+//! thread with bitwise operations and appends the straddling ones to the active list, reserving
+//! their vertices and indices with atomics; `dispatch_active` writes the indirect dispatch over
+//! them; `edge_vertices` places one vertex on each crossing edge a cell owns (the seven edges from
+//! its corner 0: three box edges, three face diagonals and the body diagonal, so every edge of
+//! every tetrahedron has exactly one owner); `triangles` writes three indices per triangle, finding
+//! each edge's vertex through the owner's entry in the cell map (each owner's entry loaded once per
+//! cell); `finalize` writes the draw. Vertex normals: the central-difference gradient of the
+//! density interpolated along the edge, negated (toward lower density); a vanishing gradient falls
+//! back to the edge's direction from inside to outside.
 
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
@@ -70,11 +70,11 @@ fn corner(k: u32) -> glam::Vec3 {
 }
 
 /// The triangles of a cell for each inside mask of its corners (bit k: corner k), as read by
-/// shaders/surface/marching_tets.wgsl: word 13m holds the count in its low byte and, from bit 8, which
-/// corners (bit c: corner c) are the lower end of some triangle's edge, so the shader loads those
-/// owners' cell-map entries once per cell; words 13m + 1.. one triangle each, three six-bit edges
-/// (lower corner | direction << 3), wound to face away from the inside corners. The winding is
-/// decided at the edge midpoints: a triangle on given tetrahedron edges keeps its orientation
+/// shaders/surface/marching_tets.wgsl: word 13m holds the count in its low byte and, from bit 8,
+/// which corners (bit c: corner c) are the lower end of some triangle's edge, so the shader loads
+/// those owners' cell-map entries once per cell; words 13m + 1.. one triangle each, three six-bit
+/// edges (lower corner | direction << 3), wound to face away from the inside corners. The winding
+/// is decided at the edge midpoints: a triangle on given tetrahedron edges keeps its orientation
 /// wherever on the open edges its corners lie.
 pub(crate) fn case_table() -> Vec<u32> {
     let mut table = vec![0u32; 256 * CASE_STRIDE];

@@ -5,20 +5,20 @@
 //! the `loudscape mesh` export).
 //!
 //! Reads: a [`VoxelGrid`](crate::render::grid::VoxelGrid) (density, hp_mean). Writes: an indexed
-//! mesh in [`buffers::MeshBuffers`] (vertex records, an index buffer, the active-cell list,
-//! atomic counters and indirect dispatch and draw arguments), then colour and depth of the
-//! render target. Files, each beside its shader in shaders/surface/: [`extraction`] (the
-//! skeleton both methods share, extraction.wgsl), [`marching_tets`] and [`dual_contour`] (the
-//! methods), [`draw`] (draw.wgsl's CPU side), [`pass`] (the per-device [`pass::SurfacePass`]:
-//! pipelines, growth, read-back, draw) and [`state`] (one cloud's
-//! [`state::ExtractedSurface`], owned by its `SceneData`). Both methods first classify every cell and append only the cells that straddle the
+//! mesh in [`buffers::MeshBuffers`] (vertex records, an index buffer, the active-cell list, atomic
+//! counters and indirect dispatch and draw arguments), then colour and depth of the render target.
+//! Files, each beside its shader in shaders/surface/: [`extraction`] (the skeleton both methods
+//! share, extraction.wgsl), [`marching_tets`] and [`dual_contour`] (the methods), [`draw`]
+//! (draw.wgsl's CPU side), [`pass`] (the per-device [`pass::SurfacePass`]: pipelines, growth,
+//! read-back, draw) and [`state`] (one cloud's [`state::ExtractedSurface`], owned by its
+//! `SceneData`). Both methods first classify every cell and append only the cells that straddle the
 //! isovalue to an active list, then run their expensive passes over those cells alone through
 //! indirect dispatches; output is reserved in preallocated buffers with atomics and a one-thread
-//! pass turns the counters into indirect draw arguments, so the interactive path never waits on
-//! the GPU. The surface is re-extracted only when the method, isovalue or grid changes. The
-//! counters keep counting past capacity; they are copied into a staging buffer that is mapped
-//! without waiting and read a frame or two later, and when a surface needed more room the
-//! buffers grow and the surface is extracted again (never silently truncated: see
+//! pass turns the counters into indirect draw arguments, so the interactive path never waits on the
+//! GPU. The surface is re-extracted only when the method, isovalue or grid changes. The counters
+//! keep counting past capacity; they are copied into a staging buffer that is mapped without
+//! waiting and read a frame or two later, and when a surface needed more room the buffers grow and
+//! the surface is extracted again (never silently truncated: see
 //! [`state::ExtractedSurface::counts`]). Tests and export use
 //! [`pass::SurfacePass::extract_blocking`] and [`pass::SurfacePass::read_mesh`], which do wait.
 

@@ -10,6 +10,7 @@ use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::uniform_entry;
 use crate::render::gpu::readback::{map_buffer, read_buffer};
 use crate::render::gpu::target::COLOR_FORMAT;
+use crate::render::gpu::timing::Timestamps;
 use crate::render::grid::VoxelGrid;
 use crate::render::points::depth_state;
 use crate::render::shaders;
@@ -36,16 +37,7 @@ pub struct SurfacePass {
     style_bind_group: wgpu::BindGroup,
     initial_capacity: (u32, u32),
     /// Per-pass GPU timestamps of blocking extractions (benchmarks), when enabled.
-    timing: Option<PassTiming>,
-}
-
-/// Timestamp queries around each extraction pass, resolved and copied for reading.
-struct PassTiming {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    read: wgpu::Buffer,
-    /// Nanoseconds per tick.
-    period: f64,
+    timing: Option<Timestamps>,
 }
 
 const TIMESTAMPS: u32 = 2 * EXTRACTION_PASSES as u32;
@@ -129,38 +121,14 @@ impl SurfacePass {
     /// [`SurfacePass::pass_times_ms`]; false (and nothing changes) when the device has no
     /// timestamp queries. Splits the extraction into one compute pass per dispatch.
     pub fn enable_pass_timing(&mut self, queue: &wgpu::Queue) -> bool {
-        if !self
-            .device
-            .features()
-            .contains(wgpu::Features::TIMESTAMP_QUERY)
-        {
-            return false;
-        }
-        let buffer = |label, usage| {
-            self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: u64::from(TIMESTAMPS) * 8,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        self.timing = Some(PassTiming {
-            set: self.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("surface::pass_timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: TIMESTAMPS,
-            }),
-            resolve: buffer(
-                "surface::pass_timestamps_resolve",
-                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            ),
-            read: buffer(
-                "surface::pass_timestamps_read",
-                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            ),
-            period: f64::from(queue.get_timestamp_period()),
-        });
-        true
+        self.timing = Timestamps::new(
+            &self.device,
+            queue,
+            "surface::pass_timestamps",
+            TIMESTAMPS,
+            wgpu::Features::TIMESTAMP_QUERY,
+        );
+        self.timing.is_some()
     }
 
     /// The GPU time of each pass of the last blocking extraction, in milliseconds, by name
@@ -172,9 +140,9 @@ impl SurfacePass {
         let Some(timing) = &self.timing else {
             return Ok(None);
         };
-        let bytes = map_buffer(&self.device, &timing.read)
+        let ticks = timing
+            .read_ticks(&self.device)
             .map_err(|e| SurfaceError::Readback(e.to_string()))?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
         let names = match method {
             SurfaceMethod::MarchingTetrahedra => self.marching_tets.pass_names(),
             SurfaceMethod::DualContouring => self.dual_contour.pass_names(),
@@ -183,7 +151,7 @@ impl SurfacePass {
             names
                 .iter()
                 .zip(ticks.chunks_exact(2))
-                .map(|(&name, t)| (name, t[1].wrapping_sub(t[0]) as f64 * timing.period / 1e6))
+                .map(|(&name, t)| (name, timing.ms(t[0], t[1])))
                 .collect(),
         ))
     }
@@ -415,8 +383,7 @@ impl SurfacePass {
             });
             encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
             if let Some(timing) = &self.timing {
-                encoder.resolve_query_set(&timing.set, 0..TIMESTAMPS, &timing.resolve, 0);
-                encoder.copy_buffer_to_buffer(&timing.resolve, 0, &timing.read, 0, None);
+                timing.resolve(&mut encoder, TIMESTAMPS);
             }
             queue.submit([encoder.finish()]);
             let bytes = map_buffer(&self.device, &staging)
