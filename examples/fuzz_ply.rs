@@ -448,14 +448,23 @@ fn check_cloud(cloud: &PointCloud) -> Result<(), String> {
         }
         check_axis(name, axis)?;
     }
-    // Hover read-outs of a few points and of the box corners.
+    // Hover read-outs of a few points and of the box corners: a number, the file's unit and a
+    // note name, so short whatever the number.
+    let longest_unit = cloud
+        .meta
+        .axes
+        .named()
+        .iter()
+        .map(|(_, a)| a.unit.len())
+        .max();
     for p in cloud.points.iter().take(8) {
         for reading in pick::point_readings(&cloud.meta.axes, p) {
-            if reading.value.len() > 1000 {
+            if reading.value.len() > 100 + longest_unit.unwrap_or(0) {
                 return Err(format!(
-                    "read-out of {} is {} bytes",
+                    "read-out of {} is {} bytes: {}",
                     reading.name,
-                    reading.value.len()
+                    reading.value.len(),
+                    reading.value.chars().take(80).collect::<String>()
                 ));
             }
         }

@@ -408,8 +408,15 @@ fn significant_decimals(value: f64, digits: i32) -> usize {
     (digits - 1 - magnitude).clamp(0, 6) as usize
 }
 
-/// `value` with `decimals` decimals, ASCII minus, no "-0".
+/// Beyond this magnitude numbers are written in scientific notation (`1.000e20`): f64 has no
+/// more digits to show, and a plain 1e300 would be 301 characters.
+const SCIENTIFIC_FROM: f64 = 1e15;
+
+/// `value` with `decimals` decimals, ASCII minus, no "-0"; scientific beyond 1e15.
 fn fixed(value: f64, decimals: usize) -> String {
+    if value.abs() >= SCIENTIFIC_FROM {
+        return format!("{value:.3e}");
+    }
     let text = format!("{value:.decimals$}");
     match text.strip_prefix('-') {
         Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
@@ -419,6 +426,9 @@ fn fixed(value: f64, decimals: usize) -> String {
 
 /// Seconds as a clock: `m:ss` or `h:mm:ss`, with `decimals` decimals on the seconds.
 fn clock(seconds: f64, decimals: usize) -> String {
+    if seconds.abs() >= SCIENTIFIC_FROM || seconds.is_nan() {
+        return format!("{} s", fixed(seconds, 0));
+    }
     let sign = if seconds < 0.0 { "-" } else { "" };
     let scale = 10f64.powi(decimals as i32);
     let total = (seconds.abs() * scale).round() / scale;
@@ -696,6 +706,15 @@ mod tests {
         }
         exercise(&Axis::log("f", "Hz", f64::MIN_POSITIVE, f64::MAX));
         exercise(&Axis::log("f", "Hz", 5e-324, 1e308));
+        // Labels and read-outs stay short whatever the magnitude.
+        for value in [1e300, -f64::MAX, 1e20, 3.6e20] {
+            for unit in ["", "s", "Hz", "year", "dB"] {
+                let axis = Axis::linear("v", unit, -f64::MAX, f64::MAX);
+                assert!(axis.format_value(value).len() < 40, "{unit} {value}");
+                assert!(axis.tick_label(value, 1e19).len() < 40, "{unit} {value}");
+            }
+        }
+        assert_eq!(fixed(1e20, 2), "1.000e20");
         // Wide ranges still get round ticks where f64 allows.
         let wide = Axis::linear("v", "", -1e38, 1e38);
         assert!(wide.ticks(5).len() >= 2);
