@@ -15,7 +15,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music demo clean
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke demo clean
 
 system:
 	@bash scripts/setup-system.sh
@@ -66,7 +66,19 @@ test-mesh: system venv
 	$(CARGO) test --no-run -q
 	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
 
-test: system lint-rust lint-py test-rust test-py test-mesh
+# The PLY loader, its metadata parser and the axes/read-outs fuzzed (examples/fuzz_ply.rs):
+# a few seconds in `make test`, in release and in the overflow-checked debug build; `make fuzz
+# N=5000000` for millions of inputs. Crashing inputs are saved under fuzz-crashes/.
+FUZZ_SECONDS ?= 3
+N ?= 1000000
+fuzz-smoke:
+	$(CARGO) run -q --release --example fuzz_ply -- --seconds $(FUZZ_SECONDS)
+	$(CARGO) run -q --example fuzz_ply -- --seconds $(FUZZ_SECONDS)
+
+fuzz:
+	$(CARGO) run -q --release --example fuzz_ply -- --inputs $(N)
+
+test: system lint-rust lint-py test-rust test-py test-mesh fuzz-smoke
 
 clean:
 	$(CARGO) clean
