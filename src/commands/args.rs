@@ -10,6 +10,9 @@ use loudscape::data::cloud::PointCloud;
 use loudscape::render::grid::voxelize::{MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION};
 use loudscape::render::surface::SurfaceMethod;
 
+/// The demo song, the default input of commands that measure (`bench`).
+pub const DEMO_SONG: &str = "data/demo_song.ply";
+
 /// Loads a cloud, with the file named in the error; audio (anything not a PLY) is extracted
 /// first, or found in the cloud cache. The error's own line already carries its cause (an OS
 /// error, say), so it goes on as one message, not as a chain that repeats it.

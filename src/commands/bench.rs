@@ -11,13 +11,10 @@ use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
-/// The cloud measured when none is named.
-pub const DEFAULT_INPUT: &str = "data/demo_song.ply";
-
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
     /// The song cloud to measure with (points and volume parts).
-    #[arg(default_value = DEFAULT_INPUT)]
+    #[arg(default_value = super::args::DEMO_SONG)]
     pub input: PathBuf,
     /// Frame size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]

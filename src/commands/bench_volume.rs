@@ -96,7 +96,7 @@ pub fn median(mut values: Vec<f64>) -> f64 {
 /// The song to measure: `input` (the command's INPUT), or a synthetic song when INPUT is the
 /// default demo file and that is absent (a checkout without data/).
 fn song_cloud(input: &Path) -> anyhow::Result<(PointCloud, String)> {
-    if input == Path::new(super::bench::DEFAULT_INPUT) && !input.exists() {
+    if input == Path::new(super::args::DEMO_SONG) && !input.exists() {
         eprintln!(
             "bench: {} is absent; using a synthetic song instead",
             input.display()

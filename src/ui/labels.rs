@@ -267,20 +267,63 @@ pub fn describe_cloud(cloud: &PointCloud) -> Vec<String> {
     lines
 }
 
-/// Loudness metrics as "name: value unit" lines, leaving out the ones not measured.
+/// Loudness and dynamics metrics as "name: value unit" lines, leaving out the ones not
+/// measured (files from older extractors have no DR or PSR).
 pub fn describe_metrics(m: &crate::data::cloud::Metrics) -> Vec<String> {
     let rows = [
         ("integrated loudness", m.integrated_lufs, "LUFS"),
-        ("loudness range", m.lra_lu, "LU"),
+        ("loudness range (LRA)", m.lra_lu, "LU"),
         ("sample peak", m.sample_peak_dbfs, "dBFS"),
         ("true peak", m.true_peak_dbtp, "dBTP"),
         ("PLR", m.plr_db, "dB"),
-        ("crest factor, median", m.crest_median_db, "dB"),
-        ("crest factor, 95th pct", m.crest_p95_db, "dB"),
+        ("DR (TT meter)", m.dr_db, "dB"),
+        ("PSR, median of 3 s", m.psr_median_db, "dB"),
+        ("crest factor of 3 s, median", m.crest_3s_median_db, "dB"),
+        ("crest factor of a frame, median", m.crest_median_db, "dB"),
+        ("crest factor of a frame, 95th pct", m.crest_p95_db, "dB"),
     ];
-    rows.iter()
+    let mut lines: Vec<String> = rows
+        .iter()
         .filter_map(|(name, value, unit)| value.map(|v| format!("{name}: {v:.1} {unit}")))
-        .collect()
+        .collect();
+    if let (Some(low), Some(high)) = (m.psr_p10_db, m.psr_p90_db) {
+        lines.push(format!("PSR, 10th-90th pct: {low:.1} to {high:.1} dB"));
+    }
+    if let Some(dc) = m.dc_offset.filter(|dc| *dc > 0.01) {
+        lines.push(format!("DC offset removed: {dc:.3} of full scale"));
+    }
+    lines
+}
+
+#[cfg(test)]
+mod metrics_tests {
+    use super::describe_metrics;
+    use crate::data::cloud::Metrics;
+
+    #[test]
+    fn the_dynamics_metrics_are_listed_with_units_and_missing_ones_left_out() {
+        let m = Metrics {
+            integrated_lufs: Some(-8.04),
+            dr_db: Some(5.46),
+            psr_median_db: Some(10.0),
+            psr_p10_db: Some(8.5),
+            psr_p90_db: Some(11.3),
+            dc_offset: Some(0.315),
+            ..Metrics::default()
+        };
+        let lines = describe_metrics(&m);
+        assert_eq!(
+            lines,
+            [
+                "integrated loudness: -8.0 LUFS",
+                "DR (TT meter): 5.5 dB",
+                "PSR, median of 3 s: 10.0 dB",
+                "PSR, 10th-90th pct: 8.5 to 11.3 dB",
+                "DC offset removed: 0.315 of full scale",
+            ]
+        );
+        assert!(describe_metrics(&Metrics::default()).is_empty());
+    }
 }
 
 #[cfg(test)]

@@ -6,37 +6,19 @@
 //! old view stays until the new cloud is installed.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::mpsc::{Receiver, channel};
-use std::sync::{Arc, Mutex};
 
 use eframe::egui::{self, RichText};
 
 use crate::data::cloud::PointCloud;
 use crate::extract::{self, Progress, Settings};
-use crate::ui::state::LoudscapeApp;
+use crate::ui::state::{LoudscapeApp, Shared};
 
 /// Audio the dialog offers (the extractor reads these); clouds are `.ply`.
 const AUDIO_EXTENSIONS: [&str; 9] = [
     "wav", "flac", "ogg", "oga", "opus", "mp3", "aiff", "aif", "aifc",
 ];
-
-/// The Open row: its text field and the file dialog while it is open.
-#[derive(Default)]
-pub(super) struct OpenPanel {
-    pub(super) path: String,
-    /// The dialog's answer (`None`: closed without a choice).
-    pub(super) dialog: Option<Receiver<Option<PathBuf>>>,
-}
-
-/// What a loading thread shares with the window.
-#[derive(Clone, Default)]
-pub(super) struct Shared {
-    /// The extractor's latest stage (audio only).
-    pub(super) progress: Arc<Mutex<Option<Progress>>>,
-    /// Set by the Cancel button: the extractor is killed and its partial output removed.
-    pub(super) cancel: Arc<AtomicBool>,
-}
 
 /// Opens `path` as the window does: a cloud file, or audio extracted (or found in the cache).
 /// Progress goes to `shared` and, one line a stage, to stderr; errors name the file.

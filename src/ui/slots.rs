@@ -19,7 +19,7 @@ impl LoudscapeApp {
     pub(super) fn start_loading(&mut self, path: PathBuf) {
         let (sender, receiver) = channel();
         let thread_path = path.clone();
-        let shared = crate::ui::open::Shared::default();
+        let shared = crate::ui::state::Shared::default();
         let thread_shared = shared.clone();
         std::thread::spawn(move || {
             let settings = crate::extract::Settings::default();

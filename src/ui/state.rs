@@ -70,7 +70,7 @@ pub(super) struct LoudscapeApp {
     /// Scene renders counted by the view and the frame they were last seen to change.
     pub(super) renders_seen: (u64, u32),
     /// The Open row (`open.rs`).
-    pub(super) open: crate::ui::open::OpenPanel,
+    pub(super) open: OpenPanel,
 }
 
 /// Which of the two data slots.
@@ -111,7 +111,7 @@ pub(super) struct Loading {
     pub(super) path: PathBuf,
     pub(super) receiver: Receiver<Result<PointCloud, String>>,
     /// Progress and cancel of an extraction (`open.rs`).
-    pub(super) shared: crate::ui::open::Shared,
+    pub(super) shared: Shared,
 }
 
 /// What is under the cursor, recomputed only when the cursor or the view changed.
@@ -159,4 +159,21 @@ impl Default for SaveShot {
             requested: false,
         }
     }
+}
+
+/// The Open row: its text field and the file dialog while it is open.
+#[derive(Default)]
+pub(super) struct OpenPanel {
+    pub(super) path: String,
+    /// The dialog's answer (`None`: closed without a choice).
+    pub(super) dialog: Option<std::sync::mpsc::Receiver<Option<std::path::PathBuf>>>,
+}
+
+/// What a loading thread shares with the window.
+#[derive(Clone, Default)]
+pub(super) struct Shared {
+    /// The extractor's latest stage (audio only).
+    pub(super) progress: std::sync::Arc<std::sync::Mutex<Option<crate::extract::Progress>>>,
+    /// Set by the Cancel button: the extractor is killed and its partial output removed.
+    pub(super) cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }

@@ -237,6 +237,16 @@ pub struct Metrics {
     pub plr_db: Option<f64>,
     pub crest_median_db: Option<f64>,
     pub crest_p95_db: Option<f64>,
+    /// The TT Dynamic Range meter's DR value (docs/FORMAT.md, "Metrics").
+    pub dr_db: Option<f64>,
+    /// Peak to short-term loudness ratio over 3 s windows: median, 10th and 90th percentiles.
+    pub psr_median_db: Option<f64>,
+    pub psr_p10_db: Option<f64>,
+    pub psr_p90_db: Option<f64>,
+    /// Crest factor over the same 3 s windows, median.
+    pub crest_3s_median_db: Option<f64>,
+    /// Largest channel mean removed before the measures (full scale 1).
+    pub dc_offset: Option<f64>,
 }
 
 /// Timeline mode: one song.
