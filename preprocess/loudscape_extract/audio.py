@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,8 +16,11 @@ __all__ = [
     "MIN_SAMPLE_RATE",
     "SUPPORTED_EXTENSIONS",
     "Audio",
+    "AudioInfo",
+    "audio_info",
     "decode_audio",
     "mix_to_mono",
+    "read_blocks",
 ]
 
 MIN_SAMPLE_RATE = 8_000
@@ -81,37 +85,16 @@ def decode_audio(path: str | os.PathLike) -> Audio:
         8 kHz - 192 kHz, no samples at all, or NaN / infinite samples.
     """
     name = os.fspath(path)
-    if not os.path.exists(name):
-        raise ExtractError("no such file", path=name)
-    if os.path.isdir(name):
-        raise ExtractError("is a directory, not an audio file", path=name)
-    if not os.access(name, os.R_OK):
-        raise ExtractError("permission denied", path=name)
-    extension = os.path.splitext(name)[1].lower()
+    _check_readable(name)
     try:
         info = soundfile.info(name)
         samples, sample_rate = soundfile.read(name, dtype="float32", always_2d=True)
     except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
-        reason = _one_line(exc)
-        if extension not in SUPPORTED_EXTENSIONS and "recogni" in reason.lower():
-            supported = ", ".join(SUPPORTED_EXTENSIONS)
-            raise ExtractError(
-                f"unsupported format {extension or '(no extension)'!r} "
-                f"(libsndfile: {reason}); supported: {supported}",
-                path=name,
-            ) from exc
-        raise ExtractError(
-            f"cannot decode audio, corrupt or unreadable ({reason})", path=name
-        ) from exc
+        raise _decode_error(exc, name) from exc
     except OSError as exc:
         raise ExtractError(f"cannot read file ({_one_line(exc)})", path=name) from exc
 
-    if not MIN_SAMPLE_RATE <= sample_rate <= MAX_SAMPLE_RATE:
-        raise ExtractError(
-            f"sample rate {sample_rate} Hz is outside the supported "
-            f"{MIN_SAMPLE_RATE}-{MAX_SAMPLE_RATE} Hz",
-            path=name,
-        )
+    _check_sample_rate(sample_rate, name)
     if samples.shape[0] == 0:
         raise ExtractError("zero-length audio: the file holds no samples", path=name)
     finite = np.isfinite(samples)
@@ -127,6 +110,137 @@ def decode_audio(path: str | os.PathLike) -> Audio:
         format=str(info.format),
         subtype=str(info.subtype),
     )
+
+
+def _check_readable(name: str) -> None:
+    if not os.path.exists(name):
+        raise ExtractError("no such file", path=name)
+    if os.path.isdir(name):
+        raise ExtractError("is a directory, not an audio file", path=name)
+    if not os.access(name, os.R_OK):
+        raise ExtractError("permission denied", path=name)
+
+
+def _decode_error(exc: BaseException, name: str) -> ExtractError:
+    reason = _one_line(exc)
+    extension = os.path.splitext(name)[1].lower()
+    if extension not in SUPPORTED_EXTENSIONS and "recogni" in reason.lower():
+        supported = ", ".join(SUPPORTED_EXTENSIONS)
+        return ExtractError(
+            f"unsupported format {extension or '(no extension)'!r} "
+            f"(libsndfile: {reason}); supported: {supported}",
+            path=name,
+        )
+    return ExtractError(f"cannot decode audio, corrupt or unreadable ({reason})", path=name)
+
+
+def _check_sample_rate(sample_rate: int, name: str) -> None:
+    if not MIN_SAMPLE_RATE <= sample_rate <= MAX_SAMPLE_RATE:
+        raise ExtractError(
+            f"sample rate {sample_rate} Hz is outside the supported "
+            f"{MIN_SAMPLE_RATE}-{MAX_SAMPLE_RATE} Hz",
+            path=name,
+        )
+
+
+@dataclass(frozen=True)
+class AudioInfo:
+    """What :func:`audio_info` reads from a file's header (no samples decoded).
+
+    Attributes
+    ----------
+    path : str
+    sample_rate, n_channels : int
+    n_samples : int
+        As the header states it (:func:`read_blocks` checks it while decoding).
+    format, subtype : str
+    """
+
+    path: str
+    sample_rate: int
+    n_channels: int
+    n_samples: int
+    format: str
+    subtype: str
+
+    @property
+    def duration_s(self) -> float:
+        return self.n_samples / self.sample_rate
+
+
+def audio_info(path: str | os.PathLike) -> AudioInfo:
+    """Open a file as :func:`decode_audio` would (same checks and messages) and read its header.
+
+    Raises
+    ------
+    ExtractError
+        As :func:`decode_audio`, for everything visible without decoding.
+    """
+    name = os.fspath(path)
+    _check_readable(name)
+    try:
+        info = soundfile.info(name)
+    except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
+        raise _decode_error(exc, name) from exc
+    except OSError as exc:
+        raise ExtractError(f"cannot read file ({_one_line(exc)})", path=name) from exc
+    _check_sample_rate(int(info.samplerate), name)
+    return AudioInfo(
+        path=name,
+        sample_rate=int(info.samplerate),
+        n_channels=int(info.channels),
+        n_samples=int(info.frames),
+        format=str(info.format),
+        subtype=str(info.subtype),
+    )
+
+
+def read_blocks(info: AudioInfo, *, block: int) -> Iterator[tuple[int, np.ndarray]]:
+    """Decode a file block by block, front to back (no seeking, so any format works).
+
+    Parameters
+    ----------
+    info : AudioInfo
+        From :func:`audio_info`.
+    block : int
+        Samples per block (the last one may be shorter).
+
+    Yields
+    ------
+    start : int
+        Index of the block's first sample.
+    samples : np.ndarray [shape=(n, n_channels), dtype=float32]
+        The samples :func:`decode_audio` returns for ``[start, start + n)``.
+
+    Raises
+    ------
+    ExtractError
+        Undecodable data, NaN or infinite samples (naming the first), no samples at all.
+    """
+    name = info.path
+    start = 0
+    try:
+        with soundfile.SoundFile(name) as handle:
+            while True:
+                samples = handle.read(block, dtype="float32", always_2d=True)
+                if samples.shape[0] == 0:
+                    break
+                finite = np.isfinite(samples)
+                if not finite.all():
+                    first = start + int(np.argmin(finite.all(axis=1)))
+                    raise ExtractError(
+                        f"NaN or infinite sample at sample {first} "
+                        f"({first / info.sample_rate:.3f} s)",
+                        path=name,
+                    )
+                yield start, samples
+                start += samples.shape[0]
+    except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
+        raise _decode_error(exc, name) from exc
+    except OSError as exc:
+        raise ExtractError(f"cannot read file ({_one_line(exc)})", path=name) from exc
+    if start == 0:
+        raise ExtractError("zero-length audio: the file holds no samples", path=name)
 
 
 def mix_to_mono(samples: np.ndarray) -> np.ndarray:

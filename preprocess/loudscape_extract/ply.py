@@ -6,12 +6,20 @@ import contextlib
 import json
 import os
 import tempfile
+from collections.abc import Iterable
 
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
 
-__all__ = ["PROPERTIES", "encode_header", "read_ply", "read_ply_metadata", "write_ply"]
+__all__ = [
+    "PROPERTIES",
+    "encode_header",
+    "read_ply",
+    "read_ply_metadata",
+    "write_ply",
+    "write_ply_blocks",
+]
 
 PROPERTIES = ("x", "y", "z", "scalar", "hp")
 META_PREFIX = "comment loudscape-meta "
@@ -71,6 +79,61 @@ def write_ply(path: str | os.PathLike, *, points: np.ndarray, metadata: dict) ->
         with handle:
             handle.write(header)
             body.tofile(handle)
+        os.chmod(handle.name, 0o666 & ~_umask())
+        os.replace(handle.name, name)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            os.unlink(handle.name)
+        if isinstance(exc, OSError):
+            raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=name) from exc
+        raise
+
+
+def write_ply_blocks(
+    path: str | os.PathLike, *, n_points: int, metadata: dict, blocks: Iterable[np.ndarray]
+) -> None:
+    """Write points as they are produced, atomically (as :func:`write_ply`).
+
+    The header, with ``n_points``, goes first; each block of shape (n, 5) is appended as it
+    arrives, so only one block is in memory. When the blocks do not add up to ``n_points``
+    exactly, or anything fails (an exception in the producer, Ctrl+C), the temporary file is
+    removed and nothing is left at ``path``.
+
+    Raises
+    ------
+    ExtractError
+        Unwritable directory, a block of the wrong shape, or a wrong total.
+    """
+    name = os.fspath(path)
+    directory = os.path.dirname(os.path.abspath(name))
+    if not os.path.isdir(directory):
+        raise ExtractError(f"output directory {directory!r} does not exist", path=name)
+    header = encode_header(n_points=int(n_points), metadata=metadata)
+    try:
+        handle = tempfile.NamedTemporaryFile(
+            dir=directory, prefix="." + os.path.basename(name) + ".", suffix=".tmp", delete=False
+        )
+    except OSError as exc:
+        raise ExtractError(f"cannot write to {directory!r} ({exc.strerror})", path=name) from exc
+    try:
+        with handle:
+            handle.write(header)
+            written = 0
+            for block in blocks:
+                block = np.asarray(block)
+                if block.ndim != 2 or block.shape[1] != len(PROPERTIES):
+                    raise ExtractError(
+                        f"points must have shape (n_points, 5), got {block.shape}", path=name
+                    )
+                written += block.shape[0]
+                if written > n_points:
+                    break
+                np.ascontiguousarray(block, dtype="<f4").tofile(handle)
+            if written != n_points:
+                raise ExtractError(
+                    f"the header promises {n_points} points but {written} were produced",
+                    path=name,
+                )
         os.chmod(handle.name, 0o666 & ~_umask())
         os.replace(handle.name, name)
     except BaseException as exc:

@@ -4,13 +4,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from loudscape_extract.audio import decode_audio
 from loudscape_extract.dynamics import DC_WARN_THRESHOLD, dc_warning
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.features import track_features
 from loudscape_extract.paths import check_output_path
-from loudscape_extract.ply import write_ply
-from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata, song_points
+from loudscape_extract.ply import write_ply_blocks
+from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata
+from loudscape_extract.stream import (
+    DEFAULT_BLOCK_FRAMES,
+    DEFAULT_BLOCK_SAMPLES,
+    song_point_blocks,
+    stream_track,
+)
 from loudscape_extract.version import GENERATOR
 
 __all__ = ["extract_song"]
@@ -27,8 +31,10 @@ def extract_song(
     highpass_hz: float | None = None,
     progress: Callable[[str], None] | None = None,
     warn: Callable[[str], None] | None = None,
+    block_samples: int = DEFAULT_BLOCK_SAMPLES,
+    block_frames: int = DEFAULT_BLOCK_FRAMES,
 ) -> dict:
-    """Song mode end to end: decode, features, points, atomic PLY write.
+    """Song mode end to end: decode, features, points, atomic PLY write, streamed in blocks.
 
     Parameters
     ----------
@@ -47,6 +53,10 @@ def extract_song(
         Called with a short message before each stage.
     warn : callable, optional
         Called with a message about the input worth knowing (a large DC offset).
+    block_samples, block_frames : int
+        Decoding and STFT block sizes (:mod:`loudscape_extract.stream`): memory is bounded by
+        them and by the decoded mono mix, whatever the track's length; the output does not
+        depend on them.
 
     Returns
     -------
@@ -57,25 +67,36 @@ def extract_song(
     floor = DEFAULT_FLOOR_DB if floor_db is None else floor_db
     check_output_path(output)
     say(f"decoding {source}")
-    audio = decode_audio(source)
-    say(f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s)")
     try:
-        features = track_features(
-            audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, progress=say
+        track = stream_track(
+            source,
+            n_fft=n_fft,
+            hop_length=hop_length,
+            highpass_hz=highpass_hz,
+            frame_hp=False,
+            block_samples=block_samples,
+            block_frames=block_frames,
+            progress=say,
         )
-        say("building points")
-        cloud = song_points(features, floor_db=floor, freq_scale=freq_scale)
+        say(
+            f"{track.duration_s:.1f} s, {track.sample_rate} Hz, {track.n_channels} channel(s); "
+            "counting points"
+        )
+        cloud, blocks = song_point_blocks(track, floor_db=floor, freq_scale=freq_scale)
     except ExtractError as exc:
         if exc.path is None:
             exc.path = source
         raise
-    offset = features.metrics.get("dc_offset") or 0.0
+    offset = track.metrics.get("dc_offset") or 0.0
     if warn and offset > DC_WARN_THRESHOLD:
         warn(dc_warning(source, offset))
-    source_format = f"{audio.format}/{audio.subtype}"
-    del audio
-    metadata = song_metadata(features, cloud, generator=GENERATOR, source_format=source_format)
-    say(f"writing {cloud.points.shape[0]} points to {output}")
-    write_ply(output, points=cloud.points, metadata=metadata)
+    metadata = song_metadata(track, cloud, generator=GENERATOR, source_format=track.source_format)
+    say(f"harmonic-percussive separation, writing {cloud.point_count} points to {output}")
+    try:
+        write_ply_blocks(output, n_points=cloud.point_count, metadata=metadata, blocks=blocks())
+    except ExtractError as exc:
+        if exc.path is None:
+            exc.path = source
+        raise
     say("done")
     return metadata

@@ -232,10 +232,10 @@ def test_cache_hit_does_not_decode(tmp_path, capsys, monkeypatch):
     first = out.read_bytes()
     assert len(os.listdir(tmp_path / "cache")) == 2
 
-    def no_decode(path):
+    def no_decode(path, **_options):
         raise AssertionError(f"decoded {path} despite the cache")
 
-    monkeypatch.setattr(timeline.frames, "decode_audio", no_decode)
+    monkeypatch.setattr(timeline.frames, "stream_track", no_decode)
     status, err = cli_timeline([tmp_path / "m"], out, capsys, tmp_path / "cache")
     assert status == 0 and "2 from cache" in err
     assert out.read_bytes() == first

@@ -6,8 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from loudscape_extract.audio import decode_audio
-from loudscape_extract.features import track_features
+from loudscape_extract.stream import stream_track
 
 __all__ = ["SongFrames", "compute_song_frames"]
 
@@ -40,10 +39,9 @@ class SongFrames:
 def compute_song_frames(
     path: str, *, n_fft: int, hop_length: int, highpass_hz: float | None = None
 ) -> SongFrames:
-    """Decode and run :func:`track_features` (the Song pipeline), keep frames and metrics."""
-    audio = decode_audio(path)
-    features = track_features(audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
-    del audio
+    """Run the Song pipeline's per-frame features (streamed in bounded memory,
+    :func:`stream_track`), keep frames and metrics."""
+    features = stream_track(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
     frames = features.frames
     keep = ~frames.silent
     hp = frames.hp_mean[keep]
