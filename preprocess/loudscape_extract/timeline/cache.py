@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import uuid
 
 import numpy as np
 
@@ -50,7 +51,9 @@ def cache_key(path: str, *, n_fft: int, hop_length: int, highpass_hz: float | No
 def save_entry(path: str, song: SongFrames) -> None:
     directory = os.path.dirname(path)
     os.makedirs(directory, exist_ok=True)
-    temporary = f"{path}.{os.getpid()}.tmp.npz"
+    # Unique across the processes and machines sharing the folder (Dask workers); os.replace
+    # makes the entry appear whole or not at all.
+    temporary = f"{path}.{uuid.uuid4().hex}.tmp.npz"
     np.savez(
         temporary,
         rms_dbfs=song.rms_dbfs,
