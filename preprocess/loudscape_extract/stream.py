@@ -22,6 +22,7 @@ up to float rounding (sums in a different order, FFT convolutions of different l
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -31,7 +32,11 @@ import scipy.fft
 from numpy.lib.stride_tricks import sliding_window_view
 
 from loudscape_extract.audio import AudioInfo, audio_info, mix_to_mono, read_blocks
-from loudscape_extract.dsp import fft_convolve, hann_window, sos_impulse_response
+from loudscape_extract.dsp import (
+    fft_convolve,
+    hann_window,
+    sos_impulse_response,
+)
 from loudscape_extract.dynamics import (
     dr_block_length,
     dr_from_blocks,
@@ -88,6 +93,12 @@ DEFAULT_BLOCK_SAMPLES = 1 << 20
 DEFAULT_BLOCK_FRAMES = 2048
 _FFT_CHUNK_FRAMES = 512
 _FRAME_CHUNK = 1024
+_SHORT_PEAK = 1 << 15
+
+
+@functools.lru_cache(maxsize=16)
+def _impulse_response(flat_sos: tuple) -> np.ndarray:
+    return sos_impulse_response(np.array(flat_sos).reshape(-1, 6))
 
 
 @dataclass(frozen=True)
@@ -175,15 +186,17 @@ class _StreamFir:
 
 class _StreamTruePeak:
     """The 4x-oversampled absolute maximum over channels around each sample, as
-    :func:`segment_true_peak` computes it (FFT convolutions in float32), fed consecutive blocks;
+    :func:`segment_true_peak` computes it (the same interpolator in float32: FFT convolutions,
+    or shifted sums for short blocks), fed consecutive blocks;
     only positions whose interpolation window lies inside the signal are produced."""
 
     def __init__(self, rows: int, oversampling: int = TRUE_PEAK_OVERSAMPLING) -> None:
-        taps = interpolator_taps(oversampling)
-        self.per_phase = -(-taps.shape[0] // oversampling)
+        self.taps = interpolator_taps(oversampling).astype(np.float32)
+        self.factor = oversampling
+        self.per_phase = -(-self.taps.shape[0] // oversampling)
         self.half = (self.per_phase - 1) // 2
         padded = np.zeros(self.per_phase * oversampling)
-        padded[: taps.shape[0]] = taps
+        padded[: self.taps.shape[0]] = self.taps
         self.phases = [padded[p::oversampling] for p in range(oversampling)]
         self.buffer = np.zeros((rows, self.half), dtype=np.float32)
         self.buffer_start = -self.half
@@ -195,10 +208,18 @@ class _StreamTruePeak:
         s0 = self.buffer_start + self.half
         count = x.shape[1] - (p - 1)
         peak = np.zeros(max(count, 0), dtype=np.float32)
-        if count > 0:
-            for phase in self.phases:
-                y = fft_convolve(x, phase, dtype=np.float32)[:, p - 1 :]
+        if 0 < count < _SHORT_PEAK:
+            # Short blocks (short songs): the phases as shifted sums, cheaper than FFTs.
+            for phase in range(self.factor):
+                y = np.zeros((x.shape[0], count), dtype=np.float32)
+                for k, tap in enumerate(self.taps[phase :: self.factor]):
+                    y += tap * x[:, p - 1 - k : p - 1 - k + count]
                 np.maximum(peak, np.abs(y).max(axis=0), out=peak)
+        elif count > 0:
+            for h in self.phases:
+                y = fft_convolve(x, h, dtype=np.float32)[:, p - 1 :]
+                np.maximum(peak, np.abs(y).max(axis=0), out=peak)
+        if count > 0:
             self.buffer = x[:, count:].copy()
             self.buffer_start += count
         else:
@@ -289,12 +310,11 @@ def signal_pass(
     highpass = None
     if highpass_hz is not None:
         sos = highpass_sos(highpass_hz, sample_rate=rate)
-        highpass = _StreamFir(sos_impulse_response(sos), nc, np.float32)
+        highpass = _StreamFir(_impulse_response(tuple(sos.ravel())), nc, np.float32)
     gains = channel_gains(nc)
     used = np.flatnonzero(gains)
-    k_weighting = _StreamFir(
-        sos_impulse_response(k_weighting_sos(sample_rate=rate)), used.shape[0], np.float32
-    )
+    k_sos = k_weighting_sos(sample_rate=rate)
+    k_weighting = _StreamFir(_impulse_response(tuple(k_sos.ravel())), used.shape[0], np.float32)
     n_segments = int(math.floor(n / (0.1 * rate) + 1e-9))
     boundaries = np.round(np.arange(n_segments + 1) * 0.1 * rate).astype(np.int64)
     boundaries = np.minimum(boundaries, n)
