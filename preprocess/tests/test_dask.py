@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
 import pytest
 from test_timeline import FAST, cli_timeline, run, tagged_folder
 
@@ -28,7 +29,7 @@ def test_local_cluster_equals_process_pool_and_shares_the_cache(tmp_path, capsys
     assert status == 0 and "(0 from cache)" in err
     assert dask.read_bytes() == pool.read_bytes()
     # Every worker wrote its songs' entries into the shared folder, atomically (no temp left).
-    assert sorted(os.path.splitext(n)[1] for n in os.listdir(cache)) == [".npz"] * 4
+    assert sorted(os.path.splitext(n)[1] for n in os.listdir(cache)) == [".frames"] * 4
     status, err = run(argv, capsys)
     assert status == 0 and "(4 from cache)" in err
     assert dask.read_bytes() == pool.read_bytes()
@@ -78,3 +79,30 @@ def test_max_points_lowers_frames_per_song(tmp_path, capsys):
     assert meta["extraction"]["frames_per_song"] == 75
     assert meta["extraction"]["frames_per_song_requested"] == 90
     assert meta["extraction"]["max_points"] == 150
+
+
+def test_cache_entry_round_trip_and_damage(tmp_path):
+    from loudscape_extract.timeline.cache import load_entry, save_entry
+    from loudscape_extract.timeline.frames import SongFrames
+
+    n = 7
+    series = {
+        name: np.arange(n, dtype=np.float32) + i
+        for i, name in enumerate(
+            ("rms_dbfs", "crest_db", "loudness_a_db", "hp_mean", "psr_db", "crest_3s_db")
+        )
+    }
+    series["psr_db"][2] = np.nan
+    song = SongFrames(**series, n_frames_total=9, metrics={"dr_db": 8.5, "lra_lu": None})
+    path = str(tmp_path / "entry.frames")
+    save_entry(path, song)
+    assert os.listdir(tmp_path) == ["entry.frames"]
+    back = load_entry(path)
+    assert back.n_frames_total == 9 and back.metrics == song.metrics
+    for name, values in series.items():
+        assert np.array_equal(getattr(back, name), values, equal_nan=True), name
+    data = open(path, "rb").read()
+    open(path, "wb").write(data[:-3])  # truncated: recomputed, not misread
+    assert load_entry(path) is None
+    open(path, "wb").write(b"PK\x03\x04 an old npz")
+    assert load_entry(path) is None

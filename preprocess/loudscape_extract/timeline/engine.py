@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.timeline.cache import cache_key, load_entry, save_entry
+from loudscape_extract.timeline.cache import ENTRY_SUFFIX, cache_key, load_entry, save_entry
 from loudscape_extract.timeline.frames import SongFrames, compute_song_frames
 from loudscape_extract.timeline.layout import DEFAULT_Z_MEASURE, sample_song
 
@@ -36,7 +36,7 @@ def song_frames(
         ), False
     entry = os.path.join(
         cache_dir,
-        cache_key(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz) + ".npz",
+        cache_key(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz) + ENTRY_SUFFIX,
     )
     song = load_entry(entry) if os.path.exists(entry) else None
     if song is not None:
