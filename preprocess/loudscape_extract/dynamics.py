@@ -20,9 +20,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 from numpy.lib.stride_tricks import sliding_window_view
 
-from loudscape_extract.dsp import fft_convolve, sos_filter
+from loudscape_extract.dsp import sos_filter
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.loudness import (
     ABSOLUTE_GATE_LUFS,
@@ -145,18 +146,46 @@ def segment_true_peak(
     valid = valid_interpolated_samples(n_samples, oversampling=oversampling)
     end = int(boundaries[-1])
     per_sample = np.abs(samples).max(axis=1).astype(np.float32)
-    # Each phase of the polyphase interpolator as a causal FFT convolution of the signal with
-    # `half` zeros in front: output n = s + per_phase - 1 interpolates around sample s.
+    # x[w .. w + per_phase - 1] is the window centred on sample w: `half` zeros in front.
     padded = np.zeros((n_channels, half + n_samples + per_phase), dtype=np.float32)
     padded[:, half : half + n_samples] = samples.T
-    padded_taps = np.zeros(per_phase * oversampling)
-    padded_taps[: taps.shape[0]] = taps
-    for phase in range(oversampling):
-        y = fft_convolve(padded, padded_taps[phase::oversampling], dtype=np.float32)
-        peak = np.abs(y[:, per_phase - 1 : per_phase - 1 + valid]).max(axis=0)
-        np.maximum(per_sample[:valid], peak, out=per_sample[:valid])
+    peak = _interpolated_peak(padded, taps, oversampling, valid)
+    np.maximum(per_sample[:valid], peak, out=per_sample[:valid])
     per_segment = np.maximum.reduceat(per_sample[:end], boundaries[:-1].astype(np.int64))
     return per_segment, float(per_sample.max())
+
+
+def _interpolated_peak(
+    padded: np.ndarray, taps: np.ndarray, factor: int, count: int, *, size: int = 1 << 15
+) -> np.ndarray:
+    """Largest absolute interpolated value around each of the first ``count`` samples, over
+    the rows and the ``factor`` phases: overlap-save FFT convolution with each phase of the
+    polyphase filter, one forward transform per block shared by all phases.
+
+    ``padded[:, w : w + per_phase]`` is the window centred on sample ``w``.
+    """
+    per_phase = -(-taps.shape[0] // factor)
+    flat = np.zeros(per_phase * factor)
+    flat[: taps.shape[0]] = taps
+    # Phase p, as a causal filter: h_p[k] = taps[p + k * factor].
+    spectra = scipy.fft.rfft(flat.reshape(per_phase, factor).T, size, axis=-1)
+    spectra = spectra.astype(np.complex64)
+    step = size - per_phase + 1
+    n = padded.shape[-1]
+    out = np.zeros(count, dtype=np.float32)
+    block = np.zeros((padded.shape[0], size), dtype=np.float32)
+    for first in range(0, count, step):
+        # Output k of the block's convolution is sample first + k - (per_phase - 1).
+        stop = min(first + size, n)
+        block[:] = 0.0
+        block[:, : stop - first] = padded[:, first:stop]
+        spectrum = scipy.fft.rfft(block, axis=-1)
+        m = min(step, count - first)
+        best = out[first : first + m]
+        for phase in range(factor):
+            y = scipy.fft.irfft(spectrum * spectra[phase], size, axis=-1)
+            np.maximum(best, np.abs(y[:, per_phase - 1 : per_phase - 1 + m]).max(axis=0), out=best)
+    return out
 
 
 def dr_meter(samples: np.ndarray, *, sample_rate: float) -> float | None:

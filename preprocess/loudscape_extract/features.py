@@ -32,6 +32,7 @@ from loudscape_extract.loudness import (
 from loudscape_extract.spectrogram import (
     LEVEL_FLOOR_DB,
     a_weighting_db,
+    frame_count,
     frame_signal,
     frame_times,
     level_db,
@@ -150,6 +151,16 @@ def _frame_rms_peak(mono: np.ndarray, *, n_fft: int, hop_length: int):
         rms[start : start + chunk.shape[0]] = np.sqrt(np.einsum("ij,ij->i", chunk, chunk) / n_fft)
         peak[start : start + chunk.shape[0]] = np.abs(chunk).max(axis=1)
     return rms, peak
+
+
+def _silent_frames(mono: np.ndarray, *, n_fft: int, hop_length: int) -> np.ndarray:
+    """Frames (centred, zero-padded, as the STFT's) whose every sample is exactly 0."""
+    nonzero = np.concatenate([[0], np.cumsum(mono != 0, dtype=np.int64)])
+    n_frames = frame_count(mono.shape[0], n_fft=n_fft, hop_length=hop_length)
+    start = np.arange(n_frames, dtype=np.int64) * hop_length - n_fft // 2
+    first = np.clip(start, 0, mono.shape[0])
+    last = np.clip(start + n_fft, 0, mono.shape[0])
+    return nonzero[last] == nonzero[first]
 
 
 def frame_features(
@@ -295,8 +306,10 @@ def track_features(
     del mask_harmonic, mask_percussive
     say("frame features")
     clean, dc = dc_and_highpass(samples, sample_rate=audio.sample_rate, highpass_hz=highpass_hz)
-    mono_clean = mix_to_mono(clean)
-    _, decoded_peak = _frame_rms_peak(mono, n_fft=n_fft, hop_length=hop_length)
+    if highpass_hz is None:  # the mean of DC-free channels is the mono mix minus its mean DC
+        mono_clean = mono - np.float32(dc.mean())
+    else:
+        mono_clean = mix_to_mono(clean)
     frames = frame_features(
         mono_clean,
         sample_rate=audio.sample_rate,
@@ -305,7 +318,7 @@ def track_features(
         magnitude=magnitude,
         hp=hp,
         a_gain_db=a_gain,
-        silent=decoded_peak == 0,
+        silent=_silent_frames(mono, n_fft=n_fft, hop_length=hop_length),
     )
     say("dynamics and loudness (short-term loudness, PSR, DR, integrated, range, true peak)")
     energy = segment_energy(clean, audio.sample_rate)

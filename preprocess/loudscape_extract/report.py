@@ -1,13 +1,17 @@
-"""``loudscape-extract report``: per-year loudness metrics of a timeline PLY, as PNG and CSV.
+"""``loudscape-extract report``: per-year loudness and dynamics of a timeline PLY, as PNG and CSV.
 
 Reads only the file's metadata (:func:`read_ply_metadata`): each song's ``year`` and
-``metrics``. Per year, over the songs of that year:
+``metrics``. One panel per quantity, each song a dot and the year's median a line (broken
+where years are missing, never drawn across them):
 
-- integrated loudness (LUFS): median, and each song as a dot;
-- crest factor (dB): median of the songs' median frame crest factor, with the band from the
-  5th to the 95th percentile of those per-song values;
-- loudness range (LU): median;
-- hp mean: median of the songs' frame-level hp means.
+- integrated loudness (LUFS), with the loudness targets of streaming services and broadcast;
+- PLR (true peak minus integrated loudness) and the TT DR value (dB);
+- PSR (median over the song of true peak minus short-term loudness, 3 s), with the 5th-95th
+  percentile band of the year's songs only where a year has at least five songs;
+- loudness range (LU); hp mean (0 percussive .. 1 tonal, on a 0-1 axis); songs per year.
+
+Songs far from their year's median are named. The CSV has one row per year; a second CSV
+beside it (``<name>-songs.csv``) has one row per song.
 """
 
 from __future__ import annotations
@@ -21,56 +25,148 @@ from loudscape_extract.errors import ExtractError
 from loudscape_extract.paths import check_output_path
 from loudscape_extract.ply import read_ply_metadata
 
-__all__ = ["REPORT_COLUMNS", "per_year", "write_report"]
+__all__ = [
+    "BAND_MIN_SONGS",
+    "REPORT_COLUMNS",
+    "SONG_COLUMNS",
+    "STREAMING_TARGETS_LUFS",
+    "per_song",
+    "per_year",
+    "songs_csv_path",
+    "write_report",
+]
 
+#: A year's percentile band is drawn (and its percentiles written) only from this many songs.
+BAND_MIN_SONGS = 5
+#: Reference lines on the loudness panel: playback normalization targets.
+STREAMING_TARGETS_LUFS = (
+    (-14.0, "-14 LUFS: Spotify, YouTube, Tidal"),
+    (-16.0, "-16 LUFS: Apple Music"),
+    (-23.0, "-23 LUFS: EBU R 128 broadcast"),
+)
+_MEDIANS = (
+    ("integrated_lufs", "integrated_lufs_median"),
+    ("plr_db", "plr_db_median"),
+    ("dr_db", "dr_db_median"),
+    ("psr_median_db", "psr_db_median"),
+    ("lra_lu", "lra_lu_median"),
+    ("hp_mean", "hp_mean_median"),
+)
 REPORT_COLUMNS = (
     "year",
     "songs",
     "integrated_lufs_median",
+    "plr_db_median",
+    "dr_db_median",
+    "psr_db_median",
+    "psr_p5_db",
+    "psr_p95_db",
     "crest_median_db",
     "crest_p5_db",
     "crest_p95_db",
     "lra_lu_median",
     "hp_mean_median",
 )
+SONG_COLUMNS = (
+    "year",
+    "artist",
+    "title",
+    "path",
+    "integrated_lufs",
+    "lra_lu",
+    "sample_peak_dbfs",
+    "true_peak_dbtp",
+    "plr_db",
+    "dr_db",
+    "psr_median_db",
+    "psr_p10_db",
+    "psr_p90_db",
+    "psr_spread_db",
+    "crest_3s_median_db",
+    "crest_median_db",
+    "crest_p95_db",
+    "dc_offset",
+    "hp_mean",
+)
 
 
 def _values(songs, key):
-    return np.array([s["metrics"].get(key) for s in songs if s["metrics"].get(key) is not None])
+    return np.array(
+        [s["metrics"].get(key) for s in songs if s["metrics"].get(key) is not None], dtype=float
+    )
 
 
 def _stat(values, function, *args):
     return float(function(values, *args)) if values.size else None
 
 
+def _band(values, q):
+    return float(np.percentile(values, q)) if values.size >= BAND_MIN_SONGS else None
+
+
 def per_year(metadata: dict) -> list[dict]:
-    """One row per year (ascending) with the columns of :data:`REPORT_COLUMNS`."""
-    songs = metadata.get("songs") or []
+    """One row per year that has songs (ascending), with the columns of :data:`REPORT_COLUMNS`.
+
+    Percentiles are None for years with fewer than :data:`BAND_MIN_SONGS` songs. Songs
+    without a year (a timeline laid out by order) are left out.
+    """
+    songs = [s for s in metadata.get("songs") or [] if s.get("year") is not None]
     rows = []
     for year in sorted({s["year"] for s in songs}):
         group = [s for s in songs if s["year"] == year]
-        crest = _values(group, "crest_median_db")
-        rows.append(
-            {
-                "year": year,
-                "songs": len(group),
-                "integrated_lufs_median": _stat(_values(group, "integrated_lufs"), np.median),
-                "crest_median_db": _stat(crest, np.median),
-                "crest_p5_db": _stat(crest, np.percentile, 5.0),
-                "crest_p95_db": _stat(crest, np.percentile, 95.0),
-                "lra_lu_median": _stat(_values(group, "lra_lu"), np.median),
-                "hp_mean_median": _stat(_values(group, "hp_mean"), np.median),
-            }
+        row = {"year": year, "songs": len(group)}
+        for key, column in _MEDIANS:
+            row[column] = _stat(_values(group, key), np.median)
+        psr, crest = _values(group, "psr_median_db"), _values(group, "crest_median_db")
+        row.update(
+            psr_p5_db=_band(psr, 5.0),
+            psr_p95_db=_band(psr, 95.0),
+            crest_median_db=_stat(crest, np.median),
+            crest_p5_db=_band(crest, 5.0),
+            crest_p95_db=_band(crest, 95.0),
         )
+        rows.append({column: row.get(column) for column in REPORT_COLUMNS})
     return rows
 
 
-def _column(rows, key):
-    return np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+def per_song(metadata: dict) -> list[dict]:
+    """One row per song, in the file's order, with the columns of :data:`SONG_COLUMNS`."""
+    rows = []
+    for song in metadata.get("songs") or []:
+        metrics = song.get("metrics") or {}
+        row = {k: song.get(k, "") for k in ("year", "artist", "title", "path")}
+        row.update({k: metrics.get(k) for k in SONG_COLUMNS[4:]})
+        rows.append(row)
+    return rows
+
+
+def songs_csv_path(csv_path: str) -> str:
+    """Where the per-song CSV goes: ``table.csv`` -> ``table-songs.csv``."""
+    stem, extension = os.path.splitext(csv_path)
+    return f"{stem}-songs{extension or '.csv'}"
+
+
+def _write_csv(path, columns, rows):
+    try:
+        with open(path, "w", newline="", encoding="utf-8") as handle:
+            writer = csv.DictWriter(handle, fieldnames=columns)
+            writer.writeheader()
+            for row in rows:
+                writer.writerow(
+                    {
+                        k: "" if v is None else (round(v, 4) if isinstance(v, float) else v)
+                        for k, v in row.items()
+                    }
+                )
+    except OSError as exc:
+        raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=path) from exc
 
 
 def write_report(path: str, output: str, *, csv_path: str | None = None) -> list[dict]:
     """Plot the per-year metrics of the timeline at ``path`` into ``output`` (PNG).
+
+    With ``csv_path``, also the per-year table there and the per-song table beside it
+    (:func:`songs_csv_path`).
 
     Raises
     ------
@@ -88,18 +184,89 @@ def write_report(path: str, output: str, *, csv_path: str | None = None) -> list
         )
     if not metadata.get("songs"):
         raise ExtractError("the timeline lists no songs", path=path)
-    check_output_path(output)
-    if csv_path:
-        check_output_path(csv_path)
+    outputs = [output] + ([csv_path, songs_csv_path(csv_path)] if csv_path else [])
+    for target in outputs:
+        check_output_path(target)
+        if os.path.abspath(target) == os.path.abspath(path):
+            raise ExtractError("would overwrite the input timeline", path=target)
     rows = per_year(metadata)
-    _plot(rows, metadata["songs"], output, title=os.path.basename(path))
+    dated = [s for s in metadata["songs"] if s.get("year") is not None]
+    if not dated:
+        raise ExtractError("no song of the timeline has a year: nothing to plot by year", path=path)
+    _plot(rows, dated, output, title=os.path.basename(path))
     if csv_path:
-        with open(csv_path, "w", newline="", encoding="utf-8") as handle:
-            writer = csv.DictWriter(handle, fieldnames=REPORT_COLUMNS)
-            writer.writeheader()
-            for row in rows:
-                writer.writerow({k: "" if v is None else round(v, 4) for k, v in row.items()})
+        _write_csv(csv_path, REPORT_COLUMNS, rows)
+        _write_csv(songs_csv_path(csv_path), SONG_COLUMNS, per_song(metadata))
     return rows
+
+
+def _by_year(rows, column):
+    """Years and values with NaN inserted at missing years, so lines break there."""
+    years, values = [], []
+    for i, row in enumerate(rows):
+        if i and row["year"] != rows[i - 1]["year"] + 1:
+            years.append(rows[i - 1]["year"] + 0.5)
+            values.append(np.nan)
+        years.append(row["year"])
+        values.append(np.nan if row[column] is None else row[column])
+    return np.array(years, dtype=float), np.array(values, dtype=float)
+
+
+def _name(song):
+    title = song.get("title") or os.path.splitext(os.path.basename(song.get("path") or "?"))[0]
+    return f"{song['artist']}: {title}" if song.get("artist") else title
+
+
+def _outliers(songs, rows, key, column, *, limit=6):
+    """Songs whose value is far from their year's median (over 2.5 median absolute
+    deviations of all songs' distances, and at least 1 unit), largest first."""
+    median = {r["year"]: r[column] for r in rows}
+    found = []
+    for song in songs:
+        value, centre = song["metrics"].get(key), median.get(song["year"])
+        if value is not None and centre is not None:
+            found.append((abs(value - centre), song, value))
+    if len(found) < 3:
+        return []
+    spread = float(np.median([d for d, _, _ in found]))
+    cut = max(2.5 * spread, 1.0)
+    far = sorted((f for f in found if f[0] > cut), key=lambda f: -f[0])
+    return [(song, value) for _, song, value in far[:limit]]
+
+
+def _song_panel(ax, songs, rows, key, column, *, color, label, band=None):
+    present = [s for s in songs if s["metrics"].get(key) is not None]
+    ax.scatter(
+        [s["year"] for s in present],
+        [s["metrics"][key] for s in present],
+        s=14,
+        color="0.55",
+        label="songs",
+        zorder=2,
+    )
+    if band and any(r[band[0]] is not None for r in rows):
+        low_years, low = _by_year(rows, band[0])
+        _, high = _by_year(rows, band[1])
+        ax.fill_between(
+            low_years,
+            low,
+            high,
+            color=color,
+            alpha=0.2,
+            label=f"5th-95th percentile (years with {BAND_MIN_SONGS}+ songs)",
+        )
+    years, values = _by_year(rows, column)
+    ax.plot(years, values, "o-", color=color, label="median of the year", zorder=3)
+    for song, value in _outliers(present, rows, key, column):
+        ax.annotate(
+            _name(song)[:28],
+            (song["year"], value),
+            xytext=(4, 4),
+            textcoords="offset points",
+            fontsize=7,
+            color="0.25",
+        )
+    ax.set_ylabel(label)
 
 
 def _plot(rows, songs, output, *, title):
@@ -108,41 +275,57 @@ def _plot(rows, songs, output, *, title):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    years = _column(rows, "year")
-    fig, axes = plt.subplots(4, 1, figsize=(9, 11), sharex=True, constrained_layout=True)
-    fig.suptitle(f"Loudness by year - {title} ({len(songs)} songs)", fontsize=13)
+    fig, axes = plt.subplots(7, 1, figsize=(10, 19), sharex=True, constrained_layout=True)
+    fig.suptitle(f"Loudness and dynamics by year - {title} ({len(songs)} songs)", fontsize=13)
 
     ax = axes[0]
-    measured = [s for s in songs if s["metrics"].get("integrated_lufs") is not None]
-    song_years = [s["year"] for s in measured]
-    song_lufs = [s["metrics"]["integrated_lufs"] for s in measured]
-    ax.scatter(song_years, song_lufs, s=14, color="0.6", label="songs", zorder=2)
-    ax.plot(years, _column(rows, "integrated_lufs_median"), "o-", color="C3", label="median")
-    ax.set_ylabel("integrated loudness\n(LUFS)")
-    ax.legend(loc="upper left", fontsize=9)
-
-    ax = axes[1]
-    ax.fill_between(
-        years,
-        _column(rows, "crest_p5_db"),
-        _column(rows, "crest_p95_db"),
-        color="C0",
-        alpha=0.25,
-        label="5th-95th percentile of songs",
+    _song_panel(
+        ax, songs, rows, "integrated_lufs", "integrated_lufs_median", color="C3",
+        label="integrated loudness\n(LUFS)",
+    )  # fmt: skip
+    for level, text in STREAMING_TARGETS_LUFS:
+        ax.axhline(level, color="0.35", linewidth=0.8, linestyle="--", zorder=1)
+        ax.annotate(
+            text,
+            (0.005, level),
+            xycoords=("axes fraction", "data"),
+            xytext=(0, 2),
+            textcoords="offset points",
+            fontsize=7,
+            color="0.3",
+        )
+    ax.legend(loc="lower right", fontsize=8)
+    _song_panel(
+        axes[1], songs, rows, "plr_db", "plr_db_median", color="C1",
+        label="PLR (dB)\ntrue peak - integrated",
+    )  # fmt: skip
+    _song_panel(
+        axes[2], songs, rows, "dr_db", "dr_db_median", color="C5",
+        label="DR (dB)\nTT Dynamic Range",
+    )  # fmt: skip
+    _song_panel(
+        axes[3], songs, rows, "psr_median_db", "psr_db_median", color="C0",
+        label="PSR (dB, song median)\ntrue peak - short-term, 3 s",
+        band=("psr_p5_db", "psr_p95_db"),
+    )  # fmt: skip
+    axes[3].legend(loc="upper right", fontsize=8)
+    _song_panel(
+        axes[4], songs, rows, "lra_lu", "lra_lu_median", color="C2", label="loudness range\n(LU)"
     )
-    ax.plot(years, _column(rows, "crest_median_db"), "o-", color="C0", label="median")
-    ax.set_ylabel("crest factor\n(dB, song median)")
-    ax.legend(loc="upper right", fontsize=9)
-
-    axes[2].plot(years, _column(rows, "lra_lu_median"), "o-", color="C2")
-    axes[2].set_ylabel("loudness range\n(LU)")
-    axes[3].plot(years, _column(rows, "hp_mean_median"), "o-", color="C4")
-    axes[3].set_ylabel("hp mean\n(0 percussive - 1 tonal)")
-    axes[3].set_xlabel("year")
+    _song_panel(
+        axes[5], songs, rows, "hp_mean", "hp_mean_median", color="C4",
+        label="hp mean\n(0 percussive - 1 tonal)",
+    )  # fmt: skip
+    axes[5].set_ylim(0.0, 1.0)
+    counts = axes[6]
+    counts.bar([r["year"] for r in rows], [r["songs"] for r in rows], color="0.5", width=0.8)
+    counts.set_ylabel("songs per year")
+    counts.axhline(BAND_MIN_SONGS, color="C0", linewidth=0.8, linestyle=":")
+    counts.set_xlabel("year")
     for ax in axes:
         ax.grid(True, alpha=0.3)
     try:
-        fig.savefig(output, dpi=110)
+        fig.savefig(output, dpi=100)
     except OSError as exc:
         raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=output) from exc
     finally:

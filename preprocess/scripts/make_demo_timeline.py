@@ -168,7 +168,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"  {song['year']} {song['artist']:<18} {m['integrated_lufs']:6.1f} LUFS  "
             f"crest {m['crest_median_db']:5.1f} dB  LRA {m['lra_lu']:4.1f} LU  "
-            f"PLR {m['plr_db']:5.1f} dB  hp {m['hp_mean']:.2f}",
+            f"PLR {m['plr_db']:5.1f} dB  DR {m['dr_db']:4.1f} dB  "
+            f"PSR {m['psr_median_db']:4.1f} dB  hp {m['hp_mean']:.2f}",
             file=sys.stderr,
         )
     if args.report:

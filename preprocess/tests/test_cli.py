@@ -347,3 +347,20 @@ def test_progress_only_on_a_tty_and_not_with_quiet(tmp_path, capsys, monkeypatch
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     status, err = run(["song", source, "-o", out, "--n-fft", 256, "--hop", 128, "-q"], capsys)
     assert status == 0 and err == ""
+
+
+def test_song_warns_about_a_dc_offset_and_keeps_quiet_bass_off_zero(tmp_path, capsys):
+    source = tmp_path / "dc.wav"
+    t = np.arange(RATE * 2) / RATE
+    # A quiet track: bass at 60 Hz far below -100 dB A-weighted, plus a DC offset.
+    y = 1e-4 * np.sin(2 * np.pi * 60 * t) + 0.002 * np.sin(2 * np.pi * 1000 * t) + 0.2
+    soundfile.write(source, y.astype(np.float32), RATE, subtype="FLOAT")
+    out = tmp_path / "dc.ply"
+    status, err = run(["song", source, "-o", out, "--n-fft", 256, "--hop", 128], capsys)
+    assert status == 0 and "DC offset 0.200" in err and err.count("\n") == 1
+    header, metadata, records = tiny_read(out)
+    assert metadata["metrics"]["dc_offset"] == pytest.approx(0.2, abs=1e-3)
+    frequency = (records[:, 2] + 1) / 2 * (RATE / 2)
+    bass = records[(frequency > 20) & (frequency < 100)]
+    assert bass.shape[0] > 0 and np.all(bass[:, 3] > 0)  # no cliff: none clipped to 0
+    assert metadata["axes"]["scalar"]["min"] < -100

@@ -8,7 +8,7 @@ import pytest
 
 from loudscape_extract.cli import main
 from loudscape_extract.ply import read_ply, read_ply_metadata, write_ply
-from loudscape_extract.report import per_year
+from loudscape_extract.report import _by_year, per_year, songs_csv_path
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 DEMO = os.path.join(REPO, "data", "demo_timeline.ply")
@@ -38,10 +38,27 @@ def test_per_year_statistics():
     first = rows[0]
     assert first["songs"] == 2 and first["integrated_lufs_median"] == -13.0
     assert first["crest_median_db"] == 8.0
-    assert first["crest_p5_db"] == pytest.approx(6.2) and first["crest_p95_db"] == pytest.approx(
-        9.8
-    )
+    # Two songs make no percentile band: none is drawn or written.
+    assert first["crest_p5_db"] is None and first["crest_p95_db"] is None
     assert first["lra_lu_median"] == 5.0
+
+
+def test_percentile_band_from_five_songs_a_year():
+    songs = [song(1980, -14.0, 5.0 + i) for i in range(5)]
+    for s, psr in zip(songs, (8.0, 9.0, 10.0, 11.0, 12.0), strict=True):
+        s["metrics"]["psr_median_db"] = psr
+    row = per_year({"songs": songs})[0]
+    assert row["psr_db_median"] == 10.0
+    assert row["psr_p5_db"] == pytest.approx(8.2) and row["psr_p95_db"] == pytest.approx(11.8)
+    assert row["crest_p5_db"] == pytest.approx(5.2)
+
+
+def test_lines_break_at_missing_years():
+    rows = per_year(
+        {"songs": [song(1980, -14.0, 8.0), song(1981, -13.0, 8.0), song(1990, -8.0, 4.0)]}
+    )
+    years, values = _by_year(rows, "integrated_lufs_median")
+    assert years.tolist()[:2] == [1980, 1981] and np.isnan(values[2]) and years[3] == 1990
 
 
 def test_report_png_and_csv(tmp_path, capsys):
@@ -54,6 +71,15 @@ def test_report_png_and_csv(tmp_path, capsys):
         rows = list(csv.DictReader(handle))
     assert [r["year"] for r in rows] == ["1975", "2005"]
     assert float(rows[1]["integrated_lufs_median"]) == -6.5
+    assert rows[1]["crest_p5_db"] == ""  # two songs: no percentiles
+    with open(songs_csv_path(str(table))) as handle:
+        per_song = list(csv.DictReader(handle))
+    assert [(r["year"], r["integrated_lufs"]) for r in per_song] == [
+        ("1975", "-16.0"),
+        ("2005", "-7.0"),
+        ("2005", "-6.0"),
+    ]
+    assert "dr_db" in per_song[0] and "psr_median_db" in per_song[0]
 
 
 def test_report_bad_inputs(tmp_path, capsys):
@@ -81,4 +107,9 @@ def test_demo_timeline_shows_the_loudness_war():
     lufs = [r["integrated_lufs_median"] for r in rows]
     crest = [r["crest_median_db"] for r in rows]
     assert lufs[-1] > lufs[0] + 6 and crest[-1] < crest[0] - 3
+    # The new dynamics metrics are in the shipped demo, and fall with the loudness war.
+    psr = [r["psr_db_median"] for r in rows]
+    dr = [r["dr_db_median"] for r in rows]
+    assert psr[-1] < psr[0] - 3 and dr[-1] < dr[0] - 3
+    assert meta["axes"]["z"]["measure"] == "psr"
     assert np.all(np.abs(points[:, :3]) <= 1)

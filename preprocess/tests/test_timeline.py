@@ -382,3 +382,61 @@ def test_progress_line_on_a_tty(tmp_path, capsys, monkeypatch):
     _, meta = read_ply(tmp_path / "t.ply")
     assert [s["x_min"] for s in meta["songs"]] == [-1.0, 0.0]
     assert meta["extraction"]["x_by"] == "order"
+
+
+# ----------------------------------------------------------------------------- dynamics options
+
+
+def test_order_mode_places_songs_without_a_year_last(tmp_path, capsys):
+    paths = tagged_folder(tmp_path / "m", [1990, 1980])
+    write_song(tmp_path / "m" / "untagged.wav", seed=7)
+    out = tmp_path / "t.ply"
+    status, err = cli_timeline([tmp_path / "m", "--x-by", "order"], out, capsys, tmp_path / "c")
+    assert status == 0, err
+    assert "no year" not in err
+    _, meta = read_ply(out)
+    assert [s["year"] for s in meta["songs"]] == [1980, 1990, None]
+    assert meta["songs"][2]["path"].endswith("untagged.wav")
+    assert [t["label"] for t in meta["axes"]["x"]["ticks"]] == ["1980", "1990"]
+    assert meta["extraction"]["skipped"] == []
+    # No year at all: the songs still make a timeline by order.
+    for path in paths:
+        path.unlink()
+    status, err = cli_timeline([tmp_path / "m", "--x-by", "order"], out, capsys, tmp_path / "c")
+    assert status == 0, err
+    _, meta = read_ply(out)
+    assert meta["axes"]["x"]["label"] == "song" and len(meta["songs"]) == 1
+
+
+@pytest.mark.parametrize(
+    ("measure", "label"),
+    [("crest-3s", "crest factor (3 s)"), ("crest-frame", "crest factor (frame)")],
+)
+def test_z_measure_option(tmp_path, capsys, measure, label):
+    tagged_folder(tmp_path / "m", [1990, 2000])
+    out = tmp_path / "t.ply"
+    status, err = cli_timeline(
+        [tmp_path / "m", "--z-measure", measure], out, capsys, tmp_path / "c"
+    )
+    assert status == 0, err
+    _, meta = read_ply(out)
+    assert meta["axes"]["z"]["label"] == label
+    assert meta["axes"]["z"]["measure"] == meta["extraction"]["z_measure"] == measure
+
+
+def test_dc_offset_is_warned_about_and_highpass_recorded(tmp_path, capsys):
+    folder = tmp_path / "m"
+    folder.mkdir()
+    y = musical_signal(sample_rate=RATE, duration_s=1.5, seed=1) * 0.3 + 0.3
+    soundfile.write(str(folder / "dc.flac"), y.astype(np.float32), RATE)
+    tag(folder / "dc.flac", year=1999, title="DC")
+    out = tmp_path / "t.ply"
+    status, err = cli_timeline([folder, "--highpass"], out, capsys, tmp_path / "c")
+    assert status == 0, err
+    assert "dc.flac: DC offset 0.3" in err and "warning" in err
+    _, meta = read_ply(out)
+    assert meta["songs"][0]["metrics"]["dc_offset"] == pytest.approx(0.3, abs=0.01)
+    assert meta["extraction"]["highpass_hz"] == 20.0 and meta["extraction"]["dc_removed"]
+    # A full-scale sine's A-weighted frame level is 0 dB in both modes: the scalar references
+    # agree (the timeline's used to read 3.01 dB lower).
+    assert meta["axes"]["scalar"]["label"] == "A-weighted level"

@@ -16,7 +16,7 @@ of one song), ``cache`` (keys, save/load), ``engine`` (cache-or-compute, worker 
 from loudscape_extract.timeline.assembly import TimelineResult, build_timeline
 from loudscape_extract.timeline.cache import CACHE_VERSION, cache_key, default_cache_dir
 from loudscape_extract.timeline.engine import compute_all, song_frames
-from loudscape_extract.timeline.frames import SongFrames, compute_song_frames
+from loudscape_extract.timeline.frames import SongFrames, compute_song_frames, frames_of
 from loudscape_extract.timeline.inputs import (
     SongEntry,
     collect_entries,
@@ -72,6 +72,7 @@ __all__ = [
     "compute_song_frames",
     "default_cache_dir",
     "discover_audio",
+    "frames_of",
     "parse_year",
     "percentile_map",
     "read_manifest",

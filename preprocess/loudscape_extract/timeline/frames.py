@@ -6,9 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from loudscape_extract.stream import stream_track
+from loudscape_extract.features import TrackFeatures
+from loudscape_extract.stream import StreamedTrack, stream_track
 
-__all__ = ["SongFrames", "compute_song_frames"]
+__all__ = ["SongFrames", "compute_song_frames", "frames_of"]
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,11 @@ def compute_song_frames(
     """Run the Song pipeline's per-frame features (streamed in bounded memory,
     :func:`stream_track`), keep frames and metrics."""
     features = stream_track(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
+    return frames_of(features)
+
+
+def frames_of(features: TrackFeatures | StreamedTrack) -> SongFrames:
+    """What the timeline keeps of a track's features (also for audio that is not a file)."""
     frames = features.frames
     keep = ~frames.silent
     hp = frames.hp_mean[keep]
