@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -178,6 +179,12 @@ def _dask_results(paths: Sequence[str], arguments: tuple, *, scheduler: str, job
             f"(needed by --dask and --scheduler; {exc})"
         ) from exc
     cluster = None
+    # The in-process scheduler and nannies of a local cluster log a dead worker in several
+    # lines of their own; the song's failure is reported once, in our words, instead.
+    quiet = logging.getLogger("distributed")
+    level = quiet.level
+    if scheduler == "local":
+        quiet.setLevel(logging.CRITICAL)
     settings = {
         "distributed.scheduler.allowed-failures": 0,
         "distributed.scheduler.worker-saturation": 1.0,
@@ -217,3 +224,4 @@ def _dask_results(paths: Sequence[str], arguments: tuple, *, scheduler: str, job
     finally:
         if cluster is not None:
             cluster.close()
+        quiet.setLevel(level)
