@@ -24,7 +24,7 @@ import numpy as np
 
 
 def grid_box(xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The grid box of src/render/voxelize.rs ``grid_box``: bounding box grown by 1 %."""
+    """The grid box of src/render/grid/voxelize.rs ``grid_box``: bounding box grown by 1 %."""
     if len(xyz) == 0:
         return np.full(3, -1.0, np.float32), np.full(3, 1.0, np.float32)
     lo, hi = xyz.min(axis=0), xyz.max(axis=0)

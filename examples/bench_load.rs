@@ -1,5 +1,5 @@
 //! Load benchmark: writes a 20-million-point loudscape file to the system temp folder, loads it
-//! three times with `loudscape::cloud::load`, and prints the median wall time and the peak
+//! three times with `loudscape::data::cloud::load`, and prints the median wall time and the peak
 //! resident memory (VmHWM from /proc/self/status, Linux only) against the file size.
 //!
 //! Run with `cargo run --release --example bench_load [POINTS]`.
@@ -7,7 +7,7 @@
 use std::io::{BufWriter, Write};
 use std::time::Instant;
 
-use loudscape::cloud::{self, Point};
+use loudscape::data::cloud::{self, Point};
 
 fn peak_rss_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;

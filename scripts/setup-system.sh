@@ -22,6 +22,7 @@ declare -A need=(
   [libasound2-dev]=/usr/include/alsa/asoundlib.h
   [pkg-config]=/usr/bin/pkg-config
   [libsndfile1]=/usr/lib/x86_64-linux-gnu/libsndfile.so.1
+  [libusb-1.0-0]=/usr/lib/x86_64-linux-gnu/libusb-1.0.so.0
   [python3-venv]=/usr/lib/python3/dist-packages/venv
 )
 

@@ -1,4 +1,5 @@
-// Lines: the box around the data, its tick marks and the playhead, in data space.
+// Lines: the box around the data and its tick marks, in data space (the playhead and other
+// markers are markers.wgsl).
 
 struct LineVertex {
     @location(0) position: vec3<f32>,

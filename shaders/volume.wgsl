@@ -1,6 +1,6 @@
 // Volume view: a full-screen triangle whose fragments march their pixel's ray through the voxel
 // grid, front to back, mapping density through a transfer function (paper 3.3).
-// Reads the grid's density and hp_mean buffers (layout of src/render/grid.rs) with manual
+// Reads the grid's density and hp_mean buffers (layout of src/render/grid/mod.rs) with manual
 // trilinear filtering. Writes premultiplied colour (blended over the cleared background) and the
 // depth where the ray's opacity first passes one half, so box lines behind dense volume hide.
 // Keep VolumeParams in sync with src/render/volume.rs and `transfer` with src/render/transfer.rs.

@@ -1,16 +1,22 @@
 //! loudscape: see how music is loud.
 //!
-//! The library half of the app: loading point clouds ([`cloud`]), axis labelling ([`axes`]),
-//! the camera ([`camera`]) and the GPU passes ([`render`]), which know nothing of the window.
-//! The binary (`src/main.rs`) adds the command line and the egui window ([`ui`]).
+//! The library half of the app, one floor of the data flow a module; each imports only from the
+//! floors below it (the full map, file by file, is in docs/ARCHITECTURE.md):
+//!
+//! - [`data`]: point clouds from PLY files (`data::cloud`: header, metadata, the fast path for
+//!   loudscape files, generic PLY, the writer), axes in physical units, fields on a box, and
+//!   data made in code for tests and benchmarks.
+//! - [`view`]: the orbit camera and what lies under a pixel (no GPU).
+//! - [`playback`]: the source audio, its output and clock (no GPU, no window).
+//! - [`render`]: the GPU passes, which know nothing of the window: `gpu/` plumbing, `grid/`
+//!   (voxelize), `surface/` (marching tetrahedra, dual contouring, draw), points, lines,
+//!   markers, volume, composite; `scene` owns them (once per device) and each cloud's data.
+//! - [`ui`]: everything egui: the window, its panels, hover, persistence, labels, screenshots.
+//!
+//! The binary (`src/main.rs`) adds the command line (`src/commands/`).
 
-pub mod axes;
-pub mod camera;
-pub mod cloud;
-pub mod overlay;
-pub mod pick;
+pub mod data;
 pub mod playback;
 pub mod render;
-pub mod screenshot;
-mod synthetic;
 pub mod ui;
+pub mod view;

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use thiserror::Error;
 
-use crate::cloud::PointCloud;
+use crate::data::cloud::PointCloud;
 
 /// Why the song cannot be played.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -501,12 +501,12 @@ impl Playhead {
 
 /// Where time `seconds` lies on the cloud's x axis, normalized to [-1, 1] (clamped), for Song
 /// clouds whose x axis is time.
-pub fn time_to_x(axis: &crate::axes::Axis, seconds: f64) -> f32 {
+pub fn time_to_x(axis: &crate::data::axes::Axis, seconds: f64) -> f32 {
     axis.normalized_of(seconds).clamp(-1.0, 1.0) as f32
 }
 
 /// The time at a normalized x position.
-pub fn x_to_time(axis: &crate::axes::Axis, x: f32) -> f64 {
+pub fn x_to_time(axis: &crate::data::axes::Axis, x: f32) -> f64 {
     axis.value_at(f64::from(x.clamp(-1.0, 1.0)))
 }
 

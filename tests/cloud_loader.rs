@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use loudscape::cloud::{self, CloudError, DataMode, Point, PointCloud};
+use loudscape::data::cloud::{self, CloudError, DataMode, Point, PointCloud};
 use serde_json::{Value, json};
 
 // ---------------------------------------------------------------------------------------------
@@ -1021,14 +1021,14 @@ fn fixture_song_matches_expected() {
     );
     check_against_expected(&ply, &expected);
     // The metadata the extractor wrote is the metadata the reader parsed.
-    let cloud = loudscape::cloud::load(&ply).expect("fixture loads");
+    let cloud = loudscape::data::cloud::load(&ply).expect("fixture loads");
     let text = std::fs::read_to_string(&expected).expect("expected values");
     let want: Value = serde_json::from_str(&text).expect("expected JSON");
     assert_eq!(
         cloud.meta.raw, want["metadata"],
         "metadata differs from the expected values"
     );
-    assert_eq!(cloud.meta.mode, loudscape::cloud::DataMode::Song);
+    assert_eq!(cloud.meta.mode, loudscape::data::cloud::DataMode::Song);
     let metrics = cloud.meta.metrics.as_ref().expect("song metrics");
     assert_eq!(
         metrics.integrated_lufs,

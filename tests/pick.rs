@@ -3,11 +3,12 @@
 
 use glam::{UVec3, Vec2, Vec3};
 
-use loudscape::camera::Camera;
-use loudscape::cloud::{DataMode, Point, PointCloud, SongInfo};
-use loudscape::pick::{CpuGrid, cursor_ray, pick_point, point_readings, song_at};
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::{DataMode, Point, PointCloud, SongInfo};
+use loudscape::data::field::Field;
 use loudscape::render::scene::world_from_data;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
+use loudscape::view::pick::{cursor_ray, pick_point, point_readings, song_at};
 
 /// A 31 x 21 grid of bins over time and frequency, level rising with time.
 fn grid_cloud() -> PointCloud {
@@ -27,14 +28,7 @@ fn grid_cloud() -> PointCloud {
 }
 
 fn view_from(camera: Camera) -> FrameView {
-    FrameView {
-        camera,
-        world_from_data: world_from_data(DataMode::Song),
-        width: 640,
-        height: 400,
-        frame_index: 0,
-        moving: false,
-    }
+    FrameView::at_rest(camera, world_from_data(DataMode::Song), 640, 400)
 }
 
 #[test]
@@ -106,7 +100,7 @@ fn the_ray_stops_at_the_first_dense_voxel() {
         density[idx] = d;
         hp[idx] = h;
     }
-    let grid = CpuGrid {
+    let grid = Field {
         dims,
         box_min: Vec3::splat(-1.0),
         box_max: Vec3::splat(1.0),

@@ -6,7 +6,7 @@ use std::cell::Cell;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use loudscape::axes::Axis;
+use loudscape::data::axes::Axis;
 use loudscape::playback::{
     AudioBackend, AudioClock, AudioOutput, PlaybackError, Player, Playhead, Track, TrackSource,
     Transport, time_to_x, x_to_time,
@@ -162,7 +162,7 @@ fn seeking_in_seconds_lands_on_the_right_frame() {
 
 #[test]
 fn time_maps_onto_the_x_axis_of_the_metadata() {
-    let cloud = loudscape::cloud::load(
+    let cloud = loudscape::data::cloud::load(
         &std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply"),
     )
     .expect("demo cloud");
@@ -191,7 +191,7 @@ fn the_demo_song_resolves_and_unplayable_formats_say_why() {
     let text = err.to_string();
     assert!(text.contains(".opus") && text.contains("wav"), "{text}");
     // A moved song: the message says it cannot be found and where it looked.
-    let mut cloud = loudscape::cloud::load(&repo.join("data/demo_song.ply")).expect("demo");
+    let mut cloud = loudscape::data::cloud::load(&repo.join("data/demo_song.ply")).expect("demo");
     if let Some(source) = cloud.meta.source.as_mut() {
         source.path = Some("gone/away.wav".into());
     }

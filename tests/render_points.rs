@@ -4,12 +4,12 @@ mod common;
 
 use std::path::PathBuf;
 
-use loudscape::camera::Camera;
-use loudscape::cloud::{self, DataMode, Point, PointCloud};
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::{self, DataMode, Point, PointCloud};
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointStyle, lod_stride};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 fn demo_song() -> PointCloud {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply");
@@ -17,17 +17,13 @@ fn demo_song() -> PointCloud {
 }
 
 fn view_of(data: &SceneData, width: u32, height: u32) -> FrameView {
-    let mut camera = Camera::default();
-    let (min, max) = data.world_box();
-    camera.fit(min, max, width as f32 / height as f32);
-    FrameView {
-        camera,
-        world_from_data: data.world_from_data,
+    FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
         width,
         height,
-        frame_index: 0,
-        moving: false,
-    }
+    )
 }
 
 #[test]
@@ -147,14 +143,7 @@ fn moving_camera_draws_a_subset() {
 fn empty_scene_renders_background() {
     let gpu = common::gpu();
     let renderer = Renderer::new(&gpu.device);
-    let view = FrameView {
-        camera: Camera::default(),
-        world_from_data: glam::Mat4::IDENTITY,
-        width: 64,
-        height: 64,
-        frame_index: 0,
-        moving: false,
-    };
+    let view = FrameView::at_rest(Camera::default(), glam::Mat4::IDENTITY, 64, 64);
     let image =
         render_image(&gpu, &renderer, None, &view, &RenderSettings::default()).expect("render");
     assert_eq!(common::coverage(&image), 0.0);

@@ -4,14 +4,14 @@ mod common;
 
 use std::path::PathBuf;
 
-use loudscape::camera::Camera;
-use loudscape::cloud;
-use loudscape::overlay;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud;
 use loudscape::render::headless::render_frame;
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
-use loudscape::screenshot;
+use loudscape::ui::labels;
+use loudscape::ui::screenshot;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 #[test]
 fn saved_screenshot_matches_the_headless_render() {
@@ -21,17 +21,13 @@ fn saved_screenshot_matches_the_headless_render() {
     let cloud = cloud::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let data = SceneData::new(&gpu.device, &renderer, &cloud);
     let (w, h) = (320, 200);
-    let mut camera = Camera::default();
-    let (min, max) = data.world_box();
-    camera.fit(min, max, w as f32 / h as f32);
-    let view = FrameView {
-        camera,
-        world_from_data: data.world_from_data,
-        width: w,
-        height: h,
-        frame_index: 0,
-        moving: false,
-    };
+    let view = FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
+        w,
+        h,
+    );
     let settings = RenderSettings {
         markers: vec![MarkerBox::playhead(0.2)],
         ..Default::default()
@@ -45,7 +41,7 @@ fn saved_screenshot_matches_the_headless_render() {
     assert_eq!(saved.dimensions(), (w, h));
 
     let target = render_frame(&gpu, &renderer, Some(&data), &view, &settings);
-    overlay::draw_headless(&gpu, &target, &view, &cloud, &data);
+    labels::draw_headless(&gpu, &target, &view, &cloud, &data);
     let reference = target.read_rgba(&gpu.device, &gpu.queue).expect("read");
     let (share, mean) = common::difference(&saved, &reference, 8);
     assert!(

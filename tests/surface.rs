@@ -7,15 +7,18 @@ mod common;
 use std::collections::HashMap;
 
 use glam::{UVec3, Vec3};
-use loudscape::camera::Camera;
-use loudscape::cloud::{DataMode, PointCloud};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::{FrameBinding, FrameView};
+use loudscape::data::cloud::{DataMode, PointCloud};
+use loudscape::data::synthetic::song_like_field;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
-use loudscape::render::mesh::{
-    CpuMesh, SurfaceMethod, SurfacePass, SurfaceSettings, song_like_field,
-};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::surface::cpu_mesh::CpuMesh;
+use loudscape::render::surface::pass::SurfacePass;
+use loudscape::render::surface::state::ExtractedSurface;
+use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 const MT: SurfaceMethod = SurfaceMethod::MarchingTetrahedra;
 const DC: SurfaceMethod = SurfaceMethod::DualContouring;
@@ -73,11 +76,12 @@ fn extract(
         iso_value,
         lit: true,
     };
+    let surface = ExtractedSurface::new();
     let counts = pass
-        .extract_blocking(&gpu.queue, grid, &settings)
+        .extract_blocking(&gpu.queue, &surface, grid, &settings)
         .expect("extraction");
     assert!(counts.fits(), "{counts:?}");
-    pass.read_mesh(&gpu.queue).expect("read back")
+    pass.read_mesh(&gpu.queue, &surface).expect("read back")
 }
 
 fn surface_pass(gpu: &GpuContext) -> SurfacePass {
@@ -303,24 +307,25 @@ fn buffers_grow_until_the_surface_fits() {
             iso_value: 0.5,
             lit: true,
         };
+        let surface = ExtractedSurface::new();
         let mut frames = 0;
         loop {
             let mut encoder = gpu
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            small.prepare(&gpu.queue, &mut encoder, Some(&grid), &settings);
+            small.prepare(&gpu.queue, &mut encoder, &surface, Some(&grid), &settings);
             gpu.queue.submit([encoder.finish()]);
             frames += 1;
-            if !small.needs_another_frame() {
+            if !surface.needs_another_frame() {
                 break;
             }
             assert!(frames < 50, "{}: the surface never settled", method.name());
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
-        let counts = small.counts().expect("counts");
+        let counts = surface.counts().expect("counts");
         assert!(counts.fits(), "{counts:?}");
         assert_eq!(counts.triangles() as usize, triangles);
-        let mesh = small.read_mesh(&gpu.queue).expect("read");
+        let mesh = small.read_mesh(&gpu.queue, &surface).expect("read");
         assert_eq!(mesh.triangle_count(), triangles);
     }
 }
@@ -331,7 +336,7 @@ fn surface_shaders_translate_to_metal() {
     for (name, source) in [
         ("marching_tets", shaders::marching_tets()),
         ("dual_contour", shaders::dual_contour()),
-        ("mesh", shaders::mesh()),
+        ("surface_draw", shaders::surface_draw()),
     ] {
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
@@ -376,16 +381,14 @@ fn render_song_surface(method: SurfaceMethod) -> image::RgbaImage {
     let grid = data.grid.as_ref().expect("grid");
     renderer
         .surface
-        .extract_blocking(&gpu.queue, grid, &settings.surface)
+        .extract_blocking(&gpu.queue, &data.surface, grid, &settings.surface)
         .expect("extract");
-    let view = FrameView {
-        camera: Camera::from_angles(-35.0, 30.0, 5.2),
-        world_from_data: data.world_from_data,
-        width: 480,
-        height: 320,
-        frame_index: 0,
-        moving: false,
-    };
+    let view = FrameView::at_rest(
+        Camera::from_angles(-35.0, 30.0, 5.2),
+        data.world_from_data,
+        480,
+        320,
+    );
     loudscape::render::headless::render_image(&gpu, &renderer, Some(&data), &view, &settings)
         .expect("render")
 }

@@ -3,14 +3,14 @@
 
 mod common;
 
-use loudscape::camera::Camera;
-use loudscape::cloud::{DataMode, Point, PointCloud};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::{DataMode, Point, PointCloud};
+use loudscape::data::synthetic::synthetic_song;
+use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::headless::render_image;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::TransferPreset;
-use loudscape::render::voxelize::synthetic_song;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 const SIZE: (u32, u32) = (320, 200);
 
@@ -39,16 +39,15 @@ fn song_scene() -> Scene {
 }
 
 fn view(data: &SceneData, moving: bool) -> FrameView {
-    let mut camera = Camera::from_angles(-30.0, 28.0, 4.0);
-    let (min, max) = data.world_box();
-    camera.fit(min, max, SIZE.0 as f32 / SIZE.1 as f32);
     FrameView {
-        camera,
-        world_from_data: data.world_from_data,
-        width: SIZE.0,
-        height: SIZE.1,
-        frame_index: 0,
         moving,
+        ..FrameView::fitted(
+            Camera::from_angles(-30.0, 28.0, 4.0),
+            data.world_from_data,
+            data.world_box(),
+            SIZE.0,
+            SIZE.1,
+        )
     }
 }
 

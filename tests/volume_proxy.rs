@@ -5,11 +5,11 @@ mod common;
 
 use std::path::PathBuf;
 
-use loudscape::camera::Camera;
-use loudscape::cloud;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud;
 use loudscape::render::headless::render_image;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 #[test]
 fn points_stand_in_for_the_volume_only_while_moving_and_when_asked() {

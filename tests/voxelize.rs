@@ -2,12 +2,13 @@
 
 mod common;
 
-use loudscape::cloud::Point;
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameBinding;
-use loudscape::render::voxelize::{
-    FIXED_POINT_SCALE, HISTOGRAM_BINS_PER_OCTAVE, HP_FIXED_POINT_SCALE, ReferenceGrid, VoxelStats,
-    VoxelizeError, VoxelizePass, grid_box, reference_sum,
+use loudscape::data::cloud::Point;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameBinding;
+use loudscape::render::grid::reference::ReferenceGrid;
+use loudscape::render::grid::voxelize::{
+    FIXED_POINT_SCALE, HISTOGRAM_BINS_PER_OCTAVE, HP_FIXED_POINT_SCALE, VoxelStats, VoxelizeError,
+    VoxelizePass, grid_box, reference_sum,
 };
 
 struct Built {

@@ -13,8 +13,11 @@ import sys
 import time
 from collections.abc import Sequence
 
+from loudscape_extract import export
 from loudscape_extract.dynamics import HIGHPASS_HZ, dc_warning
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.interrupts import Terminated, sigterm_raises
+from loudscape_extract.messages import one_line
 from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
 from loudscape_extract.progress import Progress
 from loudscape_extract.report import write_report
@@ -127,7 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--manifest",
         help="CSV with columns path, year[, title, artist]; paths relative to its folder",
     )
-    timeline.add_argument("-o", "--output", default="timeline.ply", help="PLY file to write")
+    timeline.add_argument("-o", "--output", default="timeline.ply", help="PLY file to write (.ply)")
     timeline.add_argument(
         "--x-by",
         choices=("year", "order"),
@@ -199,13 +202,60 @@ def build_parser() -> argparse.ArgumentParser:
         "percentile band over songs), loudness range and hp mean, from a timeline PLY.",
     )
     report.add_argument("input", help="timeline PLY written by the timeline command")
-    report.add_argument("-o", "--output", default="report.png", help="PNG file to write")
-    report.add_argument("--csv", help="also write the per-year table as CSV")
+    report.add_argument("-o", "--output", default="report.png", help="PNG file to write (.png)")
+    report.add_argument("--csv", help="also write the per-year table as CSV (.csv)")
 
-    for sub in (song, timeline, report):
-        sub.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    for sub in (song, timeline):
+        sub.add_argument(
+            "--strict",
+            action="store_true",
+            help="refuse truncated or corrupt audio instead of using what decodes (with a warning)",
+        )
+    for sub in (song, timeline, report, export.add_parser(commands)):
+        sub.add_argument(
+            "-q",
+            "--quiet",
+            action="store_true",
+            help="no progress or 'wrote' summaries on stderr (warnings and errors still show)",
+        )
         sub.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     return parser
+
+
+def _say(text: str) -> None:
+    """One line on stderr, prefixed with the program's name, whitespace collapsed, capped."""
+    print(one_line(f"{PROG}: {text}"), file=sys.stderr, flush=True)
+
+
+def _list(items, limit: int = 5) -> str:
+    shown = ", ".join(str(item) for item in items[:limit])
+    return shown + (f" and {len(items) - limit} more" if len(items) > limit else "")
+
+
+def run_song(args: argparse.Namespace, progress: Progress) -> int:
+    """The song subcommand: extract, then a ``wrote ...`` summary."""
+    output = args.output or os.path.splitext(args.input)[0] + ".ply"
+    start = time.perf_counter()
+    metadata = extract_song(
+        args.input,
+        output,
+        n_fft=args.n_fft,
+        hop_length=args.hop,
+        floor_db=args.floor_db,
+        freq_scale=args.freq_scale,
+        strict=args.strict,
+        highpass_hz=HIGHPASS_HZ if args.highpass else None,
+        progress=progress,
+        warn=lambda text: _say(f"warning: {text}"),
+    )
+    if not args.quiet:
+        _say(
+            f"wrote {output} ({metadata['point_count']} points, "
+            f"{metadata['stft']['frames_kept']} of {metadata['stft']['frames']} frames, "
+            f"{metadata['source']['duration_s']:.1f} s of audio, "
+            f"{time.perf_counter() - start:.1f} s)"
+        )
+    return 0
 
 
 def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
@@ -231,6 +281,7 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
             hop_length=args.hop,
             cache_dir=cache_dir,
             jobs=args.jobs,
+            strict=args.strict,
             z_measure=args.z_measure,
             highpass_hz=HIGHPASS_HZ if args.highpass else None,
             progress=progress,
@@ -241,93 +292,99 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
         if tty and width[0]:
             print("\r" + " " * width[0] + "\r", end="", file=sys.stderr, flush=True)
     elapsed = time.perf_counter() - start
+    for note in result.notes:
+        _say(f"warning: {note}")
     for path in result.without_year:
-        print(f"{PROG}: skipped: {path}: no year in its tags", file=sys.stderr)
+        _say(f"skipped: {path}: no year in its tags")
     for path, reason in sorted(result.failed.items()):
-        print(f"{PROG}: skipped: {path}: {reason}", file=sys.stderr)
+        _say(f"skipped: {path}: {reason}")
     for path, offset in result.dc_offsets:
-        print(f"{PROG}: {dc_warning(path, offset)}", file=sys.stderr)
+        _say(f"warning: {dc_warning(path, offset)}")
     if not args.quiet:
         songs = result.metadata["songs"]
-        print(
-            f"{PROG}: wrote {args.output}: {len(songs)} song(s), "
-            f"{result.metadata['point_count']} points in {elapsed:.1f} s "
-            f"({result.cached} from cache)",
-            file=sys.stderr,
+        _say(
+            f"wrote {args.output} ({result.metadata['point_count']} points, "
+            f"{len(songs)} song(s), {result.cached} from cache, {elapsed:.1f} s)"
         )
         if result.few_frames:
-            print(
-                f"{PROG}: {len(result.few_frames)} song(s) have fewer than "
-                f"{result.frames_per_song} non-silent frames and use all they have: "
-                + ", ".join(result.few_frames[:5])
-                + (" ..." if len(result.few_frames) > 5 else ""),
-                file=sys.stderr,
+            _say(
+                f"{len(result.few_frames)} song(s) have fewer than {result.frames_per_song} "
+                f"non-silent frames and use all they have: {_list(result.few_frames)}"
             )
         if result.frames_per_song < args.frames_per_song:
-            print(
-                f"{PROG}: {result.frames_per_song} frames per song (of "
-                f"{args.frames_per_song}) keep {len(songs)} songs under --max-points "
-                f"{args.max_points:,}",
-                file=sys.stderr,
+            _say(
+                f"{result.frames_per_song} frames per song (of {args.frames_per_song}) keep "
+                f"{len(songs)} songs under --max-points {args.max_points:,}"
             )
         if result.without_year:
-            print(
-                f"{PROG}: left out {len(result.without_year)} song(s) without a year",
-                file=sys.stderr,
-            )
+            _say(f"left out {len(result.without_year)} song(s) without a year")
     if result.failed:
-        print(
-            f"{PROG}: {len(result.failed)} song(s) failed and were skipped: "
-            + ", ".join(sorted(result.failed)),
-            file=sys.stderr,
+        _say(
+            f"{len(result.failed)} song(s) failed and were skipped: " + _list(sorted(result.failed))
         )
         return 1
     return 0
 
 
+def run_export(args: argparse.Namespace) -> int:
+    """The export subcommand: one VTK XML PolyData file, then the ``wrote ...`` summary."""
+    output = args.output or os.path.splitext(args.input)[0] + ".vtp"
+    n_points = export.export_vtp(args.input, output)
+    if not args.quiet:
+        _say(f"wrote {output} ({n_points} points, VTK XML PolyData)")
+    return 0
+
+
+def run_report(args: argparse.Namespace) -> int:
+    """The report subcommand: PNG (and CSV), then ``wrote ...`` summaries."""
+    rows = write_report(args.input, args.output, csv_path=args.csv)
+    if not args.quiet:
+        songs = sum(row["songs"] for row in rows)
+        _say(f"wrote {args.output} ({songs} song(s), {len(rows)} year(s))")
+        if args.csv:
+            _say(f"wrote {args.csv} ({len(rows)} row(s), one per year)")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``loudscape-extract``; returns the exit status."""
+    """Entry point of ``loudscape-extract``; returns the exit status.
+
+    Every message is one line on stderr. SIGTERM is turned into an exception so temporaries
+    are removed and worker processes stopped; exit status 130 after Ctrl+C, 143 after SIGTERM.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "song" and args.hop > args.n_fft:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
     try:
-        if args.command == "song":
-            output = args.output or os.path.splitext(args.input)[0] + ".ply"
-            extract_song(
-                args.input,
-                output,
-                n_fft=args.n_fft,
-                hop_length=args.hop,
-                floor_db=args.floor_db,
-                freq_scale=args.freq_scale,
-                highpass_hz=HIGHPASS_HZ if args.highpass else None,
-                progress=progress,
-                warn=lambda message: print(f"{PROG}: {message}", file=sys.stderr),
-            )
-        elif args.command == "timeline":
-            return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
-        elif args.command == "report":
-            write_report(args.input, args.output, csv_path=args.csv)
+        with sigterm_raises():
+            if args.command == "song":
+                return run_song(args, progress)
+            if args.command == "timeline":
+                return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
+            if args.command == "export":
+                return run_export(args)
+            return run_report(args)
     except ExtractError as exc:
         if args.debug:
             raise
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        _say(f"error: {exc}")
         return 1
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         if args.debug:
             raise
-        print(f"{PROG}: interrupted; no file written", file=sys.stderr)
-        return 130
+        what = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        kept = "; songs finished so far stay in the cache" if args.command == "timeline" else ""
+        _say(f"{what}; no file written{kept}")
+        return 143 if isinstance(exc, Terminated) else 130
     except Exception as exc:  # noqa: BLE001 - one line, no traceback, unless --debug
         if args.debug:
             raise
         reason = " ".join(str(exc).split()) or type(exc).__name__
         where = getattr(args, "input", None) or getattr(args, "output", "")
-        print(f"{PROG}: error: {where}: internal error: {reason}", file=sys.stderr)
+        _say(f"error: {where}: internal error: {reason}")
         return 1
-    return 0
 
 
 if __name__ == "__main__":

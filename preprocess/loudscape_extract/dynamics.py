@@ -64,7 +64,7 @@ _DR_LOUDEST = 0.2
 def dc_warning(path: str, offset: float) -> str:
     """The one-line warning for a large DC offset."""
     return (
-        f"warning: {path}: DC offset {offset:.3f} of full scale "
+        f"{path}: DC offset {offset:.3f} of full scale "
         f"({20.0 * math.log10(offset):.1f} dBFS) removed before level, crest, PSR and DR"
     )
 

@@ -9,6 +9,10 @@ silence (dropped frames), then a decaying 500 Hz tone with a second harmonic and
 Extraction: n_fft 64, hop 64, floor 40 dB, linear frequency. ``source.path`` is recorded as
 ``data/fixture_song.wav`` (the path given on the command line, relative to the repo root);
 the wav itself is not kept.
+
+The file is written in format version 1 (``--format-version 2`` for the newer layout) as long as
+the app's tests read it with a version-1 reader; ``loudscape_extract.format_fixtures`` writes
+the fixtures of both versions in tests/fixtures/format/.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import tempfile
 import numpy as np
 import soundfile
 
-from loudscape_extract.ply import read_ply
+from loudscape_extract.ply import read_ply, write_ply
 from loudscape_extract.song import extract_song
 
 FIXTURE_STEM = "fixture_song"
@@ -31,6 +35,7 @@ SAMPLE_RATE = 8000
 N_FFT = 64
 HOP = 64
 FLOOR_DB = 40.0
+FORMAT_VERSION = 1
 
 
 def fixture_signal() -> np.ndarray:
@@ -73,7 +78,7 @@ def expected_values(points: np.ndarray, metadata: dict) -> dict:
     }
 
 
-def write_fixture(out_dir: str) -> tuple[str, str]:
+def write_fixture(out_dir: str, *, format_version: int = FORMAT_VERSION) -> tuple[str, str]:
     """Write ``fixture_song.ply`` and ``fixture_song.expected.json`` into ``out_dir``.
 
     Returns
@@ -91,6 +96,8 @@ def write_fixture(out_dir: str) -> tuple[str, str]:
         with _working_directory(scratch):
             extract_song(relative, ply_path, n_fft=N_FFT, hop_length=HOP, floor_db=FLOOR_DB)
     points, metadata = read_ply(ply_path)
+    write_ply(ply_path, points=points, metadata=metadata, format_version=format_version)
+    points, metadata = read_ply(ply_path)
     with open(json_path, "w", encoding="ascii") as handle:
         json.dump(expected_values(points, metadata), handle, indent=1)
         handle.write("\n")
@@ -100,8 +107,11 @@ def write_fixture(out_dir: str) -> tuple[str, str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out-dir", default="data", help="where to write (default: data)")
+    parser.add_argument(
+        "--format-version", type=int, choices=(1, 2), default=FORMAT_VERSION, help="(1)"
+    )
     args = parser.parse_args(argv)
-    for path in write_fixture(args.out_dir):
+    for path in write_fixture(args.out_dir, format_version=args.format_version):
         print(path, file=sys.stderr)
     return 0
 

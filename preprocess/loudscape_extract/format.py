@@ -27,7 +27,7 @@ __all__ = [
 ]
 
 #: ``format_version`` of the metadata; readers refuse versions they do not know.
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 MODE_SONG = "song"
 MODE_TIMELINE = "timeline"
 _TICK_FREQUENCIES = (20, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.features import HPSS_KERNEL, HPSS_MARGIN, HPSS_POWER, TrackFeatures
 from loudscape_extract.format import (
@@ -158,9 +159,13 @@ def song_points(
     points[:, 3] = np.clip(scalar, 0.0, 1.0)
     points[:, 4] = features.hp[first_bin:, kept_frames].T[keep]
 
+    # One kept frame, or one level everywhere: the axis gets a range around the single value
+    # (half a hop of time, half a dB) and the points sit at its middle (docs/FORMAT.md).
+    x_low, x_high = spread_range(t_first, t_last, features.hop_length / features.sample_rate / 2)
+    y_axis_low, y_axis_high = spread_range(y_low, peak, 0.5)
     axes = {
-        "x": axis("time", "s", t_first, t_last),
-        "y": level_axis(y_low, peak),
+        "x": axis("time", "s", x_low, x_high),
+        "y": level_axis(y_axis_low, y_axis_high),
         "z": z_axis,
         "scalar": scalar_axis(s_low, s_high),
         "hp": hp_axis(),
@@ -189,7 +194,7 @@ def song_metadata(
         :class:`loudscape_extract.stream.StreamedTrack`).
     cloud : SongCloud
         Or anything with its attributes but ``point_count`` for ``points`` (such as
-        :class:`loudscape_extract.stream.StreamedCloud`).
+        :class:`loudscape_extract.stream_points.StreamedCloud`).
     generator : str
         Program name and version, e.g. ``"loudscape-extract 0.1.0"``.
     source_format : str

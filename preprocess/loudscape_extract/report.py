@@ -22,7 +22,8 @@ import os
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.paths import check_output_path
+from loudscape_extract.messages import shorten
+from loudscape_extract.paths import atomic_output, check_output_path, check_regular_input
 from loudscape_extract.ply import read_ply_metadata
 
 __all__ = [
@@ -129,6 +130,39 @@ def per_year(metadata: dict) -> list[dict]:
     return rows
 
 
+def _checked_songs(metadata, path: str) -> list[dict]:
+    """The metadata's songs, each a dict with an int (or absent: ``None``) year and a metrics
+    object of finite numbers, or a clear error."""
+    if not isinstance(metadata, dict):
+        raise ExtractError("loudscape-meta is not a JSON object", path=path)
+    mode = metadata.get("mode")
+    if mode != "timeline":
+        raise ExtractError(
+            f"not a timeline file (mode {shorten(mode, 40) if mode else 'missing'}); "
+            "write one with loudscape-extract timeline",
+            path=path,
+        )
+    songs = metadata.get("songs")
+    if not isinstance(songs, list) or not songs:
+        raise ExtractError("the timeline lists no songs", path=path)
+    checked = []
+    for index, song in enumerate(songs):
+        year = song.get("year") if isinstance(song, dict) else None
+        metrics = song.get("metrics") if isinstance(song, dict) else None
+        bad_year = year is not None and (isinstance(year, bool) or not isinstance(year, int))
+        if bad_year or not isinstance(metrics, dict):
+            raise ExtractError(
+                f"songs[{index}] needs an integer (or null) year and a metrics object", path=path
+            )
+        clean = {
+            key: value
+            for key, value in metrics.items()
+            if isinstance(value, int | float) and not isinstance(value, bool) and np.isfinite(value)
+        }
+        checked.append({**song, "metrics": clean})
+    return checked
+
+
 def per_song(metadata: dict) -> list[dict]:
     """One row per song, in the file's order, with the columns of :data:`SONG_COLUMNS`."""
     rows = []
@@ -147,19 +181,20 @@ def songs_csv_path(csv_path: str) -> str:
 
 
 def _write_csv(path, columns, rows):
-    try:
-        with open(path, "w", newline="", encoding="utf-8") as handle:
-            writer = csv.DictWriter(handle, fieldnames=columns)
-            writer.writeheader()
-            for row in rows:
-                writer.writerow(
-                    {
-                        k: "" if v is None else (round(v, 4) if isinstance(v, float) else v)
-                        for k, v in row.items()
-                    }
-                )
-    except OSError as exc:
-        raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=path) from exc
+    """One CSV table, written atomically."""
+    with (
+        atomic_output(path) as temporary,
+        open(temporary, "w", newline="", encoding="utf-8") as handle,
+    ):
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow(
+                {
+                    k: "" if v is None else (round(v, 4) if isinstance(v, float) else v)
+                    for k, v in row.items()
+                }
+            )
 
 
 def write_report(path: str, output: str, *, csv_path: str | None = None) -> list[dict]:
@@ -173,30 +208,28 @@ def write_report(path: str, output: str, *, csv_path: str | None = None) -> list
     ExtractError
         Not a readable PLY, not a timeline, no songs, or an output directory that is missing.
     """
-    if not os.path.isfile(path):
-        raise ExtractError("no such file", path=path)
+    check_regular_input(path)
+    check_output_path(output, inputs=[path], extensions=(".png",))
+    if csv_path:
+        check_output_path(csv_path, inputs=[path, output], extensions=(".csv",), flag="--csv")
     metadata = read_ply_metadata(path)
-    if metadata.get("mode") != "timeline":
-        raise ExtractError(
-            f"not a timeline file (mode {metadata.get('mode')!r}); "
-            "write one with loudscape-extract timeline",
-            path=path,
+    songs = _checked_songs(metadata, path)
+    if csv_path:
+        check_output_path(
+            songs_csv_path(csv_path),
+            inputs=[path, output, csv_path],
+            extensions=(".csv",),
+            flag="--csv",
         )
-    if not metadata.get("songs"):
-        raise ExtractError("the timeline lists no songs", path=path)
-    outputs = [output] + ([csv_path, songs_csv_path(csv_path)] if csv_path else [])
-    for target in outputs:
-        check_output_path(target)
-        if os.path.abspath(target) == os.path.abspath(path):
-            raise ExtractError("would overwrite the input timeline", path=target)
-    rows = per_year(metadata)
-    dated = [s for s in metadata["songs"] if s.get("year") is not None]
+    rows = per_year({"songs": songs})
+    dated = [s for s in songs if s.get("year") is not None]
     if not dated:
         raise ExtractError("no song of the timeline has a year: nothing to plot by year", path=path)
-    _plot(rows, dated, output, title=os.path.basename(path))
+    with atomic_output(output) as temporary:
+        _plot(rows, dated, temporary, title=os.path.basename(path))
     if csv_path:
         _write_csv(csv_path, REPORT_COLUMNS, rows)
-        _write_csv(songs_csv_path(csv_path), SONG_COLUMNS, per_song(metadata))
+        _write_csv(songs_csv_path(csv_path), SONG_COLUMNS, per_song({"songs": songs}))
     return rows
 
 
@@ -325,8 +358,6 @@ def _plot(rows, songs, output, *, title):
     for ax in axes:
         ax.grid(True, alpha=0.3)
     try:
-        fig.savefig(output, dpi=100)
-    except OSError as exc:
-        raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=output) from exc
+        fig.savefig(output, dpi=100, format="png")  # OSError: atomic_output names the file
     finally:
         plt.close(fig)

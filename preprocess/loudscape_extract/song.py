@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
+from loudscape_extract.contract import checked_blocks
 from loudscape_extract.dynamics import DC_WARN_THRESHOLD, dc_warning
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.paths import check_output_path
 from loudscape_extract.ply import write_ply_blocks
 from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata
-from loudscape_extract.stream import (
-    DEFAULT_BLOCK_FRAMES,
-    DEFAULT_BLOCK_SAMPLES,
-    song_point_blocks,
-    stream_track,
-)
+from loudscape_extract.stream import DEFAULT_BLOCK_FRAMES, DEFAULT_BLOCK_SAMPLES, stream_track
+from loudscape_extract.stream_points import song_point_blocks
 from loudscape_extract.version import GENERATOR
 
 __all__ = ["extract_song"]
@@ -28,6 +26,7 @@ def extract_song(
     hop_length: int = 1024,
     floor_db: float | None = None,
     freq_scale: str = "linear",
+    strict: bool = False,
     highpass_hz: float | None = None,
     progress: Callable[[str], None] | None = None,
     warn: Callable[[str], None] | None = None,
@@ -47,12 +46,15 @@ def extract_song(
     floor_db : float, optional
         Noise floor below the peak bin (default :data:`DEFAULT_FLOOR_DB`); 0 disables it.
     freq_scale : {"linear", "log"}
+    strict : bool
+        Refuse a truncated or corrupt file instead of extracting what decodes.
     highpass_hz : float, optional
         High-pass (e.g. 20 Hz) the DC-free signal before frame level, crest, DR and PSR.
     progress : callable, optional
         Called with a short message before each stage.
     warn : callable, optional
-        Called with a message about the input worth knowing (a large DC offset).
+        Called with a one-line warning about the input (a truncated or corrupt file, a large
+        DC offset); default :func:`warnings.warn`.
     block_samples, block_frames : int
         Decoding and STFT block sizes (:mod:`loudscape_extract.stream`): memory is bounded by
         them and by the decoded mono mix, whatever the track's length; the output does not
@@ -65,7 +67,7 @@ def extract_song(
     """
     say = progress or (lambda _message: None)
     floor = DEFAULT_FLOOR_DB if floor_db is None else floor_db
-    check_output_path(output)
+    check_output_path(output, inputs=[source])
     say(f"decoding {source}")
     try:
         track = stream_track(
@@ -76,27 +78,41 @@ def extract_song(
             frame_hp=False,
             block_samples=block_samples,
             block_frames=block_frames,
+            strict=strict,
             progress=say,
         )
         say(
             f"{track.duration_s:.1f} s, {track.sample_rate} Hz, {track.n_channels} channel(s); "
             "counting points"
         )
+        if track.warning:
+            _warn(warn, f"{source}: {track.warning}")
         cloud, blocks = song_point_blocks(track, floor_db=floor, freq_scale=freq_scale)
     except ExtractError as exc:
         if exc.path is None:
             exc.path = source
         raise
     offset = track.metrics.get("dc_offset") or 0.0
-    if warn and offset > DC_WARN_THRESHOLD:
-        warn(dc_warning(source, offset))
+    if offset > DC_WARN_THRESHOLD:
+        _warn(warn, dc_warning(source, offset))
     metadata = song_metadata(track, cloud, generator=GENERATOR, source_format=track.source_format)
     say(f"harmonic-percussive separation, writing {cloud.point_count} points to {output}")
     try:
-        write_ply_blocks(output, n_points=cloud.point_count, metadata=metadata, blocks=blocks())
+        # The contract (check_cloud's rules) runs on the metadata first and on each block
+        # before it is written; the file is put in place only after the last block.
+        write_ply_blocks(
+            output,
+            n_points=cloud.point_count,
+            metadata=metadata,
+            blocks=checked_blocks(blocks(), metadata, n_points=cloud.point_count, path=output),
+        )
     except ExtractError as exc:
         if exc.path is None:
             exc.path = source
         raise
     say("done")
     return metadata
+
+
+def _warn(warn: Callable[[str], None] | None, text: str) -> None:
+    (warn or (lambda line: warnings.warn(line, stacklevel=4)))(text)

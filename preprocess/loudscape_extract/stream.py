@@ -31,7 +31,14 @@ import numpy as np
 import scipy.fft
 from numpy.lib.stride_tricks import sliding_window_view
 
-from loudscape_extract.audio import AudioInfo, audio_info, mix_to_mono, read_blocks
+from loudscape_extract.audio import (
+    AudioInfo,
+    BlockReport,
+    audio_info,
+    check_decoded,
+    mix_to_mono,
+    read_blocks,
+)
 from loudscape_extract.dsp import (
     fft_convolve,
     hann_window,
@@ -53,7 +60,6 @@ from loudscape_extract.features import (
     FrameFeatures,
     crest_statistics,
 )
-from loudscape_extract.format import axis, frequency_axis, hp_axis, level_axis, scalar_axis
 from loudscape_extract.hpss import hp_ratio, masks_from_medians, median_filter_axis
 from loudscape_extract.loudness import (
     TRUE_PEAK_OVERSAMPLING,
@@ -62,9 +68,7 @@ from loudscape_extract.loudness import (
     k_weighting_sos,
     loudness_from_energy,
 )
-from loudscape_extract.points import FREQ_SCALES, _normalize, scalar_range
 from loudscape_extract.spectrogram import (
-    LEVEL_FLOOR_DB,
     a_weighting_db,
     frame_count,
     frame_times,
@@ -77,12 +81,9 @@ __all__ = [
     "DecodedMono",
     "SignalStats",
     "SpectralBlock",
-    "StreamedCloud",
     "StreamedTrack",
     "decode_pass",
-    "level_a_db",
     "signal_pass",
-    "song_point_blocks",
     "spectral_blocks",
     "stream_track",
 ]
@@ -116,6 +117,8 @@ class DecodedMono:
         Largest absolute decoded sample.
     any_nonzero : bool
         Whether any decoded sample is non-zero.
+    warning : str
+        Non-empty when the file is truncated or corrupt (:attr:`Audio.warning`).
     """
 
     info: AudioInfo
@@ -123,21 +126,29 @@ class DecodedMono:
     dc: np.ndarray
     sample_peak: float
     any_nonzero: bool
+    warning: str = ""
 
     @property
     def n_samples(self) -> int:
         return int(self.mono.shape[0])
 
 
-def decode_pass(info: AudioInfo, *, block: int = DEFAULT_BLOCK_SAMPLES) -> DecodedMono:
-    """Decode once: the mono mix, channel means and the sample peak (see the module docs)."""
+def decode_pass(
+    info: AudioInfo, *, block: int = DEFAULT_BLOCK_SAMPLES, strict: bool = False
+) -> DecodedMono:
+    """Decode once: the mono mix, channel means and the sample peak (see the module docs).
+
+    A truncated or corrupt file is decoded as far as it goes, with a warning, as by
+    :func:`decode_audio` (``strict``: an :class:`ExtractError`).
+    """
+    report = BlockReport()
     capacity = max(info.n_samples, 1)
     mono = np.empty(capacity, dtype=np.float32)
     sums = np.zeros(info.n_channels)
     peak = 0.0
     any_nonzero = False
     n = 0
-    for start, samples in read_blocks(info, block=block):
+    for start, samples in read_blocks(info, block=block, report=report):
         count = samples.shape[0]
         if start + count > mono.shape[0]:  # the header understated the length
             grown = np.empty(max(2 * mono.shape[0], start + count), dtype=np.float32)
@@ -149,8 +160,14 @@ def decode_pass(info: AudioInfo, *, block: int = DEFAULT_BLOCK_SAMPLES) -> Decod
         peak = max(peak, block_peak)
         any_nonzero = any_nonzero or block_peak > 0
         n = start + count
+    warning = check_decoded(info, decoded=n, report=report, strict=strict)
     return DecodedMono(
-        info=info, mono=mono[:n], dc=sums / n, sample_peak=peak, any_nonzero=any_nonzero
+        info=info,
+        mono=mono[:n],
+        dc=sums / n,
+        sample_peak=peak,
+        any_nonzero=any_nonzero,
+        warning=warning,
     )
 
 
@@ -484,6 +501,8 @@ class StreamedTrack:
         bin (0: all bins, 1: without the 0 Hz bin).
     highpass_hz : float or None
     kernel_size, block_frames : int
+    warning : str
+        Non-empty when the file is truncated or corrupt: how much was decoded, and why.
     """
 
     path: str
@@ -503,6 +522,7 @@ class StreamedTrack:
     highpass_hz: float | None
     kernel_size: int
     block_frames: int
+    warning: str = ""
 
     @property
     def duration_s(self) -> float:
@@ -519,6 +539,7 @@ def stream_track(
     frame_hp: bool = True,
     block_samples: int = DEFAULT_BLOCK_SAMPLES,
     block_frames: int = DEFAULT_BLOCK_FRAMES,
+    strict: bool = False,
     progress: Callable[[str], None] | None = None,
 ) -> StreamedTrack:
     """:func:`track_features` in bounded memory: per-frame series, metrics and level range.
@@ -533,6 +554,9 @@ def stream_track(
         Compute the per-frame hp mean (runs HPSS; the timeline needs it, Song mode does not).
     block_samples, block_frames : int
         Block sizes of the decoding and spectral passes (results do not depend on them).
+    strict : bool
+        Refuse a truncated or corrupt file; otherwise it is used as far as it decodes and
+        ``track.warning`` says how far.
     progress : callable, optional
 
     Raises
@@ -542,7 +566,7 @@ def stream_track(
     """
     say = progress or (lambda _message: None)
     info = audio_info(path)
-    decoded = decode_pass(info, block=block_samples)
+    decoded = decode_pass(info, block=block_samples, strict=strict)
     n = decoded.n_samples
     rate = info.sample_rate
     if n < n_fft:
@@ -664,125 +688,5 @@ def stream_track(
         highpass_hz=highpass_hz,
         kernel_size=kernel_size,
         block_frames=block_frames,
+        warning=decoded.warning,
     )
-
-
-def level_a_db(magnitude_levels: np.ndarray, a_gain_db: np.ndarray) -> np.ndarray:
-    """``level + A-gain`` per bin, clipped at the level floor (as :func:`track_features`)."""
-    levels_a = magnitude_levels + a_gain_db[:, None].astype(np.float32)
-    np.maximum(levels_a, np.float32(LEVEL_FLOOR_DB), out=levels_a)
-    return levels_a
-
-
-@dataclass(frozen=True)
-class StreamedCloud:
-    """:class:`SongCloud` without the points (they are produced block by block)."""
-
-    point_count: int
-    axes: dict
-    frames_total: int
-    frames_kept: int
-    peak_level_db: float
-    floor_db: float
-    freq_scale: str
-
-
-def song_point_blocks(
-    track: StreamedTrack, *, floor_db: float, freq_scale: str = "linear"
-) -> tuple[StreamedCloud, Callable[[], Iterator[np.ndarray]]]:
-    """:func:`song_points` block by block: the cloud's description now, the points on demand.
-
-    Counting the points above the floor needs the track's peak level, known only after
-    :func:`stream_track`; so this runs one STFT pass to count them (the header must state the
-    count), and the returned callable runs the STFT and HPSS again to produce them.
-
-    Returns
-    -------
-    cloud : StreamedCloud
-    blocks : callable
-        Returns an iterator of float32 arrays of shape (n, 5), in :func:`song_points`' order,
-        whose lengths sum to ``cloud.point_count``.
-    """
-    if freq_scale not in FREQ_SCALES:
-        raise ExtractError(f"freq_scale must be one of {FREQ_SCALES}, got {freq_scale!r}")
-    if not (floor_db >= 0 and math.isfinite(floor_db)):
-        raise ExtractError(f"floor_db must be a finite number >= 0, got {floor_db}")
-    silent = track.frames.silent
-    kept_frames = np.flatnonzero(~silent)
-    if kept_frames.size == 0:
-        raise ExtractError("audio is entirely silent (no frame has a non-zero sample)")
-    first_bin = 0 if freq_scale == "linear" else 1
-    z_per_bin, z_axis = frequency_axis(track.frequencies_hz, freq_scale)
-    z_per_bin = z_per_bin[first_bin:].astype(np.float32)
-    n_bins = z_per_bin.shape[0]
-    peak = track.level_max_db[first_bin]
-    options = dict(n_fft=track.n_fft, hop_length=track.hop_length, block_frames=track.block_frames)
-    if floor_db > 0:
-        y_low = peak - floor_db
-        threshold = np.float32(y_low)
-        n_points = 0
-        for block in spectral_blocks(track.mono, **options):
-            kept = ~silent[block.start : block.stop]
-            levels = level_db(block.magnitude[first_bin:, kept])
-            n_points += int(np.count_nonzero(levels >= threshold))
-    else:
-        y_low = track.level_min_db[first_bin]
-        threshold = None
-        n_points = int(kept_frames.size) * n_bins
-    if n_points == 0:
-        raise ExtractError("no bin is left above the noise floor")
-    times = track.frames.times_s[kept_frames]
-    t_first, t_last = float(times[0]), float(times[-1])
-    x_per_kept = np.full(silent.shape, np.nan, dtype=np.float32)
-    x_per_kept[kept_frames] = _normalize(times, t_first, t_last)
-    s_low, s_high = scalar_range(track.frequencies_hz[first_bin:], y_low, peak)
-    a_gain = track.a_gain_db
-
-    def blocks() -> Iterator[np.ndarray]:
-        written = 0
-        for block in spectral_blocks(
-            track.mono, **options, hpss=True, kernel_size=track.kernel_size
-        ):
-            kept = ~silent[block.start : block.stop]
-            if not kept.any():
-                continue
-            levels_all = level_db(block.magnitude[:, kept])
-            levels = levels_all[first_bin:].T  # (n_kept, n_bins_drawn)
-            if threshold is None:
-                keep = np.ones(levels.shape, dtype=bool)
-            else:
-                keep = levels >= threshold
-            count = int(np.count_nonzero(keep))
-            if count == 0:
-                continue
-            points = np.empty((count, 5), dtype=np.float32)
-            x = x_per_kept[block.start : block.stop][kept]
-            points[:, 0] = np.broadcast_to(x[:, None], keep.shape)[keep]
-            points[:, 1] = _normalize(levels[keep], y_low, peak)
-            points[:, 2] = np.broadcast_to(z_per_bin[None, :], keep.shape)[keep]
-            levels_a = level_a_db(levels_all, a_gain)[first_bin:].T[keep]
-            scalar = (levels_a.astype(np.float64) - s_low) / (s_high - s_low)
-            points[:, 3] = np.clip(scalar, 0.0, 1.0)
-            points[:, 4] = block.hp[first_bin:, kept].T[keep]
-            written += count
-            yield points
-        if written != n_points:
-            raise ExtractError(f"counted {n_points} points but produced {written}")
-
-    axes = {
-        "x": axis("time", "s", t_first, t_last),
-        "y": level_axis(y_low, peak),
-        "z": z_axis,
-        "scalar": scalar_axis(s_low, s_high),
-        "hp": hp_axis(),
-    }
-    cloud = StreamedCloud(
-        point_count=n_points,
-        axes=axes,
-        frames_total=int(silent.size),
-        frames_kept=int(kept_frames.size),
-        peak_level_db=peak,
-        floor_db=float(floor_db),
-        freq_scale=freq_scale,
-    )
-    return cloud, blocks

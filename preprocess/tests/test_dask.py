@@ -26,12 +26,12 @@ def test_local_cluster_equals_process_pool_and_shares_the_cache(tmp_path, capsys
     cache = tmp_path / "cache"
     argv = ["timeline", tmp_path / "m", "-o", dask, "--cache-dir", cache, *DASK]
     status, err = run(argv, capsys)
-    assert status == 0 and "(0 from cache)" in err
+    assert status == 0 and ", 0 from cache, " in err
     assert dask.read_bytes() == pool.read_bytes()
     # Every worker wrote its songs' entries into the shared folder, atomically (no temp left).
     assert sorted(os.path.splitext(n)[1] for n in os.listdir(cache)) == [".frames"] * 4
     status, err = run(argv, capsys)
-    assert status == 0 and "(4 from cache)" in err
+    assert status == 0 and ", 4 from cache, " in err
     assert dask.read_bytes() == pool.read_bytes()
 
 

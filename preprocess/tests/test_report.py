@@ -20,7 +20,7 @@ def song(year, lufs, crest, lra=5.0, hp=0.5):
 
 
 def timeline_file(path, songs):
-    meta = {"format_version": 1, "mode": "timeline", "point_count": 1, "songs": songs}
+    meta = {"format_version": 2, "mode": "timeline", "point_count": 1, "songs": songs}
     write_ply(path, points=np.zeros((1, 5), np.float32), metadata=meta)
     return meta
 

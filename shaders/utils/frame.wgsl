@@ -1,5 +1,5 @@
 // Per-frame values shared by every pass: bind group 0, binding 0.
-// Keep in sync with FrameUniforms in src/render/frame.rs.
+// Keep in sync with FrameUniforms in src/render/gpu/frame.rs.
 struct Frame {
     // Clip space from data space (the cloud's normalized [-1, 1] coordinates).
     clip_from_data: mat4x4<f32>,

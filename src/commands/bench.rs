@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
-use loudscape::camera::Camera;
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameView;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
-use loudscape::render::target::RenderTarget;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -98,26 +98,22 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
 
 /// Load, first frame and points frame times on the song cloud.
 fn bench_points(args: &BenchArgs) -> anyhow::Result<()> {
-    let (width, height) = super::parse_size(&args.size)?;
+    let (width, height) = super::args::parse_size(&args.size)?;
     let process_start = Instant::now();
     let load_start = Instant::now();
-    let cloud = super::render::load_cloud(&args.input)?;
+    let cloud = super::args::load_cloud(&args.input)?;
     let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
     let gpu = GpuContext::new_headless()?;
     let renderer = Renderer::new(&gpu.device);
     let data = SceneData::new(&gpu.device, &renderer, &cloud);
     let target = RenderTarget::new(&gpu.device, width, height);
-    let mut camera = Camera::default();
-    let (min, max) = data.world_box();
-    camera.fit(min, max, width as f32 / height as f32);
-    let mut view = FrameView {
-        camera,
-        world_from_data: data.world_from_data,
+    let mut view = FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
         width,
         height,
-        frame_index: 0,
-        moving: false,
-    };
+    );
     let settings = RenderSettings::default();
     let first_ms = timed_frame(&gpu, &renderer, &target, &data, &view, &settings)?;
     let to_first_frame = process_start.elapsed().as_secs_f64() * 1e3;

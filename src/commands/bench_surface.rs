@@ -11,10 +11,13 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::{UVec3, Vec3};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameBinding;
+use loudscape::data::synthetic::song_like_field;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
-use loudscape::render::mesh::{SurfaceMethod, SurfacePass, SurfaceSettings, song_like_field};
+use loudscape::render::surface::pass::SurfacePass;
+use loudscape::render::surface::state::ExtractedSurface;
+use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
 
 /// One measured extraction.
 #[derive(Clone, Debug)]
@@ -42,6 +45,7 @@ pub fn run(
     // A second pass object times each dispatch apart (which adds pass boundaries), so the
     // wall-clock figures above come from the untimed one.
     let mut timed_pass = SurfacePass::new(&gpu.device, &frame);
+    let (surface, timed_surface) = (ExtractedSurface::new(), ExtractedSurface::new());
     let timed = timed_pass.enable_pass_timing(&gpu.queue);
     println!(
         "  times: submit to read-back of the counts, wall clock{}",
@@ -74,7 +78,7 @@ pub fn run(
                 lit: true,
             };
             // Warm-up: compiles pipelines and grows the buffers to fit.
-            let counts = match pass.extract_blocking(&gpu.queue, &grid, &settings) {
+            let counts = match pass.extract_blocking(&gpu.queue, &surface, &grid, &settings) {
                 Ok(counts) => counts,
                 Err(e) => {
                     println!("surface {name} {} error: {e}", method.short_name());
@@ -84,15 +88,15 @@ pub fn run(
             let mut times = Vec::with_capacity(runs);
             for _ in 0..runs {
                 let start = Instant::now();
-                pass.extract_blocking(&gpu.queue, &grid, &settings)?;
+                pass.extract_blocking(&gpu.queue, &surface, &grid, &settings)?;
                 times.push(start.elapsed().as_secs_f64() * 1e3);
             }
             // Per pass: the timed pass object, warmed up like the untimed one.
             let mut per_pass: Vec<(&str, Vec<f64>)> = Vec::new();
             if timed {
-                timed_pass.extract_blocking(&gpu.queue, &grid, &settings)?;
+                timed_pass.extract_blocking(&gpu.queue, &timed_surface, &grid, &settings)?;
                 for _ in 0..runs {
-                    timed_pass.extract_blocking(&gpu.queue, &grid, &settings)?;
+                    timed_pass.extract_blocking(&gpu.queue, &timed_surface, &grid, &settings)?;
                     let passes = timed_pass.pass_times_ms(method)?.unwrap_or_default();
                     per_pass.resize_with(passes.len(), || ("", Vec::new()));
                     for ((name, times), (pass_name, ms)) in per_pass.iter_mut().zip(passes) {
@@ -102,7 +106,7 @@ pub fn run(
                 }
             }
             let median_ms = median(&mut times);
-            let area = pass.read_mesh(&gpu.queue)?.area();
+            let area = pass.read_mesh(&gpu.queue, &surface)?.area();
             println!(
                 "surface {name} {} median_ms={median_ms:.2} triangles={} area={area:.5}",
                 method.short_name(),

@@ -6,13 +6,15 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use loudscape::camera::Camera;
-use loudscape::cloud::{DataMode, Point, PointCloud};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::{DataMode, Point, PointCloud};
+use loudscape::data::synthetic::synthetic_song;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::target::RenderTarget;
+use loudscape::render::gpu::timing::Timestamps;
+use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
-use loudscape::render::target::RenderTarget;
-use loudscape::render::voxelize::{MAX_PASSES, VoxelizeJob, synthetic_song};
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 /// Points of the synthetic stand-in for a song when data/demo_song.ply is absent.
 pub const SYNTHETIC_SONG_POINTS: usize = 700_000;
@@ -20,37 +22,18 @@ pub const LARGE_CLOUD_POINTS: usize = 2_000_000;
 
 /// Times GPU work: timestamps around the recorded work where supported, else wall time.
 pub struct GpuTimer {
-    queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer, f64)>,
+    queries: Option<Timestamps>,
 }
 
 impl GpuTimer {
     pub fn new(gpu: &GpuContext) -> Self {
-        let features = gpu.device.features();
-        let queries = features
-            .contains(
-                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
-            )
-            .then(|| {
-                let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("bench::timestamps"),
-                    ty: wgpu::QueryType::Timestamp,
-                    count: 2,
-                });
-                let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("bench::timestamps_resolve"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("bench::timestamps_read"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                });
-                let period = f64::from(gpu.queue.get_timestamp_period());
-                (set, resolve, read, period)
-            });
+        let queries = Timestamps::new(
+            &gpu.device,
+            &gpu.queue,
+            "bench::timestamps",
+            2,
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        );
         Self { queries }
     }
 
@@ -73,14 +56,13 @@ impl GpuTimer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("bench::timed"),
             });
-        if let Some((set, _, _, _)) = &self.queries {
-            encoder.write_timestamp(set, 0);
+        if let Some(queries) = &self.queries {
+            encoder.write_timestamp(&queries.set, 0);
         }
         record(&mut encoder);
-        if let Some((set, resolve, read, _)) = &self.queries {
-            encoder.write_timestamp(set, 1);
-            encoder.resolve_query_set(set, 0..2, resolve, 0);
-            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+        if let Some(queries) = &self.queries {
+            encoder.write_timestamp(&queries.set, 1);
+            queries.resolve(&mut encoder, 2);
         }
         let start = Instant::now();
         gpu.queue.submit([encoder.finish()]);
@@ -89,33 +71,13 @@ impl GpuTimer {
             .context("waiting for the GPU")?;
         let wall = start.elapsed().as_secs_f64() * 1e3;
         match &self.queries {
-            Some((_, _, read, period)) => {
-                let bytes = loudscape::render::target::map_buffer(&gpu.device, read)?;
-                let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-                Ok(ticks[1].wrapping_sub(ticks[0]) as f64 * period / 1e6)
+            Some(queries) => {
+                let ticks = queries.read_ticks(&gpu.device)?;
+                Ok(queries.ms(ticks[0], ticks[1]))
             }
             None => Ok(wall),
         }
     }
-}
-
-/// Copies resolved pass timestamps to the CPU.
-fn read_pass_ticks(
-    gpu: &GpuContext,
-    passes: &Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
-) -> anyhow::Result<Option<Vec<u64>>> {
-    let Some((_, resolve, read)) = passes else {
-        return Ok(None);
-    };
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("bench::pass_timestamps_copy"),
-        });
-    encoder.copy_buffer_to_buffer(resolve, 0, read, 0, None);
-    gpu.queue.submit([encoder.finish()]);
-    let bytes = loudscape::render::target::map_buffer(&gpu.device, read)?;
-    Ok(Some(bytemuck::cast_slice(&bytes).to_vec()))
 }
 
 pub fn median(mut values: Vec<f64>) -> f64 {
@@ -134,7 +96,7 @@ pub fn median(mut values: Vec<f64>) -> f64 {
 fn song_cloud() -> (PointCloud, String) {
     let demo = Path::new("data/demo_song.ply");
     if demo.is_file() {
-        match loudscape::cloud::load(demo) {
+        match loudscape::data::cloud::load(demo) {
             Ok(cloud) => return (cloud, demo.display().to_string()),
             Err(e) => eprintln!("bench: {e}; using a synthetic song instead"),
         }
@@ -175,32 +137,13 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
     }
 
     // Per-pass timestamps, where the adapter has them.
-    let period = f64::from(gpu.queue.get_timestamp_period()) / 1e6;
-    let passes = gpu
-        .device
-        .features()
-        .contains(wgpu::Features::TIMESTAMP_QUERY)
-        .then(|| {
-            let count = 2 * MAX_PASSES as u32;
-            let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("bench::pass_timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count,
-            });
-            let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bench::pass_timestamps_resolve"),
-                size: u64::from(count) * 8,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bench::pass_timestamps_read"),
-                size: u64::from(count) * 8,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            (set, resolve, read)
-        });
+    let passes = Timestamps::new(
+        &gpu.device,
+        &gpu.queue,
+        "bench::pass_timestamps",
+        2 * MAX_PASSES as u32,
+        wgpu::Features::TIMESTAMP_QUERY,
+    );
     let stages: [(&str, &PointCloud, u32, f32); 4] = [
         ("voxelize song", &song, 128, 0.0),
         ("voxelize song, smoothed (sigma 1)", &song, 128, 1.0),
@@ -219,19 +162,21 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
         let mut pass_names = Vec::new();
         for i in 0..=runs {
             let ms = timer.time(&gpu, |encoder| {
-                pass_names = renderer
-                    .voxelize
-                    .encode(encoder, &job, passes.as_ref().map(|p| &p.0));
-                if let Some((set, resolve, _)) = &passes {
-                    encoder.resolve_query_set(set, 0..2 * pass_names.len() as u32, resolve, 0);
+                pass_names =
+                    renderer
+                        .voxelize
+                        .encode(encoder, &job, passes.as_ref().map(|p| &p.set));
+                if let Some(passes) = &passes {
+                    passes.resolve(encoder, 2 * pass_names.len() as u32);
                 }
             })?;
             if i > 0 {
                 times.push(ms);
-                if let Some(ticks) = read_pass_ticks(&gpu, &passes)? {
+                if let Some(passes) = &passes {
+                    let ticks = passes.read_ticks(&gpu.device)?;
                     pass_times.resize(pass_names.len(), Vec::new());
                     for (p, times) in pass_times.iter_mut().enumerate() {
-                        times.push(ticks[2 * p + 1].wrapping_sub(ticks[2 * p]) as f64 * period);
+                        times.push(passes.ms(ticks[2 * p], ticks[2 * p + 1]));
                     }
                 }
             }
@@ -262,18 +207,15 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
     data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &song, &settings.voxels)?;
     let (width, height) = (1280, 720);
     let target = RenderTarget::new(&gpu.device, width, height);
-    let mut camera = Camera::default();
-    let (min, max) = data.world_box();
-    camera.fit(min, max, width as f32 / height as f32);
+    let at_rest = FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
+        width,
+        height,
+    );
     for moving in [false, true] {
-        let view = FrameView {
-            camera,
-            world_from_data: data.world_from_data,
-            width,
-            height,
-            frame_index: 0,
-            moving,
-        };
+        let view = FrameView { moving, ..at_rest };
         let mut times = Vec::new();
         for i in 0..=runs {
             let ms = timer.time(&gpu, |encoder| {

@@ -6,13 +6,23 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use glam::{UVec3, Vec3};
-use loudscape::cloud::{DataMode, PointCloud};
-use loudscape::pick::CpuGrid;
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameBinding;
+use loudscape::data::cloud::PointCloud;
+use loudscape::data::field::Field;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
-use loudscape::render::mesh::{CpuMesh, SurfaceMethod, SurfacePass, SurfaceSettings, warm_cool};
-use loudscape::render::voxelize::{MAX_RESOLUTION, MIN_RESOLUTION, VoxelSettings, VoxelizePass};
+use loudscape::render::grid::voxelize::{
+    MAX_RESOLUTION, VoxelSettings, VoxelizePass, default_resolution,
+};
+use loudscape::render::surface::cpu_mesh::CpuMesh;
+use loudscape::render::surface::draw::warm_cool;
+use loudscape::render::surface::pass::SurfacePass;
+use loudscape::render::surface::state::ExtractedSurface;
+use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
+
+use crate::commands::args::{
+    check_iso, check_output_folder, check_resolution, load_cloud, parse_method,
+};
 
 #[derive(clap::Args, Debug)]
 pub struct MeshArgs {
@@ -32,30 +42,6 @@ pub struct MeshArgs {
     /// The mesh file to write: .ply (binary) or .obj.
     #[arg(short, long)]
     pub output: PathBuf,
-}
-
-/// Parses `--method`.
-pub fn parse_method(text: &str) -> anyhow::Result<SurfaceMethod> {
-    SurfaceMethod::parse(text).with_context(|| format!("method '{text}' is not mt or dc"))
-}
-
-/// Checks `--iso`.
-pub fn check_iso(iso: f32) -> anyhow::Result<f32> {
-    if !iso.is_finite() {
-        bail!("isovalue {iso} is not a number in [0, 1]");
-    }
-    if !(0.0..=1.0).contains(&iso) {
-        bail!("isovalue {iso} is outside [0, 1] (the density is normalized)");
-    }
-    Ok(iso)
-}
-
-/// The grid resolution the paper uses for a data mode.
-pub fn default_resolution(mode: DataMode) -> u32 {
-    match mode {
-        DataMode::Timeline => 224,
-        DataMode::Song | DataMode::Generic => 128,
-    }
 }
 
 /// The cloud's voxel grid, built by the GPU voxelizer with the default smoothing.
@@ -82,27 +68,15 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     let method = parse_method(&args.method)?;
     let iso_value = check_iso(args.iso)?;
     let format = MeshFormat::from_path(&args.output)?;
-    if let Some(res) = args.res
-        && !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&res)
-    {
-        bail!("resolution {res} is out of range {MIN_RESOLUTION} to {MAX_RESOLUTION}");
-    }
-    if let Some(dir) = args.output.parent().filter(|p| !p.as_os_str().is_empty())
-        && !dir.is_dir()
-    {
-        bail!(
-            "{}: the folder {} does not exist",
-            args.output.display(),
-            dir.display()
-        );
-    }
+    check_resolution(args.res)?;
+    check_output_folder(&args.output)?;
     let is_field = args
         .input
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
     // Read and check the input before starting the GPU.
     enum Input {
-        Field(CpuGrid),
+        Field(Field),
         Cloud(Box<PointCloud>),
     }
     let input = if is_field {
@@ -114,7 +88,7 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         }
         Input::Field(read_field(&args.input)?)
     } else {
-        Input::Cloud(Box::new(super::render::load_cloud(&args.input)?))
+        Input::Cloud(Box::new(load_cloud(&args.input)?))
     };
     let gpu = GpuContext::new_headless()?;
     let frame = FrameBinding::new(&gpu.device);
@@ -134,16 +108,17 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     };
     let dims = grid.dims;
     let pass = SurfacePass::new(&gpu.device, &frame);
+    let surface = ExtractedSurface::new();
     let settings = SurfaceSettings {
         method,
         iso_value,
         lit: true,
     };
     let counts = pass
-        .extract_blocking(&gpu.queue, &grid, &settings)
+        .extract_blocking(&gpu.queue, &surface, &grid, &settings)
         .with_context(|| format!("{}: extracting the surface", args.input.display()))?;
     let mut mesh = pass
-        .read_mesh(&gpu.queue)
+        .read_mesh(&gpu.queue, &surface)
         .with_context(|| format!("{}: reading the surface", args.input.display()))?;
     if method == SurfaceMethod::MarchingTetrahedra {
         mesh = mesh.welded();
@@ -173,7 +148,7 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
 /// Reads a .npy density field (field 0; field 1, when present, is the mean hp, else 0.5).
 /// The box comes from the `FIELD.npy.json` that `loudscape voxelize` writes beside it; without
 /// one, voxel (i, j, k) is centred on the point (i, j, k), so the mesh is in voxel units.
-pub fn read_field(path: &Path) -> anyhow::Result<CpuGrid> {
+pub fn read_field(path: &Path) -> anyhow::Result<Field> {
     let npy = super::npy::read(path)?;
     if npy.dims.min_element() < 2 || npy.dims.max_element() > MAX_RESOLUTION {
         bail!(
@@ -202,7 +177,7 @@ pub fn read_field(path: &Path) -> anyhow::Result<CpuGrid> {
         }
     }
     let (box_min, box_max) = field_box(path, npy.dims)?;
-    Ok(CpuGrid {
+    Ok(Field {
         dims: npy.dims,
         box_min,
         box_max,
@@ -328,7 +303,8 @@ fn write_obj(w: &mut impl Write, mesh: &CpuMesh, comment: &str) -> std::io::Resu
 mod tests {
     use super::*;
     use glam::Vec3;
-    use loudscape::cloud::Point;
+    use loudscape::data::cloud::DataMode;
+    use loudscape::data::cloud::Point;
 
     /// A blob of points in the stand-in grid, meshed on the GPU and written both ways.
     #[test]
@@ -355,14 +331,15 @@ mod tests {
         let frame = FrameBinding::new(&gpu.device);
         let grid = voxel_grid(&gpu, &frame, &cloud, 64).expect("voxelize");
         let pass = SurfacePass::new(&gpu.device, &frame);
+        let surface = ExtractedSurface::new();
         let settings = SurfaceSettings {
             method: SurfaceMethod::MarchingTetrahedra,
             iso_value: 0.3,
             lit: true,
         };
-        pass.extract_blocking(&gpu.queue, &grid, &settings)
+        pass.extract_blocking(&gpu.queue, &surface, &grid, &settings)
             .expect("extract");
-        let mesh = pass.read_mesh(&gpu.queue).expect("read").welded();
+        let mesh = pass.read_mesh(&gpu.queue, &surface).expect("read").welded();
         assert!(mesh.triangle_count() > 100);
         let dir = std::env::temp_dir().join(format!("loudscape-mesh-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");

@@ -3,16 +3,19 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use loudscape::camera::Camera;
-use loudscape::cloud::PointCloud;
-use loudscape::overlay;
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameView;
+use loudscape::data::cloud::PointCloud;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::grid::voxelize::VoxelSettings;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::{TransferPreset, VolumeSettings};
-use loudscape::render::voxelize::{
-    MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION, VoxelSettings,
+use loudscape::ui::labels;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
+
+use crate::commands::args::{
+    check_iso, check_output_folder, check_range, check_resolution, check_smoothing, load_cloud,
+    parse_camera, parse_method, parse_size,
 };
 
 #[derive(clap::Args, Debug)]
@@ -86,27 +89,11 @@ impl VolumeArgs {
                 self.tf
             )
         })?;
-        let check = |value: f32, range: std::ops::RangeInclusive<f32>, what: &str| {
-            if !range.contains(&value) {
-                bail!(
-                    "{what} {value} is out of range {} to {}",
-                    range.start(),
-                    range.end()
-                );
-            }
-            Ok(())
-        };
-        check(self.density, VolumeSettings::DENSITY_RANGE, "density")?;
-        check(self.opacity, VolumeSettings::OPACITY_RANGE, "opacity")?;
-        check(self.step, VolumeSettings::STEP_RANGE, "step")?;
-        check(self.smooth, 0.0..=MAX_SMOOTHING_SIGMA, "smoothing sigma")?;
-        if let Some(res) = self.res
-            && !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&res)
-        {
-            bail!(
-                "resolution {res} is out of range {MIN_RESOLUTION} to {MAX_RESOLUTION} voxels per side"
-            );
-        }
+        check_range(self.density, VolumeSettings::DENSITY_RANGE, "density")?;
+        check_range(self.opacity, VolumeSettings::OPACITY_RANGE, "opacity")?;
+        check_range(self.step, VolumeSettings::STEP_RANGE, "step")?;
+        check_smoothing(self.smooth)?;
+        check_resolution(self.res)?;
         settings.volume = VolumeSettings {
             preset,
             density_scale: self.density,
@@ -137,11 +124,6 @@ pub struct RenderDemoArgs {
     pub inputs: Vec<PathBuf>,
 }
 
-/// Loads a cloud, with the file named in the error.
-pub fn load_cloud(path: &Path) -> anyhow::Result<PointCloud> {
-    Ok(loudscape::cloud::load(path)?)
-}
-
 /// Renders `cloud` as `view` and writes `output` (via a temporary file, so no half-written PNG).
 #[allow(clippy::too_many_arguments)]
 fn render_to_file(
@@ -155,24 +137,20 @@ fn render_to_file(
     labels: bool,
     output: &Path,
 ) -> anyhow::Result<()> {
-    let camera = camera.unwrap_or_else(|| {
-        let mut camera = Camera::default();
-        let (min, max) = data.world_box();
-        camera.fit(min, max, size.0 as f32 / size.1 as f32);
-        camera
-    });
-    let view = FrameView {
-        camera,
-        world_from_data: data.world_from_data,
-        width: size.0,
-        height: size.1,
-        frame_index: 0,
-        moving: false,
+    let view = match camera {
+        Some(camera) => FrameView::at_rest(camera, data.world_from_data, size.0, size.1),
+        None => FrameView::fitted(
+            Camera::default(),
+            data.world_from_data,
+            data.world_box(),
+            size.0,
+            size.1,
+        ),
     };
     let target =
         loudscape::render::headless::render_frame(gpu, renderer, Some(data), &view, settings);
     if labels {
-        overlay::draw_headless(gpu, &target, &view, cloud, data);
+        labels::draw_headless(gpu, &target, &view, cloud, data);
     }
     let image = target
         .read_rgba(&gpu.device, &gpu.queue)
@@ -180,40 +158,24 @@ fn render_to_file(
     save_png(&image, output)
 }
 
-/// Writes a PNG (through a temporary file, see [`loudscape::screenshot::save_png`]), first
+/// Writes a PNG (through a temporary file, see [`loudscape::ui::screenshot::save_png`]), first
 /// saying plainly when the folder is missing.
 pub fn save_png(image: &image::RgbaImage, output: &Path) -> anyhow::Result<()> {
-    let dir = output.parent().filter(|p| !p.as_os_str().is_empty());
-    if let Some(dir) = dir
-        && !dir.is_dir()
-    {
-        bail!(
-            "{}: the folder {} does not exist",
-            output.display(),
-            dir.display()
-        );
-    }
-    Ok(loudscape::screenshot::save_png(image, output)?)
+    check_output_folder(output)?;
+    Ok(loudscape::ui::screenshot::save_png(image, output)?)
 }
 
 fn parse_view(name: &str) -> anyhow::Result<ViewKind> {
-    let view = ViewKind::parse(name)
-        .with_context(|| format!("view '{name}' is not one of points, surface, volume"))?;
-    if !view.available() {
-        bail!(
-            "the {} view is not available in this build yet",
-            view.name()
-        );
-    }
-    Ok(view)
+    ViewKind::parse(name)
+        .with_context(|| format!("view '{name}' is not one of points, surface, volume"))
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    let size = super::parse_size(&args.size)?;
+    let size = parse_size(&args.size)?;
     let view = parse_view(&args.view)?;
     let camera = match &args.camera {
         Some(text) => {
-            let (az, el, dist) = super::parse_camera(text)?;
+            let (az, el, dist) = parse_camera(text)?;
             Some(Camera::from_angles(az, el, dist))
         }
         None => None,
@@ -223,8 +185,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     {
         bail!("point size {size} is out of range 0.5 to 64 pixels");
     }
-    let method = super::mesh::parse_method(&args.method)?;
-    let iso_value = super::mesh::check_iso(args.iso)?;
+    let method = parse_method(&args.method)?;
+    let iso_value = check_iso(args.iso)?;
     let mut settings = RenderSettings {
         view,
         ..Default::default()
@@ -275,14 +237,14 @@ pub fn prepare_grid(
     {
         renderer
             .surface
-            .extract_blocking(&gpu.queue, grid, &settings.surface)
+            .extract_blocking(&gpu.queue, &data.surface, grid, &settings.surface)
             .with_context(|| format!("{}: extracting the surface", cloud.path.display()))?;
     }
     Ok(())
 }
 
 pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
-    let size = super::parse_size(&args.size)?;
+    let size = parse_size(&args.size)?;
     std::fs::create_dir_all(&args.out_dir)
         .with_context(|| format!("{}: cannot create the folder", args.out_dir.display()))?;
     let gpu = GpuContext::new_headless()?;
@@ -296,7 +258,7 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "cloud".into());
-        for view in ViewKind::ALL.into_iter().filter(|v| v.available()) {
+        for view in ViewKind::ALL {
             let output = args
                 .out_dir
                 .join(format!("{stem}_{}.png", view.name().to_lowercase()));

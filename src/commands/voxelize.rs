@@ -13,12 +13,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use glam::{UVec3, Vec3};
-use loudscape::render::context::GpuContext;
-use loudscape::render::frame::FrameBinding;
-use loudscape::render::voxelize::{
-    MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION, PERCENTILE, VoxelizePass,
-    default_resolution,
-};
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameBinding;
+use loudscape::render::grid::voxelize::{PERCENTILE, VoxelizePass, default_resolution};
+
+use crate::commands::args::{check_output_folder, check_resolution, check_smoothing, load_cloud};
 
 #[derive(clap::Args, Debug)]
 pub struct VoxelizeArgs {
@@ -55,27 +54,10 @@ fn format_of(path: &Path) -> anyhow::Result<Format> {
 
 pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
     let format = format_of(&args.output)?;
-    if let Some(dir) = args.output.parent().filter(|p| !p.as_os_str().is_empty())
-        && !dir.is_dir()
-    {
-        bail!(
-            "{}: the folder {} does not exist",
-            args.output.display(),
-            dir.display()
-        );
-    }
-    if let Some(res) = args.res
-        && !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&res)
-    {
-        bail!("resolution {res} is out of range {MIN_RESOLUTION} to {MAX_RESOLUTION}");
-    }
-    if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&args.smooth) {
-        bail!(
-            "smoothing sigma {} is out of range 0 to {MAX_SMOOTHING_SIGMA}",
-            args.smooth
-        );
-    }
-    let cloud = super::render::load_cloud(&args.input)?;
+    check_output_folder(&args.output)?;
+    check_resolution(args.res)?;
+    check_smoothing(args.smooth)?;
+    let cloud = load_cloud(&args.input)?;
     let resolution = args.res.unwrap_or(default_resolution(cloud.meta.mode));
     let gpu = GpuContext::new_headless()?;
     let frame = FrameBinding::new(&gpu.device);

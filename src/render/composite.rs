@@ -4,8 +4,8 @@
 //! recorded into, whose format is given at creation. If that format is sRGB, the shader's
 //! gamma-encoded values are decoded first so the screen shows what the PNGs show.
 
+use crate::render::gpu::target::RenderTarget;
 use crate::render::shaders;
-use crate::render::target::RenderTarget;
 
 pub struct CompositePass {
     pipeline: wgpu::RenderPipeline,

@@ -1,9 +1,10 @@
 //! Rendering without a window: the same passes into an offscreen target, read back as an image.
 
-use crate::render::context::GpuContext;
-use crate::render::frame::FrameView;
+use crate::render::gpu::context::GpuContext;
+use crate::render::gpu::readback::ReadbackError;
+use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
-use crate::render::target::{ReadbackError, RenderTarget};
+use crate::view::frame_view::FrameView;
 
 /// Renders one frame at rest (full quality) and returns it with the target still holding it, so
 /// callers can draw more (labels) over it before reading back.

@@ -5,9 +5,9 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::render::frame::FrameBinding;
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::shaders;
-use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]

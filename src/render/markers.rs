@@ -5,9 +5,9 @@
 //! alpha-blended and tested against depth (points in front of a plane hide it), no depth writes.
 //! A box whose size is zero along one axis is drawn as a plane.
 
-use crate::render::frame::FrameBinding;
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::shaders;
-use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
 
 pub const MAX_MARKERS: usize = 8;
 

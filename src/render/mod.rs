@@ -1,21 +1,20 @@
 //! GPU passes. Nothing here knows of egui: the window and the headless renderer both drive
-//! [`scene::Renderer`], which owns one instance of every pass.
+//! [`scene::Renderer`], which owns one instance of every pass, and one [`scene::SceneData`] per
+//! loaded cloud. One pass a file, each beside its shader in shaders/ (same folders) and its CPU
+//! mirror: [`gpu`] (device, targets, read-back, layouts, frame uniforms), [`grid`] (voxelize),
+//! [`surface`] (marching tetrahedra, dual contouring, the draw), [`points`], [`lines`],
+//! [`markers`], [`volume`] (with [`transfer`]), [`composite`]; [`shaders`] composes the WGSL.
 
 pub mod composite;
-pub mod context;
-pub mod dual_contour;
-pub mod frame;
+pub mod gpu;
 pub mod grid;
 pub mod headless;
 pub mod lines;
-pub mod marching_tets;
 pub mod markers;
-pub mod mesh;
 pub mod palette;
 pub mod points;
 pub mod scene;
 pub mod shaders;
-pub mod target;
+pub mod surface;
 pub mod transfer;
 pub mod volume;
-pub mod voxelize;

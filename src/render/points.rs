@@ -9,10 +9,12 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::cloud::Point;
-use crate::render::frame::FrameBinding;
+use crate::data::cloud::Point;
+use crate::render::gpu::context::storage_binding_limit;
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::layouts::{storage_entry, uniform_entry};
+use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::shaders;
-use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
 
 /// Keep in sync with `PointParams` in shaders/points.wgsl.
 #[repr(C)]
@@ -111,10 +113,7 @@ impl PointsGpu {
 
     /// The largest chunk one storage binding and one buffer can hold on this device.
     pub fn chunk_limit(device: &wgpu::Device) -> u64 {
-        let limits = device.limits();
-        limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size)
+        storage_binding_limit(device)
     }
 
     pub fn chunk_count(&self) -> usize {
@@ -134,26 +133,8 @@ impl PointsPass {
         let cloud_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("points::cloud_layout"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::VERTEX,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                storage_entry(0, wgpu::ShaderStages::VERTEX, true),
+                uniform_entry(1, wgpu::ShaderStages::VERTEX),
             ],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

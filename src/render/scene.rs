@@ -5,17 +5,20 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::cloud::{DataMode, PointCloud};
-use crate::render::frame::{FrameBinding, FrameView};
+use crate::data::cloud::{DataMode, PointCloud};
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::target::{BACKGROUND, RenderTarget};
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
 use crate::render::markers::{MarkerBox, MarkersPass};
-use crate::render::mesh::{SurfacePass, SurfaceSettings};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
-use crate::render::target::{BACKGROUND, RenderTarget};
+use crate::render::surface::SurfaceSettings;
+use crate::render::surface::pass::SurfacePass;
+use crate::render::surface::state::ExtractedSurface;
+use crate::view::frame_view::FrameView;
 // Volume view and voxel grid.
 use crate::render::grid::VoxelGrid;
+use crate::render::grid::voxelize::{VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass};
 use crate::render::volume::{VolumeGpu, VolumePass, VolumeSettings};
-use crate::render::voxelize::{VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass};
 
 /// What the 3D view shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -34,14 +37,6 @@ impl ViewKind {
             ViewKind::Surface => "Surface",
             ViewKind::Volume => "Volume",
         }
-    }
-
-    /// Whether this build can draw the view; the others are shown as not yet available.
-    pub fn available(self) -> bool {
-        matches!(
-            self,
-            ViewKind::Points | ViewKind::Surface | ViewKind::Volume
-        )
     }
 
     pub fn parse(name: &str) -> Option<Self> {
@@ -109,6 +104,9 @@ pub struct SceneData {
     pub grid_stats: Option<VoxelStats>,
     grid_key: Option<(u32, u32)>,
     volume: Option<VolumeGpu>,
+    /// The isosurface of the grid, extracted by [`Renderer::surface`] when the Surface view
+    /// draws (each cloud keeps its own).
+    pub surface: ExtractedSurface,
 }
 
 impl SceneData {
@@ -126,8 +124,9 @@ impl SceneData {
         let points = PointsGpu::upload(device, &renderer.points, &cloud.points, max_chunk_bytes);
         let (box_min, box_max) = data_box(cloud);
         let axes = &cloud.meta.axes;
-        let tick_positions =
-            |axis: &crate::axes::Axis| -> Vec<f32> { axis.ticks(8).iter().map(|t| t.at).collect() };
+        let tick_positions = |axis: &crate::data::axes::Axis| -> Vec<f32> {
+            axis.ticks(8).iter().map(|t| t.at).collect()
+        };
         let (tx, ty, tz) = (
             tick_positions(&axes.x),
             tick_positions(&axes.y),
@@ -144,6 +143,7 @@ impl SceneData {
             grid_stats: None,
             grid_key: None,
             volume: None,
+            surface: ExtractedSurface::new(),
         }
     }
 
@@ -239,8 +239,13 @@ impl Renderer {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
             if settings.view == ViewKind::Surface {
-                self.surface
-                    .prepare(queue, encoder, data.grid.as_ref(), &settings.surface);
+                self.surface.prepare(
+                    queue,
+                    encoder,
+                    &data.surface,
+                    data.grid.as_ref(),
+                    &settings.surface,
+                );
             }
             if let (ViewKind::Volume, Some(volume)) = (settings.view, &data.volume) {
                 self.volume
@@ -280,7 +285,7 @@ impl Renderer {
         };
         match (settings.view, &data.volume) {
             (ViewKind::Surface, _) if data.grid.is_some() => {
-                self.surface.draw(&mut pass, &self.frame);
+                self.surface.draw(&mut pass, &self.frame, &data.surface);
             }
             // A slow device may ask for the points as a stand-in while the camera moves.
             (ViewKind::Volume, Some(volume)) if !(view.moving && settings.points_while_moving) => {

@@ -9,11 +9,11 @@ pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 pub const MARKERS: &str = include_str!("../../shaders/markers.wgsl");
-pub const ISO_GRID: &str = include_str!("../../shaders/utils/iso_grid.wgsl");
-pub const MARCHING_TETS: &str = include_str!("../../shaders/marching_tets.wgsl");
-pub const DUAL_CONTOUR: &str = include_str!("../../shaders/dual_contour.wgsl");
-pub const MESH: &str = include_str!("../../shaders/mesh.wgsl");
-pub const VOXELIZE: &str = include_str!("../../shaders/voxelize.wgsl");
+pub const SURFACE_EXTRACTION: &str = include_str!("../../shaders/surface/extraction.wgsl");
+pub const MARCHING_TETS: &str = include_str!("../../shaders/surface/marching_tets.wgsl");
+pub const DUAL_CONTOUR: &str = include_str!("../../shaders/surface/dual_contour.wgsl");
+pub const SURFACE_DRAW: &str = include_str!("../../shaders/surface/draw.wgsl");
+pub const VOXELIZE: &str = include_str!("../../shaders/grid/voxelize.wgsl");
 pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
@@ -46,15 +46,15 @@ pub fn composite() -> String {
 }
 
 pub fn marching_tets() -> String {
-    compose(&[ISO_GRID, MARCHING_TETS])
+    compose(&[SURFACE_EXTRACTION, MARCHING_TETS])
 }
 
 pub fn dual_contour() -> String {
-    compose(&[ISO_GRID, DUAL_CONTOUR])
+    compose(&[SURFACE_EXTRACTION, DUAL_CONTOUR])
 }
 
-pub fn mesh() -> String {
-    compose(&[FRAME, MESH])
+pub fn surface_draw() -> String {
+    compose(&[FRAME, SURFACE_DRAW])
 }
 
 /// Every shader module the app builds, by name, as handed to the GPU.
@@ -66,7 +66,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("markers", markers()),
         ("marching_tets", marching_tets()),
         ("dual_contour", dual_contour()),
-        ("mesh", mesh()),
+        ("surface_draw", surface_draw()),
         ("voxelize", voxelize()),
         ("volume", volume()),
     ]

@@ -10,10 +10,11 @@
 //! composites front to back until the opacity passes 0.99. Depth is written where the opacity
 //! first passes one half, so lines drawn afterwards hide behind dense volume only.
 
-use crate::render::frame::FrameBinding;
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::gpu::layouts::{storage_entry, uniform_entry};
+use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
-use crate::render::target::{COLOR_FORMAT, DEPTH_FORMAT};
 pub use crate::render::transfer::TransferPreset;
 
 /// Opacity per voxel of ray length at transfer-function opacity 1 and opacity scale 1: a ray
@@ -140,29 +141,11 @@ pub struct VolumePass {
 impl VolumePass {
     pub fn new(device: &wgpu::Device, frame: &FrameBinding) -> Self {
         let module = shaders::module(device, "volume", &shaders::volume());
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let storage = |binding| storage_entry(binding, wgpu::ShaderStages::FRAGMENT, true);
         let grid_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("volume::grid_layout"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
                 storage(1),
                 storage(2),
             ],

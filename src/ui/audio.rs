@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use eframe::egui::{self, Color32, RichText};
 
-use crate::cloud::PointCloud;
+use crate::data::cloud::PointCloud;
 use crate::playback::{self, PlaybackError, Player, Playhead, RodioBackend, Track};
 
 /// What the bar knows about the song of the current Song cloud.

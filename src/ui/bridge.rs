@@ -8,11 +8,11 @@ use std::collections::HashMap;
 
 use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor};
 
-use crate::cloud::PointCloud;
+use crate::data::cloud::PointCloud;
 use crate::render::composite::CompositePass;
-use crate::render::frame::FrameView;
+use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
-use crate::render::target::RenderTarget;
+use crate::view::frame_view::FrameView;
 
 /// GPU state owned by the window, kept in egui_wgpu's callback resources.
 pub struct ViewResources {
@@ -55,8 +55,8 @@ impl ViewResources {
         cloud: &PointCloud,
         view: &FrameView,
         settings: &RenderSettings,
-    ) -> Result<image::RgbaImage, crate::screenshot::ScreenshotError> {
-        let gpu = crate::render::context::GpuContext {
+    ) -> Result<image::RgbaImage, crate::ui::screenshot::ScreenshotError> {
+        let gpu = crate::render::gpu::context::GpuContext {
             adapter: render_state.adapter.clone(),
             device: render_state.device.clone(),
             queue: render_state.queue.clone(),
@@ -65,7 +65,7 @@ impl ViewResources {
         let resources = renderer.callback_resources.get::<ViewResources>();
         let scene = resources.and_then(|r| r.scenes.get(&id).map(|data| (r, data)));
         match scene {
-            Some((r, data)) => crate::screenshot::render_view(
+            Some((r, data)) => crate::ui::screenshot::render_view(
                 &gpu,
                 &r.renderer,
                 Some((cloud, data)),
@@ -74,7 +74,7 @@ impl ViewResources {
             ),
             None => {
                 let renderer = Renderer::new(&gpu.device);
-                crate::screenshot::render_view(&gpu, &renderer, None, view, settings)
+                crate::ui::screenshot::render_view(&gpu, &renderer, None, view, settings)
             }
         }
     }
@@ -83,14 +83,14 @@ impl ViewResources {
     pub fn read_grid(
         render_state: &egui_wgpu::RenderState,
         id: u64,
-    ) -> Option<crate::pick::CpuGrid> {
+    ) -> Option<crate::data::field::Field> {
         let renderer = render_state.renderer.read();
         let resources = renderer.callback_resources.get::<ViewResources>()?;
         let grid = resources.scenes.get(&id)?.grid.as_ref()?;
         let (device, queue) = (&render_state.device, &render_state.queue);
         let density = grid.read_field(device, queue, &grid.density).ok()?;
         let hp_mean = grid.read_field(device, queue, &grid.hp_mean).ok()?;
-        Some(crate::pick::CpuGrid {
+        Some(crate::data::field::Field {
             dims: grid.dims,
             box_min: grid.box_min,
             box_max: grid.box_max,
@@ -105,7 +105,7 @@ impl ViewResources {
         render_state: &egui_wgpu::RenderState,
         id: u64,
         cloud: &PointCloud,
-        voxels: &crate::render::voxelize::VoxelSettings,
+        voxels: &crate::render::grid::voxelize::VoxelSettings,
     ) -> Result<bool, String> {
         let mut renderer = render_state.renderer.write();
         let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() else {
@@ -127,21 +127,26 @@ impl ViewResources {
         .map_err(|e| format!("{}: {e}", cloud.path.display()))
     }
 
-    /// The surface pass's state: triangle counts of the last extraction, an error to show, and
+    /// The surface of cloud `id`: triangle counts of the last extraction, an error to show, and
     /// whether it needs another frame to finish (buffers growing).
     pub fn surface_status(
         render_state: &egui_wgpu::RenderState,
+        id: u64,
     ) -> (
-        Option<crate::render::mesh::SurfaceCounts>,
+        Option<crate::render::surface::SurfaceCounts>,
         Option<String>,
         bool,
     ) {
         let renderer = render_state.renderer.read();
-        match renderer.callback_resources.get::<ViewResources>() {
-            Some(r) => (
-                r.renderer.surface.counts(),
-                r.renderer.surface.error(),
-                r.renderer.surface.needs_another_frame(),
+        match renderer
+            .callback_resources
+            .get::<ViewResources>()
+            .and_then(|r| r.scenes.get(&id))
+        {
+            Some(scene) => (
+                scene.surface.counts(),
+                scene.surface.error(),
+                scene.surface.needs_another_frame(),
             ),
             None => (None, None, false),
         }

@@ -1,8 +1,22 @@
-//! The window: egui panels around the 3D view. [`bridge`] is the one place where egui meets the
-//! render passes (an egui_wgpu paint callback: prepare renders offscreen, paint composites).
+//! The window and everything egui (nothing else in the crate knows egui): [`app`] opens the
+//! window and draws a frame over the state in `state.rs`, whose behaviour is split by concern
+//! (`slots.rs`, `panels.rs`, `legends.rs`, `hover.rs`, `persistence.rs`,
+//! `window_screenshot.rs`). egui meets the render passes in two places: [`bridge`] (the
+//! window's egui_wgpu paint callback: prepare renders offscreen, paint composites) and
+//! [`labels`] (axis labels, also drawn headless into a render target); [`screenshot`] renders a
+//! view offscreen and saves PNGs, [`audio`] is the transport bar.
 
 pub mod app;
 pub mod audio;
 pub mod bridge;
+mod hover;
+pub mod labels;
+mod legends;
+mod panels;
+mod persistence;
+pub mod screenshot;
+mod slots;
+mod state;
+mod window_screenshot;
 
 pub use app::{WindowOptions, run};

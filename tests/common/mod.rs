@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use loudscape::render::context::GpuContext;
+use loudscape::render::gpu::context::GpuContext;
 
 /// A headless device; the tests need one (install mesa-vulkan-drivers for lavapipe).
 pub fn gpu() -> GpuContext {

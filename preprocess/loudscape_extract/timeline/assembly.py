@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from loudscape_extract.contract import check_cloud
 from loudscape_extract.dynamics import DC_WARN_THRESHOLD
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import FORMAT_VERSION, MODE_TIMELINE
@@ -38,6 +39,8 @@ class TimelineResult:
     cached: int
     #: Frames drawn per song (the request, lowered by the point cap).
     frames_per_song: int = 0
+    #: One line each: repaired cache entries, files listed twice, truncated or corrupt songs.
+    notes: list = field(default_factory=list)
     #: (path, DC offset) of songs whose offset is over DC_WARN_THRESHOLD.
     dc_offsets: list = field(default_factory=list)
 
@@ -53,6 +56,7 @@ def build_timeline(
     hop_length: int = 1024,
     cache_dir: str | None = None,
     jobs: int = 1,
+    strict: bool = False,
     z_measure: str = DEFAULT_Z_MEASURE,
     highpass_hz: float | None = None,
     progress: Callable[[int, int, str], None] | None = None,
@@ -63,9 +67,12 @@ def build_timeline(
 
     Songs that fail to decode are skipped and listed in ``result.failed`` (and in the
     metadata's ``extraction.skipped``); songs without a year likewise in ``without_year``
-    (with ``x_by="order"`` they are placed after the dated songs instead). ``z_measure`` is
-    one of :data:`Z_MEASURES`; ``highpass_hz`` high-pass filters each song before its dynamics
-    (see :func:`track_features`).
+    (with ``x_by="order"`` they are placed after the dated songs instead). A truncated or
+    corrupt song is used as far as it decodes, with a line in ``result.notes`` (``strict``: it
+    fails instead). The output is checked first: it must end with .ply and be none of the
+    inputs (the songs, the manifest). ``z_measure`` is one of :data:`Z_MEASURES`;
+    ``highpass_hz`` high-pass filters each song before its dynamics (see
+    :func:`track_features`).
 
     ``frames_per_song`` is lowered for many songs so the cloud stays under ``max_points``
     (:func:`frames_per_song_for`; None or 0: no cap). ``scheduler`` runs the songs on Dask
@@ -83,10 +90,12 @@ def build_timeline(
     if z_measure not in Z_MEASURES:
         raise ExtractError(f"--z-measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
     check_output_path(output)
-    entries, without_year, tag_failures = collect_entries(
+    entries, without_year, tag_failures, notes = collect_entries(
         inputs, manifest=manifest, need_year=x_by == "year"
     )
     paths = [e.path for e in entries]
+    sources = [*paths, *tag_failures, *without_year] + ([manifest] if manifest else [])
+    check_output_path(output, inputs=sources)
     total = len(paths)
 
     def on_done(done, path):
@@ -103,9 +112,14 @@ def build_timeline(
         hop_length=hop_length,
         cache_dir=cache_dir,
         jobs=jobs,
+        strict=strict,
         highpass_hz=highpass_hz,
         on_done=on_done,
+        notes=notes,
     )
+    notes += [
+        f"{path}: {songs[path].warning}" for path in paths if path in songs and songs[path].warning
+    ]
     failed.update(tag_failures)
     good = [e for e in entries if e.path in songs]
     if not good:
@@ -146,6 +160,7 @@ def build_timeline(
             "generator": GENERATOR,
         },
     }
+    check_cloud(points, metadata, path=output)
     write_ply(output, points=points, metadata=metadata)
     return TimelineResult(
         metadata=metadata,
@@ -155,5 +170,6 @@ def build_timeline(
         few_frames=few,
         cached=n_cached,
         frames_per_song=drawn_per_song,
+        notes=notes,
         dc_offsets=dc_offsets,
     )

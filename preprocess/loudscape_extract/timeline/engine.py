@@ -1,18 +1,46 @@
-"""Per-song work for a timeline: from the cache or computed, in a pool of worker processes."""
+"""Per-song work for a timeline: from the cache or computed, in a pool of worker processes.
+
+Stopping: when the caller is interrupted (Ctrl+C, or SIGTERM turned into an exception by the
+command line) the pending songs are cancelled and the running workers terminated at once,
+their cache temporaries removed; entries already saved stay. Workers ignore SIGINT (the
+parent decides) and exit by themselves when the parent process is gone.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+import signal
+import threading
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
 
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.timeline.cache import ENTRY_SUFFIX, cache_key, load_entry, save_entry
+from loudscape_extract.timeline.cache import (
+    ENTRY_SUFFIX,
+    cache_key,
+    read_entry,
+    remove_temporaries,
+    save_entry,
+)
 from loudscape_extract.timeline.frames import SongFrames, compute_song_frames
 from loudscape_extract.timeline.layout import DEFAULT_Z_MEASURE, sample_song
 
-__all__ = ["compute_all", "song_frames"]
+__all__ = ["SongOutcome", "compute_all", "song_frames"]
+
+
+@dataclass
+class SongOutcome:
+    """What one song's job gives back."""
+
+    path: str
+    song: SongFrames | None = None
+    cached: bool = False
+    error: str | None = None
+    notes: list[str] = field(default_factory=list)
 
 
 def song_frames(
@@ -21,9 +49,14 @@ def song_frames(
     n_fft: int,
     hop_length: int,
     cache_dir: str | None,
+    strict: bool = False,
+    notes: list[str] | None = None,
     highpass_hz: float | None = None,
 ) -> tuple[SongFrames, bool]:
     """One song's frames, from the cache when its content and parameters match.
+
+    An entry that cannot be read (truncated, empty, wrong shapes) is recomputed and replaced,
+    and a line saying so is appended to ``notes``.
 
     Returns
     -------
@@ -32,17 +65,26 @@ def song_frames(
         True when read from the cache (no decoding).
     """
     if cache_dir is None:
-        return compute_song_frames(
-            path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz
-        ), False
+        song = compute_song_frames(
+            path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict
+        )
+        return song, False
     entry = os.path.join(
         cache_dir,
         cache_key(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz) + ENTRY_SUFFIX,
     )
-    song = load_entry(entry) if os.path.exists(entry) else None
-    if song is not None:
-        return song, True
-    song = compute_song_frames(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
+    if os.path.exists(entry):
+        song, problem = read_entry(entry)
+        if song is not None:
+            return song, True
+        if notes is not None:
+            notes.append(
+                f"{path}: its cache entry {entry} could not be read ({problem}); "
+                "recomputed and replaced"
+            )
+    song = compute_song_frames(
+        path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict
+    )
     try:
         save_entry(entry, song)
     except OSError:
@@ -59,30 +101,90 @@ def _job(
     n_fft: int,
     hop_length: int,
     cache_dir: str | None,
-    highpass_hz=None,
+    strict: bool = False,
+    highpass_hz: float | None = None,
     frames_per_song: int | None = None,
     z_measure: str = DEFAULT_Z_MEASURE,
 ):
-    """One song's work, a pure function of its arguments (and the file's content):
-    (path, SampledSong or SongFrames or None, cached, error message or None).
+    """Worker: one song's :class:`SongOutcome`, a pure function of its arguments (and the
+    file's content); never raises for a bad song.
 
-    With ``frames_per_song`` the song is sampled here, so only its drawn frames travel back.
+    With ``frames_per_song`` the song is sampled here (``outcome.song`` is a
+    :class:`SampledSong`), so only its drawn frames travel back.
     """
     if os.environ.get(_EXIT_HOOK) and os.environ[_EXIT_HOOK] == os.path.basename(path):
         os._exit(70)
+    outcome = SongOutcome(path)
     try:
         song, cached = song_frames(
-            path, n_fft=n_fft, hop_length=hop_length, cache_dir=cache_dir, highpass_hz=highpass_hz
+            path,
+            n_fft=n_fft,
+            hop_length=hop_length,
+            cache_dir=cache_dir,
+            strict=strict,
+            highpass_hz=highpass_hz,
+            notes=outcome.notes,
         )
-        if frames_per_song is not None:
-            song = sample_song(song, frames_per_song=frames_per_song, z_measure=z_measure)
-        return path, song, cached, None
+        if strict and song.warning:
+            outcome.error = f"{song.warning} (--strict)"
+        else:
+            if frames_per_song is not None:
+                song = sample_song(song, frames_per_song=frames_per_song, z_measure=z_measure)
+            outcome.song, outcome.cached = song, cached
     except ExtractError as exc:
-        return path, None, False, exc.message
+        outcome.error = exc.message
     except MemoryError:
-        return path, None, False, "out of memory"
+        outcome.error = "out of memory"
     except Exception as exc:  # noqa: BLE001 - one bad song must not stop the timeline
-        return path, None, False, " ".join(str(exc).split()) or type(exc).__name__
+        outcome.error = " ".join(str(exc).split()) or type(exc).__name__
+    return outcome
+
+
+def _worker_start(parent: int) -> None:
+    """Pool initializer: leave SIGINT to the parent, die on SIGTERM, and exit once the parent
+    process is gone (SIGKILL, crash) instead of waiting forever for work."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="loudscape-parent-watch", daemon=True).start()
+
+
+def _stop_pool(pool: ProcessPoolExecutor, cache_dir: str | None) -> None:
+    """Cancel queued songs, terminate running workers, remove their cache temporaries."""
+    # The executor has no public way to stop running calls: its worker processes are
+    # terminated directly (``_processes``, present in CPython 3.10 to 3.14).
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    deadline = time.monotonic() + 2.0
+    for process in processes:
+        process.join(max(deadline - time.monotonic(), 0.0))
+        if process.is_alive():
+            process.kill()
+            process.join(1.0)
+    if cache_dir is not None:
+        remove_temporaries(cache_dir, {p.pid for p in processes if p.pid is not None})
+
+
+@contextlib.contextmanager
+def _sigint_blocked():
+    """Hold SIGINT in this thread for the block; one that arrives meanwhile is delivered, as
+    KeyboardInterrupt, when the block ends."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -96,11 +198,13 @@ def compute_all(
     hop_length: int,
     cache_dir: str | None,
     jobs: int,
+    strict: bool = False,
     highpass_hz: float | None = None,
     on_done: Callable[[int, str], None] | None = None,
     frames_per_song: int | None = None,
     z_measure: str = DEFAULT_Z_MEASURE,
     scheduler: str | None = None,
+    notes: list[str] | None = None,
 ) -> tuple[dict, dict[str, str], int]:
     """Features of every path, ``jobs`` worker processes at a time, or on Dask.
 
@@ -116,6 +220,9 @@ def compute_all(
         address of a running ``dask.distributed`` scheduler (``tcp://host:8786``); its
         workers must see the song paths and ``cache_dir`` (a shared folder).
 
+    notes : list of str, optional
+        Receives one line per repaired cache entry.
+
     Returns
     -------
     songs : dict path -> SongFrames or SampledSong
@@ -127,35 +234,51 @@ def compute_all(
     failed: dict[str, str] = {}
     n_cached = 0
     done = 0
+    if cache_dir is not None:
+        remove_temporaries(cache_dir)  # left by a run that was killed
 
-    def collect(result):
+    def collect(outcome: SongOutcome):
         nonlocal n_cached, done
-        path, song, cached, error = result
         done += 1
-        if error is None:
-            songs[path] = song
-            n_cached += cached
+        if notes is not None:
+            notes.extend(outcome.notes)
+        if outcome.error is None:
+            songs[outcome.path] = outcome.song
+            n_cached += outcome.cached
         else:
-            failed[path] = error
+            failed[outcome.path] = outcome.error
         if on_done:
-            on_done(done, path)
+            on_done(done, outcome.path)
 
-    arguments = (n_fft, hop_length, cache_dir, highpass_hz, frames_per_song, z_measure)
+    arguments = (n_fft, hop_length, cache_dir, strict, highpass_hz, frames_per_song, z_measure)
     if scheduler is not None:
-        for result in _dask_results(paths, arguments, scheduler=scheduler, jobs=jobs):
-            collect(result)
-    elif jobs <= 1 or len(paths) <= 1:
+        # Closed explicitly, so that an interrupt (Ctrl+C, SIGTERM) raised while a result is
+        # being collected also shuts the local cluster down before the exception goes on.
+        with contextlib.closing(
+            _dask_results(paths, arguments, scheduler=scheduler, jobs=jobs)
+        ) as results:
+            for outcome in results:
+                collect(outcome)
+        return songs, failed, n_cached
+    if jobs <= 1 or len(paths) <= 1:
         for path in paths:
             collect(_job(path, *arguments))
-    else:
-        with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
-            futures = {pool.submit(_job, p, *arguments): p for p in paths}
-            for future in as_completed(futures):
-                try:
-                    result = future.result()
-                except Exception as exc:  # noqa: BLE001 - e.g. a worker killed for memory
-                    result = (futures[future], None, False, f"worker failed ({_one_line(exc)})")
-                collect(result)
+        return songs, failed, n_cached
+    pool = ProcessPoolExecutor(
+        max_workers=min(jobs, len(paths)), initializer=_worker_start, initargs=(os.getpid(),)
+    )
+    try:
+        futures = {pool.submit(_job, p, *arguments): p for p in paths}
+        for future in as_completed(futures):
+            try:
+                outcome = future.result()
+            except Exception as exc:  # noqa: BLE001 - e.g. a worker killed for memory
+                outcome = SongOutcome(futures[future], error=f"worker failed ({_one_line(exc)})")
+            collect(outcome)
+    except BaseException:
+        _stop_pool(pool, cache_dir)
+        raise
+    pool.shutdown(wait=True)
     return songs, failed, n_cached
 
 
@@ -192,12 +315,18 @@ def _dask_results(paths: Sequence[str], arguments: tuple, *, scheduler: str, job
     try:
         with dask.config.set(settings if scheduler == "local" else {}):
             if scheduler == "local":
-                cluster = LocalCluster(
-                    n_workers=max(1, jobs),
-                    threads_per_worker=1,
-                    processes=True,
-                    dashboard_address=None,
-                )
+                # Ctrl+C goes to the whole process group: the cluster's workers ignore SIGINT
+                # (a preload, run in every worker, a restarted one too), so the parent alone
+                # decides, as with the pool, and closes the cluster on its way out. A Ctrl+C
+                # while the cluster starts is held until ``cluster`` is set, so it is closed.
+                with _sigint_blocked():
+                    cluster = LocalCluster(
+                        n_workers=max(1, jobs),
+                        threads_per_worker=1,
+                        processes=True,
+                        dashboard_address=None,
+                        preload=["loudscape_extract.timeline.dask_worker"],
+                    )
                 client = Client(cluster)
             else:
                 try:
@@ -218,7 +347,7 @@ def _dask_results(paths: Sequence[str], arguments: tuple, *, scheduler: str, job
                     except Exception as exc:  # noqa: BLE001 - KilledWorker, lost data, ...
                         name = type(exc).__name__
                         reason = "worker died" if name == "KilledWorker" else _one_line(exc)
-                        result = (path, None, False, f"worker failed ({reason})")
+                        result = SongOutcome(path, error=f"worker failed ({reason})")
                     future.release()
                     yield result
     finally:

@@ -25,6 +25,8 @@ class SongFrames:
         All STFT frames, silent ones included.
     metrics : dict
         The Song metrics plus ``hp_mean`` (mean over non-silent frames of the frame hp).
+    warning : str
+        The decoder's note (:attr:`Audio.warning`): non-empty for a truncated or corrupt file.
     """
 
     rms_dbfs: np.ndarray
@@ -33,21 +35,31 @@ class SongFrames:
     hp_mean: np.ndarray
     n_frames_total: int
     metrics: dict = field(default_factory=dict)
+    warning: str = ""
     psr_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     crest_3s_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
 
 
 def compute_song_frames(
-    path: str, *, n_fft: int, hop_length: int, highpass_hz: float | None = None
+    path: str,
+    *,
+    n_fft: int,
+    hop_length: int,
+    highpass_hz: float | None = None,
+    strict: bool = False,
 ) -> SongFrames:
     """Run the Song pipeline's per-frame features (streamed in bounded memory,
-    :func:`stream_track`), keep frames and metrics."""
-    features = stream_track(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
-    return frames_of(features)
+    :func:`stream_track`), keep frames and metrics. A truncated or corrupt file is used as far
+    as it decodes, with :attr:`SongFrames.warning` saying so (``strict``: an error)."""
+    features = stream_track(
+        path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict
+    )
+    return frames_of(features, warning=features.warning)
 
 
-def frames_of(features: TrackFeatures | StreamedTrack) -> SongFrames:
-    """What the timeline keeps of a track's features (also for audio that is not a file)."""
+def frames_of(features: TrackFeatures | StreamedTrack, *, warning: str = "") -> SongFrames:
+    """What the timeline keeps of a track's features (also for audio that is not a file);
+    ``warning`` is the decoder's note on a damaged file."""
     frames = features.frames
     keep = ~frames.silent
     hp = frames.hp_mean[keep]
@@ -61,6 +73,7 @@ def frames_of(features: TrackFeatures | StreamedTrack) -> SongFrames:
         hp_mean=hp.astype(np.float32),
         n_frames_total=int(frames.silent.shape[0]),
         metrics=metrics,
+        warning=warning,
         psr_db=frames.psr_db[keep].astype(np.float32),
         crest_3s_db=frames.crest_3s_db[keep].astype(np.float32),
     )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import datetime
 import os
 import re
 from collections.abc import Sequence
@@ -10,16 +11,23 @@ from dataclasses import dataclass
 
 from loudscape_extract.audio import SUPPORTED_EXTENSIONS
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.messages import shorten
+from loudscape_extract.paths import check_regular_input
 
 __all__ = [
+    "FIRST_YEAR",
     "SongEntry",
     "collect_entries",
     "discover_audio",
+    "manifest_entries",
     "parse_year",
+    "plausible_years",
     "read_manifest",
     "read_tags",
 ]
 
+#: The earliest plausible release year (the first recordings of sound); the latest is next year.
+FIRST_YEAR = 1860
 _YEAR = re.compile(r"(?<!\d)(\d{4})(?!\d)")
 
 
@@ -42,9 +50,14 @@ def discover_audio(inputs: Sequence[str]) -> list[str]:
             for root, dirs, files in os.walk(item):
                 dirs.sort()
                 for name in sorted(files):
-                    if os.path.splitext(name)[1].lower() in SUPPORTED_EXTENSIONS:
-                        found.append(os.path.join(root, name))
+                    full = os.path.join(root, name)
+                    # Regular files only: a FIFO named .wav would block its reader forever.
+                    if os.path.splitext(name)[1].lower() in SUPPORTED_EXTENSIONS and (
+                        os.path.isfile(full)
+                    ):
+                        found.append(full)
         elif os.path.exists(item):
+            check_regular_input(item)
             found.append(item)
         else:
             raise ExtractError("no such file or folder", path=item)
@@ -101,55 +114,131 @@ def read_tags(path: str) -> dict:
     return result
 
 
+def plausible_years() -> tuple[int, int]:
+    """The years a song may have: :data:`FIRST_YEAR` (recorded sound) to next year."""
+    return FIRST_YEAR, datetime.date.today().year + 1
+
+
+def _year_problem(year: int) -> str:
+    low, high = plausible_years()
+    if low <= year <= high:
+        return ""
+    return f"year {year} is outside the plausible {low}-{high}"
+
+
 def read_manifest(path: str) -> list[SongEntry]:
     """Songs from a CSV with columns ``path``, ``year`` and optionally ``title``, ``artist``.
 
-    Paths are relative to the manifest's folder. Every problem raises :class:`ExtractError`
-    naming the manifest, the line and the offending value.
+    CSV as Python's csv module reads it (a comma inside a value needs double quotes). Paths are
+    relative to the manifest's folder. Blank lines and empty trailing cells (a trailing comma)
+    are ignored. Every problem raises :class:`ExtractError` naming the manifest, the line and
+    the offending value; a line with more cells than the header (an unquoted comma) is one.
     """
-    if not os.path.isfile(path):
-        raise ExtractError("no such manifest file", path=path)
+    return [entry for entry, _line in manifest_entries(path)]
+
+
+def manifest_entries(path: str) -> list[tuple[SongEntry, int]]:
+    """:func:`read_manifest`'s entries with the line each came from."""
+    check_regular_input(path, what="manifest file")
     folder = os.path.dirname(path)
     try:
         with open(path, newline="", encoding="utf-8-sig") as handle:
-            reader = csv.DictReader(handle)
-            rows = list(reader)
-            columns = [(c or "").strip().lower() for c in (reader.fieldnames or [])]
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise ExtractError(f"cannot read manifest ({exc})", path=path) from exc
+            records = _csv_records(handle, path)
+    except OSError as exc:
+        raise ExtractError(f"cannot read manifest ({exc.strerror or exc})", path=path) from exc
+    except UnicodeDecodeError as exc:
+        raise ExtractError(
+            f"manifest is not UTF-8 text (bad byte at offset {exc.start})", path=path
+        ) from exc
+    if not records:
+        raise ExtractError("manifest is empty (expected a header line path,year)", path=path)
+    header_line, header = records[0]
+    columns = [cell.strip().lower() for cell in header]
+    while columns and not columns[-1]:
+        columns.pop()  # a trailing comma on the header line
     missing = {"path", "year"} - set(columns)
     if missing:
         raise ExtractError(
-            f"manifest needs columns path and year; missing {', '.join(sorted(missing))} "
-            f"(has {', '.join(columns) or 'none'})",
+            f"line {header_line}: manifest needs columns path and year; missing "
+            f"{', '.join(sorted(missing))} (has {shorten(','.join(columns), 120)})",
             path=path,
         )
     entries = []
-    for line, row in enumerate(rows, start=2):
-        row = {(k or "").strip().lower(): (v or "").strip() for k, v in row.items()}
+    for line, cells in records[1:]:
+        cells = [cell.strip() for cell in cells]
+        while len(cells) > len(columns) and not cells[-1]:
+            cells.pop()  # trailing commas
+        if len(cells) > len(columns):
+            raise ExtractError(
+                f"line {line}: {len(cells)} values but the header has {len(columns)} columns "
+                f'(an unquoted comma? quote such values: "Hello, World")',
+                path=path,
+            )
+        row = dict(zip(columns, cells + [""] * (len(columns) - len(cells)), strict=True))
         if not row.get("path"):
             raise ExtractError(f"line {line}: empty path", path=path)
         song = os.path.join(folder, row["path"])
+        if not os.path.exists(song):
+            raise ExtractError(f"line {line}: no such file {shorten(song)}", path=path)
         if not os.path.isfile(song):
-            raise ExtractError(f"line {line}: no such file {song!r}", path=path)
+            raise ExtractError(f"line {line}: {shorten(song)} is not a regular file", path=path)
         try:
             year = int(row.get("year", ""))
         except ValueError:
             raise ExtractError(
-                f"line {line}: year {row.get('year')!r} of {row['path']!r} is not a whole number",
+                f"line {line}: year {shorten(row.get('year'), 40)} of {shorten(row['path'])} "
+                "is not a whole number",
                 path=path,
             ) from None
-        if not 1000 <= year <= 9999:
-            raise ExtractError(f"line {line}: year {year} is not a four-digit year", path=path)
-        entries.append(SongEntry(song, year, row.get("title", ""), row.get("artist", "")))
+        problem = _year_problem(year)
+        if problem:
+            raise ExtractError(f"line {line}: {problem} ({shorten(row['path'])})", path=path)
+        entries.append((SongEntry(song, year, row.get("title", ""), row.get("artist", "")), line))
     if not entries:
         raise ExtractError("manifest lists no songs", path=path)
     return entries
 
 
+def _csv_records(handle, path: str) -> list[tuple[int, list[str]]]:
+    """Non-blank CSV records, each with the line it starts on."""
+    reader = csv.reader(handle)
+    records = []
+    line = 1
+    while True:
+        try:
+            cells = next(reader)
+        except StopIteration:
+            return records
+        except csv.Error as exc:
+            raise ExtractError(f"line {reader.line_num}: bad CSV ({exc})", path=path) from None
+        if any(cell.strip() for cell in cells):
+            records.append((line, cells))
+        line = reader.line_num + 1
+
+
+def _drop_duplicates(entries, describe) -> tuple[list, list[str]]:
+    """Keep the first of entries naming one file (same device and inode); messages for the rest."""
+    seen: dict[tuple[int, int], object] = {}
+    kept, notes = [], []
+    for item in entries:
+        entry = item[0] if isinstance(item, tuple) else item
+        try:
+            info = os.stat(entry.path)
+            key = (info.st_dev, info.st_ino)
+        except OSError:
+            kept.append(item)
+            continue
+        if key in seen:
+            notes.append(describe(item, seen[key]))
+            continue
+        seen[key] = item
+        kept.append(item)
+    return kept, notes
+
+
 def collect_entries(
     inputs: Sequence[str], *, manifest: str | None = None, need_year: bool = True
-) -> tuple[list[SongEntry], list[str], dict[str, str]]:
+) -> tuple[list[SongEntry], list[str], dict[str, str], list[str]]:
     """The songs to place, from ``manifest`` or from the tags of the files under ``inputs``.
 
     Returns
@@ -160,7 +249,9 @@ def collect_entries(
         Files whose tags have no year (left out when ``need_year``; with ``need_year=False``,
         for ``x_by="order"``, they are placed after the dated songs and this is empty).
     tag_failures : dict path -> reason
-        Files whose tags could not be read.
+        Files whose tags could not be read or give an implausible year.
+    duplicates : list of str
+        One message per file listed again (another path, a link): it is kept once.
 
     Raises
     ------
@@ -172,15 +263,31 @@ def collect_entries(
     if manifest is not None:
         if inputs:
             raise ExtractError("give either folders/files or --manifest, not both")
-        entries = read_manifest(manifest)
+        numbered, notes = _drop_duplicates(
+            manifest_entries(manifest),
+            lambda item, first: (
+                f"{manifest}: line {item[1]}: {item[0].path} is the same file "
+                f"as line {first[1]} ({first[0].path}); kept once"
+            ),
+        )
+        entries = [entry for entry, _line in numbered]
     else:
         if not inputs:
             raise ExtractError("no input: give folders or files, or --manifest songs.csv")
+        found, notes = _drop_duplicates(
+            [SongEntry(path, 0) for path in discover_audio(inputs)],
+            lambda item, first: f"{item.path}: the same file as {first.path}; kept once",
+        )
         entries = []
-        for path in discover_audio(inputs):
+        for path in (entry.path for entry in found):
             tags = read_tags(path)
+            year_problem = "" if tags["year"] is None else _year_problem(tags["year"])
             if tags["error"]:
                 tag_failures[path] = tags["error"]
+            elif year_problem:
+                tag_failures[path] = (
+                    f"{year_problem} (from its tags); fix the tag or use --manifest"
+                )
             elif tags["year"] is None and need_year:
                 without_year.append(path)
             else:
@@ -198,4 +305,4 @@ def collect_entries(
                 f"(first: {without_year[0]}); tag them or use --manifest",
                 path=", ".join(inputs),
             )
-    return entries, without_year, tag_failures
+    return entries, without_year, tag_failures, notes

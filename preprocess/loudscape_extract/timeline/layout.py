@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import axis, hp_axis, level_axis, scalar_axis
 from loudscape_extract.timeline.frames import SongFrames
@@ -105,6 +106,8 @@ class SampledSong:
         take it); None when no frame has one.
     frames_non_silent, frames_total : int
     metrics : dict
+    warning : str
+        The decoder's note on a truncated or corrupt file (:attr:`SongFrames.warning`).
     """
 
     rms_dbfs: np.ndarray
@@ -115,6 +118,7 @@ class SampledSong:
     frames_non_silent: int
     frames_total: int
     metrics: dict
+    warning: str = ""
 
 
 def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> SampledSong:
@@ -133,6 +137,7 @@ def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> Sa
         frames_non_silent=int(song.rms_dbfs.shape[0]),
         frames_total=int(song.n_frames_total),
         metrics=dict(song.metrics),
+        warning=song.warning,
     )
 
 
@@ -197,8 +202,8 @@ def _tick_years(first: int, last: int) -> list[int]:
 def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
     """The x axis object: years proportional (``x_by="year"``) or a tick per year group."""
     dated = [e.year for e in entries if e.year is not None]
-    if not dated:  # by order, no song has a year: the axis counts songs
-        return axis("song", "", 1, len(entries), ticks=[])
+    if not dated:  # by order, no song has a year: the axis counts songs, song k in [k-1, k]
+        return axis("song", "", 0, len(entries), ticks=[])
     first, last = min(dated), max(dated)
     ticks = []
     if x_by == "year":
@@ -217,7 +222,8 @@ def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
         if group not in seen:
             seen.add(group)
             ticks.append({"at": round(span[0], 6), "label": str(max(group, first))})
-    return axis("year", "year", first, last, ticks=ticks)
+    # All songs of one year: the axis ends where that year does, as with x by year.
+    return axis("year", "year", first, last if last > first else last + 1, ticks=ticks)
 
 
 def _scalar_range(levels: Sequence[np.ndarray]) -> tuple[float, float]:
@@ -318,7 +324,12 @@ def timeline_points(
         "x": x_axis(entries, spans, x_by),
         "y": level_axis(LEVEL_MIN_DBFS, LEVEL_MAX_DBFS),
         "z": {
-            **axis(_Z_LABELS[z_measure], "dB", round(crest_low, 6), round(crest_high, 6)),
+            **axis(
+                _Z_LABELS[z_measure],
+                "dB",
+                # A constant z: every z is 0, the axis spans half a dB either side.
+                *(round(v, 6) for v in spread_range(crest_low, crest_high, 0.5)),
+            ),
             "measure": z_measure,
         },
         "scalar": scalar_axis(s_low, s_high),

@@ -1,0 +1,146 @@
+"""The file contract, checked before a cloud is written, and the rule for one-value axes.
+
+docs/FORMAT.md lets an axis have ``min == max``, but a reader needs a range to map values
+back (the app's loader refuses an empty one), so writers never produce one: when every value
+on an axis is the same ``v`` (one kept frame, one song, a constant crest factor), the axis is
+written as ``[v - w, v + w]`` with a half width ``w`` that means something on that axis (half
+a hop of time, half a dB, ...) and every point sits at its middle, 0. :func:`check_cloud`
+then refuses, before anything is written, a cloud the loader would reject.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Iterator
+
+import numpy as np
+
+from loudscape_extract.errors import ExtractError
+
+__all__ = [
+    "AXIS_NAMES",
+    "check_cloud",
+    "check_metadata",
+    "check_points",
+    "checked_blocks",
+    "spread_range",
+]
+
+AXIS_NAMES = ("x", "y", "z", "scalar", "hp")
+_COLUMN_RANGES = ((-1.0, 1.0), (-1.0, 1.0), (-1.0, 1.0), (0.0, 1.0), (0.0, 1.0))
+
+
+def spread_range(low: float, high: float, half_width: float, *, digits: int = 6):
+    """``(low, high)``, or ``(v - half_width, v + half_width)`` when the range is empty.
+
+    Empty means ``high <= low`` after rounding to ``digits`` decimals, as the metadata stores
+    them. ``half_width`` must be larger than the rounding step.
+    """
+    if round(high, digits) > round(low, digits):
+        return low, high
+    middle = (low + high) / 2.0
+    return middle - half_width, middle + half_width
+
+
+def _axis_problem(value: object) -> str:
+    if not isinstance(value, dict):
+        return f"must be an object, found {type(value).__name__}"
+    low, high = value.get("min"), value.get("max")
+    for key, number in (("min", low), ("max", high)):
+        if isinstance(number, bool) or not isinstance(number, int | float):
+            return f"{key} must be a number, found {number!r}"
+        if not math.isfinite(number):
+            return f"{key} {number} is not finite"
+    if low == high:
+        return f"min and max are both {low}"
+    scale = value.get("scale", "linear")
+    if scale not in ("linear", "log"):
+        return f"scale must be linear or log, found {scale!r}"
+    if scale == "log" and (low <= 0 or high <= 0):
+        return f"a log axis needs positive min and max, found {low} and {high}"
+    for tick in value.get("ticks") or []:
+        at = tick.get("at") if isinstance(tick, dict) else None
+        if isinstance(at, bool) or not isinstance(at, int | float) or not math.isfinite(at):
+            return f"tick position {at!r} is not a finite number"
+    return ""
+
+
+def _fail(reason: str, path: str | None):
+    raise ExtractError(f"refusing to write a file the app cannot load: {reason}", path=path)
+
+
+def check_points(points: np.ndarray, *, path: str | None = None) -> None:
+    """The point rules of :func:`check_cloud` alone: shape (n, 5), every value finite, x y z
+    in [-1, 1], scalar and hp in [0, 1]. For a cloud written block by block, run on each block.
+
+    Raises
+    ------
+    ExtractError
+        Naming the first violation.
+    """
+    points = np.asarray(points)
+    if points.ndim != 2 or points.shape[1] != 5:
+        _fail(f"points must have shape (n, 5), found {points.shape}", path)
+    for column, (name, (low, high)) in enumerate(zip(AXIS_NAMES, _COLUMN_RANGES, strict=True)):
+        values = points[:, column]
+        if values.size == 0:
+            continue
+        if not np.isfinite(values).all():
+            _fail(f"column {name} has a NaN or infinite value", path)
+        if values.min() < low or values.max() > high:
+            _fail(f"column {name} leaves [{low:g}, {high:g}]", path)
+
+
+def check_metadata(metadata: dict, *, n_points: int, path: str | None = None) -> None:
+    """The metadata rules of :func:`check_cloud` alone, for a cloud of ``n_points`` points:
+    JSON-encodable without NaN or infinity, ``point_count`` equal to ``n_points``, five valid
+    axes.
+
+    Raises
+    ------
+    ExtractError
+        Naming the first violation.
+    """
+    try:
+        json.dumps(metadata, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        _fail(f"metadata is not plain JSON ({exc})", path)
+    if metadata.get("point_count") != n_points:
+        _fail(f"point_count {metadata.get('point_count')!r} is not {n_points}", path)
+    axes = metadata.get("axes")
+    if not isinstance(axes, dict):
+        _fail("metadata has no axes object", path)
+    for name in AXIS_NAMES:
+        problem = _axis_problem(axes.get(name))
+        if problem:
+            _fail(f"axes.{name}: {problem}", path)
+
+
+def check_cloud(points: np.ndarray, metadata: dict, *, path: str | None = None) -> None:
+    """Refuse a cloud the app's loader would reject (docs/FORMAT.md and src/data/cloud/).
+
+    Checks: shape (n, 5); every value finite, x y z in [-1, 1], scalar and hp in [0, 1];
+    metadata JSON-encodable without NaN or infinity; ``point_count`` equal to n; five axes with
+    finite, distinct ``min`` and ``max`` (positive on a log axis) and finite tick positions.
+
+    Raises
+    ------
+    ExtractError
+        Naming the first violation; nothing has been written.
+    """
+    check_points(points, path=path)
+    check_metadata(metadata, n_points=np.asarray(points).shape[0], path=path)
+
+
+def checked_blocks(
+    blocks: Iterable[np.ndarray], metadata: dict, *, n_points: int, path: str | None = None
+) -> Iterator[np.ndarray]:
+    """``blocks`` of a cloud written as it is produced, with :func:`check_cloud`'s rules: the
+    metadata is checked before the first block, each block before it is passed on. A writer
+    that puts the file in place only after the last block (:func:`ply.write_ply_blocks`)
+    therefore never leaves a file the app rejects."""
+    check_metadata(metadata, n_points=n_points, path=path)
+    for block in blocks:
+        check_points(block, path=path)
+        yield block

@@ -1,0 +1,132 @@
+//! The argument checks the subcommands share, with one set of messages: sizes, cameras, surface
+//! method and isovalue, grid resolution and smoothing, value ranges, output folders, and loading
+//! the input cloud.
+
+use std::ops::RangeInclusive;
+use std::path::Path;
+
+use anyhow::{Context, bail};
+use loudscape::data::cloud::PointCloud;
+use loudscape::render::grid::voxelize::{MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION};
+use loudscape::render::surface::SurfaceMethod;
+
+/// Loads a cloud, with the file named in the error.
+pub fn load_cloud(path: &Path) -> anyhow::Result<PointCloud> {
+    Ok(loudscape::data::cloud::load(path)?)
+}
+
+/// Fails, naming the output, when the folder it would be written into does not exist.
+pub fn check_output_folder(output: &Path) -> anyhow::Result<()> {
+    if let Some(dir) = output.parent().filter(|p| !p.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        bail!(
+            "{}: the folder {} does not exist",
+            output.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Fails unless `value` (the option `what`) lies in `range`.
+pub fn check_range(value: f32, range: RangeInclusive<f32>, what: &str) -> anyhow::Result<()> {
+    if !range.contains(&value) {
+        bail!(
+            "{what} {value} is out of range {} to {}",
+            range.start(),
+            range.end()
+        );
+    }
+    Ok(())
+}
+
+/// Checks `--res` (voxels per side) when given.
+pub fn check_resolution(res: Option<u32>) -> anyhow::Result<()> {
+    if let Some(res) = res
+        && !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&res)
+    {
+        bail!(
+            "resolution {res} is out of range {MIN_RESOLUTION} to {MAX_RESOLUTION} voxels per side"
+        );
+    }
+    Ok(())
+}
+
+/// Checks `--smooth` (Gaussian sigma in voxels).
+pub fn check_smoothing(sigma: f32) -> anyhow::Result<()> {
+    check_range(sigma, 0.0..=MAX_SMOOTHING_SIGMA, "smoothing sigma")
+}
+
+/// Parses `--method`.
+pub fn parse_method(text: &str) -> anyhow::Result<SurfaceMethod> {
+    SurfaceMethod::parse(text).with_context(|| format!("method '{text}' is not mt or dc"))
+}
+
+/// Checks `--iso`.
+pub fn check_iso(iso: f32) -> anyhow::Result<f32> {
+    if !iso.is_finite() {
+        bail!("isovalue {iso} is not a number in [0, 1]");
+    }
+    if !(0.0..=1.0).contains(&iso) {
+        bail!("isovalue {iso} is outside [0, 1] (the density is normalized)");
+    }
+    Ok(iso)
+}
+
+/// Parses `WxH` (e.g. `1280x720`).
+pub fn parse_size(text: &str) -> anyhow::Result<(u32, u32)> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .with_context(|| format!("size '{text}' is not WIDTHxHEIGHT, e.g. 1280x720"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .with_context(|| format!("width in '{text}'"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .with_context(|| format!("height in '{text}'"))?;
+    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
+        bail!("size '{text}' is out of range: each side must be 16 to 8192 pixels");
+    }
+    Ok((w, h))
+}
+
+/// Parses `AZ,EL,DIST` (degrees, degrees, distance in world units).
+pub fn parse_camera(text: &str) -> anyhow::Result<(f32, f32, f32)> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [az, el, dist] = parts.as_slice() else {
+        bail!("camera '{text}' is not AZ,EL,DIST, e.g. -35,25,4");
+    };
+    let number = |s: &str, what: &str| -> anyhow::Result<f32> {
+        let v: f32 = s
+            .parse()
+            .with_context(|| format!("{what} '{s}' in camera '{text}' is not a number"))?;
+        if !v.is_finite() {
+            bail!("{what} in camera '{text}' is not finite");
+        }
+        Ok(v)
+    };
+    let dist_v = number(dist, "distance")?;
+    if dist_v <= 0.0 {
+        bail!("distance in camera '{text}' must be positive");
+    }
+    Ok((number(az, "azimuth")?, number(el, "elevation")?, dist_v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_and_cameras_parse() {
+        assert_eq!(parse_size("1280x720").unwrap(), (1280, 720));
+        assert!(parse_size("1280").is_err());
+        assert!(parse_size("0x720").is_err());
+        assert_eq!(parse_camera("-35, 25, 4").unwrap(), (-35.0, 25.0, 4.0));
+        assert!(parse_camera("1,2").is_err());
+        assert!(parse_camera("1,2,-3").is_err());
+        assert!(parse_camera("a,2,3").is_err());
+    }
+}

@@ -1,0 +1,6 @@
+//! The data floor: point clouds as they come from files (or from code), before any GPU.
+
+pub mod axes;
+pub mod cloud;
+pub mod field;
+pub mod synthetic;

@@ -1,0 +1,10 @@
+//! GPU plumbing shared by every pass: the device and its limits ([`context`]), render targets
+//! ([`target`]), waiting read-back ([`readback`]), bind-group layout entries ([`layouts`]), GPU
+//! timestamps ([`timing`]) and the per-frame uniforms ([`frame`]).
+
+pub mod context;
+pub mod frame;
+pub mod layouts;
+pub mod readback;
+pub mod target;
+pub mod timing;

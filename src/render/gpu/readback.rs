@@ -1,0 +1,58 @@
+//! Reading GPU buffers back to the CPU, waiting for the GPU: [`read_buffer`] copies into a
+//! staging buffer and maps it; [`map_buffer`] maps a MAP_READ buffer already filled. (The
+//! window's surface counters are read without waiting; see `render::surface::pass`.)
+
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum ReadbackError {
+    #[error("reading the rendered image back from the GPU failed: {0}")]
+    Map(String),
+}
+
+/// Copies `size` bytes from the start of `source` (which needs COPY_SRC) into a staging buffer
+/// labelled `label`, submits, waits and returns them. Zero bytes return at once.
+pub fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    label: &str,
+    source: &wgpu::Buffer,
+    size: u64,
+) -> Result<Vec<u8>, ReadbackError> {
+    if size == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder =
+        device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+    encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+    queue.submit([encoder.finish()]);
+    map_buffer(device, &staging)
+}
+
+/// Maps a MAP_READ buffer after the queue's work is done and returns a copy of its bytes.
+pub fn map_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, ReadbackError> {
+    let slice = buffer.slice(..);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        let _ = sender.send(result);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| ReadbackError::Map(e.to_string()))?;
+    receiver
+        .recv()
+        .map_err(|e| ReadbackError::Map(e.to_string()))?
+        .map_err(|e| ReadbackError::Map(e.to_string()))?;
+    let bytes = slice
+        .get_mapped_range()
+        .map_err(|e| ReadbackError::Map(e.to_string()))?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}

@@ -1,0 +1,87 @@
+//! The voxel grid: the scalar fields that the volume and surface views are built from.
+//!
+//! Layout (keep in sync with every shader that reads a grid): `dims` voxels along x, y, z;
+//! voxel (i, j, k) is element `i + dims.x * (j + dims.y * k)` of each buffer, an `f32`; its
+//! centre is at `box_min + (ijk + 0.5) * voxel_size` in data space, where
+//! `voxel_size = (box_max - box_min) / dims`.
+//! `density` holds the normalized loudness density in [0, 1]; `hp_mean` the mean hp of the points
+//! in the voxel (0.5 where a voxel holds none).
+
+pub mod reference;
+pub mod voxelize;
+
+use glam::{UVec3, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::render::gpu::readback::{ReadbackError, read_buffer};
+
+pub struct VoxelGrid {
+    pub dims: UVec3,
+    pub box_min: Vec3,
+    pub box_max: Vec3,
+    /// `f32` per voxel, STORAGE | COPY_SRC | COPY_DST.
+    pub density: wgpu::Buffer,
+    /// `f32` per voxel, STORAGE | COPY_SRC | COPY_DST.
+    pub hp_mean: wgpu::Buffer,
+}
+
+impl VoxelGrid {
+    pub fn voxel_count(&self) -> u64 {
+        u64::from(self.dims.x) * u64::from(self.dims.y) * u64::from(self.dims.z)
+    }
+
+    pub fn voxel_size(&self) -> Vec3 {
+        (self.box_max - self.box_min) / self.dims.as_vec3()
+    }
+
+    /// A grid from fields computed on the CPU (tests, analytic fields, imported grids).
+    pub fn from_fields(
+        device: &wgpu::Device,
+        dims: UVec3,
+        box_min: Vec3,
+        box_max: Vec3,
+        density: &[f32],
+        hp_mean: &[f32],
+    ) -> Self {
+        let n = (dims.x * dims.y * dims.z) as usize;
+        assert_eq!(density.len(), n, "density has the wrong voxel count");
+        assert_eq!(hp_mean.len(), n, "hp_mean has the wrong voxel count");
+        let usage = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
+        let density = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grid::density"),
+            contents: bytemuck::cast_slice(density),
+            usage,
+        });
+        let hp_mean = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grid::hp_mean"),
+            contents: bytemuck::cast_slice(hp_mean),
+            usage,
+        });
+        Self {
+            dims,
+            box_min,
+            box_max,
+            density,
+            hp_mean,
+        }
+    }
+
+    /// Reads a field back to the CPU (tests, export).
+    pub fn read_field(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        field: &wgpu::Buffer,
+    ) -> Result<Vec<f32>, ReadbackError> {
+        let bytes = read_buffer(
+            device,
+            queue,
+            "grid::readback",
+            field,
+            self.voxel_count() * 4,
+        )?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+}

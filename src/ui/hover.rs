@@ -1,0 +1,202 @@
+//! What is under the cursor in the 3D view: picking on hover (only when the cursor or the view
+//! changed), clicks (seek a song, select a timeline song), the markers drawn for them and the
+//! read-out next to the cursor.
+
+use eframe::egui::{self, Color32};
+
+use crate::render::markers::MarkerBox;
+use crate::render::scene::ViewKind;
+use crate::ui::state::{Hover, HoverKey, LoudscapeApp, Slot};
+use crate::view::frame_view::FrameView;
+use crate::view::pick::{self, Reading};
+
+/// Density at which a hover ray stops in the Volume view.
+pub(super) const VOLUME_PICK_DENSITY: f32 = 0.1;
+
+impl LoudscapeApp {
+    /// The playhead plane, the loop range and the hovered or selected timeline song.
+    pub(super) fn markers(&self) -> Vec<MarkerBox> {
+        let mut markers = Vec::new();
+        let Some(loaded) = self.active() else {
+            return markers;
+        };
+        let axis = &loaded.cloud.meta.axes.x;
+        match self.active {
+            Slot::Song => {
+                if let Some((a, b)) = self.audio.loop_shown() {
+                    markers.push(MarkerBox::x_span(
+                        crate::playback::time_to_x(axis, a),
+                        crate::playback::time_to_x(axis, b),
+                        [0.95, 0.8, 0.3, 0.06],
+                        [0.95, 0.8, 0.3, 0.5],
+                    ));
+                }
+                if let Some(t) = self.audio.time_s() {
+                    markers.push(MarkerBox::playhead(crate::playback::time_to_x(axis, t)));
+                }
+            }
+            Slot::Timeline => {
+                let songs = &loaded.cloud.meta.songs;
+                for (index, alpha) in [(self.selected_song, 0.16), (self.hovered_song, 0.09)] {
+                    let Some(song) = index.and_then(|i| songs.get(i)) else {
+                        continue;
+                    };
+                    if let (Some(a), Some(b)) = (song.x_min, song.x_max) {
+                        markers.push(MarkerBox::x_span(
+                            a as f32,
+                            b as f32,
+                            [1.0, 1.0, 1.0, alpha],
+                            [1.0, 1.0, 1.0, 0.7],
+                        ));
+                    }
+                }
+            }
+        }
+        markers
+    }
+
+    /// Recomputes what is under the cursor when the cursor or the view changed.
+    pub(super) fn update_hover(&mut self, px: Option<glam::Vec2>, view: &FrameView, moving: bool) {
+        let (Some(px), false) = (px, moving) else {
+            if px.is_none() {
+                self.hover = None;
+                self.hovered_song = None;
+            }
+            return;
+        };
+        let Some(loaded) = self.active() else {
+            self.hover = None;
+            return;
+        };
+        let key = HoverKey {
+            px,
+            camera: view.camera,
+            size: (view.width, view.height),
+            view: self.settings.view,
+            cloud_id: loaded.id,
+            min_scalar: self.settings.points.min_scalar,
+        };
+        if self.hover.as_ref().is_some_and(|(k, _)| k == &key) {
+            return;
+        }
+        let cloud = loaded.cloud.clone();
+        let axes = &cloud.meta.axes;
+        let (origin, dir) = pick::cursor_ray(view, px);
+        let mut hover = Hover::default();
+        match self.settings.view {
+            ViewKind::Points => {
+                let ppp_radius = 5.0;
+                if let Some(i) = pick::pick_point(
+                    &cloud.points,
+                    view,
+                    px,
+                    ppp_radius,
+                    self.settings.points.min_scalar,
+                ) {
+                    hover.readings = pick::point_readings(axes, &cloud.points[i]);
+                    hover.x = Some(cloud.points[i].position[0]);
+                }
+            }
+            ViewKind::Surface | ViewKind::Volume => {
+                let threshold = if self.settings.view == ViewKind::Surface {
+                    self.settings.surface.iso_value
+                } else {
+                    VOLUME_PICK_DENSITY
+                };
+                if let Some(hit) = loaded
+                    .cpu_grid
+                    .as_ref()
+                    .and_then(|g| g.pick(origin, dir, threshold))
+                {
+                    hover.readings = pick::voxel_readings(axes, &hit);
+                    hover.x = Some(hit.position.x);
+                }
+            }
+        }
+        if hover.x.is_none()
+            && let Some((t, _)) =
+                pick::ray_box(origin, dir, glam::Vec3::splat(-1.0), glam::Vec3::ONE)
+        {
+            let p = origin + dir * t;
+            hover.x = Some(p.x.clamp(-1.0, 1.0));
+            let first = pick::position_readings(axes, p);
+            hover.readings = first.into_iter().take(1).collect();
+        }
+        self.hovered_song = match (self.active, hover.x) {
+            (Slot::Timeline, Some(x)) => pick::song_at(&cloud.meta.songs, x),
+            _ => None,
+        };
+        if let Some(song) = self.hovered_song.and_then(|i| cloud.meta.songs.get(i)) {
+            hover.readings.insert(
+                0,
+                Reading {
+                    name: "song".into(),
+                    value: song_title(song),
+                },
+            );
+        }
+        self.hover = Some((key, hover));
+    }
+
+    /// A click on the data: seek there (Song) or select the song (Timeline).
+    pub(super) fn click(&mut self) {
+        let Some(x) = self.hover.as_ref().and_then(|(_, h)| h.x) else {
+            return;
+        };
+        match self.active {
+            Slot::Song => {
+                if let Some(loaded) = self.song.as_ref() {
+                    let t = crate::playback::x_to_time(&loaded.cloud.meta.axes.x, x);
+                    self.audio.seek(t);
+                }
+            }
+            Slot::Timeline => self.selected_song = self.hovered_song,
+        }
+    }
+}
+
+/// "Title — Artist (1984)".
+pub(super) fn song_title(song: &crate::data::cloud::SongInfo) -> String {
+    let mut text = if song.title.is_empty() {
+        "untitled".to_string()
+    } else {
+        song.title.clone()
+    };
+    if !song.artist.is_empty() {
+        text.push_str(&format!(" — {}", song.artist));
+    }
+    if let Some(year) = song.year {
+        text.push_str(&format!(" ({year})"));
+    }
+    text
+}
+
+/// The read-out next to the cursor.
+pub(super) fn paint_readings(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    pos: egui::Pos2,
+    readings: &[Reading],
+) {
+    if readings.is_empty() {
+        return;
+    }
+    let text = readings
+        .iter()
+        .map(|r| format!("{}: {}", r.name, r.value))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let galley =
+        painter.layout_no_wrap(text, egui::FontId::monospace(12.0), Color32::from_gray(230));
+    let size = galley.size() + egui::vec2(12.0, 8.0);
+    let mut min = pos + egui::vec2(16.0, 12.0);
+    if min.x + size.x > rect.right() {
+        min.x = pos.x - 16.0 - size.x;
+    }
+    if min.y + size.y > rect.bottom() {
+        min.y = pos.y - 12.0 - size.y;
+    }
+    let frame = egui::Rect::from_min_size(min, size);
+    painter.rect_filled(frame, 4.0, Color32::from_black_alpha(200));
+    painter.galley(min + egui::vec2(6.0, 4.0), galley, Color32::from_gray(230));
+}

@@ -1,0 +1,281 @@
+//! Text over the 3D view: axis tick labels and axis titles in physical units.
+//!
+//! The window paints these with its egui painter each frame; the headless renderer runs egui
+//! once offscreen and draws the same shapes into the render target, so PNGs carry the same labels.
+
+use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect};
+use eframe::egui_wgpu;
+use glam::Vec3;
+
+use crate::data::axes::Axis;
+use crate::data::cloud::PointCloud;
+use crate::render::gpu::context::GpuContext;
+use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
+use crate::render::scene::SceneData;
+use crate::view::frame_view::FrameView;
+
+/// A tick label or an axis title, placed along one axis of the box.
+#[derive(Clone, Debug)]
+pub struct Label {
+    /// 0, 1, 2 for x, y, z.
+    pub axis: usize,
+    /// Normalized position along the axis, -1 to 1.
+    pub at: f32,
+    pub text: String,
+    pub title: bool,
+}
+
+/// The labels of a box: which edge carries them is chosen per frame, facing the camera.
+#[derive(Clone, Debug, Default)]
+pub struct AxisLabels {
+    pub box_min: Vec3,
+    pub box_max: Vec3,
+    pub labels: Vec<Label>,
+}
+
+/// "time (s)", or just "hp" for a unitless axis.
+pub fn axis_title(axis: &Axis, fallback: &str) -> String {
+    let name = if axis.label.is_empty() {
+        fallback
+    } else {
+        &axis.label
+    };
+    if axis.unit.is_empty() || axis.unit.eq_ignore_ascii_case(name) {
+        name.to_string()
+    } else {
+        format!("{name} ({})", axis.unit)
+    }
+}
+
+/// Tick labels and axis titles for the box drawn by the scene.
+pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> AxisLabels {
+    axis_labels_for_box(cloud, data.box_min, data.box_max)
+}
+
+/// Tick labels and axis titles for a box `[min, max]` in data space.
+pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabels {
+    let axes = &cloud.meta.axes;
+    let mut labels = Vec::new();
+    for (index, (axis, fallback)) in [(&axes.x, "x"), (&axes.y, "y"), (&axes.z, "z")]
+        .into_iter()
+        .enumerate()
+    {
+        for tick in axis.ticks(8) {
+            labels.push(Label {
+                axis: index,
+                at: tick.at,
+                text: tick.label,
+                title: false,
+            });
+        }
+        labels.push(Label {
+            axis: index,
+            at: 0.0,
+            text: axis_title(axis, fallback),
+            title: true,
+        });
+    }
+    AxisLabels {
+        box_min: min,
+        box_max: max,
+        labels,
+    }
+}
+
+/// The box edge an axis is labelled on, as the two fixed coordinates of the other axes:
+/// x and z along the lowest edge on screen, y along the leftmost vertical edge.
+fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3> {
+    let (min, max) = (labels.box_min, labels.box_max);
+    let mid = (min + max) * 0.5;
+    let mut best: Option<(f32, Vec3)> = None;
+    for corner in 0..4u32 {
+        let mut point = mid;
+        let (a, b) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        point[a] = if corner & 1 == 0 { min[a] } else { max[a] };
+        point[b] = if corner & 2 == 0 { min[b] } else { max[b] };
+        let Some(pixel) = view.project(point) else {
+            continue;
+        };
+        // Lowest on screen for x and z, leftmost for y.
+        let score = if axis == 1 { -pixel.x } else { pixel.y };
+        if best.is_none_or(|(s, _)| score > s) {
+            best = Some((score, point));
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
+/// Paints labels projected through `view` into `rect` (the 3D view's place on screen, points).
+pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &AxisLabels) {
+    let scale = rect.width() / view.width.max(1) as f32;
+    let edges: Vec<Option<Vec3>> = (0..3).map(|axis| label_edge(labels, view, axis)).collect();
+    let mut placed: Vec<Rect> = Vec::new();
+    // Titles first, so ticks make way for them.
+    let ordered = labels
+        .labels
+        .iter()
+        .filter(|l| l.title)
+        .chain(labels.labels.iter().filter(|l| !l.title));
+    for label in ordered {
+        let Some(mut anchor) = edges[label.axis] else {
+            continue;
+        };
+        let (lo, hi) = (labels.box_min[label.axis], labels.box_max[label.axis]);
+        anchor[label.axis] = lo + (label.at + 1.0) * 0.5 * (hi - lo);
+        let Some(pixel) = view.project(anchor) else {
+            continue;
+        };
+        let (offset, align) = if label.axis == 1 {
+            (egui::vec2(-10.0, 0.0), Align2::RIGHT_CENTER)
+        } else {
+            (egui::vec2(0.0, 8.0), Align2::CENTER_TOP)
+        };
+        let offset = if label.title { offset * 3.0 } else { offset };
+        let pos = rect.min + egui::vec2(pixel.x, pixel.y) * scale + offset;
+        if !rect.expand(40.0).contains(pos) {
+            continue;
+        }
+        let (size, color) = if label.title {
+            (14.0, Color32::from_rgb(225, 230, 238))
+        } else {
+            (12.0, Color32::from_rgb(160, 168, 182))
+        };
+        // Skip a label that would overlap one already placed (crowded ticks at some angles).
+        let galley = painter.layout_no_wrap(label.text.clone(), FontId::proportional(size), color);
+        let text_rect = align.anchor_size(pos, galley.size());
+        if placed
+            .iter()
+            .any(|r: &Rect| r.expand(2.0).intersects(text_rect))
+        {
+            continue;
+        }
+        placed.push(text_rect);
+        painter.galley(text_rect.min, galley, color);
+    }
+}
+
+/// Draws the labels of `cloud` over what `target` holds, without a window.
+pub fn draw_headless(
+    gpu: &GpuContext,
+    target: &RenderTarget,
+    view: &FrameView,
+    cloud: &PointCloud,
+    data: &SceneData,
+) {
+    let labels = axis_labels(cloud, data);
+    let (w, h) = (target.width, target.height);
+    let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32, h as f32));
+    let ctx = egui::Context::default();
+    let input = egui::RawInput {
+        screen_rect: Some(rect),
+        ..Default::default()
+    };
+    let mut output = ctx.run_ui(input, |ui| {
+        paint(ui.painter(), rect, view, &labels);
+    });
+    let shapes = std::mem::take(&mut output.shapes);
+    let primitives = ctx.tessellate(shapes, 1.0);
+    let mut renderer = egui_wgpu::Renderer::new(
+        &gpu.device,
+        COLOR_FORMAT,
+        egui_wgpu::RendererOptions::default(),
+    );
+    for (id, deltas) in &output.textures_delta.set {
+        for delta in deltas {
+            renderer.update_texture(&gpu.device, &gpu.queue, *id, delta);
+        }
+    }
+    // Applied above; the renderer is dropped at the end, which frees its textures.
+    output.textures_delta.clear();
+    let screen = egui_wgpu::ScreenDescriptor {
+        size_in_pixels: [w, h],
+        pixels_per_point: 1.0,
+    };
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("labels::labels"),
+        });
+    let extra =
+        renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
+    {
+        let mut pass = encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("labels::labels"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target.color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            })
+            .forget_lifetime();
+        renderer.render(&mut pass, &primitives, &screen);
+    }
+    gpu.queue
+        .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+}
+
+/// Lines describing a cloud for the side panel: where it came from and its loudness metrics.
+pub fn describe_cloud(cloud: &PointCloud) -> Vec<String> {
+    let meta = &cloud.meta;
+    let mut lines = Vec::new();
+    match meta.mode {
+        crate::data::cloud::DataMode::Song => lines.push("Song".to_string()),
+        crate::data::cloud::DataMode::Timeline => {
+            lines.push(format!("Timeline of {} songs", meta.songs.len()))
+        }
+        crate::data::cloud::DataMode::Generic => {
+            lines.push("Generic point cloud (no loudscape metadata)".into())
+        }
+    }
+    if let Some(source) = &meta.source {
+        if let Some(path) = &source.path {
+            lines.push(format!("source: {path}"));
+        }
+        let mut parts = Vec::new();
+        if let Some(d) = source.duration_s {
+            parts.push(format!("{d:.1} s"));
+        }
+        if let Some(rate) = source.sample_rate {
+            parts.push(format!("{rate} Hz"));
+        }
+        if let Some(ch) = source.channels {
+            parts.push(format!("{ch} ch"));
+        }
+        if !parts.is_empty() {
+            lines.push(parts.join(", "));
+        }
+    }
+    if let Some(m) = &meta.metrics {
+        lines.extend(describe_metrics(m));
+    }
+    lines
+}
+
+/// Loudness metrics as "name: value unit" lines, leaving out the ones not measured.
+pub fn describe_metrics(m: &crate::data::cloud::Metrics) -> Vec<String> {
+    let rows = [
+        ("integrated loudness", m.integrated_lufs, "LUFS"),
+        ("loudness range", m.lra_lu, "LU"),
+        ("sample peak", m.sample_peak_dbfs, "dBFS"),
+        ("true peak", m.true_peak_dbtp, "dBTP"),
+        ("PLR", m.plr_db, "dB"),
+        ("crest factor, median", m.crest_median_db, "dB"),
+        ("crest factor, 95th pct", m.crest_p95_db, "dB"),
+    ];
+    rows.iter()
+        .filter_map(|(name, value, unit)| value.map(|v| format!("{name}: {v:.1} {unit}")))
+        .collect()
+}

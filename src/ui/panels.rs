@@ -1,0 +1,316 @@
+//! The side panel: data slots, view, points, voxel grid, volume and surface controls, camera,
+//! the timeline's song and what the file says about itself.
+
+use std::path::{Path, PathBuf};
+
+use eframe::egui::{self, Color32, RichText};
+
+use crate::data::cloud::{DataMode, PointCloud};
+use crate::render::scene::ViewKind;
+use crate::ui::hover::song_title;
+use crate::ui::labels;
+use crate::ui::legends;
+use crate::ui::state::LoudscapeApp;
+use crate::ui::state::Slot;
+
+impl LoudscapeApp {
+    pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("loudscape");
+        ui.add_space(4.0);
+
+        ui.label(RichText::new("Data").strong());
+        ui.horizontal(|ui| {
+            for slot in [Slot::Song, Slot::Timeline] {
+                let present = self.slot(slot).is_some();
+                let response = ui.add_enabled(
+                    present,
+                    egui::Button::selectable(self.active == slot, slot.name()),
+                );
+                let response = if present {
+                    response
+                } else {
+                    response.on_disabled_hover_text(format!(
+                        "No {} cloud loaded: open one with `loudscape song.ply timeline.ply` or drop a .ply here",
+                        slot.name().to_lowercase()
+                    ))
+                };
+                if response.clicked() && self.active != slot {
+                    self.active = slot;
+                    self.fit_pending = true;
+                }
+            }
+        });
+
+        ui.add_space(6.0);
+        ui.label(RichText::new("View").strong());
+        ui.horizontal(|ui| {
+            for view in ViewKind::ALL {
+                let response = ui.add(egui::Button::selectable(
+                    self.settings.view == view,
+                    view.name(),
+                ));
+                if response.clicked() {
+                    self.settings.view = view;
+                }
+            }
+        });
+
+        if self.settings.view == ViewKind::Points {
+            ui.add_space(6.0);
+            ui.label(RichText::new("Points").strong());
+            if let Some(size) = self.active().map(|l| l.point_size) {
+                self.settings.points.size_px = size;
+            }
+            let size_changed = ui
+                .add(
+                    egui::Slider::new(&mut self.settings.points.size_px, 1.0..=12.0)
+                        .text("size (px)"),
+                )
+                .changed();
+            if size_changed {
+                let size = self.settings.points.size_px;
+                match self.active {
+                    Slot::Song => self.song.iter_mut().for_each(|l| l.point_size = size),
+                    Slot::Timeline => self.timeline.iter_mut().for_each(|l| l.point_size = size),
+                }
+            }
+            ui.add(
+                egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0)
+                    .text("min loudness"),
+            );
+            legends::hp(ui);
+        }
+        if self.settings.view != ViewKind::Points {
+            self.grid_controls(ui);
+        }
+        if self.settings.view == ViewKind::Volume {
+            self.volume_controls(ui);
+        }
+        if self.settings.view == ViewKind::Surface {
+            self.surface_controls(ui);
+            legends::surface(ui);
+        }
+
+        ui.add_space(6.0);
+        ui.label(RichText::new("Camera").strong());
+        ui.horizontal(|ui| {
+            if ui.button("Fit (F)").clicked() {
+                self.fit_pending = true;
+            }
+            ui.checkbox(&mut self.settings.show_box, "axes");
+        });
+        ui.label(
+            RichText::new("Left drag: orbit · right/middle drag: pan · wheel: zoom")
+                .small()
+                .weak(),
+        );
+
+        ui.add_space(6.0);
+        self.screenshot_controls(ui);
+
+        if self.active == Slot::Timeline {
+            self.timeline_song(ui);
+        }
+
+        if let Some(loaded) = self.active() {
+            ui.add_space(8.0);
+            ui.separator();
+            cloud_info(ui, &loaded.cloud);
+        }
+
+        for loading in &self.loading {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(format!("loading {}", loading.path.display()));
+            });
+        }
+        if !self.messages.is_empty() {
+            ui.separator();
+            let mut dismiss = false;
+            for message in &self.messages {
+                ui.colored_label(Color32::from_rgb(240, 120, 100), message);
+            }
+            if ui.small_button("dismiss").clicked() {
+                dismiss = true;
+            }
+            if dismiss {
+                self.messages.clear();
+            }
+        }
+
+        ui.with_layout(egui::Layout::bottom_up(egui::Align::LEFT), |ui| {
+            ui.label(
+                RichText::new(format!("{:.1} ms/frame", self.frame_ms))
+                    .small()
+                    .weak(),
+            );
+        });
+    }
+
+    pub(super) fn grid_controls(&mut self, ui: &mut egui::Ui) {
+        ui.add_space(6.0);
+        ui.label(RichText::new("Voxel grid").strong());
+        let mode = self.active().map_or(DataMode::Song, |l| l.cloud.meta.mode);
+        let mut resolution = self.settings.voxels.resolution_for(mode);
+        let changed = ui
+            .add(
+                egui::Slider::new(
+                    &mut resolution,
+                    crate::render::grid::voxelize::MIN_RESOLUTION
+                        ..=crate::render::grid::voxelize::MAX_RESOLUTION,
+                )
+                .step_by(16.0)
+                .text("voxels/side"),
+            )
+            .on_hover_text("128 for songs and 224 for timelines by default; rebuilt on release")
+            .drag_stopped();
+        if changed {
+            self.settings.voxels.resolution = Some(resolution);
+        }
+        let mut sigma = self.settings.voxels.smoothing_sigma;
+        if ui
+            .add(egui::Slider::new(&mut sigma, 0.0..=3.0).text("smoothing σ"))
+            .drag_stopped()
+        {
+            self.settings.voxels.smoothing_sigma = sigma;
+        }
+    }
+
+    pub(super) fn volume_controls(&mut self, ui: &mut egui::Ui) {
+        use crate::render::transfer::TransferPreset;
+        ui.add_space(6.0);
+        ui.label(RichText::new("Volume").strong());
+        let volume = &mut self.settings.volume;
+        ui.horizontal(|ui| {
+            for preset in TransferPreset::ALL {
+                ui.selectable_value(&mut volume.preset, preset, preset.name());
+            }
+        });
+        legends::transfer(ui, volume.preset);
+        ui.add(egui::Slider::new(&mut volume.density_scale, 0.1..=4.0).text("density"));
+        ui.add(egui::Slider::new(&mut volume.opacity_scale, 0.1..=4.0).text("opacity scale"));
+        ui.add(
+            egui::Slider::new(&mut volume.step_voxels, 0.25..=4.0)
+                .logarithmic(true)
+                .text("step (voxels)"),
+        )
+        .on_hover_text("Smaller steps: finer detail, slower frames");
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut volume.hp_tint, "hp tint")
+                .on_hover_text("Colour by mean hp: red percussive to blue harmonic");
+            ui.checkbox(&mut volume.shading, "shading");
+        });
+    }
+
+    pub(super) fn surface_controls(&mut self, ui: &mut egui::Ui) {
+        use crate::render::surface::SurfaceMethod;
+        ui.add_space(6.0);
+        ui.label(RichText::new("Surface").strong());
+        let surface = &mut self.settings.surface;
+        ui.horizontal(|ui| {
+            for method in SurfaceMethod::ALL {
+                ui.selectable_value(&mut surface.method, method, method.name());
+            }
+        });
+        ui.add(egui::Slider::new(&mut surface.iso_value, 0.0..=1.0).text("isovalue"))
+            .on_hover_text("The loudness density the surface encloses");
+        ui.checkbox(&mut surface.lit, "lit from above");
+        if let Some(error) = &self.surface_error {
+            ui.colored_label(Color32::from_rgb(240, 120, 100), error);
+        }
+    }
+
+    /// The hovered or selected timeline song: who, when, how loud, and its own Song cloud.
+    pub(super) fn timeline_song(&mut self, ui: &mut egui::Ui) {
+        let Some(loaded) = self.timeline.as_ref() else {
+            return;
+        };
+        let cloud = loaded.cloud.clone();
+        let index = self.hovered_song.or(self.selected_song);
+        ui.add_space(6.0);
+        ui.label(RichText::new("Song").strong());
+        let Some(song) = index.and_then(|i| cloud.meta.songs.get(i)) else {
+            ui.label(
+                RichText::new("Hover a song's span to see it; click to keep it.")
+                    .small()
+                    .weak(),
+            );
+            return;
+        };
+        ui.label(RichText::new(song_title(song)).strong());
+        for line in song
+            .metrics
+            .as_ref()
+            .map(labels::describe_metrics)
+            .unwrap_or_default()
+        {
+            ui.label(RichText::new(line).small());
+        }
+        if let Some(path) = song_cloud_path(&cloud, song) {
+            if ui
+                .button("Open in Song mode")
+                .on_hover_text(path.display().to_string())
+                .clicked()
+            {
+                self.start_loading(path);
+            }
+        } else {
+            ui.label(
+                RichText::new("No Song cloud of it next to the song or the timeline.")
+                    .small()
+                    .weak(),
+            );
+        }
+    }
+}
+
+/// What the file says about itself: source, size and loudness metrics.
+pub(super) fn cloud_info(ui: &mut egui::Ui, cloud: &PointCloud) {
+    let name = cloud
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    ui.label(RichText::new(name).strong());
+    ui.label(format!(
+        "{} points",
+        group_thousands(cloud.points.len() as u64)
+    ));
+    for line in crate::ui::labels::describe_cloud(cloud) {
+        ui.label(RichText::new(line).small());
+    }
+}
+
+pub(super) fn group_thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push('\u{2009}');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The song's own Song cloud: same stem .ply next to the song's audio, or next to the timeline.
+pub(super) fn song_cloud_path(
+    timeline: &PointCloud,
+    song: &crate::data::cloud::SongInfo,
+) -> Option<PathBuf> {
+    let audio = PathBuf::from(song.path.as_ref()?);
+    let stem = audio.file_stem()?;
+    let mut name = stem.to_os_string();
+    name.push(".ply");
+    let folder = timeline.path.parent().unwrap_or(Path::new(""));
+    let candidates = [
+        audio.with_file_name(&name),
+        folder
+            .join(audio.parent().unwrap_or(Path::new("")))
+            .join(&name),
+        folder.join(&name),
+    ];
+    candidates
+        .into_iter()
+        .find(|p| p.is_file() && p != &timeline.path)
+}

@@ -1,0 +1,144 @@
+//! What the window keeps between frames: [`LoudscapeApp`] and the types of its fields. The
+//! behaviour lives beside it, one file a concern, each adding its methods to `LoudscapeApp`:
+//! `app.rs` (opening the window, one frame, camera input), `slots.rs` (loading and installing
+//! clouds), `panels.rs` (the side panel), `hover.rs` (picking and markers), `persistence.rs`
+//! (what is remembered between runs) and `window_screenshot.rs` (the two screenshot paths).
+//! Keeping the state in its own file lets those files see it without importing each other.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::sync::mpsc::Receiver;
+use std::time::Instant;
+
+use crate::data::cloud::{DataMode, PointCloud};
+use crate::data::field::Field;
+use crate::render::scene::{RenderSettings, ViewKind};
+use crate::ui::audio::AudioPanel;
+use crate::ui::labels;
+use crate::view::camera::Camera;
+use crate::view::frame_view::FrameView;
+use crate::view::pick::Reading;
+
+/// The window's state: the two data slots, the render settings, the camera and what each
+/// panel keeps between frames.
+pub(super) struct LoudscapeApp {
+    pub(super) song: Option<Loaded>,
+    pub(super) timeline: Option<Loaded>,
+    pub(super) active: Slot,
+    pub(super) settings: RenderSettings,
+    pub(super) camera: Camera,
+    pub(super) fit_pending: bool,
+    pub(super) loading: Vec<Loading>,
+    pub(super) messages: Vec<String>,
+    pub(super) next_id: u64,
+    pub(super) last_motion: Option<Instant>,
+    pub(super) frame_index: u32,
+    pub(super) frame_ms: f32,
+    pub(super) view_aspect: f32,
+    pub(super) screenshot: Option<ScreenshotState>,
+    pub(super) audio: AudioPanel,
+    pub(super) hover: Option<(HoverKey, Hover)>,
+    pub(super) hovered_song: Option<usize>,
+    pub(super) selected_song: Option<usize>,
+    /// The "Save PNG" panel.
+    pub(super) save_shot: SaveShot,
+    pub(super) last_view: Option<FrameView>,
+    pub(super) audio_for: Vec<(PathBuf, PathBuf)>,
+    /// Whether to remember state (off for scripted screenshot runs).
+    pub(super) persist: bool,
+    /// Loads that keep the remembered camera instead of fitting.
+    pub(super) keep_camera_loads: usize,
+    /// Why the surface could not be extracted, if it could not.
+    pub(super) surface_error: Option<String>,
+    /// Draw again next frame (the surface is still growing its buffers).
+    pub(super) needs_repaint: bool,
+    /// Smoothed time of a volume frame at rest (ms), to decide whether orbiting needs a stand-in.
+    pub(super) volume_rest_ms: f32,
+}
+
+/// Which of the two data slots.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Slot {
+    Song,
+    Timeline,
+}
+
+impl Slot {
+    pub(super) fn for_mode(mode: DataMode) -> Self {
+        match mode {
+            DataMode::Timeline => Slot::Timeline,
+            DataMode::Song | DataMode::Generic => Slot::Song,
+        }
+    }
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            Slot::Song => "Song",
+            Slot::Timeline => "Timeline",
+        }
+    }
+}
+
+pub(super) struct Loaded {
+    pub(super) id: u64,
+    /// Point size for this cloud (sparse timelines want larger discs than dense songs).
+    pub(super) point_size: f32,
+    pub(super) cloud: Arc<PointCloud>,
+    pub(super) labels: labels::AxisLabels,
+    pub(super) world_from_data: glam::Mat4,
+    pub(super) world_box: (glam::Vec3, glam::Vec3),
+    /// The voxel grid read back once for hover picking in the Surface and Volume views.
+    pub(super) cpu_grid: Option<Field>,
+}
+
+pub(super) struct Loading {
+    pub(super) path: PathBuf,
+    pub(super) receiver: Receiver<Result<PointCloud, String>>,
+}
+
+/// What is under the cursor, recomputed only when the cursor or the view changed.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct HoverKey {
+    pub(super) px: glam::Vec2,
+    pub(super) camera: Camera,
+    pub(super) size: (u32, u32),
+    pub(super) view: ViewKind,
+    pub(super) cloud_id: u64,
+    pub(super) min_scalar: f32,
+}
+
+#[derive(Clone, Debug, Default)]
+pub(super) struct Hover {
+    pub(super) readings: Vec<Reading>,
+    /// Normalized x under the cursor (on the data, or where the ray enters the box).
+    pub(super) x: Option<f32>,
+}
+
+pub(super) struct ScreenshotState {
+    pub(super) path: PathBuf,
+    pub(super) frames_shown: u32,
+    pub(super) requested: bool,
+    pub(super) done: Arc<AtomicBool>,
+}
+
+/// The "Save PNG" panel's choices.
+pub(super) struct SaveShot {
+    /// Where to save; empty saves `loudscape-<time>.png` in the current directory.
+    pub(super) path: String,
+    /// Whether to render at `size` instead of the window's size.
+    pub(super) custom_size: bool,
+    pub(super) size: [u32; 2],
+    /// Save on this frame (the button or Ctrl+S).
+    pub(super) requested: bool,
+}
+
+impl Default for SaveShot {
+    fn default() -> Self {
+        Self {
+            path: String::new(),
+            custom_size: false,
+            size: [1920, 1080],
+            requested: false,
+        }
+    }
+}

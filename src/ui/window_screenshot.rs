@@ -1,0 +1,122 @@
+//! The window's two screenshot paths: "Save PNG" (the 3D view rendered offscreen at the
+//! window's or a chosen size, through [`crate::ui::screenshot::render_view`], labels included)
+//! and the scripted `--screenshot` of the whole window (egui's own, for tests), which closes the
+//! window once saved.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+
+use eframe::egui::{self, RichText};
+
+use crate::ui::bridge::ViewResources;
+use crate::ui::state::LoudscapeApp;
+
+impl LoudscapeApp {
+    pub(super) fn handle_screenshot(&mut self, ctx: &egui::Context) {
+        let has_data = self.active().is_some();
+        let Some(state) = self.screenshot.as_mut() else {
+            return;
+        };
+        if state.done.load(Ordering::SeqCst) {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            return;
+        }
+        if !has_data && self.loading.is_empty() && self.messages.is_empty() {
+            // Nothing to wait for: take the empty window.
+        } else if !has_data {
+            if !self.messages.is_empty() {
+                // Loading failed; still take the picture so the test sees the message.
+            } else {
+                ctx.request_repaint();
+                return;
+            }
+        }
+        state.frames_shown += 1;
+        if state.frames_shown >= 3 && !state.requested {
+            state.requested = true;
+            let path = state.path.clone();
+            let done = state.done.clone();
+            let repaint = ctx.clone();
+            ctx.request_screenshot(move |image| {
+                if let Err(e) = save_color_image(&image, &path) {
+                    eprintln!("loudscape: error: {}: {e}", path.display());
+                }
+                done.store(true, Ordering::SeqCst);
+                repaint.request_repaint();
+            });
+        }
+        ctx.request_repaint();
+    }
+
+    pub(super) fn screenshot_controls(&mut self, ui: &mut egui::Ui) {
+        ui.label(RichText::new("Screenshot").strong());
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.active().is_some(), egui::Button::new("Save PNG"))
+                .on_hover_text("Ctrl+S (Cmd+S): the 3D view as a PNG")
+                .clicked()
+            {
+                self.save_shot.requested = true;
+            }
+            ui.checkbox(&mut self.save_shot.custom_size, "size");
+        });
+        if self.save_shot.custom_size {
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut self.save_shot.size[0]).range(16..=8192));
+                ui.label("×");
+                ui.add(egui::DragValue::new(&mut self.save_shot.size[1]).range(16..=8192));
+                ui.label("px");
+            });
+        }
+        ui.add(
+            egui::TextEdit::singleline(&mut self.save_shot.path)
+                .hint_text("loudscape-<time>.png")
+                .desired_width(230.0),
+        );
+    }
+
+    /// Renders the current view offscreen (window size or the chosen size) and saves it.
+    pub(super) fn save_screenshot(&mut self, frame: &eframe::Frame) {
+        let (Some(render_state), Some(mut view)) = (frame.wgpu_render_state(), self.last_view)
+        else {
+            return;
+        };
+        let Some(loaded) = self.active() else {
+            return;
+        };
+        if self.save_shot.custom_size {
+            view.width = self.save_shot.size[0].max(1);
+            view.height = self.save_shot.size[1].max(1);
+        }
+        let path = if self.save_shot.path.trim().is_empty() {
+            crate::ui::screenshot::timestamped_name(std::time::SystemTime::now())
+        } else {
+            PathBuf::from(self.save_shot.path.trim())
+        };
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
+        let result =
+            ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
+                .and_then(|image| crate::ui::screenshot::save_png(&image, &path));
+        match result {
+            Ok(()) => self.messages.push(format!(
+                "saved {} ({}×{})",
+                path.display(),
+                view.width,
+                view.height
+            )),
+            Err(e) => self.messages.push(e.to_string()),
+        }
+    }
+}
+
+pub(super) fn save_color_image(image: &egui::ColorImage, path: &Path) -> anyhow::Result<()> {
+    let [w, h] = image.size;
+    let mut rgba = Vec::with_capacity(w * h * 4);
+    for pixel in &image.pixels {
+        rgba.extend_from_slice(&pixel.to_array());
+    }
+    let img = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+        .ok_or_else(|| anyhow::anyhow!("screenshot has the wrong size"))?;
+    Ok(crate::ui::screenshot::save_png(&img, path)?)
+}

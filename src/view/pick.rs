@@ -1,0 +1,208 @@
+//! What is under the cursor, on the CPU: the nearest projected point, the first voxel along the
+//! cursor's ray above a threshold, or the timeline song whose span holds an x position, and the
+//! read-out of each in physical units.
+//!
+//! Picking runs once per hover event (when the cursor or the view changed), not per frame: a
+//! linear scan projecting every point costs a few milliseconds for 200k points.
+
+use glam::{UVec3, Vec2, Vec3, Vec4Swizzles};
+
+use crate::data::axes::{Axes, Axis, note_name};
+use crate::data::cloud::{Point, SongInfo};
+use crate::data::field::Field;
+use crate::view::frame_view::FrameView;
+
+/// The ray under pixel `px` (origin top left) in data space: origin on the near plane, unit
+/// direction away from the camera.
+pub fn cursor_ray(view: &FrameView, px: Vec2) -> (Vec3, Vec3) {
+    let data_from_clip = view.clip_from_data().inverse();
+    let ndc_x = px.x / view.width.max(1) as f32 * 2.0 - 1.0;
+    let ndc_y = 1.0 - px.y / view.height.max(1) as f32 * 2.0;
+    let unproject = |z: f32| {
+        let p = data_from_clip * glam::Vec4::new(ndc_x, ndc_y, z, 1.0);
+        p.xyz() / p.w
+    };
+    let near = unproject(0.0);
+    let far = unproject(1.0);
+    (near, (far - near).normalize_or_zero())
+}
+
+/// Where a ray enters and leaves the box `[min, max]`: parameters `(t_enter, t_exit)`, None when
+/// it misses.
+pub fn ray_box(origin: Vec3, dir: Vec3, min: Vec3, max: Vec3) -> Option<(f32, f32)> {
+    let inv = dir.recip();
+    let a = (min - origin) * inv;
+    let b = (max - origin) * inv;
+    let t_enter = a.min(b).max_element().max(0.0);
+    let t_exit = a.max(b).min_element();
+    (t_exit >= t_enter && t_exit.is_finite()).then_some((t_enter, t_exit))
+}
+
+/// The point drawn under pixel `px`: among the points projected within `radius_px` of it (and
+/// shown: scalar at least `min_scalar`), the one nearest the camera.
+pub fn pick_point(
+    points: &[Point],
+    view: &FrameView,
+    px: Vec2,
+    radius_px: f32,
+    min_scalar: f32,
+) -> Option<usize> {
+    let clip_from_data = view.clip_from_data();
+    let (w, h) = (view.width as f32, view.height as f32);
+    let radius2 = radius_px * radius_px;
+    let mut best: Option<(usize, f32, f32)> = None;
+    for (index, point) in points.iter().enumerate() {
+        if point.scalar < min_scalar {
+            continue;
+        }
+        let clip = clip_from_data * Vec3::from(point.position).extend(1.0);
+        if clip.w <= 1e-6 {
+            continue;
+        }
+        let ndc = clip.xyz() / clip.w;
+        if !(0.0..=1.0).contains(&ndc.z) {
+            continue;
+        }
+        let screen = Vec2::new((ndc.x * 0.5 + 0.5) * w, (0.5 - ndc.y * 0.5) * h);
+        let d2 = screen.distance_squared(px);
+        if d2 > radius2 {
+            continue;
+        }
+        // Nearest the camera wins; within a hair of the same depth, nearest the cursor.
+        let better = match best {
+            None => true,
+            Some((_, depth, dist)) => ndc.z < depth - 1e-6 || (ndc.z <= depth + 1e-6 && d2 < dist),
+        };
+        if better {
+            best = Some((index, ndc.z, d2));
+        }
+    }
+    best.map(|(index, _, _)| index)
+}
+
+/// The voxel a ray stopped at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelHit {
+    pub voxel: UVec3,
+    /// The voxel's centre in data space.
+    pub position: Vec3,
+    pub density: f32,
+    pub hp_mean: f32,
+}
+
+impl Field {
+    /// The first voxel along the ray whose density is at least `threshold`, sampled every
+    /// quarter voxel.
+    pub fn pick(&self, origin: Vec3, dir: Vec3, threshold: f32) -> Option<VoxelHit> {
+        let n = self.dims.x as usize * self.dims.y as usize * self.dims.z as usize;
+        if n == 0 || self.density.len() != n || self.hp_mean.len() != n {
+            return None;
+        }
+        let (t0, t1) = ray_box(origin, dir, self.box_min, self.box_max)?;
+        let size = (self.box_max - self.box_min) / self.dims.as_vec3();
+        let step = (size.min_element() * 0.25).max(1e-5);
+        let mut t = t0 + step * 0.5;
+        while t <= t1 {
+            if let Some(v) = self.voxel_of(origin + dir * t) {
+                let i = self.index(v);
+                if self.density[i] >= threshold {
+                    return Some(VoxelHit {
+                        voxel: v,
+                        position: self.box_min + (v.as_vec3() + 0.5) * size,
+                        density: self.density[i],
+                        hp_mean: self.hp_mean[i],
+                    });
+                }
+            }
+            t += step;
+        }
+        None
+    }
+}
+
+/// The timeline song whose span `[x_min, x_max]` (normalized) holds `x`.
+pub fn song_at(songs: &[SongInfo], x: f32) -> Option<usize> {
+    let x = f64::from(x);
+    songs.iter().position(|s| match (s.x_min, s.x_max) {
+        (Some(a), Some(b)) => x >= a.min(b) && x <= a.max(b),
+        _ => false,
+    })
+}
+
+/// One line of a read-out: what and how much.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reading {
+    pub name: String,
+    pub value: String,
+}
+
+fn axis_name(axis: &Axis, fallback: &str) -> String {
+    if axis.label.is_empty() {
+        fallback.to_string()
+    } else {
+        axis.label.clone()
+    }
+}
+
+/// A position axis's value with more precision than a tick, and the nearest note for Hz.
+fn reading_at(axis: &Axis, fallback: &str, value: f64) -> Reading {
+    let mut text = axis.format_value(value);
+    if axis.unit == "Hz"
+        && let Some(note) = note_name(value)
+    {
+        text = format!("{text} ({note})");
+    }
+    Reading {
+        name: axis_name(axis, fallback),
+        value: text,
+    }
+}
+
+/// The physical values at a data-space position: time or year, level, frequency or crest factor.
+pub fn position_readings(axes: &Axes, position: Vec3) -> Vec<Reading> {
+    vec![
+        reading_at(&axes.x, "x", axes.x.value_at(f64::from(position.x))),
+        reading_at(&axes.z, "z", axes.z.value_at(f64::from(position.z))),
+        reading_at(&axes.y, "y", axes.y.value_at(f64::from(position.y))),
+    ]
+}
+
+/// Everything about one point: its position's values, loudness (scalar) and hp.
+pub fn point_readings(axes: &Axes, point: &Point) -> Vec<Reading> {
+    let mut out = position_readings(axes, Vec3::from(point.position));
+    out.push(Reading {
+        name: axis_name(&axes.scalar, "loudness"),
+        value: axes
+            .scalar
+            .format_value(axes.scalar.value_at_unit(f64::from(point.scalar))),
+    });
+    out.push(Reading {
+        name: "hp".into(),
+        value: format!("{:.2} ({})", point.hp, hp_word(point.hp)),
+    });
+    out
+}
+
+/// A voxel's position values, density and mean hp.
+pub fn voxel_readings(axes: &Axes, hit: &VoxelHit) -> Vec<Reading> {
+    let mut out = position_readings(axes, hit.position);
+    out.push(Reading {
+        name: "density".into(),
+        value: format!("{:.3}", hit.density),
+    });
+    out.push(Reading {
+        name: "mean hp".into(),
+        value: format!("{:.2} ({})", hit.hp_mean, hp_word(hit.hp_mean)),
+    });
+    out
+}
+
+fn hp_word(hp: f32) -> &'static str {
+    if hp < 0.35 {
+        "percussive"
+    } else if hp > 0.65 {
+        "harmonic"
+    } else {
+        "mixed"
+    }
+}
