@@ -15,7 +15,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music demo clean
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke demo clean
 
 system:
 	@bash scripts/setup-system.sh
@@ -32,7 +32,8 @@ build: system
 	$(CARGO) build --release
 
 # Opens the demo in a window; with no display, renders every view of the demo to PNG files.
-run: build
+# The venv holds the extractor the app runs when it is given a song instead of a cloud.
+run: build venv
 	@if [ -n "$(DISPLAY)$(WAYLAND_DISPLAY)" ] || [ "$$(uname -s)" = Darwin ]; then \
 		./target/release/loudscape $(DEMO_SONG) $(wildcard $(DEMO_TIMELINE)); \
 	else \
@@ -44,7 +45,7 @@ lint-rust:
 	$(CARGO) fmt --check
 	$(CARGO) clippy --all-targets -- -D warnings
 
-test-rust: system
+test-rust: system venv
 	$(XVFB) $(CARGO) test
 
 lint-py: venv
@@ -65,7 +66,19 @@ test-mesh: system venv
 	$(CARGO) test --no-run -q
 	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
 
-test: system lint-rust lint-py test-rust test-py test-mesh
+# The PLY loader, its metadata parser and the axes/read-outs fuzzed (examples/fuzz_ply.rs):
+# a few seconds in `make test` in the overflow-checked debug build the tests already built (a
+# release build only for this would double CI's compile time); `make fuzz N=5000000` runs
+# millions of inputs in release. Crashing inputs are saved under fuzz-crashes/.
+FUZZ_SECONDS ?= 6
+N ?= 1000000
+fuzz-smoke:
+	$(CARGO) run -q --example fuzz_ply -- --seconds $(FUZZ_SECONDS)
+
+fuzz:
+	$(CARGO) run -q --release --example fuzz_ply -- --inputs $(N)
+
+test: system lint-rust lint-py test-rust test-py test-mesh fuzz-smoke
 
 # Benchmarks, not part of `make test` (minutes each; figures in docs/PERFORMANCE.md).
 # 1,000 short songs cold (process pool, two-worker Dask LocalCluster) and the warm rebuild of a

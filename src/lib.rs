@@ -11,11 +11,15 @@
 //! - [`render`]: the GPU passes, which know nothing of the window: `gpu/` plumbing, `grid/`
 //!   (voxelize), `surface/` (marching tetrahedra, dual contouring, draw), points, lines,
 //!   markers, volume, composite; `scene` owns them (once per device) and each cloud's data.
+//! - [`files`]: writing files safely: temporary files removed on errors and signals, outputs
+//!   that are not inputs.
 //! - [`ui`]: everything egui: the window, its panels, hover, persistence, labels, screenshots.
 //!
 //! The binary (`src/main.rs`) adds the command line (`src/commands/`).
 
 pub mod data;
+pub mod extract;
+pub mod files;
 pub mod playback;
 pub mod render;
 pub mod ui;

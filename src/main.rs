@@ -6,7 +6,7 @@ mod commands;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -29,6 +29,10 @@ struct Cli {
     /// Print the full error chain and backtraces.
     #[arg(long, global = true)]
     debug: bool,
+
+    /// Quiet: no "wrote ..." summaries (errors are still reported).
+    #[arg(short, long, global = true)]
+    quiet: bool,
 
     #[command(subcommand)]
     command: Option<Command>,
@@ -53,19 +57,118 @@ fn parse_view(name: &str) -> Result<loudscape::render::scene::ViewKind, String> 
         .ok_or_else(|| format!("'{name}' is not one of points, surface, volume"))
 }
 
+/// Longest error line printed (characters); longer ones are cut, with an ellipsis.
+const MAX_MESSAGE_CHARS: usize = 300;
+
+/// `text` as one line of at most `max` characters: line breaks and other control characters
+/// become spaces, runs of spaces one, and the tail is cut with an ellipsis.
+fn one_line(text: &str, max: usize) -> String {
+    let mut out = String::with_capacity(text.len().min(max + 4));
+    let mut chars = 0;
+    let mut last_space = false;
+    for c in text.trim().chars() {
+        let c = if c.is_control() { ' ' } else { c };
+        if c == ' ' && last_space {
+            continue;
+        }
+        last_space = c == ' ';
+        if chars == max {
+            out.truncate(out.trim_end().len());
+            out.push('…');
+            return out;
+        }
+        out.push(c);
+        chars += 1;
+    }
+    out
+}
+
+/// Vulkan's window-system probing prints "error: XDG_RUNTIME_DIR is invalid or not set in the
+/// environment." when the variable names no folder. Commands without a window point it at a
+/// private folder (`loudscape-runtime-UID` in the temporary folder, mode 0700) in that case;
+/// the window leaves the environment alone. Called first thing, before any thread starts.
+#[cfg(target_os = "linux")]
+fn headless_runtime_dir() {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    let valid = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(PathBuf::from)
+        .is_some_and(|dir| dir.is_absolute() && dir.is_dir());
+    if valid {
+        return;
+    }
+    let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("loudscape-runtime-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    // Only a folder that is ours and private (not one planted by someone else).
+    let private = std::fs::symlink_metadata(&dir)
+        .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.permissions().mode() & 0o077 == 0);
+    if private {
+        // SAFETY: called at the start of main, before any other thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn headless_runtime_dir() {}
+
+/// A first FILES argument that is no file and looks like a word (no extension, no folder) was
+/// meant as a subcommand: answer as clap does for an unknown one, instead of opening a window.
+fn reject_unknown_subcommand(files: &[PathBuf]) {
+    let Some(first) = files.first() else {
+        return;
+    };
+    let word = first.to_str().is_some_and(|s| {
+        !s.is_empty()
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    });
+    if word && !first.exists() {
+        Cli::command()
+            .error(
+                clap::error::ErrorKind::InvalidSubcommand,
+                format!("unrecognized subcommand '{}'", first.display()),
+            )
+            .exit();
+    }
+}
+
+/// The outputs of the window's `--screenshot`: a .png that is none of the files opened.
+fn check_screenshot(cli: &Cli) -> anyhow::Result<()> {
+    if let Some(shot) = &cli.screenshot {
+        let inputs: Vec<&std::path::Path> = cli.files.iter().map(PathBuf::as_path).collect();
+        commands::args::check_output(shot, &["png"], &inputs)?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if cli.command.is_some() {
+        headless_runtime_dir();
+    } else {
+        reject_unknown_subcommand(&cli.files);
+    }
+    commands::set_quiet(cli.quiet);
     if !cli.debug {
         // No backtrace dumps for users; errors are reported as one line below.
         std::panic::set_hook(Box::new(|info| {
-            eprintln!("loudscape: internal error: {info} (run with --debug for details)");
+            let text = one_line(&info.to_string(), MAX_MESSAGE_CHARS);
+            eprintln!("loudscape: internal error: {text} (run with --debug for details)");
         }));
     }
+    // Temporary files go with the process on SIGTERM and SIGINT, as they do on errors.
+    if let Err(e) = loudscape::files::remove_temporaries_on_signal() {
+        log::warn!("cannot watch for signals: {e}");
+    }
     let result = match cli.command {
-        None => loudscape::ui::run(loudscape::ui::WindowOptions {
-            files: cli.files,
-            screenshot: cli.screenshot,
-            view: cli.view,
+        None => check_screenshot(&cli).and_then(|()| {
+            loudscape::ui::run(loudscape::ui::WindowOptions {
+                files: cli.files,
+                screenshot: cli.screenshot,
+                view: cli.view,
+            })
         }),
         Some(Command::Render(args)) => commands::render::run(args),
         Some(Command::RenderDemo(args)) => commands::render::run_demo(args),
@@ -79,9 +182,26 @@ fn main() -> ExitCode {
             if cli.debug {
                 eprintln!("loudscape: error: {error:?}");
             } else {
-                eprintln!("loudscape: error: {error:#}");
+                let text = one_line(&format!("{error:#}"), MAX_MESSAGE_CHARS);
+                eprintln!("loudscape: error: {text}");
             }
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+
+    #[test]
+    fn messages_become_one_short_line() {
+        assert_eq!(one_line("a\n  b\tc\r\n", 300), "a b c");
+        let long = "x".repeat(1000);
+        let cut = one_line(&long, 300);
+        assert_eq!(cut.chars().count(), 301);
+        assert!(cut.ends_with('…'));
+        assert_eq!(one_line("é".repeat(5).as_str(), 3), "ééé…");
+        assert_eq!(one_line("short", 300), "short");
     }
 }

@@ -112,16 +112,18 @@ pub fn decode(path: &Path) -> Result<Track, PlaybackError> {
     })
 }
 
-/// Where the song of a cloud is: `source.path` as written (relative to the current directory),
+/// Where the song of a cloud is: `source.path` as written (its exact bytes from
+/// `source.path_bytes_b64` when recorded; relative to the current directory),
 /// then relative to the .ply's folder, then its file name next to the .ply.
 pub fn resolve_source(cloud: &PointCloud) -> Result<PathBuf, PlaybackError> {
-    let Some(recorded) = cloud.meta.source.as_ref().and_then(|s| s.path.clone()) else {
+    // The exact bytes when the file records them (`path_bytes_b64`: a name that is not UTF-8).
+    let Some(recorded_path) = cloud.meta.source.as_ref().and_then(|s| s.open_path()) else {
         return Err(PlaybackError::NotFound {
             path: cloud.path.display().to_string(),
             tried: "the file names no source audio (source.path)".into(),
         });
     };
-    let recorded_path = PathBuf::from(&recorded);
+    let recorded = recorded_path.display().to_string();
     let folder = cloud.path.parent().unwrap_or(Path::new(""));
     let mut candidates = vec![recorded_path.clone()];
     if recorded_path.is_relative() {

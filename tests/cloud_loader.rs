@@ -724,13 +724,26 @@ fn header_without_end_header() {
         text.as_bytes(),
         &["header line 10", "ends before `end_header`"],
     );
-    // A 10 MB line where the header should end: stops at the cap.
+    // A 10 MB line where the header should end: the file ends first (the cap is 64 MiB).
     let mut bytes = header_text(&STANDARD[..9]).into_bytes();
     bytes.extend(std::iter::repeat_n(b'a', 10 * 1024 * 1024));
     expect_error(
         "long_line.ply",
         &bytes,
-        &["header line 10", "longer than 64 KiB"],
+        &["header line 10", "ends before `end_header`"],
+    );
+    // A stream (no length known) of endless header: stops at the cap.
+    let endless = std::io::Read::chain(
+        std::io::Cursor::new(header_text(&STANDARD[..9]).into_bytes()),
+        std::io::repeat(b'a'),
+    );
+    let err = cloud::load_from_reader(endless, Path::new("endless.ply"), None)
+        .expect_err("an endless header fails");
+    let message = err.to_string();
+    assert!(
+        message.starts_with("endless.ply: header line 10: ")
+            && message.contains("longer than 64 MiB without `end_header`"),
+        "{message}"
     );
 }
 
@@ -761,9 +774,9 @@ fn bad_json_meta() {
             "missing `format_version`",
         ),
         (
-            "version_2",
-            |m| m["format_version"] = json!(2),
-            "format_version 2 is not supported",
+            "version_3",
+            |m| m["format_version"] = json!(3),
+            "format_version 3 is not supported",
         ),
         ("no_mode", |m| remove(m, "mode"), "missing `mode`"),
         (
@@ -786,7 +799,8 @@ fn bad_json_meta() {
     for (name, change, needle) in cases {
         let mut meta = song_meta();
         change(&mut meta);
-        let bytes = file_bytes(&sample_points(10), &meta);
+        // Written by hand: the writer owns `format_version` and would set it.
+        let bytes = with_header_line(3, &format!("comment loudscape-meta {meta}"));
         expect_error(&format!("{name}.ply"), &bytes, &["header line 3", needle]);
     }
     let mut meta = song_meta();

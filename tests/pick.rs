@@ -142,3 +142,91 @@ fn timeline_positions_find_their_song() {
     assert_eq!(song_at(&songs, 0.99), Some(2));
     assert_eq!(song_at(&songs, 1.5), None);
 }
+
+/// A dense but empty voxel (smoothing spread density into it; the voxelizer wrote the empty
+/// default 0.5 as its hp) reads the hp of the points beside it, not "0.50 (mixed)".
+#[test]
+fn an_empty_voxel_reads_the_hp_of_its_neighbours() {
+    use loudscape::view::pick::{EMPTY_VOXEL_HP, voxel_readings};
+    let dims = UVec3::new(8, 8, 8);
+    let n = 512;
+    let index = |x: u32, y: u32, z: u32| (x + 8 * (y + 8 * z)) as usize;
+    let mut density = vec![0.0f32; n];
+    let mut hp = vec![EMPTY_VOXEL_HP; n];
+    // (2, 4, 4) is dense and empty; (3, 4, 4) and (3, 5, 4) hold percussive points, (7, 4, 4)
+    // (out of reach) a harmonic one.
+    density[index(2, 4, 4)] = 0.6;
+    for (x, y, d, h) in [(3, 4, 0.9f32, 0.1f32), (3, 5, 0.3, 0.3), (7, 4, 1.0, 0.95)] {
+        density[index(x, y, 4)] = d;
+        hp[index(x, y, 4)] = h;
+    }
+    let grid = Field {
+        dims,
+        box_min: Vec3::splat(-1.0),
+        box_max: Vec3::splat(1.0),
+        density,
+        hp_mean: hp,
+    };
+    // Along +x through the centre of row (y = 4, z = 4).
+    let hit = grid
+        .pick(Vec3::new(-3.0, 0.125, 0.125), Vec3::X, 0.5)
+        .expect("hit");
+    assert_eq!(hit.voxel, UVec3::new(2, 4, 4));
+    let expected = (0.1 * 0.9 + 0.3 * 0.3) / (0.9 + 0.3);
+    assert!((hit.hp_mean - expected).abs() < 1e-6, "{}", hit.hp_mean);
+    let readings = voxel_readings(
+        &loudscape::data::axes::Axes::generic([(-1.0, 1.0); 3]),
+        &hit,
+    );
+    let hp_line = readings.iter().find(|r| r.name == "mean hp").unwrap();
+    assert_eq!(hp_line.value, "0.15 (percussive)");
+    // Nothing holding points within two voxels: said so, not 0.50.
+    let mut lonely = grid.clone();
+    lonely.hp_mean.iter_mut().for_each(|h| *h = EMPTY_VOXEL_HP);
+    let hit = lonely
+        .pick(Vec3::new(-3.0, 0.125, 0.125), Vec3::X, 0.5)
+        .expect("hit");
+    assert!(hit.hp_mean.is_nan());
+    let readings = voxel_readings(
+        &loudscape::data::axes::Axes::generic([(-1.0, 1.0); 3]),
+        &hit,
+    );
+    assert!(readings.iter().any(|r| r.value == "no points nearby"));
+}
+
+/// The year under the cursor on a timeline comes from the song spans: two 1987 songs side by
+/// side both read 1987, and songs placed by order (not by year) read their own year.
+#[test]
+fn the_timeline_year_comes_from_the_song_spans() {
+    use loudscape::data::axes::{Axes, Axis};
+    use loudscape::view::pick::timeline_year;
+    let axes = Axes {
+        x: Axis::linear("year", "year", 1980.0, 2010.0),
+        ..Axes::generic([(-1.0, 1.0); 3])
+    };
+    let song = |year: i32, a: f64, b: f64| SongInfo {
+        year: Some(year),
+        x_min: Some(a),
+        x_max: Some(b),
+        ..Default::default()
+    };
+    // By order: a 2005 song in the middle, where the linear map says 1995.
+    let songs = vec![
+        song(1987, -1.0, -0.6),
+        song(1987, -0.6, -0.2),
+        song(2005, -0.2, 0.3),
+        song(2009, 0.5, 1.0),
+    ];
+    let year = |x: f32| timeline_year(&axes, &songs, x).map(|r| r.value);
+    assert_eq!(year(-0.9).as_deref(), Some("1987"));
+    assert_eq!(year(-0.3).as_deref(), Some("1987"));
+    assert_eq!(year(0.0).as_deref(), Some("2005"));
+    assert_eq!(year(0.4), None, "between songs there is no year");
+    assert_eq!(
+        timeline_year(&axes, &songs, 0.0).unwrap().name,
+        "year",
+        "named as the axis"
+    );
+    // Without spans, the axis's own map is all there is.
+    assert!(timeline_year(&axes, &[], 0.0).is_some());
+}

@@ -8,7 +8,7 @@ use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::reference::ReferenceGrid;
 use loudscape::render::grid::voxelize::{
     FIXED_POINT_SCALE, HISTOGRAM_BINS_PER_OCTAVE, HP_FIXED_POINT_SCALE, VoxelStats, VoxelizeError,
-    VoxelizePass, grid_box, reference_sum,
+    VoxelizePass, grid_box, reference_sum, voxel_of, voxels_per_unit,
 };
 
 struct Built {
@@ -273,6 +273,63 @@ fn degenerate_clouds_give_sensible_grids() {
         built.stats.nonempty, 2,
         "the scalar-0 point adds no loudness"
     );
+}
+
+/// More than 2^24 points, most of them in one voxel (the old 24-bit count wrapped there): the
+/// count, the hp mean and the loudness sum stay exact, and the CPU reference agrees.
+#[test]
+fn clouds_over_2_pow_24_points_voxelize_exactly() {
+    // 17 * 2^20 = 17,825,792 points in one voxel, hp alternating 0.25 and 0.5: the mean is 0.375
+    // and every sum is exact in the fixed point and in f32.
+    let crowded = 17usize << 20;
+    assert!(crowded > 1 << 24);
+    let mut points: Vec<Point> = (0..crowded)
+        .map(|i| Point {
+            position: [-0.5, -0.5, -0.5],
+            scalar: 0.5,
+            hp: if i % 2 == 0 { 0.25 } else { 0.5 },
+        })
+        .collect();
+    points.extend(std::iter::repeat_n(
+        Point {
+            position: [0.5, 0.5, 0.5],
+            scalar: 1.0,
+            hp: 1.0,
+        },
+        1000,
+    ));
+    for corner in [[-1.0; 3], [1.0; 3]] {
+        points.push(Point {
+            position: corner,
+            scalar: 1.0,
+            hp: 0.0,
+        });
+    }
+    let resolution = 64;
+    let gpu = common::gpu();
+    let built = build(&gpu, &points, resolution, 0.0);
+    let (min, max) = grid_box(&points);
+    let dims = glam::UVec3::splat(resolution);
+    let per_unit = voxels_per_unit(dims, min, max);
+    let index = |p: [f32; 3]| {
+        let v = voxel_of(glam::Vec3::from_array(p), min, per_unit, dims);
+        (v.x + dims.x * (v.y + dims.y * v.z)) as usize
+    };
+    let (a, b) = (index([-0.5; 3]), index([0.5; 3]));
+    assert_eq!(built.stats.nonempty, 4);
+    assert_eq!(built.hp_mean[a], 0.375, "hp mean of the crowded voxel");
+    assert_eq!(built.hp_mean[b], 1.0);
+    assert_eq!(built.hp_mean[index([-1.0; 3])], 0.0);
+    // The crowded voxel holds the largest sum (8,912,896), beyond the histogram's top bin
+    // (2^22.6): the reference is that bin's upper edge, as on the CPU, and the voxel clamps to 1.
+    let reference = ReferenceGrid::build(&points, resolution);
+    assert_eq!(reference.counts[a] as usize, crowded);
+    assert_eq!(reference.sums[a], (crowded / 2) as f64);
+    let cpu_reference = reference_sum(reference.sums.iter().map(|&s| s as f32));
+    assert_eq!(built.stats.reference_sum, cpu_reference);
+    assert_eq!(built.density[a], 1.0);
+    assert_eq!(built.density[b], 1000.0 / cpu_reference);
+    assert_matches_reference(&points, resolution, 0.0);
 }
 
 #[test]

@@ -109,6 +109,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="z axis: linear in bin index (default) or log frequency (drops the 0 Hz bin)",
     )
     song.add_argument(
+        "--progress",
+        choices=("text", "json"),
+        default="text",
+        help="json: one JSON object a line on stdout (stage, fraction; done or error last)",
+    )
+    song.add_argument(
         "--highpass",
         action="store_true",
         help=f"also high-pass at {HIGHPASS_HZ:g} Hz (infrasound) before frame level, crest, "
@@ -248,6 +254,8 @@ def run_song(args: argparse.Namespace, progress: Progress) -> int:
         progress=progress,
         warn=lambda text: _say(f"warning: {text}"),
     )
+    if hasattr(progress, "done"):
+        progress.done(output)
     if not args.quiet:
         _say(
             f"wrote {output} ({metadata['point_count']} points, "
@@ -357,6 +365,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "song" and args.hop > args.n_fft:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
+    if getattr(args, "progress", "text") == "json":
+        from loudscape_extract.progress import JsonProgress
+
+        progress = JsonProgress()
     try:
         with sigterm_raises():
             if args.command == "song":
@@ -370,6 +382,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             raise
         _say(f"error: {exc}")
+        if hasattr(progress, "error"):
+            progress.error(str(exc))
         return 1
     except KeyboardInterrupt as exc:
         if args.debug:
@@ -384,6 +398,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         reason = " ".join(str(exc).split()) or type(exc).__name__
         where = getattr(args, "input", None) or getattr(args, "output", "")
         _say(f"error: {where}: internal error: {reason}")
+        if hasattr(progress, "error"):
+            progress.error(f"{where}: internal error: {reason}")
         return 1
 
 

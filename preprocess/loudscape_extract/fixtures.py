@@ -10,9 +10,9 @@ Extraction: n_fft 64, hop 64, floor 40 dB, linear frequency. ``source.path`` is 
 ``data/fixture_song.wav`` (the path given on the command line, relative to the repo root);
 the wav itself is not kept.
 
-The file is written in format version 1 (``--format-version 2`` for the newer layout) as long as
-the app's tests read it with a version-1 reader; ``loudscape_extract.format_fixtures`` writes
-the fixtures of both versions in tests/fixtures/format/.
+The file is written in format version 2, which the app reads (``--format-version 1`` for the
+older layout); ``loudscape_extract.format_fixtures`` writes the fixtures of both versions in
+tests/fixtures/format/.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ SAMPLE_RATE = 8000
 N_FFT = 64
 HOP = 64
 FLOOR_DB = 40.0
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 
 def fixture_signal() -> np.ndarray:
@@ -108,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out-dir", default="data", help="where to write (default: data)")
     parser.add_argument(
-        "--format-version", type=int, choices=(1, 2), default=FORMAT_VERSION, help="(1)"
+        "--format-version", type=int, choices=(1, 2), default=FORMAT_VERSION, help="(2)"
     )
     args = parser.parse_args(argv)
     for path in write_fixture(args.out_dir, format_version=args.format_version):

@@ -81,10 +81,8 @@ def extract_song(
             strict=strict,
             progress=say,
         )
-        say(
-            f"{track.duration_s:.1f} s, {track.sample_rate} Hz, {track.n_channels} channel(s); "
-            "counting points"
-        )
+        say(f"{track.duration_s:.1f} s, {track.sample_rate} Hz, {track.n_channels} channel(s)")
+        say("building points: counting those above the floor")
         if track.warning:
             _warn(warn, f"{source}: {track.warning}")
         cloud, blocks = song_point_blocks(track, floor_db=floor, freq_scale=freq_scale)
@@ -96,7 +94,12 @@ def extract_song(
     if offset > DC_WARN_THRESHOLD:
         _warn(warn, dc_warning(source, offset))
     metadata = song_metadata(track, cloud, generator=GENERATOR, source_format=track.source_format)
-    say(f"harmonic-percussive separation, writing {cloud.point_count} points to {output}")
+    say("harmonic-percussive separation and the points, block by block")
+
+    def produced():
+        yield from checked_blocks(blocks(), metadata, n_points=cloud.point_count, path=output)
+        say(f"writing {cloud.point_count} points to {output}")  # the last block is in
+
     try:
         # The contract (check_cloud's rules) runs on the metadata first and on each block
         # before it is written; the file is put in place only after the last block.
@@ -104,7 +107,7 @@ def extract_song(
             output,
             n_points=cloud.point_count,
             metadata=metadata,
-            blocks=checked_blocks(blocks(), metadata, n_points=cloud.point_count, path=output),
+            blocks=produced(),
         )
     except ExtractError as exc:
         if exc.path is None:

@@ -619,6 +619,7 @@ def stream_track(
                 part = levels[first_bin:]
                 level_max[first_bin] = max(level_max[first_bin], float(part.max()))
                 level_min[first_bin] = min(level_min[first_bin], float(part.min()))
+    say("frame features")
     rms, peak = stats.frame_rms, stats.frame_peak
     with np.errstate(divide="ignore", invalid="ignore"):
         rms_dbfs = np.where(silent, -np.inf, 20.0 * np.log10(rms))

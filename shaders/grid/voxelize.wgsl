@@ -1,6 +1,6 @@
 // Voxelization: points -> per-voxel sums -> normalized loudness density and mean hp.
 // Entry points, in the order src/render/grid/voxelize.rs dispatches them:
-//   accumulate  one thread per point: adds scalar, hp and 1 to the point's voxel record
+//   accumulate  one thread per point: adds scalar, hp and 1 to the point's voxel's sums and count
 //   resolve     one thread per voxel: density = loudness sum (as f32), hp mean = hp sum / count
 //   smooth_axis one thread per voxel: one axis of a separable Gaussian on the sums (optional)
 //   histogram   grid-stride over voxels: log2 histogram of the positive (smoothed) sums
@@ -42,19 +42,20 @@ const STATS_HISTOGRAM: u32 = 4u;
 // The cloud chunk as a flat array, five f32 per point (x, y, z, scalar, hp), the PLY record.
 @group(1) @binding(1) var<storage, read> cloud: array<f32>;
 // Two 64-bit fixed-point numbers per voxel, each two u32 words (low, high) with manual carries,
-// in two buffers of 8 bytes per voxel (so a 224^3 grid fits a 128 MiB binding):
+// in two buffers of 8 bytes per voxel (so a 224^3 grid fits a 128 MiB binding), and a count:
 //   loudness_sums: the loudness sum, scale 2^20
-//   hp_counts:     count * 2^40 + hp sum at scale 2^16; the count is the high word >> 8 (24
-//                  bits, exact below 2^24 points; the hp sum, at most count * 2^16, stays below
-//                  2^40 and never reaches the count's bits)
+//   hp_sums:       the hp sum, scale 2^16
+//   point_counts:  the points in the voxel, one u32 (4 bytes per voxel): exact up to 2^32 - 1
+//                  points, more than any cloud a GPU buffer holds at 20 bytes a point
 @group(1) @binding(2) var<storage, read_write> loudness_sums: array<atomic<u32>>;
-@group(1) @binding(3) var<storage, read_write> hp_counts: array<atomic<u32>>;
+@group(1) @binding(3) var<storage, read_write> hp_sums: array<atomic<u32>>;
 @group(1) @binding(4) var<storage, read_write> stats: array<atomic<u32>>;
 // Four voxels per element (the buffer is padded to a multiple of 16 bytes with zeros).
 @group(1) @binding(5) var<storage, read_write> density: array<vec4<f32>>;
 @group(1) @binding(6) var<storage, read_write> hp_mean: array<f32>;
 // [0] the reference sum, written by `percentile` for `normalize_density` to read without atomics.
 @group(1) @binding(7) var<storage, read_write> reference_sum: array<f32>;
+@group(1) @binding(8) var<storage, read_write> point_counts: array<atomic<u32>>;
 
 // The smoothing pass binds only group 2 (group 1 holds the density it would read and write).
 @group(2) @binding(0) var<uniform> smooth_params: SmoothParams;
@@ -66,10 +67,11 @@ const STATS_HISTOGRAM: u32 = 4u;
 @group(3) @binding(0) var<uniform> resolve_params: VoxelParams;
 // Two voxels per element (low, high word each).
 @group(3) @binding(1) var<storage, read> loudness_words: array<vec4<u32>>;
-@group(3) @binding(2) var<storage, read> hp_count_words: array<vec4<u32>>;
+@group(3) @binding(2) var<storage, read> hp_words: array<vec4<u32>>;
 // Four voxels per element.
 @group(3) @binding(3) var<storage, read_write> resolved_density: array<vec4<f32>>;
 @group(3) @binding(4) var<storage, read_write> resolved_hp_mean: array<vec4<f32>>;
+@group(3) @binding(5) var<storage, read> count_words: array<vec4<u32>>;
 
 // Linear invocation index over a 2D dispatch (x up to 65535 workgroups, then rows of y).
 fn linear_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -101,7 +103,8 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     if (any(p != p)) {
         return;
     }
-    let word = 2u * voxel_of(p);
+    let voxel = voxel_of(p);
+    let word = 2u * voxel;
     let scalar = u32(round(clamp(cloud[base + 3u], 0.0, 1.0) * params.scales.x));
     let hp = u32(round(clamp(cloud[base + 4u], 0.0, 1.0) * params.scales.w));
     // Add to the low words; carry one into the high word where the low word wrapped.
@@ -109,9 +112,11 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     if (old_scalar > 0xffffffffu - scalar) {
         atomicAdd(&loudness_sums[word + 1u], 1u);
     }
-    let old_hp = atomicAdd(&hp_counts[word], hp);
-    // 256 in the high word is 2^40: one more point.
-    atomicAdd(&hp_counts[word + 1u], select(256u, 257u, old_hp > 0xffffffffu - hp));
+    let old_hp = atomicAdd(&hp_sums[word], hp);
+    if (old_hp > 0xffffffffu - hp) {
+        atomicAdd(&hp_sums[word + 1u], 1u);
+    }
+    atomicAdd(&point_counts[voxel], 1u);
 }
 
 // The histogram bin of a non-empty voxel's sum. Keep in sync with histogram_bin in voxelize.rs.
@@ -142,13 +147,12 @@ fn bin_locally(sum: f32, scales: vec4<f32>) {
     }
 }
 
-fn resolve_one(loudness: vec2<u32>, hp_count: vec2<u32>) -> vec2<f32> {
-    let count = hp_count.y >> 8u;
+fn resolve_one(loudness: vec2<u32>, hp_sum: vec2<u32>, count: u32) -> vec2<f32> {
     if (count == 0u) {
         return vec2<f32>(0.0, 0.5);
     }
     let scalar = (f32(loudness.y) * 4294967296.0 + f32(loudness.x)) / resolve_params.scales.x;
-    let hp = (f32(hp_count.y & 255u) * 4294967296.0 + f32(hp_count.x)) / resolve_params.scales.w;
+    let hp = (f32(hp_sum.y) * 4294967296.0 + f32(hp_sum.x)) / resolve_params.scales.w;
     return vec2<f32>(scalar, clamp(hp / f32(count), 0.0, 1.0));
 }
 
@@ -161,12 +165,13 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     }
     let l01 = loudness_words[2u * group4];
     let l23 = loudness_words[2u * group4 + 1u];
-    let h01 = hp_count_words[2u * group4];
-    let h23 = hp_count_words[2u * group4 + 1u];
-    let v0 = resolve_one(l01.xy, h01.xy);
-    let v1 = resolve_one(l01.zw, h01.zw);
-    let v2 = resolve_one(l23.xy, h23.xy);
-    let v3 = resolve_one(l23.zw, h23.zw);
+    let h01 = hp_words[2u * group4];
+    let h23 = hp_words[2u * group4 + 1u];
+    let n = count_words[group4];
+    let v0 = resolve_one(l01.xy, h01.xy, n.x);
+    let v1 = resolve_one(l01.zw, h01.zw, n.y);
+    let v2 = resolve_one(l23.xy, h23.xy, n.z);
+    let v3 = resolve_one(l23.zw, h23.zw, n.w);
     resolved_density[group4] = vec4<f32>(v0.x, v1.x, v2.x, v3.x);
     resolved_hp_mean[group4] = vec4<f32>(v0.y, v1.y, v2.y, v3.y);
 }

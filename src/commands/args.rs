@@ -10,9 +10,41 @@ use loudscape::data::cloud::PointCloud;
 use loudscape::render::grid::voxelize::{MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION};
 use loudscape::render::surface::SurfaceMethod;
 
-/// Loads a cloud, with the file named in the error.
+/// Loads a cloud, with the file named in the error; audio (anything not a PLY) is extracted
+/// first, or found in the cloud cache. The error's own line already carries its cause (an OS
+/// error, say), so it goes on as one message, not as a chain that repeats it.
 pub fn load_cloud(path: &Path) -> anyhow::Result<PointCloud> {
-    Ok(loudscape::data::cloud::load(path)?)
+    loudscape::extract::open_for_command(path).map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+/// The checks every output gets before any work: it is none of `inputs` (not even through a
+/// link), it ends in one of `extensions` (lowercase, without the dot), and its folder exists.
+pub fn check_output(output: &Path, extensions: &[&str], inputs: &[&Path]) -> anyhow::Result<()> {
+    check_not_input(output, inputs)?;
+    check_extension(output, extensions)?;
+    check_output_folder(output)
+}
+
+/// Fails unless `output` ends in one of `extensions`, listing them.
+pub fn check_extension(output: &Path, extensions: &[&str]) -> anyhow::Result<()> {
+    let ext = output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if ext.as_deref().is_some_and(|e| extensions.contains(&e)) {
+        return Ok(());
+    }
+    let list: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+    bail!(
+        "{}: cannot write this file type; supported: {}",
+        output.display(),
+        list.join(", ")
+    );
+}
+
+/// Fails when `output` is one of `inputs` (the same path, or the same file through a link).
+pub fn check_not_input(output: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
+    loudscape::files::check_not_input(output, inputs).map_err(anyhow::Error::msg)
 }
 
 /// Fails, naming the output, when the folder it would be written into does not exist.
@@ -128,5 +160,16 @@ mod tests {
         assert!(parse_camera("1,2").is_err());
         assert!(parse_camera("1,2,-3").is_err());
         assert!(parse_camera("a,2,3").is_err());
+    }
+
+    #[test]
+    fn output_extensions_are_listed() {
+        assert!(check_extension(Path::new("a.PNG"), &["png"]).is_ok());
+        let error = check_extension(Path::new("a.jpg"), &["png"]).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "a.jpg: cannot write this file type; supported: .png"
+        );
+        assert!(check_extension(Path::new("a"), &["ply", "obj"]).is_err());
     }
 }

@@ -11,10 +11,13 @@ use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
+/// The cloud measured when none is named.
+pub const DEFAULT_INPUT: &str = "data/demo_song.ply";
+
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// The song cloud to measure with.
-    #[arg(default_value = "data/demo_song.ply")]
+    /// The song cloud to measure with (points and volume parts).
+    #[arg(default_value = DEFAULT_INPUT)]
     pub input: PathBuf,
     /// Frame size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
@@ -87,7 +90,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         bench_points(&args)?;
     }
     if wants("volume") {
-        super::bench_volume::run(args.runs, args.export_points.as_ref())?;
+        super::bench_volume::run(&args.input, args.runs, args.export_points.as_ref())?;
     }
     if wants("surface") {
         let surfaces = super::bench_surface::run(args.runs, args.iso, args.fields_dir.as_deref())?;

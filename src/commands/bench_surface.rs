@@ -62,6 +62,7 @@ pub fn run(
         if let Some(dir) = fields_dir {
             let path = dir.join(format!("{name}.npy"));
             super::write_atomically(&path, |out| Ok(super::npy::write(out, &[&density], dims)?))?;
+            super::wrote(&path, &format!("{n}x{n}x{n} density field"));
         }
         let grid = VoxelGrid::from_fields(
             &gpu.device,

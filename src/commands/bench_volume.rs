@@ -93,25 +93,36 @@ pub fn median(mut values: Vec<f64>) -> f64 {
     }
 }
 
-fn song_cloud() -> (PointCloud, String) {
-    let demo = Path::new("data/demo_song.ply");
-    if demo.is_file() {
-        match loudscape::data::cloud::load(demo) {
-            Ok(cloud) => return (cloud, demo.display().to_string()),
-            Err(e) => eprintln!("bench: {e}; using a synthetic song instead"),
-        }
+/// The song to measure: `input` (the command's INPUT), or a synthetic song when INPUT is the
+/// default demo file and that is absent (a checkout without data/).
+fn song_cloud(input: &Path) -> anyhow::Result<(PointCloud, String)> {
+    if input == Path::new(super::bench::DEFAULT_INPUT) && !input.exists() {
+        eprintln!(
+            "bench: {} is absent; using a synthetic song instead",
+            input.display()
+        );
+        let cloud = PointCloud::synthetic(synthetic_song(SYNTHETIC_SONG_POINTS, 1), DataMode::Song);
+        return Ok((cloud, "synthetic song".into()));
     }
-    let cloud = PointCloud::synthetic(synthetic_song(SYNTHETIC_SONG_POINTS, 1), DataMode::Song);
-    (cloud, "synthetic song".into())
+    let cloud = super::args::load_cloud(input)?;
+    Ok((cloud, input.display().to_string()))
 }
 
-fn export(points: &[Point], path: &Path) -> anyhow::Result<()> {
-    std::fs::write(path, bytemuck::cast_slice::<Point, u8>(points))
-        .with_context(|| format!("{}: cannot write", path.display()))
+fn export(points: &[Point], path: &Path, input: &Path) -> anyhow::Result<()> {
+    super::args::check_not_input(path, &[input])?;
+    super::write_atomically(path, |out| {
+        std::io::Write::write_all(out, bytemuck::cast_slice::<Point, u8>(points))?;
+        Ok(())
+    })?;
+    super::wrote(
+        path,
+        &format!("{} points, x y z scalar hp float32", points.len()),
+    );
+    Ok(())
 }
 
 /// One line per stage: name, median ms, runs.
-pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
+pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
     let runs = runs.max(1);
     let gpu = GpuContext::new_headless()?;
     let timer = GpuTimer::new(&gpu);
@@ -122,18 +133,14 @@ pub fn run(runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
     );
     let renderer = Renderer::new(&gpu.device);
 
-    let (song, song_name) = song_cloud();
+    let (song, song_name) = song_cloud(input)?;
     println!("song: {song_name}");
     let large = PointCloud::synthetic(synthetic_song(LARGE_CLOUD_POINTS, 2), DataMode::Timeline);
     if let Some(dir) = export_points {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("{}: cannot create the folder", dir.display()))?;
-        export(&song.points, &dir.join("song.f32"))?;
-        export(&large.points, &dir.join("large.f32"))?;
-        println!(
-            "exported points (x, y, z, scalar, hp float32) to {}",
-            dir.display()
-        );
+        export(&song.points, &dir.join("song.f32"), input)?;
+        export(&large.points, &dir.join("large.f32"), input)?;
     }
 
     // Per-pass timestamps, where the adapter has them.

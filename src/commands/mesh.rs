@@ -21,7 +21,7 @@ use loudscape::render::surface::state::ExtractedSurface;
 use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
 
 use crate::commands::args::{
-    check_iso, check_output_folder, check_resolution, load_cloud, parse_method,
+    check_iso, check_not_input, check_output_folder, check_resolution, load_cloud, parse_method,
 };
 
 #[derive(clap::Args, Debug)]
@@ -69,6 +69,9 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
     let iso_value = check_iso(args.iso)?;
     let format = MeshFormat::from_path(&args.output)?;
     check_resolution(args.res)?;
+    // Neither the input nor the box file read beside a .npy field may be written over.
+    let field_meta = PathBuf::from(format!("{}.json", args.input.display()));
+    check_not_input(&args.output, &[&args.input, &field_meta])?;
     check_output_folder(&args.output)?;
     let is_field = args
         .input
@@ -135,12 +138,14 @@ pub fn run(args: MeshArgs) -> anyhow::Result<()> {
         dims.z
     );
     write_mesh(&mesh, format, &comment, &args.output)?;
-    println!(
-        "wrote {} ({} vertices, {} triangles; {} triangles extracted)",
-        args.output.display(),
-        mesh.positions.len(),
-        mesh.triangle_count(),
-        counts.triangles()
+    super::wrote(
+        &args.output,
+        &format!(
+            "{} vertices, {} triangles; {} triangles extracted",
+            mesh.positions.len(),
+            mesh.triangle_count(),
+            counts.triangles()
+        ),
     );
     Ok(())
 }

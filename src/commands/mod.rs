@@ -11,26 +11,48 @@ pub mod render;
 pub mod voxelize;
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Context;
+use loudscape::files::TempFile;
 
-/// Writes through `PATH.tmp` and renames, so no half-written file is left under the name.
+/// Set by `-q`: no "wrote ..." summaries.
+static QUIET: AtomicBool = AtomicBool::new(false);
+
+/// Silences the "wrote ..." summaries (`-q`).
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, Ordering::Relaxed);
+}
+
+/// The one summary line every command prints per file written, on stderr (stdout stays for
+/// results such as benchmark figures): `wrote PATH` or `wrote PATH (DETAIL)`.
+pub fn wrote(path: &Path, detail: &str) {
+    if QUIET.load(Ordering::Relaxed) {
+        return;
+    }
+    if detail.is_empty() {
+        eprintln!("wrote {}", path.display());
+    } else {
+        eprintln!("wrote {} ({detail})", path.display());
+    }
+}
+
+/// Writes through `PATH.tmp` and renames, so no half-written file is left under the name; the
+/// temporary file is removed on any error and on SIGTERM/SIGINT.
 pub fn write_atomically(
     path: &Path,
-    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
+    write: impl FnOnce(&mut std::io::BufWriter<&mut std::fs::File>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    let tmp = PathBuf::from(format!("{}.tmp", path.display()));
     let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        let mut out = std::io::BufWriter::new(file);
-        write(&mut out)?;
-        out.flush()?;
+        let mut tmp = TempFile::create(path, ".tmp")?;
+        {
+            let mut out = std::io::BufWriter::new(tmp.file());
+            write(&mut out)?;
+            out.flush()?;
+        }
+        tmp.persist(path)?;
         Ok::<_, anyhow::Error>(())
     })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e.context(format!("{}: cannot write", path.display())));
-    }
-    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
+    result.with_context(|| format!("{}: cannot write", path.display()))
 }

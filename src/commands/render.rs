@@ -14,8 +14,8 @@ use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
 use crate::commands::args::{
-    check_iso, check_output_folder, check_range, check_resolution, check_smoothing, load_cloud,
-    parse_camera, parse_method, parse_size,
+    check_iso, check_not_input, check_output, check_output_folder, check_range, check_resolution,
+    check_smoothing, load_cloud, parse_camera, parse_method, parse_size,
 };
 
 #[derive(clap::Args, Debug)]
@@ -45,7 +45,7 @@ pub struct RenderArgs {
     pub no_labels: bool,
     #[command(flatten)]
     pub volume: VolumeArgs,
-    /// The PNG file to write.
+    /// The PNG file to write (.png; not the input).
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -171,6 +171,7 @@ fn parse_view(name: &str) -> anyhow::Result<ViewKind> {
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
+    check_output(&args.output, &["png"], &[&args.input])?;
     let size = parse_size(&args.size)?;
     let view = parse_view(&args.view)?;
     let camera = match &args.camera {
@@ -215,7 +216,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         !args.no_labels,
         &args.output,
     )?;
-    println!("wrote {}", args.output.display());
+    super::wrote(
+        &args.output,
+        &format!("{}x{} {}", size.0, size.1, view.name().to_lowercase()),
+    );
     Ok(())
 }
 
@@ -245,23 +249,25 @@ pub fn prepare_grid(
 
 pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
     let size = parse_size(&args.size)?;
+    // Every output is named up front and checked against every input, before any work.
+    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    check_not_input(&args.out_dir, &inputs)?;
+    let outputs: Vec<Vec<PathBuf>> = args
+        .inputs
+        .iter()
+        .map(|input| demo_outputs(&args.out_dir, input))
+        .collect();
+    for output in outputs.iter().flatten() {
+        check_not_input(output, &inputs)?;
+    }
     std::fs::create_dir_all(&args.out_dir)
         .with_context(|| format!("{}: cannot create the folder", args.out_dir.display()))?;
     let gpu = GpuContext::new_headless()?;
-    eprintln!("rendering on {}", gpu.describe());
     let renderer = Renderer::new(&gpu.device);
-    let mut written = Vec::new();
-    for input in &args.inputs {
+    for (input, outputs) in args.inputs.iter().zip(&outputs) {
         let cloud = load_cloud(input)?;
         let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
-        let stem = input
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "cloud".into());
-        for view in ViewKind::ALL {
-            let output = args
-                .out_dir
-                .join(format!("{stem}_{}.png", view.name().to_lowercase()));
+        for (view, output) in ViewKind::ALL.into_iter().zip(outputs) {
             let mut settings = RenderSettings {
                 view,
                 ..Default::default()
@@ -271,14 +277,25 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
                 prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
             }
             render_to_file(
-                &gpu, &renderer, &cloud, &data, None, size, &settings, true, &output,
+                &gpu, &renderer, &cloud, &data, None, size, &settings, true, output,
             )?;
-            written.push(output);
+            super::wrote(
+                output,
+                &format!("{}x{} {}", size.0, size.1, view.name().to_lowercase()),
+            );
         }
     }
-    println!("Rendered the demo to:");
-    for path in written {
-        println!("  {}", path.display());
-    }
     Ok(())
+}
+
+/// The PNG files `render-demo` writes for `input`: `OUT_DIR/STEM_VIEW.png`, one per view.
+fn demo_outputs(out_dir: &Path, input: &Path) -> Vec<PathBuf> {
+    let stem = input
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "cloud".into());
+    ViewKind::ALL
+        .into_iter()
+        .map(|view| out_dir.join(format!("{stem}_{}.png", view.name().to_lowercase())))
+        .collect()
 }

@@ -17,7 +17,9 @@ use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::voxelize::{PERCENTILE, VoxelizePass, default_resolution};
 
-use crate::commands::args::{check_output_folder, check_resolution, check_smoothing, load_cloud};
+use crate::commands::args::{
+    check_not_input, check_output_folder, check_resolution, check_smoothing, load_cloud,
+};
 
 #[derive(clap::Args, Debug)]
 pub struct VoxelizeArgs {
@@ -34,6 +36,7 @@ pub struct VoxelizeArgs {
     pub output: PathBuf,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq)]
 enum Format {
     Npy,
     Nrrd,
@@ -54,6 +57,14 @@ fn format_of(path: &Path) -> anyhow::Result<Format> {
 
 pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
     let format = format_of(&args.output)?;
+    let meta_path = PathBuf::from(format!("{}.json", args.output.display()));
+    let mut outputs = vec![args.output.clone(), meta_path.clone()];
+    if format == Format::Nrrd {
+        outputs.push(hp_nrrd_path(&args.output));
+    }
+    for output in &outputs {
+        check_not_input(output, &[&args.input])?;
+    }
     check_output_folder(&args.output)?;
     check_resolution(args.res)?;
     check_smoothing(args.smooth)?;
@@ -113,20 +124,19 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
         "nonempty_voxels": stats.nonempty,
         "points": cloud.points.len(),
     });
-    let meta_path = PathBuf::from(format!("{}.json", args.output.display()));
     super::write_atomically(&meta_path, |out| {
         out.write_all(serde_json::to_string_pretty(&meta)?.as_bytes())?;
         Ok(())
     })?;
     written.push(meta_path);
-    println!(
-        "voxelized {} points into {r}x{r}x{r} ({} voxels non-empty)",
+    let detail = format!(
+        "{} points into {r}x{r}x{r}, {} voxels non-empty",
         cloud.points.len(),
         stats.nonempty,
         r = resolution
     );
     for path in written {
-        println!("wrote {}", path.display());
+        super::wrote(&path, &detail);
     }
     Ok(())
 }

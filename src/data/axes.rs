@@ -115,17 +115,15 @@ impl Axis {
         }
     }
 
-    /// Why this axis cannot map values, if it cannot: non-finite or equal ends, or a log axis
-    /// with an end that is not positive.
+    /// Why this axis cannot map values, if it cannot: non-finite ends, or a log axis with an end
+    /// that is not positive. Equal ends are allowed (docs/FORMAT.md: every coordinate on that
+    /// axis is then 0, and every position reads the one value).
     pub fn problem(&self) -> Option<String> {
         if !self.min.is_finite() || !self.max.is_finite() {
             return Some(format!(
                 "min {} and max {} must be finite numbers",
                 self.min, self.max
             ));
-        }
-        if self.min == self.max {
-            return Some(format!("min and max are both {}", self.min));
         }
         if self.scale == AxisScale::Log && (self.min <= 0.0 || self.max <= 0.0) {
             return Some(format!(
@@ -136,11 +134,20 @@ impl Axis {
         None
     }
 
-    /// Physical value at a normalized position in [-1, 1].
+    /// Whether both ends are the same value (every position reads it).
+    pub fn is_degenerate(&self) -> bool {
+        self.min == self.max
+    }
+
+    /// Physical value at a normalized position in [-1, 1]. Written so that no finite axis
+    /// overflows in between (ends near the largest f64 included).
     pub fn value_at(&self, normalized: f64) -> f64 {
         let t = (normalized + 1.0) * 0.5;
+        if self.is_degenerate() {
+            return self.min;
+        }
         match self.scale {
-            AxisScale::Linear => self.min + t * (self.max - self.min),
+            AxisScale::Linear => self.min * (1.0 - t) + self.max * t,
             AxisScale::Log => {
                 let (a, b) = (self.min.log10(), self.max.log10());
                 10f64.powf(a + t * (b - a))
@@ -149,10 +156,21 @@ impl Axis {
     }
 
     /// Normalized position in [-1, 1] of a physical value (outside for values beyond the ends;
-    /// NaN for a value that is not positive on a log axis).
+    /// NaN for a value that is not positive on a log axis). On an axis with equal ends the value
+    /// itself is at 0, others at plus or minus infinity.
     pub fn normalized_of(&self, value: f64) -> f64 {
+        if self.is_degenerate() {
+            return if value == self.min {
+                0.0
+            } else if value.is_nan() {
+                f64::NAN
+            } else {
+                (value - self.min).signum() * f64::INFINITY
+            };
+        }
         let t = match self.scale {
-            AxisScale::Linear => (value - self.min) / (self.max - self.min),
+            // Halves first, so ends near the largest f64 do not overflow the span.
+            AxisScale::Linear => (value * 0.5 - self.min * 0.5) / (self.max * 0.5 - self.min * 0.5),
             AxisScale::Log => {
                 if value <= 0.0 {
                     return f64::NAN;
@@ -185,10 +203,42 @@ impl Axis {
         if max_count == 0 || self.problem().is_some() {
             return Vec::new();
         }
-        match self.scale {
+        if self.is_degenerate() {
+            return vec![Tick {
+                at: 0.0,
+                label: self.format_value(self.min),
+            }];
+        }
+        let ticks = match self.scale {
             AxisScale::Linear => self.linear_ticks(max_count),
             AxisScale::Log => self.log_ticks(max_count),
+        };
+        if ticks.is_empty() {
+            self.end_ticks(max_count)
+        } else {
+            ticks
         }
+    }
+
+    /// When no round values fit (a span too small for f64 to step through, or too wide for a
+    /// step to exist): the ends themselves, as read-outs, or the middle when one tick is wanted.
+    fn end_ticks(&self, max_count: usize) -> Vec<Tick> {
+        if max_count == 1 {
+            return vec![Tick {
+                at: 0.0,
+                label: self.format_value(self.value_at(0.0)),
+            }];
+        }
+        vec![
+            Tick {
+                at: -1.0,
+                label: self.format_value(self.min),
+            },
+            Tick {
+                at: 1.0,
+                label: self.format_value(self.max),
+            },
+        ]
     }
 
     /// A value as a hover read-out: like a tick label, with more precision.
@@ -225,22 +275,32 @@ impl Axis {
     }
 
     fn linear_ticks(&self, max_count: usize) -> Vec<Tick> {
+        /// Beyond this many steps from 0, f64 cannot tell neighbouring ticks apart.
+        const MAX_STEPS_FROM_ZERO: f64 = 1e15;
         let (lo, hi) = (self.min.min(self.max), self.min.max(self.max));
-        let span = hi - lo;
-        let count_for = |step: f64| -> f64 {
+        // The span of ends near the largest f64 overflows; its half does not.
+        let half_span = hi * 0.5 - lo * 0.5;
+        if !(half_span > 0.0 && half_span.is_finite()) {
+            return Vec::new();
+        }
+        // Tick indices k (ticks at k * step) from first to last, when f64 can hold them.
+        let range_for = |step: f64| -> Option<(i64, i64)> {
             let eps = step * 1e-9;
-            ((hi + eps) / step).floor() - ((lo - eps) / step).ceil() + 1.0
+            let first = ((lo - eps) / step).ceil();
+            let last = ((hi + eps) / step).floor();
+            let fits = |k: f64| k.is_finite() && k.abs() <= MAX_STEPS_FROM_ZERO;
+            (fits(first) && fits(last) && first <= last).then_some((first as i64, last as i64))
         };
-        let candidates = self.step_candidates(span, max_count);
-        let Some(step) = candidates
+        let Some((step, first, last)) = self
+            .step_candidates(half_span, max_count)
             .into_iter()
-            .find(|&s| count_for(s) <= max_count as f64)
+            .find_map(|step| {
+                let (first, last) = range_for(step)?;
+                (last - first < max_count as i64).then_some((step, first, last))
+            })
         else {
             return Vec::new();
         };
-        let eps = step * 1e-9;
-        let first = ((lo - eps) / step).ceil() as i64;
-        let last = ((hi + eps) / step).floor() as i64;
         (first..=last)
             .map(|k| {
                 let value = k as f64 * step;
@@ -252,9 +312,10 @@ impl Axis {
             .collect()
     }
 
-    /// Steps to try, smallest first, from about span / max_count upwards.
-    fn step_candidates(&self, span: f64, max_count: usize) -> Vec<f64> {
-        let rough = span / max_count as f64;
+    /// Steps to try, smallest first, from about span / max_count upwards (`half_span` is half
+    /// the span, finite and positive); every one finite and positive.
+    fn step_candidates(&self, half_span: f64, max_count: usize) -> Vec<f64> {
+        let rough = half_span / max_count as f64 * 2.0;
         let mut steps = Vec::new();
         if self.is_clock() && rough >= 1.0 {
             const CLOCK: [f64; 14] = [
@@ -269,7 +330,8 @@ impl Axis {
             }
             return steps;
         }
-        let mut exponent = rough.log10().floor() as i32 - 1;
+        // f64 decades run from 1e-324 to 1e308: clamp so the 40 tried stay in range.
+        let mut exponent = (rough.log10().floor() - 1.0).clamp(-330.0, 310.0) as i32;
         if self.unit == "year" {
             exponent = exponent.max(0);
         }
@@ -278,6 +340,7 @@ impl Axis {
             steps.extend([decade, 2.0 * decade, 5.0 * decade]);
             exponent += 1;
         }
+        steps.retain(|s| s.is_finite() && *s > 0.0);
         steps
     }
 
@@ -345,8 +408,15 @@ fn significant_decimals(value: f64, digits: i32) -> usize {
     (digits - 1 - magnitude).clamp(0, 6) as usize
 }
 
-/// `value` with `decimals` decimals, ASCII minus, no "-0".
+/// Beyond this magnitude numbers are written in scientific notation (`1.000e20`): f64 has no
+/// more digits to show, and a plain 1e300 would be 301 characters.
+const SCIENTIFIC_FROM: f64 = 1e15;
+
+/// `value` with `decimals` decimals, ASCII minus, no "-0"; scientific beyond 1e15.
 fn fixed(value: f64, decimals: usize) -> String {
+    if value.abs() >= SCIENTIFIC_FROM {
+        return format!("{value:.3e}");
+    }
     let text = format!("{value:.decimals$}");
     match text.strip_prefix('-') {
         Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
@@ -356,6 +426,9 @@ fn fixed(value: f64, decimals: usize) -> String {
 
 /// Seconds as a clock: `m:ss` or `h:mm:ss`, with `decimals` decimals on the seconds.
 fn clock(seconds: f64, decimals: usize) -> String {
+    if seconds.abs() >= SCIENTIFIC_FROM || seconds.is_nan() {
+        return format!("{} s", fixed(seconds, 0));
+    }
     let sign = if seconds < 0.0 { "-" } else { "" };
     let scale = 10f64.powi(decimals as i32);
     let total = (seconds.abs() * scale).round() / scale;
@@ -552,7 +625,7 @@ mod tests {
             label: "middle".into(),
         }]);
         assert_eq!(labels(&axis.ticks(5)), ["middle"]);
-        assert!(Axis::linear("x", "", 1.0, 1.0).ticks(5).is_empty());
+        assert_eq!(labels(&Axis::linear("x", "", 1.0, 1.0).ticks(5)), ["1.00"]);
         assert!(Axis::log("f", "Hz", 0.0, 10.0).ticks(5).is_empty());
         assert!(Axis::linear("x", "", f64::NAN, 1.0).ticks(5).is_empty());
         assert!(Axis::linear("x", "", 0.0, 1.0).ticks(0).is_empty());
@@ -578,6 +651,101 @@ mod tests {
         for n in 1..12 {
             assert!(Axis::log("f", "Hz", 20.0, 20000.0).ticks(n).len() <= n);
             assert!(Axis::log("f", "", 1e-30, 1e30).ticks(n).len() <= n);
+        }
+    }
+
+    /// Every tick, label and read-out of `axis`, checked for what the labels and hover rely on.
+    fn exercise(axis: &Axis) {
+        for n in 0..14 {
+            let ticks = axis.ticks(n);
+            assert!(ticks.len() <= n.max(1), "{axis:?} n={n}: {ticks:?}");
+            for tick in &ticks {
+                assert!((-1.0..=1.0).contains(&tick.at), "{axis:?}: {tick:?}");
+                assert!(!tick.label.is_empty() && tick.label.len() < 400);
+            }
+        }
+        for t in [-1.0, -0.5, 0.0, 0.3, 1.0, 2.0, f64::NAN] {
+            let value = axis.value_at(t);
+            let _ = axis.format_value(value);
+            let _ = axis.normalized_of(value);
+            let _ = axis.tick_label(value, value.abs());
+            let _ = note_name(value);
+        }
+        if axis.problem().is_none() && axis.scale == AxisScale::Linear {
+            assert_eq!(axis.value_at(-1.0), axis.min, "{axis:?}");
+            assert_eq!(axis.value_at(1.0), axis.max, "{axis:?}");
+            assert!(axis.value_at(0.0).is_finite(), "{axis:?}");
+        }
+    }
+
+    #[test]
+    fn extreme_ranges_are_total() {
+        let ends = [
+            (-1e38, 1e38),
+            (-f64::MAX, f64::MAX),
+            (f64::MAX / 2.0, f64::MAX),
+            (0.0, f64::MIN_POSITIVE),
+            (1.0, 1.0 + f64::EPSILON),
+            (1e300, 1e300 * (1.0 + 1e-15)),
+            (-5e-324, 5e-324),
+            (0.0, 5e-324),
+            (1e15, 1e15 + 1.0),
+            (-3.0, -3.0),
+            (0.0, 0.0),
+            (f64::MAX, f64::MAX),
+            (2024.0, 2024.0),
+        ];
+        for (min, max) in ends {
+            for unit in ["", "s", "Hz", "year", "dB"] {
+                exercise(&Axis::linear("v", unit, min, max));
+                exercise(&Axis::linear("v", unit, max, min));
+                if min > 0.0 {
+                    exercise(&Axis::log("v", unit, min, max));
+                }
+            }
+        }
+        exercise(&Axis::log("f", "Hz", f64::MIN_POSITIVE, f64::MAX));
+        exercise(&Axis::log("f", "Hz", 5e-324, 1e308));
+        // Labels and read-outs stay short whatever the magnitude.
+        for value in [1e300, -f64::MAX, 1e20, 3.6e20] {
+            for unit in ["", "s", "Hz", "year", "dB"] {
+                let axis = Axis::linear("v", unit, -f64::MAX, f64::MAX);
+                assert!(axis.format_value(value).len() < 40, "{unit} {value}");
+                assert!(axis.tick_label(value, 1e19).len() < 40, "{unit} {value}");
+            }
+        }
+        assert_eq!(fixed(1e20, 2), "1.000e20");
+        // Wide ranges still get round ticks where f64 allows.
+        let wide = Axis::linear("v", "", -1e38, 1e38);
+        assert!(wide.ticks(5).len() >= 2);
+    }
+
+    #[test]
+    fn equal_ends_read_their_value_at_zero() {
+        let axis = Axis::linear("crest", "dB", 12.0, 12.0);
+        assert_eq!(axis.problem(), None);
+        assert_eq!(axis.value_at(0.0), 12.0);
+        assert_eq!(axis.value_at(0.7), 12.0);
+        assert_eq!(axis.normalized_of(12.0), 0.0);
+        assert_eq!(axis.normalized_of(13.0), f64::INFINITY);
+        let ticks = axis.ticks(6);
+        assert_eq!(labels(&ticks), ["12.0 dB"]);
+        assert_eq!(ticks[0].at, 0.0);
+        let year = Axis::linear("year", "year", 1984.0, 1984.0);
+        assert_eq!(labels(&year.ticks(6)), ["1984"]);
+        let log = Axis::log("f", "Hz", 440.0, 440.0);
+        assert_eq!(log.problem(), None);
+        assert_eq!(log.value_at(0.2), 440.0);
+        // Spans at the limit of f64 still get a tick or two (round values, else the ends).
+        for (min, max) in [
+            (1.0, 1.0 + 4.0 * f64::EPSILON),
+            (1e300, 1e300 * (1.0 + 1e-15)),
+        ] {
+            let tiny = Axis::linear("v", "", min, max);
+            for n in 1..6 {
+                let count = tiny.ticks(n).len();
+                assert!((1..=n).contains(&count), "{min}..{max} n={n}: {count}");
+            }
         }
     }
 

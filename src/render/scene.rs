@@ -180,6 +180,13 @@ impl SceneData {
         Ok(true)
     }
 
+    /// Whether a grid built with `settings` for `cloud` is already there.
+    pub fn grid_matches(&self, cloud: &PointCloud, settings: &VoxelSettings) -> bool {
+        let resolution = settings.resolution_for(cloud.meta.mode);
+        self.grid.is_some()
+            && self.grid_key == Some((resolution, settings.smoothing_sigma.to_bits()))
+    }
+
     /// The data box in world space, for fitting the camera.
     pub fn world_box(&self) -> (Vec3, Vec3) {
         world_box(self.world_from_data, self.box_min, self.box_max)

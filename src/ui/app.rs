@@ -22,8 +22,17 @@ use crate::view::frame_view::FrameView;
 
 /// How long after the last input the view still counts as moving (drawn at reduced quality).
 const SETTLE: Duration = Duration::from_millis(180);
-/// Volume frames slower than this at rest are replaced by the points while the camera moves.
-const VOLUME_PROXY_MS: f32 = 80.0;
+/// While the camera moves, the Volume and Surface views render at a reduced resolution, chosen
+/// so a frame takes about this long (the device's pace measured while moving).
+const MOVING_FRAME_MS: f32 = 45.0;
+/// How far (in wheel notches) the window's fit steps back from a tight fit of the box, so the
+/// labels outside the box stay in view: 0.9^-1 = 11 % farther.
+const LABEL_MARGIN_STEPS: f32 = 1.0;
+/// The coarsest reduction while moving: one pixel in `MAX_MOVING_DIVISOR` per side.
+const MAX_MOVING_DIVISOR: u32 = 4;
+/// A press shorter than this still counts as a click. egui measures it in frame times, so on a
+/// device where one frame takes over a second its default (0.8 s) lost clicks.
+const MAX_CLICK_SECONDS: f64 = 4.0;
 
 /// Options from the command line.
 #[derive(Clone, Debug, Default)]
@@ -60,6 +69,8 @@ pub fn run(options: WindowOptions) -> anyhow::Result<()> {
                 .as_ref()
                 .ok_or("no GPU render state: loudscape needs wgpu (Vulkan, Metal or DX12)")?;
             ViewResources::install(render_state);
+            cc.egui_ctx
+                .options_mut(|o| o.input_options.max_click_duration = MAX_CLICK_SECONDS);
             // Scripted screenshot runs (tests) start from defaults and remember nothing.
             let remembered = if options.screenshot.is_some() {
                 None
@@ -106,8 +117,16 @@ impl LoudscapeApp {
             persist,
             keep_camera_loads: 0,
             surface_error: None,
+            surface_empty: false,
+            camera_fitted: false,
+            busy: None,
+            busy_shown: false,
+            notice: None,
             needs_repaint: false,
-            volume_rest_ms: 0.0,
+            moving_divisor: [1; 3],
+            slot_cameras: [None, None],
+            renders_seen: (0, 0),
+            open: Default::default(),
         };
         let files = app.apply_remembered(options.files, remembered);
         if let Some(view) = options.view {
@@ -119,11 +138,44 @@ impl LoudscapeApp {
         app
     }
 
+    /// Frames the active cloud, keeping the viewing direction (F, "Fit").
     fn fit(&mut self) {
         if let Some(loaded) = self.active() {
             let (min, max) = loaded.world_box;
             let aspect = self.view_aspect;
             self.camera.fit(min, max, aspect);
+            // Room around the box for the tick labels and axis titles drawn outside it (in a
+            // small window a tight fit put them under the side panel).
+            self.camera.zoom(-LABEL_MARGIN_STEPS);
+        }
+    }
+
+    /// The default viewing direction, fitted to the active cloud (R, "Reset view").
+    pub(super) fn reset_view(&mut self) {
+        self.camera = Camera::default();
+        self.fit();
+        self.camera_fitted = true;
+    }
+
+    /// Makes `slot` the active one. Each data mode keeps its own camera: the one left behind is
+    /// remembered, the one switched to comes back as it was (or is fitted the first time).
+    pub(super) fn switch_slot(&mut self, slot: Slot) {
+        if self.active == slot {
+            return;
+        }
+        // A camera still waiting for its first fit is not worth keeping.
+        self.slot_cameras[self.active as usize] = (!self.fit_pending).then_some(self.camera);
+        self.active = slot;
+        self.hover = None;
+        match self.slot_cameras[slot as usize] {
+            Some(camera) => {
+                self.camera = camera;
+                self.fit_pending = false;
+            }
+            None => {
+                self.camera = Camera::default();
+                self.fit_pending = true;
+            }
         }
     }
 
@@ -133,10 +185,17 @@ impl LoudscapeApp {
         let ppp = ui.ctx().pixels_per_point();
         let width = (rect.width() * ppp).round().max(1.0) as u32;
         let height = (rect.height() * ppp).round().max(1.0) as u32;
-        self.view_aspect = width as f32 / height as f32;
+        let aspect = width as f32 / height as f32;
+        if (aspect - self.view_aspect).abs() > 1e-3 && self.camera_fitted {
+            // The window was resized and the camera not moved by hand since it was fitted:
+            // fit again so the data stays in view (an 800x600 window cut the labels off).
+            self.fit_pending = true;
+        }
+        self.view_aspect = aspect;
         if self.fit_pending && self.active().is_some() {
             self.fit();
             self.fit_pending = false;
+            self.camera_fitted = true;
         }
 
         // Camera input.
@@ -158,27 +217,31 @@ impl LoudscapeApp {
                 moved = true;
             }
         }
-        if ui.ctx().input(|i| i.key_pressed(egui::Key::F)) && !ui.ctx().egui_wants_keyboard_input()
-        {
+        let keys_free = !ui.ctx().egui_wants_keyboard_input();
+        let mut fitted_now = false;
+        if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::F)) {
             self.fit();
-            moved = true;
+            (moved, fitted_now) = (true, true);
+        }
+        if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::R)) {
+            self.reset_view();
+            (moved, fitted_now) = (true, true);
         }
         let now = Instant::now();
         if moved {
             self.last_motion = Some(now);
+            self.camera_fitted = fitted_now;
         }
         let moving = self.last_motion.is_some_and(|t| now - t < SETTLE);
-        // When volume frames are too slow to orbit with (software rasterizers), show the points
-        // while the camera moves and the volume again once it settles.
-        if self.settings.view == ViewKind::Volume && !moving {
+        // The volume and the surface are drawn while moving too, at a resolution the device can
+        // keep up with: the divisor follows the pace of the frames while moving.
+        let kind = self.settings.view as usize;
+        if moving && self.settings.view != ViewKind::Points {
+            let busy = ui.ctx().requested_repaint_last_pass();
             let dt = ui.ctx().input(|i| i.unstable_dt) * 1000.0;
-            self.volume_rest_ms = if self.volume_rest_ms == 0.0 {
-                dt
-            } else {
-                self.volume_rest_ms * 0.8 + dt * 0.2
-            };
+            self.moving_divisor[kind] =
+                next_moving_divisor(self.moving_divisor[kind], busy.then_some(dt));
         }
-        self.settings.points_while_moving = self.volume_rest_ms > VOLUME_PROXY_MS;
         if moving {
             ui.ctx().request_repaint();
         } else if self.last_motion.take().is_some() {
@@ -211,11 +274,21 @@ impl LoudscapeApp {
         if response.clicked() {
             self.click();
         }
+        if response.clicked() || response.secondary_clicked() {
+            // What the click changed (the seek position, the selected song) shows at once.
+            ui.ctx().request_repaint();
+        }
         let mut settings = self.settings.clone();
         settings.markers = self.markers();
         let active = self.active();
+        let mut render_view = view;
+        if moving && self.settings.view != ViewKind::Points {
+            let divisor = self.moving_divisor[kind].max(1);
+            render_view.width = width.div_ceil(divisor).max(1);
+            render_view.height = height.div_ceil(divisor).max(1);
+        }
         let callback = ViewCallback {
-            view,
+            view: render_view,
             settings,
             cloud_id: active.map(|l| l.id),
         };
@@ -225,12 +298,15 @@ impl LoudscapeApp {
             if self.settings.show_box {
                 labels::paint(&painter, rect, &view, &loaded.labels);
             }
-            if let (Some((_, hover)), Some(pos)) = (&self.hover, response.hover_pos()) {
+            // While the camera moves the read-out would describe where the cursor was.
+            if let (Some((_, hover)), Some(pos), false) =
+                (&self.hover, response.hover_pos(), moving)
+            {
                 paint_readings(&painter, rect, pos, &hover.readings);
             }
         } else {
             let text = if self.loading.is_empty() {
-                "Drop a loudscape .ply file here, or run: loudscape song.ply [timeline.ply]"
+                "Drop a song or a loudscape .ply file here, or run: loudscape song.ogg [timeline.ply]"
             } else {
                 "Loading…"
             };
@@ -254,7 +330,17 @@ impl eframe::App for LoudscapeApp {
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
-        self.frame_ms = self.frame_ms * 0.9 + ctx.input(|i| i.unstable_dt) * 1000.0 * 0.1;
+        // A frame's time counts only when it followed the last one at once (a repaint was asked
+        // for), so time spent waiting for input is not shown as frame time.
+        if ctx.requested_repaint_last_pass() {
+            let dt = ctx.input(|i| i.unstable_dt) * 1000.0;
+            self.frame_ms = if self.frame_ms == 0.0 {
+                dt
+            } else {
+                self.frame_ms * 0.8 + dt * 0.2
+            };
+        }
+        let before = self.shown_state();
         self.poll_loading(&ctx, frame);
         self.fetch_grid(frame);
         if std::mem::take(&mut self.needs_repaint) {
@@ -301,5 +387,60 @@ impl eframe::App for LoudscapeApp {
         }
         self.remember_audio_choice();
         self.handle_screenshot(&ctx);
+        if self.shown_state() != before {
+            // A control changed what the panels or the view show: draw it now, not at the next
+            // mouse move (the panels were drawn before the change).
+            ctx.request_repaint();
+        }
+        if let Some(render_state) = frame.wgpu_render_state() {
+            let renders = ViewResources::renders(render_state);
+            if renders != self.renders_seen.0 {
+                self.renders_seen = (renders, self.frame_index);
+            }
+        }
+    }
+}
+
+impl LoudscapeApp {
+    /// What a frame shows that a control can change, to ask for a repaint when it did.
+    fn shown_state(&self) -> (RenderSettings, Slot, Option<usize>, bool, Camera) {
+        (
+            self.settings.clone(),
+            self.active,
+            self.selected_song,
+            self.fit_pending,
+            self.camera,
+        )
+    }
+}
+
+/// The divisor of the moving resolution after a frame that took `frame_ms` (None: the frame
+/// did not follow the last at once, so its time says nothing about the device): one step
+/// coarser when frames are slower than [`MOVING_FRAME_MS`], one finer when well under it.
+pub(super) fn next_moving_divisor(divisor: u32, frame_ms: Option<f32>) -> u32 {
+    match frame_ms {
+        Some(ms) if ms > MOVING_FRAME_MS => (divisor + 1).min(MAX_MOVING_DIVISOR),
+        Some(ms) if ms < MOVING_FRAME_MS * 0.4 => divisor.saturating_sub(1).max(1),
+        _ => divisor.max(1),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moving_divisor_follows_the_pace_and_stays_in_range() {
+        let mut d = 1;
+        for _ in 0..10 {
+            d = next_moving_divisor(d, Some(400.0));
+        }
+        assert_eq!(d, MAX_MOVING_DIVISOR);
+        assert_eq!(next_moving_divisor(d, None), d, "idle frames say nothing");
+        assert_eq!(next_moving_divisor(d, Some(MOVING_FRAME_MS * 0.8)), d);
+        for _ in 0..10 {
+            d = next_moving_divisor(d, Some(5.0));
+        }
+        assert_eq!(d, 1);
     }
 }

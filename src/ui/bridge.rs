@@ -3,6 +3,11 @@
 //! `prepare` renders the scene into an offscreen [`RenderTarget`] sized to the 3D view, `paint`
 //! composites it into egui's frame. GPU state lives in egui_wgpu's callback resources as one
 //! [`ViewResources`], created once when the window opens.
+//!
+//! The scene is rendered only when what it shows changed ([`FrameCache`]): the camera, the size,
+//! the settings (markers and playhead included), the cloud or its GPU data. Frames that change
+//! only the panels, the hover read-out or a tooltip composite the last render again, so hovering
+//! over a cloud of millions of points costs a composite, not a scene.
 
 use std::collections::HashMap;
 
@@ -21,6 +26,76 @@ pub struct ViewResources {
     target: Option<RenderTarget>,
     /// Uploaded clouds by the app's cloud id.
     pub scenes: HashMap<u64, SceneData>,
+    /// What the target holds, to skip frames that would render the same scene again.
+    pub cache: FrameCache,
+}
+
+/// Everything a render of the scene depends on. Two frames with equal keys draw the same image
+/// (the hover read-out, tooltips and panels are egui shapes over it, not part of it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderKey {
+    pub camera: crate::view::camera::Camera,
+    pub world_from_data: glam::Mat4,
+    pub size: (u32, u32),
+    pub moving: bool,
+    pub settings: RenderSettings,
+    pub cloud_id: Option<u64>,
+    /// Bumped whenever a cloud's GPU data changes (upload, new grid, removal).
+    pub revision: u64,
+}
+
+impl RenderKey {
+    pub fn new(
+        view: &FrameView,
+        settings: &RenderSettings,
+        cloud_id: Option<u64>,
+        revision: u64,
+    ) -> Self {
+        Self {
+            camera: view.camera,
+            world_from_data: view.world_from_data,
+            size: (view.width, view.height),
+            moving: view.moving,
+            settings: settings.clone(),
+            cloud_id,
+            revision,
+        }
+    }
+}
+
+/// The key of the last render and how many renders there were (the window shows the count's
+/// rate; the tests check that a hover-only frame adds none).
+#[derive(Debug, Default)]
+pub struct FrameCache {
+    last: Option<RenderKey>,
+    /// Scene renders so far.
+    pub renders: u64,
+    /// GPU data revision: bumped by every change to a cloud's [`SceneData`].
+    pub revision: u64,
+}
+
+impl FrameCache {
+    /// Whether a frame with `key` must render the scene (the target holds something else).
+    /// Counts the render when it must.
+    pub fn begin(&mut self, key: &RenderKey) -> bool {
+        if self.last.as_ref() == Some(key) {
+            return false;
+        }
+        self.renders += 1;
+        true
+    }
+
+    /// Records what the target now holds; `complete` false when the render was one step of
+    /// several (a surface still growing its buffers), so the next frame renders again.
+    pub fn finish(&mut self, key: RenderKey, complete: bool) {
+        self.last = complete.then_some(key);
+    }
+
+    /// Forgets what the target holds (its size or contents changed outside a render).
+    pub fn invalidate(&mut self) {
+        self.last = None;
+        self.revision += 1;
+    }
 }
 
 impl ViewResources {
@@ -31,6 +106,7 @@ impl ViewResources {
             composite: CompositePass::new(device, render_state.target_format),
             target: None,
             scenes: HashMap::new(),
+            cache: FrameCache::default(),
         };
         render_state
             .renderer
@@ -45,6 +121,7 @@ impl ViewResources {
         if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
             let data = SceneData::new(&render_state.device, &resources.renderer, cloud);
             resources.scenes.insert(id, data);
+            resources.cache.invalidate();
         }
     }
 
@@ -117,14 +194,19 @@ impl ViewResources {
         let Some(data) = scenes.get_mut(&id) else {
             return Ok(false);
         };
-        data.ensure_grid(
-            &render_state.device,
-            &render_state.queue,
-            renderer,
-            cloud,
-            voxels,
-        )
-        .map_err(|e| format!("{}: {e}", cloud.path.display()))
+        let rebuilt = data
+            .ensure_grid(
+                &render_state.device,
+                &render_state.queue,
+                renderer,
+                cloud,
+                voxels,
+            )
+            .map_err(|e| format!("{}: {e}", cloud.path.display()))?;
+        if rebuilt {
+            resources.cache.invalidate();
+        }
+        Ok(rebuilt)
     }
 
     /// The surface of cloud `id`: triangle counts of the last extraction, an error to show, and
@@ -152,6 +234,21 @@ impl ViewResources {
         }
     }
 
+    /// Whether cloud `id` has a voxel grid built with these settings (no build needed).
+    pub fn grid_matches(
+        render_state: &egui_wgpu::RenderState,
+        id: u64,
+        cloud: &PointCloud,
+        voxels: &crate::render::grid::voxelize::VoxelSettings,
+    ) -> bool {
+        let renderer = render_state.renderer.read();
+        renderer
+            .callback_resources
+            .get::<ViewResources>()
+            .and_then(|r| r.scenes.get(&id))
+            .is_none_or(|s| s.grid_matches(cloud, voxels))
+    }
+
     /// Whether cloud `id` has a voxel grid on the GPU yet.
     pub fn has_grid(render_state: &egui_wgpu::RenderState, id: u64) -> bool {
         let renderer = render_state.renderer.read();
@@ -166,7 +263,17 @@ impl ViewResources {
         let mut renderer = render_state.renderer.write();
         if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
             resources.scenes.remove(&id);
+            resources.cache.invalidate();
         }
+    }
+
+    /// Scene renders so far (for the frame read-out and the tests).
+    pub fn renders(render_state: &egui_wgpu::RenderState) -> u64 {
+        let renderer = render_state.renderer.read();
+        renderer
+            .callback_resources
+            .get::<ViewResources>()
+            .map_or(0, |r| r.cache.renders)
     }
 }
 
@@ -194,6 +301,17 @@ impl CallbackTrait for ViewCallback {
             let target = RenderTarget::new(device, w, h);
             res.composite.set_source(device, &target);
             res.target = Some(target);
+            res.cache.invalidate();
+        }
+        let key = RenderKey::new(
+            &self.view,
+            &self.settings,
+            self.cloud_id,
+            res.cache.revision,
+        );
+        if !res.cache.begin(&key) {
+            // The target already holds this scene: paint composites it again.
+            return Vec::new();
         }
         let Some(target) = res.target.as_ref() else {
             return Vec::new();
@@ -201,6 +319,11 @@ impl CallbackTrait for ViewCallback {
         let data = self.cloud_id.and_then(|id| res.scenes.get(&id));
         res.renderer
             .render(queue, encoder, target, data, &self.view, &self.settings);
+        let complete = !data.is_some_and(|d| {
+            self.settings.view == crate::render::scene::ViewKind::Surface
+                && d.surface.needs_another_frame()
+        });
+        res.cache.finish(key, complete);
         Vec::new()
     }
 
@@ -217,3 +340,60 @@ impl CallbackTrait for ViewCallback {
 }
 
 use eframe::egui;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::camera::Camera;
+
+    fn view(frame_index: u32) -> FrameView {
+        let mut view = FrameView::at_rest(Camera::default(), glam::Mat4::IDENTITY, 640, 400);
+        view.frame_index = frame_index;
+        view
+    }
+
+    /// Frames that differ only in what egui paints over the scene (hover read-out, tooltips,
+    /// panels) or in the frame counter render once; a change to the camera, size, settings,
+    /// markers, cloud or its GPU data renders again.
+    #[test]
+    fn only_frames_that_change_the_scene_render_it() {
+        let settings = RenderSettings::default();
+        let mut cache = FrameCache::default();
+        let frame = |cache: &mut FrameCache, view: &FrameView, settings: &RenderSettings| {
+            let key = RenderKey::new(view, settings, Some(1), cache.revision);
+            let render = cache.begin(&key);
+            if render {
+                cache.finish(key, true);
+            }
+            render
+        };
+        assert!(frame(&mut cache, &view(0), &settings), "first frame");
+        for i in 1..10 {
+            // A hover-only frame: the app passes the same view and settings (the read-out is
+            // painted by egui), only the frame counter moves on.
+            assert!(!frame(&mut cache, &view(i), &settings), "hover frame {i}");
+        }
+        assert_eq!(cache.renders, 1);
+
+        let mut moved = view(11);
+        moved.camera.orbit(5.0, 0.0, 400.0);
+        assert!(frame(&mut cache, &moved, &settings), "camera");
+        let mut resized = moved;
+        resized.width = 800;
+        assert!(frame(&mut cache, &resized, &settings), "size");
+        let mut changed = settings.clone();
+        changed.surface.iso_value = 0.7;
+        assert!(frame(&mut cache, &resized, &changed), "settings");
+        changed.markers = vec![crate::render::markers::MarkerBox::playhead(0.1)];
+        assert!(frame(&mut cache, &resized, &changed), "playhead");
+        assert!(!frame(&mut cache, &resized, &changed), "same again");
+        cache.invalidate();
+        assert!(frame(&mut cache, &resized, &changed), "new GPU data");
+        assert_eq!(cache.renders, 6);
+
+        // An unfinished render (a surface still growing its buffers) is not kept.
+        let key = RenderKey::new(&resized, &changed, Some(1), cache.revision);
+        cache.finish(key.clone(), false);
+        assert!(cache.begin(&key));
+    }
+}

@@ -126,6 +126,26 @@ impl LoudscapeApp {
             (Slot::Timeline, Some(x)) => pick::song_at(&cloud.meta.songs, x),
             _ => None,
         };
+        if let (Slot::Timeline, Some(x)) = (self.active, hover.x) {
+            // The year from the song spans, not the axis's linear map (see timeline_year).
+            let year = pick::timeline_year(axes, &cloud.meta.songs, x);
+            let name = year.as_ref().map_or_else(
+                || pick::timeline_year(axes, &[], x).map(|r| r.name),
+                |r| Some(r.name.clone()),
+            );
+            if let Some(at) = hover
+                .readings
+                .iter()
+                .position(|r| Some(&r.name) == name.as_ref())
+            {
+                match year {
+                    Some(year) => hover.readings[at] = year,
+                    None => {
+                        hover.readings.remove(at);
+                    }
+                }
+            }
+        }
         if let Some(song) = self.hovered_song.and_then(|i| cloud.meta.songs.get(i)) {
             hover.readings.insert(
                 0,

@@ -42,6 +42,9 @@ pub fn axis_title(axis: &Axis, fallback: &str) -> String {
     };
     if axis.unit.is_empty() || axis.unit.eq_ignore_ascii_case(name) {
         name.to_string()
+    } else if axis.unit == "s" && axis.ticks(8).iter().any(|t| t.label.contains(':')) {
+        // The ticks read as a clock: "(s)" over "2:30" would say seconds where minutes are.
+        format!("{name} (m:ss)")
     } else {
         format!("{name} ({})", axis.unit)
     }
@@ -278,4 +281,20 @@ pub fn describe_metrics(m: &crate::data::cloud::Metrics) -> Vec<String> {
     rows.iter()
         .filter_map(|(name, value, unit)| value.map(|v| format!("{name}: {v:.1} {unit}")))
         .collect()
+}
+
+#[cfg(test)]
+mod title_tests {
+    use super::*;
+    use crate::data::axes::Axis;
+
+    #[test]
+    fn a_clock_axis_is_titled_in_minutes_and_seconds() {
+        let long = Axis::linear("time", "s", 0.0, 168.0);
+        assert!(long.ticks(8).iter().any(|t| t.label.contains(':')));
+        assert_eq!(axis_title(&long, "x"), "time (m:ss)");
+        let short = Axis::linear("time", "s", 0.0, 30.0);
+        assert_eq!(axis_title(&short, "x"), "time (s)");
+        assert_eq!(axis_title(&Axis::linear("hp", "", 0.0, 1.0), "x"), "hp");
+    }
 }

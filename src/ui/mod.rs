@@ -12,6 +12,7 @@ pub mod bridge;
 mod hover;
 pub mod labels;
 mod legends;
+mod open;
 mod panels;
 mod persistence;
 pub mod screenshot;

@@ -17,6 +17,7 @@ impl LoudscapeApp {
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("loudscape");
         ui.add_space(4.0);
+        self.open_controls(ui);
 
         ui.label(RichText::new("Data").strong());
         ui.horizontal(|ui| {
@@ -34,9 +35,8 @@ impl LoudscapeApp {
                         slot.name().to_lowercase()
                     ))
                 };
-                if response.clicked() && self.active != slot {
-                    self.active = slot;
-                    self.fit_pending = true;
+                if response.clicked() {
+                    self.switch_slot(slot);
                 }
             }
         });
@@ -94,15 +94,28 @@ impl LoudscapeApp {
         ui.add_space(6.0);
         ui.label(RichText::new("Camera").strong());
         ui.horizontal(|ui| {
-            if ui.button("Fit (F)").clicked() {
+            if ui
+                .button("Fit (F)")
+                .on_hover_text("Frame the data, keeping the viewing direction")
+                .clicked()
+            {
                 self.fit_pending = true;
+            }
+            if ui
+                .button("Reset (R)")
+                .on_hover_text("The default viewing direction, framed")
+                .clicked()
+            {
+                self.reset_view();
             }
             ui.checkbox(&mut self.settings.show_box, "axes");
         });
         ui.label(
-            RichText::new("Left drag: orbit · right/middle drag: pan · wheel: zoom")
-                .small()
-                .weak(),
+            RichText::new(
+                "Left drag: orbit · right/middle drag: pan · wheel: zoom · F: fit · R: reset",
+            )
+            .small()
+            .weak(),
         );
 
         ui.add_space(6.0);
@@ -118,11 +131,19 @@ impl LoudscapeApp {
             cloud_info(ui, &loaded.cloud);
         }
 
-        for loading in &self.loading {
+        if let Some(busy) = &self.busy {
             ui.horizontal(|ui| {
                 ui.spinner();
-                ui.label(format!("loading {}", loading.path.display()));
+                ui.label(busy);
             });
+        }
+        self.loading_progress(ui);
+        if let Some(notice) = self.notice.clone() {
+            ui.separator();
+            ui.label(notice);
+            if ui.small_button("ok").clicked() {
+                self.notice = None;
+            }
         }
         if !self.messages.is_empty() {
             ui.separator();
@@ -138,13 +159,21 @@ impl LoudscapeApp {
             }
         }
 
-        ui.with_layout(egui::Layout::bottom_up(egui::Align::LEFT), |ui| {
-            ui.label(
-                RichText::new(format!("{:.1} ms/frame", self.frame_ms))
-                    .small()
-                    .weak(),
-            );
-        });
+        // At the end of the scrolling panel (a bottom-up layout inside the scroll area drew it
+        // over the last lines when the window was small).
+        ui.add_space(8.0);
+        ui.label(
+            RichText::new(format!(
+                "{:.1} ms/frame · {} scene renders",
+                self.frame_ms, self.renders_seen.0
+            ))
+            .small()
+            .weak(),
+        )
+        .on_hover_text(
+            "Time of frames drawn one after another (waiting for input not counted); \
+             the scene renders only when the camera, the data or a setting changed",
+        );
     }
 
     pub(super) fn grid_controls(&mut self, ui: &mut egui::Ui) {
@@ -217,6 +246,11 @@ impl LoudscapeApp {
         ui.checkbox(&mut surface.lit, "lit from above");
         if let Some(error) = &self.surface_error {
             ui.colored_label(Color32::from_rgb(240, 120, 100), error);
+        } else if self.surface_empty {
+            ui.label(
+                RichText::new("no surface at this isovalue: the density crosses it nowhere")
+                    .color(Color32::from_rgb(230, 190, 110)),
+            );
         }
     }
 
@@ -298,7 +332,7 @@ pub(super) fn song_cloud_path(
     timeline: &PointCloud,
     song: &crate::data::cloud::SongInfo,
 ) -> Option<PathBuf> {
-    let audio = PathBuf::from(song.path.as_ref()?);
+    let audio = song.open_path()?;
     let stem = audio.file_stem()?;
     let mut name = stem.to_os_string();
     name.push(".ply");

@@ -8,6 +8,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
+use crate::files::TempFile;
 use crate::render::gpu::context::GpuContext;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
 use crate::view::frame_view::FrameView;
@@ -45,22 +46,22 @@ pub fn render_view(
     Ok(target.read_rgba(&gpu.device, &gpu.queue)?)
 }
 
-/// Writes `image` to `path` as PNG: first to a temporary file beside it, then renamed.
+/// Writes `image` to `path` as PNG: first to `PATH.partial` beside it, then renamed; the partial
+/// file is removed on every error path and on SIGTERM/SIGINT (see [`crate::files::TempFile`]).
 pub fn save_png(image: &image::RgbaImage, path: &Path) -> Result<(), ScreenshotError> {
     let write_error = |reason: String| ScreenshotError::Write {
         path: path.to_path_buf(),
         reason,
     };
-    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
-    tmp_name.push(".partial");
-    let tmp = path.with_file_name(tmp_name);
-    image
-        .save_with_format(&tmp, image::ImageFormat::Png)
-        .map_err(|e| write_error(e.to_string()))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        write_error(e.to_string())
-    })
+    let mut tmp = TempFile::create(path, ".partial").map_err(|e| write_error(e.to_string()))?;
+    {
+        let mut out = std::io::BufWriter::new(tmp.file());
+        image
+            .write_to(&mut out, image::ImageFormat::Png)
+            .map_err(|e| write_error(e.to_string()))?;
+        std::io::Write::flush(&mut out).map_err(|e| write_error(e.to_string()))?;
+    }
+    tmp.persist(path).map_err(|e| write_error(e.to_string()))
 }
 
 /// `loudscape-20260123-142501.png` (UTC) for the given moment.

@@ -19,11 +19,18 @@ impl LoudscapeApp {
     pub(super) fn start_loading(&mut self, path: PathBuf) {
         let (sender, receiver) = channel();
         let thread_path = path.clone();
+        let shared = crate::ui::open::Shared::default();
+        let thread_shared = shared.clone();
         std::thread::spawn(move || {
-            let result = crate::data::cloud::load(&thread_path).map_err(|e| e.to_string());
+            let settings = crate::extract::Settings::default();
+            let result = crate::ui::open::open_path(&thread_path, &settings, &thread_shared);
             let _ = sender.send(result);
         });
-        self.loading.push(Loading { path, receiver });
+        self.loading.push(Loading {
+            path,
+            receiver,
+            shared,
+        });
     }
 
     pub(super) fn slot(&self, slot: Slot) -> Option<&Loaded> {
@@ -111,10 +118,16 @@ impl LoudscapeApp {
             Slot::Song => self.song = Some(loaded),
             Slot::Timeline => self.timeline = Some(loaded),
         }
+        if self.active != slot && !self.fit_pending {
+            self.slot_cameras[self.active as usize] = Some(self.camera);
+        }
+        // A new cloud in this slot starts from its own fitted camera, not another slot's.
+        self.slot_cameras[slot as usize] = None;
         self.active = slot;
         if self.keep_camera_loads > 0 {
             self.keep_camera_loads -= 1;
         } else {
+            self.camera = crate::view::camera::Camera::default();
             self.fit_pending = true;
         }
     }
@@ -136,6 +149,18 @@ impl LoudscapeApp {
         let Some(loaded) = slot else {
             return;
         };
+        // Building a grid blocks the window for a while on slow devices: say so first, and
+        // build on the next frame, once the notice is on screen.
+        let needs_build =
+            !ViewResources::grid_matches(render_state, loaded.id, &loaded.cloud, &voxels);
+        if needs_build && !self.busy_shown {
+            self.busy = Some("building the voxel grid…".into());
+            self.busy_shown = true;
+            self.needs_repaint = true;
+            return;
+        }
+        self.busy_shown = false;
+        self.busy = None;
         let mut failure = None;
         match ViewResources::ensure_grid(render_state, loaded.id, &loaded.cloud, &voxels) {
             Ok(true) => loaded.cpu_grid = None,
@@ -150,8 +175,9 @@ impl LoudscapeApp {
         {
             self.messages.push(message);
         }
-        let (_, error, again) = ViewResources::surface_status(render_state, loaded.id);
+        let (counts, error, again) = ViewResources::surface_status(render_state, loaded.id);
         self.surface_error = error;
+        self.surface_empty = counts.is_some_and(|c| c.fits() && c.triangles() == 0);
         if again {
             self.needs_repaint = true;
         }

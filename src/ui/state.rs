@@ -51,10 +51,26 @@ pub(super) struct LoudscapeApp {
     pub(super) keep_camera_loads: usize,
     /// Why the surface could not be extracted, if it could not.
     pub(super) surface_error: Option<String>,
+    /// Work that blocks the window, announced a frame before it runs (shown with a spinner).
+    pub(super) busy: Option<String>,
+    /// The busy notice has been on screen for a frame: the work may start.
+    pub(super) busy_shown: bool,
+    /// The camera is as the last fit left it (not moved by hand since): refit on resize.
+    pub(super) camera_fitted: bool,
+    /// The last extraction found no surface (the isovalue is above every voxel).
+    pub(super) surface_empty: bool,
+    /// A line of news that is not an error (where a screenshot went), in the normal colour.
+    pub(super) notice: Option<String>,
     /// Draw again next frame (the surface is still growing its buffers).
     pub(super) needs_repaint: bool,
-    /// Smoothed time of a volume frame at rest (ms), to decide whether orbiting needs a stand-in.
-    pub(super) volume_rest_ms: f32,
+    /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
+    pub(super) moving_divisor: [u32; 3],
+    /// The camera each data slot (Song, Timeline) was left with.
+    pub(super) slot_cameras: [Option<Camera>; 2],
+    /// Scene renders counted by the view and the frame they were last seen to change.
+    pub(super) renders_seen: (u64, u32),
+    /// The Open row (`open.rs`).
+    pub(super) open: crate::ui::open::OpenPanel,
 }
 
 /// Which of the two data slots.
@@ -94,6 +110,8 @@ pub(super) struct Loaded {
 pub(super) struct Loading {
     pub(super) path: PathBuf,
     pub(super) receiver: Receiver<Result<PointCloud, String>>,
+    /// Progress and cancel of an extraction (`open.rs`).
+    pub(super) shared: crate::ui::open::Shared,
 }
 
 /// What is under the cursor, recomputed only when the cursor or the view changed.

@@ -99,12 +99,16 @@ impl LoudscapeApp {
             ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
                 .and_then(|image| crate::ui::screenshot::save_png(&image, &path));
         match result {
-            Ok(()) => self.messages.push(format!(
-                "saved {} ({}×{})",
-                path.display(),
-                view.width,
-                view.height
-            )),
+            Ok(()) => {
+                // The full path: a bare name lands in the folder the window was started from.
+                let shown = std::path::absolute(&path).unwrap_or(path);
+                self.notice = Some(format!(
+                    "saved {} ({}×{})",
+                    shown.display(),
+                    view.width,
+                    view.height
+                ));
+            }
             Err(e) => self.messages.push(e.to_string()),
         }
     }

@@ -103,7 +103,7 @@ def app_files(tmp_path_factory) -> dict[str, Path]:
     if not BINARY.exists():
         pytest.fail(f"{BINARY} does not exist: run `cargo build` (or set LOUDSCAPE_BIN)")
     folder = tmp_path_factory.mktemp("app")
-    source = ROOT / "data" / "fixture_song.ply"  # format version 1: what the app reads today
+    source = ROOT / "data" / "fixture_song.ply"  # format version 2
     files = {}
     for method in ("mt", "dc"):
         for ext in ("ply", "obj"):

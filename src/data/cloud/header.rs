@@ -1,10 +1,11 @@
-//! The PLY header: format line, elements, properties and the `loudscape-meta` comment, read
-//! line by line up to [`MAX_HEADER_BYTES`].
+//! The PLY header: format line, elements, properties and the loudscape metadata (one version-1
+//! `comment loudscape-meta {JSON}` line, or the version-2 `comment loudscape-meta-v2 I/N CHUNK`
+//! parts, joined), read line by line up to [`MAX_HEADER_BYTES`].
 
 use std::io::{BufRead, Read};
 use std::path::Path;
 
-use super::{CloudError, MAX_HEADER_BYTES, META_KEYWORD};
+use super::{CloudError, MAX_HEADER_BYTES, META_KEYWORD, META_V2_KEYWORD};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Encoding {
@@ -104,7 +105,8 @@ pub(super) struct Element {
 pub(super) struct Header {
     pub(super) encoding: Encoding,
     pub(super) format_line: usize,
-    /// Line and JSON text of `comment loudscape-meta`.
+    /// The metadata JSON text and the line it is reported at: the `comment loudscape-meta`
+    /// line (version 1) or the first `loudscape-meta-v2` part (version 2, the parts joined).
     pub(super) meta: Option<(usize, String)>,
     pub(super) elements: Vec<Element>,
     pub(super) end_line: usize,
@@ -131,11 +133,17 @@ pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<He
         line,
         reason,
     };
+    let meta_error = |line: usize, reason: String| CloudError::Meta {
+        path: path.to_owned(),
+        line,
+        reason,
+    };
     let mut consumed: u64 = 0;
     let mut line_no = 0;
     let mut buf = Vec::new();
     let mut format: Option<(Encoding, usize)> = None;
     let mut meta: Option<(usize, String)> = None;
+    let mut v2 = MetaParts::default();
     let mut elements: Vec<Element> = Vec::new();
     loop {
         line_no += 1;
@@ -183,8 +191,8 @@ pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<He
                 error(
                     line_no,
                     format!(
-                        "the header is longer than {} KiB without `end_header`",
-                        MAX_HEADER_BYTES / 1024
+                        "the header is longer than {} MiB without `end_header`",
+                        MAX_HEADER_BYTES >> 20
                     ),
                 )
             } else {
@@ -228,21 +236,36 @@ pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<He
                 format = Some((encoding, line_no));
             }
             "comment" => {
-                let is_meta = rest == META_KEYWORD
-                    || rest
-                        .strip_prefix(META_KEYWORD)
-                        .is_some_and(|after| after.starts_with(char::is_whitespace));
-                if is_meta {
+                let word = tokens.first().copied().unwrap_or("");
+                if word == META_KEYWORD {
                     if let Some((first, _)) = meta {
-                        return Err(CloudError::Meta {
-                            path: path.to_owned(),
-                            line: line_no,
-                            reason: format!(
-                                "second loudscape-meta comment (the first is line {first})"
+                        return Err(meta_error(
+                            line_no,
+                            format!("second loudscape-meta comment (the first is line {first})"),
+                        ));
+                    }
+                    if let Some(first) = v2.first_line {
+                        return Err(meta_error(
+                            line_no,
+                            format!(
+                                "both a version-1 loudscape-meta comment and version-2 \
+                                 {META_V2_KEYWORD} parts (the first is line {first})"
                             ),
-                        });
+                        ));
                     }
                     meta = Some((line_no, rest[META_KEYWORD.len()..].trim().to_owned()));
+                } else if word == META_V2_KEYWORD {
+                    if let Some((first, _)) = meta {
+                        return Err(meta_error(
+                            line_no,
+                            format!(
+                                "both version-2 {META_V2_KEYWORD} parts and a version-1 \
+                                 loudscape-meta comment (line {first})"
+                            ),
+                        ));
+                    }
+                    v2.push(text, line_no)
+                        .map_err(|reason| meta_error(line_no, reason))?;
                 }
             }
             "obj_info" | "" => {}
@@ -349,6 +372,19 @@ pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<He
                         ),
                     ));
                 }
+                if let Some(first) = v2.first_line {
+                    if v2.parts != v2.total {
+                        return Err(meta_error(
+                            first,
+                            format!(
+                                "{META_V2_KEYWORD} has {} of its {} parts (the header ends on \
+                                 line {line_no})",
+                                v2.parts, v2.total
+                            ),
+                        ));
+                    }
+                    meta = Some((first, std::mem::take(&mut v2.text)));
+                }
                 let Some((encoding, format_line)) = format else {
                     return Err(error(
                         line_no,
@@ -373,5 +409,84 @@ pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<He
                 ));
             }
         }
+    }
+}
+
+/// The version-2 metadata parts seen so far (docs/FORMAT.md, "Version 2 metadata lines").
+#[derive(Default)]
+struct MetaParts {
+    /// Line of part 1.
+    first_line: Option<usize>,
+    /// `N` of part 1.
+    total: u64,
+    /// Parts taken so far.
+    parts: u64,
+    /// Their chunks, joined.
+    text: String,
+}
+
+impl MetaParts {
+    /// Takes the line `comment loudscape-meta-v2 I/N CHUNK` (`line`: its text without `\n` or
+    /// `\r`), which must match exactly and be the next part in order.
+    fn push(&mut self, line: &str, line_no: usize) -> Result<(), String> {
+        let shape = || {
+            format!(
+                "expected `comment {META_V2_KEYWORD} I/N CHUNK` (one space between words, I and \
+                 N whole numbers from 1 without leading zeros, CHUNK printable ASCII without \
+                 spaces), found {}",
+                excerpt(line.as_bytes())
+            )
+        };
+        let prefix = format!("comment {META_V2_KEYWORD} ");
+        let rest = line.strip_prefix(prefix.as_str()).ok_or_else(shape)?;
+        let (numbers, chunk) = rest.split_once(' ').ok_or_else(shape)?;
+        let (index, total) = numbers.split_once('/').ok_or_else(shape)?;
+        let number = |digits: &str| -> Option<u64> {
+            let first = *digits.as_bytes().first()?;
+            if !(b'1'..=b'9').contains(&first) || !digits.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            digits.parse().ok()
+        };
+        let (Some(index), Some(total)) = (number(index), number(total)) else {
+            return Err(shape());
+        };
+        if chunk.is_empty() || !chunk.bytes().all(|b| (0x21..=0x7e).contains(&b)) {
+            return Err(shape());
+        }
+        match self.first_line {
+            None => {
+                if index != 1 {
+                    return Err(format!(
+                        "{META_V2_KEYWORD} part {index}/{total} comes first (expected 1/{total})"
+                    ));
+                }
+                self.first_line = Some(line_no);
+                self.total = total;
+            }
+            Some(first) => {
+                if total != self.total {
+                    return Err(format!(
+                        "{META_V2_KEYWORD} part {index}/{total}: the part count changed (part 1 \
+                         on line {first} says {})",
+                        self.total
+                    ));
+                }
+                if index != self.parts + 1 {
+                    return Err(format!(
+                        "{META_V2_KEYWORD} part {index}/{total} out of order (expected {}/{total})",
+                        self.parts + 1
+                    ));
+                }
+            }
+        }
+        if index > total {
+            return Err(format!(
+                "{META_V2_KEYWORD} part {index}/{total}: more parts than announced"
+            ));
+        }
+        self.parts = index;
+        self.text.push_str(chunk);
+        Ok(())
     }
 }

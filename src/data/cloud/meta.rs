@@ -1,13 +1,124 @@
-//! The `loudscape-meta` JSON of a header, typed into [`CloudMeta`].
+//! The `loudscape-meta` JSON of a header (either format version), typed into [`CloudMeta`],
+//! with the exact bytes of non-UTF-8 paths from their `KEY_bytes_b64` companions.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Deserializer};
 use serde_json::Value;
 
 use super::{
-    Axes, Axis, CloudError, CloudMeta, DataMode, FORMAT_VERSION, Metrics, SongInfo, Source, Stft,
+    Axes, Axis, CloudError, CloudMeta, DataMode, FORMAT_VERSIONS, Metrics, SongInfo, Source, Stft,
 };
+
+/// The suffix of a member that holds the exact bytes of its sibling string (docs/FORMAT.md,
+/// "Strings that are not UTF-8").
+pub(super) const BYTES_SUFFIX: &str = "_bytes_b64";
+
+/// Decodes standard base64 (RFC 4648 section 4: `A-Z a-z 0-9 + /`, `=` padding to a multiple of
+/// four characters, no whitespace). Non-canonical trailing bits are refused as Python's
+/// `b64decode(validate=True)` would not produce them from bytes.
+pub(super) fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
+    fn value(byte: u8) -> Option<u32> {
+        Some(match byte {
+            b'A'..=b'Z' => byte - b'A',
+            b'a'..=b'z' => byte - b'a' + 26,
+            b'0'..=b'9' => byte - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        } as u32)
+    }
+    let bytes = text.as_bytes();
+    if !bytes.len().is_multiple_of(4) {
+        return Err(format!(
+            "{} characters, not a multiple of 4 (standard base64 with `=` padding)",
+            bytes.len()
+        ));
+    }
+    let mut out = Vec::with_capacity(bytes.len() / 4 * 3);
+    for (i, quad) in bytes.chunks_exact(4).enumerate() {
+        let last = i + 1 == bytes.len() / 4;
+        let padding = quad.iter().rev().take_while(|&&b| b == b'=').count();
+        if padding > 2 || (padding > 0 && !last) || quad[..4 - padding].contains(&b'=') {
+            return Err(format!("misplaced `=` at character {}", i * 4 + 1));
+        }
+        let mut word = 0u32;
+        for (j, &b) in quad[..4 - padding].iter().enumerate() {
+            let v = value(b).ok_or_else(|| {
+                format!(
+                    "character {} ({:?}) is not in the base64 alphabet",
+                    i * 4 + j + 1,
+                    b as char
+                )
+            })?;
+            word |= v << (18 - 6 * j);
+        }
+        let decoded = [(word >> 16) as u8, (word >> 8) as u8, word as u8];
+        let keep = 3 - padding;
+        if decoded[keep..].iter().any(|&b| b != 0) {
+            return Err("non-zero bits after the last byte".into());
+        }
+        out.extend_from_slice(&decoded[..keep]);
+    }
+    Ok(out)
+}
+
+/// Checks every `*_bytes_b64` member in `value` (a string of valid base64); `at` is the JSON
+/// path of `value`, for messages.
+fn check_bytes_members(value: &Value, at: &mut String) -> Result<(), String> {
+    match value {
+        Value::Object(object) => {
+            for (key, item) in object {
+                let len = at.len();
+                if !at.is_empty() {
+                    at.push('.');
+                }
+                at.push_str(key);
+                if key.ends_with(BYTES_SUFFIX) {
+                    let Value::String(text) = item else {
+                        return Err(format!("`{at}` must be a base64 string, found {item}"));
+                    };
+                    decode_base64(text).map_err(|e| format!("`{at}` is not base64: {e}"))?;
+                } else {
+                    check_bytes_members(item, at)?;
+                }
+                at.truncate(len);
+            }
+        }
+        Value::Array(items) => {
+            for (i, item) in items.iter().enumerate() {
+                let len = at.len();
+                at.push_str(&format!("[{i}]"));
+                check_bytes_members(item, at)?;
+                at.truncate(len);
+            }
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The exact bytes of `object.KEY` from `object.KEY_bytes_b64` (already checked), if any.
+fn exact_bytes(object: Option<&Value>, key: &str) -> Option<Vec<u8>> {
+    let text = object?.get(format!("{key}{BYTES_SUFFIX}"))?.as_str()?;
+    decode_base64(text).ok()
+}
+
+/// The path to open for a recorded path: its exact bytes when the file recorded them (on Unix a
+/// file name is bytes; elsewhere the bytes are read as UTF-8 with U+FFFD for invalid ones), else
+/// the text.
+pub(super) fn open_path(text: Option<&str>, bytes: Option<&[u8]>) -> Option<PathBuf> {
+    match bytes {
+        #[cfg(unix)]
+        Some(bytes) => {
+            use std::os::unix::ffi::OsStrExt;
+            Some(PathBuf::from(std::ffi::OsStr::from_bytes(bytes)))
+        }
+        #[cfg(not(unix))]
+        Some(bytes) => Some(PathBuf::from(String::from_utf8_lossy(bytes).into_owned())),
+        None => text.map(PathBuf::from),
+    }
+}
 
 pub(super) fn lenient_u32<'de, D: Deserializer<'de>>(
     deserializer: D,
@@ -52,14 +163,15 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
     };
     match object.get("format_version") {
         None => return Err(error("missing `format_version`".into())),
-        Some(v) if v.as_u64() == Some(FORMAT_VERSION) => {}
+        Some(v) if v.as_u64().is_some_and(|v| FORMAT_VERSIONS.contains(&v)) => {}
         Some(v) => {
             return Err(error(format!(
-                "format_version {v} is not supported (this build reads format_version \
-                 {FORMAT_VERSION})"
+                "format_version {v} is not supported (this build reads format_version {})",
+                FORMAT_VERSIONS.map(|v| v.to_string()).join(" and ")
             )));
         }
     }
+    check_bytes_members(&raw, &mut String::new()).map_err(error)?;
     let mode = match object.get("mode") {
         None => return Err(error("missing `mode`".into())),
         Some(Value::String(s)) if s == "song" => DataMode::Song,
@@ -114,7 +226,10 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
                 .map_err(|e| format!("`{key}`: {e}")),
         }
     }
-    let source = optional::<Source>(object, "source").map_err(error)?;
+    let mut source = optional::<Source>(object, "source").map_err(error)?;
+    if let Some(source) = &mut source {
+        source.path_bytes = exact_bytes(object.get("source"), "path");
+    }
     let stft = optional::<Stft>(object, "stft").map_err(error)?;
     let metrics = optional::<Metrics>(object, "metrics").map_err(error)?;
     let songs = match object.get("songs") {
@@ -123,8 +238,10 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
             .iter()
             .enumerate()
             .map(|(i, item)| {
-                serde_json::from_value::<SongInfo>(item.clone())
-                    .map_err(|e| error(format!("`songs[{i}]`: {e}")))
+                let mut song = serde_json::from_value::<SongInfo>(item.clone())
+                    .map_err(|e| error(format!("`songs[{i}]`: {e}")))?;
+                song.path_bytes = exact_bytes(Some(item), "path");
+                Ok(song)
             })
             .collect::<Result<_, _>>()?,
         Some(v) => return Err(error(format!("`songs` must be an array, found {v}"))),

@@ -1,7 +1,8 @@
 //! PLY point-cloud loading.
 //!
-//! Reads the loudscape point-cloud file (docs/FORMAT.md): a PLY header with one
-//! `comment loudscape-meta {JSON}` line and `element vertex N` of `float x, y, z, scalar, hp`,
+//! Reads the loudscape point-cloud file (docs/FORMAT.md): a PLY header with the metadata JSON
+//! (format version 2: split into `comment loudscape-meta-v2 I/N CHUNK` lines, joined; version 1:
+//! one `comment loudscape-meta {JSON}` line) and `element vertex N` of `float x, y, z, scalar, hp`,
 //! then N little-endian records of 20 bytes. The header is read line by line (at most
 //! [`MAX_HEADER_BYTES`]); the body is read once, straight into a `Vec<Point>` of exactly N
 //! allocated up front, and then checked in place: every value finite, positions in [-1, 1],
@@ -36,7 +37,7 @@ use serde::Deserialize;
 use serde_json::Value;
 
 pub use crate::data::axes::{Axes, Axis, AxisScale, Tick};
-pub use write::{write, write_header, write_points};
+pub use write::{META_CHUNK_BYTES, write, write_header, write_header_version, write_points};
 
 mod body;
 mod generic;
@@ -66,10 +67,18 @@ pub const POINT_BYTES: usize = 20;
 const _: () = assert!(std::mem::size_of::<Point>() == POINT_BYTES);
 const _: () = assert!(std::mem::align_of::<Point>() == 4);
 
-/// The `format_version` this build reads.
-pub const FORMAT_VERSION: u64 = 1;
-/// The header may not be longer than this; a file without `end_header` fails after it.
-pub const MAX_HEADER_BYTES: u64 = 64 * 1024;
+/// The `format_version`s this build reads (docs/FORMAT.md): 1 (one `loudscape-meta` line) and 2
+/// (`loudscape-meta-v2` parts).
+pub const FORMAT_VERSIONS: [u64; 2] = [1, 2];
+/// The `format_version` [`write`] writes.
+pub const FORMAT_VERSION: u64 = 2;
+/// The header may not be longer than this (nor, of course, than the file); a file without
+/// `end_header` fails after it. The rule (docs/FORMAT.md, "Header size"): the header is held in
+/// memory twice while it is parsed (the text, then the JSON values, about 5x the text), so the cap
+/// bounds that to well under a GiB while leaving room for ten times the largest library we know
+/// of: a 10,000-song timeline has a 5-7 MB header, 64 MiB holds about 90,000 songs. The Python
+/// reader's `read_ply_metadata` stops at the same size.
+pub const MAX_HEADER_BYTES: u64 = 64 << 20;
 /// Slack allowed on the [-1, 1] and [0, 1] ranges, for float rounding in the writer.
 pub const RANGE_EPSILON: f32 = 1e-5;
 /// The vertex properties of a loudscape file, in order.
@@ -80,6 +89,8 @@ pub const GENERIC_SCALAR: f32 = 1.0;
 pub const GENERIC_HP: f32 = 0.5;
 
 const META_KEYWORD: &str = "loudscape-meta";
+/// The word of a version-2 metadata part: `comment loudscape-meta-v2 I/N CHUNK`.
+const META_V2_KEYWORD: &str = "loudscape-meta-v2";
 /// Longest line accepted in an ascii body.
 const MAX_ASCII_LINE_BYTES: u64 = 1024 * 1024;
 /// Records per read when the body length is unknown or the body is converted (generic files).
@@ -177,7 +188,11 @@ pub struct CloudMeta {
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(default)]
 pub struct Source {
+    /// The audio's path as text (non-UTF-8 bytes shown as U+FFFD); open [`Source::open_path`].
     pub path: Option<String>,
+    /// The exact bytes of `path` when the file records them (`path_bytes_b64`).
+    #[serde(skip)]
+    pub path_bytes: Option<Vec<u8>>,
     #[serde(deserialize_with = "lenient_u32")]
     pub sample_rate: Option<u32>,
     #[serde(deserialize_with = "lenient_u32")]
@@ -194,6 +209,20 @@ pub struct Stft {
     #[serde(deserialize_with = "lenient_u32")]
     pub hop_length: Option<u32>,
     pub window: Option<String>,
+}
+
+impl Source {
+    /// The audio file to open: the exact bytes of `path` when recorded, else `path`.
+    pub fn open_path(&self) -> Option<PathBuf> {
+        meta::open_path(self.path.as_deref(), self.path_bytes.as_deref())
+    }
+}
+
+impl SongInfo {
+    /// The song's audio file to open: the exact bytes of `path` when recorded, else `path`.
+    pub fn open_path(&self) -> Option<PathBuf> {
+        meta::open_path(self.path.as_deref(), self.path_bytes.as_deref())
+    }
 }
 
 /// Whole-track loudness metrics; `None` where not measurable (e.g. audio shorter than one
@@ -218,7 +247,11 @@ pub struct SongInfo {
     pub artist: String,
     #[serde(deserialize_with = "lenient_i32")]
     pub year: Option<i32>,
+    /// The song's path as text (non-UTF-8 bytes shown as U+FFFD); open [`SongInfo::open_path`].
     pub path: Option<String>,
+    /// The exact bytes of `path` when the file records them (`path_bytes_b64`).
+    #[serde(skip)]
+    pub path_bytes: Option<Vec<u8>>,
     /// Normalized x range of the song's frames.
     pub x_min: Option<f64>,
     pub x_max: Option<f64>,

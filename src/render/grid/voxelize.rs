@@ -5,14 +5,14 @@
 //! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
 //! shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
 //! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual carry; scale
-//! [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp, with the point count in the
-//! top 24 bits of the hp sum; portable to every adapter, no float atomics). `resolve` turns the
-//! sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally blurs the sums with a
-//! separable Gaussian; `histogram` bins the positive sums on a log2 scale, `percentile` finds the
-//! bin holding the 99th percentile, and `normalize_density` divides by that reference sum and
-//! clamps to 1, so one hot voxel cannot flatten the rest of the field. The grid box is the cloud's
-//! bounding box, padded ([`grid_box`]); the grid is rebuilt only when the cloud or the settings
-//! change (see `SceneData::ensure_grid`).
+//! [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp) and counts it in a u32 of
+//! its own (so any cloud up to [`MAX_POINTS`]; portable to every adapter, no float atomics).
+//! `resolve` turns the sums into an f32 loudness sum and a mean hp; `smooth_axis` optionally
+//! blurs the sums with a separable Gaussian; `histogram` bins the positive sums on a log2 scale,
+//! `percentile` finds the bin holding the 99th percentile, and `normalize_density` divides by
+//! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field. The
+//! grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only when the
+//! cloud or the settings change (see `SceneData::ensure_grid`).
 
 use glam::{UVec3, Vec3};
 use thiserror::Error;
@@ -35,11 +35,11 @@ pub const MAX_RESOLUTION: u32 = 384;
 /// Fixed-point units per 1.0 of scalar or hp. One point adds at most 2^20 to a 64-bit sum, so no
 /// cloud that fits a GPU buffer can overflow it; the rounding error is at most 2^-21 per point.
 pub const FIXED_POINT_SCALE: u32 = 1 << 20;
-/// Fixed-point units per 1.0 of hp. The hp sum shares 64 bits with the point count (count times
-/// 2^40 plus the hp sum), so the count has 24 bits: exact for any cloud under 2^24 points.
+/// Fixed-point units per 1.0 of hp, in a 64-bit sum of its own (the count has its own u32).
 pub const HP_FIXED_POINT_SCALE: u32 = 1 << 16;
-/// Most points per voxelization (the per-voxel count has 24 bits).
-pub const MAX_POINTS: usize = (1 << 24) - 1;
+/// Most points per voxelization: the per-voxel count is a u32. A cloud this large would take
+/// 86 GB at 20 bytes a point, so no cloud a machine holds reaches it.
+pub const MAX_POINTS: usize = u32::MAX as usize;
 /// The density is normalized by this percentile of the voxels with a positive loudness sum.
 pub const PERCENTILE: f64 = 0.99;
 pub const HISTOGRAM_BINS: u32 = 1024;
@@ -135,7 +135,7 @@ pub enum VoxelizeError {
         limit_mib: u64,
         largest: u32,
     },
-    #[error("the cloud has {0} points; at most 16777215 can be voxelized at once")]
+    #[error("the cloud has {0} points; at most 4294967295 can be voxelized at once")]
     TooManyPoints(usize),
     #[error("voxelization: {0}")]
     Readback(#[from] ReadbackError),
@@ -268,7 +268,8 @@ pub struct VoxelizeJob {
     pub point_count: usize,
     chunks: Vec<Chunk>,
     loudness_sums: wgpu::Buffer,
-    hp_counts: wgpu::Buffer,
+    hp_sums: wgpu::Buffer,
+    point_counts: wgpu::Buffer,
     stats: wgpu::Buffer,
     density: wgpu::Buffer,
     hp_mean: wgpu::Buffer,
@@ -313,6 +314,7 @@ impl VoxelizePass {
                 storage_entry(5, COMPUTE, false),
                 storage_entry(6, COMPUTE, false),
                 storage_entry(7, COMPUTE, false),
+                storage_entry(8, COMPUTE, false),
             ],
         });
         let smooth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -331,6 +333,7 @@ impl VoxelizePass {
                 storage_entry(2, COMPUTE, true),
                 storage_entry(3, COMPUTE, false),
                 storage_entry(4, COMPUTE, false),
+                storage_entry(5, COMPUTE, true),
             ],
         });
         let resolve_pipeline_layout =
@@ -427,7 +430,8 @@ impl VoxelizePass {
         // zero (an empty voxel) and is never part of the grid.
         let group4_count = voxels.div_ceil(4);
         let loudness_sums = storage("voxelize::loudness_sums", group4_count * 32, copy);
-        let hp_counts = storage("voxelize::hp_counts", group4_count * 32, copy);
+        let hp_sums = storage("voxelize::hp_sums", group4_count * 32, copy);
+        let point_counts = storage("voxelize::point_counts", group4_count * 16, copy);
         let stats = storage("voxelize::stats", STATS_WORDS as u64 * 4, copy);
         let reference = storage("voxelize::reference_sum", 16, copy);
         let density = storage("voxelize::density_grid", group4_count * 16, copy);
@@ -479,11 +483,12 @@ impl VoxelizePass {
                 &params_buffer,
                 &points_buffer,
                 &loudness_sums,
-                &hp_counts,
+                &hp_sums,
                 &stats,
                 &density,
                 &hp_mean,
                 &reference,
+                &point_counts,
             ];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
@@ -509,9 +514,10 @@ impl VoxelizePass {
         let resolve_buffers = [
             &chunks[0]._params,
             &loudness_sums,
-            &hp_counts,
+            &hp_sums,
             &density,
             &hp_mean,
+            &point_counts,
         ];
         let resolve_entries: Vec<wgpu::BindGroupEntry> = resolve_buffers
             .iter()
@@ -580,7 +586,8 @@ impl VoxelizePass {
             point_count: points.len(),
             chunks,
             loudness_sums,
-            hp_counts,
+            hp_sums,
+            point_counts,
             stats,
             density,
             hp_mean,
@@ -599,7 +606,12 @@ impl VoxelizePass {
         job: &VoxelizeJob,
         timestamps: Option<&wgpu::QuerySet>,
     ) -> Vec<&'static str> {
-        for buffer in [&job.loudness_sums, &job.hp_counts, &job.stats] {
+        for buffer in [
+            &job.loudness_sums,
+            &job.hp_sums,
+            &job.point_counts,
+            &job.stats,
+        ] {
             encoder.clear_buffer(buffer, 0, None);
         }
         let voxels = dispatch_size(job.voxel_count());

@@ -1,0 +1,59 @@
+"""``--progress json``: the lines a program reads while the extractor runs."""
+
+import json
+
+import numpy as np
+import soundfile
+
+from loudscape_extract.cli import main
+from loudscape_extract.progress import STAGES, JsonProgress
+
+from conftest import musical_signal
+
+RATE = 8000
+
+
+def lines_of(text):
+    return [json.loads(line) for line in text.splitlines() if line.strip()]
+
+
+def test_song_progress_is_json_lines_ending_in_done(tmp_path, capsys):
+    source = tmp_path / "track.wav"
+    soundfile.write(source, musical_signal(sample_rate=RATE, duration_s=1.0) * 0.5, RATE)
+    out = tmp_path / "track.ply"
+    status = main(["song", str(source), "-o", str(out), "--n-fft", "256", "--hop", "128",
+                   "--progress", "json"])  # fmt: skip
+    captured = capsys.readouterr()
+    assert status == 0 and out.exists()
+    records = lines_of(captured.out)
+    assert records[-1] == {"done": str(out)}
+    stages = [r["stage"] for r in records[:-1]]
+    for stage in ("decode", "spectrogram", "hpss", "frame features", "points", "write"):
+        assert stage in stages
+    fractions = [r["fraction"] for r in records[:-1]]
+    assert fractions == sorted(fractions) and 0.0 <= fractions[0] and fractions[-1] < 1.0
+    assert all(0.0 <= f <= 1.0 for f in fractions)
+
+
+def test_song_progress_error_is_the_last_line(tmp_path, capsys):
+    source = tmp_path / "silent.wav"
+    soundfile.write(source, np.zeros(RATE, dtype=np.float32), RATE)
+    out = tmp_path / "silent.ply"
+    status = main(["song", str(source), "-o", str(out), "--progress", "json"])
+    captured = capsys.readouterr()
+    assert status == 1 and not out.exists()
+    last = lines_of(captured.out)[-1]
+    assert set(last) == {"error"} and "silent" in last["error"] and str(source) in last["error"]
+    assert "error" in captured.err  # the usual one line on stderr as well
+
+
+def test_fractions_only_grow_and_unknown_messages_keep_the_stage(capsys):
+    progress = JsonProgress()
+    progress("decoding x.wav")
+    progress("3.0 s, 44100 Hz, 2 channel(s)")
+    progress("harmonic-percussive separation")
+    progress("spectrogram")  # out of order: the fraction does not go back
+    records = lines_of(capsys.readouterr().out)
+    assert [r["stage"] for r in records] == ["decode", "decode", "hpss", "spectrogram"]
+    assert [r["fraction"] for r in records] == [0.0, 0.0, 0.82, 0.82]
+    assert [f for _, _, f in STAGES] == sorted(f for _, _, f in STAGES)

@@ -1,0 +1,91 @@
+//! The cloud cache: one PLY per (audio content, extraction settings), named by a SHA-256 of the
+//! audio's bytes and the settings, in `$LOUDSCAPE_CACHE_DIR`, else `$XDG_CACHE_HOME/loudscape/
+//! clouds`, else `~/.cache/loudscape/clouds` (beside the extractor's own timeline cache). A
+//! renamed or moved song still hits; an edited one misses. The extractor writes each file
+//! atomically, so a file in the cache is always whole.
+
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use sha2::{Digest, Sha256};
+
+use super::{ExtractError, Settings};
+
+/// Bumped when what the key covers changes meaning (a new extractor output, say).
+const KEY_VERSION: &str = "loudscape-cloud-cache 1";
+
+/// The cache folder (not created here).
+pub fn dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os("LOUDSCAPE_CACHE_DIR").filter(|d| !d.is_empty()) {
+        return PathBuf::from(dir);
+    }
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .unwrap_or_else(std::env::temp_dir);
+    base.join("loudscape").join("clouds")
+}
+
+/// The cache key of `audio` under `settings`: hex SHA-256 of the key version, the settings'
+/// flags and the file's bytes.
+pub fn key(audio: &Path, settings: &Settings) -> Result<String, ExtractError> {
+    let io = |e: std::io::Error| ExtractError::Io {
+        path: audio.to_owned(),
+        reason: format!("cannot read the audio file: {e}"),
+    };
+    let mut file = File::open(audio).map_err(io)?;
+    if file.metadata().map_err(io)?.is_dir() {
+        return Err(ExtractError::Io {
+            path: audio.to_owned(),
+            reason: "is a folder, not an audio file".into(),
+        });
+    }
+    let mut hasher = Sha256::new();
+    hasher.update(KEY_VERSION.as_bytes());
+    for arg in settings.arguments() {
+        hasher.update(arg.as_bytes());
+        hasher.update([0]);
+    }
+    let mut buffer = vec![0u8; 1 << 20];
+    loop {
+        let n = file.read(&mut buffer).map_err(io)?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buffer[..n]);
+    }
+    Ok(hasher
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn key_follows_content_and_settings_not_the_name() {
+        let dir = std::env::temp_dir().join(format!("loudscape-cache-key-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (a, b, c) = (dir.join("a.wav"), dir.join("b.wav"), dir.join("c.wav"));
+        std::fs::write(&a, b"some audio bytes").unwrap();
+        std::fs::write(&b, b"some audio bytes").unwrap();
+        std::fs::write(&c, b"other audio bytes").unwrap();
+        let settings = Settings::default();
+        let key_a = key(&a, &settings).unwrap();
+        assert_eq!(key_a.len(), 64);
+        assert_eq!(key_a, key(&b, &settings).unwrap());
+        assert_ne!(key_a, key(&c, &settings).unwrap());
+        let log = Settings {
+            freq_scale: "log".into(),
+            ..Settings::default()
+        };
+        assert_ne!(key_a, key(&a, &log).unwrap());
+        assert!(key(&dir, &settings).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

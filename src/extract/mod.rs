@@ -1,0 +1,277 @@
+//! Audio in: a song file becomes a point cloud by running the Python extractor
+//! (`loudscape-extract song --progress json`) as a child process, with its progress, a way to
+//! cancel, and a cache so that reopening a song is instant. The Python extractor stays the one
+//! implementation of the analysis; this module only finds it ([`locate`]), drives it
+//! ([`child`]) and keeps what it wrote ([`cache`]).
+//!
+//! [`open_any`] is the one entry point the window (argument, drop, Open button) and every
+//! command that takes a cloud share: a PLY file is read as it is, anything else is taken for
+//! audio.
+
+pub mod cache;
+pub mod child;
+pub mod locate;
+
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use thiserror::Error;
+
+use crate::data::cloud::{CloudError, PointCloud};
+
+/// The extraction settings that change the cloud; part of the cache key.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// STFT size (even, >= 4).
+    pub n_fft: u32,
+    /// STFT hop in samples.
+    pub hop: u32,
+    /// Drop bins more than this many dB below the loudest; `None` is the extractor's default.
+    pub floor_db: Option<f32>,
+    /// `"linear"` or `"log"` frequency axis.
+    pub freq_scale: String,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            n_fft: 2048,
+            hop: 1024,
+            floor_db: None,
+            freq_scale: "linear".into(),
+        }
+    }
+}
+
+impl Settings {
+    /// The extractor's flags for these settings.
+    pub fn arguments(&self) -> Vec<String> {
+        let mut args = vec![
+            "--n-fft".into(),
+            self.n_fft.to_string(),
+            "--hop".into(),
+            self.hop.to_string(),
+            "--freq-scale".into(),
+            self.freq_scale.clone(),
+        ];
+        if let Some(floor) = self.floor_db {
+            args.extend(["--floor-db".into(), floor.to_string()]);
+        }
+        args
+    }
+}
+
+/// Where an extraction is: the extractor's stage and the share of the work done.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Progress {
+    pub stage: String,
+    /// 0 to 1.
+    pub fraction: f32,
+}
+
+/// Why audio could not become a cloud. Each names the file and the reason.
+#[derive(Debug, Error)]
+pub enum ExtractError {
+    #[error(
+        "{audio}: this is not a .ply cloud, so it was taken for audio, but the extractor \
+         loudscape-extract was not found (looked in: {looked}); install it with `make venv` \
+         (or: python3 -m venv .venv && .venv/bin/pip install -e ./preprocess)"
+    )]
+    NotFound { audio: PathBuf, looked: String },
+    #[error("{path}: {reason}")]
+    Io { path: PathBuf, reason: String },
+    #[error("{audio}: the extractor failed: {reason}")]
+    Failed { audio: PathBuf, reason: String },
+    #[error("{audio}: extraction cancelled")]
+    Cancelled { audio: PathBuf },
+    #[error(transparent)]
+    Cloud(#[from] CloudError),
+}
+
+/// What [`open_any`] opened.
+pub struct Opened {
+    pub cloud: PointCloud,
+    /// For audio: the cached cloud file and whether it was already there.
+    pub extracted: Option<(PathBuf, bool)>,
+}
+
+/// True unless the file is a PLY: named `.ply` (a broken one gets the PLY reader's error, not
+/// the extractor's) or starting with the PLY magic `ply` whatever its name.
+pub fn is_audio(path: &Path) -> bool {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ply"))
+    {
+        return false;
+    }
+    let mut magic = [0u8; 3];
+    let read = File::open(path).and_then(|mut f| f.read_exact(&mut magic));
+    !(read.is_ok() && &magic == b"ply")
+}
+
+/// Opens a cloud file, or extracts (or finds in the cache) the cloud of an audio file and opens
+/// that. `on_progress` hears every stage; setting `cancel` stops the extractor.
+pub fn open_any(
+    path: &Path,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    on_progress: &mut dyn FnMut(&Progress),
+) -> Result<Opened, ExtractError> {
+    if !is_audio(path) {
+        return Ok(Opened {
+            cloud: crate::data::cloud::load(path)?,
+            extracted: None,
+        });
+    }
+    let (ply, hit) = cloud_for_audio(path, settings, cancel, on_progress)?;
+    let mut cloud = crate::data::cloud::load(&ply)?;
+    // The song names the cloud (panel, messages, what the window remembers: reopened through
+    // the cache), not the cache file's hash.
+    cloud.path = path.to_owned();
+    Ok(Opened {
+        cloud,
+        extracted: Some((ply, hit)),
+    })
+}
+
+/// The cached cloud of `audio` under `settings`, extracting it first when it is not cached.
+/// Returns its path and whether it came from the cache.
+pub fn cloud_for_audio(
+    audio: &Path,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    on_progress: &mut dyn FnMut(&Progress),
+) -> Result<(PathBuf, bool), ExtractError> {
+    cloud_for_audio_with(
+        audio,
+        settings,
+        &cache::dir(),
+        locate::extractor,
+        cancel,
+        on_progress,
+    )
+}
+
+/// [`cloud_for_audio`] with the cache folder given and the extractor found by `find` (only
+/// called on a cache miss: a cached song opens without Python).
+pub fn cloud_for_audio_with(
+    audio: &Path,
+    settings: &Settings,
+    dir: &Path,
+    find: impl FnOnce() -> Result<PathBuf, String>,
+    cancel: &AtomicBool,
+    on_progress: &mut dyn FnMut(&Progress),
+) -> Result<(PathBuf, bool), ExtractError> {
+    // The extractor gets the absolute path: it is recorded in the cloud for playback.
+    let absolute = std::path::absolute(audio).unwrap_or_else(|_| audio.to_owned());
+    on_progress(&Progress {
+        stage: "hashing".into(),
+        fraction: 0.0,
+    });
+    let key = cache::key(audio, settings)?;
+    let ply = dir.join(format!("{key}.ply"));
+    if ply.is_file() {
+        return Ok((ply, true));
+    }
+    let extractor = find().map_err(|looked| ExtractError::NotFound {
+        audio: audio.to_owned(),
+        looked,
+    })?;
+    std::fs::create_dir_all(dir).map_err(|e| ExtractError::Io {
+        path: dir.to_owned(),
+        reason: format!("cannot create the cache folder: {e}"),
+    })?;
+    child::run(
+        &extractor,
+        &absolute,
+        audio,
+        &ply,
+        settings,
+        cancel,
+        on_progress,
+    )?;
+    Ok((ply, false))
+}
+
+/// [`open_any`] with default settings for the command line: progress lines (see
+/// [`open_reporting`]) only when stderr is a terminal, as the extractor does, so that scripts
+/// see one line on failure and nothing on success.
+pub fn open_for_command(path: &Path) -> Result<PointCloud, ExtractError> {
+    use std::io::IsTerminal;
+    let verbose = std::io::stderr().is_terminal();
+    let cancel = AtomicBool::new(false);
+    open_reporting(path, &Settings::default(), &cancel, verbose, &mut |_| {})
+}
+
+/// [`open_any`] telling stderr about it when `verbose`: one line a stage, and for audio where
+/// the cloud came from (extracted, or from the cache); `also` hears every progress report.
+pub fn open_reporting(
+    path: &Path,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    verbose: bool,
+    also: &mut dyn FnMut(&Progress),
+) -> Result<PointCloud, ExtractError> {
+    let name = path.display().to_string();
+    let start = std::time::Instant::now();
+    let mut last_stage = String::new();
+    let mut report = |progress: &Progress| {
+        also(progress);
+        // Hashing is local and quick; stderr hears only the extractor's stages.
+        if verbose && progress.stage != last_stage && progress.stage != "hashing" {
+            eprintln!(
+                "loudscape: {name}: {} ({:.0}%)",
+                progress.stage,
+                progress.fraction * 100.0
+            );
+            last_stage.clone_from(&progress.stage);
+        }
+    };
+    let opened = open_any(path, settings, cancel, &mut report)?;
+    if let Some((ply, hit)) = opened.extracted.as_ref().filter(|_| verbose) {
+        let how = if *hit { "from the cache" } else { "extracted" };
+        let seconds = start.elapsed().as_secs_f32();
+        eprintln!(
+            "loudscape: {name}: cloud {how} in {seconds:.2} s: {}",
+            ply.display()
+        );
+    }
+    Ok(opened.cloud)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ply_by_magic_audio_otherwise() {
+        let dir = std::env::temp_dir().join(format!("loudscape-is-audio-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let cloud = dir.join("named-like-audio.ogg");
+        std::fs::write(&cloud, b"ply\nformat binary_little_endian 1.0\n").unwrap();
+        let audio = dir.join("song.ply.wav");
+        std::fs::write(&audio, b"RIFF....WAVE").unwrap();
+        let broken = dir.join("broken.PLY");
+        std::fs::write(&broken, b"hello world\n").unwrap();
+        assert!(!is_audio(&cloud));
+        assert!(is_audio(&audio));
+        assert!(!is_audio(&broken));
+        assert!(!is_audio(&dir.join("missing.ply")));
+        assert!(is_audio(&dir.join("missing.flac")));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn settings_become_flags() {
+        let mut settings = Settings::default();
+        assert!(!settings.arguments().contains(&"--floor-db".to_string()));
+        settings.floor_db = Some(60.0);
+        let args = settings.arguments();
+        assert_eq!(
+            args[args.len() - 2..],
+            ["--floor-db".to_string(), "60".into()]
+        );
+    }
+}
