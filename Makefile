@@ -80,6 +80,16 @@ fuzz:
 
 test: system lint-rust lint-py test-rust test-py test-mesh fuzz-smoke
 
+# Benchmarks, not part of `make test` (minutes each; figures in docs/PERFORMANCE.md).
+# 1,000 short songs cold (process pool, two-worker Dask LocalCluster) and the warm rebuild of a
+# 10,000-song timeline, kept in out/bench-timeline/timeline_10000.ply.
+bench-timeline: venv
+	$(PY) bench/bench_timeline.py
+
+# Peak memory of Song extraction on 5, 20 and 60-minute tracks.
+bench-memory: venv
+	$(PY) bench/bench_memory.py
+
 clean:
 	$(CARGO) clean
 	rm -rf $(VENV) $(OUT)

@@ -8,7 +8,8 @@ import os
 import struct
 import sys
 import tempfile
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 
 import numpy as np
 import soundfile
@@ -23,8 +24,13 @@ __all__ = [
     "MIN_SAMPLE_RATE",
     "SUPPORTED_EXTENSIONS",
     "Audio",
+    "AudioInfo",
+    "BlockReport",
+    "audio_info",
+    "check_decoded",
     "decode_audio",
     "mix_to_mono",
+    "read_blocks",
 ]
 
 MIN_SAMPLE_RATE = 8_000
@@ -355,6 +361,211 @@ def _captured_fd2():
             sink.seek(0)
             text = sink.read(1 << 16).decode("utf-8", errors="replace")
             lines.extend(line.strip() for line in text.splitlines() if line.strip())
+
+
+@dataclass(frozen=True)
+class AudioInfo:
+    """What :func:`audio_info` reads from a file's header (no samples decoded).
+
+    Attributes
+    ----------
+    path : str
+    sample_rate, n_channels : int
+    n_samples : int
+        As the header states it (:func:`read_blocks` checks it while decoding).
+    format, subtype : str
+    """
+
+    path: str
+    sample_rate: int
+    n_channels: int
+    n_samples: int
+    format: str
+    subtype: str
+
+    @property
+    def duration_s(self) -> float:
+        return self.n_samples / self.sample_rate
+
+
+@dataclass
+class BlockReport:
+    """What :func:`read_blocks` saw go wrong while decoding (empty when nothing did).
+
+    Attributes
+    ----------
+    stream_error : str
+        The decoder error that ended the read early, ``""`` when the stream ended normally.
+    decoder_errors : list of str
+        Error lines the decoder libraries printed on file descriptor 2 (libmpg123).
+    """
+
+    stream_error: str = ""
+    decoder_errors: list[str] = field(default_factory=list)
+
+
+def audio_info(path: str | os.PathLike) -> AudioInfo:
+    """Open a file as :func:`decode_audio` would (same checks and messages) and read its header.
+
+    Raises
+    ------
+    ExtractError
+        As :func:`decode_audio`, for everything visible without decoding.
+    """
+    name = os.fspath(path)
+    check_regular_input(name)
+    extension = os.path.splitext(name)[1].lower()
+    with _captured_fd2():
+        try:
+            info = soundfile.info(name)
+        except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
+            raise _open_error(name, extension, exc) from exc
+        except OSError as exc:
+            raise ExtractError(f"cannot read file ({_one_line(exc)})", path=name) from exc
+    sample_rate = int(info.samplerate)
+    if not MIN_SAMPLE_RATE <= sample_rate <= MAX_SAMPLE_RATE:
+        raise ExtractError(
+            f"sample rate {sample_rate} Hz is outside the supported "
+            f"{MIN_SAMPLE_RATE}-{MAX_SAMPLE_RATE} Hz",
+            path=name,
+        )
+    return AudioInfo(
+        path=name,
+        sample_rate=sample_rate,
+        n_channels=int(info.channels),
+        n_samples=max(int(info.frames), 0),
+        format=str(info.format),
+        subtype=str(info.subtype),
+    )
+
+
+def read_blocks(
+    info: AudioInfo, *, block: int, report: BlockReport | None = None
+) -> Iterator[tuple[int, np.ndarray]]:
+    """Decode a file block by block, front to back (no seeking, so any format works).
+
+    A decoder error mid-stream ends the iteration, as in :func:`decode_audio`: what decoded
+    before it is yielded, and the error goes into ``report`` (with the decoder libraries' error
+    lines on file descriptor 2, which is captured only while the decoder runs).
+    :func:`check_decoded` turns the report into the warning or the ``--strict`` error.
+
+    Parameters
+    ----------
+    info : AudioInfo
+        From :func:`audio_info`.
+    block : int
+        Samples per block (the last one may be shorter).
+    report : BlockReport, optional
+        Filled in with what went wrong.
+
+    Yields
+    ------
+    start : int
+        Index of the block's first sample.
+    samples : np.ndarray [shape=(n, n_channels), dtype=float32]
+        The samples :func:`decode_audio` returns for ``[start, start + n)``.
+
+    Raises
+    ------
+    ExtractError
+        A file that cannot be opened, NaN or infinite samples (naming the first), float samples
+        beyond +/- :data:`MAX_SAMPLE_MAGNITUDE`.
+    """
+    name = info.path
+    report = report if report is not None else BlockReport()
+    extension = os.path.splitext(name)[1].lower()
+    start = 0
+    with _captured_fd2() as chatter:
+        try:
+            handle = soundfile.SoundFile(name)
+        except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
+            raise _open_error(name, extension, exc) from exc
+        except OSError as exc:
+            raise ExtractError(f"cannot read file ({_one_line(exc)})", path=name) from exc
+    report.decoder_errors += [line for line in chatter if "error" in line.lower()]
+    # Read in pieces of at most _BLOCK_FRAMES, at the offsets decode_audio reads: a decoder
+    # error loses the piece being read, so a damaged file decodes as far as it does there.
+    piece = min(block, _BLOCK_FRAMES)
+    ended = False
+    with handle:
+        while not ended:
+            samples = np.empty((block, info.n_channels), dtype=np.float32)
+            filled = 0
+            while filled < block:
+                want = min(piece, block - filled)
+                with _captured_fd2() as chatter:
+                    try:
+                        got = handle.read(
+                            want,
+                            dtype="float32",
+                            always_2d=True,
+                            out=samples[filled : filled + want],
+                        ).shape[0]
+                    except (soundfile.LibsndfileError, RuntimeError) as exc:
+                        report.stream_error = _one_line(exc).removeprefix("Error : ")
+                        got = 0
+                    except OSError as exc:
+                        raise ExtractError(
+                            f"cannot read file ({_one_line(exc)})", path=name
+                        ) from exc
+                report.decoder_errors += [line for line in chatter if "error" in line.lower()]
+                if got == 0:
+                    ended = True
+                    break
+                filled += got
+            if filled == 0:
+                break
+            samples = samples[:filled]
+            finite = np.isfinite(samples)
+            if not finite.all():
+                first = start + int(np.argmin(finite.all(axis=1)))
+                raise ExtractError(
+                    f"NaN or infinite sample at sample {first} ({first / info.sample_rate:.3f} s)",
+                    path=name,
+                )
+            if max(float(samples.max()), -float(samples.min())) > MAX_SAMPLE_MAGNITUDE:
+                peak_index = int(np.argmax(np.abs(samples).max(axis=1)))
+                peak = float(np.abs(samples[peak_index]).max())
+                raise ExtractError(
+                    f"sample value {peak:.3g} at {(start + peak_index) / info.sample_rate:.3f} s "
+                    f"is beyond +/-{MAX_SAMPLE_MAGNITUDE:g} "
+                    f"({20 * math.log10(MAX_SAMPLE_MAGNITUDE):+.0f} dBFS): "
+                    "a float file this hot is corrupt or not audio",
+                    path=name,
+                )
+            yield start, samples
+            start += samples.shape[0]
+
+
+def check_decoded(
+    info: AudioInfo, *, decoded: int, report: BlockReport, strict: bool = False
+) -> str:
+    """After a streamed decode of ``decoded`` frames: the truncation warning, as
+    :attr:`Audio.warning` (``""`` for a complete file), checked against what the container
+    promises exactly as :func:`decode_audio` does.
+
+    Raises
+    ------
+    ExtractError
+        ``strict`` and the file is truncated or corrupt; or nothing decoded at all.
+    """
+    promised, container_problem = _promised_frames(
+        info.path, info.format, info.subtype, info.n_channels
+    )
+    problem = _decode_problem(
+        decoded=decoded,
+        promised=promised,
+        sample_rate=info.sample_rate,
+        container_problem=container_problem,
+        stream_error=report.stream_error,
+        decoder_errors=report.decoder_errors,
+    )
+    if problem and (strict or decoded == 0):
+        hint = "" if decoded == 0 else "; without --strict it is decoded as far as it goes"
+        raise ExtractError(f"{problem}{hint}", path=info.path)
+    if decoded == 0:
+        raise ExtractError("zero-length audio: the file holds no samples", path=info.path)
+    return problem or ""
 
 
 def mix_to_mono(samples: np.ndarray) -> np.ndarray:

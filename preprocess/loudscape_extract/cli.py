@@ -23,7 +23,9 @@ from loudscape_extract.progress import Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
 from loudscape_extract.timeline import (
+    DEFAULT_MAX_POINTS,
     DEFAULT_Z_MEASURE,
+    MIN_FRAMES_PER_SONG,
     Z_MEASURES,
     build_timeline,
     default_cache_dir,
@@ -50,6 +52,16 @@ def _positive_int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
     return value
 
 
@@ -149,7 +161,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--frames-per-song",
         type=_positive_int,
         default=1024,
-        help="frames sampled evenly per song (1024; fewer if a song has fewer)",
+        help="frames sampled evenly per song (1024; fewer if a song has fewer, or if "
+        "--max-points needs it)",
+    )
+    timeline.add_argument(
+        "--max-points",
+        type=_non_negative_int,
+        default=DEFAULT_MAX_POINTS,
+        help=f"lower the frames per song so the cloud stays under this many points, but not "
+        f"below {MIN_FRAMES_PER_SONG} a song ({DEFAULT_MAX_POINTS:,}; 0: no cap)",
     )
     timeline.add_argument("--n-fft", type=_positive_even, default=2048, help="STFT size (2048)")
     timeline.add_argument("--hop", type=_positive_int, default=1024, help="STFT hop (1024)")
@@ -163,7 +183,22 @@ def build_parser() -> argparse.ArgumentParser:
         "-j",
         type=_positive_int,
         default=os.cpu_count() or 1,
-        help="songs in parallel worker processes (default: number of cores)",
+        help="songs in parallel worker processes (default: number of cores); with --dask, "
+        "the local cluster's workers",
+    )
+    engine = timeline.add_mutually_exclusive_group()
+    engine.add_argument(
+        "--dask",
+        action="store_true",
+        help="run the songs on a local Dask cluster (--jobs worker processes) instead of "
+        "the process pool (needs the [dask] extra)",
+    )
+    engine.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the songs on an existing dask.distributed scheduler, e.g. "
+        "tcp://host:8786; its workers must see the song paths and --cache-dir (a shared "
+        "folder)",
     )
 
     report = commands.add_parser(
@@ -258,6 +293,8 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
             z_measure=args.z_measure,
             highpass_hz=HIGHPASS_HZ if args.highpass else None,
             progress=progress,
+            max_points=args.max_points,
+            scheduler="local" if args.dask else args.scheduler,
         )
     finally:
         if tty and width[0]:
@@ -279,8 +316,13 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
         )
         if result.few_frames:
             _say(
-                f"{len(result.few_frames)} song(s) have fewer than {args.frames_per_song} "
+                f"{len(result.few_frames)} song(s) have fewer than {result.frames_per_song} "
                 f"non-silent frames and use all they have: {_list(result.few_frames)}"
+            )
+        if result.frames_per_song < args.frames_per_song:
+            _say(
+                f"{result.frames_per_song} frames per song (of {args.frames_per_song}) keep "
+                f"{len(songs)} songs under --max-points {args.max_points:,}"
             )
         if result.without_year:
             _say(f"left out {len(result.without_year)} song(s) without a year")

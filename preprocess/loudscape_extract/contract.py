@@ -12,12 +12,20 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterable, Iterator
 
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
 
-__all__ = ["AXIS_NAMES", "check_cloud", "spread_range"]
+__all__ = [
+    "AXIS_NAMES",
+    "check_cloud",
+    "check_metadata",
+    "check_points",
+    "checked_blocks",
+    "spread_range",
+]
 
 AXIS_NAMES = ("x", "y", "z", "scalar", "hp")
 _COLUMN_RANGES = ((-1.0, 1.0), (-1.0, 1.0), (-1.0, 1.0), (0.0, 1.0), (0.0, 1.0))
@@ -58,8 +66,59 @@ def _axis_problem(value: object) -> str:
     return ""
 
 
+def _fail(reason: str, path: str | None):
+    raise ExtractError(f"refusing to write a file the app cannot load: {reason}", path=path)
+
+
+def check_points(points: np.ndarray, *, path: str | None = None) -> None:
+    """The point rules of :func:`check_cloud` alone: shape (n, 5), every value finite, x y z
+    in [-1, 1], scalar and hp in [0, 1]. For a cloud written block by block, run on each block.
+
+    Raises
+    ------
+    ExtractError
+        Naming the first violation.
+    """
+    points = np.asarray(points)
+    if points.ndim != 2 or points.shape[1] != 5:
+        _fail(f"points must have shape (n, 5), found {points.shape}", path)
+    for column, (name, (low, high)) in enumerate(zip(AXIS_NAMES, _COLUMN_RANGES, strict=True)):
+        values = points[:, column]
+        if values.size == 0:
+            continue
+        if not np.isfinite(values).all():
+            _fail(f"column {name} has a NaN or infinite value", path)
+        if values.min() < low or values.max() > high:
+            _fail(f"column {name} leaves [{low:g}, {high:g}]", path)
+
+
+def check_metadata(metadata: dict, *, n_points: int, path: str | None = None) -> None:
+    """The metadata rules of :func:`check_cloud` alone, for a cloud of ``n_points`` points:
+    JSON-encodable without NaN or infinity, ``point_count`` equal to ``n_points``, five valid
+    axes.
+
+    Raises
+    ------
+    ExtractError
+        Naming the first violation.
+    """
+    try:
+        json.dumps(metadata, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        _fail(f"metadata is not plain JSON ({exc})", path)
+    if metadata.get("point_count") != n_points:
+        _fail(f"point_count {metadata.get('point_count')!r} is not {n_points}", path)
+    axes = metadata.get("axes")
+    if not isinstance(axes, dict):
+        _fail("metadata has no axes object", path)
+    for name in AXIS_NAMES:
+        problem = _axis_problem(axes.get(name))
+        if problem:
+            _fail(f"axes.{name}: {problem}", path)
+
+
 def check_cloud(points: np.ndarray, metadata: dict, *, path: str | None = None) -> None:
-    """Refuse a cloud the app's loader would reject (docs/FORMAT.md and src/cloud.rs).
+    """Refuse a cloud the app's loader would reject (docs/FORMAT.md and src/data/cloud/).
 
     Checks: shape (n, 5); every value finite, x y z in [-1, 1], scalar and hp in [0, 1];
     metadata JSON-encodable without NaN or infinity; ``point_count`` equal to n; five axes with
@@ -70,31 +129,18 @@ def check_cloud(points: np.ndarray, metadata: dict, *, path: str | None = None) 
     ExtractError
         Naming the first violation; nothing has been written.
     """
+    check_points(points, path=path)
+    check_metadata(metadata, n_points=np.asarray(points).shape[0], path=path)
 
-    def fail(reason: str):
-        raise ExtractError(f"refusing to write a file the app cannot load: {reason}", path=path)
 
-    points = np.asarray(points)
-    if points.ndim != 2 or points.shape[1] != 5:
-        fail(f"points must have shape (n, 5), found {points.shape}")
-    for column, (name, (low, high)) in enumerate(zip(AXIS_NAMES, _COLUMN_RANGES, strict=True)):
-        values = points[:, column]
-        if values.size == 0:
-            continue
-        if not np.isfinite(values).all():
-            fail(f"column {name} has a NaN or infinite value")
-        if values.min() < low or values.max() > high:
-            fail(f"column {name} leaves [{low:g}, {high:g}]")
-    try:
-        json.dumps(metadata, allow_nan=False)
-    except (TypeError, ValueError) as exc:
-        fail(f"metadata is not plain JSON ({exc})")
-    if metadata.get("point_count") != points.shape[0]:
-        fail(f"point_count {metadata.get('point_count')!r} is not {points.shape[0]}")
-    axes = metadata.get("axes")
-    if not isinstance(axes, dict):
-        fail("metadata has no axes object")
-    for name in AXIS_NAMES:
-        problem = _axis_problem(axes.get(name))
-        if problem:
-            fail(f"axes.{name}: {problem}")
+def checked_blocks(
+    blocks: Iterable[np.ndarray], metadata: dict, *, n_points: int, path: str | None = None
+) -> Iterator[np.ndarray]:
+    """``blocks`` of a cloud written as it is produced, with :func:`check_cloud`'s rules: the
+    metadata is checked before the first block, each block before it is passed on. A writer
+    that puts the file in place only after the last block (:func:`ply.write_ply_blocks`)
+    therefore never leaves a file the app rejects."""
+    check_metadata(metadata, n_points=n_points, path=path)
+    for block in blocks:
+        check_points(block, path=path)
+        yield block

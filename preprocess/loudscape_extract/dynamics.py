@@ -40,7 +40,10 @@ __all__ = [
     "Dynamics",
     "dc_and_highpass",
     "dc_warning",
+    "dr_block_length",
+    "dr_from_blocks",
     "dr_meter",
+    "dynamics_from_segments",
     "frame_windows",
     "highpass_sos",
     "segment_true_peak",
@@ -200,19 +203,39 @@ def dr_meter(samples: np.ndarray, *, sample_rate: float) -> float | None:
     x = np.asarray(samples, dtype=np.float64)
     if x.ndim == 1:
         x = x[:, None]
-    block = int(round(_DR_BLOCK_S * sample_rate))
+    block = dr_block_length(sample_rate)
     n_samples = x.shape[0]
     starts = np.arange(0, n_samples, block)
     if starts.size == 0:
         return None
     lengths = np.minimum(starts + block, n_samples) - starts
     squares = np.add.reduceat(x * x, starts, axis=0)
-    rms = np.sqrt(2.0 * squares / lengths[:, None])
     peaks = np.maximum.reduceat(np.abs(x), starts, axis=0)
-    n_blocks = starts.size
+    return dr_from_blocks(squares, peaks, lengths)
+
+
+def dr_block_length(sample_rate: float) -> int:
+    """Samples in one of the DR meter's 3 s blocks."""
+    return int(round(_DR_BLOCK_S * sample_rate))
+
+
+def dr_from_blocks(squares: np.ndarray, peaks: np.ndarray, lengths: np.ndarray) -> float | None:
+    """:func:`dr_meter` from per-block sums, for callers that stream the signal.
+
+    Parameters
+    ----------
+    squares, peaks : np.ndarray [shape=(n_blocks, n_channels)]
+        Sum of squares (float64) and largest absolute sample of each 3 s block and channel.
+    lengths : np.ndarray [shape=(n_blocks,)]
+        Samples in each block (the last may be short).
+    """
+    n_blocks = squares.shape[0]
+    if n_blocks == 0:
+        return None
+    rms = np.sqrt(2.0 * squares / lengths[:, None])
     loudest = max(1, int(math.floor(n_blocks * _DR_LOUDEST)))
     values = []
-    for channel in range(x.shape[1]):
+    for channel in range(squares.shape[1]):
         top = np.sort(rms[:, channel])[-loudest:]
         level = math.sqrt(float(np.mean(top**2)))
         ordered = np.sort(peaks[:, channel])
@@ -283,21 +306,65 @@ def short_term_dynamics(
     """
     energy, boundaries = energy if energy is not None else segment_energy(samples, sample_rate)
     segment_peak, overall = segment_true_peak(samples, boundaries)
+    m = np.asarray(mono[: boundaries[-1]], dtype=np.float64)
+    starts = boundaries[:-1].astype(np.int64)
+    if starts.size:
+        mono_squares = np.add.reduceat(m * m, starts)
+        mono_peaks = np.maximum.reduceat(np.abs(m), starts)
+    else:
+        mono_squares = mono_peaks = np.zeros(0)
+    return dynamics_from_segments(
+        energy,
+        boundaries,
+        segment_peak=segment_peak,
+        true_peak=overall,
+        mono_squares=mono_squares,
+        mono_peaks=mono_peaks,
+        sample_rate=sample_rate,
+    )
+
+
+def dynamics_from_segments(
+    energy: np.ndarray,
+    boundaries: np.ndarray,
+    *,
+    segment_peak: np.ndarray,
+    true_peak: float,
+    mono_squares: np.ndarray,
+    mono_peaks: np.ndarray,
+    sample_rate: float,
+) -> Dynamics:
+    """:func:`short_term_dynamics` from per-segment sums, for callers that stream the signal.
+
+    Parameters
+    ----------
+    energy, boundaries : np.ndarray
+        :func:`segment_energy`'s output.
+    segment_peak : np.ndarray [shape=(n_segments,)]
+        True peak of each segment (:func:`segment_true_peak`).
+    true_peak : float
+        True peak of the whole track.
+    mono_squares, mono_peaks : np.ndarray [shape=(n_segments,)]
+        Sum of squares (float64) and largest absolute sample of the mono mix per segment.
+    sample_rate : float
+
+    Returns
+    -------
+    dynamics : Dynamics
+    """
     n_segments = energy.shape[0]
     if n_segments == 0:
         empty = np.zeros(0)
-        return Dynamics(empty, empty, empty, empty, true_peak=overall)
+        return Dynamics(empty, empty, empty, empty, true_peak=true_peak)
     n = min(SHORT_TERM_SEGMENTS, n_segments)
     lengths = _windows(np.diff(boundaries).astype(np.float64), n, np.sum)
     with np.errstate(divide="ignore", invalid="ignore"):
         loudness = -0.691 + 10.0 * np.log10(_windows(energy, n, np.sum) / lengths)
-        true_peak = _windows(segment_peak, n, np.max)
-        peak_db = 20.0 * np.log10(true_peak)
+        window_peak = _windows(segment_peak, n, np.max)
+        peak_db = 20.0 * np.log10(window_peak)
         psr = np.where(loudness > ABSOLUTE_GATE_LUFS, peak_db - loudness, np.nan)
-        m = np.asarray(mono[: boundaries[-1]], dtype=np.float64)
-        starts = boundaries[:-1].astype(np.int64)
-        squares = _windows(np.add.reduceat(m * m, starts), n, np.sum)
-        peaks = _windows(np.maximum.reduceat(np.abs(m), starts), n, np.max)
+        squares = _windows(mono_squares, n, np.sum)
+        peaks = _windows(mono_peaks, n, np.max)
         rms = np.sqrt(squares / lengths)
         crest = np.where(peaks > 0, 20.0 * np.log10(peaks / rms), np.nan)
     start_s = boundaries[: loudness.shape[0]] / float(sample_rate)
@@ -306,7 +373,7 @@ def short_term_dynamics(
         short_term_lufs=loudness,
         psr_db=psr,
         crest_3s_db=crest,
-        true_peak=overall,
+        true_peak=true_peak,
     )
 
 

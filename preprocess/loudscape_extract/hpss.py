@@ -17,7 +17,13 @@ import scipy.ndimage
 
 from loudscape_extract.errors import ExtractError
 
-__all__ = ["HP_EPSILON", "hp_ratio", "hpss_masks", "median_filter_axis"]
+__all__ = [
+    "HP_EPSILON",
+    "hp_ratio",
+    "hpss_masks",
+    "masks_from_medians",
+    "median_filter_axis",
+]
 
 #: The epsilon of ``hp = |H| / (|H| + |P| + eps)``, in full-scale magnitude units (-200 dB).
 HP_EPSILON = 1e-10
@@ -101,6 +107,16 @@ def hpss_masks(
         raise ExtractError(f"margin must be >= 1, got {margin}")
     harmonic = median_filter_axis(magnitude, size=kernel_size, axis=1)
     percussive = median_filter_axis(magnitude, size=kernel_size, axis=0)
+    return masks_from_medians(harmonic, percussive, power=power, margin=margin)
+
+
+def masks_from_medians(
+    harmonic: np.ndarray, percussive: np.ndarray, *, power: float = 2.0, margin: float = 1.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """The soft masks of :func:`hpss_masks` from its two median-filtered spectrograms (the
+    time-direction one, ``harmonic``, and the frequency-direction one, ``percussive``), for
+    callers that filter a long spectrogram block by block.
+    """
     if margin == 1:
         return _softmask_pair(harmonic, percussive, power=power)
     mask_harmonic = _softmask(harmonic, percussive * margin, power=power, split_zeros=False)

@@ -39,6 +39,7 @@ __all__ = [
     "read_ply_metadata",
     "write_atomically",
     "write_ply",
+    "write_ply_blocks",
 ]
 
 PROPERTIES = ("x", "y", "z", "scalar", "hp")
@@ -319,6 +320,55 @@ def write_ply(
         n_points=points.shape[0], metadata=metadata, format_version=format_version
     )
     write_atomically(name, [header, np.ascontiguousarray(points, dtype="<f4")])
+
+
+def write_ply_blocks(
+    path: str | os.PathLike,
+    *,
+    n_points: int,
+    metadata: dict,
+    blocks: Iterable[np.ndarray],
+    format_version: int = WRITTEN_VERSION,
+) -> None:
+    """Write points as they are produced, atomically (as :func:`write_ply`, same header).
+
+    The header, with ``n_points``, goes first; each block of shape (n, 5) is appended as it
+    arrives, so only one block is in memory. When the blocks do not add up to ``n_points``
+    exactly, or anything fails (an exception in the producer, Ctrl+C), the temporary file is
+    removed and nothing is left at ``path``.
+
+    Raises
+    ------
+    ExtractError
+        Unwritable directory, a block of the wrong shape, or a wrong total.
+    """
+    name = os.fspath(path)
+    n_points = int(n_points)
+    directory = os.path.dirname(os.path.abspath(name))
+    if not os.path.isdir(directory):
+        raise ExtractError(f"output directory {directory!r} does not exist", path=name)
+    header = encode_header(n_points=n_points, metadata=metadata, format_version=format_version)
+
+    def parts() -> Iterator[bytes | np.ndarray]:
+        yield header
+        written = 0
+        for block in blocks:
+            block = np.asarray(block)
+            if block.ndim != 2 or block.shape[1] != len(PROPERTIES):
+                raise ExtractError(
+                    f"points must have shape (n_points, 5), got {block.shape}", path=name
+                )
+            written += block.shape[0]
+            if written > n_points:
+                break
+            yield np.ascontiguousarray(block, dtype="<f4")
+        if written != n_points:
+            raise ExtractError(
+                f"the header promises {n_points} points but {written} were produced",
+                path=name,
+            )
+
+    write_atomically(name, parts())
 
 
 def _umask() -> int:

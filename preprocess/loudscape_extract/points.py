@@ -76,6 +76,10 @@ class SongCloud:
     floor_db: float
     freq_scale: str
 
+    @property
+    def point_count(self) -> int:
+        return int(self.points.shape[0])
+
 
 def _normalize(values: np.ndarray, low: float, high: float) -> np.ndarray:
     """Map [low, high] to [-1, 1] (0 when the range is empty)."""
@@ -185,7 +189,12 @@ def song_metadata(
     Parameters
     ----------
     features : TrackFeatures
+        Or anything with its attributes ``path``, ``sample_rate``, ``n_channels``,
+        ``duration_s``, ``n_fft``, ``hop_length``, ``metrics``, ``highpass_hz`` (such as
+        :class:`loudscape_extract.stream.StreamedTrack`).
     cloud : SongCloud
+        Or anything with its attributes but ``point_count`` for ``points`` (such as
+        :class:`loudscape_extract.stream_points.StreamedCloud`).
     generator : str
         Program name and version, e.g. ``"loudscape-extract 0.1.0"``.
     source_format : str
@@ -199,7 +208,7 @@ def song_metadata(
     return {
         "format_version": FORMAT_VERSION,
         "mode": MODE_SONG,
-        "point_count": int(cloud.points.shape[0]),
+        "point_count": cloud.point_count,
         "source": {
             "path": features.path,
             "format": source_format,

@@ -5,14 +5,14 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 
-from loudscape_extract.audio import decode_audio
-from loudscape_extract.contract import check_cloud
+from loudscape_extract.contract import checked_blocks
 from loudscape_extract.dynamics import DC_WARN_THRESHOLD, dc_warning
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.features import track_features
 from loudscape_extract.paths import check_output_path
-from loudscape_extract.ply import write_ply
-from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata, song_points
+from loudscape_extract.ply import write_ply_blocks
+from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata
+from loudscape_extract.stream import DEFAULT_BLOCK_FRAMES, DEFAULT_BLOCK_SAMPLES, stream_track
+from loudscape_extract.stream_points import song_point_blocks
 from loudscape_extract.version import GENERATOR
 
 __all__ = ["extract_song"]
@@ -30,8 +30,10 @@ def extract_song(
     highpass_hz: float | None = None,
     progress: Callable[[str], None] | None = None,
     warn: Callable[[str], None] | None = None,
+    block_samples: int = DEFAULT_BLOCK_SAMPLES,
+    block_frames: int = DEFAULT_BLOCK_FRAMES,
 ) -> dict:
-    """Song mode end to end: decode, features, points, atomic PLY write.
+    """Song mode end to end: decode, features, points, atomic PLY write, streamed in blocks.
 
     Parameters
     ----------
@@ -53,6 +55,10 @@ def extract_song(
     warn : callable, optional
         Called with a one-line warning about the input (a truncated or corrupt file, a large
         DC offset); default :func:`warnings.warn`.
+    block_samples, block_frames : int
+        Decoding and STFT block sizes (:mod:`loudscape_extract.stream`): memory is bounded by
+        them and by the decoded mono mix, whatever the track's length; the output does not
+        depend on them.
 
     Returns
     -------
@@ -63,28 +69,53 @@ def extract_song(
     floor = DEFAULT_FLOOR_DB if floor_db is None else floor_db
     check_output_path(output, inputs=[source])
     say(f"decoding {source}")
-    audio = decode_audio(source, strict=strict)
-    if audio.warning:
-        (warn or (lambda text: warnings.warn(text, stacklevel=3)))(f"{source}: {audio.warning}")
-    say(f"{audio.duration_s:.1f} s, {audio.sample_rate} Hz, {audio.n_channels} channel(s)")
     try:
-        features = track_features(
-            audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, progress=say
+        track = stream_track(
+            source,
+            n_fft=n_fft,
+            hop_length=hop_length,
+            highpass_hz=highpass_hz,
+            frame_hp=False,
+            block_samples=block_samples,
+            block_frames=block_frames,
+            strict=strict,
+            progress=say,
         )
-        say("building points")
-        cloud = song_points(features, floor_db=floor, freq_scale=freq_scale)
+        say(f"{track.duration_s:.1f} s, {track.sample_rate} Hz, {track.n_channels} channel(s)")
+        say("building points: counting those above the floor")
+        if track.warning:
+            _warn(warn, f"{source}: {track.warning}")
+        cloud, blocks = song_point_blocks(track, floor_db=floor, freq_scale=freq_scale)
     except ExtractError as exc:
         if exc.path is None:
             exc.path = source
         raise
-    offset = features.metrics.get("dc_offset") or 0.0
+    offset = track.metrics.get("dc_offset") or 0.0
     if offset > DC_WARN_THRESHOLD:
-        (warn or (lambda text: warnings.warn(text, stacklevel=3)))(dc_warning(source, offset))
-    source_format = f"{audio.format}/{audio.subtype}"
-    del audio
-    metadata = song_metadata(features, cloud, generator=GENERATOR, source_format=source_format)
-    check_cloud(cloud.points, metadata, path=output)
-    say(f"writing {cloud.points.shape[0]} points to {output}")
-    write_ply(output, points=cloud.points, metadata=metadata)
+        _warn(warn, dc_warning(source, offset))
+    metadata = song_metadata(track, cloud, generator=GENERATOR, source_format=track.source_format)
+    say("harmonic-percussive separation and the points, block by block")
+
+    def produced():
+        yield from checked_blocks(blocks(), metadata, n_points=cloud.point_count, path=output)
+        say(f"writing {cloud.point_count} points to {output}")  # the last block is in
+
+    try:
+        # The contract (check_cloud's rules) runs on the metadata first and on each block
+        # before it is written; the file is put in place only after the last block.
+        write_ply_blocks(
+            output,
+            n_points=cloud.point_count,
+            metadata=metadata,
+            blocks=produced(),
+        )
+    except ExtractError as exc:
+        if exc.path is None:
+            exc.path = source
+        raise
     say("done")
     return metadata
+
+
+def _warn(warn: Callable[[str], None] | None, text: str) -> None:
+    (warn or (lambda line: warnings.warn(line, stacklevel=4)))(text)

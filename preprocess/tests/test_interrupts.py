@@ -108,10 +108,7 @@ def test_timeline_stops_fast_without_orphans_and_keeps_the_cache(
         wait_for(lambda: len(children(process.pid)) >= 2, 30, "two workers")
         workers = children(process.pid)
         wait_for(
-            lambda: (
-                cache.exists()
-                and any(n.endswith(".npz") and ".tmp" not in n for n in os.listdir(cache))
-            ),
+            lambda: cache.exists() and any(n.endswith(".frames") for n in os.listdir(cache)),
             120,
             "a cached song",
         )
@@ -131,7 +128,7 @@ def test_timeline_stops_fast_without_orphans_and_keeps_the_cache(
     assert "Traceback" not in err
     wait_for(lambda: not any(alive(pid) for pid in workers), 5, "the workers to exit")
     assert not out.exists() and leftovers(tmp_path, cache) == []
-    kept = [n for n in os.listdir(cache) if n.endswith(".npz")]
+    kept = [n for n in os.listdir(cache) if n.endswith(".frames")]
     assert 1 <= len(kept) < SONGS
     assert all(read_entry(str(cache / n))[0] is not None for n in kept)
     # The next run uses what was cached.
@@ -177,7 +174,7 @@ WRITER = textwrap.dedent(
     import numpy as np
     from loudscape_extract.interrupts import sigterm_raises
     from loudscape_extract.paths import atomic_output
-    from loudscape_extract.ply import write_ply
+    from loudscape_extract.ply import write_ply, write_ply_blocks
     from loudscape_extract.timeline.cache import save_entry
     from loudscape_extract.timeline.frames import SongFrames
 
@@ -190,19 +187,36 @@ WRITER = textwrap.dedent(
         if kind == "ply":
             os.chmod = stall  # called once the temporary is written, before os.replace
             write_ply(target, points=np.zeros((3, 5)), metadata={"a": 1})
+        elif kind == "blocks":
+            def blocks():
+                yield np.zeros((3, 5))
+                stall()  # the header and a first block are in the temporary
+                yield np.zeros((3, 5))
+            write_ply_blocks(target, n_points=6, metadata={"a": 1}, blocks=blocks())
         elif kind == "png":
             with atomic_output(target) as temporary:
                 open(temporary, "wb").write(b"partial")
                 stall()
         else:
             os.replace = stall  # the cache entry's temporary is written, not yet renamed
-            frames = SongFrames(*(np.zeros(3, np.float32) for _ in range(4)), n_frames_total=3)
+            series = {k: np.zeros(3, np.float32) for k in ("psr_db", "crest_3s_db")}
+            frames = SongFrames(
+                *(np.zeros(3, np.float32) for _ in range(4)), n_frames_total=3, **series
+            )
             save_entry(target, frames)
     """
 )
 
 
-@pytest.mark.parametrize(("kind", "name"), [("ply", "c.ply"), ("png", "r.png"), ("npz", "e.npz")])
+@pytest.mark.parametrize(
+    ("kind", "name"),
+    [
+        ("ply", "c.ply"),
+        ("blocks", "s.ply"),
+        ("png", "r.png"),
+        ("frames", "e.frames"),
+    ],
+)
 def test_sigterm_during_a_write_leaves_no_temporary(tmp_path, kind, name):
     script = tmp_path / "writer.py"
     script.write_text(WRITER)
@@ -249,3 +263,48 @@ def test_sigterm_to_song_exits_143_and_writes_nothing(tmp_path):
     assert process.returncode == 143
     assert err == "loudscape-extract: terminated; no file written\n"
     assert sorted(os.listdir(tmp_path)) == ["long.wav"]
+
+
+def descendants(pid):
+    found, queue = [], [pid]
+    while queue:
+        for child in children(queue.pop()):
+            found.append(child)
+            queue.append(child)
+    return found
+
+
+@pytest.mark.parametrize(
+    ("how", "status", "word"),
+    [("SIGTERM to the process", 143, "terminated"), ("Ctrl+C to the group", 130, "interrupted")],
+)
+def test_dask_timeline_stops_and_closes_its_local_cluster(tmp_path, collection, how, status, word):
+    pytest.importorskip("dask.distributed")
+    out, cache = tmp_path / "t.ply", tmp_path / "cache"
+    process = start_timeline(collection, out, cache, "--dask")
+    try:
+        wait_for(
+            lambda: cache.exists() and any(n.endswith(".frames") for n in os.listdir(cache)),
+            120,
+            "a cached song",
+        )
+        workers = descendants(process.pid)
+        assert workers, "the local cluster's worker processes"
+        sent = time.monotonic()
+        if how.startswith("SIGTERM"):
+            process.send_signal(signal.SIGTERM)
+        else:
+            os.killpg(process.pid, signal.SIGINT)
+        _, err = process.communicate(timeout=30)
+        stopped = time.monotonic() - sent
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == status, err
+    assert stopped < 15.0, f"took {stopped:.1f} s"
+    assert err.strip().splitlines()[-1].startswith(f"loudscape-extract: {word}; no file written")
+    assert "Traceback" not in err, err
+    wait_for(lambda: not any(alive(pid) for pid in workers), 10, "the cluster's processes to exit")
+    assert not out.exists()
+    kept = [n for n in os.listdir(cache) if n.endswith(".frames")]
+    assert kept and all(read_entry(str(cache / n))[0] is not None for n in kept)

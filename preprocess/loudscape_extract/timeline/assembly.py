@@ -15,11 +15,13 @@ from loudscape_extract.timeline.engine import compute_all
 from loudscape_extract.timeline.inputs import collect_entries
 from loudscape_extract.timeline.layout import (
     CREST_PERCENTILES,
+    DEFAULT_MAX_POINTS,
     DEFAULT_Z_MEASURE,
     LEVEL_MAX_DBFS,
     LEVEL_MIN_DBFS,
     X_BY,
     Z_MEASURES,
+    frames_per_song_for,
     timeline_points,
 )
 from loudscape_extract.version import GENERATOR
@@ -35,6 +37,8 @@ class TimelineResult:
     without_year: list
     few_frames: list
     cached: int
+    #: Frames drawn per song (the request, lowered by the point cap).
+    frames_per_song: int = 0
     #: One line each: repaired cache entries, files listed twice, truncated or corrupt songs.
     notes: list = field(default_factory=list)
     #: (path, DC offset) of songs whose offset is over DC_WARN_THRESHOLD.
@@ -56,6 +60,8 @@ def build_timeline(
     z_measure: str = DEFAULT_Z_MEASURE,
     highpass_hz: float | None = None,
     progress: Callable[[int, int, str], None] | None = None,
+    max_points: int | None = DEFAULT_MAX_POINTS,
+    scheduler: str | None = None,
 ) -> TimelineResult:
     """Timeline mode end to end; writes ``output`` unless no song at all could be placed.
 
@@ -67,6 +73,11 @@ def build_timeline(
     inputs (the songs, the manifest). ``z_measure`` is one of :data:`Z_MEASURES`;
     ``highpass_hz`` high-pass filters each song before its dynamics (see
     :func:`track_features`).
+
+    ``frames_per_song`` is lowered for many songs so the cloud stays under ``max_points``
+    (:func:`frames_per_song_for`; None or 0: no cap). ``scheduler`` runs the songs on Dask
+    (:func:`compute_all`: ``"local"`` or a scheduler's address); each song is sampled where it
+    is computed and only its drawn frames are kept here.
 
     Raises
     ------
@@ -91,8 +102,12 @@ def build_timeline(
         if progress:
             progress(done, total, path)
 
+    drawn_per_song = frames_per_song_for(total, frames_per_song, max_points)
     songs, failed, n_cached = compute_all(
         paths,
+        frames_per_song=drawn_per_song,
+        z_measure=z_measure,
+        scheduler=scheduler,
         n_fft=n_fft,
         hop_length=hop_length,
         cache_dir=cache_dir,
@@ -113,14 +128,14 @@ def build_timeline(
             f"none of the {len(failed)} song(s) could be extracted (first: {first[0]}: {first[1]})"
         )
     points, layout = timeline_points(
-        good, songs, frames_per_song=frames_per_song, x_by=x_by, z_measure=z_measure
+        good, songs, frames_per_song=drawn_per_song, x_by=x_by, z_measure=z_measure
     )
     dc_offsets = [
         (s["path"], s["metrics"]["dc_offset"])
         for s in layout["songs"]
         if (s["metrics"].get("dc_offset") or 0.0) > DC_WARN_THRESHOLD
     ]
-    few = [s["path"] for s in layout["songs"] if s["point_count"] < frames_per_song]
+    few = [s["path"] for s in layout["songs"] if s["point_count"] < drawn_per_song]
     metadata = {
         "format_version": FORMAT_VERSION,
         "mode": MODE_TIMELINE,
@@ -129,7 +144,9 @@ def build_timeline(
         "songs": layout["songs"],
         "extraction": {
             "x_by": x_by,
-            "frames_per_song": frames_per_song,
+            "frames_per_song": drawn_per_song,
+            "frames_per_song_requested": frames_per_song,
+            "max_points": max_points or None,
             "n_fft": n_fft,
             "hop_length": hop_length,
             "level_range_dbfs": [LEVEL_MIN_DBFS, LEVEL_MAX_DBFS],
@@ -152,6 +169,7 @@ def build_timeline(
         without_year=without_year,
         few_frames=few,
         cached=n_cached,
+        frames_per_song=drawn_per_song,
         notes=notes,
         dc_offsets=dc_offsets,
     )

@@ -8,6 +8,8 @@ parent decides) and exit by themselves when the parent process is gone.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
 import signal
 import threading
@@ -18,12 +20,14 @@ from dataclasses import dataclass, field
 
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.timeline.cache import (
+    ENTRY_SUFFIX,
     cache_key,
     read_entry,
     remove_temporaries,
     save_entry,
 )
 from loudscape_extract.timeline.frames import SongFrames, compute_song_frames
+from loudscape_extract.timeline.layout import DEFAULT_Z_MEASURE, sample_song
 
 __all__ = ["SongOutcome", "compute_all", "song_frames"]
 
@@ -67,7 +71,7 @@ def song_frames(
         return song, False
     entry = os.path.join(
         cache_dir,
-        cache_key(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz) + ".npz",
+        cache_key(path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz) + ENTRY_SUFFIX,
     )
     if os.path.exists(entry):
         song, problem = read_entry(entry)
@@ -88,6 +92,10 @@ def song_frames(
     return song, False
 
 
+#: Tests only: a worker computing the song with this file name exits at once (a worker death).
+_EXIT_HOOK = "LOUDSCAPE_TEST_WORKER_EXIT"
+
+
 def _job(
     path: str,
     n_fft: int,
@@ -95,8 +103,17 @@ def _job(
     cache_dir: str | None,
     strict: bool = False,
     highpass_hz: float | None = None,
+    frames_per_song: int | None = None,
+    z_measure: str = DEFAULT_Z_MEASURE,
 ):
-    """Worker: one song's :class:`SongOutcome`; never raises for a bad song."""
+    """Worker: one song's :class:`SongOutcome`, a pure function of its arguments (and the
+    file's content); never raises for a bad song.
+
+    With ``frames_per_song`` the song is sampled here (``outcome.song`` is a
+    :class:`SampledSong`), so only its drawn frames travel back.
+    """
+    if os.environ.get(_EXIT_HOOK) and os.environ[_EXIT_HOOK] == os.path.basename(path):
+        os._exit(70)
     outcome = SongOutcome(path)
     try:
         song, cached = song_frames(
@@ -111,6 +128,8 @@ def _job(
         if strict and song.warning:
             outcome.error = f"{song.warning} (--strict)"
         else:
+            if frames_per_song is not None:
+                song = sample_song(song, frames_per_song=frames_per_song, z_measure=z_measure)
             outcome.song, outcome.cached = song, cached
     except ExtractError as exc:
         outcome.error = exc.message
@@ -154,6 +173,24 @@ def _stop_pool(pool: ProcessPoolExecutor, cache_dir: str | None) -> None:
         remove_temporaries(cache_dir, {p.pid for p in processes if p.pid is not None})
 
 
+@contextlib.contextmanager
+def _sigint_blocked():
+    """Hold SIGINT in this thread for the block; one that arrives meanwhile is delivered, as
+    KeyboardInterrupt, when the block ends."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
 def compute_all(
     paths: Sequence[str],
     *,
@@ -164,23 +201,36 @@ def compute_all(
     strict: bool = False,
     highpass_hz: float | None = None,
     on_done: Callable[[int, str], None] | None = None,
+    frames_per_song: int | None = None,
+    z_measure: str = DEFAULT_Z_MEASURE,
+    scheduler: str | None = None,
     notes: list[str] | None = None,
-) -> tuple[dict[str, SongFrames], dict[str, str], int]:
-    """Features of every path, ``jobs`` worker processes at a time.
+) -> tuple[dict, dict[str, str], int]:
+    """Features of every path, ``jobs`` worker processes at a time, or on Dask.
 
     Parameters
     ----------
+    frames_per_song, z_measure
+        When given, each song is sampled where it is computed (:func:`sample_song`) and only
+        its drawn frames come back: the results are :class:`SampledSong`, a few kilobytes a
+        song, and are collected as they complete.
+    scheduler : str, optional
+        None: a local process pool (``jobs`` processes). ``"local"``: a Dask
+        ``LocalCluster`` of ``jobs`` single-threaded worker processes. Anything else: the
+        address of a running ``dask.distributed`` scheduler (``tcp://host:8786``); its
+        workers must see the song paths and ``cache_dir`` (a shared folder).
+
     notes : list of str, optional
         Receives one line per repaired cache entry.
 
     Returns
     -------
-    songs : dict path -> SongFrames
+    songs : dict path -> SongFrames or SampledSong
     failed : dict path -> reason
     cached : int
         How many came from the cache.
     """
-    songs: dict[str, SongFrames] = {}
+    songs: dict = {}
     failed: dict[str, str] = {}
     n_cached = 0
     done = 0
@@ -200,27 +250,107 @@ def compute_all(
         if on_done:
             on_done(done, outcome.path)
 
+    arguments = (n_fft, hop_length, cache_dir, strict, highpass_hz, frames_per_song, z_measure)
+    if scheduler is not None:
+        # Closed explicitly, so that an interrupt (Ctrl+C, SIGTERM) raised while a result is
+        # being collected also shuts the local cluster down before the exception goes on.
+        with contextlib.closing(
+            _dask_results(paths, arguments, scheduler=scheduler, jobs=jobs)
+        ) as results:
+            for outcome in results:
+                collect(outcome)
+        return songs, failed, n_cached
     if jobs <= 1 or len(paths) <= 1:
         for path in paths:
-            collect(_job(path, n_fft, hop_length, cache_dir, strict, highpass_hz))
+            collect(_job(path, *arguments))
         return songs, failed, n_cached
     pool = ProcessPoolExecutor(
         max_workers=min(jobs, len(paths)), initializer=_worker_start, initargs=(os.getpid(),)
     )
     try:
-        futures = {
-            pool.submit(_job, p, n_fft, hop_length, cache_dir, strict, highpass_hz): p
-            for p in paths
-        }
+        futures = {pool.submit(_job, p, *arguments): p for p in paths}
         for future in as_completed(futures):
             try:
                 outcome = future.result()
             except Exception as exc:  # noqa: BLE001 - e.g. a worker killed for memory
-                reason = " ".join(str(exc).split()) or type(exc).__name__
-                outcome = SongOutcome(futures[future], error=f"worker failed ({reason})")
+                outcome = SongOutcome(futures[future], error=f"worker failed ({_one_line(exc)})")
             collect(outcome)
     except BaseException:
         _stop_pool(pool, cache_dir)
         raise
     pool.shutdown(wait=True)
     return songs, failed, n_cached
+
+
+def _dask_results(paths: Sequence[str], arguments: tuple, *, scheduler: str, jobs: int):
+    """Run :func:`_job` on every path on Dask; yield each result as it completes.
+
+    Each song is one task, keyed by its arguments (a pure map). A task whose worker dies is
+    that song's failure, reported like any other ("worker died"); the rest carry on. On a
+    ``LocalCluster`` a task is not retried on another worker (a song that crashes its worker
+    would crash the next one too) and each worker runs one task at a time, so a death takes
+    no other song with it; a remote scheduler keeps its own ``allowed-failures`` setting.
+    Results are released as they are read, so the client holds one at a time.
+    """
+    try:
+        import dask
+        from dask.distributed import Client, LocalCluster
+        from dask.distributed import as_completed as dask_completed
+    except ImportError as exc:
+        raise ExtractError(
+            "Dask is not installed: pip install 'loudscape-extract[dask]' "
+            f"(needed by --dask and --scheduler; {exc})"
+        ) from exc
+    cluster = None
+    # The in-process scheduler and nannies of a local cluster log a dead worker in several
+    # lines of their own; the song's failure is reported once, in our words, instead.
+    quiet = logging.getLogger("distributed")
+    level = quiet.level
+    if scheduler == "local":
+        quiet.setLevel(logging.CRITICAL)
+    settings = {
+        "distributed.scheduler.allowed-failures": 0,
+        "distributed.scheduler.worker-saturation": 1.0,
+    }
+    try:
+        with dask.config.set(settings if scheduler == "local" else {}):
+            if scheduler == "local":
+                # Ctrl+C goes to the whole process group: the cluster's workers ignore SIGINT
+                # (a preload, run in every worker, a restarted one too), so the parent alone
+                # decides, as with the pool, and closes the cluster on its way out. A Ctrl+C
+                # while the cluster starts is held until ``cluster`` is set, so it is closed.
+                with _sigint_blocked():
+                    cluster = LocalCluster(
+                        n_workers=max(1, jobs),
+                        threads_per_worker=1,
+                        processes=True,
+                        dashboard_address=None,
+                        preload=["loudscape_extract.timeline.dask_worker"],
+                    )
+                client = Client(cluster)
+            else:
+                try:
+                    client = Client(scheduler, timeout="5s")
+                except (OSError, TimeoutError, ValueError) as exc:
+                    raise ExtractError(
+                        f"cannot reach the Dask scheduler at {scheduler!r} ({_one_line(exc)})"
+                    ) from exc
+            with client:
+                futures = client.map(_job, list(paths), *[[a] * len(paths) for a in arguments])
+                where = {future.key: path for future, path in zip(futures, paths, strict=True)}
+                completed = dask_completed(futures)
+                del futures
+                for future in completed:
+                    path = where[future.key]
+                    try:
+                        result = future.result()
+                    except Exception as exc:  # noqa: BLE001 - KilledWorker, lost data, ...
+                        name = type(exc).__name__
+                        reason = "worker died" if name == "KilledWorker" else _one_line(exc)
+                        result = SongOutcome(path, error=f"worker failed ({reason})")
+                    future.release()
+                    yield result
+    finally:
+        if cluster is not None:
+            cluster.close()
+        quiet.setLevel(level)

@@ -6,8 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from loudscape_extract.audio import decode_audio
-from loudscape_extract.features import TrackFeatures, track_features
+from loudscape_extract.features import TrackFeatures
+from loudscape_extract.stream import StreamedTrack, stream_track
 
 __all__ = ["SongFrames", "compute_song_frames", "frames_of"]
 
@@ -26,7 +26,7 @@ class SongFrames:
     metrics : dict
         The Song metrics plus ``hp_mean`` (mean over non-silent frames of the frame hp).
     warning : str
-        :attr:`Audio.warning` of the decode: non-empty for a truncated or corrupt file.
+        The decoder's note (:attr:`Audio.warning`): non-empty for a truncated or corrupt file.
     """
 
     rms_dbfs: np.ndarray
@@ -48,15 +48,16 @@ def compute_song_frames(
     highpass_hz: float | None = None,
     strict: bool = False,
 ) -> SongFrames:
-    """Decode and run :func:`track_features` (the Song pipeline), keep frames and metrics."""
-    audio = decode_audio(path, strict=strict)
-    warning = audio.warning
-    features = track_features(audio, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz)
-    del audio
-    return frames_of(features, warning=warning)
+    """Run the Song pipeline's per-frame features (streamed in bounded memory,
+    :func:`stream_track`), keep frames and metrics. A truncated or corrupt file is used as far
+    as it decodes, with :attr:`SongFrames.warning` saying so (``strict``: an error)."""
+    features = stream_track(
+        path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict
+    )
+    return frames_of(features, warning=features.warning)
 
 
-def frames_of(features: TrackFeatures, *, warning: str = "") -> SongFrames:
+def frames_of(features: TrackFeatures | StreamedTrack, *, warning: str = "") -> SongFrames:
     """What the timeline keeps of a track's features (also for audio that is not a file);
     ``warning`` is the decoder's note on a damaged file."""
     frames = features.frames

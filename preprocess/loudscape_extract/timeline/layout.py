@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,6 +16,11 @@ from loudscape_extract.timeline.inputs import SongEntry
 
 __all__ = [
     "CREST_PERCENTILES",
+    "DEFAULT_MAX_POINTS",
+    "MIN_FRAMES_PER_SONG",
+    "SampledSong",
+    "frames_per_song_for",
+    "sample_song",
     "LEVEL_MAX_DBFS",
     "LEVEL_MIN_DBFS",
     "METRIC_KEYS",
@@ -65,6 +71,76 @@ METRIC_KEYS = (
 )
 
 
+#: Default cap on a timeline's points (``--max-points``): see :func:`frames_per_song_for`.
+DEFAULT_MAX_POINTS = 4_000_000
+#: No song is drawn with fewer frames than this because of the cap.
+MIN_FRAMES_PER_SONG = 64
+
+
+def frames_per_song_for(n_songs: int, requested: int, max_points: int | None) -> int:
+    """Frames drawn per song: ``requested``, lowered so ``n_songs`` songs stay under
+    ``max_points`` points, but never below :data:`MIN_FRAMES_PER_SONG` (or ``requested``).
+
+    ``min(requested, max(MIN_FRAMES_PER_SONG, max_points // n_songs))``; ``max_points`` None
+    or 0: no cap. With the defaults (1024 frames, 4,000,000 points) up to 3,906 songs keep
+    1024 frames, 10,000 songs get 400 and more than 62,500 songs get 64 each.
+    """
+    if requested < 1:
+        raise ExtractError(f"frames per song must be >= 1, got {requested}")
+    if not max_points or n_songs <= 0:
+        return requested
+    return min(requested, max(MIN_FRAMES_PER_SONG, max_points // n_songs))
+
+
+@dataclass(frozen=True)
+class SampledSong:
+    """What the layout keeps of one song: its drawn frames only, so a timeline of many songs
+    holds a few hundred numbers per song, not every frame (computed where the song is).
+
+    Attributes
+    ----------
+    rms_dbfs, measure, loudness_a_db, hp_mean : np.ndarray [shape=(n_drawn,)]
+        The drawn frames' series; ``measure`` is the chosen z measure's.
+    neutral : float or None
+        Median of the z measure over all the song's non-silent frames (frames without a value
+        take it); None when no frame has one.
+    frames_non_silent, frames_total : int
+    metrics : dict
+    warning : str
+        The decoder's note on a truncated or corrupt file (:attr:`SongFrames.warning`).
+    """
+
+    rms_dbfs: np.ndarray
+    measure: np.ndarray
+    loudness_a_db: np.ndarray
+    hp_mean: np.ndarray
+    neutral: float | None
+    frames_non_silent: int
+    frames_total: int
+    metrics: dict
+    warning: str = ""
+
+
+def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> SampledSong:
+    """The frames :func:`timeline_points` draws of ``song`` (:func:`sample_frames`)."""
+    if z_measure not in Z_MEASURES:
+        raise ExtractError(f"z_measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
+    index = sample_frames(song.rms_dbfs.shape[0], frames_per_song)
+    measure = getattr(song, _Z_SERIES[z_measure])
+    finite = measure[np.isfinite(measure)].astype(np.float64)
+    return SampledSong(
+        rms_dbfs=song.rms_dbfs[index],
+        measure=measure[index],
+        loudness_a_db=song.loudness_a_db[index],
+        hp_mean=song.hp_mean[index],
+        neutral=float(np.median(finite)) if finite.size else None,
+        frames_non_silent=int(song.rms_dbfs.shape[0]),
+        frames_total=int(song.n_frames_total),
+        metrics=dict(song.metrics),
+        warning=song.warning,
+    )
+
+
 def sample_frames(n_frames: int, count: int) -> np.ndarray:
     """Indices of ``count`` frames spread evenly over ``n_frames`` (all of them if fewer)."""
     if n_frames <= count:
@@ -101,12 +177,17 @@ def song_spans(entries: Sequence[SongEntry], x_by: str) -> list[tuple[float, flo
         return [(2.0 * i / n - 1.0, 2.0 * (i + 1) / n - 1.0) for i in range(n)]
     first, last = entries[0].year, entries[-1].year
     width = last + 1 - first
+    per_year: dict[int, int] = {}
+    for entry in entries:
+        per_year[entry.year] = per_year.get(entry.year, 0) + 1
+    seen: dict[int, int] = {}
     spans = []
-    for i, entry in enumerate(entries):
-        same = [e for e in entries if e.year == entry.year]
-        k = sum(1 for e in entries[:i] if e.year == entry.year)
-        start = entry.year - first + k / len(same)
-        end = entry.year - first + (k + 1) / len(same)
+    for entry in entries:
+        k = seen.get(entry.year, 0)
+        seen[entry.year] = k + 1
+        same = per_year[entry.year]
+        start = entry.year - first + k / same
+        end = entry.year - first + (k + 1) / same
         spans.append((2.0 * start / width - 1.0, 2.0 * end / width - 1.0))
     return spans
 
@@ -164,13 +245,17 @@ def _round(value, digits=4):
 
 def timeline_points(
     entries: Sequence[SongEntry],
-    songs: dict[str, SongFrames],
+    songs: dict[str, SongFrames | SampledSong],
     *,
     frames_per_song: int,
     x_by: str = "year",
     z_measure: str = DEFAULT_Z_MEASURE,
 ) -> tuple[np.ndarray, dict]:
     """Points and the ``axes`` / ``songs`` metadata for songs that all have features.
+
+    ``songs`` holds each song's :class:`SongFrames` (sampled here) or its
+    :class:`SampledSong` (sampled already, with the same ``frames_per_song`` and
+    ``z_measure``, where the song was computed).
 
     Returns
     -------
@@ -185,37 +270,38 @@ def timeline_points(
     if x_by == "year" and any(e.year is None for e in entries):
         raise ExtractError("x_by='year' needs a year for every song")
     entries = sort_entries(entries)
-    series = _Z_SERIES[z_measure]
-    all_crest = np.concatenate([getattr(songs[e.path], series) for e in entries])
-    all_crest = all_crest.astype(np.float64)
+    drawn = {
+        e.path: songs[e.path]
+        if isinstance(songs[e.path], SampledSong)
+        else sample_song(songs[e.path], frames_per_song=frames_per_song, z_measure=z_measure)
+        for e in entries
+    }
+    # The z axis spans the 1st-99th percentiles of the drawn frames of all songs.
+    all_crest = np.concatenate([drawn[e.path].measure for e in entries]).astype(np.float64)
     all_crest = all_crest[np.isfinite(all_crest)]
     if all_crest.size:
         crest_low, crest_high = (float(v) for v in np.percentile(all_crest, CREST_PERCENTILES))
     else:
         crest_low = crest_high = 0.0
     spans = song_spans(entries, x_by)
-    sampled = [sample_frames(songs[e.path].rms_dbfs.shape[0], frames_per_song) for e in entries]
-    s_low, s_high = _scalar_range(
-        [songs[e.path].loudness_a_db[i] for e, i in zip(entries, sampled, strict=True)]
-    )
+    s_low, s_high = _scalar_range([drawn[e.path].loudness_a_db for e in entries])
     blocks, described = [], []
     offset = 0
-    for entry, index, (x_min, x_max) in zip(entries, sampled, spans, strict=True):
-        song = songs[entry.path]
-        m = index.shape[0]
+    for entry, (x_min, x_max) in zip(entries, spans, strict=True):
+        song = drawn[entry.path]
+        m = song.rms_dbfs.shape[0]
         x = x_min + (x_max - x_min) * (np.arange(m) + 0.5) / max(m, 1)
-        rms = np.nan_to_num(song.rms_dbfs[index].astype(np.float64), nan=-200.0, neginf=-200.0)
+        rms = np.nan_to_num(song.rms_dbfs.astype(np.float64), nan=-200.0, neginf=-200.0)
         y = np.clip(
             2.0 * (rms - LEVEL_MIN_DBFS) / (LEVEL_MAX_DBFS - LEVEL_MIN_DBFS) - 1.0, -1.0, 1.0
         )
-        measure = getattr(song, series).astype(np.float64)
-        finite = measure[np.isfinite(measure)]
         # A frame without a value (a 3 s window under -70 LUFS) takes the song's median.
-        neutral = float(np.median(finite)) if finite.size else crest_low
-        z = percentile_map(np.nan_to_num(measure[index], nan=neutral), crest_low, crest_high)
-        la = np.nan_to_num(song.loudness_a_db[index].astype(np.float64), nan=-200.0, neginf=-200)
+        neutral = crest_low if song.neutral is None else song.neutral
+        measure = song.measure.astype(np.float64)
+        z = percentile_map(np.nan_to_num(measure, nan=neutral), crest_low, crest_high)
+        la = np.nan_to_num(song.loudness_a_db.astype(np.float64), nan=-200.0, neginf=-200)
         scalar = np.clip((la - s_low) / (s_high - s_low), 0.0, 1.0)
-        hp = np.clip(np.nan_to_num(song.hp_mean[index].astype(np.float64), nan=0.5), 0.0, 1.0)
+        hp = np.clip(np.nan_to_num(song.hp_mean.astype(np.float64), nan=0.5), 0.0, 1.0)
         blocks.append(np.stack([x, y, z, scalar, hp], axis=1))
         described.append(
             {
@@ -227,8 +313,8 @@ def timeline_points(
                 "x_max": round(x_max, 6),
                 "point_offset": offset,
                 "point_count": int(m),
-                "frames_non_silent": int(song.rms_dbfs.shape[0]),
-                "frames_total": int(song.n_frames_total),
+                "frames_non_silent": song.frames_non_silent,
+                "frames_total": song.frames_total,
                 "metrics": {k: _round(song.metrics.get(k)) for k in METRIC_KEYS},
             }
         )
