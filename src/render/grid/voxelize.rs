@@ -21,7 +21,7 @@ use wgpu::util::DeviceExt;
 use crate::data::cloud::{DataMode, Point};
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
-use crate::render::gpu::layouts::{storage_entry, uniform_entry};
+use crate::render::gpu::layouts::{storage_entry, uniform_entry, whole_buffer_entries};
 use crate::render::gpu::readback::{ReadbackError, read_buffer};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
@@ -490,14 +490,7 @@ impl VoxelizePass {
                 &reference,
                 &point_counts,
             ];
-            let entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
-                .enumerate()
-                .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                    binding: binding as u32,
-                    resource: buffer.as_entire_binding(),
-                })
-                .collect();
+            let entries = whole_buffer_entries(&buffers);
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(&format!("voxelize::bind_group_{i}")),
                 layout: &self.main_layout,
@@ -519,14 +512,7 @@ impl VoxelizePass {
             &hp_mean,
             &point_counts,
         ];
-        let resolve_entries: Vec<wgpu::BindGroupEntry> = resolve_buffers
-            .iter()
-            .enumerate()
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding: binding as u32,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
+        let resolve_entries = whole_buffer_entries(&resolve_buffers);
         let resolve_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("voxelize::resolve_bind_group"),
             layout: &self.resolve_layout,

@@ -3,7 +3,7 @@
 //! classify, the dispatch over the active cells, two passes over the active cells only, the draw
 //! arguments) and their recording, with optional per-pass timestamps.
 
-use crate::render::gpu::layouts::{storage_entry, uniform_entry};
+use crate::render::gpu::layouts::{storage_entry, uniform_entry, whole_buffer_entries};
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
 use crate::render::surface::buffers::{
@@ -44,7 +44,7 @@ pub(crate) fn extraction_entries<'a>(
     let expect = "ensure_grid_buffers before binding";
     let cell_map = buffers.cell_map.as_ref().expect(expect);
     let inside_bits = buffers.inside_bits.as_ref().expect(expect);
-    [
+    whole_buffer_entries(&[
         &buffers.params,
         &grid.density,
         &grid.hp_mean,
@@ -55,14 +55,7 @@ pub(crate) fn extraction_entries<'a>(
         cell_map,
         &buffers.active,
         inside_bits,
-    ]
-    .into_iter()
-    .enumerate()
-    .map(|(i, buffer)| wgpu::BindGroupEntry {
-        binding: i as u32,
-        resource: buffer.as_entire_binding(),
-    })
-    .collect()
+    ])
 }
 
 /// A compute pipeline for one entry point of an extraction shader.
