@@ -425,7 +425,7 @@ impl Axis {
     /// tick taken, then sorted along the axis. Strictly inside the axis, like log ticks.
     fn mel_ticks(&self, max_count: usize) -> Vec<Tick> {
         let (lo, hi) = (self.min.min(self.max), self.min.max(self.max));
-        if !(hi > 0.0) {
+        if hi.is_nan() || hi <= 0.0 {
             return Vec::new();
         }
         let inside = |v: f64| v > lo + (hi - lo) * 1e-9 && v < hi * (1.0 - 1e-9);
