@@ -352,3 +352,72 @@ fn hover_reads_a_1_khz_sine_as_1_khz_on_every_axis() {
         assert!((hz - 1000.0).abs() < 40.0, "{axis:?} voxel reads {hz}");
     }
 }
+
+fn loudscape(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .args(args)
+        .output()
+        .expect("start loudscape")
+}
+
+#[test]
+fn render_takes_freq_axis_and_refuses_what_has_none() {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let dir = common::output_dir().join("freq_axis_cli");
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    let out = dir.join("mel.png");
+    let _ = std::fs::remove_file(&out);
+    let song = repo.join("data/demo_song.ply");
+    let timeline = repo.join("data/demo_timeline.ply");
+    let (song, timeline, out_text) = (
+        song.to_str().unwrap(),
+        timeline.to_str().unwrap(),
+        out.to_str().unwrap(),
+    );
+    let output = loudscape(&[
+        "render",
+        song,
+        "--freq-axis",
+        "mel",
+        "--size",
+        "320x200",
+        "-o",
+        out_text,
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(common::coverage(&image::open(&out).expect("png").to_rgba8()) > 0.02);
+    std::fs::remove_file(&out).expect("remove");
+    for (input, axis, names) in [
+        (song, "octave", "octave"),
+        (timeline, "log", "demo_timeline.ply"),
+    ] {
+        let output = loudscape(&["render", input, "--freq-axis", axis, "-o", out_text]);
+        assert_eq!(output.status.code(), Some(1), "{axis}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(lines.len(), 1, "{axis}: {stderr}");
+        assert!(lines[0].contains(names), "{axis}: {}", lines[0]);
+        assert!(!stderr.contains("panicked"));
+        assert!(!out.exists(), "{axis}: an output was written");
+    }
+    // A timeline's linear axis is its stored z: rendering it as before is fine.
+    let output = loudscape(&[
+        "render",
+        timeline,
+        "--freq-axis",
+        "linear",
+        "--size",
+        "320x200",
+        "-o",
+        out_text,
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
