@@ -51,13 +51,18 @@ pub fn axis_title(axis: &Axis, fallback: &str) -> String {
 }
 
 /// Tick labels and axis titles for the box drawn by the scene.
-pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> AxisLabels {
-    axis_labels_for_box(cloud, data.box_min, data.box_max)
+/// (The axes as the view shows them: `data.axes`, z on the frequency axis shown.)
+pub fn axis_labels(_cloud: &PointCloud, data: &SceneData) -> AxisLabels {
+    axis_labels_for_axes(&data.axes, data.box_min, data.box_max)
 }
 
 /// Tick labels and axis titles for a box `[min, max]` in data space.
 pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabels {
-    let axes = &cloud.meta.axes;
+    axis_labels_for_axes(&cloud.meta.axes, min, max)
+}
+
+/// Tick labels and axis titles of `axes` for a box `[min, max]` in data space.
+pub fn axis_labels_for_axes(axes: &crate::data::axes::Axes, min: Vec3, max: Vec3) -> AxisLabels {
     let mut labels = Vec::new();
     for (index, (axis, fallback)) in [(&axes.x, "x"), (&axes.y, "y"), (&axes.z, "z")]
         .into_iter()

@@ -9,6 +9,7 @@
 pub mod app;
 pub mod audio;
 pub mod bridge;
+mod freq_axis;
 mod hover;
 pub mod labels;
 mod legends;
