@@ -22,6 +22,14 @@ struct Cli {
     #[arg(long, value_parser = parse_view)]
     view: Option<loudscape::render::scene::ViewKind>,
 
+    /// Compare the song with this one (B): side by side, their difference, A/B playback.
+    #[arg(long)]
+    compare: Option<PathBuf>,
+
+    /// Start playback at this position, in seconds.
+    #[arg(long)]
+    seek: Option<f64>,
+
     /// Save a screenshot of the window to this PNG once the data is shown, then close.
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
@@ -168,6 +176,8 @@ fn main() -> ExitCode {
                 files: cli.files,
                 screenshot: cli.screenshot,
                 view: cli.view,
+                compare: cli.compare,
+                seek: cli.seek,
             })
         }),
         Some(Command::Render(args)) => commands::render::run(args),

@@ -2,5 +2,6 @@
 
 pub mod axes;
 pub mod cloud;
+pub mod compare;
 pub mod field;
 pub mod synthetic;

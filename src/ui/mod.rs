@@ -9,6 +9,9 @@
 pub mod app;
 pub mod audio;
 pub mod bridge;
+pub mod compare;
+pub mod compare_shot;
+mod compare_window;
 mod hover;
 pub mod labels;
 mod legends;

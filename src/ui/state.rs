@@ -71,6 +71,10 @@ pub(super) struct LoudscapeApp {
     pub(super) renders_seen: (u64, u32),
     /// The Open row (`open.rs`).
     pub(super) open: OpenPanel,
+    /// The A/B compare with a second song (`compare_window.rs`).
+    pub(super) compare: Option<crate::ui::compare_window::CompareState>,
+    /// Where to put the playhead once the song's audio is ready (`--seek`).
+    pub(super) pending_seek: Option<f64>,
 }
 
 /// Which of the two data slots.

@@ -405,6 +405,20 @@ impl VoxelizePass {
         resolution: u32,
         smoothing_sigma: f32,
     ) -> Result<VoxelizeJob, VoxelizeError> {
+        self.prepare_in_box(device, points, resolution, smoothing_sigma, None)
+    }
+
+    /// As [`VoxelizePass::prepare`], in a given grid box (`None`: the cloud's own,
+    /// [`grid_box`]); an A/B compare builds both grids in one box. Points outside it count in
+    /// the nearest border voxel.
+    pub fn prepare_in_box(
+        &self,
+        device: &wgpu::Device,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        grid_box_override: Option<(Vec3, Vec3)>,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
         Self::check_resolution(device, resolution)?;
         if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
             return Err(VoxelizeError::Smoothing(smoothing_sigma));
@@ -413,7 +427,7 @@ impl VoxelizePass {
             return Err(VoxelizeError::TooManyPoints(points.len()));
         }
         let dims = UVec3::splat(resolution);
-        let (box_min, box_max) = grid_box(points);
+        let (box_min, box_max) = grid_box_override.unwrap_or_else(|| grid_box(points));
         let per_unit = voxels_per_unit(dims, box_min, box_max);
         let voxels = u64::from(dims.x * dims.y * dims.z);
         let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
@@ -708,7 +722,26 @@ impl VoxelizePass {
         resolution: u32,
         smoothing_sigma: f32,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        let job = self.prepare(device, points, resolution, smoothing_sigma)?;
+        self.voxelize_in_box(device, queue, points, resolution, smoothing_sigma, None)
+    }
+
+    /// As [`VoxelizePass::voxelize`], in a given grid box (see [`VoxelizePass::prepare_in_box`]).
+    pub fn voxelize_in_box(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        grid_box_override: Option<(Vec3, Vec3)>,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        let job = self.prepare_in_box(
+            device,
+            points,
+            resolution,
+            smoothing_sigma,
+            grid_box_override,
+        )?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("voxelize::build"),
         });
