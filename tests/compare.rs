@@ -25,19 +25,18 @@ fn demo_song() -> PointCloud {
     loudscape::data::cloud::load(&repo().join("data/demo_song.ply")).expect("demo song")
 }
 
-/// The demo song made 6 dB louder exactly as the extractor would make it from audio gained by
-/// +6 dB: every level 6 dB higher, so the level axis's ends move up by 6 dB (the normalized
-/// coordinates stay, the floor being relative to the loudest bin) and each scalar (A-weighted
-/// level on its fixed axis) rises by 6 dB, clipped at the axis's top as the extractor clips.
+/// The demo song made 6 dB louder exactly as the extractor makes it from the audio gained by
+/// +6 dB (checked against the extractor's output of the demo audio gained in a float WAV): every
+/// level is 6 dB higher, so the level axis's ends move up by 6 dB while the normalized
+/// coordinates stay (the floor is relative to the loudest bin), and the scalar's axis, whose
+/// range the extractor derives from the levels, moves up by 6 dB with the scalars staying.
 fn louder_copy(song: &PointCloud, gain_db: f64) -> PointCloud {
     let mut louder = song.clone();
     louder.path = PathBuf::from("demo_song_plus_6_dB.ply");
-    louder.meta.axes.y.min += gain_db;
-    louder.meta.axes.y.max += gain_db;
-    let scalar = song.meta.axes.scalar.clone();
-    for p in &mut louder.points {
-        let level = scalar.value_at_unit(f64::from(p.scalar)) + gain_db;
-        p.scalar = (scalar.unit_of(level) as f32).clamp(0.0, 1.0);
+    let axes = &mut louder.meta.axes;
+    for axis in [&mut axes.y, &mut axes.scalar] {
+        axis.min += gain_db;
+        axis.max += gain_db;
     }
     louder
 }

@@ -157,6 +157,10 @@ impl LoudscapeApp {
             // Room around the box for the tick labels and axis titles drawn outside it (in a
             // small window a tight fit put them under the side panel).
             self.camera.zoom(-LABEL_MARGIN_STEPS);
+            if self.compare.as_ref().is_some_and(|c| c.side_by_side()) {
+                // Each half is narrow: one step more for the level axis's title.
+                self.camera.zoom(-1.0);
+            }
         }
     }
 

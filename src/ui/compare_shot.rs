@@ -49,16 +49,28 @@ fn file_name(cloud: &PointCloud) -> String {
         .unwrap_or_else(|| cloud.path.display().to_string())
 }
 
-fn view_for(camera: Option<Camera>, data: &SceneData, width: u32, height: u32) -> FrameView {
+fn view_for(
+    camera: Option<Camera>,
+    data: &SceneData,
+    width: u32,
+    height: u32,
+    margin_steps: f32,
+) -> FrameView {
     match camera {
         Some(camera) => FrameView::at_rest(camera, data.world_from_data, width, height),
-        None => FrameView::fitted(
-            Camera::default(),
-            data.world_from_data,
-            data.world_box(),
-            width,
-            height,
-        ),
+        None => {
+            let mut view = FrameView::fitted(
+                Camera::default(),
+                data.world_from_data,
+                data.world_box(),
+                width,
+                height,
+            );
+            // Room for the axis titles outside the box, as the window's fit leaves (one step
+            // more in a narrow half).
+            view.camera.zoom(-margin_steps);
+            view
+        }
     }
 }
 
@@ -137,7 +149,7 @@ pub fn render_compare_image(
                 }
             }
             // One camera for both: the boxes are the same, so A's fitted view is B's.
-            let frame = view_for(camera, &scene.data_a, half, size.1);
+            let frame = view_for(camera, &scene.data_a, half, size.1, 2.0);
             let left = render_one(
                 gpu,
                 renderer,
@@ -173,7 +185,7 @@ pub fn render_compare_image(
                 .as_ref()
                 .context("the difference grid was not built")?;
             let settings = difference_settings(base);
-            let frame = view_for(camera, &grids.data, size.0, size.1);
+            let frame = view_for(camera, &grids.data, size.0, size.1, 1.0);
             render_one(
                 gpu,
                 renderer,

@@ -311,7 +311,7 @@ impl LoudscapeApp {
             let edit = ui.add(
                 egui::TextEdit::singleline(field)
                     .hint_text("B: song or cloud")
-                    .desired_width(150.0),
+                    .desired_width(130.0),
             );
             if edit.lost_focus()
                 && ui.input(|i| i.key_pressed(egui::Key::Enter))
@@ -380,6 +380,9 @@ impl LoudscapeApp {
                 {
                     state.layout = layout;
                     state.hover = None;
+                    // The view changes: draw it now (a build is announced first).
+                    ui.ctx().request_repaint();
+                    self.fit_pending = true;
                 }
             }
         });
@@ -396,14 +399,10 @@ impl LoudscapeApp {
                         .clicked()
                     {
                         state.measure = measure;
+                        ui.ctx().request_repaint();
                     }
                 }
             });
-            if let Some(copy) = &state.difference {
-                let (rect, _) =
-                    ui.allocate_exact_size(egui::vec2(240.0, 150.0), egui::Sense::hover());
-                paint_diverging_legend(ui.painter(), rect, copy.measure, copy.range);
-            }
         }
         let mut switch = None;
         ui.horizontal(|ui| {
@@ -596,13 +595,13 @@ fn compare_readings(
     match near {
         Some(q) => {
             out.push(Reading {
-                name: format!("{} level", names[1 - side]),
+                name: format!("{} level (loudest here)", names[1 - side]),
                 value: axes
                     .y
                     .format_value(axes.y.value_at(f64::from(q.position[1]))),
             });
             out.push(Reading {
-                name: format!("{} loudness", names[1 - side]),
+                name: format!("{} loudness (loudest here)", names[1 - side]),
                 value: axes
                     .scalar
                     .format_value(axes.scalar.value_at_unit(f64::from(q.scalar))),
