@@ -145,7 +145,8 @@ fn reject_unknown_subcommand(files: &[PathBuf]) {
 /// The outputs of the window's `--screenshot`: a .png that is none of the files opened.
 fn check_screenshot(cli: &Cli) -> anyhow::Result<()> {
     if let Some(shot) = &cli.screenshot {
-        let inputs: Vec<&std::path::Path> = cli.files.iter().map(PathBuf::as_path).collect();
+        let mut inputs: Vec<&std::path::Path> = cli.files.iter().map(PathBuf::as_path).collect();
+        inputs.extend(cli.compare.as_deref());
         commands::args::check_output(shot, &["png"], &inputs)?;
     }
     Ok(())
