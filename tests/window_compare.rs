@@ -47,6 +47,10 @@ fn switching_a_and_b_keeps_the_playback_position() {
         std::env::var_os("DISPLAY").is_some(),
         "this test needs a display: run it under xvfb-run"
     );
+    assert!(
+        xdotool(&["version"]).is_some(),
+        "this test needs xdotool to press keys in the window (apt-get install xdotool)"
+    );
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let home = common::output_dir().join("window_compare_home");
     let _ = std::fs::remove_dir_all(&home);
