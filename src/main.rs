@@ -22,6 +22,14 @@ struct Cli {
     #[arg(long, value_parser = parse_view)]
     view: Option<loudscape::render::scene::ViewKind>,
 
+    /// Compare the song with this one (B): side by side, their difference, A/B playback.
+    #[arg(long)]
+    compare: Option<PathBuf>,
+
+    /// Start playback at this position, in seconds.
+    #[arg(long)]
+    seek: Option<f64>,
+
     /// Save a screenshot of the window to this PNG once the data is shown, then close.
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
@@ -137,7 +145,8 @@ fn reject_unknown_subcommand(files: &[PathBuf]) {
 /// The outputs of the window's `--screenshot`: a .png that is none of the files opened.
 fn check_screenshot(cli: &Cli) -> anyhow::Result<()> {
     if let Some(shot) = &cli.screenshot {
-        let inputs: Vec<&std::path::Path> = cli.files.iter().map(PathBuf::as_path).collect();
+        let mut inputs: Vec<&std::path::Path> = cli.files.iter().map(PathBuf::as_path).collect();
+        inputs.extend(cli.compare.as_deref());
         commands::args::check_output(shot, &["png"], &inputs)?;
     }
     Ok(())
@@ -168,6 +177,8 @@ fn main() -> ExitCode {
                 files: cli.files,
                 screenshot: cli.screenshot,
                 view: cli.view,
+                compare: cli.compare,
+                seek: cli.seek,
             })
         }),
         Some(Command::Render(args)) => commands::render::run(args),

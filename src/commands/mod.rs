@@ -8,6 +8,7 @@ pub mod bench_volume;
 pub mod mesh;
 pub mod npy;
 pub mod render;
+pub mod render_compare;
 pub mod voxelize;
 
 use std::io::Write;

@@ -48,6 +48,15 @@ pub struct RenderArgs {
     /// in the metadata; no re-extraction). A timeline has no frequency axis: only linear.
     #[arg(long, default_value = "linear")]
     pub freq_axis: String,
+    /// A second cloud to compare with (B); --view is then compare or difference.
+    #[arg(long)]
+    pub compare: Option<PathBuf>,
+    /// With --view compare: how each half is drawn (points, surface or volume).
+    #[arg(long, default_value = "points")]
+    pub compare_as: String,
+    /// With --view difference: density (B - A per voxel) or level (level-weighted, per column).
+    #[arg(long, default_value = "density")]
+    pub measure: String,
     #[command(flatten)]
     pub volume: VolumeArgs,
     /// The PNG file to write (.png; not the input).
@@ -181,8 +190,14 @@ fn parse_freq_axis(name: &str) -> anyhow::Result<FreqAxis> {
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    check_output(&args.output, &["png"], &[&args.input])?;
+    let mut inputs = vec![args.input.as_path()];
+    inputs.extend(args.compare.as_deref());
+    check_output(&args.output, &["png"], &inputs)?;
     let size = parse_size(&args.size)?;
+    if let Some(compare) = args.compare.as_deref() {
+        let (settings, camera) = compare_settings(&args)?;
+        return super::render_compare::run(&args, compare, settings, camera, size);
+    }
     let view = parse_view(&args.view)?;
     let camera = match &args.camera {
         Some(text) => {
@@ -234,6 +249,28 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         &format!("{}x{} {}", size.0, size.1, view.name().to_lowercase()),
     );
     Ok(())
+}
+
+/// The settings and camera of a compare render: every option but --view, checked as for one
+/// cloud.
+fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Option<Camera>)> {
+    let camera = match &args.camera {
+        Some(text) => {
+            let (az, el, dist) = parse_camera(text)?;
+            Some(Camera::from_angles(az, el, dist))
+        }
+        None => None,
+    };
+    if let Some(size) = args.point_size
+        && !(0.5..=64.0).contains(&size)
+    {
+        bail!("point size {size} is out of range 0.5 to 64 pixels");
+    }
+    let mut settings = RenderSettings::default();
+    settings.surface.method = parse_method(&args.method)?;
+    settings.surface.iso_value = check_iso(args.iso)?;
+    args.volume.apply(&mut settings)?;
+    Ok((settings, camera))
 }
 
 /// Builds the grid (until the GPU voxelizer lands, the CPU stand-in) and extracts the surface,

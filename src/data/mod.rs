@@ -2,6 +2,7 @@
 
 pub mod axes;
 pub mod cloud;
+pub mod compare;
 pub mod field;
 pub mod freq_axis;
 pub mod synthetic;

@@ -5,6 +5,7 @@
 //! [`surface`] (marching tetrahedra, dual contouring, the draw), [`points`], [`lines`],
 //! [`markers`], [`volume`] (with [`transfer`]), [`composite`]; [`shaders`] composes the WGSL.
 
+pub mod compare;
 pub mod composite;
 pub mod gpu;
 pub mod grid;

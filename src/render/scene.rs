@@ -19,6 +19,7 @@ use crate::render::surface::state::ExtractedSurface;
 use crate::view::frame_view::FrameView;
 // Volume view and voxel grid.
 use crate::render::grid::VoxelGrid;
+use crate::render::grid::difference::DifferencePass;
 use crate::render::grid::voxelize::{VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass};
 use crate::render::volume::{VolumeGpu, VolumePass, VolumeSettings};
 
@@ -216,6 +217,24 @@ impl SceneData {
         Ok(true)
     }
 
+    /// Installs a grid built elsewhere (an A/B compare's grids in their shared box and scale,
+    /// or their difference) as if [`SceneData::ensure_grid`] had built it with `settings`.
+    pub fn set_grid(
+        &mut self,
+        device: &wgpu::Device,
+        renderer: &Renderer,
+        grid: VoxelGrid,
+        stats: Option<VoxelStats>,
+        resolution: u32,
+        settings: &VoxelSettings,
+    ) {
+        self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
+        self.grid = Some(grid);
+        self.grid_stats = stats;
+        self.grid_key = Some((resolution, settings.smoothing_sigma.to_bits()));
+        self.surface = ExtractedSurface::new();
+    }
+
     /// Whether a grid built with `settings` for `cloud` is already there.
     pub fn grid_matches(&self, cloud: &PointCloud, settings: &VoxelSettings) -> bool {
         let resolution = settings.resolution_for(cloud.meta.mode);
@@ -269,6 +288,8 @@ pub struct Renderer {
     pub voxelize: VoxelizePass,
     pub volume: VolumePass,
     pub surface: SurfacePass,
+    /// A/B compare: the difference of two grids.
+    pub difference: DifferencePass,
 }
 
 impl Renderer {
@@ -281,6 +302,7 @@ impl Renderer {
             voxelize: VoxelizePass::new(device, &frame),
             volume: VolumePass::new(device, &frame),
             surface: SurfacePass::new(device, &frame),
+            difference: DifferencePass::new(device),
             frame,
         }
     }

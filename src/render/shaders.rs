@@ -16,6 +16,7 @@ pub const DUAL_CONTOUR: &str = include_str!("../../shaders/surface/dual_contour.
 pub const SURFACE_DRAW: &str = include_str!("../../shaders/surface/draw.wgsl");
 pub const VOXELIZE: &str = include_str!("../../shaders/grid/voxelize.wgsl");
 pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
+pub const DIFFERENCE: &str = include_str!("../../shaders/grid/difference.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -36,6 +37,10 @@ pub fn markers() -> String {
 
 pub fn voxelize() -> String {
     compose(&[FRAME, FREQ_AXIS, VOXELIZE])
+}
+
+pub fn difference() -> String {
+    DIFFERENCE.to_string()
 }
 
 pub fn volume() -> String {
@@ -70,6 +75,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("surface_draw", surface_draw()),
         ("voxelize", voxelize()),
         ("volume", volume()),
+        ("difference", difference()),
     ]
 }
 

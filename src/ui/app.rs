@@ -42,6 +42,10 @@ pub struct WindowOptions {
     pub screenshot: Option<PathBuf>,
     /// The view to open in (otherwise the remembered one, or Points).
     pub view: Option<ViewKind>,
+    /// Compare the song with this one (B): `loudscape A --compare B`.
+    pub compare: Option<PathBuf>,
+    /// Start playback at this many seconds once the song's audio is ready.
+    pub seek: Option<f64>,
 }
 
 /// Opens the window and runs until it closes.
@@ -128,13 +132,19 @@ impl LoudscapeApp {
             renders_seen: (0, 0),
             open: Default::default(),
             freq_axis: Default::default(),
+            compare: None,
+            pending_seek: options.seek,
         };
+        let compare = options.compare.clone();
         let files = app.apply_remembered(options.files, remembered);
         if let Some(view) = options.view {
             app.settings.view = view;
         }
         for file in files {
             app.start_loading(file);
+        }
+        if let Some(b) = compare {
+            app.compare_with(b);
         }
         app
     }
@@ -148,6 +158,10 @@ impl LoudscapeApp {
             // Room around the box for the tick labels and axis titles drawn outside it (in a
             // small window a tight fit put them under the side panel).
             self.camera.zoom(-LABEL_MARGIN_STEPS);
+            if self.compare.as_ref().is_some_and(|c| c.side_by_side()) {
+                // Each half is narrow: one step more for the level axis's title.
+                self.camera.zoom(-1.0);
+            }
         }
     }
 
@@ -184,7 +198,14 @@ impl LoudscapeApp {
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
         let ppp = ui.ctx().pixels_per_point();
-        let width = (rect.width() * ppp).round().max(1.0) as u32;
+        // Side by side, each half is a view of its own (one camera for both).
+        let view_width = match &self.compare {
+            Some(c) if c.side_by_side() && self.active == Slot::Song => {
+                (rect.width() - crate::ui::compare_window::GAP) / 2.0
+            }
+            _ => rect.width(),
+        };
+        let width = (view_width * ppp).round().max(1.0) as u32;
         let height = (rect.height() * ppp).round().max(1.0) as u32;
         let aspect = width as f32 / height as f32;
         if (aspect - self.view_aspect).abs() > 1e-3 && self.camera_fitted {
@@ -272,7 +293,8 @@ impl LoudscapeApp {
             // The side panel, drawn before the view, shows the new song next frame.
             ui.ctx().request_repaint();
         }
-        if response.clicked() {
+        let compare_shown = self.compare.as_ref().is_some_and(|c| c.shown());
+        if response.clicked() && !compare_shown {
             self.click();
         }
         if response.clicked() || response.secondary_clicked() {
@@ -281,19 +303,23 @@ impl LoudscapeApp {
         }
         let mut settings = self.settings.clone();
         settings.markers = self.markers();
-        let active = self.active();
         let mut render_view = view;
         if moving && self.settings.view != ViewKind::Points {
             let divisor = self.moving_divisor[kind].max(1);
             render_view.width = width.div_ceil(divisor).max(1);
             render_view.height = height.div_ceil(divisor).max(1);
         }
+        let painter = ui.painter_at(rect);
+        let hover_pos = response.hover_pos();
+        if self.paint_compare(&painter, rect, &view, &render_view, &settings, hover_pos) {
+            return;
+        }
+        let active = self.active();
         let callback = ViewCallback {
             view: render_view,
             settings,
             cloud_id: active.map(|l| l.id),
         };
-        let painter = ui.painter_at(rect);
         painter.add(egui_wgpu::Callback::new_paint_callback(rect, callback));
         if let Some(loaded) = active {
             if self.settings.show_box {
@@ -344,6 +370,7 @@ impl eframe::App for LoudscapeApp {
         let before = self.shown_state();
         self.poll_loading(&ctx, frame);
         self.apply_freq_axis(frame);
+        self.poll_compare(&ctx, frame);
         self.fetch_grid(frame);
         if std::mem::take(&mut self.needs_repaint) {
             ctx.request_repaint();
@@ -355,8 +382,14 @@ impl eframe::App for LoudscapeApp {
                 .map(|f| f.path().to_path_buf())
                 .collect()
         });
+        // A drop with Shift held is B of an A/B compare.
+        let shift = ctx.input(|i| i.modifiers.shift);
         for path in dropped {
-            self.start_loading(path);
+            if shift && self.song.is_some() {
+                self.compare_with(path);
+            } else {
+                self.start_loading(path);
+            }
         }
 
         egui::Panel::left("controls")
@@ -366,6 +399,7 @@ impl eframe::App for LoudscapeApp {
                 egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
             });
         self.audio.poll(&ctx);
+        self.compare_keys(&ctx);
         let keys_free = !ctx.egui_wants_keyboard_input();
         if keys_free && ctx.input(|i| i.key_pressed(egui::Key::Space)) && self.active == Slot::Song
         {

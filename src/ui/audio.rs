@@ -30,6 +30,8 @@ pub struct AudioPanel {
     /// The playback time of the current frame, seconds.
     time_s: f64,
     no_device_said: bool,
+    /// The decoded song now in the player (shared samples), for an A/B swap to hand back.
+    track: Option<Track>,
 }
 
 impl AudioPanel {
@@ -48,12 +50,14 @@ impl AudioPanel {
             loop_range: (0.0, 0.0),
             time_s: 0.0,
             no_device_said: false,
+            track: None,
         }
     }
 
     /// Finds and decodes the song of a freshly loaded Song cloud (on a worker thread).
     pub fn load_for(&mut self, cloud: &PointCloud, remembered: Option<PathBuf>) {
         self.player.unload();
+        self.track = None;
         self.playhead = None;
         self.time_s = 0.0;
         let found = match remembered.filter(|p| p.is_file()) {
@@ -96,6 +100,7 @@ impl AudioPanel {
                 Ok(Ok(track)) => {
                     self.playhead = Some(Playhead::new(track.sample_rate));
                     self.loop_range = (0.0, track.duration_s());
+                    self.track = Some(track.clone());
                     self.player.load(track);
                     self.source = Source::Ready;
                 }
@@ -121,6 +126,14 @@ impl AudioPanel {
         self.player.loaded.as_ref().map(|_| self.time_s)
     }
 
+    /// Where the loaded song's transport stands, in seconds (what the output plays next).
+    pub fn position_s(&self) -> Option<f64> {
+        self.player
+            .loaded
+            .as_ref()
+            .map(|l| l.transport.position() as f64 / f64::from(l.sample_rate.max(1)))
+    }
+
     pub fn loop_shown(&self) -> Option<(f64, f64)> {
         (self.loop_enabled && self.player.loaded.is_some()).then_some(self.loop_range)
     }
@@ -134,6 +147,32 @@ impl AudioPanel {
         if let Some(p) = self.playhead.as_mut() {
             *p = Playhead::new(self.player.loaded.as_ref().map_or(1, |l| l.sample_rate));
         }
+    }
+
+    /// A/B compare: plays `other` from the position (and in the state, playing or paused) the
+    /// current song is at, and hands the current song back so it can be swapped in again. The
+    /// loop range stays. Returns `None` when no song was loaded yet (then `other` just loads).
+    pub fn swap_track(&mut self, other: Track) -> Option<Track> {
+        let (time, playing) = (self.time_s, self.player.is_playing());
+        let previous = self.track.take();
+        self.playhead = Some(Playhead::new(other.sample_rate));
+        if previous.is_none() {
+            self.loop_range = (0.0, other.duration_s());
+        }
+        self.path_field = other.path.display().to_string();
+        self.track = Some(other.clone());
+        self.player.load(other);
+        self.source = Source::Ready;
+        if previous.is_some() {
+            self.seek(time);
+            self.time_s = time;
+            self.player
+                .set_loop_s(self.loop_shown().filter(|(a, b)| b > a));
+            if playing {
+                self.player.toggle();
+            }
+        }
+        previous
     }
 
     /// The bar under the 3D view.

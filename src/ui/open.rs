@@ -35,7 +35,7 @@ pub fn open_path(path: &Path, settings: &Settings, shared: &Shared) -> Result<Po
 
 /// The native Open dialog, built here (macOS wants dialogs made on the main thread) and awaited
 /// on a thread so the window keeps drawing; the answer comes through the receiver.
-fn open_dialog() -> Receiver<Option<PathBuf>> {
+pub(super) fn open_dialog() -> Receiver<Option<PathBuf>> {
     let (sender, receiver) = channel();
     let dialog = rfd::AsyncFileDialog::new()
         .set_title("Open a song or a loudscape cloud")

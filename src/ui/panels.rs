@@ -18,6 +18,7 @@ impl LoudscapeApp {
         ui.heading("loudscape");
         ui.add_space(4.0);
         self.open_controls(ui);
+        self.compare_controls(ui);
 
         ui.label(RichText::new("Data").strong());
         ui.horizontal(|ui| {

@@ -73,6 +73,10 @@ pub(super) struct LoudscapeApp {
     pub(super) open: OpenPanel,
     /// The frequency axis chosen for songs (`freq_axis.rs`).
     pub(super) freq_axis: crate::data::freq_axis::FreqAxis,
+    /// The A/B compare with a second song (`compare_window.rs`).
+    pub(super) compare: Option<crate::ui::compare_window::CompareState>,
+    /// Where to put the playhead once the song's audio is ready (`--seek`).
+    pub(super) pending_seek: Option<f64>,
 }
 
 /// Which of the two data slots.

@@ -7,6 +7,7 @@
 //! `density` holds the normalized loudness density in [0, 1]; `hp_mean` the mean hp of the points
 //! in the voxel (0.5 where a voxel holds none).
 
+pub mod difference;
 pub mod reference;
 pub mod voxelize;
 

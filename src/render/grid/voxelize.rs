@@ -441,7 +441,7 @@ impl VoxelizePass {
         resolution: u32,
         smoothing_sigma: f32,
     ) -> Result<VoxelizeJob, VoxelizeError> {
-        self.prepare_mapped(device, points, resolution, smoothing_sigma, None)
+        self.prepare_with(device, points, resolution, smoothing_sigma, None, None)
     }
 
     /// As [`VoxelizePass::prepare`], with the points' z on the frequency axis `mapping`.
@@ -453,6 +453,41 @@ impl VoxelizePass {
         smoothing_sigma: f32,
         mapping: Option<&FreqMapping>,
     ) -> Result<VoxelizeJob, VoxelizeError> {
+        self.prepare_with(device, points, resolution, smoothing_sigma, mapping, None)
+    }
+
+    /// As [`VoxelizePass::prepare`], in a given grid box (`None`: the cloud's own,
+    /// [`grid_box`]); an A/B compare builds both grids in one box. Points outside it count in
+    /// the nearest border voxel.
+    pub fn prepare_in_box(
+        &self,
+        device: &wgpu::Device,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        grid_box_override: Option<(Vec3, Vec3)>,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
+        self.prepare_with(
+            device,
+            points,
+            resolution,
+            smoothing_sigma,
+            None,
+            grid_box_override,
+        )
+    }
+
+    /// The general form of [`VoxelizePass::prepare`]: the frequency axis `mapping` and a grid
+    /// box (`None`: the mapped cloud's own).
+    pub fn prepare_with(
+        &self,
+        device: &wgpu::Device,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        mapping: Option<&FreqMapping>,
+        grid_box_override: Option<(Vec3, Vec3)>,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
         Self::check_resolution(device, resolution)?;
         if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
             return Err(VoxelizeError::Smoothing(smoothing_sigma));
@@ -461,7 +496,8 @@ impl VoxelizePass {
             return Err(VoxelizeError::TooManyPoints(points.len()));
         }
         let dims = UVec3::splat(resolution);
-        let (box_min, box_max) = grid_box_mapped(points, mapping);
+        let (box_min, box_max) =
+            grid_box_override.unwrap_or_else(|| grid_box_mapped(points, mapping));
         let per_unit = voxels_per_unit(dims, box_min, box_max);
         let voxels = u64::from(dims.x * dims.y * dims.z);
         let freq = mapping.map_or(FreqParams::IDENTITY, FreqMapping::params);
@@ -767,7 +803,7 @@ impl VoxelizePass {
         resolution: u32,
         smoothing_sigma: f32,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        self.voxelize_mapped(device, queue, points, resolution, smoothing_sigma, None)
+        self.voxelize_with(device, queue, points, resolution, smoothing_sigma, None, None)
     }
 
     /// As [`VoxelizePass::voxelize`], with the points' z on the frequency axis `mapping`.
@@ -780,7 +816,50 @@ impl VoxelizePass {
         smoothing_sigma: f32,
         mapping: Option<&FreqMapping>,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        let job = self.prepare_mapped(device, points, resolution, smoothing_sigma, mapping)?;
+        self.voxelize_with(device, queue, points, resolution, smoothing_sigma, mapping, None)
+    }
+
+    /// As [`VoxelizePass::voxelize`], in a given grid box (see [`VoxelizePass::prepare_in_box`]).
+    pub fn voxelize_in_box(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        grid_box_override: Option<(Vec3, Vec3)>,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        self.voxelize_with(
+            device,
+            queue,
+            points,
+            resolution,
+            smoothing_sigma,
+            None,
+            grid_box_override,
+        )
+    }
+
+    /// The general form of [`VoxelizePass::voxelize`] (see [`VoxelizePass::prepare_with`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn voxelize_with(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        mapping: Option<&FreqMapping>,
+        grid_box_override: Option<(Vec3, Vec3)>,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        let job = self.prepare_with(
+            device,
+            points,
+            resolution,
+            smoothing_sigma,
+            mapping,
+            grid_box_override,
+        )?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("voxelize::build"),
         });

@@ -1,0 +1,80 @@
+//! `loudscape render A --compare B --view compare|difference`: an A/B compare, headless.
+//!
+//! Both clouds go onto the union of their axes (`data::compare`); `compare` draws them side by
+//! side, A left and B right, from one camera, as points, surfaces or volumes (`--compare-as`;
+//! grids in one box and on one scale); `difference` draws the difference grid as a volume in
+//! the diverging map with its legend (`--measure density|level`). The pictures are made by
+//! `ui::compare_shot`.
+
+use anyhow::{Context, bail};
+use loudscape::render::compare::CompareScene;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::grid::difference::DifferenceMeasure;
+use loudscape::render::points::PointStyle;
+use loudscape::render::scene::{RenderSettings, Renderer, ViewKind};
+use loudscape::ui::compare_shot::{CompareView, render_compare_image};
+use loudscape::view::camera::Camera;
+
+/// Parses `--view` with `--compare`: `compare` (side by side, as `--compare-as`) or
+/// `difference` (as `--measure`).
+pub fn parse_compare_view(
+    view: &str,
+    compare_as: &str,
+    measure: &str,
+) -> anyhow::Result<CompareView> {
+    match view.to_ascii_lowercase().as_str() {
+        "compare" => {
+            let kind = ViewKind::parse(compare_as).with_context(|| {
+                format!("--compare-as '{compare_as}' is not one of points, surface, volume")
+            })?;
+            Ok(CompareView::SideBySide(kind))
+        }
+        "difference" => {
+            let measure = DifferenceMeasure::parse(measure)
+                .with_context(|| format!("--measure '{measure}' is not density or level"))?;
+            Ok(CompareView::Difference(measure))
+        }
+        other => bail!("view '{other}' is not compare or difference (the views of --compare)"),
+    }
+}
+
+/// `loudscape render A --compare B ...`, after the common checks of `render::run`.
+pub fn run(
+    args: &super::render::RenderArgs,
+    compare: &std::path::Path,
+    settings: RenderSettings,
+    camera: Option<Camera>,
+    size: (u32, u32),
+) -> anyhow::Result<()> {
+    let what = parse_compare_view(&args.view, &args.compare_as, &args.measure)?;
+    let cloud_a = super::args::load_cloud(&args.input)?;
+    let cloud_b = super::args::load_cloud(compare)?;
+    let mut settings = settings;
+    settings.points.size_px = args
+        .point_size
+        .unwrap_or_else(|| PointStyle::size_for(cloud_a.points.len().max(cloud_b.points.len())));
+    let gpu = GpuContext::new_headless()?;
+    let renderer = Renderer::new(&gpu.device);
+    let mut scene = CompareScene::new(&gpu.device, &renderer, &cloud_a, &cloud_b)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let image = render_compare_image(
+        &gpu,
+        &renderer,
+        &mut scene,
+        what,
+        camera,
+        size,
+        &settings,
+        !args.no_labels,
+    )?;
+    super::render::save_png(&image, &args.output)?;
+    let detail = match what {
+        CompareView::SideBySide(kind) => format!("compare, {}", kind.name().to_lowercase()),
+        CompareView::Difference(measure) => {
+            let range = scene.grids.as_ref().map(|g| g.range()).unwrap_or(0.0);
+            format!("difference, {} range ±{range:.3}", measure.name())
+        }
+    };
+    super::wrote(&args.output, &format!("{}x{} {detail}", size.0, size.1));
+    Ok(())
+}

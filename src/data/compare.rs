@@ -1,0 +1,207 @@
+//! Two clouds on one set of axes, so equal loudness looks equal (issue 17's A/B compare).
+//!
+//! Each cloud's coordinates are normalized to its own axes: a song's level axis runs from its
+//! floor to its loudest bin, so a copy 6 dB louder has exactly the same normalized points and
+//! only different axis ends. [`on_union_axes`] puts both clouds on the union of both ranges
+//! (per axis: the smaller minimum, the larger maximum, the same scale), moving every point by
+//! `union.normalized_of(own.value_at(coordinate))`; the scalar and hp are moved the same way
+//! between their own axes and the union's. The file's tick marks are moved with the points and
+//! kept where they still fall on the axis.
+
+use crate::data::axes::{Axes, Axis, AxisScale, Tick};
+use crate::data::cloud::{Aabb, PointCloud};
+
+/// Why two clouds cannot share axes.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum CompareError {
+    #[error("{b}: a {mode_b} cloud cannot be compared with {a}, a {mode_a} cloud")]
+    Mode {
+        a: String,
+        b: String,
+        mode_a: String,
+        mode_b: String,
+    },
+    #[error(
+        "{b}: its {axis} axis is {scale_b} and that of {a} is {scale_a}; they cannot share one"
+    )]
+    Scale {
+        a: String,
+        b: String,
+        axis: &'static str,
+        scale_a: &'static str,
+        scale_b: &'static str,
+    },
+    #[error("{file}: its {axis} axis cannot map values: {reason}")]
+    Axis {
+        file: String,
+        axis: &'static str,
+        reason: String,
+    },
+}
+
+fn scale_name(scale: AxisScale) -> &'static str {
+    match scale {
+        AxisScale::Linear => "linear",
+        AxisScale::Log => "logarithmic",
+    }
+}
+
+/// The union of two axes of one scale: the smaller minimum and the larger maximum, A's label
+/// and unit, and A's file ticks (or B's) moved onto it.
+pub fn union_axis(a: &Axis, b: &Axis) -> Axis {
+    let (lo_a, hi_a) = (a.min.min(a.max), a.min.max(a.max));
+    let (lo_b, hi_b) = (b.min.min(b.max), b.min.max(b.max));
+    let mut union = Axis {
+        label: a.label.clone(),
+        unit: a.unit.clone(),
+        min: lo_a.min(lo_b),
+        max: hi_a.max(hi_b),
+        scale: a.scale,
+        ticks: None,
+    };
+    // Keep the direction of A's axis (min above max is allowed by the format).
+    if a.min > a.max {
+        std::mem::swap(&mut union.min, &mut union.max);
+    }
+    let source = if a.ticks.is_some() { a } else { b };
+    if let Some(ticks) = &source.ticks {
+        let moved: Vec<Tick> = ticks
+            .iter()
+            .filter_map(|t| {
+                let at = union.normalized_of(source.value_at(f64::from(t.at)));
+                (at.is_finite() && (-1.0..=1.0).contains(&at)).then(|| Tick {
+                    at: at as f32,
+                    label: t.label.clone(),
+                })
+            })
+            .collect();
+        union.ticks = Some(moved);
+    }
+    union
+}
+
+/// Moves a normalized coordinate from `from` to `to`.
+pub fn move_coordinate(from: &Axis, to: &Axis, coordinate: f32) -> f32 {
+    if from == to {
+        return coordinate;
+    }
+    to.normalized_of(from.value_at(f64::from(coordinate))) as f32
+}
+
+/// Moves a [0, 1] coordinate (scalar, hp) from `from` to `to`, clamped to [0, 1].
+fn move_unit(from: &Axis, to: &Axis, unit: f32) -> f32 {
+    if from == to {
+        return unit;
+    }
+    (to.unit_of(from.value_at_unit(f64::from(unit))) as f32).clamp(0.0, 1.0)
+}
+
+fn name(cloud: &PointCloud) -> String {
+    cloud.path.display().to_string()
+}
+
+/// The union of both clouds' axes, or why there is none.
+pub fn union_axes(a: &PointCloud, b: &PointCloud) -> Result<Axes, CompareError> {
+    if a.meta.mode != b.meta.mode {
+        return Err(CompareError::Mode {
+            a: name(a),
+            b: name(b),
+            mode_a: format!("{:?}", a.meta.mode).to_lowercase(),
+            mode_b: format!("{:?}", b.meta.mode).to_lowercase(),
+        });
+    }
+    let (axes_a, axes_b) = (&a.meta.axes, &b.meta.axes);
+    for ((axis, one), (_, other)) in axes_a.named().into_iter().zip(axes_b.named()) {
+        for (cloud, axis_of) in [(a, one), (b, other)] {
+            if let Some(reason) = axis_of.problem() {
+                return Err(CompareError::Axis {
+                    file: name(cloud),
+                    axis,
+                    reason,
+                });
+            }
+        }
+        if one.scale != other.scale {
+            return Err(CompareError::Scale {
+                a: name(a),
+                b: name(b),
+                axis,
+                scale_a: scale_name(one.scale),
+                scale_b: scale_name(other.scale),
+            });
+        }
+    }
+    Ok(Axes {
+        x: union_axis(&axes_a.x, &axes_b.x),
+        y: union_axis(&axes_a.y, &axes_b.y),
+        z: union_axis(&axes_a.z, &axes_b.z),
+        scalar: union_axis(&axes_a.scalar, &axes_b.scalar),
+        hp: union_axis(&axes_a.hp, &axes_b.hp),
+    })
+}
+
+/// `cloud` moved onto `axes` (its points, bounds and axes; the rest of its metadata kept).
+pub fn moved_onto(cloud: &PointCloud, axes: &Axes) -> PointCloud {
+    let own = &cloud.meta.axes;
+    let mut moved = cloud.clone();
+    let mut min = glam::Vec3::splat(f32::INFINITY);
+    let mut max = glam::Vec3::splat(f32::NEG_INFINITY);
+    for p in &mut moved.points {
+        p.position = [
+            move_coordinate(&own.x, &axes.x, p.position[0]),
+            move_coordinate(&own.y, &axes.y, p.position[1]),
+            move_coordinate(&own.z, &axes.z, p.position[2]),
+        ];
+        p.scalar = move_unit(&own.scalar, &axes.scalar, p.scalar);
+        p.hp = move_unit(&own.hp, &axes.hp, p.hp);
+        let q = glam::Vec3::from(p.position);
+        min = min.min(q);
+        max = max.max(q);
+    }
+    if !moved.points.is_empty() {
+        moved.bounds = Aabb { min, max };
+    }
+    moved.meta.axes = axes.clone();
+    moved
+}
+
+/// Both clouds on the union of their axes: `(A, B)`.
+pub fn on_union_axes(
+    a: &PointCloud,
+    b: &PointCloud,
+) -> Result<(PointCloud, PointCloud), CompareError> {
+    let axes = union_axes(a, b)?;
+    Ok((moved_onto(a, &axes), moved_onto(b, &axes)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn union_of_shifted_level_axes_moves_points_by_the_shift() {
+        let a = Axis::linear("level", "dB", -65.0, -5.0);
+        let b = Axis::linear("level", "dB", -59.0, 1.0);
+        let u = union_axis(&a, &b);
+        assert_eq!((u.min, u.max), (-65.0, 1.0));
+        // The same normalized coordinate is 6 dB higher on B.
+        let ya = move_coordinate(&a, &u, 0.0);
+        let yb = move_coordinate(&b, &u, 0.0);
+        let db = (u.value_at(f64::from(yb)) - u.value_at(f64::from(ya))) as f32;
+        assert!((db - 6.0).abs() < 1e-4, "{db}");
+    }
+
+    #[test]
+    fn file_ticks_move_with_the_axis() {
+        let mut a = Axis::linear("frequency", "Hz", 0.0, 10000.0);
+        a.ticks = Some(vec![Tick {
+            at: 0.0,
+            label: "5 kHz".into(),
+        }]);
+        let b = Axis::linear("frequency", "Hz", 0.0, 20000.0);
+        let u = union_axis(&a, &b);
+        let ticks = u.ticks.unwrap();
+        assert_eq!(ticks.len(), 1);
+        assert!((ticks[0].at + 0.5).abs() < 1e-6);
+    }
+}
