@@ -43,6 +43,7 @@ fn scale_name(scale: AxisScale) -> &'static str {
     match scale {
         AxisScale::Linear => "linear",
         AxisScale::Log => "logarithmic",
+        AxisScale::Mel => "mel",
     }
 }
 

@@ -231,7 +231,11 @@ impl SceneData {
         self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
         self.grid = Some(grid);
         self.grid_stats = stats;
-        self.grid_key = Some((resolution, settings.smoothing_sigma.to_bits()));
+        self.grid_key = Some((
+            resolution,
+            settings.smoothing_sigma.to_bits(),
+            self.freq_axis(),
+        ));
         self.surface = ExtractedSurface::new();
     }
 

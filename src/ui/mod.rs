@@ -9,10 +9,10 @@
 pub mod app;
 pub mod audio;
 pub mod bridge;
-mod freq_axis;
 pub mod compare;
 pub mod compare_shot;
 mod compare_window;
+mod freq_axis;
 mod hover;
 pub mod labels;
 mod legends;

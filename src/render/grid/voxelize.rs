@@ -803,7 +803,15 @@ impl VoxelizePass {
         resolution: u32,
         smoothing_sigma: f32,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        self.voxelize_with(device, queue, points, resolution, smoothing_sigma, None, None)
+        self.voxelize_with(
+            device,
+            queue,
+            points,
+            resolution,
+            smoothing_sigma,
+            None,
+            None,
+        )
     }
 
     /// As [`VoxelizePass::voxelize`], with the points' z on the frequency axis `mapping`.
@@ -816,7 +824,15 @@ impl VoxelizePass {
         smoothing_sigma: f32,
         mapping: Option<&FreqMapping>,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        self.voxelize_with(device, queue, points, resolution, smoothing_sigma, mapping, None)
+        self.voxelize_with(
+            device,
+            queue,
+            points,
+            resolution,
+            smoothing_sigma,
+            mapping,
+            None,
+        )
     }
 
     /// As [`VoxelizePass::voxelize`], in a given grid box (see [`VoxelizePass::prepare_in_box`]).
