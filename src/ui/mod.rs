@@ -9,9 +9,10 @@
 pub mod app;
 pub mod audio;
 pub mod bridge;
+mod colour_controls;
 mod hover;
 pub mod labels;
-mod legends;
+pub mod legends;
 mod open;
 mod panels;
 mod persistence;
