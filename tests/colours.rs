@@ -363,3 +363,51 @@ fn render_takes_colour_flags_and_rejects_bad_names() {
         assert!(stderr.contains(says), "{stderr}");
     }
 }
+
+/// `render-demo` writes every view with its legend: the key strip is not the background, and
+/// in the light background the paper is white.
+#[test]
+fn render_demo_pictures_carry_legends() {
+    let out_dir = common::output_dir().join("colours_demo");
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let input = repo().join("data/demo_timeline.ply");
+    let output = loudscape(&[
+        "-q",
+        "render-demo",
+        "--out-dir",
+        out_dir.to_str().unwrap(),
+        "--size",
+        "640x400",
+        "--background",
+        "light",
+        "--colormap",
+        "viridis",
+        input.to_str().unwrap(),
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    for view in ["points", "surface", "volume"] {
+        let path = out_dir.join(format!("demo_timeline_{view}.png"));
+        let image = image::open(&path)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            .to_rgba8();
+        assert_eq!(image.get_pixel(2, 2).0, [255, 255, 255, 255], "{view}");
+        let want = if view == "volume" {
+            let colours = Colours {
+                hp: HpColourMap::Viridis,
+                ..light()
+            };
+            let [r, g, b, _] =
+                loudscape::render::transfer::legend(TransferPreset::Classic, &colours, 101)[90];
+            [r, g, b]
+        } else if view == "surface" {
+            HpColourMap::Viridis.surface().sample_u8(0.9)
+        } else {
+            HpColourMap::Viridis.points().sample_u8(0.9)
+        };
+        assert_near(strip_pixel(&image, 0.9), want, 14, view);
+    }
+}

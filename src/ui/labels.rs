@@ -165,7 +165,13 @@ pub fn paint_on(
         );
         // Skip a label that would overlap one already placed (crowded ticks at some angles).
         let galley = painter.layout_no_wrap(label.text.clone(), FontId::proportional(size), color);
-        let text_rect = align.anchor_size(pos, galley.size());
+        let mut text_rect = align.anchor_size(pos, galley.size());
+        if label.title {
+            // A long title beside the picture's edge moves in rather than being cut off.
+            let dx = (rect.left() + 2.0 - text_rect.left()).max(0.0)
+                + (rect.right() - 2.0 - text_rect.right()).min(0.0);
+            text_rect = text_rect.translate(egui::vec2(dx, 0.0));
+        }
         if placed
             .iter()
             .any(|r: &Rect| r.expand(2.0).intersects(text_rect))

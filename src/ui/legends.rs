@@ -205,14 +205,14 @@ pub const KEY_SIZE: egui::Vec2 = egui::vec2(220.0, 14.0);
 /// Margin between the picture's edge and the legend.
 pub const MARGIN: f32 = 14.0;
 
-/// Where the colour strip of a picture of `rect` lies (top right, under the key's title).
+/// Where the colour strip of a picture of `rect` lies (top right, under the key's title):
+/// [`KEY_SIZE`], narrower in narrow pictures (at most 30 % of the width) so the name keeps
+/// its room.
 pub fn key_strip_rect(rect: egui::Rect) -> egui::Rect {
+    let size = egui::vec2(KEY_SIZE.x.min(rect.width() * 0.3), KEY_SIZE.y);
     egui::Rect::from_min_size(
-        egui::pos2(
-            rect.right() - MARGIN - KEY_SIZE.x,
-            rect.top() + MARGIN + 18.0,
-        ),
-        KEY_SIZE,
+        egui::pos2(rect.right() - MARGIN - size.x, rect.top() + MARGIN + 18.0),
+        size,
     )
 }
 
