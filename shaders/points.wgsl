@@ -10,10 +10,14 @@ struct PointParams {
     size_px: f32,
     // Points with scalar below this are not drawn.
     min_scalar: f32,
+    // The frequency axis of the view (shaders/utils/freq_axis.wgsl).
+    freq: FreqParams,
 };
 
 @group(1) @binding(0) var<storage, read> cloud: array<f32>;
 @group(1) @binding(1) var<uniform> params: PointParams;
+// Per STFT bin: the view's z range its points are spread over (shaders/utils/freq_axis.wgsl).
+@group(1) @binding(2) var<storage, read> freq_table: array<vec2<f32>>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -26,7 +30,7 @@ fn vs_main(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance
     var out: VertexOut;
     let index = instance * params.stride;
     let base = index * 5u;
-    let position = vec3<f32>(cloud[base], cloud[base + 1u], cloud[base + 2u]);
+    let position = vec3<f32>(cloud[base], cloud[base + 1u], freq_view_z(cloud[base + 2u], index));
     let scalar = cloud[base + 3u];
     let hp = cloud[base + 4u];
     // One triangle around the unit disc (three vertices per point, not six: vertex work
@@ -39,7 +43,7 @@ fn vs_main(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance
     // Offset in pixels, scaled back into clip space so the disc keeps its pixel size.
     let half_size = 0.5 * params.size_px * frame.viewport.zw * 2.0;
     clip = vec4<f32>(clip.xy + corner * half_size * clip.w, clip.zw);
-    if (scalar < params.min_scalar || index >= params.count) {
+    if (scalar < params.min_scalar || index >= params.count || position.z > 2.0) {
         clip = vec4<f32>(0.0, 0.0, -2.0, 1.0);
     }
     out.clip = clip;

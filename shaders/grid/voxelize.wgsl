@@ -20,6 +20,8 @@ struct VoxelParams {
     // x: scalar fixed-point scale, y: log2 of the histogram's lowest bin edge, z: bins per octave,
     // w: hp fixed-point scale.
     scales: vec4<f32>,
+    // The frequency axis of the view (shaders/utils/freq_axis.wgsl); z: the chunk's first point.
+    freq: FreqParams,
 };
 
 struct SmoothParams {
@@ -56,6 +58,8 @@ const STATS_HISTOGRAM: u32 = 4u;
 // [0] the reference sum, written by `percentile` for `normalize_density` to read without atomics.
 @group(1) @binding(7) var<storage, read_write> reference_sum: array<f32>;
 @group(1) @binding(8) var<storage, read_write> point_counts: array<atomic<u32>>;
+// Per STFT bin: the view's z range its points are spread over (shaders/utils/freq_axis.wgsl).
+@group(1) @binding(9) var<storage, read> freq_table: array<vec2<f32>>;
 
 // The smoothing pass binds only group 2 (group 1 holds the density it would read and write).
 @group(2) @binding(0) var<uniform> smooth_params: SmoothParams;
@@ -98,9 +102,10 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
         return;
     }
     let base = index * 5u;
-    let p = vec3<f32>(cloud[base], cloud[base + 1u], cloud[base + 2u]);
+    let p = vec3<f32>(cloud[base], cloud[base + 1u], freq_view_z(cloud[base + 2u], index));
     // NaN coordinates would land anywhere: skip them (the loader rejects them; this is a guard).
-    if (any(p != p)) {
+    // Points the frequency axis leaves out (z = FREQ_HIDDEN) are skipped too.
+    if (any(p != p) || p.z > 2.0) {
         return;
     }
     let voxel = voxel_of(p);

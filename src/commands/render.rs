@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use loudscape::data::cloud::PointCloud;
+use loudscape::data::freq_axis::FreqAxis;
 use loudscape::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::voxelize::VoxelSettings;
@@ -50,6 +51,10 @@ pub struct RenderArgs {
     pub no_legend: bool,
     #[command(flatten)]
     pub colours: ColourArgs,
+    /// Frequency axis of a song cloud: linear, log or mel (remapped from the bin frequencies
+    /// in the metadata; no re-extraction). A timeline has no frequency axis: only linear.
+    #[arg(long, default_value = "linear")]
+    pub freq_axis: String,
     #[command(flatten)]
     pub volume: VolumeArgs,
     /// The PNG file to write (.png; not the input).
@@ -221,6 +226,11 @@ fn parse_view(name: &str) -> anyhow::Result<ViewKind> {
         .with_context(|| format!("view '{name}' is not one of points, surface, volume"))
 }
 
+fn parse_freq_axis(name: &str) -> anyhow::Result<FreqAxis> {
+    FreqAxis::parse(name)
+        .with_context(|| format!("frequency axis '{name}' is not one of linear, log, mel"))
+}
+
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     check_output(&args.output, &["png"], &[&args.input])?;
     let size = parse_size(&args.size)?;
@@ -239,6 +249,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let method = parse_method(&args.method)?;
     let iso_value = check_iso(args.iso)?;
+    let freq_axis = parse_freq_axis(&args.freq_axis)?;
     let mut settings = RenderSettings {
         view,
         ..Default::default()
@@ -254,6 +265,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let gpu = GpuContext::new_headless()?;
     let renderer = Renderer::new(&gpu.device);
     let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
+    data.set_freq_axis(&gpu.device, &renderer, &cloud, freq_axis)
+        .map_err(anyhow::Error::msg)?;
     if matches!(view, ViewKind::Volume | ViewKind::Surface) {
         prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
     }

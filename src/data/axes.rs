@@ -27,6 +27,21 @@ pub enum AxisScale {
     Linear,
     /// log10(value) = log10(min) + t * (log10(max) - log10(min)); min and max are positive.
     Log,
+    /// mel(value) = mel(min) + t * (mel(max) - mel(min)), with the HTK mel scale
+    /// `mel(f) = 2595 log10(1 + f / 700)` (see [`mel_of_hz`]); min and max are at least 0.
+    /// Files are written linear or log; the app builds mel axes at view time
+    /// (src/data/freq_axis.rs).
+    Mel,
+}
+
+/// The HTK mel of a frequency in Hz: `2595 log10(1 + f / 700)` (1000 Hz is 1000 mel).
+pub fn mel_of_hz(hz: f64) -> f64 {
+    2595.0 * (hz / 700.0).ln_1p() / std::f64::consts::LN_10
+}
+
+/// The frequency in Hz of a mel value (the inverse of [`mel_of_hz`]).
+pub fn hz_of_mel(mel: f64) -> f64 {
+    700.0 * (mel * std::f64::consts::LN_10 / 2595.0).exp_m1()
 }
 
 /// A tick mark: a normalized position in [-1, 1] and its label.
@@ -131,6 +146,12 @@ impl Axis {
                 self.min, self.max
             ));
         }
+        if self.scale == AxisScale::Mel && (self.min < 0.0 || self.max < 0.0) {
+            return Some(format!(
+                "a mel axis needs min and max of at least 0, found {} and {}",
+                self.min, self.max
+            ));
+        }
         None
     }
 
@@ -151,6 +172,10 @@ impl Axis {
             AxisScale::Log => {
                 let (a, b) = (self.min.log10(), self.max.log10());
                 10f64.powf(a + t * (b - a))
+            }
+            AxisScale::Mel => {
+                let (a, b) = (mel_of_hz(self.min), mel_of_hz(self.max));
+                hz_of_mel(a + t * (b - a))
             }
         }
     }
@@ -177,6 +202,13 @@ impl Axis {
                 }
                 let (a, b) = (self.min.log10(), self.max.log10());
                 (value.log10() - a) / (b - a)
+            }
+            AxisScale::Mel => {
+                if value < 0.0 {
+                    return f64::NAN;
+                }
+                let (a, b) = (mel_of_hz(self.min), mel_of_hz(self.max));
+                (mel_of_hz(value) - a) / (b - a)
             }
         };
         t * 2.0 - 1.0
@@ -212,6 +244,7 @@ impl Axis {
         let ticks = match self.scale {
             AxisScale::Linear => self.linear_ticks(max_count),
             AxisScale::Log => self.log_ticks(max_count),
+            AxisScale::Mel => self.mel_ticks(max_count),
         };
         if ticks.is_empty() {
             self.end_ticks(max_count)
@@ -379,6 +412,50 @@ impl Axis {
             .into_iter()
             .map(|value| Tick {
                 at: self.normalized_of(value) as f32,
+                label: self.tick_label(value, value),
+            })
+            .collect()
+    }
+}
+
+impl Axis {
+    /// Round values for a mel axis, which is nearly linear below 700 Hz and nearly logarithmic
+    /// above: 1..9 times a power of ten, taken greedily in order of roundness (1, 5, 2, then the
+    /// rest; larger decades first) where they stand at least 90 % of an even spacing from every
+    /// tick taken, then sorted along the axis. Strictly inside the axis, like log ticks.
+    fn mel_ticks(&self, max_count: usize) -> Vec<Tick> {
+        let (lo, hi) = (self.min.min(self.max), self.min.max(self.max));
+        if hi.is_nan() || hi <= 0.0 {
+            return Vec::new();
+        }
+        let inside = |v: f64| v > lo + (hi - lo) * 1e-9 && v < hi * (1.0 - 1e-9);
+        let first_decade = (lo.max(hi * 1e-12)).log10().floor() as i32;
+        let last_decade = hi.log10().ceil() as i32;
+        let mut candidates = Vec::new();
+        for mantissa in [1.0, 5.0, 2.0, 3.0, 4.0, 6.0, 7.0, 8.0, 9.0] {
+            for decade in (first_decade..=last_decade).rev() {
+                let value = mantissa * 10f64.powi(decade);
+                if inside(value) {
+                    candidates.push(value);
+                }
+            }
+        }
+        let gap = 2.0 / max_count as f64 * 0.9;
+        let mut chosen: Vec<(f64, f64)> = Vec::new();
+        for value in candidates {
+            if chosen.len() == max_count {
+                break;
+            }
+            let at = self.normalized_of(value);
+            if at.is_finite() && chosen.iter().all(|&(_, other)| (other - at).abs() >= gap) {
+                chosen.push((value, at));
+            }
+        }
+        chosen.sort_by(|a, b| a.1.total_cmp(&b.1));
+        chosen
+            .into_iter()
+            .map(|(value, at)| Tick {
+                at: at as f32,
                 label: self.tick_label(value, value),
             })
             .collect()
@@ -583,6 +660,43 @@ mod tests {
             assert!((axis.value_at(axis.normalized_of(v)) - v).abs() < 1e-6 * v);
         }
         assert!(axis.normalized_of(0.0).is_nan());
+    }
+
+    #[test]
+    fn mel_axis_maps_and_ticks() {
+        // HTK: 999.99 mel at 1 kHz.
+        assert!((mel_of_hz(1000.0) - 1000.0).abs() < 0.05);
+        assert!((hz_of_mel(mel_of_hz(440.0)) - 440.0).abs() < 1e-9);
+        let axis = Axis {
+            scale: AxisScale::Mel,
+            ..Axis::linear("frequency", "Hz", 0.0, 11025.0)
+        };
+        assert_eq!(axis.problem(), None);
+        assert_eq!(axis.normalized_of(0.0), -1.0);
+        assert!((axis.normalized_of(11025.0) - 1.0).abs() < 1e-12);
+        for v in [0.0, 50.0, 1000.0, 8000.0] {
+            assert!((axis.value_at(axis.normalized_of(v)) - v).abs() < 1e-6 * v.max(1.0));
+        }
+        // Mel gives the bass more room than linear and less than log.
+        let at_500 = axis.normalized_of(500.0);
+        let linear = Axis::linear("f", "Hz", 0.0, 11025.0).normalized_of(500.0);
+        let log = Axis::log("f", "Hz", 5.0, 11025.0).normalized_of(500.0);
+        assert!(linear < at_500 && at_500 < log, "{linear} {at_500} {log}");
+        let ticks = axis.ticks(8);
+        assert_eq!(
+            labels(&ticks),
+            ["100 Hz", "500 Hz", "1 kHz", "2 kHz", "5 kHz", "10 kHz"]
+        );
+        for pair in ticks.windows(2) {
+            assert!(
+                pair[1].at - pair[0].at >= 0.9 * 2.0 / 8.0 - 1e-6,
+                "{ticks:?}"
+            );
+        }
+        for n in 1..12 {
+            assert!(axis.ticks(n).len() <= n);
+        }
+        assert!(axis.normalized_of(-1.0).is_nan());
     }
 
     #[test]

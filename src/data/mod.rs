@@ -3,4 +3,5 @@
 pub mod axes;
 pub mod cloud;
 pub mod field;
+pub mod freq_axis;
 pub mod synthetic;

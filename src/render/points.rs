@@ -6,10 +6,13 @@
 //! shader cuts the disc.
 //! Clouds larger than one storage binding are split into chunks, each drawn on its own.
 //! While the camera moves, every `stride`-th point is drawn (a level-of-detail subset).
+//! The frequency axis of the view ([`PointsGpu::set_freq`], src/data/freq_axis.rs) remaps each
+//! point's z in the vertex shader; the stored points are never changed.
 
 use wgpu::util::DeviceExt;
 
 use crate::data::cloud::Point;
+use crate::data::freq_axis::{FreqMapping, FreqParams};
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry};
@@ -24,8 +27,9 @@ struct PointParams {
     count: u32,
     size_px: f32,
     min_scalar: f32,
+    freq: FreqParams,
 }
-const _: () = assert!(std::mem::size_of::<PointParams>() == 16);
+const _: () = assert!(std::mem::size_of::<PointParams>() == 48);
 
 /// How the points are drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,15 +54,20 @@ impl Default for PointStyle {
 
 struct Chunk {
     count: u32,
+    /// Index of the chunk's first point in the cloud (the frequency jitter's seed).
+    first: u32,
     params: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
-    _points: wgpu::Buffer,
+    points: wgpu::Buffer,
 }
 
 /// A cloud's points on the GPU.
 pub struct PointsGpu {
     chunks: Vec<Chunk>,
     pub total: u64,
+    /// The frequency axis's constants and per-bin table (identity until [`PointsGpu::set_freq`]).
+    freq: FreqParams,
+    freq_table: wgpu::Buffer,
 }
 
 impl PointsGpu {
@@ -71,6 +80,7 @@ impl PointsGpu {
         max_chunk_bytes: u64,
     ) -> Self {
         let per_chunk = (max_chunk_bytes / std::mem::size_of::<Point>() as u64).max(1) as usize;
+        let freq_table = freq_table_buffer(device, &[crate::data::freq_axis::HIDDEN]);
         let mut chunks = Vec::new();
         for (i, slice) in points.chunks(per_chunk).enumerate() {
             let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -84,30 +94,46 @@ impl PointsGpu {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&format!("points::bind_group_{i}")),
-                layout: &pass.cloud_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: points_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: params.as_entire_binding(),
-                    },
-                ],
-            });
+            let bind_group =
+                cloud_bind_group(device, pass, i, &points_buffer, &params, &freq_table);
             chunks.push(Chunk {
                 count: slice.len() as u32,
+                first: (i * per_chunk) as u32,
                 params,
                 bind_group,
-                _points: points_buffer,
+                points: points_buffer,
             });
         }
         Self {
             chunks,
             total: points.len() as u64,
+            freq: FreqParams::IDENTITY,
+            freq_table,
+        }
+    }
+
+    /// Shows the points on the frequency axis `mapping` (`None`: z as stored).
+    pub fn set_freq(
+        &mut self,
+        device: &wgpu::Device,
+        pass: &PointsPass,
+        mapping: Option<&FreqMapping>,
+    ) {
+        let Some(mapping) = mapping else {
+            self.freq = FreqParams::IDENTITY;
+            return;
+        };
+        self.freq = mapping.params();
+        self.freq_table = freq_table_buffer(device, &mapping.gpu_table());
+        for (i, chunk) in self.chunks.iter_mut().enumerate() {
+            chunk.bind_group = cloud_bind_group(
+                device,
+                pass,
+                i,
+                &chunk.points,
+                &chunk.params,
+                &self.freq_table,
+            );
         }
     }
 
@@ -119,6 +145,30 @@ impl PointsGpu {
     pub fn chunk_count(&self) -> usize {
         self.chunks.len()
     }
+}
+
+/// The frequency axis's per-bin table (`[lo, hi]` per bin) as a storage buffer.
+fn freq_table_buffer(device: &wgpu::Device, table: &[[f32; 2]]) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("points::freq_table"),
+        contents: bytemuck::cast_slice(table),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+fn cloud_bind_group(
+    device: &wgpu::Device,
+    pass: &PointsPass,
+    i: usize,
+    points: &wgpu::Buffer,
+    params: &wgpu::Buffer,
+    freq_table: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(&format!("points::bind_group_{i}")),
+        layout: &pass.cloud_layout,
+        entries: &crate::render::gpu::layouts::whole_buffer_entries(&[points, params, freq_table]),
+    })
 }
 
 /// The points pipeline, built once.
@@ -135,6 +185,7 @@ impl PointsPass {
             entries: &[
                 storage_entry(0, wgpu::ShaderStages::VERTEX, true),
                 uniform_entry(1, wgpu::ShaderStages::VERTEX),
+                storage_entry(2, wgpu::ShaderStages::VERTEX, true),
             ],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -184,6 +235,7 @@ impl PointsPass {
                 count: chunk.count,
                 size_px: style.size_px,
                 min_scalar: style.min_scalar,
+                freq: points.freq.for_chunk(chunk.first),
             };
             queue.write_buffer(&chunk.params, 0, bytemuck::bytes_of(&params));
         }

@@ -5,7 +5,9 @@
 
 use glam::{Mat4, Vec3};
 
+use crate::data::axes::Axes;
 use crate::data::cloud::{DataMode, PointCloud};
+use crate::data::freq_axis::{FreqAxis, FreqMapping};
 use crate::render::colormap::{Background, Colours, PaletteUniforms};
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::target::RenderTarget;
@@ -106,7 +108,11 @@ pub struct SceneData {
     /// The voxel grid, built on demand by [`SceneData::ensure_grid`].
     pub grid: Option<VoxelGrid>,
     pub grid_stats: Option<VoxelStats>,
-    grid_key: Option<(u32, u32)>,
+    grid_key: Option<(u32, u32, FreqAxis)>,
+    /// The frequency axis shown ([`SceneData::set_freq_axis`]); `None`: z as stored.
+    pub freq: Option<FreqMapping>,
+    /// The cloud's axes as the view shows them (z on the frequency axis shown).
+    pub axes: Axes,
     volume: Option<VolumeGpu>,
     /// The isosurface of the grid, extracted by [`Renderer::surface`] when the Surface view
     /// draws (each cloud keeps its own).
@@ -127,28 +133,53 @@ impl SceneData {
     ) -> Self {
         let points = PointsGpu::upload(device, &renderer.points, &cloud.points, max_chunk_bytes);
         let (box_min, box_max) = data_box(cloud);
-        let axes = &cloud.meta.axes;
-        let tick_positions = |axis: &crate::data::axes::Axis| -> Vec<f32> {
-            axis.ticks(8).iter().map(|t| t.at).collect()
-        };
-        let (tx, ty, tz) = (
-            tick_positions(&axes.x),
-            tick_positions(&axes.y),
-            tick_positions(&axes.z),
-        );
-        let lines = box_with_ticks(box_min, box_max, [&tx, &ty, &tz], [0.55, 0.6, 0.68, 0.8]);
+        let axes = cloud.meta.axes.clone();
         Self {
             points,
-            box_lines: LinesGpu::upload(device, "scene::box_lines", &lines),
+            box_lines: box_lines(device, &axes, box_min, box_max),
             box_min,
             box_max,
             world_from_data: world_from_data(cloud.meta.mode),
             grid: None,
             grid_stats: None,
             grid_key: None,
+            freq: None,
+            axes,
             volume: None,
             surface: ExtractedSurface::new(),
         }
+    }
+
+    /// Shows `cloud` (the cloud this data was made from) on the frequency axis `axis`: the
+    /// points, the box's ticks and [`SceneData::axes`] follow at once, the grid at the next
+    /// [`SceneData::ensure_grid`]. A cloud without a frequency axis (a timeline) takes only
+    /// `Linear` (as stored); anything else is an error naming the reason.
+    pub fn set_freq_axis(
+        &mut self,
+        device: &wgpu::Device,
+        renderer: &Renderer,
+        cloud: &PointCloud,
+        axis: FreqAxis,
+    ) -> Result<(), String> {
+        let mapping = match FreqMapping::new(&cloud.meta, axis) {
+            Ok(mapping) => Some(mapping).filter(|m| !m.is_identity()),
+            Err(_) if axis == FreqAxis::Linear => None,
+            Err(reason) => return Err(format!("{}: {reason}", cloud.path.display())),
+        };
+        self.points
+            .set_freq(device, &renderer.points, mapping.as_ref());
+        self.axes = match &mapping {
+            Some(m) => m.view_axes(&cloud.meta.axes),
+            None => cloud.meta.axes.clone(),
+        };
+        self.box_lines = box_lines(device, &self.axes, self.box_min, self.box_max);
+        self.freq = mapping;
+        Ok(())
+    }
+
+    /// The frequency axis shown.
+    pub fn freq_axis(&self) -> FreqAxis {
+        self.freq.as_ref().map_or(FreqAxis::Linear, |m| m.axis)
     }
 
     /// Builds the voxel grid of `cloud` (the cloud this data was made from) unless one with the
@@ -163,19 +194,24 @@ impl SceneData {
         settings: &VoxelSettings,
     ) -> Result<bool, VoxelizeError> {
         let resolution = settings.resolution_for(cloud.meta.mode);
-        let key = (resolution, settings.smoothing_sigma.to_bits());
+        let key = (
+            resolution,
+            settings.smoothing_sigma.to_bits(),
+            self.freq_axis(),
+        );
         if self.grid.is_some() && self.grid_key == Some(key) {
             return Ok(false);
         }
         // Free the old grid before building the new one.
         self.volume = None;
         self.grid = None;
-        let (grid, stats) = renderer.voxelize.voxelize(
+        let (grid, stats) = renderer.voxelize.voxelize_mapped(
             device,
             queue,
             &cloud.points,
             resolution,
             settings.smoothing_sigma,
+            self.freq.as_ref(),
         )?;
         self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
         self.grid = Some(grid);
@@ -188,13 +224,32 @@ impl SceneData {
     pub fn grid_matches(&self, cloud: &PointCloud, settings: &VoxelSettings) -> bool {
         let resolution = settings.resolution_for(cloud.meta.mode);
         self.grid.is_some()
-            && self.grid_key == Some((resolution, settings.smoothing_sigma.to_bits()))
+            && self.grid_key
+                == Some((
+                    resolution,
+                    settings.smoothing_sigma.to_bits(),
+                    self.freq_axis(),
+                ))
     }
 
     /// The data box in world space, for fitting the camera.
     pub fn world_box(&self) -> (Vec3, Vec3) {
         world_box(self.world_from_data, self.box_min, self.box_max)
     }
+}
+
+/// The box around the data with the ticks of `axes`.
+fn box_lines(device: &wgpu::Device, axes: &Axes, box_min: Vec3, box_max: Vec3) -> LinesGpu {
+    let tick_positions = |axis: &crate::data::axes::Axis| -> Vec<f32> {
+        axis.ticks(8).iter().map(|t| t.at).collect()
+    };
+    let (tx, ty, tz) = (
+        tick_positions(&axes.x),
+        tick_positions(&axes.y),
+        tick_positions(&axes.z),
+    );
+    let lines = box_with_ticks(box_min, box_max, [&tx, &ty, &tz], [0.55, 0.6, 0.68, 0.8]);
+    LinesGpu::upload(device, "scene::box_lines", &lines)
 }
 
 /// The data-space box `[min, max]` in world space, for fitting the camera.

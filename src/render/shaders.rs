@@ -4,6 +4,7 @@
 
 pub const FRAME: &str = include_str!("../../shaders/utils/frame.wgsl");
 pub const PALETTE: &str = include_str!("../../shaders/utils/palette.wgsl");
+pub const FREQ_AXIS: &str = include_str!("../../shaders/utils/freq_axis.wgsl");
 
 pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
@@ -22,7 +23,7 @@ pub fn compose(parts: &[&str]) -> String {
 }
 
 pub fn points() -> String {
-    compose(&[FRAME, PALETTE, POINTS])
+    compose(&[FRAME, PALETTE, FREQ_AXIS, POINTS])
 }
 
 pub fn lines() -> String {
@@ -34,7 +35,7 @@ pub fn markers() -> String {
 }
 
 pub fn voxelize() -> String {
-    compose(&[FRAME, VOXELIZE])
+    compose(&[FRAME, FREQ_AXIS, VOXELIZE])
 }
 
 pub fn volume() -> String {

@@ -127,6 +127,7 @@ impl LoudscapeApp {
             slot_cameras: [None, None],
             renders_seen: (0, 0),
             open: Default::default(),
+            freq_axis: Default::default(),
         };
         let files = app.apply_remembered(options.files, remembered);
         if let Some(view) = options.view {
@@ -346,6 +347,7 @@ impl eframe::App for LoudscapeApp {
         }
         let before = self.shown_state();
         self.poll_loading(&ctx, frame);
+        self.apply_freq_axis(frame);
         self.fetch_grid(frame);
         if std::mem::take(&mut self.needs_repaint) {
             ctx.request_repaint();

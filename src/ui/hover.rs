@@ -75,24 +75,35 @@ impl LoudscapeApp {
             view: self.settings.view,
             cloud_id: loaded.id,
             min_scalar: self.settings.points.min_scalar,
+            freq_axis: loaded.freq_axis,
         };
         if self.hover.as_ref().is_some_and(|(k, _)| k == &key) {
             return;
         }
         let cloud = loaded.cloud.clone();
         let axes = &cloud.meta.axes;
+        // On a remapped frequency axis (freq_axis.rs) the view's positions are the remapped
+        // points and its z reads through the view's axis; a point still reads its stored bin.
+        let view_axes = loaded.freq.as_ref().map(|m| m.view_axes(axes));
+        let shown_axes = view_axes.as_ref().unwrap_or(axes);
+        let shown_points: Option<&[crate::data::cloud::Point]> = match &loaded.freq {
+            None => Some(&cloud.points),
+            Some(_) => loaded.view_points.as_deref().map(Vec::as_slice),
+        };
         let (origin, dir) = pick::cursor_ray(view, px);
         let mut hover = Hover::default();
         match self.settings.view {
             ViewKind::Points => {
                 let ppp_radius = 5.0;
-                if let Some(i) = pick::pick_point(
-                    &cloud.points,
-                    view,
-                    px,
-                    ppp_radius,
-                    self.settings.points.min_scalar,
-                ) {
+                if let Some(i) = shown_points.and_then(|points| {
+                    pick::pick_point(
+                        points,
+                        view,
+                        px,
+                        ppp_radius,
+                        self.settings.points.min_scalar,
+                    )
+                }) {
                     hover.readings = pick::point_readings(axes, &cloud.points[i]);
                     hover.x = Some(cloud.points[i].position[0]);
                 }
@@ -108,7 +119,7 @@ impl LoudscapeApp {
                     .as_ref()
                     .and_then(|g| g.pick(origin, dir, threshold))
                 {
-                    hover.readings = pick::voxel_readings(axes, &hit);
+                    hover.readings = pick::voxel_readings(shown_axes, &hit);
                     hover.x = Some(hit.position.x);
                 }
             }
@@ -119,7 +130,7 @@ impl LoudscapeApp {
         {
             let p = origin + dir * t;
             hover.x = Some(p.x.clamp(-1.0, 1.0));
-            let first = pick::position_readings(axes, p);
+            let first = pick::position_readings(shown_axes, p);
             hover.readings = first.into_iter().take(1).collect();
         }
         self.hovered_song = match (self.active, hover.x) {

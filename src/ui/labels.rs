@@ -51,13 +51,47 @@ pub fn axis_title(axis: &Axis, fallback: &str) -> String {
 }
 
 /// Tick labels and axis titles for the box drawn by the scene.
+/// (The axes as the view shows them: `data.axes`, z on the frequency axis shown.)
+/// The level axis's title names its reference (dBFS RMS, or dB re FS sine) by the cloud's mode.
 pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> AxisLabels {
-    axis_labels_for_box(cloud, data.box_min, data.box_max)
+    with_references(
+        axis_labels_for_axes(&data.axes, data.box_min, data.box_max),
+        cloud,
+        &data.axes,
+    )
 }
 
 /// Tick labels and axis titles for a box `[min, max]` in data space.
 pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabels {
-    let axes = &cloud.meta.axes;
+    with_references(
+        axis_labels_for_axes(&cloud.meta.axes, min, max),
+        cloud,
+        &cloud.meta.axes,
+    )
+}
+
+/// The titles of `labels` with the level axis's reference for `cloud`'s mode
+/// (`ui::legends::titled_with_reference`).
+fn with_references(
+    mut labels: AxisLabels,
+    cloud: &PointCloud,
+    axes: &crate::data::axes::Axes,
+) -> AxisLabels {
+    let units = [&axes.x.unit, &axes.y.unit, &axes.z.unit];
+    for label in labels.labels.iter_mut().filter(|l| l.title) {
+        let text = std::mem::take(&mut label.text);
+        label.text = crate::ui::legends::titled_with_reference(
+            cloud.meta.mode,
+            label.axis,
+            units[label.axis.min(2)],
+            text,
+        );
+    }
+    labels
+}
+
+/// Tick labels and axis titles of `axes` for a box `[min, max]` in data space.
+pub fn axis_labels_for_axes(axes: &crate::data::axes::Axes, min: Vec3, max: Vec3) -> AxisLabels {
     let mut labels = Vec::new();
     for (index, (axis, fallback)) in [(&axes.x, "x"), (&axes.y, "y"), (&axes.z, "z")]
         .into_iter()
@@ -74,12 +108,7 @@ pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabe
         labels.push(Label {
             axis: index,
             at: 0.0,
-            text: crate::ui::legends::titled_with_reference(
-                cloud.meta.mode,
-                index,
-                &axis.unit,
-                axis_title(axis, fallback),
-            ),
+            text: axis_title(axis, fallback),
             title: true,
         });
     }

@@ -10,6 +10,7 @@ pub mod app;
 pub mod audio;
 pub mod bridge;
 mod colour_controls;
+mod freq_axis;
 mod hover;
 pub mod labels;
 pub mod legends;

@@ -54,6 +54,7 @@ impl LoudscapeApp {
                 }
             }
         });
+        self.freq_axis_controls(ui);
 
         if self.settings.view == ViewKind::Points {
             ui.add_space(6.0);

@@ -99,6 +99,10 @@ impl LoudscapeApp {
             world_from_data,
             world_box: crate::render::scene::world_box(world_from_data, box_min, box_max),
             cpu_grid: None,
+            freq_axis: Default::default(),
+            freq: None,
+            view_points: None,
+            view_points_pending: None,
         };
         if slot == Slot::Song {
             let remembered = self

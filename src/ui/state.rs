@@ -71,6 +71,8 @@ pub(super) struct LoudscapeApp {
     pub(super) renders_seen: (u64, u32),
     /// The Open row (`open.rs`).
     pub(super) open: OpenPanel,
+    /// The frequency axis chosen for songs (`freq_axis.rs`).
+    pub(super) freq_axis: crate::data::freq_axis::FreqAxis,
 }
 
 /// Which of the two data slots.
@@ -105,6 +107,13 @@ pub(super) struct Loaded {
     pub(super) world_box: (glam::Vec3, glam::Vec3),
     /// The voxel grid read back once for hover picking in the Surface and Volume views.
     pub(super) cpu_grid: Option<Field>,
+    /// The frequency axis the scene shows, and its mapping (`None`: z as stored).
+    pub(super) freq_axis: crate::data::freq_axis::FreqAxis,
+    pub(super) freq: Option<crate::data::freq_axis::FreqMapping>,
+    /// The points as that axis shows them, for hover picking (`None`: as stored), and the
+    /// thread making them.
+    pub(super) view_points: Option<Arc<Vec<crate::data::cloud::Point>>>,
+    pub(super) view_points_pending: Option<Receiver<Vec<crate::data::cloud::Point>>>,
 }
 
 pub(super) struct Loading {
@@ -123,6 +132,7 @@ pub(super) struct HoverKey {
     pub(super) view: ViewKind,
     pub(super) cloud_id: u64,
     pub(super) min_scalar: f32,
+    pub(super) freq_axis: crate::data::freq_axis::FreqAxis,
 }
 
 #[derive(Clone, Debug, Default)]

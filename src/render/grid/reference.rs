@@ -88,3 +88,15 @@ impl ReferenceGrid {
         self.sums.iter().map(|s| (s / reference).min(1.0)).collect()
     }
 }
+
+impl ReferenceGrid {
+    /// [`ReferenceGrid::build`] of the points as the frequency axis `mapping` shows them (the
+    /// CPU reference of the voxelizer's remapping, src/data/freq_axis.rs).
+    pub fn build_mapped(
+        points: &[Point],
+        resolution: u32,
+        mapping: &crate::data::freq_axis::FreqMapping,
+    ) -> Self {
+        Self::build(&mapping.view_points(points), resolution)
+    }
+}

@@ -12,13 +12,16 @@
 //! `percentile` finds the bin holding the 99th percentile, and `normalize_density` divides by
 //! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field. The
 //! grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only when the
-//! cloud or the settings change (see `SceneData::ensure_grid`).
+//! cloud or the settings change (see `SceneData::ensure_grid`). With a frequency axis
+//! ([`VoxelizePass::voxelize_mapped`], src/data/freq_axis.rs) `accumulate` first remaps each
+//! point's z as the points shader does, and the box is that of the remapped points.
 
 use glam::{UVec3, Vec3};
 use thiserror::Error;
 use wgpu::util::DeviceExt;
 
 use crate::data::cloud::{DataMode, Point};
+use crate::data::freq_axis::{FreqMapping, FreqParams, HIDDEN};
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry, whole_buffer_entries};
@@ -72,8 +75,10 @@ struct VoxelParams {
     /// x: loudness fixed-point scale, y: histogram log2 minimum, z: bins per octave,
     /// w: hp fixed-point scale.
     scales: [f32; 4],
+    /// The frequency axis (shaders/utils/freq_axis.wgsl); `mode[2]` is the chunk's first point.
+    freq: FreqParams,
 }
-const _: () = assert!(std::mem::size_of::<VoxelParams>() == 80);
+const _: () = assert!(std::mem::size_of::<VoxelParams>() == 112);
 
 /// Keep in sync with `SmoothParams` in shaders/grid/voxelize.wgsl.
 #[repr(C)]
@@ -174,6 +179,36 @@ pub fn grid_box(points: &[Point]) -> (Vec3, Vec3) {
     let thinnest = (extent.max_element() * 0.05).max(0.02);
     let extent = extent.max(Vec3::splat(thinnest)) * 1.02;
     (centre - extent * 0.5, centre + extent * 0.5)
+}
+
+/// The grid box of the points as the frequency axis `mapping` shows them (z remapped, points it
+/// leaves out ignored): [`grid_box`] of [`FreqMapping::view_points`], without the copy.
+pub fn grid_box_mapped(points: &[Point], mapping: Option<&FreqMapping>) -> (Vec3, Vec3) {
+    let Some(mapping) = mapping.filter(|m| !m.is_identity()) else {
+        return grid_box(points);
+    };
+    let mut min = Vec3::splat(f32::INFINITY);
+    let mut max = Vec3::splat(f32::NEG_INFINITY);
+    for (i, p) in points.iter().enumerate() {
+        let Some(z) = mapping.view_z(p.position[2], i as u32) else {
+            continue;
+        };
+        let q = Vec3::new(p.position[0], p.position[1], z);
+        if q.is_finite() {
+            min = min.min(q);
+            max = max.max(q);
+        }
+    }
+    if !min.is_finite() || !max.is_finite() {
+        return grid_box(&[]);
+    }
+    // The box of the two corners is the box of the points.
+    let corner = |q: Vec3| Point {
+        position: q.into(),
+        scalar: 0.0,
+        hp: 0.0,
+    };
+    grid_box(&[corner(min), corner(max)])
 }
 
 /// Voxel coordinates per data unit along each axis.
@@ -315,6 +350,7 @@ impl VoxelizePass {
                 storage_entry(6, COMPUTE, false),
                 storage_entry(7, COMPUTE, false),
                 storage_entry(8, COMPUTE, false),
+                storage_entry(9, COMPUTE, true),
             ],
         });
         let smooth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -405,6 +441,18 @@ impl VoxelizePass {
         resolution: u32,
         smoothing_sigma: f32,
     ) -> Result<VoxelizeJob, VoxelizeError> {
+        self.prepare_mapped(device, points, resolution, smoothing_sigma, None)
+    }
+
+    /// As [`VoxelizePass::prepare`], with the points' z on the frequency axis `mapping`.
+    pub fn prepare_mapped(
+        &self,
+        device: &wgpu::Device,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        mapping: Option<&FreqMapping>,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
         Self::check_resolution(device, resolution)?;
         if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
             return Err(VoxelizeError::Smoothing(smoothing_sigma));
@@ -413,9 +461,17 @@ impl VoxelizePass {
             return Err(VoxelizeError::TooManyPoints(points.len()));
         }
         let dims = UVec3::splat(resolution);
-        let (box_min, box_max) = grid_box(points);
+        let (box_min, box_max) = grid_box_mapped(points, mapping);
         let per_unit = voxels_per_unit(dims, box_min, box_max);
         let voxels = u64::from(dims.x * dims.y * dims.z);
+        let freq = mapping.map_or(FreqParams::IDENTITY, FreqMapping::params);
+        let freq_table = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("voxelize::freq_table"),
+            contents: bytemuck::cast_slice(
+                &mapping.map_or_else(|| vec![HIDDEN], |m| m.gpu_table()),
+            ),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -452,6 +508,7 @@ impl VoxelizePass {
         };
         let mut chunks = Vec::new();
         for (i, slice) in slices.into_iter().enumerate() {
+            let first = (i * per_chunk) as u32;
             let contents: &[u8] = if slice.is_empty() {
                 bytemuck::cast_slice(&zero)
             } else {
@@ -473,6 +530,7 @@ impl VoxelizePass {
                     HISTOGRAM_BINS_PER_OCTAVE,
                     HP_FIXED_POINT_SCALE as f32,
                 ],
+                freq: freq.for_chunk(first),
             };
             let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(&format!("voxelize::params_{i}")),
@@ -489,6 +547,7 @@ impl VoxelizePass {
                 &hp_mean,
                 &reference,
                 &point_counts,
+                &freq_table,
             ];
             let entries = whole_buffer_entries(&buffers);
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -708,7 +767,20 @@ impl VoxelizePass {
         resolution: u32,
         smoothing_sigma: f32,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        let job = self.prepare(device, points, resolution, smoothing_sigma)?;
+        self.voxelize_mapped(device, queue, points, resolution, smoothing_sigma, None)
+    }
+
+    /// As [`VoxelizePass::voxelize`], with the points' z on the frequency axis `mapping`.
+    pub fn voxelize_mapped(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        points: &[Point],
+        resolution: u32,
+        smoothing_sigma: f32,
+        mapping: Option<&FreqMapping>,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        let job = self.prepare_mapped(device, points, resolution, smoothing_sigma, mapping)?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("voxelize::build"),
         });
