@@ -1,5 +1,6 @@
 // Lines: the box around the data and its tick marks, in data space (the playhead and other
-// markers are markers.wgsl).
+// markers are markers.wgsl). Prepended: utils/frame.wgsl, utils/palette.wgsl (line_ink turns
+// the lines to dark ink on the light background).
 
 struct LineVertex {
     @location(0) position: vec3<f32>,
@@ -21,5 +22,5 @@ fn vs_main(in: LineVertex) -> VertexOut {
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    return in.color;
+    return vec4<f32>(line_ink(in.color.rgb), in.color.a);
 }

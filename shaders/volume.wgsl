@@ -3,7 +3,8 @@
 // Reads the grid's density and hp_mean buffers (layout of src/render/grid/mod.rs) with manual
 // trilinear filtering. Writes premultiplied colour (blended over the cleared background) and the
 // depth where the ray's opacity first passes one half, so box lines behind dense volume hide.
-// Keep VolumeParams in sync with src/render/volume.rs and `transfer` with src/render/transfer.rs.
+// Keep VolumeParams in sync with src/render/volume.rs and `transfer` with src/render/transfer.rs;
+// colours come from shaders/utils/palette.wgsl.
 
 struct VolumeParams {
     // Grid size in voxels (w unused).
@@ -88,29 +89,10 @@ fn sample_density(u: vec3<f32>) -> f32 {
     return trilinear_density(corners(u));
 }
 
-// Four-stop ramps, gamma-encoded. Keep in sync with the stops in src/render/transfer.rs.
-fn ramp(preset: u32, t: f32) -> vec3<f32> {
-    var stops: array<vec3<f32>, 4>;
-    if (preset == 1u) {
-        stops = array<vec3<f32>, 4>(
-            vec3<f32>(0.40, 0.05, 0.02), vec3<f32>(0.86, 0.26, 0.05),
-            vec3<f32>(1.00, 0.62, 0.16), vec3<f32>(1.00, 0.93, 0.66));
-    } else if (preset == 2u) {
-        stops = array<vec3<f32>, 4>(
-            vec3<f32>(0.05, 0.12, 0.36), vec3<f32>(0.14, 0.40, 0.80),
-            vec3<f32>(0.55, 0.82, 0.98), vec3<f32>(0.93, 0.98, 1.00));
-    } else {
-        stops = array<vec3<f32>, 4>(
-            vec3<f32>(0.14, 0.24, 0.58), vec3<f32>(0.16, 0.62, 0.78),
-            vec3<f32>(0.96, 0.78, 0.32), vec3<f32>(1.00, 0.97, 0.88));
-    }
-    let x = clamp(t, 0.0, 1.0) * 3.0;
-    let i = min(u32(floor(x)), 2u);
-    return mix(stops[i], stops[i + 1u], x - f32(i));
-}
-
-// Density (already scaled) -> colour and opacity per voxel. Keep in sync with
-// TransferPreset::shape in src/render/transfer.rs.
+// Density (already scaled) -> colour and opacity per voxel: the preset shapes density to a
+// ramp position and an opacity (keep in sync with TransferPreset::shape in
+// src/render/transfer.rs); the colour is the palette's density ramp at that position (the
+// preset's own ramp or a chosen map, src/render/colormap.rs).
 fn transfer(preset: u32, density_value: f32) -> vec4<f32> {
     let s = clamp(density_value, 0.0, 1.0);
     var t = s;
@@ -122,7 +104,7 @@ fn transfer(preset: u32, density_value: f32) -> vec4<f32> {
         t = smoothstep(0.2, 1.0, s);
         alpha = min(1.6 * t * t, 1.0);
     }
-    return vec4<f32>(ramp(preset, t), alpha);
+    return vec4<f32>(density_palette(t), alpha);
 }
 
 fn hash(pixel: vec2<u32>, frame_index: u32) -> f32 {
@@ -176,6 +158,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     let step = params.controls.z;
     let opacity = params.controls.y;
     let light = normalize(frame.light_direction.xyz);
+    let gain = select(params.controls.w, 1.0, light_background());
 
     // Jittered start: hides the banding of fixed steps (changes every frame while moving).
     var t = t_enter + step * hash(vec2<u32>(in.position.xy), frame.flags.x);
@@ -215,8 +198,10 @@ fn fs_main(in: VertexOut) -> FragmentOut {
                         rgb = rgb * mix(1.0, lit, edge);
                     }
                 }
-                // Emission outweighs absorption a little, so the field glows.
-                color += (1.0 - alpha) * a * rgb * params.controls.w;
+                // Emission outweighs absorption a little, so the field glows on the dark
+                // background; on the light one light added over white would wash out, so the
+                // colour is laid on as paint (gain 1).
+                color += (1.0 - alpha) * a * rgb * gain;
                 alpha += (1.0 - alpha) * a;
                 if (alpha > 0.5 && depth >= 1.0) {
                     let data = params.box_min.xyz + u / per_unit;

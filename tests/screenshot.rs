@@ -1,4 +1,5 @@
-//! A saved screenshot is what the headless renderer draws for the same view, playhead included.
+//! A saved screenshot is what the headless renderer draws for the same view, playhead, labels
+//! and legend included.
 
 mod common;
 
@@ -8,7 +9,6 @@ use loudscape::data::cloud;
 use loudscape::render::headless::render_frame;
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
-use loudscape::ui::labels;
 use loudscape::ui::screenshot;
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
@@ -41,7 +41,19 @@ fn saved_screenshot_matches_the_headless_render() {
     assert_eq!(saved.dimensions(), (w, h));
 
     let target = render_frame(&gpu, &renderer, Some(&data), &view, &settings);
-    labels::draw_headless(&gpu, &target, &view, &cloud, &data);
+    // The screenshot carries the labels and the legend, as headless renders do.
+    screenshot::draw_overlay(
+        &gpu,
+        &target,
+        &view,
+        &cloud,
+        &data,
+        &settings,
+        screenshot::Overlay {
+            labels: true,
+            legend: true,
+        },
+    );
     let reference = target.read_rgba(&gpu.device, &gpu.queue).expect("read");
     let (share, mean) = common::difference(&saved, &reference, 8);
     assert!(

@@ -1,9 +1,9 @@
 // Surface view: draws an extracted isosurface (marching tetrahedra or dual contouring).
-// Prepended: utils/frame.wgsl. Reads MeshVertex records as a vertex buffer (position, hp,
+// Prepended: utils/frame.wgsl, utils/palette.wgsl. Reads MeshVertex records as a vertex buffer (position, hp,
 // normal; see surface/extraction.wgsl) and SurfaceStyle; writes colour and depth.
-// Colour: hp on a warm (percussive) to cool (harmonic) gradient, paper 3.4, optionally
-// Phong-lit by the frame's directional light from above. Keep SurfaceStyle and warm_cool in sync
-// with src/render/surface/draw.rs.
+// Colour: hp through the palette's surface map (Classic: warm percussive to cool harmonic,
+// paper 3.4; src/render/colormap.rs), optionally Phong-lit by the frame's directional light
+// from above. Keep SurfaceStyle in sync with src/render/surface/draw.rs.
 
 struct SurfaceStyle {
     // 1: Phong lighting, 0: flat hp colour.
@@ -28,18 +28,6 @@ struct VertexOut {
     @location(2) normal: vec3<f32>,
 };
 
-// Warm (hp = 0, percussive) through a light neutral to cool (hp = 1, harmonic), gamma-encoded.
-fn warm_cool(hp: f32) -> vec3<f32> {
-    let warm = vec3<f32>(0.851, 0.325, 0.192);
-    let neutral = vec3<f32>(0.914, 0.882, 0.827);
-    let cool = vec3<f32>(0.231, 0.443, 0.780);
-    let t = clamp(hp, 0.0, 1.0);
-    if (t < 0.5) {
-        return mix(warm, neutral, t * 2.0);
-    }
-    return mix(neutral, cool, t * 2.0 - 1.0);
-}
-
 @vertex
 fn vs_main(in: VertexIn) -> VertexOut {
     var out: VertexOut;
@@ -52,7 +40,7 @@ fn vs_main(in: VertexIn) -> VertexOut {
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let albedo = warm_cool(in.hp);
+    let albedo = surface_palette(in.hp);
     if (style.lit == 0u) {
         return vec4<f32>(albedo, 1.0);
     }

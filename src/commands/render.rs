@@ -1,16 +1,18 @@
-//! `loudscape render` and `loudscape render-demo`: the window's passes, offscreen, to PNG.
+//! `loudscape render` and `loudscape render-demo`: the window's passes, offscreen, to PNG, with
+//! the axis labels and the legend (colour key, name) drawn over them in the background's ink.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use loudscape::data::cloud::PointCloud;
 use loudscape::data::freq_axis::FreqAxis;
+use loudscape::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::voxelize::VoxelSettings;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::{TransferPreset, VolumeSettings};
-use loudscape::ui::labels;
+use loudscape::ui::screenshot::{Overlay, draw_overlay};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -44,6 +46,11 @@ pub struct RenderArgs {
     /// Leave out the axis labels.
     #[arg(long)]
     pub no_labels: bool,
+    /// Leave out the legend (colour key and name).
+    #[arg(long)]
+    pub no_legend: bool,
+    #[command(flatten)]
+    pub colours: ColourArgs,
     /// Frequency axis of a song cloud: linear, log or mel (remapped from the bin frequencies
     /// in the metadata; no re-extraction). A timeline has no frequency axis: only linear.
     #[arg(long, default_value = "linear")]
@@ -62,6 +69,50 @@ pub struct RenderArgs {
     /// The PNG file to write (.png; not the input).
     #[arg(short, long)]
     pub output: PathBuf,
+}
+
+/// Colour maps and background of a picture.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ColourArgs {
+    /// hp colour map of points, surface and hp tint: classic, puor, cividis or viridis.
+    #[arg(long, default_value = "classic")]
+    pub colormap: String,
+    /// Colour map of the volume's transfer function: preset (the --tf's own ramp), viridis,
+    /// cividis, magma or inferno.
+    #[arg(long, default_value = "preset")]
+    pub tf_colormap: String,
+    /// Background: dark, or light for print (dark ink; the volume's ramp dark where dense).
+    #[arg(long, default_value = "dark")]
+    pub background: String,
+}
+
+impl ColourArgs {
+    /// Checks the names and writes them into `settings`.
+    pub fn apply(&self, settings: &mut RenderSettings) -> anyhow::Result<()> {
+        let hp = HpColourMap::parse(&self.colormap).with_context(|| {
+            format!(
+                "colour map '{}' is not one of {}",
+                self.colormap,
+                HpColourMap::names()
+            )
+        })?;
+        let density = DensityColourMap::parse(&self.tf_colormap).with_context(|| {
+            format!(
+                "transfer-function colour map '{}' is not one of {}",
+                self.tf_colormap,
+                DensityColourMap::names()
+            )
+        })?;
+        let background = Background::parse(&self.background).with_context(|| {
+            format!("background '{}' is not one of dark, light", self.background)
+        })?;
+        settings.colours = Colours {
+            hp,
+            density,
+            background,
+        };
+        Ok(())
+    }
 }
 
 /// Volume view options (also used by `voxelize` for --res and --smooth).
@@ -133,6 +184,8 @@ pub struct RenderDemoArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
+    #[command(flatten)]
+    pub colours: ColourArgs,
     /// Clouds to render (.ply).
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
@@ -148,7 +201,7 @@ fn render_to_file(
     camera: Option<Camera>,
     size: (u32, u32),
     settings: &RenderSettings,
-    labels: bool,
+    overlay: Overlay,
     output: &Path,
 ) -> anyhow::Result<()> {
     let view = match camera {
@@ -163,9 +216,7 @@ fn render_to_file(
     };
     let target =
         loudscape::render::headless::render_frame(gpu, renderer, Some(data), &view, settings);
-    if labels {
-        labels::draw_headless(gpu, &target, &view, cloud, data);
-    }
+    draw_overlay(gpu, &target, &view, cloud, data, settings, overlay);
     let image = target
         .read_rgba(&gpu.device, &gpu.queue)
         .with_context(|| format!("rendering {}", output.display()))?;
@@ -221,6 +272,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     settings.surface.method = method;
     settings.surface.iso_value = iso_value;
     args.volume.apply(&mut settings)?;
+    args.colours.apply(&mut settings)?;
     let cloud = load_cloud(&args.input)?;
     settings.points.size_px = args
         .point_size
@@ -241,7 +293,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         camera,
         size,
         &settings,
-        !args.no_labels,
+        Overlay {
+            labels: !args.no_labels,
+            legend: !args.no_legend,
+        },
         &args.output,
     )?;
     super::wrote(
@@ -299,6 +354,9 @@ pub fn prepare_grid(
 
 pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
     let size = parse_size(&args.size)?;
+    let mut colours = RenderSettings::default();
+    args.colours.apply(&mut colours)?;
+    let colours = colours.colours;
     // Every output is named up front and checked against every input, before any work.
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
     check_not_input(&args.out_dir, &inputs)?;
@@ -320,14 +378,19 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
         for (view, output) in ViewKind::ALL.into_iter().zip(outputs) {
             let mut settings = RenderSettings {
                 view,
+                colours,
                 ..Default::default()
             };
             settings.points.size_px = PointStyle::size_for(cloud.points.len());
             if matches!(view, ViewKind::Volume | ViewKind::Surface) {
                 prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
             }
+            let overlay = Overlay {
+                labels: true,
+                legend: true,
+            };
             render_to_file(
-                &gpu, &renderer, &cloud, &data, None, size, &settings, true, output,
+                &gpu, &renderer, &cloud, &data, None, size, &settings, overlay, output,
             )?;
             super::wrote(
                 output,

@@ -3,9 +3,12 @@
 //! loaded cloud. One pass a file, each beside its shader in shaders/ (same folders) and its CPU
 //! mirror: [`gpu`] (device, targets, read-back, layouts, frame uniforms), [`grid`] (voxelize),
 //! [`surface`] (marching tetrahedra, dual contouring, the draw), [`points`], [`lines`],
-//! [`markers`], [`volume`] (with [`transfer`]), [`composite`]; [`shaders`] composes the WGSL.
+//! [`markers`], [`volume`] (with [`transfer`]), [`composite`]; [`shaders`] composes the WGSL;
+//! [`colormap`] holds the colour maps and background every pass reads (the palette uniform).
 
 pub mod compare;
+pub mod colormap;
+pub mod colormap_data;
 pub mod composite;
 pub mod gpu;
 pub mod grid;

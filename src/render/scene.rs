@@ -8,8 +8,9 @@ use glam::{Mat4, Vec3};
 use crate::data::axes::Axes;
 use crate::data::cloud::{DataMode, PointCloud};
 use crate::data::freq_axis::{FreqAxis, FreqMapping};
+use crate::render::colormap::{Background, Colours, PaletteUniforms};
 use crate::render::gpu::frame::FrameBinding;
-use crate::render::gpu::target::{BACKGROUND, RenderTarget};
+use crate::render::gpu::target::RenderTarget;
 use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
 use crate::render::markers::{MarkerBox, MarkersPass};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
@@ -66,6 +67,8 @@ pub struct RenderSettings {
     /// Draw the points (level of detail) instead of the volume while the camera moves: for
     /// devices where a volume frame takes too long to orbit smoothly (software rasterizers).
     pub points_while_moving: bool,
+    /// Colour maps (hp, density) and the background (`render::colormap`).
+    pub colours: Colours,
 }
 
 impl Default for RenderSettings {
@@ -79,6 +82,7 @@ impl Default for RenderSettings {
             volume: VolumeSettings::default(),
             surface: SurfaceSettings::default(),
             points_while_moving: false,
+            colours: Colours::default(),
         }
     }
 }
@@ -283,6 +287,12 @@ pub fn data_box(_cloud: &PointCloud) -> (Vec3, Vec3) {
     (Vec3::splat(-1.0), Vec3::splat(1.0))
 }
 
+/// The clear colour of `background` (gamma-encoded, as the target holds it).
+fn clear_colour(background: Background) -> wgpu::Color {
+    let [r, g, b] = background.rgb().map(f64::from);
+    wgpu::Color { r, g, b, a: 1.0 }
+}
+
 /// Every pass, built once per device.
 pub struct Renderer {
     pub frame: FrameBinding,
@@ -322,6 +332,10 @@ impl Renderer {
         settings: &RenderSettings,
     ) {
         self.frame.write(queue, view);
+        self.frame.write_palette(
+            queue,
+            &PaletteUniforms::new(&settings.colours, settings.volume.preset),
+        );
         self.markers.prepare(queue, &settings.markers);
         if let Some(data) = data {
             self.points
@@ -347,12 +361,7 @@ impl Renderer {
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: BACKGROUND[0],
-                        g: BACKGROUND[1],
-                        b: BACKGROUND[2],
-                        a: 1.0,
-                    }),
+                    load: wgpu::LoadOp::Clear(clear_colour(settings.colours.background)),
                     store: wgpu::StoreOp::Store,
                 },
             })],

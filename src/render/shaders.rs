@@ -28,7 +28,7 @@ pub fn points() -> String {
 }
 
 pub fn lines() -> String {
-    compose(&[FRAME, LINES])
+    compose(&[FRAME, PALETTE, LINES])
 }
 
 pub fn markers() -> String {
@@ -60,7 +60,7 @@ pub fn dual_contour() -> String {
 }
 
 pub fn surface_draw() -> String {
-    compose(&[FRAME, SURFACE_DRAW])
+    compose(&[FRAME, PALETTE, SURFACE_DRAW])
 }
 
 /// Every shader module the app builds, by name, as handed to the GPU.

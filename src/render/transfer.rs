@@ -11,6 +11,11 @@
 //!   orange to pale yellow.
 //! - Glacial: `t = smoothstep(0.2, 1, s)`, which suppresses the low densities; opacity `1.6 t^2`
 //!   ramps steeply toward the dense cores; cool ramp from navy through blue to ice white.
+//!
+//! The ramp's colours can be swapped for a perceptually uniform map (viridis, cividis, magma,
+//! inferno: [`crate::render::colormap::DensityColourMap`]); the shape stays the preset's. The
+//! shader reads the ramp from the palette uniform, which src/render/colormap.rs fills from
+//! these stops or the chosen map.
 
 /// A transfer-function preset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -20,7 +25,7 @@ pub enum TransferPreset {
     Glacial,
 }
 
-/// Colour stops per preset (gamma-encoded RGB). Keep in sync with `ramp` in volume.wgsl.
+/// Colour stops per preset (gamma-encoded RGB), uploaded to the shader by colormap.rs.
 const CLASSIC: [[f32; 3]; 4] = [
     [0.14, 0.24, 0.58],
     [0.16, 0.62, 0.78],
@@ -66,7 +71,8 @@ impl TransferPreset {
         self as u32
     }
 
-    fn stops(self) -> &'static [[f32; 3]; 4] {
+    /// The preset's own four colour stops (the `Preset` density colour map).
+    pub fn stops(self) -> &'static [[f32; 3]; 4] {
         match self {
             TransferPreset::Classic => &CLASSIC,
             TransferPreset::Ember => &EMBER,
@@ -100,18 +106,40 @@ impl TransferPreset {
     }
 
     /// `width` colours from density 0 to 1 as RGBA8 over black, for a legend strip (opacity
-    /// shown as brightness).
+    /// shown as brightness), with the preset's own ramp on the dark background.
     pub fn legend(self, width: usize) -> Vec<[u8; 4]> {
-        (0..width)
-            .map(|i| {
-                let s = i as f32 / (width.max(2) - 1) as f32;
-                let [r, g, b, a] = self.sample(s);
-                let k = 0.25 + 0.75 * a;
-                let byte = |v: f32| (v * k * 255.0).round().clamp(0.0, 255.0) as u8;
-                [byte(r), byte(g), byte(b), 255]
-            })
-            .collect()
+        legend(self, &crate::render::colormap::Colours::default(), width)
     }
+}
+
+/// `width` colours of the transfer function (`preset` shaped, coloured by `colours`' density
+/// ramp) from density 0 to 1 as RGBA8, over `colours`' background: the colour mixed with the
+/// background by 0.25 + 0.75 of its opacity, so transparent densities fade toward the
+/// background as they do in the picture, and still show their hue.
+pub fn legend(
+    preset: TransferPreset,
+    colours: &crate::render::colormap::Colours,
+    width: usize,
+) -> Vec<[u8; 4]> {
+    let background = colours.background.rgb();
+    (0..width)
+        .map(|i| {
+            let s = i as f32 / (width.max(2) - 1) as f32;
+            let [r, g, b, a] = colours.transfer(preset, s);
+            let k = 0.25 + 0.75 * a;
+            let mix = |v: f32, bg: f32| {
+                (((v * k) + bg * (1.0 - k)) * 255.0)
+                    .round()
+                    .clamp(0.0, 255.0) as u8
+            };
+            let bg = if colours.background.is_light() {
+                background
+            } else {
+                [0.0; 3]
+            };
+            [mix(r, bg[0]), mix(g, bg[1]), mix(b, bg[2]), 255]
+        })
+        .collect()
 }
 
 /// Piecewise-linear ramp through four stops at t = 0, 1/3, 2/3, 1.

@@ -77,8 +77,7 @@ impl LoudscapeApp {
             let result = data
                 .set_freq_axis(&render_state.device, renderer, &loaded.cloud, axis)
                 .map(|()| {
-                    let labels =
-                        labels::axis_labels_for_axes(&data.axes, data.box_min, data.box_max);
+                    let labels = labels::axis_labels(&loaded.cloud, data);
                     (labels, data.freq.clone())
                 });
             resources.cache.invalidate();

@@ -3,14 +3,14 @@
 //! The window paints these with its egui painter each frame; the headless renderer runs egui
 //! once offscreen and draws the same shapes into the render target, so PNGs carry the same labels.
 
-use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect};
-use eframe::egui_wgpu;
+use eframe::egui::{self, Align2, Color32, FontId, Rect};
 use glam::Vec3;
 
 use crate::data::axes::Axis;
 use crate::data::cloud::PointCloud;
+use crate::render::colormap::Background;
 use crate::render::gpu::context::GpuContext;
-use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
+use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::SceneData;
 use crate::view::frame_view::FrameView;
 
@@ -52,13 +52,42 @@ pub fn axis_title(axis: &Axis, fallback: &str) -> String {
 
 /// Tick labels and axis titles for the box drawn by the scene.
 /// (The axes as the view shows them: `data.axes`, z on the frequency axis shown.)
-pub fn axis_labels(_cloud: &PointCloud, data: &SceneData) -> AxisLabels {
-    axis_labels_for_axes(&data.axes, data.box_min, data.box_max)
+/// The level axis's title names its reference (dBFS RMS, or dB re FS sine) by the cloud's mode.
+pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> AxisLabels {
+    with_references(
+        axis_labels_for_axes(&data.axes, data.box_min, data.box_max),
+        cloud,
+        &data.axes,
+    )
 }
 
 /// Tick labels and axis titles for a box `[min, max]` in data space.
 pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabels {
-    axis_labels_for_axes(&cloud.meta.axes, min, max)
+    with_references(
+        axis_labels_for_axes(&cloud.meta.axes, min, max),
+        cloud,
+        &cloud.meta.axes,
+    )
+}
+
+/// The titles of `labels` with the level axis's reference for `cloud`'s mode
+/// (`ui::legends::titled_with_reference`).
+fn with_references(
+    mut labels: AxisLabels,
+    cloud: &PointCloud,
+    axes: &crate::data::axes::Axes,
+) -> AxisLabels {
+    let units = [&axes.x.unit, &axes.y.unit, &axes.z.unit];
+    for label in labels.labels.iter_mut().filter(|l| l.title) {
+        let text = std::mem::take(&mut label.text);
+        label.text = crate::ui::legends::titled_with_reference(
+            cloud.meta.mode,
+            label.axis,
+            units[label.axis.min(2)],
+            text,
+        );
+    }
+    labels
 }
 
 /// Tick labels and axis titles of `axes` for a box `[min, max]` in data space.
@@ -119,6 +148,17 @@ fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3
 
 /// Paints labels projected through `view` into `rect` (the 3D view's place on screen, points).
 pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &AxisLabels) {
+    paint_on(painter, rect, view, labels, Background::Dark);
+}
+
+/// As [`paint`], in the ink of `background` (dark ink on the light background).
+pub fn paint_on(
+    painter: &egui::Painter,
+    rect: Rect,
+    view: &FrameView,
+    labels: &AxisLabels,
+    background: Background,
+) {
     let scale = rect.width() / view.width.max(1) as f32;
     let edges: Vec<Option<Vec3>> = (0..3).map(|axis| label_edge(labels, view, axis)).collect();
     let mut placed: Vec<Rect> = Vec::new();
@@ -147,14 +187,20 @@ pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &Axi
         if !rect.expand(40.0).contains(pos) {
             continue;
         }
-        let (size, color) = if label.title {
-            (14.0, Color32::from_rgb(225, 230, 238))
-        } else {
-            (12.0, Color32::from_rgb(160, 168, 182))
-        };
+        let [r, g, b] = background.ink(label.title);
+        let (size, color) = (
+            if label.title { 14.0 } else { 12.0 },
+            Color32::from_rgb(r, g, b),
+        );
         // Skip a label that would overlap one already placed (crowded ticks at some angles).
         let galley = painter.layout_no_wrap(label.text.clone(), FontId::proportional(size), color);
-        let text_rect = align.anchor_size(pos, galley.size());
+        let mut text_rect = align.anchor_size(pos, galley.size());
+        if label.title {
+            // A long title beside the picture's edge moves in rather than being cut off.
+            let dx = (rect.left() + 2.0 - text_rect.left()).max(0.0)
+                + (rect.right() - 2.0 - text_rect.right()).min(0.0);
+            text_rect = text_rect.translate(egui::vec2(dx, 0.0));
+        }
         if placed
             .iter()
             .any(|r: &Rect| r.expand(2.0).intersects(text_rect))
@@ -175,64 +221,9 @@ pub fn draw_headless(
     data: &SceneData,
 ) {
     let labels = axis_labels(cloud, data);
-    let (w, h) = (target.width, target.height);
-    let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32, h as f32));
-    let ctx = egui::Context::default();
-    let input = egui::RawInput {
-        screen_rect: Some(rect),
-        ..Default::default()
-    };
-    let mut output = ctx.run_ui(input, |ui| {
-        paint(ui.painter(), rect, view, &labels);
+    crate::ui::screenshot::paint_headless(gpu, target, |painter, rect| {
+        paint(painter, rect, view, &labels);
     });
-    let shapes = std::mem::take(&mut output.shapes);
-    let primitives = ctx.tessellate(shapes, 1.0);
-    let mut renderer = egui_wgpu::Renderer::new(
-        &gpu.device,
-        COLOR_FORMAT,
-        egui_wgpu::RendererOptions::default(),
-    );
-    for (id, deltas) in &output.textures_delta.set {
-        for delta in deltas {
-            renderer.update_texture(&gpu.device, &gpu.queue, *id, delta);
-        }
-    }
-    // Applied above; the renderer is dropped at the end, which frees its textures.
-    output.textures_delta.clear();
-    let screen = egui_wgpu::ScreenDescriptor {
-        size_in_pixels: [w, h],
-        pixels_per_point: 1.0,
-    };
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("labels::labels"),
-        });
-    let extra =
-        renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
-    {
-        let mut pass = encoder
-            .begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("labels::labels"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target.color_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            })
-            .forget_lifetime();
-        renderer.render(&mut pass, &primitives, &screen);
-    }
-    gpu.queue
-        .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
 }
 
 /// Lines describing a cloud for the side panel: where it came from and its loudness metrics.

@@ -80,7 +80,7 @@ impl LoudscapeApp {
                 egui::Slider::new(&mut self.settings.points.min_scalar, 0.0..=1.0)
                     .text("min loudness"),
             );
-            legends::hp(ui);
+            legends::hp(ui, self.settings.colours.hp);
         }
         if self.settings.view != ViewKind::Points {
             self.grid_controls(ui);
@@ -90,8 +90,10 @@ impl LoudscapeApp {
         }
         if self.settings.view == ViewKind::Surface {
             self.surface_controls(ui);
-            legends::surface(ui);
+            legends::surface(ui, self.settings.colours.hp);
         }
+
+        self.colour_controls(ui);
 
         ui.add_space(6.0);
         ui.label(RichText::new("Camera").strong());
@@ -217,7 +219,9 @@ impl LoudscapeApp {
                 ui.selectable_value(&mut volume.preset, preset, preset.name());
             }
         });
-        legends::transfer(ui, volume.preset);
+        self.density_colour_controls(ui);
+        let volume = &mut self.settings.volume;
+        legends::transfer(ui, volume.preset, &self.settings.colours);
         ui.add(egui::Slider::new(&mut volume.density_scale, 0.1..=4.0).text("density"));
         ui.add(egui::Slider::new(&mut volume.opacity_scale, 0.1..=4.0).text("opacity scale"));
         ui.add(

@@ -1,5 +1,6 @@
 //! What the window remembers between runs ([`Remembered`], kept by eframe's storage): the
-//! files, view, camera, surface and volume choices, and audio picked by hand for a cloud.
+//! files, view, camera, surface and volume choices, colours, and audio picked by hand for a
+//! cloud.
 
 use std::path::PathBuf;
 
@@ -26,6 +27,9 @@ pub struct Remembered {
     pub surface_method: Option<String>,
     /// Audio picked by hand for a cloud whose recorded source moved: cloud path -> audio path.
     pub audio_for: Vec<(PathBuf, PathBuf)>,
+    /// Colour maps and background (`render::colormap::Colours`).
+    #[serde(default)]
+    pub colours: Option<crate::render::colormap::Colours>,
 }
 
 impl LoudscapeApp {
@@ -45,6 +49,7 @@ impl LoudscapeApp {
             hp_tint: Some(self.settings.volume.hp_tint),
             surface_method: Some(self.settings.surface.method.short_name().to_string()),
             audio_for: self.audio_for.clone(),
+            colours: Some(self.settings.colours),
         }
     }
 
@@ -81,6 +86,9 @@ impl LoudscapeApp {
                 .and_then(crate::render::surface::SurfaceMethod::parse)
             {
                 self.settings.surface.method = method;
+            }
+            if let Some(colours) = r.colours {
+                self.settings.colours = colours;
             }
             self.audio_for = r.audio_for;
             // The camera and the files go together: the view comes back as it was left.
@@ -119,5 +127,30 @@ impl LoudscapeApp {
                 (None, true) => {}
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Remembered;
+    use crate::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
+
+    #[test]
+    fn colours_are_remembered_and_older_records_read_without_them() {
+        let colours = Colours {
+            hp: HpColourMap::PuOr,
+            density: DensityColourMap::Magma,
+            background: Background::Light,
+        };
+        let remembered = Remembered {
+            colours: Some(colours),
+            ..Default::default()
+        };
+        let text = serde_json::to_string(&remembered).expect("serialize");
+        let back: Remembered = serde_json::from_str(&text).expect("deserialize");
+        assert_eq!(back.colours, Some(colours));
+        let old: Remembered =
+            serde_json::from_str(r#"{"files": [], "show_box": true}"#).expect("old");
+        assert_eq!(old.colours, None);
     }
 }

@@ -1,15 +1,20 @@
 //! Screenshots of the 3D view: the same passes as the window, rendered offscreen at any size with
-//! the axis labels drawn over them, saved as PNG through a temporary file and a rename (so a
-//! reader never sees half a file).
+//! the axis labels and the legend (colour key, the song's or timeline's name; `ui::legends`)
+//! drawn over them, saved as PNG through a temporary file and a rename (so a reader never sees
+//! half a file). [`paint_headless`] runs egui once offscreen and draws its shapes into a render
+//! target, for every overlay of a headless picture.
 
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
 
+use eframe::egui::{self, Pos2, Rect};
+use eframe::egui_wgpu;
 use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
 use crate::files::TempFile;
 use crate::render::gpu::context::GpuContext;
+use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
 use crate::view::frame_view::FrameView;
 
@@ -38,12 +43,120 @@ pub fn render_view(
         &view,
         settings,
     );
-    if let Some((cloud, data)) = scene
-        && settings.show_box
-    {
-        crate::ui::labels::draw_headless(gpu, &target, &view, cloud, data);
+    if let Some((cloud, data)) = scene {
+        let overlay = Overlay {
+            labels: settings.show_box,
+            legend: true,
+        };
+        draw_overlay(gpu, &target, &view, cloud, data, settings, overlay);
     }
     Ok(target.read_rgba(&gpu.device, &gpu.queue)?)
+}
+
+/// What is drawn over a headless picture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Overlay {
+    /// Axis tick labels and titles.
+    pub labels: bool,
+    /// The colour key and the name (`ui::legends::paint_picture`).
+    pub legend: bool,
+}
+
+/// Draws the axis labels and the legend of `cloud`, as `settings` show it, over what `target`
+/// holds, in the ink of the settings' background.
+pub fn draw_overlay(
+    gpu: &GpuContext,
+    target: &RenderTarget,
+    view: &FrameView,
+    cloud: &PointCloud,
+    data: &SceneData,
+    settings: &RenderSettings,
+    overlay: Overlay,
+) {
+    if !overlay.labels && !overlay.legend {
+        return;
+    }
+    let labels = crate::ui::labels::axis_labels(cloud, data);
+    let legend = crate::ui::legends::picture_legend(cloud, settings);
+    let background = settings.colours.background;
+    paint_headless(gpu, target, |painter, rect| {
+        if overlay.labels {
+            crate::ui::labels::paint_on(painter, rect, view, &labels, background);
+        }
+        if overlay.legend {
+            crate::ui::legends::paint_picture(painter, rect, &legend);
+        }
+    });
+}
+
+/// Runs egui once offscreen over the whole of `target` (one point a pixel), lets `paint` draw
+/// with its painter, and renders the shapes into `target` over what it holds.
+pub fn paint_headless(
+    gpu: &GpuContext,
+    target: &RenderTarget,
+    paint: impl FnOnce(&egui::Painter, Rect),
+) {
+    let (w, h) = (target.width, target.height);
+    let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32, h as f32));
+    let ctx = egui::Context::default();
+    let input = egui::RawInput {
+        screen_rect: Some(rect),
+        ..Default::default()
+    };
+    let mut paint = Some(paint);
+    let mut output = ctx.run_ui(input, |ui| {
+        if let Some(paint) = paint.take() {
+            paint(ui.painter(), rect);
+        }
+    });
+    let shapes = std::mem::take(&mut output.shapes);
+    let primitives = ctx.tessellate(shapes, 1.0);
+    let mut renderer = egui_wgpu::Renderer::new(
+        &gpu.device,
+        COLOR_FORMAT,
+        egui_wgpu::RendererOptions::default(),
+    );
+    for (id, deltas) in &output.textures_delta.set {
+        for delta in deltas {
+            renderer.update_texture(&gpu.device, &gpu.queue, *id, delta);
+        }
+    }
+    // Applied above; the renderer is dropped at the end, which frees its textures.
+    output.textures_delta.clear();
+    let screen = egui_wgpu::ScreenDescriptor {
+        size_in_pixels: [w, h],
+        pixels_per_point: 1.0,
+    };
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("screenshot::overlay"),
+        });
+    let extra =
+        renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
+    {
+        let mut pass = encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("screenshot::overlay"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target.color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            })
+            .forget_lifetime();
+        renderer.render(&mut pass, &primitives, &screen);
+    }
+    gpu.queue
+        .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
 }
 
 /// Writes `image` to `path` as PNG: first to `PATH.partial` beside it, then renamed; the partial

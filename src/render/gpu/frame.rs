@@ -38,9 +38,11 @@ impl FrameView {
     }
 }
 
-/// The uniform buffer and bind group (group 0) holding [`FrameUniforms`].
+/// The uniform buffers and bind group (group 0): [`FrameUniforms`] at binding 0, the palette
+/// (`crate::render::colormap::PaletteUniforms`) at binding 1.
 pub struct FrameBinding {
     pub buffer: wgpu::Buffer,
+    pub palette: wgpu::Buffer,
     pub layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
 }
@@ -55,21 +57,37 @@ impl FrameBinding {
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame::layout"),
-            entries: &[uniform_entry(
-                0,
-                wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-            )],
+            entries: &[
+                uniform_entry(
+                    0,
+                    wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+                ),
+                uniform_entry(1, wgpu::ShaderStages::VERTEX_FRAGMENT),
+            ],
+        });
+        let palette = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame::palette"),
+            size: crate::render::colormap::PALETTE_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("frame::bind_group"),
             layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buffer.as_entire_binding(),
-            }],
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: palette.as_entire_binding(),
+                },
+            ],
         });
         Self {
             buffer,
+            palette,
             layout,
             bind_group,
         }
@@ -77,5 +95,14 @@ impl FrameBinding {
 
     pub fn write(&self, queue: &wgpu::Queue, view: &FrameView) {
         queue.write_buffer(&self.buffer, 0, bytemuck::bytes_of(&view.uniforms()));
+    }
+
+    /// Writes the colour maps and background every pass reads (see `render::colormap`).
+    pub fn write_palette(
+        &self,
+        queue: &wgpu::Queue,
+        palette: &crate::render::colormap::PaletteUniforms,
+    ) {
+        queue.write_buffer(&self.palette, 0, &palette.bytes());
     }
 }
