@@ -49,7 +49,7 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a view of a cloud to a PNG file, without a window.
-    Render(commands::render::RenderArgs),
+    Render(Box<commands::render::RenderArgs>),
     /// Render every view of the given clouds to PNG files in a folder.
     RenderDemo(commands::render::RenderDemoArgs),
     /// Voxelize a cloud and write its density and mean-hp grids (.npy or .nrrd).
@@ -181,7 +181,7 @@ fn main() -> ExitCode {
                 seek: cli.seek,
             })
         }),
-        Some(Command::Render(args)) => commands::render::run(args),
+        Some(Command::Render(args)) => commands::render::run(*args),
         Some(Command::RenderDemo(args)) => commands::render::run_demo(args),
         Some(Command::Voxelize(args)) => commands::voxelize::run(args),
         Some(Command::Mesh(args)) => commands::mesh::run(args),

@@ -26,10 +26,16 @@ pub enum CompareView {
     Difference(DifferenceMeasure),
 }
 
-/// The Difference view's volume settings: the shown grid's hp is the diverging position.
+/// The Difference view's volume settings: the shown grid's hp is the diverging position, so
+/// the hp map is the Classic red-white-blue one the legend draws, whatever map the views use
+/// (Cividis or Viridis are not diverging).
 pub fn difference_settings(base: &RenderSettings) -> RenderSettings {
     RenderSettings {
         view: ViewKind::Volume,
+        colours: crate::render::colormap::Colours {
+            hp: crate::render::colormap::HpColourMap::Classic,
+            ..base.colours
+        },
         volume: VolumeSettings {
             preset: TransferPreset::Classic,
             hp_tint: true,
