@@ -6,6 +6,7 @@
 //! [`labels`] (axis labels, also drawn headless into a render target); [`screenshot`] renders a
 //! view offscreen and saves PNGs, [`audio`] is the transport bar.
 
+mod alsa_quiet;
 pub mod app;
 pub mod audio;
 pub mod bridge;
