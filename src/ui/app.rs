@@ -87,6 +87,10 @@ pub fn run(options: WindowOptions) -> anyhow::Result<()> {
 impl LoudscapeApp {
     fn new(options: WindowOptions, remembered: Option<Remembered>) -> Self {
         let persist = options.screenshot.is_none();
+        let iso_sweep = options
+            .screenshot
+            .as_ref()
+            .and_then(|_| crate::ui::iso_sweep::IsoSweep::from_env());
         let mut app = Self {
             song: None,
             timeline: None,
@@ -119,6 +123,7 @@ impl LoudscapeApp {
             surface_error: None,
             surface_empty: false,
             surface_busy: false,
+            iso_sweep,
             camera_fitted: false,
             busy: None,
             busy_shown: false,
@@ -401,7 +406,11 @@ impl eframe::App for LoudscapeApp {
             self.save_screenshot(frame);
         }
         self.remember_audio_choice();
-        self.handle_screenshot(&ctx);
+        if self.step_iso_sweep(frame) {
+            self.handle_screenshot(&ctx);
+        } else {
+            ctx.request_repaint();
+        }
         if self.shown_state() != before {
             // A control changed what the panels or the view show: draw it now, not at the next
             // mouse move (the panels were drawn before the change).

@@ -11,6 +11,7 @@ pub mod app;
 pub mod audio;
 pub mod bridge;
 mod hover;
+mod iso_sweep;
 pub mod labels;
 mod legends;
 mod open;

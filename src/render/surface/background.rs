@@ -146,6 +146,7 @@ pub(crate) fn run_job(device: &wgpu::Device, queue: &wgpu::Queue, methods: &Meth
         ..Default::default()
     };
     let result = extract_until_fits(
+        true,
         device,
         queue,
         methods,

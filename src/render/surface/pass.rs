@@ -251,6 +251,7 @@ impl SurfacePass {
         let mut state = surface.lock();
         state.requested = None;
         extract_until_fits(
+            false,
             &self.device,
             queue,
             self.methods(),
@@ -371,10 +372,42 @@ fn grow(
     Ok(())
 }
 
+/// Maps a MAP_READ buffer by polling the device without blocking it, a millisecond apart. A
+/// blocking poll holds the device's fence while it waits, so every `queue.submit` of the
+/// window's frames (which needs that fence) would wait for the whole extraction.
+fn map_polling(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, SurfaceError> {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU8, Ordering};
+    let state = Arc::new(AtomicU8::new(0));
+    let callback_state = state.clone();
+    let slice = buffer.slice(..);
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        callback_state.store(if result.is_ok() { 1 } else { 2 }, Ordering::Release);
+    });
+    loop {
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| SurfaceError::Readback(e.to_string()))?;
+        match state.load(Ordering::Acquire) {
+            0 => std::thread::sleep(std::time::Duration::from_millis(1)),
+            1 => break,
+            _ => return Err(SurfaceError::Readback("mapping the counters failed".into())),
+        }
+    }
+    let bytes = slice
+        .get_mapped_range()
+        .map_err(|e| SurfaceError::Readback(e.to_string()))?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}
+
 /// Extracts the surface into `state`'s buffers and waits for its size, growing the buffers and
 /// extracting again until it fits (or cannot fit: then the error, with the counts kept).
+/// `background`: waits by polling (see [`map_polling`]), so other threads can submit meanwhile.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn extract_until_fits(
+    background: bool,
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     methods: &Methods,
@@ -426,8 +459,11 @@ pub(crate) fn extract_until_fits(
         }
         let (vertex_capacity, index_capacity) = (buffers.vertex_capacity, buffers.index_capacity);
         queue.submit([encoder.finish()]);
-        let bytes =
-            map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?;
+        let bytes = if background {
+            map_polling(device, &staging)?
+        } else {
+            map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?
+        };
         let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
         let counts = SurfaceCounts {
             method: settings.method,

@@ -49,6 +49,8 @@ pub(crate) struct SurfaceState {
     pub(crate) spare: Option<MeshBuffers>,
     /// The surface last asked of the background extraction, until it is installed.
     pub(crate) requested: Option<CacheKey>,
+    /// Background extractions installed so far.
+    pub(crate) installed: u64,
 }
 
 /// A finished background extraction, waiting to be installed.
@@ -147,9 +149,16 @@ impl ExtractedSurface {
             state.spare = old;
         }
         state.key = Some(finished.key);
+        state.installed += 1;
         state.counts = finished.counts;
         state.error = finished.error;
         true
+    }
+
+    /// How many background extractions were installed (fewer than requests when they were
+    /// coalesced).
+    pub fn installed(&self) -> u64 {
+        self.lock().installed
     }
 
     /// The isovalue of the surface on screen (None before the first extraction).
