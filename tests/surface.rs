@@ -300,7 +300,8 @@ fn buffers_grow_until_the_surface_fits() {
         let mesh = extract(&gpu, &small, &grid, method, 0.5);
         assert_eq!(mesh.triangle_count(), triangles);
 
-        // Interactive path: the size arrives a frame or two late, then the buffers grow.
+        // Interactive path: extracted on the background thread (which grows its buffers until
+        // the surface fits); frames go on meanwhile and the result is installed when ready.
         let small = SurfacePass::with_capacity(&gpu.device, &frame, 64, 96);
         let settings = SurfaceSettings {
             method,
@@ -319,7 +320,11 @@ fn buffers_grow_until_the_surface_fits() {
             if !surface.needs_another_frame() {
                 break;
             }
-            assert!(frames < 50, "{}: the surface never settled", method.name());
+            assert!(
+                frames < 12_000,
+                "{}: the surface never settled",
+                method.name()
+            );
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
         let counts = surface.counts().expect("counts");
@@ -327,6 +332,60 @@ fn buffers_grow_until_the_surface_fits() {
         assert_eq!(counts.triangles() as usize, triangles);
         let mesh = small.read_mesh(&gpu.queue, &surface).expect("read");
         assert_eq!(mesh.triangle_count(), triangles);
+    }
+}
+
+/// The window's path: an isovalue changed on every frame (a dragged slider) never waits for the
+/// GPU, the last mesh stays drawable meanwhile, and once the requests stop the surface shown is
+/// the one of the last isovalue, equal to a blocking extraction of it.
+#[test]
+fn interactive_isovalue_sweep_ends_on_the_last_value() {
+    let gpu = common::gpu();
+    let grid = grid_from(&gpu, 48, torus);
+    let pass = surface_pass(&gpu);
+    for method in [MT, DC] {
+        let surface = ExtractedSurface::new();
+        let frame = |iso_value: f32| {
+            let settings = SurfaceSettings {
+                method,
+                iso_value,
+                lit: true,
+            };
+            let mut encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            pass.prepare(&gpu.queue, &mut encoder, &surface, Some(&grid), &settings);
+            gpu.queue.submit([encoder.finish()]);
+        };
+        let sweep: Vec<f32> = (0..=16).map(|i| 0.3 + 0.02 * i as f32).collect();
+        let last = *sweep.last().unwrap();
+        let reference = extract(&gpu, &surface_pass(&gpu), &grid, method, last);
+        let mut busy_frames = 0;
+        for &iso in &sweep {
+            frame(iso);
+            busy_frames += usize::from(surface.is_extracting());
+        }
+        assert!(busy_frames > 0, "the sweep never ran in the background");
+        let mut frames = 0;
+        while surface.needs_another_frame() {
+            frame(last);
+            frames += 1;
+            assert!(
+                frames < 12_000,
+                "{}: the sweep never settled",
+                method.name()
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        assert_eq!(surface.shown_iso_value(), Some(last), "{}", method.name());
+        let mesh = pass.read_mesh(&gpu.queue, &surface).expect("read");
+        assert_eq!(
+            mesh.triangle_count(),
+            reference.triangle_count(),
+            "{}",
+            method.name()
+        );
+        assert!(mesh.triangle_count() > 0);
     }
 }
 

@@ -13,10 +13,10 @@ use loudscape::view::frame_view::FrameView;
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// The song cloud to measure with (points and volume parts).
+    /// The cloud to measure with (points and volume parts; a timeline gets its 224^3 grid).
     #[arg(default_value = super::args::DEMO_SONG)]
     pub input: PathBuf,
-    /// Frame size as WIDTHxHEIGHT.
+    /// Frame size as WIDTHxHEIGHT (points and volume frames).
     #[arg(long, default_value = "1280x720")]
     pub size: String,
     /// Frames per measurement.
@@ -78,6 +78,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         }
     }
     let wants = |part: &str| args.only.is_empty() || args.only.iter().any(|p| p == part);
+    // A bad size fails first thing, not after minutes of other parts.
+    let size = super::args::parse_size(&args.size)?;
     if let Some(dir) = &args.fields_dir
         && !dir.is_dir()
     {
@@ -87,7 +89,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         bench_points(&args)?;
     }
     if wants("volume") {
-        super::bench_volume::run(&args.input, args.runs, args.export_points.as_ref())?;
+        super::bench_volume::run(&args.input, size, args.runs, args.export_points.as_ref())?;
     }
     if wants("surface") {
         let surfaces = super::bench_surface::run(args.runs, args.iso, args.fields_dir.as_deref())?;

@@ -121,8 +121,14 @@ fn export(points: &[Point], path: &Path, input: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One line per stage: name, median ms, runs.
-pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow::Result<()> {
+/// One line per stage: name, median ms, runs. The song stages and the volume frame use INPUT
+/// (its own grid resolution: 128^3 for a song, 224^3 for a timeline) and the frame `size`.
+pub fn run(
+    input: &Path,
+    size: (u32, u32),
+    runs: usize,
+    export_points: Option<&PathBuf>,
+) -> anyhow::Result<()> {
     let runs = runs.max(1);
     let gpu = GpuContext::new_headless()?;
     let timer = GpuTimer::new(&gpu);
@@ -134,7 +140,15 @@ pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow
     let renderer = Renderer::new(&gpu.device);
 
     let (song, song_name) = song_cloud(input)?;
-    println!("song: {song_name}");
+    let settings = RenderSettings {
+        view: ViewKind::Volume,
+        ..Default::default()
+    };
+    let song_resolution = settings.voxels.resolution_for(song.meta.mode);
+    println!(
+        "song: {song_name} ({} points, {song_resolution}^3 grid)",
+        song.points.len()
+    );
     let large = PointCloud::synthetic(synthetic_song(LARGE_CLOUD_POINTS, 2), DataMode::Timeline);
     if let Some(dir) = export_points {
         std::fs::create_dir_all(dir)
@@ -152,8 +166,13 @@ pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow
         wgpu::Features::TIMESTAMP_QUERY,
     );
     let stages: [(&str, &PointCloud, u32, f32); 4] = [
-        ("voxelize song", &song, 128, 0.0),
-        ("voxelize song, smoothed (sigma 1)", &song, 128, 1.0),
+        ("voxelize song", &song, song_resolution, 0.0),
+        (
+            "voxelize song, smoothed (sigma 1)",
+            &song,
+            song_resolution,
+            1.0,
+        ),
         ("voxelize 2M points", &large, 224, 0.0),
         ("voxelize 2M points, smoothed (sigma 1)", &large, 224, 1.0),
     ];
@@ -205,14 +224,10 @@ pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow
         }
     }
 
-    // One volume frame of the song at 1280x720, at rest (full quality).
+    // One volume frame of the song at the frame size, at rest (full quality) and moving.
     let mut data = SceneData::new(&gpu.device, &renderer, &song);
-    let settings = RenderSettings {
-        view: ViewKind::Volume,
-        ..Default::default()
-    };
     data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &song, &settings.voxels)?;
-    let (width, height) = (1280, 720);
+    let (width, height) = size;
     let target = RenderTarget::new(&gpu.device, width, height);
     let at_rest = FrameView::fitted(
         Camera::default(),
@@ -233,7 +248,7 @@ pub fn run(input: &Path, runs: usize, export_points: Option<&PathBuf>) -> anyhow
             }
         }
         println!(
-            "volume frame {width}x{height} ({}, 128^3, step {} voxel): {:.2} ms",
+            "volume frame {width}x{height} ({}, {song_resolution}^3, step {} voxel): {:.2} ms",
             if moving { "moving" } else { "at rest" },
             settings.volume.step(moving),
             median(times)

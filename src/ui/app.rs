@@ -91,6 +91,10 @@ pub fn run(options: WindowOptions) -> anyhow::Result<()> {
 impl LoudscapeApp {
     fn new(options: WindowOptions, remembered: Option<Remembered>) -> Self {
         let persist = options.screenshot.is_none();
+        let iso_sweep = options
+            .screenshot
+            .as_ref()
+            .and_then(|_| crate::ui::iso_sweep::IsoSweep::from_env());
         let mut app = Self {
             song: None,
             timeline: None,
@@ -122,6 +126,8 @@ impl LoudscapeApp {
             keep_camera_loads: 0,
             surface_error: None,
             surface_empty: false,
+            surface_busy: false,
+            iso_sweep,
             camera_fitted: false,
             busy: None,
             busy_shown: false,
@@ -335,6 +341,9 @@ impl LoudscapeApp {
             {
                 paint_readings(&painter, rect, pos, &hover.readings);
             }
+            if self.surface_busy {
+                busy_badge(&painter, rect, "extracting surface…");
+            }
         } else {
             let text = if self.loading.is_empty() {
                 "Drop a song or a loudscape .ply file here, or run: loudscape song.ogg [timeline.ply]"
@@ -376,6 +385,17 @@ impl eframe::App for LoudscapeApp {
         self.apply_freq_axis(frame);
         self.poll_compare(&ctx, frame);
         self.fetch_grid(frame);
+        self.surface_busy = self.settings.view == ViewKind::Surface
+            && frame
+                .wgpu_render_state()
+                .zip(self.active().map(|l| l.id))
+                .is_some_and(|(render_state, id)| {
+                    ViewResources::surface_status(render_state, id).2
+                });
+        if self.surface_busy {
+            // Come back for the finished surface; the frames in between only composite.
+            ctx.request_repaint_after(Duration::from_millis(30));
+        }
         if std::mem::take(&mut self.needs_repaint) {
             ctx.request_repaint();
         }
@@ -426,7 +446,11 @@ impl eframe::App for LoudscapeApp {
             self.save_screenshot(frame);
         }
         self.remember_audio_choice();
-        self.handle_screenshot(&ctx);
+        if self.step_iso_sweep(frame) {
+            self.handle_screenshot(&ctx);
+        } else {
+            ctx.request_repaint();
+        }
         if self.shown_state() != before {
             // A control changed what the panels or the view show: draw it now, not at the next
             // mouse move (the panels were drawn before the change).
@@ -452,6 +476,46 @@ impl LoudscapeApp {
             self.camera,
         )
     }
+}
+
+/// A spinner and `text` in the top-left corner of the 3D view, over a dark plate.
+fn busy_badge(painter: &egui::Painter, rect: egui::Rect, text: &str) {
+    let font = egui::FontId::proportional(14.0);
+    let galley = painter.layout_no_wrap(text.into(), font, Color32::from_gray(220));
+    let origin = rect.min + egui::vec2(12.0, 10.0);
+    let spinner = 14.0;
+    let plate = egui::Rect::from_min_size(
+        origin,
+        egui::vec2(
+            spinner + 8.0 + galley.size().x,
+            galley.size().y.max(spinner),
+        ),
+    )
+    .expand(5.0);
+    painter.rect_filled(plate, 4.0, labels::LABEL_PLATE);
+    // The spinner: an arc turning with time (egui's Spinner needs a Ui of its own).
+    let time = painter.ctx().input(|i| i.time);
+    let centre = origin + egui::vec2(spinner * 0.5, plate.height() * 0.5 - 5.0);
+    let start = time * 4.0;
+    let points: Vec<egui::Pos2> = (0..=20)
+        .map(|i| {
+            let angle = start + f64::from(i) / 20.0 * std::f64::consts::PI * 1.5;
+            centre + spinner * 0.45 * egui::vec2(angle.cos() as f32, angle.sin() as f32)
+        })
+        .collect();
+    painter.add(egui::Shape::line(
+        points,
+        egui::Stroke::new(2.0, Color32::from_rgb(230, 190, 110)),
+    ));
+    painter.galley(
+        origin
+            + egui::vec2(
+                spinner + 8.0,
+                (plate.height() - 10.0 - galley.size().y) * 0.5,
+            ),
+        galley,
+        Color32::from_gray(220),
+    );
 }
 
 /// The divisor of the moving resolution after a frame that took `frame_ms` (None: the frame

@@ -37,7 +37,8 @@ pub struct AudioPanel {
 impl AudioPanel {
     pub fn new(open_device: bool) -> Self {
         let player = if open_device {
-            Player::new(&RodioBackend)
+            // Without ALSA's own lines on stderr (eight on a machine without a sound card).
+            crate::ui::alsa_quiet::quietly(|| Player::new(&RodioBackend))
         } else {
             Player::new(&NoBackend)
         };

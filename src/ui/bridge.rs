@@ -303,6 +303,12 @@ impl CallbackTrait for ViewCallback {
             res.target = Some(target);
             res.cache.invalidate();
         }
+        // A surface finished in the background: the scene shows it from this frame on.
+        if let Some(data) = self.cloud_id.and_then(|id| res.scenes.get(&id))
+            && data.surface.install_finished()
+        {
+            res.cache.invalidate();
+        }
         let key = RenderKey::new(
             &self.view,
             &self.settings,
@@ -319,11 +325,9 @@ impl CallbackTrait for ViewCallback {
         let data = self.cloud_id.and_then(|id| res.scenes.get(&id));
         res.renderer
             .render(queue, encoder, target, data, &self.view, &self.settings);
-        let complete = !data.is_some_and(|d| {
-            self.settings.view == crate::render::scene::ViewKind::Surface
-                && d.surface.needs_another_frame()
-        });
-        res.cache.finish(key, complete);
+        // Complete even while a surface is extracted in the background: the last mesh is what
+        // the view shows until the new one is installed (above).
+        res.cache.finish(key, true);
         Vec::new()
     }
 

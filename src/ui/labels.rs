@@ -14,6 +14,9 @@ use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::SceneData;
 use crate::view::frame_view::FrameView;
 
+/// The translucent plate under each label: the background colour, mostly opaque.
+pub const LABEL_PLATE: Color32 = Color32::from_rgba_premultiplied(10, 11, 15, 190);
+
 /// A tick label or an axis title, placed along one axis of the box.
 #[derive(Clone, Debug)]
 pub struct Label {
@@ -208,6 +211,9 @@ pub fn paint_on(
             continue;
         }
         placed.push(text_rect);
+        // A dark plate under the text keeps it readable over bright points, surfaces and the
+        // volume (tick labels sat on the cloud at some angles and vanished in it).
+        painter.rect_filled(text_rect.expand2(egui::vec2(3.0, 1.0)), 3.0, LABEL_PLATE);
         painter.galley(text_rect.min, galley, color);
     }
 }

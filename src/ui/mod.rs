@@ -6,6 +6,7 @@
 //! [`labels`] (axis labels, also drawn headless into a render target); [`screenshot`] renders a
 //! view offscreen and saves PNGs, [`audio`] is the transport bar.
 
+mod alsa_quiet;
 pub mod app;
 pub mod audio;
 pub mod bridge;
@@ -15,6 +16,7 @@ mod compare_window;
 mod colour_controls;
 mod freq_axis;
 mod hover;
+mod iso_sweep;
 pub mod labels;
 pub mod legends;
 mod open;

@@ -250,7 +250,12 @@ impl LoudscapeApp {
         ui.add(egui::Slider::new(&mut surface.iso_value, 0.0..=1.0).text("isovalue"))
             .on_hover_text("The loudness density the surface encloses");
         ui.checkbox(&mut surface.lit, "lit from above");
-        if let Some(error) = &self.surface_error {
+        if self.surface_busy {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label("extracting surface…");
+            });
+        } else if let Some(error) = &self.surface_error {
             ui.colored_label(Color32::from_rgb(240, 120, 100), error);
         } else if self.surface_empty {
             ui.label(

@@ -59,6 +59,10 @@ pub(super) struct LoudscapeApp {
     pub(super) camera_fitted: bool,
     /// The last extraction found no surface (the isovalue is above every voxel).
     pub(super) surface_empty: bool,
+    /// A surface is being extracted in the background (the last one is shown meanwhile).
+    pub(super) surface_busy: bool,
+    /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
+    pub(super) iso_sweep: Option<crate::ui::iso_sweep::IsoSweep>,
     /// A line of news that is not an error (where a screenshot went), in the normal colour.
     pub(super) notice: Option<String>,
     /// Draw again next frame (the surface is still growing its buffers).

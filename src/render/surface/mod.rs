@@ -14,14 +14,15 @@
 //! `SceneData`). Both methods first classify every cell and append only the cells that straddle the
 //! isovalue to an active list, then run their expensive passes over those cells alone through
 //! indirect dispatches; output is reserved in preallocated buffers with atomics and a one-thread
-//! pass turns the counters into indirect draw arguments, so the interactive path never waits on the
-//! GPU. The surface is re-extracted only when the method, isovalue or grid changes. The counters
-//! keep counting past capacity; they are copied into a staging buffer that is mapped without
-//! waiting and read a frame or two later, and when a surface needed more room the buffers grow and
-//! the surface is extracted again (never silently truncated: see
-//! [`state::ExtractedSurface::counts`]). Tests and export use
-//! [`pass::SurfacePass::extract_blocking`] and [`pass::SurfacePass::read_mesh`], which do wait.
+//! pass turns the counters into indirect draw arguments. The surface is re-extracted only when the
+//! method, isovalue or grid changes. The counters keep counting past capacity; when a surface
+//! needed more room the buffers grow and the surface is extracted again (never silently
+//! truncated: see [`state::ExtractedSurface::counts`]). The window never waits for any of it:
+//! [`background`] extracts on its own thread into spare buffers, coalescing requests, while the
+//! last mesh is drawn. Tests and export use [`pass::SurfacePass::extract_blocking`] and
+//! [`pass::SurfacePass::read_mesh`], which do wait.
 
+pub mod background;
 pub mod buffers;
 pub mod cpu_mesh;
 pub mod draw;

@@ -1,7 +1,6 @@
 //! [`SurfacePass`]: extraction and drawing of the Surface view, built once per device.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::OnceLock;
 
 use glam::Vec3;
 
@@ -14,6 +13,7 @@ use crate::render::gpu::timing::Timestamps;
 use crate::render::grid::VoxelGrid;
 use crate::render::points::depth_state;
 use crate::render::shaders;
+use crate::render::surface::background::{BackgroundExtractor, Job, share_grid};
 use crate::render::surface::buffers::{
     COUNTERS_SIZE, INDEXED_ARGS_OFFSET, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
 };
@@ -22,16 +22,33 @@ use crate::render::surface::draw::SurfaceStyle;
 use crate::render::surface::dual_contour::DualContourPass;
 use crate::render::surface::extraction::EXTRACTION_PASSES;
 use crate::render::surface::marching_tets::MarchingTetsPass;
-use crate::render::surface::state::{
-    CacheKey, ExtractedSurface, MAP_DONE, MAP_FAILED, MAP_PENDING, Readback, SurfaceState,
-};
+use crate::render::surface::state::{CacheKey, ExtractedSurface, SurfaceState};
 use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, SurfaceSettings};
+
+/// The pipelines of both extraction methods.
+pub(crate) struct Methods {
+    pub(crate) marching_tets: MarchingTetsPass,
+    pub(crate) dual_contour: DualContourPass,
+}
+
+impl Methods {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        Self {
+            marching_tets: MarchingTetsPass::new(device),
+            dual_contour: DualContourPass::new(device),
+        }
+    }
+}
 
 /// Extraction and drawing of the Surface view, built once per device.
 pub struct SurfacePass {
     device: wgpu::Device,
-    pub marching_tets: MarchingTetsPass,
-    pub dual_contour: DualContourPass,
+    /// The methods of blocking extractions, built on first use (the window extracts on the
+    /// background thread, which builds its own).
+    methods: OnceLock<Methods>,
+    /// The window's extraction thread, started by the first [`SurfacePass::prepare`] (None
+    /// inside when the thread could not start: then prepare extracts in place).
+    background: OnceLock<Option<BackgroundExtractor>>,
     pipeline: wgpu::RenderPipeline,
     style: wgpu::Buffer,
     style_bind_group: wgpu::BindGroup,
@@ -107,8 +124,8 @@ impl SurfacePass {
         });
         Self {
             device: device.clone(),
-            marching_tets: MarchingTetsPass::new(device),
-            dual_contour: DualContourPass::new(device),
+            methods: OnceLock::new(),
+            background: OnceLock::new(),
             pipeline,
             style,
             style_bind_group,
@@ -144,8 +161,8 @@ impl SurfacePass {
             .read_ticks(&self.device)
             .map_err(|e| SurfaceError::Readback(e.to_string()))?;
         let names = match method {
-            SurfaceMethod::MarchingTetrahedra => self.marching_tets.pass_names(),
-            SurfaceMethod::DualContouring => self.dual_contour.pass_names(),
+            SurfaceMethod::MarchingTetrahedra => self.methods().marching_tets.pass_names(),
+            SurfaceMethod::DualContouring => self.methods().dual_contour.pass_names(),
         };
         Ok(Some(
             names
@@ -156,165 +173,18 @@ impl SurfacePass {
         ))
     }
 
-    /// The largest number of `element_size`-byte elements one buffer binding may hold.
-    fn element_limit(&self, element_size: u64) -> u64 {
-        (storage_binding_limit(&self.device) / element_size).min(u64::from(u32::MAX))
+    fn methods(&self) -> &Methods {
+        self.methods.get_or_init(|| Methods::new(&self.device))
     }
 
-    /// Grows the buffers to hold `counts`; an error when the device cannot.
-    fn grow(&self, state: &mut SurfaceState, counts: &SurfaceCounts) -> Result<(), SurfaceError> {
-        let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64, max: u64| {
-            if needed <= capacity {
-                return Ok(capacity);
-            }
-            let limit = self.element_limit(size).min(max);
-            let wanted = u64::from(needed).next_power_of_two().min(limit);
-            if wanted < u64::from(needed) {
-                return Err(SurfaceError::TooLarge {
-                    what,
-                    needed: u64::from(needed),
-                    limit,
-                });
-            }
-            Ok(wanted as u32)
-        };
-        // Marching tetrahedra's cell map cannot address more vertices.
-        let max_vertices = match counts.method {
-            SurfaceMethod::MarchingTetrahedra => MAX_MAPPED_VERTICES,
-            SurfaceMethod::DualContouring => u64::MAX,
-        };
-        let vertices = grow_to(
-            counts.vertices_needed,
-            counts.vertex_capacity,
-            "vertices",
-            std::mem::size_of::<MeshVertex>() as u64,
-            max_vertices,
-        )?;
-        let indices = grow_to(
-            counts.indices_needed,
-            counts.index_capacity,
-            "indices",
-            4,
-            u64::MAX,
-        )?;
-        log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
-        state.buffers = Some(MeshBuffers::new(&self.device, vertices, indices));
-        state.key = None;
-        Ok(())
-    }
-
-    fn record_extraction(
-        &self,
-        state: &mut SurfaceState,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        grid: &VoxelGrid,
-        settings: &SurfaceSettings,
-    ) {
-        let (v, i) = self.initial_capacity;
-        let buffers = state
-            .buffers
-            .get_or_insert_with(|| MeshBuffers::new(&self.device, v, i));
-        let timestamps = self.timing.as_ref().map(|t| &t.set);
-        match settings.method {
-            SurfaceMethod::MarchingTetrahedra => self.marching_tets.record(
-                &self.device,
-                queue,
-                encoder,
-                grid,
-                buffers,
-                settings.iso_value,
-                timestamps,
-            ),
-            SurfaceMethod::DualContouring => self.dual_contour.record(
-                &self.device,
-                queue,
-                encoder,
-                grid,
-                buffers,
-                settings.iso_value,
-                timestamps,
-            ),
-        }
-        state.key = Some(CacheKey::new(grid, settings));
-        state.generation += 1;
-        state.counts_unchecked = true;
-    }
-
-    /// Reads a finished counters read-back, if one has arrived, and grows the buffers when the
-    /// surface did not fit. Never waits.
-    fn poll_counts(&self, state: &mut SurfaceState) {
-        let Some(staging) = state.staging.clone() else {
-            return;
-        };
-        match &state.readback {
-            Readback::Idle => return,
-            Readback::Copied { generation } => {
-                let generation = *generation;
-                let flag = Arc::new(AtomicU8::new(MAP_PENDING));
-                let callback_flag = flag.clone();
-                staging
-                    .slice(..)
-                    .map_async(wgpu::MapMode::Read, move |result| {
-                        let value = if result.is_ok() { MAP_DONE } else { MAP_FAILED };
-                        callback_flag.store(value, Ordering::Release);
-                    });
-                state.readback = Readback::Mapping { generation, flag };
-            }
-            Readback::Mapping { .. } => {}
-        }
-        let _ = self.device.poll(wgpu::PollType::Poll);
-        let Readback::Mapping { generation, flag } = &state.readback else {
-            return;
-        };
-        let generation = *generation;
-        let raw = match flag.load(Ordering::Acquire) {
-            MAP_PENDING => return,
-            MAP_FAILED => None,
-            _ => staging
-                .slice(..)
-                .get_mapped_range()
-                .ok()
-                .map(|bytes| bytemuck::pod_read_unaligned::<[u32; 4]>(&bytes[..16])),
-        };
-        if raw.is_some() {
-            staging.unmap();
-        }
-        state.readback = Readback::Idle;
-        let Some(raw) = raw else {
-            // Try again on a later frame.
-            state.counts_unchecked = true;
-            return;
-        };
-        if generation != state.generation {
-            return;
-        }
-        let (Some(buffers), Some(key)) = (&state.buffers, &state.key) else {
-            return;
-        };
-        let counts = SurfaceCounts {
-            method: key.method,
-            vertices_needed: raw[0],
-            indices_needed: raw[1],
-            vertex_capacity: buffers.vertex_capacity,
-            index_capacity: buffers.index_capacity,
-        };
-        state.counts = Some(counts);
-        state.error = None;
-        if !counts.fits()
-            && let Err(e) = self.grow(state, &counts)
-        {
-            log::warn!("{e}");
-            state.error = Some(e.to_string());
-        }
-    }
-
-    /// Interactive path: records the extraction when the method, isovalue or grid changed, and
-    /// the non-blocking read-back of its size. Call once per frame before the render pass.
+    /// Interactive path: when the method, isovalue or grid changed, asks the background thread
+    /// for the new surface (the last mesh is drawn until it is ready, and a newer request
+    /// replaces one still waiting); installs a finished one. Never waits for the GPU. Call once
+    /// per frame before the render pass.
     pub fn prepare(
         &self,
         queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
+        _encoder: &mut wgpu::CommandEncoder,
         surface: &ExtractedSurface,
         grid: Option<&VoxelGrid>,
         settings: &SurfaceSettings,
@@ -324,32 +194,47 @@ impl SurfacePass {
             pad: [0; 3],
         };
         queue.write_buffer(&self.style, 0, bytemuck::bytes_of(&style));
-        let mut guard = surface.lock();
-        let state = &mut *guard;
-        self.poll_counts(state);
+        surface.install_finished();
         let Some(grid) = grid else {
             return;
         };
-        if state.key.as_ref() != Some(&CacheKey::new(grid, settings)) {
-            self.record_extraction(state, queue, encoder, grid, settings);
-        }
-        if state.counts_unchecked
-            && matches!(state.readback, Readback::Idle)
-            && let Some(buffers) = &state.buffers
-        {
-            let staging = state.staging.get_or_insert_with(|| {
-                self.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("surface::counters_staging"),
-                    size: COUNTERS_SIZE,
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                })
+        let wanted = CacheKey::new(grid, settings);
+        let job = {
+            let mut state = surface.lock();
+            let current = state.requested.as_ref().or(state.key.as_ref());
+            if current == Some(&wanted) {
+                return;
+            }
+            state.requested = Some(wanted.clone());
+            let capacity = state.buffers.as_ref().map_or(self.initial_capacity, |b| {
+                (b.vertex_capacity, b.index_capacity)
             });
-            encoder.copy_buffer_to_buffer(&buffers.counters, 0, staging, 0, COUNTERS_SIZE);
-            state.readback = Readback::Copied {
-                generation: state.generation,
-            };
-            state.counts_unchecked = false;
+            Job {
+                key: wanted,
+                grid: share_grid(grid),
+                settings: *settings,
+                spare: state.spare.take(),
+                capacity,
+                mailbox: surface.mailbox.clone(),
+            }
+        };
+        let background = self.background.get_or_init(|| {
+            BackgroundExtractor::spawn(self.device.clone(), queue.clone())
+                .inspect_err(|e| log::warn!("no surface extraction thread: {e}"))
+                .ok()
+        });
+        match background {
+            Some(background) => background.submit(job),
+            // No thread: extract here (waits), as before there was one.
+            None => {
+                crate::render::surface::background::run_job(
+                    &self.device,
+                    queue,
+                    self.methods(),
+                    job,
+                );
+                surface.install_finished();
+            }
         }
     }
 
@@ -364,48 +249,18 @@ impl SurfacePass {
         settings: &SurfaceSettings,
     ) -> Result<SurfaceCounts, SurfaceError> {
         let mut state = surface.lock();
-        loop {
-            let mut encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("surface::extract_blocking"),
-                });
-            self.record_extraction(&mut state, queue, &mut encoder, grid, settings);
-            state.counts_unchecked = false;
-            let Some(buffers) = &state.buffers else {
-                return Err(SurfaceError::NotExtracted);
-            };
-            let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("surface::counters_readback"),
-                size: COUNTERS_SIZE,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
-            if let Some(timing) = &self.timing {
-                timing.resolve(&mut encoder, TIMESTAMPS);
-            }
-            queue.submit([encoder.finish()]);
-            let bytes = map_buffer(&self.device, &staging)
-                .map_err(|e| SurfaceError::Readback(e.to_string()))?;
-            let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
-            let counts = SurfaceCounts {
-                method: settings.method,
-                vertices_needed: raw[0],
-                indices_needed: raw[1],
-                vertex_capacity: buffers.vertex_capacity,
-                index_capacity: buffers.index_capacity,
-            };
-            state.counts = Some(counts);
-            if counts.fits() {
-                state.error = None;
-                return Ok(counts);
-            }
-            if let Err(e) = self.grow(&mut state, &counts) {
-                state.error = Some(e.to_string());
-                return Err(e);
-            }
-        }
+        state.requested = None;
+        extract_until_fits(
+            false,
+            &self.device,
+            queue,
+            self.methods(),
+            self.initial_capacity,
+            self.timing.as_ref(),
+            &mut state,
+            grid,
+            settings,
+        )
     }
 
     /// Reads the last extracted surface back to the CPU (waits for the GPU).
@@ -463,5 +318,170 @@ impl SurfacePass {
         pass.set_vertex_buffer(0, buffers.vertices.slice(..));
         pass.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed_indirect(&buffers.indirect, INDEXED_ARGS_OFFSET);
+    }
+}
+
+/// The largest number of `element_size`-byte elements one buffer binding may hold.
+fn element_limit(device: &wgpu::Device, element_size: u64) -> u64 {
+    (storage_binding_limit(device) / element_size).min(u64::from(u32::MAX))
+}
+
+/// Grows the buffers to hold `counts`; an error when the device cannot.
+fn grow(
+    device: &wgpu::Device,
+    state: &mut SurfaceState,
+    counts: &SurfaceCounts,
+) -> Result<(), SurfaceError> {
+    let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64, max: u64| {
+        if needed <= capacity {
+            return Ok(capacity);
+        }
+        let limit = element_limit(device, size).min(max);
+        let wanted = u64::from(needed).next_power_of_two().min(limit);
+        if wanted < u64::from(needed) {
+            return Err(SurfaceError::TooLarge {
+                what,
+                needed: u64::from(needed),
+                limit,
+            });
+        }
+        Ok(wanted as u32)
+    };
+    // Marching tetrahedra's cell map cannot address more vertices.
+    let max_vertices = match counts.method {
+        SurfaceMethod::MarchingTetrahedra => MAX_MAPPED_VERTICES,
+        SurfaceMethod::DualContouring => u64::MAX,
+    };
+    let vertices = grow_to(
+        counts.vertices_needed,
+        counts.vertex_capacity,
+        "vertices",
+        std::mem::size_of::<MeshVertex>() as u64,
+        max_vertices,
+    )?;
+    let indices = grow_to(
+        counts.indices_needed,
+        counts.index_capacity,
+        "indices",
+        4,
+        u64::MAX,
+    )?;
+    log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
+    state.buffers = Some(MeshBuffers::new(device, vertices, indices));
+    state.key = None;
+    Ok(())
+}
+
+/// Maps a MAP_READ buffer by polling the device without blocking it, a millisecond apart. A
+/// blocking poll holds the device's fence while it waits, so every `queue.submit` of the
+/// window's frames (which needs that fence) would wait for the whole extraction.
+fn map_polling(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, SurfaceError> {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU8, Ordering};
+    let state = Arc::new(AtomicU8::new(0));
+    let callback_state = state.clone();
+    let slice = buffer.slice(..);
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        callback_state.store(if result.is_ok() { 1 } else { 2 }, Ordering::Release);
+    });
+    loop {
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| SurfaceError::Readback(e.to_string()))?;
+        match state.load(Ordering::Acquire) {
+            0 => std::thread::sleep(std::time::Duration::from_millis(1)),
+            1 => break,
+            _ => return Err(SurfaceError::Readback("mapping the counters failed".into())),
+        }
+    }
+    let bytes = slice
+        .get_mapped_range()
+        .map_err(|e| SurfaceError::Readback(e.to_string()))?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}
+
+/// Extracts the surface into `state`'s buffers and waits for its size, growing the buffers and
+/// extracting again until it fits (or cannot fit: then the error, with the counts kept).
+/// `background`: waits by polling (see [`map_polling`]), so other threads can submit meanwhile.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn extract_until_fits(
+    background: bool,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    methods: &Methods,
+    initial_capacity: (u32, u32),
+    timing: Option<&Timestamps>,
+    state: &mut SurfaceState,
+    grid: &VoxelGrid,
+    settings: &SurfaceSettings,
+) -> Result<SurfaceCounts, SurfaceError> {
+    loop {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("surface::extract"),
+        });
+        let (v, i) = initial_capacity;
+        let buffers = state
+            .buffers
+            .get_or_insert_with(|| MeshBuffers::new(device, v, i));
+        let timestamps = timing.map(|t| &t.set);
+        match settings.method {
+            SurfaceMethod::MarchingTetrahedra => methods.marching_tets.record(
+                device,
+                queue,
+                &mut encoder,
+                grid,
+                buffers,
+                settings.iso_value,
+                timestamps,
+            ),
+            SurfaceMethod::DualContouring => methods.dual_contour.record(
+                device,
+                queue,
+                &mut encoder,
+                grid,
+                buffers,
+                settings.iso_value,
+                timestamps,
+            ),
+        }
+        state.key = Some(CacheKey::new(grid, settings));
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("surface::counters_readback"),
+            size: COUNTERS_SIZE,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
+        if let Some(timing) = timing {
+            timing.resolve(&mut encoder, TIMESTAMPS);
+        }
+        let (vertex_capacity, index_capacity) = (buffers.vertex_capacity, buffers.index_capacity);
+        queue.submit([encoder.finish()]);
+        let bytes = if background {
+            map_polling(device, &staging)?
+        } else {
+            map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?
+        };
+        let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
+        let counts = SurfaceCounts {
+            method: settings.method,
+            vertices_needed: raw[0],
+            indices_needed: raw[1],
+            vertex_capacity,
+            index_capacity,
+        };
+        state.counts = Some(counts);
+        if counts.fits() {
+            state.error = None;
+            return Ok(counts);
+        }
+        if let Err(e) = grow(device, state, &counts) {
+            // The truncated surface stays drawable, with the reason beside it.
+            state.key = Some(CacheKey::new(grid, settings));
+            state.error = Some(e.to_string());
+            return Err(e);
+        }
     }
 }

@@ -1,9 +1,9 @@
 //! One cloud's extracted surface ([`ExtractedSurface`], owned by its `SceneData`): the mesh
-//! buffers, what they were extracted from (the cache key) and where the read-back of their size
-//! stands. The per-device [`SurfacePass`](crate::render::surface::pass::SurfacePass) fills and
-//! draws it, so each cloud (Song, Timeline) keeps its own surface.
+//! buffers, what they were extracted from (the cache key), the surface asked of the background
+//! extraction and the mailbox its result arrives in. The per-device
+//! [`SurfacePass`](crate::render::surface::pass::SurfacePass) fills and draws it, so each cloud
+//! (Song, Timeline) keeps its own surface.
 
-use std::sync::atomic::AtomicU8;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use glam::UVec3;
@@ -37,36 +37,54 @@ impl CacheKey {
     }
 }
 
-pub(crate) const MAP_PENDING: u8 = 0;
-pub(crate) const MAP_DONE: u8 = 1;
-pub(crate) const MAP_FAILED: u8 = 2;
-
-/// Where the counters' read-back stands.
-#[derive(Default)]
-pub(crate) enum Readback {
-    #[default]
-    Idle,
-    /// A copy into the staging buffer was recorded; it is mapped on the next frame, after the
-    /// frame that holds the copy has been submitted.
-    Copied { generation: u64 },
-    Mapping {
-        generation: u64,
-        flag: Arc<AtomicU8>,
-    },
-}
-
 #[derive(Default)]
 pub(crate) struct SurfaceState {
+    /// The mesh that is drawn.
     pub(crate) buffers: Option<MeshBuffers>,
+    /// What `buffers` hold.
     pub(crate) key: Option<CacheKey>,
-    /// Counts extractions; a read-back only speaks for the extraction it copied.
-    pub(crate) generation: u64,
-    pub(crate) counts_unchecked: bool,
-    pub(crate) readback: Readback,
-    /// Where the counters are copied to be mapped; made on the first read-back.
-    pub(crate) staging: Option<wgpu::Buffer>,
     pub(crate) counts: Option<SurfaceCounts>,
     pub(crate) error: Option<String>,
+    /// The mesh drawn before `buffers`, reused by the next background extraction.
+    pub(crate) spare: Option<MeshBuffers>,
+    /// The surface last asked of the background extraction, until it is installed.
+    pub(crate) requested: Option<CacheKey>,
+    /// Background extractions installed so far.
+    pub(crate) installed: u64,
+}
+
+/// A finished background extraction, waiting to be installed.
+pub(crate) struct Finished {
+    pub(crate) key: CacheKey,
+    pub(crate) buffers: Option<MeshBuffers>,
+    pub(crate) counts: Option<SurfaceCounts>,
+    pub(crate) error: Option<String>,
+}
+
+/// Where the background extraction leaves its result for the window to pick up.
+#[derive(Default)]
+pub(crate) struct Mailbox {
+    finished: Mutex<Option<Finished>>,
+}
+
+impl Mailbox {
+    pub(crate) fn post(&self, finished: Finished) {
+        *self.finished.lock().unwrap_or_else(|e| e.into_inner()) = Some(finished);
+    }
+
+    fn take(&self) -> Option<Finished> {
+        self.finished
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take()
+    }
+
+    fn is_full(&self) -> bool {
+        self.finished
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .is_some()
+    }
 }
 
 /// One cloud's surface: filled by [`SurfacePass::prepare`] or
@@ -81,6 +99,7 @@ pub(crate) struct SurfaceState {
 #[derive(Default)]
 pub struct ExtractedSurface {
     state: Mutex<SurfaceState>,
+    pub(crate) mailbox: Arc<Mailbox>,
 }
 
 impl ExtractedSurface {
@@ -103,9 +122,47 @@ impl ExtractedSurface {
         self.lock().error.clone()
     }
 
-    /// True while a read-back or a re-extraction is pending: the window should draw again.
+    /// True while an extraction runs in the background or its result waits to be installed:
+    /// the window should come back (and show that it is busy).
     pub fn needs_another_frame(&self) -> bool {
-        let state = self.lock();
-        state.key.is_none() || state.counts_unchecked || !matches!(state.readback, Readback::Idle)
+        self.lock().requested.is_some() || self.mailbox.is_full()
+    }
+
+    /// True while the surface on screen is not yet the one asked for (an extraction runs).
+    pub fn is_extracting(&self) -> bool {
+        self.lock().requested.is_some()
+    }
+
+    /// Installs a finished background extraction, if one arrived: its mesh is drawn from now on
+    /// (the one it replaces is kept as the next extraction's spare). Returns whether the surface
+    /// changed, so the window renders the scene again. Never waits for the GPU.
+    pub fn install_finished(&self) -> bool {
+        let Some(finished) = self.mailbox.take() else {
+            return false;
+        };
+        let mut state = self.lock();
+        if state.requested.as_ref() == Some(&finished.key) {
+            state.requested = None;
+        }
+        let old = std::mem::replace(&mut state.buffers, finished.buffers);
+        if old.is_some() {
+            state.spare = old;
+        }
+        state.key = Some(finished.key);
+        state.installed += 1;
+        state.counts = finished.counts;
+        state.error = finished.error;
+        true
+    }
+
+    /// How many background extractions were installed (fewer than requests when they were
+    /// coalesced).
+    pub fn installed(&self) -> u64 {
+        self.lock().installed
+    }
+
+    /// The isovalue of the surface on screen (None before the first extraction).
+    pub fn shown_iso_value(&self) -> Option<f32> {
+        self.lock().key.as_ref().map(|k| f32::from_bits(k.iso_bits))
     }
 }

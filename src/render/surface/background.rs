@@ -1,0 +1,238 @@
+//! Surface extraction off the UI thread: [`BackgroundExtractor`] runs on its own thread with its
+//! own pipelines (built there, so their creation does not stall the window either), extracts
+//! into a spare set of mesh buffers, waits for the GPU there, grows the buffers until the
+//! surface fits, and leaves the finished mesh in the cloud's [`Mailbox`]. The window keeps
+//! drawing the last mesh until [`ExtractedSurface::install_finished`] swaps the new one in.
+//!
+//! Requests are coalesced ([`Coalescer`]): while one extraction runs, a newer request for the
+//! same surface replaces the waiting one, so a dragged isovalue slider extracts the value it
+//! was at when the worker became free and, last, the value it was left at, never a backlog.
+//!
+//! [`ExtractedSurface::install_finished`]: crate::render::surface::state::ExtractedSurface::install_finished
+
+use std::collections::VecDeque;
+use std::sync::{Arc, Condvar, Mutex};
+
+use crate::render::grid::VoxelGrid;
+use crate::render::surface::SurfaceSettings;
+use crate::render::surface::buffers::MeshBuffers;
+use crate::render::surface::pass::{Methods, extract_until_fits};
+use crate::render::surface::state::{CacheKey, Finished, Mailbox, SurfaceState};
+
+/// A queue of work in which a new item replaces a waiting one with the same key (the latest
+/// request for a thing is the only one worth doing). Items with other keys wait in order.
+pub struct Coalescer<K, T> {
+    inner: Mutex<(VecDeque<(K, T)>, bool)>,
+    ready: Condvar,
+}
+
+impl<K, T> Default for Coalescer<K, T> {
+    fn default() -> Self {
+        Self {
+            inner: Mutex::new((VecDeque::new(), false)),
+            ready: Condvar::new(),
+        }
+    }
+}
+
+impl<K: PartialEq, T> Coalescer<K, T> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, (VecDeque<(K, T)>, bool)> {
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Queues `item` under `key`; returns the waiting item it replaced, if any.
+    pub fn submit(&self, key: K, item: T) -> Option<T> {
+        let mut inner = self.lock();
+        let replaced = match inner.0.iter_mut().find(|(k, _)| *k == key) {
+            Some(slot) => Some(std::mem::replace(&mut slot.1, item)),
+            None => {
+                inner.0.push_back((key, item));
+                None
+            }
+        };
+        self.ready.notify_one();
+        replaced
+    }
+
+    /// The oldest waiting item, without waiting.
+    pub fn try_take(&self) -> Option<(K, T)> {
+        self.lock().0.pop_front()
+    }
+
+    /// The oldest waiting item; waits for one. None once [`Coalescer::close`] was called.
+    pub fn take(&self) -> Option<(K, T)> {
+        let mut inner = self.lock();
+        loop {
+            if inner.1 {
+                return None;
+            }
+            if let Some(item) = inner.0.pop_front() {
+                return Some(item);
+            }
+            inner = self.ready.wait(inner).unwrap_or_else(|e| e.into_inner());
+        }
+    }
+
+    /// Items waiting.
+    pub fn len(&self) -> usize {
+        self.lock().0.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Stops [`Coalescer::take`]: it returns None from now on.
+    pub fn close(&self) {
+        self.lock().1 = true;
+        self.ready.notify_all();
+    }
+}
+
+/// One extraction to run: what to extract, the buffers to extract into, and where to leave it.
+pub(crate) struct Job {
+    pub(crate) key: CacheKey,
+    pub(crate) grid: VoxelGrid,
+    pub(crate) settings: SurfaceSettings,
+    /// Buffers to reuse (the mesh shown before the current one), when there are any.
+    pub(crate) spare: Option<MeshBuffers>,
+    /// Room the last surface needed: new buffers start at least this large.
+    pub(crate) capacity: (u32, u32),
+    pub(crate) mailbox: Arc<Mailbox>,
+}
+
+/// The worker thread and its queue of jobs (one waiting job per surface).
+pub(crate) struct BackgroundExtractor {
+    jobs: Arc<Coalescer<usize, Job>>,
+}
+
+impl BackgroundExtractor {
+    pub(crate) fn spawn(device: wgpu::Device, queue: wgpu::Queue) -> std::io::Result<Self> {
+        let jobs: Arc<Coalescer<usize, Job>> = Arc::default();
+        let worker_jobs = jobs.clone();
+        std::thread::Builder::new()
+            .name("surface-extraction".into())
+            .spawn(move || {
+                let methods = Methods::new(&device);
+                while let Some((_, job)) = worker_jobs.take() {
+                    run_job(&device, &queue, &methods, job);
+                }
+            })?;
+        Ok(Self { jobs })
+    }
+
+    /// Queues `job`, replacing a waiting job for the same surface.
+    pub(crate) fn submit(&self, job: Job) {
+        let key = Arc::as_ptr(&job.mailbox) as usize;
+        self.jobs.submit(key, job);
+    }
+}
+
+impl Drop for BackgroundExtractor {
+    fn drop(&mut self) {
+        // The thread ends after the job it is running; nothing waits for it.
+        self.jobs.close();
+    }
+}
+
+/// Extracts one job (waiting for the GPU on this thread) and posts the result.
+pub(crate) fn run_job(device: &wgpu::Device, queue: &wgpu::Queue, methods: &Methods, job: Job) {
+    let (v, i) = job.capacity;
+    let spare = job
+        .spare
+        .filter(|b| b.vertex_capacity >= v && b.index_capacity >= i);
+    let mut state = SurfaceState {
+        buffers: Some(spare.unwrap_or_else(|| MeshBuffers::new(device, v, i))),
+        ..Default::default()
+    };
+    let result = extract_until_fits(
+        true,
+        device,
+        queue,
+        methods,
+        (v, i),
+        None,
+        &mut state,
+        &job.grid,
+        &job.settings,
+    );
+    let error = result.err().map(|e| {
+        log::warn!("{e}");
+        e.to_string()
+    });
+    job.mailbox.post(Finished {
+        key: job.key,
+        buffers: state.buffers,
+        counts: state.counts,
+        error,
+    });
+}
+
+/// A second handle on a grid's buffers, for a job (the buffers are shared, not copied).
+pub(crate) fn share_grid(grid: &VoxelGrid) -> VoxelGrid {
+    VoxelGrid {
+        dims: grid.dims,
+        box_min: grid.box_min,
+        box_max: grid.box_max,
+        density: grid.density.clone(),
+        hp_mean: grid.hp_mean.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// While one request runs, later ones for the same surface replace each other: only the
+    /// latest waits, and it is the one taken next.
+    #[test]
+    fn only_the_latest_request_per_key_waits() {
+        let queue: Coalescer<&str, f32> = Coalescer::default();
+        assert!(queue.try_take().is_none());
+        assert_eq!(queue.submit("song", 0.30), None);
+        // The worker takes 0.30 and works on it; the slider moves on meanwhile.
+        assert_eq!(queue.try_take(), Some(("song", 0.30)));
+        assert_eq!(queue.submit("song", 0.31), None);
+        assert_eq!(queue.submit("song", 0.40), Some(0.31));
+        assert_eq!(queue.submit("song", 0.55), Some(0.40));
+        assert_eq!(queue.len(), 1);
+        assert_eq!(queue.try_take(), Some(("song", 0.55)));
+        assert!(queue.is_empty());
+    }
+
+    /// Requests for different surfaces (Song and Timeline) do not replace each other and are
+    /// taken in the order they came.
+    #[test]
+    fn other_keys_keep_their_place() {
+        let queue: Coalescer<&str, f32> = Coalescer::default();
+        queue.submit("song", 0.3);
+        queue.submit("timeline", 0.5);
+        queue.submit("song", 0.4);
+        assert_eq!(queue.try_take(), Some(("song", 0.4)));
+        assert_eq!(queue.try_take(), Some(("timeline", 0.5)));
+        assert_eq!(queue.try_take(), None);
+    }
+
+    /// A waiting worker wakes for a request and stops when the queue closes.
+    #[test]
+    fn take_waits_for_work_and_ends_on_close() {
+        let queue: Arc<Coalescer<u32, u32>> = Arc::default();
+        let worker = {
+            let queue = queue.clone();
+            std::thread::spawn(move || {
+                let mut seen = Vec::new();
+                while let Some((_, item)) = queue.take() {
+                    seen.push(item);
+                }
+                seen
+            })
+        };
+        queue.submit(1, 7);
+        while !queue.is_empty() {
+            std::thread::yield_now();
+        }
+        queue.close();
+        assert_eq!(worker.join().unwrap(), vec![7]);
+        assert!(queue.take().is_none());
+    }
+}

@@ -1,0 +1,134 @@
+//! A scripted isovalue sweep for the window tests: with `LOUDSCAPE_ISO_SWEEP=0.3,0.35,...` in a
+//! `--screenshot` run in the Surface view, the window sets one isovalue a frame once the first
+//! surface is shown (as a dragged slider does), waits until the surface of the last value is on
+//! screen, and prints one line on stderr, `iso sweep: values=N frames=N busy_frames=N
+//! longest_frame_ms=X installed=N shown_iso=X`: the frames it drew, how many of them while an
+//! extraction ran, the longest frame on the UI thread, the extractions installed and the
+//! isovalue of the surface shown. The screenshot is taken after it.
+
+use std::time::Instant;
+
+use eframe::egui_wgpu;
+
+use crate::render::scene::ViewKind;
+use crate::ui::bridge::ViewResources;
+use crate::ui::state::LoudscapeApp;
+
+/// The environment variable that asks for a sweep (screenshot runs only).
+pub const ISO_SWEEP_VAR: &str = "LOUDSCAPE_ISO_SWEEP";
+
+pub(super) struct IsoSweep {
+    values: Vec<f32>,
+    /// Values set so far (None: waiting for the first surface).
+    next: Option<usize>,
+    last_frame: Option<Instant>,
+    longest_ms: f64,
+    frames: u32,
+    busy_frames: u32,
+    installed_before: u64,
+    pub(super) done: bool,
+}
+
+impl IsoSweep {
+    /// The sweep asked for in the environment, if any (a list of isovalues).
+    pub(super) fn from_env() -> Option<Self> {
+        let text = std::env::var(ISO_SWEEP_VAR).ok()?;
+        let values: Vec<f32> = text
+            .split(',')
+            .filter_map(|v| v.trim().parse().ok())
+            .collect();
+        (!values.is_empty()).then_some(Self {
+            values,
+            next: None,
+            last_frame: None,
+            longest_ms: 0.0,
+            frames: 0,
+            busy_frames: 0,
+            installed_before: 0,
+            done: false,
+        })
+    }
+}
+
+/// The active cloud's surface: (shown isovalue, extracting, installed extractions).
+fn surface_of(render_state: &egui_wgpu::RenderState, id: u64) -> Option<(Option<f32>, bool, u64)> {
+    let renderer = render_state.renderer.read();
+    let scene = renderer
+        .callback_resources
+        .get::<ViewResources>()?
+        .scenes
+        .get(&id)?;
+    Some((
+        scene.surface.shown_iso_value(),
+        scene.surface.needs_another_frame(),
+        scene.surface.installed(),
+    ))
+}
+
+impl LoudscapeApp {
+    /// One frame of the sweep; true once it is over (or there is none).
+    pub(super) fn step_iso_sweep(&mut self, frame: &eframe::Frame) -> bool {
+        let Some(id) = self.active().map(|l| l.id) else {
+            return self.iso_sweep.as_ref().is_none_or(|s| s.done);
+        };
+        let (Some(sweep), Some(render_state)) =
+            (self.iso_sweep.as_mut(), frame.wgpu_render_state())
+        else {
+            return true;
+        };
+        if sweep.done {
+            return true;
+        }
+        if self.settings.view != ViewKind::Surface {
+            self.settings.view = ViewKind::Surface;
+            return false;
+        }
+        let Some((shown, busy, installed)) = surface_of(render_state, id) else {
+            return false;
+        };
+        let now = Instant::now();
+        match sweep.next {
+            None => {
+                // Wait for the first surface (the grid build and first extraction are not part
+                // of the sweep).
+                if shown.is_some() && !busy {
+                    sweep.next = Some(0);
+                    sweep.installed_before = installed;
+                    sweep.last_frame = Some(now);
+                }
+                return false;
+            }
+            Some(_) => {
+                if let Some(last) = sweep.last_frame {
+                    let ms = (now - last).as_secs_f64() * 1e3;
+                    sweep.longest_ms = sweep.longest_ms.max(ms);
+                }
+                sweep.last_frame = Some(now);
+                sweep.frames += 1;
+                sweep.busy_frames += u32::from(busy);
+            }
+        }
+        let next = sweep.next.unwrap_or(0);
+        if let Some(&value) = sweep.values.get(next) {
+            self.settings.surface.iso_value = value;
+            sweep.next = Some(next + 1);
+            return false;
+        }
+        let last = sweep.values[sweep.values.len() - 1];
+        if busy || shown != Some(last) {
+            return false;
+        }
+        eprintln!(
+            "iso sweep: values={} frames={} busy_frames={} longest_frame_ms={:.1} installed={} \
+             shown_iso={}",
+            sweep.values.len(),
+            sweep.frames,
+            sweep.busy_frames,
+            sweep.longest_ms,
+            installed - sweep.installed_before,
+            shown.unwrap_or(f32::NAN),
+        );
+        sweep.done = true;
+        true
+    }
+}
