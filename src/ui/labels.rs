@@ -14,8 +14,18 @@ use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::SceneData;
 use crate::view::frame_view::FrameView;
 
-/// The translucent plate under each label: the background colour, mostly opaque.
+/// The translucent plate under each label on the dark background: its colour, mostly opaque.
 pub const LABEL_PLATE: Color32 = Color32::from_rgba_premultiplied(10, 11, 15, 190);
+
+/// The plate under a label on `background`: the paper's colour, mostly opaque, so the ink of
+/// [`Background::ink`] stays readable over the cloud on either background.
+pub fn label_plate(background: Background) -> Color32 {
+    if background.is_light() {
+        Color32::from_rgba_unmultiplied(255, 255, 255, 190)
+    } else {
+        LABEL_PLATE
+    }
+}
 
 /// A tick label or an axis title, placed along one axis of the box.
 #[derive(Clone, Debug)]
@@ -211,9 +221,14 @@ pub fn paint_on(
             continue;
         }
         placed.push(text_rect);
-        // A dark plate under the text keeps it readable over bright points, surfaces and the
-        // volume (tick labels sat on the cloud at some angles and vanished in it).
-        painter.rect_filled(text_rect.expand2(egui::vec2(3.0, 1.0)), 3.0, LABEL_PLATE);
+        // A plate of the background's colour under the text keeps it readable over bright
+        // points, surfaces and the volume (tick labels sat on the cloud at some angles and
+        // vanished in it).
+        painter.rect_filled(
+            text_rect.expand2(egui::vec2(3.0, 1.0)),
+            3.0,
+            label_plate(background),
+        );
         painter.galley(text_rect.min, galley, color);
     }
 }
