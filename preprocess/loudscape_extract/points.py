@@ -21,6 +21,7 @@ from loudscape_extract.format import (
     rounded,
     scalar_axis,
 )
+from loudscape_extract.normalization import streaming_gains
 from loudscape_extract.spectrogram import a_weighting_db
 
 __all__ = [
@@ -237,6 +238,7 @@ def song_metadata(
         },
         "axes": rounded(cloud.axes, 6),
         "metrics": rounded(features.metrics, 4),
+        "streaming": rounded(streaming_gains(features.metrics), 2),
         "extraction": {
             "floor_db": rounded(cloud.floor_db, 6),
             "floor_taper_db": rounded(taper_width(cloud.floor_db), 6),
