@@ -217,7 +217,7 @@ def song_metadata(
     metadata : dict
         JSON-ready; floats rounded to 6 decimals (metrics to 4).
     """
-    return {
+    metadata = {
         "format_version": FORMAT_VERSION,
         "mode": MODE_SONG,
         "point_count": cloud.point_count,
@@ -249,3 +249,7 @@ def song_metadata(
             "generator": generator,
         },
     }
+    curves = getattr(features, "curves", None)
+    if curves is not None:
+        metadata["loudness"] = curves
+    return metadata

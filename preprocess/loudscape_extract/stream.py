@@ -39,6 +39,7 @@ from loudscape_extract.audio import (
     mix_to_mono,
     read_blocks,
 )
+from loudscape_extract.curves import loudness_curves
 from loudscape_extract.dsp import (
     fft_convolve,
     hann_window,
@@ -580,6 +581,7 @@ class StreamedTrack:
     kernel_size: int
     block_frames: int
     warning: str = ""
+    curves: dict | None = None
 
     @property
     def duration_s(self) -> float:
@@ -747,4 +749,11 @@ def stream_track(
         kernel_size=kernel_size,
         block_frames=block_frames,
         warning=decoded.warning,
+        curves=loudness_curves(
+            stats.energy,
+            stats.boundaries,
+            segment_peak=stats.segment_peak,
+            dynamics=dynamics,
+            sample_rate=rate,
+        ),
     )
