@@ -127,6 +127,7 @@ impl LoudscapeApp {
             slot_cameras: [None, None],
             renders_seen: (0, 0),
             open: Default::default(),
+            strip: Default::default(),
         };
         let files = app.apply_remembered(options.files, remembered);
         if let Some(view) = options.view {
@@ -378,6 +379,17 @@ impl eframe::App for LoudscapeApp {
                 self.audio.bar(ui);
                 ui.add_space(2.0);
             });
+            if let Some(song) = &self.song {
+                self.strip.sync(song.id, &song.cloud);
+            }
+            if self.strip.has_curves() {
+                let (strip, audio) = (&self.strip, &mut self.audio);
+                egui::Panel::bottom("loudness_strip").show(ui, |ui| {
+                    if let Some(t) = strip.show(ui, audio.time_s().unwrap_or(0.0)) {
+                        audio.seek(t);
+                    }
+                });
+            }
         }
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)

@@ -71,6 +71,8 @@ pub(super) struct LoudscapeApp {
     pub(super) renders_seen: (u64, u32),
     /// The Open row (`open.rs`).
     pub(super) open: OpenPanel,
+    /// The loudness strip under the Song view (`strip.rs`).
+    pub(super) strip: crate::ui::strip::LoudnessStrip,
 }
 
 /// Which of the two data slots.
