@@ -1,12 +1,14 @@
 """Benchmark Song extraction on a synthesized 3-minute 44.1 kHz stereo song.
 
-    .venv/bin/python bench/bench_song.py [--runs 3] [--librosa-runs 3]
+    .venv/bin/python bench/bench_song.py [--runs 3] [--librosa-runs 3] [--vs-code OLD/preprocess]
 
 Prints, as medians of the runs:
 - ours: ``loudscape-extract song x.wav -o x.ply --quiet`` end to end as a child process
   (interpreter start, imports, decode, STFT, HPSS, loudness metrics, points, write);
 - librosa: ``librosa.stft`` + ``np.abs`` + ``librosa.decompose.hpss(S, mask=True)`` on the same
   mono mix in a child process, timed inside it (imports and decoding not counted);
+- with ``--vs-code DIR``: the same command with the extractor imported from ``DIR`` (an older
+  tree's ``preprocess``, e.g. from ``git archive``), its runs interleaved with ours;
 - peak memory (``ru_maxrss``) of each kind of child process.
 Not a test: timings on a shared machine are noisy, hence the medians.
 """
@@ -50,7 +52,7 @@ def synthesize_song() -> np.ndarray:
     return module.synthesize(sample_rate=SAMPLE_RATE, duration_s=DURATION_S)
 
 
-def run_child(command: list[str]) -> tuple[float, float, float, str]:
+def run_child(command: list[str], env: dict | None = None) -> tuple[float, float, float, str]:
     """Run a child through a small wrapper; return (wall s, its peak RSS in MiB, its CPU s
     (user + system), its stdout).
 
@@ -66,7 +68,11 @@ def run_child(command: list[str]) -> tuple[float, float, float, str]:
         "print(json.dumps([wall, u.ru_maxrss, u.ru_utime + u.ru_stime, r.stdout.strip()]))\n"
     )
     result = subprocess.run(
-        [sys.executable, "-c", wrapper, *command], capture_output=True, text=True, check=True
+        [sys.executable, "-c", wrapper, *command],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=env,
     )
     wall, rss, cpu, stdout = json.loads(result.stdout)
     rss_bytes = rss if platform.system() == "Darwin" else rss * 1024  # macOS: bytes, Linux: KiB
@@ -77,7 +83,11 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--librosa-runs", type=int, default=3)
+    parser.add_argument("--vs-code", help="an older tree's preprocess folder to time as well")
     args = parser.parse_args()
+    old_env = None
+    if args.vs_code:
+        old_env = dict(os.environ, PYTHONPATH=os.path.abspath(args.vs_code))
     executable = os.path.join(os.path.dirname(sys.executable), "loudscape-extract")
     with tempfile.TemporaryDirectory() as scratch:
         wav = os.path.join(scratch, "song.wav")
@@ -88,11 +98,18 @@ def main() -> int:
             f"{os.cpu_count()} CPUs; python {platform.python_version()}"
         )
         ours_times, ours_rss, ours_cpu = [], [], []
+        old_times, old_cpu = [], []
         for _ in range(args.runs):
             wall, rss, cpu, _ = run_child([executable, "song", wav, "-o", ply, "--quiet"])
             ours_times.append(wall)
             ours_rss.append(rss)
             ours_cpu.append(cpu)
+            if old_env is not None:
+                old_ply = os.path.join(scratch, "old.ply")
+                command = [sys.executable, "-m", "loudscape_extract.cli", "song", wav]
+                wall, _, cpu, _ = run_child([*command, "-o", old_ply, "--quiet"], env=old_env)
+                old_times.append(wall)
+                old_cpu.append(cpu)
         size_mb = os.path.getsize(ply) / 1e6
         librosa_times, librosa_rss = [], []
         for _ in range(args.librosa_runs):
@@ -105,6 +122,12 @@ def main() -> int:
         f"CPU (user+sys) median {statistics.median(ours_cpu):.2f} s"
     )
     print(f"  output {size_mb:.1f} MB")
+    if old_times:
+        print(f"older code ({args.vs_code}): runs {', '.join(f'{t:.2f}' for t in old_times)} s")
+        print(
+            f"  median {statistics.median(old_times):.2f} s, "
+            f"CPU (user+sys) median {statistics.median(old_cpu):.2f} s"
+        )
     print(f"librosa (stft + hpss only): runs {', '.join(f'{t:.2f}' for t in librosa_times)} s")
     print(f"  median {statistics.median(librosa_times):.2f} s, peak RSS {max(librosa_rss):.0f} MiB")
     print(f"speed-up: {statistics.median(librosa_times) / statistics.median(ours_times):.1f}x")

@@ -14,11 +14,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from loudscape_extract.audio import Audio, mix_to_mono
+from loudscape_extract.curves import loudness_curves
 from loudscape_extract.dynamics import (
     dc_and_highpass,
     dr_meter,
+    dynamics_from_segments,
     frame_windows,
-    short_term_dynamics,
+    segment_true_peak,
     song_dynamics_metrics,
 )
 from loudscape_extract.errors import ExtractError
@@ -135,6 +137,7 @@ class TrackFeatures:
     frames: FrameFeatures
     metrics: dict
     highpass_hz: float | None = None
+    curves: dict | None = None
 
     @property
     def duration_s(self) -> float:
@@ -322,7 +325,18 @@ def track_features(
     )
     say("dynamics and loudness (short-term loudness, PSR, DR, integrated, range, true peak)")
     energy = segment_energy(clean, audio.sample_rate)
-    dynamics = short_term_dynamics(clean, mono_clean, sample_rate=audio.sample_rate, energy=energy)
+    # short_term_dynamics' steps, keeping the segment peaks for the overs
+    segment_peak, overall_peak = segment_true_peak(clean, energy[1])
+    starts = energy[1][:-1].astype(np.int64)
+    m = np.asarray(mono_clean[: energy[1][-1]], dtype=np.float64)
+    dynamics = dynamics_from_segments(
+        *energy,
+        segment_peak=segment_peak,
+        true_peak=overall_peak,
+        mono_squares=np.add.reduceat(m * m, starts) if starts.size else np.zeros(0),
+        mono_peaks=np.maximum.reduceat(np.abs(m), starts) if starts.size else np.zeros(0),
+        sample_rate=audio.sample_rate,
+    )
     window = frame_windows(frames.times_s, dynamics)
     has_windows = dynamics.start_s.shape[0] > 0
     per_frame = lambda series: series[window] if has_windows else np.full(window.shape, np.nan)  # noqa: E731
@@ -365,4 +379,10 @@ def track_features(
         frames=frames,
         metrics=metrics,
         highpass_hz=highpass_hz,
+        curves=loudness_curves(
+            *energy,
+            segment_peak=segment_peak,
+            dynamics=dynamics,
+            sample_rate=audio.sample_rate,
+        ),
     )

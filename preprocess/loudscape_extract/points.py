@@ -10,6 +10,7 @@ import numpy as np
 from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.features import HPSS_KERNEL, HPSS_MARGIN, HPSS_POWER, TrackFeatures
+from loudscape_extract.floor import floor_keep_mask, taper_width
 from loudscape_extract.format import (
     FORMAT_VERSION,
     MODE_SONG,
@@ -20,6 +21,7 @@ from loudscape_extract.format import (
     rounded,
     scalar_axis,
 )
+from loudscape_extract.normalization import streaming_gains
 from loudscape_extract.spectrogram import a_weighting_db
 
 __all__ = [
@@ -33,7 +35,8 @@ __all__ = [
     "song_points",
 ]
 
-#: Bins more than this many dB below the track's loudest bin are dropped (0 keeps every bin).
+#: Bins more than this many dB below the track's loudest bin are dropped (0 keeps every bin);
+#: above it the floor fades in (:mod:`loudscape_extract.floor`).
 DEFAULT_FLOOR_DB = 80.0
 #: ``scalar`` maps the A-weighted bin level linearly to [0, 1] over a range that holds every
 #: drawn bin at or above :data:`AUDIBLE_HZ`: ``[y_min + A_min, y_max + A_max]``, with ``A_min``,
@@ -108,8 +111,11 @@ def song_points(
 
     Silent frames are dropped; x is the frame time mapped from [first, last] kept frame to
     [-1, 1]. With ``freq_scale="log"`` the DC bin (0 Hz, no place on a log axis) is dropped.
-    Bins whose level is more than ``floor_db`` below the loudest remaining bin are dropped;
-    y maps [peak - floor_db, peak] (or [quietest, peak] with the floor disabled) to [-1, 1].
+    Bins whose level is more than ``floor_db`` below the loudest remaining bin are dropped, and
+    the floor fades in over the :func:`~loudscape_extract.floor.taper_width` dB above it
+    (:func:`~loudscape_extract.floor.floor_keep_mask`: the fraction of bins kept rises
+    linearly from 0 at the floor to 1, so no band ends in a wall at the floor); y maps
+    [peak - floor_db, peak] (or [quietest, peak] with the floor disabled) to [-1, 1].
 
     Parameters
     ----------
@@ -138,7 +144,13 @@ def song_points(
     peak = float(levels.max())
     if floor_db > 0:
         y_low = peak - floor_db
-        keep = levels >= np.float32(y_low)
+        keep = floor_keep_mask(
+            levels,
+            frame_index=kept_frames,
+            bin_index=np.arange(first_bin, first_bin + levels.shape[1]),
+            y_min=y_low,
+            floor_db=floor_db,
+        )
     else:
         y_low = float(levels.min())
         keep = np.ones(levels.shape, dtype=bool)
@@ -205,7 +217,7 @@ def song_metadata(
     metadata : dict
         JSON-ready; floats rounded to 6 decimals (metrics to 4).
     """
-    return {
+    metadata = {
         "format_version": FORMAT_VERSION,
         "mode": MODE_SONG,
         "point_count": cloud.point_count,
@@ -226,8 +238,10 @@ def song_metadata(
         },
         "axes": rounded(cloud.axes, 6),
         "metrics": rounded(features.metrics, 4),
+        "streaming": rounded(streaming_gains(features.metrics), 2),
         "extraction": {
             "floor_db": rounded(cloud.floor_db, 6),
+            "floor_taper_db": rounded(taper_width(cloud.floor_db), 6),
             "freq_scale": cloud.freq_scale,
             "dc_removed": True,
             "highpass_hz": features.highpass_hz,
@@ -235,3 +249,7 @@ def song_metadata(
             "generator": generator,
         },
     }
+    curves = getattr(features, "curves", None)
+    if curves is not None:
+        metadata["loudness"] = curves
+    return metadata

@@ -23,6 +23,7 @@ import numpy as np
 
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.messages import shorten
+from loudscape_extract.normalization import SERVICES, streaming_gains
 from loudscape_extract.paths import atomic_output, check_output_path, check_regular_input
 from loudscape_extract.ply import read_ply_metadata
 
@@ -41,8 +42,10 @@ __all__ = [
 BAND_MIN_SONGS = 5
 #: Reference lines on the loudness panel: playback normalization targets.
 STREAMING_TARGETS_LUFS = (
-    (-14.0, "-14 LUFS: Spotify, YouTube, Tidal"),
-    (-16.0, "-16 LUFS: Apple Music"),
+    (-11.0, "-11 LUFS: Spotify (loud)"),
+    (-14.0, "-14 LUFS: Spotify (normal), YouTube"),
+    (-16.0, "-16 LUFS: AES TD1008 (track)"),
+    (-19.0, "-19 LUFS: Spotify (quiet)"),
     (-23.0, "-23 LUFS: EBU R 128 broadcast"),
 )
 _MEDIANS = (
@@ -88,7 +91,7 @@ SONG_COLUMNS = (
     "crest_p95_db",
     "dc_offset",
     "hp_mean",
-)
+) + tuple(f"{service.key}_gain_db" for service in SERVICES)
 
 
 def _values(songs, key):
@@ -169,7 +172,11 @@ def per_song(metadata: dict) -> list[dict]:
     for song in metadata.get("songs") or []:
         metrics = song.get("metrics") or {}
         row = {k: song.get(k, "") for k in ("year", "artist", "title", "path")}
-        row.update({k: metrics.get(k) for k in SONG_COLUMNS[4:]})
+        row.update({k: metrics.get(k) for k in SONG_COLUMNS[4:] if not k.endswith("_gain_db")})
+        gains = streaming_gains(metrics)
+        row.update(
+            {f"{key}_gain_db": None if g is None else round(g, 2) for key, g in gains.items()}
+        )
         rows.append(row)
     return rows
 

@@ -39,6 +39,7 @@ from loudscape_extract.audio import (
     mix_to_mono,
     read_blocks,
 )
+from loudscape_extract.curves import loudness_curves
 from loudscape_extract.dsp import (
     fft_convolve,
     hann_window,
@@ -201,13 +202,44 @@ class _StreamFir:
         return y
 
 
+def _phase_convolve(x: np.ndarray, phases: list[np.ndarray]) -> Iterator[np.ndarray]:
+    """``fft_convolve(x, h, dtype=np.float32)`` for each ``h`` of ``phases`` (equal lengths),
+    by overlap-save with one forward transform of each segment shared by all filters."""
+    rows, n = x.shape
+    m = phases[0].shape[0]
+    size = 1 << max(16, math.ceil(math.log2(4 * m)))
+    step = size - m + 1
+    n_blocks = -(-n // step)
+    spectra = [scipy.fft.rfft(np.asarray(h, dtype=np.float32), size) for h in phases]
+    padded = np.zeros((rows, m - 1 + n_blocks * step + size), dtype=np.float32)
+    padded[:, m - 1 : m - 1 + n] = x
+    outputs = [np.empty((rows, n_blocks * step), dtype=np.float32) for _ in phases]
+    batch = 8
+    for first in range(0, n_blocks, batch):
+        count = min(batch, n_blocks - first)
+        starts = (first + np.arange(count)) * step
+        segments = padded[:, starts[:, None] + np.arange(size)[None, :]]  # (rows, count, size)
+        spectrum = scipy.fft.rfft(segments, axis=-1)
+        for out, h_spectrum in zip(outputs, spectra, strict=True):
+            y = scipy.fft.irfft(spectrum * h_spectrum, size, axis=-1)
+            out[:, first * step : (first + count) * step] = y[:, :, m - 1 :].reshape(rows, -1)
+    for out in outputs:
+        yield out[:, :n]
+
+
 class _StreamTruePeak:
     """The 4x-oversampled absolute maximum over channels around each sample, as
     :func:`segment_true_peak` computes it (the same interpolator in float32: FFT convolutions,
     or shifted sums for short blocks), fed consecutive blocks;
-    only positions whose interpolation window lies inside the signal are produced."""
+    only positions whose interpolation window lies inside the signal are produced.
 
-    def __init__(self, rows: int, oversampling: int = TRUE_PEAK_OVERSAMPLING) -> None:
+    With ``offsets`` it also gives the peak of ``signal + offsets`` (the decoded signal, when
+    the fed one is its DC-free version) from the same interpolation: the interpolator is
+    linear, so each phase's output moves by ``offset * sum(phase taps)`` wherever its window
+    lies inside the signal (near the start, by the partial sum over the samples already
+    there). One oversampled pass serves both peaks."""
+
+    def __init__(self, rows: int, oversampling: int = TRUE_PEAK_OVERSAMPLING, offsets=None) -> None:
         self.taps = interpolator_taps(oversampling).astype(np.float32)
         self.factor = oversampling
         self.per_phase = -(-self.taps.shape[0] // oversampling)
@@ -217,31 +249,54 @@ class _StreamTruePeak:
         self.phases = [padded[p::oversampling] for p in range(oversampling)]
         self.buffer = np.zeros((rows, self.half), dtype=np.float32)
         self.buffer_start = -self.half
+        self.offsets = None if offsets is None else np.asarray(offsets, np.float32)[:, None]
 
-    def feed(self, block: np.ndarray) -> tuple[int, np.ndarray]:
-        """``(s0, peak)``: the interpolated peak of samples ``s0 .. s0 + len(peak) - 1``."""
+    def _offset_response(self, phase: int, count: int) -> np.ndarray:
+        """``sum_k h_p[k]`` over the window samples inside the signal, per output (1, count)."""
+        h = self.taps[phase :: self.factor].astype(np.float32)
+        p = self.per_phase
+        # output j reads samples j - half .. (relative to buffer_start); tap k reads x[j+p-1-k]
+        j = np.arange(count)
+        first_inside = -self.buffer_start  # x index of sample 0
+        k_max = np.minimum(p - 1, j + p - 1 - first_inside)
+        partial = np.concatenate([[0.0], np.cumsum(h, dtype=np.float64)]).astype(np.float32)
+        return partial[np.clip(k_max + 1, 0, h.shape[0])][None, :]
+
+    def feed(self, block: np.ndarray) -> tuple[int, np.ndarray, np.ndarray | None]:
+        """``(s0, peak, offset_peak)``: the interpolated peak of samples ``s0 .. s0 +
+        len(peak) - 1``, and that of the signal plus the offsets (None without them)."""
         x = np.concatenate([self.buffer, block.astype(np.float32, copy=False)], axis=1)
         p = self.per_phase
         s0 = self.buffer_start + self.half
         count = x.shape[1] - (p - 1)
         peak = np.zeros(max(count, 0), dtype=np.float32)
-        if 0 < count < _SHORT_PEAK:
-            # Short blocks (short songs): the phases as shifted sums, cheaper than FFTs.
-            for phase in range(self.factor):
-                y = np.zeros((x.shape[0], count), dtype=np.float32)
-                for k, tap in enumerate(self.taps[phase :: self.factor]):
-                    y += tap * x[:, p - 1 - k : p - 1 - k + count]
-                np.maximum(peak, np.abs(y).max(axis=0), out=peak)
-        elif count > 0:
-            for h in self.phases:
-                y = fft_convolve(x, h, dtype=np.float32)[:, p - 1 :]
-                np.maximum(peak, np.abs(y).max(axis=0), out=peak)
+        offset_peak = None if self.offsets is None else np.zeros_like(peak)
         if count > 0:
+            if count < _SHORT_PEAK:
+                # Short blocks (short songs): the phases as shifted sums, cheaper than FFTs.
+                def outputs():
+                    for phase in range(self.factor):
+                        y = np.zeros((x.shape[0], count), dtype=np.float32)
+                        for k, tap in enumerate(self.taps[phase :: self.factor]):
+                            y += tap * x[:, p - 1 - k : p - 1 - k + count]
+                        yield y
+
+                produced = outputs()
+            else:
+                produced = (y[:, p - 1 :] for y in _phase_convolve(x, self.phases))
+            for phase, y in enumerate(produced):
+                np.maximum(peak, np.abs(y).max(axis=0), out=peak)
+                if offset_peak is not None:
+                    if self.buffer_start < 0:
+                        shift = self.offsets * self._offset_response(phase, count)
+                    else:
+                        shift = self.offsets * self._offset_response(phase, 1)
+                    np.maximum(offset_peak, np.abs(y + shift).max(axis=0), out=offset_peak)
             self.buffer = x[:, count:].copy()
             self.buffer_start += count
         else:
             self.buffer = x
-        return s0, peak
+        return s0, peak, offset_peak
 
 
 class _StreamFrames:
@@ -343,8 +398,10 @@ def signal_pass(
     dr_bounds = np.append(np.arange(0, n, dr_block), n).astype(np.int64)
     dr_squares = np.zeros((nc, dr_bounds.shape[0] - 1))
     dr_peaks = np.zeros((nc, dr_bounds.shape[0] - 1))
-    peak_clean = _StreamTruePeak(nc)
-    peak_decoded = _StreamTruePeak(nc)
+    # Without the high-pass the decoded signal is the DC-free one plus the channel means: one
+    # oversampled pass gives both true peaks. With it they differ by more; two passes.
+    peak_clean = _StreamTruePeak(nc, offsets=None if highpass is not None else decoded.dc)
+    peak_decoded = _StreamTruePeak(nc) if highpass is not None else None
     frames = _StreamFrames(n, n_fft=n_fft, hop_length=hop_length)
     overall_clean = 0.0
     overall_decoded = decoded.sample_peak
@@ -363,13 +420,14 @@ def signal_pass(
         sample_abs = np.abs(clean).max(axis=1).astype(np.float32)
         _reduce_into(segment_peak, sample_abs, start, boundaries, np.maximum)
         overall_clean = max(overall_clean, float(sample_abs.max()))
-        s0, interpolated = peak_clean.feed(clean.T)
+        s0, interpolated, decoded_peak = peak_clean.feed(clean.T)
         if interpolated.size:
             _reduce_into(segment_peak, interpolated, s0, boundaries, np.maximum)
             overall_clean = max(overall_clean, float(interpolated.max()))
-        s0, interpolated = peak_decoded.feed(samples.T)
-        if interpolated.size:
-            overall_decoded = max(overall_decoded, float(interpolated.max()))
+        if peak_decoded is not None:
+            _, decoded_peak, _ = peak_decoded.feed(samples.T)
+        if decoded_peak is not None and decoded_peak.size:
+            overall_decoded = max(overall_decoded, float(decoded_peak.max()))
         m = mono_clean.astype(np.float64)
         _reduce_into(mono_squares, m * m, start, boundaries, np.add)
         _reduce_into(mono_peaks, np.abs(m), start, boundaries, np.maximum)
@@ -523,6 +581,7 @@ class StreamedTrack:
     kernel_size: int
     block_frames: int
     warning: str = ""
+    curves: dict | None = None
 
     @property
     def duration_s(self) -> float:
@@ -690,4 +749,11 @@ def stream_track(
         kernel_size=kernel_size,
         block_frames=block_frames,
         warning=decoded.warning,
+        curves=loudness_curves(
+            stats.energy,
+            stats.boundaries,
+            segment_peak=stats.segment_peak,
+            dynamics=dynamics,
+            sample_rate=rate,
+        ),
     )

@@ -11,6 +11,7 @@ import numpy as np
 
 from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.floor import floor_keep_mask
 from loudscape_extract.format import axis, frequency_axis, hp_axis, level_axis, scalar_axis
 from loudscape_extract.points import FREQ_SCALES, _normalize, scalar_range
 from loudscape_extract.spectrogram import LEVEL_FLOOR_DB, level_db
@@ -69,17 +70,26 @@ def song_point_blocks(
     n_bins = z_per_bin.shape[0]
     peak = track.level_max_db[first_bin]
     options = dict(n_fft=track.n_fft, hop_length=track.hop_length, block_frames=track.block_frames)
+    bin_index = np.arange(first_bin, first_bin + n_bins)
+
+    def keep_mask(levels: np.ndarray, block_start: int, kept: np.ndarray) -> np.ndarray:
+        # levels: (n_kept, n_bins_drawn) of the block's kept frames (the rule of points.py)
+        if floor_db <= 0:
+            return np.ones(levels.shape, dtype=bool)
+        frame_index = block_start + np.flatnonzero(kept)
+        return floor_keep_mask(
+            levels, frame_index=frame_index, bin_index=bin_index, y_min=y_low, floor_db=floor_db
+        )
+
     if floor_db > 0:
         y_low = peak - floor_db
-        threshold = np.float32(y_low)
         n_points = 0
         for block in spectral_blocks(track.mono, **options):
             kept = ~silent[block.start : block.stop]
-            levels = level_db(block.magnitude[first_bin:, kept])
-            n_points += int(np.count_nonzero(levels >= threshold))
+            levels = level_db(block.magnitude[first_bin:, kept]).T
+            n_points += int(np.count_nonzero(keep_mask(levels, block.start, kept)))
     else:
         y_low = track.level_min_db[first_bin]
-        threshold = None
         n_points = int(kept_frames.size) * n_bins
     if n_points == 0:
         raise ExtractError("no bin is left above the noise floor")
@@ -100,10 +110,7 @@ def song_point_blocks(
                 continue
             levels_all = level_db(block.magnitude[:, kept])
             levels = levels_all[first_bin:].T  # (n_kept, n_bins_drawn)
-            if threshold is None:
-                keep = np.ones(levels.shape, dtype=bool)
-            else:
-                keep = levels >= threshold
+            keep = keep_mask(levels, block.start, kept)
             count = int(np.count_nonzero(keep))
             if count == 0:
                 continue

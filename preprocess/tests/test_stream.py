@@ -213,3 +213,23 @@ def test_streamed_decode_of_a_truncated_file_warns_or_fails_with_strict(tmp_path
     with pytest.raises(ExtractError, match="truncated or corrupt audio.*without --strict"):
         extract_song(str(source), str(output), n_fft=N_FFT, hop_length=HOP, strict=True)
     assert not output.exists()
+
+
+@pytest.mark.parametrize("block", [700, 40000, 100000])
+def test_one_true_peak_pass_gives_the_decoded_signals_peak_too(block):
+    from loudscape_extract.stream import _StreamTruePeak
+
+    rng = np.random.default_rng(5)
+    clean = (0.3 * rng.standard_normal((2, 150000))).astype(np.float32)
+    clean[:, :200] *= 3.0  # loud start: the partial windows there decide the peak
+    offsets = np.array([0.31, -0.02], dtype=np.float32)
+    decoded = clean + offsets[:, None]
+    shared = _StreamTruePeak(2, offsets=offsets)
+    alone_clean, alone_decoded = _StreamTruePeak(2), _StreamTruePeak(2)
+    for start in range(0, clean.shape[1], block):
+        s0, peak, offset_peak = shared.feed(clean[:, start : start + block])
+        s1, expected, _ = alone_clean.feed(clean[:, start : start + block])
+        s2, expected_decoded, none = alone_decoded.feed(decoded[:, start : start + block])
+        assert s0 == s1 == s2 and none is None
+        np.testing.assert_allclose(peak, expected, rtol=0, atol=0)
+        np.testing.assert_allclose(offset_peak, expected_decoded, rtol=1e-5, atol=1e-6)

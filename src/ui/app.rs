@@ -140,6 +140,7 @@ impl LoudscapeApp {
             freq_axis: Default::default(),
             compare: None,
             pending_seek: options.seek,
+            strip: Default::default(),
         };
         let compare = options.compare.clone();
         let files = app.apply_remembered(options.files, remembered);
@@ -438,6 +439,17 @@ impl eframe::App for LoudscapeApp {
                 self.audio.bar(ui);
                 ui.add_space(2.0);
             });
+            if let Some(song) = &self.song {
+                self.strip.sync(song.id, &song.cloud);
+            }
+            if self.strip.has_curves() {
+                let (strip, audio) = (&self.strip, &mut self.audio);
+                egui::Panel::bottom("loudness_strip").show(ui, |ui| {
+                    if let Some(t) = strip.show(ui, audio.time_s().unwrap_or(0.0)) {
+                        audio.seek(t);
+                    }
+                });
+            }
         }
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)

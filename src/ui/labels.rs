@@ -309,7 +309,93 @@ pub fn describe_metrics(m: &crate::data::cloud::Metrics) -> Vec<String> {
     if let Some(dc) = m.dc_offset.filter(|dc| *dc > 0.01) {
         lines.push(format!("DC offset removed: {dc:.3} of full scale"));
     }
+    for service in &STREAMING_SERVICES {
+        if let Some(gain) = normalization_gain(service, m.integrated_lufs, m.true_peak_dbtp) {
+            lines.push(format!("{}: {}", service.name, describe_gain(gain)));
+        }
+    }
     lines
+}
+
+/// How a streaming service turns a song up when it is quieter than the target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TurnUp {
+    /// Only as far as the true peak stays at or below this ceiling (dBTP).
+    PeakCeiling(f64),
+    /// To the target whatever the peak (the service limits the peaks).
+    Free,
+    /// Never: the service only turns down.
+    Never,
+}
+
+/// A playback normalization rule: `gain = target - integrated loudness`, positive gain
+/// limited by [`TurnUp`]. Keep in sync with `preprocess/loudscape_extract/normalization.py`
+/// (sources in docs/DYNAMICS.md, "Streaming normalization").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreamingService {
+    pub name: &'static str,
+    pub target_lufs: f64,
+    pub turn_up: TurnUp,
+}
+
+pub const STREAMING_SERVICES: [StreamingService; 5] = [
+    StreamingService {
+        name: "Spotify (normal)",
+        target_lufs: -14.0,
+        turn_up: TurnUp::PeakCeiling(-1.0),
+    },
+    StreamingService {
+        name: "Spotify (loud)",
+        target_lufs: -11.0,
+        turn_up: TurnUp::Free,
+    },
+    StreamingService {
+        name: "Spotify (quiet)",
+        target_lufs: -19.0,
+        turn_up: TurnUp::PeakCeiling(-1.0),
+    },
+    StreamingService {
+        name: "YouTube",
+        target_lufs: -14.0,
+        turn_up: TurnUp::Never,
+    },
+    StreamingService {
+        name: "AES TD1008 (track)",
+        target_lufs: -16.0,
+        turn_up: TurnUp::PeakCeiling(-1.0),
+    },
+];
+
+/// The playback gain in dB (negative: turned down) `service` applies to a song; None without
+/// an integrated loudness, or when turning up needs a true peak the file does not give.
+pub fn normalization_gain(
+    service: &StreamingService,
+    integrated_lufs: Option<f64>,
+    true_peak_dbtp: Option<f64>,
+) -> Option<f64> {
+    let integrated = integrated_lufs.filter(|v| v.is_finite())?;
+    let gain = service.target_lufs - integrated;
+    if gain <= 0.0 {
+        return Some(gain);
+    }
+    match service.turn_up {
+        TurnUp::Free => Some(gain),
+        TurnUp::Never => Some(0.0),
+        TurnUp::PeakCeiling(ceiling) => {
+            let peak = true_peak_dbtp.filter(|v| v.is_finite())?;
+            Some(gain.min(ceiling - peak).max(0.0))
+        }
+    }
+}
+
+fn describe_gain(gain: f64) -> String {
+    if gain <= -0.05 {
+        format!("turned down {:.1} dB", -gain)
+    } else if gain >= 0.05 {
+        format!("turned up {gain:.1} dB")
+    } else {
+        "plays as mastered".to_string()
+    }
 }
 
 #[cfg(test)]
@@ -337,9 +423,37 @@ mod metrics_tests {
                 "PSR, median of 3 s: 10.0 dB",
                 "PSR, 10th-90th pct: 8.5 to 11.3 dB",
                 "DC offset removed: 0.315 of full scale",
+                "Spotify (normal): turned down 6.0 dB",
+                "Spotify (loud): turned down 3.0 dB",
+                "Spotify (quiet): turned down 11.0 dB",
+                "YouTube: turned down 6.0 dB",
+                "AES TD1008 (track): turned down 8.0 dB",
             ]
         );
         assert!(describe_metrics(&Metrics::default()).is_empty());
+    }
+
+    #[test]
+    fn quiet_songs_are_turned_up_only_as_far_as_each_services_peak_rule_allows() {
+        use super::{STREAMING_SERVICES, normalization_gain};
+        let gain = |i: usize, lufs: f64, peak: Option<f64>| {
+            normalization_gain(&STREAMING_SERVICES[i], Some(lufs), peak)
+        };
+        // Spotify's published example: -20 LUFS, true peak -5 dB: lifted to -16 LUFS only
+        assert_eq!(gain(0, -20.0, Some(-5.0)), Some(4.0));
+        assert_eq!(gain(0, -20.0, Some(-9.0)), Some(6.0));
+        assert_eq!(gain(0, -20.0, Some(-0.5)), Some(0.0));
+        assert_eq!(gain(0, -20.0, None), None);
+        assert_eq!(gain(1, -20.0, Some(-0.5)), Some(9.0)); // loud: limiter, no peak rule
+        assert_eq!(gain(3, -20.0, Some(-9.0)), Some(0.0)); // YouTube turns down only
+        let m = Metrics {
+            integrated_lufs: Some(-14.02),
+            true_peak_dbtp: Some(-1.0),
+            ..Metrics::default()
+        };
+        let lines = describe_metrics(&m);
+        assert!(lines.contains(&"Spotify (normal): plays as mastered".to_string()));
+        assert!(lines.contains(&"Spotify (loud): turned up 3.0 dB".to_string()));
     }
 }
 

@@ -25,6 +25,7 @@ mod persistence;
 pub mod screenshot;
 mod slots;
 mod state;
+mod strip;
 mod window_screenshot;
 
 pub use app::{WindowOptions, run};

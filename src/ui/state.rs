@@ -81,6 +81,8 @@ pub(super) struct LoudscapeApp {
     pub(super) compare: Option<crate::ui::compare_window::CompareState>,
     /// Where to put the playhead once the song's audio is ready (`--seek`).
     pub(super) pending_seek: Option<f64>,
+    /// The loudness strip under the Song view (`strip.rs`).
+    pub(super) strip: crate::ui::strip::LoudnessStrip,
 }
 
 /// Which of the two data slots.

@@ -257,3 +257,112 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
         raw,
     })
 }
+
+/// Song mode's loudness over time (docs/FORMAT.md, "loudness"): momentary and short-term
+/// loudness, PSR and the true-peak overs. Files without it (older extractors, other tools)
+/// have none; a malformed object is treated as absent, so the cloud still opens.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoudnessCurves {
+    /// Values per second of each curve.
+    pub rate_hz: f64,
+    /// Centre time of the first momentary (400 ms) window, seconds.
+    pub momentary_start_s: f64,
+    pub momentary_lufs: Vec<Option<f32>>,
+    /// Centre time of the first short-term (3 s) window, seconds; PSR shares its windows.
+    pub short_term_start_s: f64,
+    pub short_term_lufs: Vec<Option<f32>>,
+    pub psr_db: Vec<Option<f32>>,
+    /// `[start_s, end_s]` where the true peak exceeds 0 dBTP, and -1 dBTP.
+    pub overs_0dbtp: Vec<(f64, f64)>,
+    pub overs_1dbtp: Vec<(f64, f64)>,
+}
+
+impl LoudnessCurves {
+    /// The time of value `index` of a curve starting at `start_s`.
+    pub fn time_of(&self, start_s: f64, index: usize) -> f64 {
+        start_s + index as f64 / self.rate_hz
+    }
+
+    /// The time the curves cover: the last short-term or momentary window's centre plus its
+    /// half width.
+    pub fn end_s(&self) -> f64 {
+        let momentary = self.momentary_lufs.len().saturating_sub(1);
+        let short = self.short_term_lufs.len().saturating_sub(1);
+        (self.time_of(self.momentary_start_s, momentary) + self.momentary_start_s)
+            .max(self.time_of(self.short_term_start_s, short) + self.short_term_start_s)
+    }
+}
+
+/// The `loudness` object of a file's metadata (`raw`: [`CloudMeta::raw`]), if it has a valid
+/// one.
+pub fn loudness_curves(raw: &Value) -> Option<LoudnessCurves> {
+    let object = raw.get("loudness")?.as_object()?;
+    let number = |key: &str| object.get(key).and_then(Value::as_f64);
+    let series = |key: &str| -> Option<Vec<Option<f32>>> {
+        object
+            .get(key)?
+            .as_array()?
+            .iter()
+            .map(|v| match v {
+                Value::Null => Some(None),
+                v => v.as_f64().map(|x| Some(x as f32)),
+            })
+            .collect()
+    };
+    let intervals = |key: &str| -> Option<Vec<(f64, f64)>> {
+        match object.get(key) {
+            None => Some(Vec::new()),
+            Some(v) => v
+                .as_array()?
+                .iter()
+                .map(|pair| {
+                    let pair = pair.as_array()?;
+                    match pair.as_slice() {
+                        [a, b] => Some((a.as_f64()?, b.as_f64()?)),
+                        _ => None,
+                    }
+                })
+                .collect(),
+        }
+    };
+    let rate_hz = number("rate_hz").filter(|r| r.is_finite() && *r > 0.0)?;
+    Some(LoudnessCurves {
+        rate_hz,
+        momentary_start_s: number("momentary_start_s").unwrap_or(0.2),
+        momentary_lufs: series("momentary_lufs").unwrap_or_default(),
+        short_term_start_s: number("short_term_start_s").unwrap_or(1.5),
+        short_term_lufs: series("short_term_lufs")?,
+        psr_db: series("psr_db").unwrap_or_default(),
+        overs_0dbtp: intervals("overs_0dbtp")?,
+        overs_1dbtp: intervals("overs_1dbtp")?,
+    })
+}
+
+#[cfg(test)]
+mod loudness_tests {
+    use super::*;
+
+    #[test]
+    fn loudness_curves_are_read_and_files_without_them_have_none() {
+        let raw: Value = serde_json::from_str(
+            r#"{"loudness": {"rate_hz": 10.0, "momentary_start_s": 0.2,
+                "momentary_lufs": [-20.5, null, -18.0], "short_term_start_s": 1.5,
+                "short_term_lufs": [-19.0], "psr_db": [12.5],
+                "overs_0dbtp": [[1.0, 1.3]], "overs_0dbtp_count": 1,
+                "overs_1dbtp": [[1.0, 1.3], [5.0, 5.1]], "overs_1dbtp_count": 2}}"#,
+        )
+        .unwrap();
+        let curves = loudness_curves(&raw).expect("curves");
+        assert_eq!(curves.momentary_lufs, [Some(-20.5), None, Some(-18.0)]);
+        assert_eq!(curves.short_term_lufs, [Some(-19.0)]);
+        assert_eq!(curves.psr_db, [Some(12.5)]);
+        assert_eq!(curves.overs_0dbtp, [(1.0, 1.3)]);
+        assert_eq!(curves.overs_1dbtp, [(1.0, 1.3), (5.0, 5.1)]);
+        assert!((curves.time_of(curves.momentary_start_s, 2) - 0.4).abs() < 1e-12);
+        assert!((curves.end_s() - 3.0).abs() < 1e-12);
+        assert_eq!(loudness_curves(&serde_json::json!({"mode": "song"})), None);
+        // malformed: absent, not an error
+        let bad = serde_json::json!({"loudness": {"rate_hz": 10.0, "short_term_lufs": "x"}});
+        assert_eq!(loudness_curves(&bad), None);
+    }
+}

@@ -43,6 +43,7 @@ mod body;
 mod generic;
 mod header;
 mod meta;
+pub use meta::{LoudnessCurves, loudness_curves};
 mod write;
 
 use body::Body;

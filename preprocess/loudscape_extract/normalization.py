@@ -1,0 +1,89 @@
+"""How many dB streaming services would turn a song down (or up) at playback.
+
+Each service plays a track at ``gain = target - integrated loudness`` (BS.1770, LUFS), except
+that positive gain is limited by its turn-up rule:
+
+- ``"peak"``: turned up only as far as the true peak stays at or below ``ceiling_dbtp``
+  (never turned up when the true peak is already above it);
+- ``"free"``: turned up to the target whatever the peak (the service limits the peaks);
+- ``"never"``: only turned down.
+
+The rules and their public sources are in docs/DYNAMICS.md ("Streaming normalization"); only
+what a public source documents is here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["SERVICES", "Service", "normalization_gain", "streaming_gains"]
+
+
+@dataclass(frozen=True)
+class Service:
+    """A playback normalization rule.
+
+    Attributes
+    ----------
+    key : str
+        Metadata key (``streaming.<key>``) and CSV column stem.
+    name : str
+        As shown in the app and the report.
+    target_lufs : float
+    turn_up : {"peak", "free", "never"}
+    ceiling_dbtp : float or None
+        The true-peak ceiling of ``"peak"``.
+    """
+
+    key: str
+    name: str
+    target_lufs: float
+    turn_up: str
+    ceiling_dbtp: float | None = None
+
+
+SERVICES = (
+    Service("spotify", "Spotify (normal)", -14.0, "peak", -1.0),
+    Service("spotify_loud", "Spotify (loud)", -11.0, "free"),
+    Service("spotify_quiet", "Spotify (quiet)", -19.0, "peak", -1.0),
+    Service("youtube", "YouTube", -14.0, "never"),
+    Service("aes_td1008", "AES TD1008 (track)", -16.0, "peak", -1.0),
+)
+
+
+def normalization_gain(
+    service: Service, *, integrated_lufs: float | None, true_peak_dbtp: float | None
+) -> float | None:
+    """The playback gain in dB (negative: turned down) of ``service`` for a song.
+
+    Returns
+    -------
+    gain_db : float or None
+        None without an integrated loudness (silence, or too short to gate).
+    """
+    if integrated_lufs is None or not math.isfinite(integrated_lufs):
+        return None
+    gain = service.target_lufs - integrated_lufs
+    if gain <= 0.0 or service.turn_up == "free":
+        return gain
+    if service.turn_up == "never":
+        return 0.0
+    if true_peak_dbtp is None or not math.isfinite(true_peak_dbtp):
+        return None
+    return max(0.0, min(gain, service.ceiling_dbtp - true_peak_dbtp))
+
+
+def streaming_gains(metrics: dict) -> dict[str, float | None]:
+    """``{service.key: gain_db}`` for every service of :data:`SERVICES`.
+
+    Parameters
+    ----------
+    metrics : dict
+        With ``integrated_lufs`` and ``true_peak_dbtp`` (the song metadata's ``metrics``).
+    """
+    integrated, peak = metrics.get("integrated_lufs"), metrics.get("true_peak_dbtp")
+    return {
+        s.key: normalization_gain(s, integrated_lufs=integrated, true_peak_dbtp=peak)
+        for s in SERVICES
+    }
