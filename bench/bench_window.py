@@ -279,12 +279,12 @@ def iso_sweep(x: XDriver, slider: tuple[int, int, int], seconds: float) -> float
     # Updates still in the pipe count too; the rate is over the whole time they took.
     end = time.monotonic() + 30.0
     quiet_since = time.monotonic()
-    while time.monotonic() < end and time.monotonic() - quiet_since < 1.5:
+    while time.monotonic() < end and time.monotonic() - quiet_since < 5.0:
         n = len(changes)
         watch(time.monotonic() + 0.25)
         if len(changes) != n:
             quiet_since = time.monotonic()
-    if len(changes) < 2:
+    if not changes:
         raise RuntimeError("the isovalue sweep changed nothing: is --iso-slider on the slider?")
     return len(changes) / (changes[-1] - start)
 
