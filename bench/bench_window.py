@@ -441,6 +441,7 @@ def main() -> int:
     parser.add_argument("--big", type=Path, default=Path("out/bench-window/real_5m.ply"))
     parser.add_argument("--big-seconds", type=float, default=170.0, help="length of the big song")
     parser.add_argument("--no-big", action="store_true", help="the demo only")
+    parser.add_argument("--skip-demo", action="store_true", help="the big song only")
     parser.add_argument("--views", default="points,surface,volume")
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--hovers", type=int, default=5)
@@ -461,7 +462,7 @@ def main() -> int:
         if not binary.is_file():
             print(f"{binary}: no such binary (cargo build --release)", file=sys.stderr)
             return 1
-    files = [("demo", args.demo)]
+    files = [] if args.skip_demo else [("demo", args.demo)]
     if not args.no_big:
         if not args.big.is_file():
             print(f"extracting the big song into {args.big} ...", flush=True)
