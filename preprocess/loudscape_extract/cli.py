@@ -179,6 +179,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     timeline.add_argument("--no-cache", action="store_true", help="neither read nor write it")
     timeline.add_argument(
+        "--progress",
+        choices=("text", "json"),
+        default="text",
+        help="json: one JSON object a song on stdout as each finishes (song, songs_done, "
+        "songs_total, fraction), then the songs left out, then done or error",
+    )
+    timeline.add_argument(
         "--jobs",
         "-j",
         type=_positive_int,
@@ -266,11 +273,16 @@ def run_song(args: argparse.Namespace, progress: Progress) -> int:
     return 0
 
 
-def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
-    """The timeline subcommand: build, then a summary on stderr; 1 when any song failed."""
+def run_timeline(args: argparse.Namespace, *, tty: bool, json_progress=None) -> int:
+    """The timeline subcommand: build, then a summary on stderr; 1 when any song failed.
+
+    ``json_progress`` (a :class:`JsonTimelineProgress`) hears every song as it finishes.
+    """
     width = [0]
 
     def progress(done: int, total: int, path: str) -> None:
+        if json_progress is not None:
+            json_progress(done, total, path)
         if tty:
             line = f"{PROG}: [{done}/{total}] {os.path.basename(path)}"[:100]
             print("\r" + line.ljust(width[0]), end="", file=sys.stderr, flush=True)
@@ -300,6 +312,9 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
         if tty and width[0]:
             print("\r" + " " * width[0] + "\r", end="", file=sys.stderr, flush=True)
     elapsed = time.perf_counter() - start
+    if json_progress is not None:
+        json_progress.left_out(without_year=result.without_year, failed=result.failed)
+        json_progress.done(args.output)
     for note in result.notes:
         _say(f"warning: {note}")
     for path in result.without_year:
@@ -366,15 +381,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
     if getattr(args, "progress", "text") == "json":
-        from loudscape_extract.progress import JsonProgress
+        from loudscape_extract.progress import JsonProgress, JsonTimelineProgress
 
-        progress = JsonProgress()
+        progress = JsonTimelineProgress() if args.command == "timeline" else JsonProgress()
     try:
         with sigterm_raises():
             if args.command == "song":
                 return run_song(args, progress)
             if args.command == "timeline":
-                return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
+                return run_timeline(
+                    args,
+                    tty=not args.quiet and sys.stderr.isatty(),
+                    json_progress=progress if hasattr(progress, "left_out") else None,
+                )
             if args.command == "export":
                 return run_export(args)
             return run_report(args)

@@ -2,7 +2,8 @@
 //! audio's bytes and the settings, in `$LOUDSCAPE_CACHE_DIR`, else `$XDG_CACHE_HOME/loudscape/
 //! clouds`, else `~/.cache/loudscape/clouds` (beside the extractor's own timeline cache). A
 //! renamed or moved song still hits; an edited one misses. The extractor writes each file
-//! atomically, so a file in the cache is always whole.
+//! atomically, so a file in the cache is always whole. The key covers the extractor's version
+//! too (`version.rs`): a new extractor writes new clouds instead of reusing an older one's.
 
 use std::fs::File;
 use std::io::Read;
@@ -28,9 +29,14 @@ pub fn dir() -> PathBuf {
     base.join("loudscape").join("clouds")
 }
 
-/// The cache key of `audio` under `settings`: hex SHA-256 of the key version, the settings'
-/// flags and the file's bytes.
-pub fn key(audio: &Path, settings: &Settings) -> Result<String, ExtractError> {
+/// The cache key of `audio` under `settings` by the extractor of `extractor_version`: hex
+/// SHA-256 of the key version, the extractor's version, the settings' flags and the file's
+/// bytes.
+pub fn key(
+    audio: &Path,
+    settings: &Settings,
+    extractor_version: &str,
+) -> Result<String, ExtractError> {
     let io = |e: std::io::Error| ExtractError::Io {
         path: audio.to_owned(),
         reason: format!("cannot read the audio file: {e}"),
@@ -44,6 +50,9 @@ pub fn key(audio: &Path, settings: &Settings) -> Result<String, ExtractError> {
     }
     let mut hasher = Sha256::new();
     hasher.update(KEY_VERSION.as_bytes());
+    hasher.update([0]);
+    hasher.update(extractor_version.as_bytes());
+    hasher.update([0]);
     for arg in settings.arguments() {
         hasher.update(arg.as_bytes());
         hasher.update([0]);
@@ -68,7 +77,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn key_follows_content_and_settings_not_the_name() {
+    fn key_follows_content_settings_and_extractor_not_the_name() {
         let dir = std::env::temp_dir().join(format!("loudscape-cache-key-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (a, b, c) = (dir.join("a.wav"), dir.join("b.wav"), dir.join("c.wav"));
@@ -76,15 +85,29 @@ mod tests {
         std::fs::write(&b, b"some audio bytes").unwrap();
         std::fs::write(&c, b"other audio bytes").unwrap();
         let settings = Settings::default();
+        let key = |path: &Path, settings: &Settings| key(path, settings, "0.1.0");
         let key_a = key(&a, &settings).unwrap();
         assert_eq!(key_a.len(), 64);
         assert_eq!(key_a, key(&b, &settings).unwrap());
         assert_ne!(key_a, key(&c, &settings).unwrap());
+        assert_ne!(key_a, super::key(&a, &settings, "0.1.1").unwrap());
         let log = Settings {
             freq_scale: "log".into(),
             ..Settings::default()
         };
         assert_ne!(key_a, key(&a, &log).unwrap());
+        for changed in [
+            Settings {
+                n_fft: 4096,
+                ..Settings::default()
+            },
+            Settings {
+                floor_db: Some(60.0),
+                ..Settings::default()
+            },
+        ] {
+            assert_ne!(key_a, key(&a, &changed).unwrap(), "{changed:?}");
+        }
         assert!(key(&dir, &settings).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }
