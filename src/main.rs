@@ -26,6 +26,10 @@ struct Cli {
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
 
+    /// Press these keys once the data is shown (`?`, `F`, `Ctrl+S`; for tests).
+    #[arg(long, hide = true)]
+    press: Vec<String>,
+
     /// Print the full error chain and backtraces.
     #[arg(long, global = true)]
     debug: bool,
@@ -168,6 +172,7 @@ fn main() -> ExitCode {
                 files: cli.files,
                 screenshot: cli.screenshot,
                 view: cli.view,
+                press: cli.press,
             })
         }),
         Some(Command::Render(args)) => commands::render::run(args),

@@ -16,6 +16,7 @@ use crate::ui::bridge::{ViewCallback, ViewResources};
 use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::persistence::Remembered;
+use crate::ui::shortcuts::{self, Action};
 use crate::ui::state::{LoudscapeApp, SaveShot, ScreenshotState, Slot};
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
@@ -42,6 +43,9 @@ pub struct WindowOptions {
     pub screenshot: Option<PathBuf>,
     /// The view to open in (otherwise the remembered one, or Points).
     pub view: Option<ViewKind>,
+    /// Keys to press once the data is shown (`?`, `Ctrl+S`; for tests: they go through the
+    /// same key handling as real keys).
+    pub press: Vec<String>,
 }
 
 /// Opens the window and runs until it closes.
@@ -126,7 +130,16 @@ impl LoudscapeApp {
             moving_divisor: [1; 3],
             slot_cameras: [None, None],
             renders_seen: (0, 0),
-            open: Default::default(),
+            open: crate::ui::open::OpenPanel {
+                // A scripted run keeps a recent list only where it is told to.
+                recent: crate::ui::recent::RecentFiles::load(
+                    (persist || std::env::var_os("LOUDSCAPE_STATE_DIR").is_some())
+                        .then(crate::ui::recent::default_store)
+                        .flatten(),
+                ),
+                ..Default::default()
+            },
+            scripted_presses: options.press,
         };
         let files = app.apply_remembered(options.files, remembered);
         if let Some(view) = options.view {
@@ -217,13 +230,12 @@ impl LoudscapeApp {
                 moved = true;
             }
         }
-        let keys_free = !ui.ctx().egui_wants_keyboard_input();
         let mut fitted_now = false;
-        if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::F)) {
+        if shortcuts::pressed(ui.ctx(), Action::Fit) {
             self.fit();
             (moved, fitted_now) = (true, true);
         }
-        if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::R)) {
+        if shortcuts::pressed(ui.ctx(), Action::ResetView) {
             self.reset_view();
             (moved, fitted_now) = (true, true);
         }
@@ -322,6 +334,19 @@ impl LoudscapeApp {
 }
 
 impl eframe::App for LoudscapeApp {
+    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        // Scripted presses (tests), once the data is shown or nothing is loading.
+        if !self.scripted_presses.is_empty() && (self.active().is_some() || self.loading.is_empty())
+        {
+            for name in std::mem::take(&mut self.scripted_presses) {
+                match shortcuts::key_event(&name) {
+                    Some(event) => raw_input.events.push(event),
+                    None => self.messages.push(format!("--press {name}: no such key")),
+                }
+            }
+        }
+    }
+
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         if self.persist {
             eframe::set_value(storage, eframe::APP_KEY, &self.remembered());
@@ -364,14 +389,16 @@ impl eframe::App for LoudscapeApp {
                 egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
             });
         self.audio.poll(&ctx);
-        let keys_free = !ctx.egui_wants_keyboard_input();
-        if keys_free && ctx.input(|i| i.key_pressed(egui::Key::Space)) && self.active == Slot::Song
-        {
+        if self.active == Slot::Song && shortcuts::pressed(&ctx, Action::PlayPause) {
             self.audio.toggle();
         }
-        if ctx.input_mut(|i| i.consume_key(egui::Modifiers::COMMAND, egui::Key::S)) {
+        if shortcuts::pressed(&ctx, Action::SavePng) {
             self.save_shot.requested = true;
         }
+        if shortcuts::pressed(&ctx, Action::Open) {
+            self.open_dialog_or_say_why();
+        }
+        self.shortcuts_overlay(&ctx);
         if self.active == Slot::Song && self.song.is_some() {
             egui::Panel::bottom("transport").show(ui, |ui| {
                 ui.add_space(3.0);

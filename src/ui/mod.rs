@@ -9,13 +9,16 @@
 pub mod app;
 pub mod audio;
 pub mod bridge;
+mod extract_settings;
 mod hover;
 pub mod labels;
 mod legends;
 mod open;
 mod panels;
 mod persistence;
+mod recent;
 pub mod screenshot;
+mod shortcuts;
 mod slots;
 mod state;
 mod window_screenshot;

@@ -21,8 +21,12 @@ impl LoudscapeApp {
         let thread_path = path.clone();
         let shared = crate::ui::state::Shared::default();
         let thread_shared = shared.clone();
+        // Audio is extracted with the side panel's settings (`extract_settings.rs`).
+        let settings = self.open.extract.next.clone();
+        if crate::ui::extract_settings::named_like_audio(&path) {
+            self.open.extract.shown = Some((path.clone(), settings.clone()));
+        }
         std::thread::spawn(move || {
-            let settings = crate::extract::Settings::default();
             let result = crate::ui::open::open_path(&thread_path, &settings, &thread_shared);
             let _ = sender.send(result);
         });
@@ -67,7 +71,10 @@ impl LoudscapeApp {
         };
         for (path, result) in finished {
             match result {
-                Ok(cloud) => self.install(render_state, cloud),
+                Ok(cloud) => {
+                    self.opened(&path);
+                    self.install(render_state, cloud);
+                }
                 Err(message) => {
                     log::error!("{message}");
                     self.messages.push(format!("{}: {message}", path.display()));

@@ -71,6 +71,8 @@ pub(super) struct LoudscapeApp {
     pub(super) renders_seen: (u64, u32),
     /// The Open row (`open.rs`).
     pub(super) open: OpenPanel,
+    /// Key presses a scripted run (`--press`, tests) still has to make (`shortcuts.rs`).
+    pub(super) scripted_presses: Vec<String>,
 }
 
 /// Which of the two data slots.
@@ -161,13 +163,8 @@ impl Default for SaveShot {
     }
 }
 
-/// The Open row: its text field and the file dialog while it is open.
-#[derive(Default)]
-pub(super) struct OpenPanel {
-    pub(super) path: String,
-    /// The dialog's answer (`None`: closed without a choice).
-    pub(super) dialog: Option<std::sync::mpsc::Receiver<Option<std::path::PathBuf>>>,
-}
+/// The Open row, recent files, extraction settings and shortcuts overlay (`open.rs`).
+pub(super) use crate::ui::open::OpenPanel;
 
 /// What a loading thread shares with the window.
 #[derive(Clone, Default)]
