@@ -179,6 +179,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     timeline.add_argument("--no-cache", action="store_true", help="neither read nor write it")
     timeline.add_argument(
+        "--list-songs",
+        action="store_true",
+        help="only list the audio files found and the year, title and artist of their tags "
+        "(with --progress json: one object a song, then done); nothing is written",
+    )
+    timeline.add_argument(
         "--progress",
         choices=("text", "json"),
         default="text",
@@ -270,6 +276,38 @@ def run_song(args: argparse.Namespace, progress: Progress) -> int:
             f"{metadata['source']['duration_s']:.1f} s of audio, "
             f"{time.perf_counter() - start:.1f} s)"
         )
+    return 0
+
+
+def list_songs(args: argparse.Namespace, json_progress=None) -> int:
+    """``timeline --list-songs``: the songs found under the inputs with their tags, on stdout.
+
+    A program (the app, to ask for the missing years before building) reads one JSON object a
+    song, ``{"song", "year", "title", "artist", "tag_error"}`` (year null when the tags have
+    none), then ``{"done": ""}``; people read one ``path<TAB>year<TAB>title<TAB>artist`` line a
+    song.
+    """
+    from loudscape_extract.timeline import discover_audio, read_tags
+
+    if not args.inputs:
+        raise ExtractError("no input: give folders or files to list")
+    for path in discover_audio(args.inputs):
+        tags = read_tags(path)
+        if json_progress is not None:
+            json_progress.emit(
+                {
+                    "song": path,
+                    "year": tags["year"],
+                    "title": tags["title"],
+                    "artist": tags["artist"],
+                    "tag_error": tags["error"],
+                }
+            )
+        else:
+            year = "" if tags["year"] is None else str(tags["year"])
+            print(f"{path}\t{year}\t{tags['title']}\t{tags['artist']}", flush=True)
+    if json_progress is not None:
+        json_progress.done("")
     return 0
 
 
@@ -388,6 +426,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         with sigterm_raises():
             if args.command == "song":
                 return run_song(args, progress)
+            if args.command == "timeline" and args.list_songs:
+                return list_songs(args, progress if hasattr(progress, "left_out") else None)
             if args.command == "timeline":
                 return run_timeline(
                     args,

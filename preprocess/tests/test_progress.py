@@ -96,3 +96,27 @@ def test_the_installed_version_is_the_programs():
     from loudscape_extract.version import __version__
 
     assert version("loudscape-extract") == __version__
+
+
+def test_list_songs_gives_each_song_its_tags_and_writes_nothing(tmp_path, capsys):
+    import mutagen.flac
+
+    folder = tmp_path / "music"
+    folder.mkdir()
+    for i, year in enumerate([1984, None]):
+        path = folder / f"song{i}.flac"
+        soundfile.write(path, musical_signal(sample_rate=RATE, duration_s=0.5, seed=i) * 0.5, RATE)
+        if year is not None:
+            tags = mutagen.flac.FLAC(path)
+            tags["date"], tags["title"] = str(year), "Title"
+            tags.save()
+    status = main(["timeline", str(folder), "--list-songs", "--progress", "json"])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    records = lines_of(captured.out)
+    assert records[-1] == {"done": ""}
+    by_name = {os.path.basename(r["song"]): r for r in records[:-1]}
+    assert by_name["song0.flac"]["year"] == 1984 and by_name["song0.flac"]["title"] == "Title"
+    assert by_name["song1.flac"]["year"] is None
+    assert all(r["tag_error"] is None for r in records[:-1])
+    assert sorted(os.listdir(folder)) == ["song0.flac", "song1.flac"]
