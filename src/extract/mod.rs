@@ -11,6 +11,7 @@
 pub mod cache;
 pub mod child;
 pub mod locate;
+pub mod timeline;
 pub mod version;
 
 use std::fs::File;

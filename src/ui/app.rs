@@ -137,6 +137,12 @@ impl LoudscapeApp {
                         .then(crate::ui::recent::default_store)
                         .flatten(),
                 ),
+                years: crate::ui::timeline_build::YearBook::load(
+                    (persist || std::env::var_os("LOUDSCAPE_STATE_DIR").is_some())
+                        .then(crate::ui::recent::default_store)
+                        .flatten()
+                        .map(|recent| recent.with_file_name("years.json")),
+                ),
                 ..Default::default()
             },
             scripted_presses: options.press,
@@ -145,9 +151,7 @@ impl LoudscapeApp {
         if let Some(view) = options.view {
             app.settings.view = view;
         }
-        for file in files {
-            app.start_loading(file);
-        }
+        app.start_opening(files);
         app
     }
 
@@ -336,7 +340,9 @@ impl LoudscapeApp {
 impl eframe::App for LoudscapeApp {
     fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
         // Scripted presses (tests), once the data is shown or nothing is loading.
-        if !self.scripted_presses.is_empty() && (self.active().is_some() || self.loading.is_empty())
+        if !self.scripted_presses.is_empty()
+            && (self.active().is_some() || self.loading.is_empty())
+            && self.scripted_input_ready()
         {
             for name in std::mem::take(&mut self.scripted_presses) {
                 match shortcuts::key_event(&name) {
@@ -378,8 +384,8 @@ impl eframe::App for LoudscapeApp {
                 .map(|f| f.path().to_path_buf())
                 .collect()
         });
-        for path in dropped {
-            self.start_loading(path);
+        if !dropped.is_empty() {
+            self.start_opening(dropped);
         }
 
         egui::Panel::left("controls")
@@ -396,7 +402,7 @@ impl eframe::App for LoudscapeApp {
             self.save_shot.requested = true;
         }
         if shortcuts::pressed(&ctx, Action::Open) {
-            self.open_dialog_or_say_why();
+            self.open_dialog_or_say_why(false);
         }
         self.shortcuts_overlay(&ctx);
         if self.active == Slot::Song && self.song.is_some() {

@@ -21,6 +21,7 @@ pub mod screenshot;
 mod shortcuts;
 mod slots;
 mod state;
+mod timeline_build;
 mod window_screenshot;
 
 pub use app::{WindowOptions, run};

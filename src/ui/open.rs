@@ -2,8 +2,9 @@
 //! goes through the extractor and the cloud cache in `crate::extract`), its progress bar with the
 //! stage and a Cancel button, and the "Open" row of the side panel (a path field, and a native
 //! file dialog through `rfd`). The command-line argument, a dropped file, the path field and the
-//! dialog all end in [`LoudscapeApp::start_loading`], which calls [`open_path`] on a thread; the
-//! old view stays until the new cloud is installed. Below the row: the recent files
+//! dialog all end in `start_opening` (`timeline_build.rs`: a folder or several songs are a
+//! timeline), and a song or a cloud in [`LoudscapeApp::start_loading`], which calls
+//! [`open_path`] on a thread; the old view stays until the new cloud is installed. Below the row: the recent files
 //! (`recent.rs`). The save dialog for screenshots ([`LoudscapeApp::ask_where_to_save`]) lives
 //! here too. Where no dialog can open (Linux without a desktop portal or zenity, as under Xvfb)
 //! the window says so and goes on as it did without dialogs (the path field; screenshots in the
@@ -26,7 +27,7 @@ use crate::ui::state::{LoudscapeApp, Shared};
 pub(super) struct OpenPanel {
     pub(super) path: String,
     /// The dialog's answer (`None`: closed without a choice).
-    pub(super) dialog: Option<Receiver<Option<PathBuf>>>,
+    pub(super) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
     /// The save dialog's answer, while it is open.
     pub(super) save_dialog: Option<Receiver<Option<PathBuf>>>,
     /// Where the save dialog said to save the next screenshot.
@@ -37,6 +38,14 @@ pub(super) struct OpenPanel {
     /// The extraction settings for the next song opened, and those of the song shown
     /// (`extract_settings.rs`).
     pub(super) extract: crate::ui::extract_settings::ExtractChoices,
+    /// A timeline on its way: tags being read, or the years dialog (`timeline_build.rs`).
+    pub(super) timeline: Option<crate::ui::timeline_build::TimelineBuild>,
+    /// The songs of the timeline being built, a row each as they finish.
+    pub(super) timeline_rows: crate::ui::timeline_build::Rows,
+    /// The loading row of the timeline being built.
+    pub(super) building: Option<PathBuf>,
+    /// Years typed for songs whose tags lack one.
+    pub(super) years: crate::ui::timeline_build::YearBook,
 }
 
 /// Whether a native file dialog can open here. On Linux rfd asks the desktop portal over
@@ -76,19 +85,32 @@ pub fn open_path(path: &Path, settings: &Settings, shared: &Shared) -> Result<Po
 
 /// The native Open dialog, built here (macOS wants dialogs made on the main thread) and awaited
 /// on a thread so the window keeps drawing; the answer comes through the receiver.
-fn open_dialog() -> Receiver<Option<PathBuf>> {
+/// Several songs chosen become a timeline; `folder` asks for a folder (a timeline of the songs
+/// in it).
+fn open_dialog(folder: bool) -> Receiver<Option<Vec<PathBuf>>> {
     let (sender, receiver) = channel();
+    if folder {
+        let dialog = rfd::AsyncFileDialog::new()
+            .set_title("Open a folder of songs as a timeline")
+            .pick_folder();
+        std::thread::spawn(move || {
+            let picked = pollster::block_on(dialog).map(|f| vec![f.path().to_path_buf()]);
+            let _ = sender.send(picked);
+        });
+        return receiver;
+    }
     let dialog = rfd::AsyncFileDialog::new()
-        .set_title("Open a song or a loudscape cloud")
+        .set_title("Open a song, several songs (a timeline) or a loudscape cloud")
         .add_filter(
             "Songs and clouds",
             &[&AUDIO_EXTENSIONS[..], &["ply"]].concat(),
         )
         .add_filter("Songs", &AUDIO_EXTENSIONS)
         .add_filter("Clouds (.ply)", &["ply"])
-        .pick_file();
+        .pick_files();
     std::thread::spawn(move || {
-        let picked = pollster::block_on(dialog).map(|file| file.path().to_path_buf());
+        let picked = pollster::block_on(dialog)
+            .map(|files| files.iter().map(|f| f.path().to_path_buf()).collect());
         let _ = sender.send(picked);
     });
     receiver
@@ -125,18 +147,25 @@ impl LoudscapeApp {
             let field = ui.add(
                 egui::TextEdit::singleline(&mut self.open.path)
                     .hint_text("song.ogg or cloud.ply")
-                    .desired_width(150.0),
+                    .desired_width(95.0),
             );
             let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
             if enter && !self.open.path.trim().is_empty() {
                 let path = PathBuf::from(self.open.path.trim());
-                self.start_loading(path);
+                self.start_opening(vec![path]);
             }
             let button = ui
                 .add_enabled(self.open.dialog.is_none(), egui::Button::new("Open…"))
                 .on_hover_text("a song (wav, flac, ogg, opus, mp3, aiff) or a .ply cloud (Ctrl+O)");
             if button.clicked() {
-                self.open_dialog_or_say_why();
+                self.open_dialog_or_say_why(false);
+            }
+            if ui
+                .add_enabled(self.open.dialog.is_none(), egui::Button::new("Folder…"))
+                .on_hover_text("a folder of songs: one timeline, songs placed by year")
+                .clicked()
+            {
+                self.open_dialog_or_say_why(true);
             }
             if ui
                 .small_button("?")
@@ -147,15 +176,18 @@ impl LoudscapeApp {
             }
         });
         self.poll_save_dialog(ui.ctx());
+        self.timeline_build_panel(ui);
         self.recent_files(ui);
         self.extraction_controls(ui);
         let answer = self.open.dialog.as_ref().map(|r| r.try_recv());
         match answer {
             Some(Ok(picked)) => {
                 self.open.dialog = None;
-                if let Some(path) = picked {
-                    self.open.path = path.display().to_string();
-                    self.start_loading(path);
+                if let Some(paths) = picked.filter(|p| !p.is_empty()) {
+                    if let [path] = &paths[..] {
+                        self.open.path = path.display().to_string();
+                    }
+                    self.start_opening(paths);
                 }
             }
             Some(Err(std::sync::mpsc::TryRecvError::Disconnected)) => self.open.dialog = None,
@@ -168,12 +200,12 @@ impl LoudscapeApp {
     }
 
     /// Opens the Open dialog, or says why it cannot (Ctrl+O and the Open… button).
-    pub(super) fn open_dialog_or_say_why(&mut self) {
+    pub(super) fn open_dialog_or_say_why(&mut self, folder: bool) {
         if self.open.dialog.is_some() {
             return;
         }
         if dialogs_available() {
-            self.open.dialog = Some(open_dialog());
+            self.open.dialog = Some(open_dialog(folder));
         } else {
             self.notice = Some(format!("{NO_DIALOG}: type a path in the field"));
         }
@@ -247,13 +279,15 @@ impl LoudscapeApp {
             });
         if let Some(path) = open {
             self.open.path = path.display().to_string();
-            self.start_loading(path);
+            self.start_opening(vec![path]);
         }
     }
 
-    /// A file (song, cloud) opened: first in the recent list.
-    pub(super) fn opened(&mut self, path: &Path) {
-        if let Err(message) = self.open.recent.add(path) {
+    /// A file (song, cloud) or folder opened as `path` into `cloud`: first in the recent list.
+    /// A timeline of several songs is named by no one path: its cloud (in the cache) is kept.
+    pub(super) fn opened(&mut self, path: &Path, cloud: &Path) {
+        let kept = if path.exists() { path } else { cloud };
+        if let Err(message) = self.open.recent.add(kept) {
             log::warn!("{message}");
         }
     }

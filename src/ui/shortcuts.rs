@@ -17,6 +17,7 @@ pub(super) enum Action {
     Open,
     Shortcuts,
     CloseOverlay,
+    Confirm,
 }
 
 /// One keyboard shortcut.
@@ -82,6 +83,13 @@ pub(super) const SHORTCUTS: &[Shortcut] = &[
         keys: "Esc",
         what: "close this list",
     },
+    Shortcut {
+        action: Action::Confirm,
+        key: Key::Enter,
+        modifiers: Modifiers::NONE,
+        keys: "Enter",
+        what: "in the years dialog: build with the years typed",
+    },
 ];
 
 /// The 3D view's mouse gestures (not keys: listed, not handled, here).
@@ -106,7 +114,9 @@ pub(super) fn shortcut(action: Action) -> &'static Shortcut {
 /// fit).
 pub(super) fn pressed(ctx: &egui::Context, action: Action) -> bool {
     let shortcut = shortcut(action);
-    if shortcut.modifiers.is_none() && ctx.egui_wants_keyboard_input() {
+    // Enter confirms a dialog while its field has the keyboard.
+    if shortcut.modifiers.is_none() && action != Action::Confirm && ctx.egui_wants_keyboard_input()
+    {
         return false;
     }
     ctx.input_mut(|i| i.consume_key(shortcut.modifiers, shortcut.key))
@@ -115,6 +125,9 @@ pub(super) fn pressed(ctx: &egui::Context, action: Action) -> bool {
 /// The key event `name` (`?`, `F`, `Ctrl+S`) stands for, for the scripted `--press` of tests:
 /// they go through [`pressed`] as a real key does.
 pub(super) fn key_event(name: &str) -> Option<egui::Event> {
+    if let Some(text) = name.strip_prefix("text:") {
+        return Some(egui::Event::Text(text.to_string()));
+    }
     let (modifiers, key_name) = match name.strip_prefix("Ctrl+") {
         Some(rest) => (Modifiers::COMMAND, rest),
         None => (Modifiers::NONE, name),
@@ -189,6 +202,7 @@ mod tests {
             Action::Open,
             Action::Shortcuts,
             Action::CloseOverlay,
+            Action::Confirm,
         ] {
             assert_eq!(SHORTCUTS.iter().filter(|s| s.action == action).count(), 1);
         }

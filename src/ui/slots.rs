@@ -72,7 +72,7 @@ impl LoudscapeApp {
         for (path, result) in finished {
             match result {
                 Ok(cloud) => {
-                    self.opened(&path);
+                    self.opened(&path, &cloud.path);
                     self.install(render_state, cloud);
                 }
                 Err(message) => {

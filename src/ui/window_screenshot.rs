@@ -14,11 +14,17 @@ use crate::ui::state::LoudscapeApp;
 impl LoudscapeApp {
     pub(super) fn handle_screenshot(&mut self, ctx: &egui::Context) {
         let has_data = self.active().is_some();
+        let waiting = self.timeline_listing() || !self.scripted_presses.is_empty();
         let Some(state) = self.screenshot.as_mut() else {
             return;
         };
         if state.done.load(Ordering::SeqCst) {
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            return;
+        }
+        if waiting {
+            // Wait for the tags of a timeline and for the scripted key presses.
+            ctx.request_repaint();
             return;
         }
         if !has_data && self.loading.is_empty() && self.messages.is_empty() {
