@@ -19,7 +19,7 @@ from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
 from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
-from loudscape_extract.progress import Progress
+from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
 from loudscape_extract.timeline import (
@@ -29,6 +29,8 @@ from loudscape_extract.timeline import (
     Z_MEASURES,
     build_timeline,
     default_cache_dir,
+    discover_audio,
+    read_tags,
 )
 from loudscape_extract.version import PROG, __version__
 
@@ -287,8 +289,6 @@ def list_songs(args: argparse.Namespace, json_progress=None) -> int:
     none), then ``{"done": ""}``; people read one ``path<TAB>year<TAB>title<TAB>artist`` line a
     song.
     """
-    from loudscape_extract.timeline import discover_audio, read_tags
-
     if not args.inputs:
         raise ExtractError("no input: give folders or files to list")
     for path in discover_audio(args.inputs):
@@ -419,8 +419,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
     if getattr(args, "progress", "text") == "json":
-        from loudscape_extract.progress import JsonProgress, JsonTimelineProgress
-
         progress = JsonTimelineProgress() if args.command == "timeline" else JsonProgress()
     try:
         with sigterm_raises():
