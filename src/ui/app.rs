@@ -345,6 +345,9 @@ impl eframe::App for LoudscapeApp {
             && self.scripted_input_ready()
         {
             for name in std::mem::take(&mut self.scripted_presses) {
+                if self.scripted_setting(&name) {
+                    continue;
+                }
                 match shortcuts::key_event(&name) {
                     Some(event) => raw_input.events.push(event),
                     None => self.messages.push(format!("--press {name}: no such key")),
@@ -400,6 +403,9 @@ impl eframe::App for LoudscapeApp {
         }
         if shortcuts::pressed(&ctx, Action::SavePng) {
             self.save_shot.requested = true;
+        }
+        if shortcuts::pressed(&ctx, Action::Reextract) {
+            self.reextract_shown_song();
         }
         if shortcuts::pressed(&ctx, Action::Open) {
             self.open_dialog_or_say_why(false);

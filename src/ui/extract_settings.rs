@@ -117,8 +117,56 @@ impl LoudscapeApp {
         });
     }
 
+    /// The song on screen, when it came from audio.
+    fn shown_audio(&self) -> Option<PathBuf> {
+        self.song
+            .as_ref()
+            .map(|l| l.cloud.path.clone())
+            .filter(|p| named_like_audio(p))
+    }
+
+    /// Whether the song on screen is being extracted again.
+    pub(super) fn reextracting(&self) -> bool {
+        self.shown_audio()
+            .is_some_and(|audio| self.loading.iter().any(|l| l.path == audio))
+    }
+
+    /// Ctrl+E: the song on screen again with the panel's settings (when they changed).
+    pub(super) fn reextract_shown_song(&mut self) {
+        let Some(audio) = self.shown_audio() else {
+            return;
+        };
+        let shown = match &self.open.extract.shown {
+            Some((path, settings)) if path == &audio => settings.clone(),
+            _ => Settings::default(),
+        };
+        if !self.reextracting() && self.open.extract.next != shown {
+            self.reextract(audio);
+        }
+    }
+
+    /// A scripted setting of the Extraction panel (`--press floor=40`, tests), as its slider
+    /// would set it; false when `name` is no such setting.
+    pub(super) fn scripted_setting(&mut self, name: &str) -> bool {
+        match name
+            .strip_prefix("floor=")
+            .and_then(|v| v.parse::<f32>().ok())
+        {
+            Some(floor) => {
+                self.open.extract.next.floor_db = Some(floor);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Opens `audio` again with the chosen settings (the old cloud stays until it is ready).
     pub(super) fn reextract(&mut self, audio: PathBuf) {
+        eprintln!(
+            "loudscape: {}: extracting again ({}); the cloud shown stays until the new one is ready",
+            audio.display(),
+            self.open.extract.next.arguments().join(" ")
+        );
         // The new cloud keeps the camera: the same song, seen the same way.
         self.keep_camera_loads += 1;
         self.start_loading(audio);

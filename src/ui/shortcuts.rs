@@ -18,6 +18,7 @@ pub(super) enum Action {
     Shortcuts,
     CloseOverlay,
     Confirm,
+    Reextract,
 }
 
 /// One keyboard shortcut.
@@ -68,6 +69,13 @@ pub(super) const SHORTCUTS: &[Shortcut] = &[
         modifiers: Modifiers::COMMAND,
         keys: "Ctrl+O (Cmd+O)",
         what: "open songs, a folder (a timeline) or a cloud",
+    },
+    Shortcut {
+        action: Action::Reextract,
+        key: Key::E,
+        modifiers: Modifiers::COMMAND,
+        keys: "Ctrl+E (Cmd+E)",
+        what: "re-extract the song with the Extraction settings",
     },
     Shortcut {
         action: Action::Shortcuts,
@@ -203,6 +211,7 @@ mod tests {
             Action::Shortcuts,
             Action::CloseOverlay,
             Action::Confirm,
+            Action::Reextract,
         ] {
             assert_eq!(SHORTCUTS.iter().filter(|s| s.action == action).count(), 1);
         }

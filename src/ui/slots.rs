@@ -92,6 +92,15 @@ impl LoudscapeApp {
         let id = self.next_id;
         self.next_id += 1;
         if let Some(old) = self.slot(slot) {
+            if old.cloud.path == cloud.path {
+                // A re-extraction: the old cloud was shown until now.
+                eprintln!(
+                    "loudscape: {}: the new cloud ({} points) replaces the one shown ({} points)",
+                    cloud.path.display(),
+                    cloud.points.len(),
+                    old.cloud.points.len()
+                );
+            }
             ViewResources::remove(render_state, old.id);
         }
         ViewResources::upload(render_state, id, &cloud);

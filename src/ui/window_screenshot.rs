@@ -14,7 +14,8 @@ use crate::ui::state::LoudscapeApp;
 impl LoudscapeApp {
     pub(super) fn handle_screenshot(&mut self, ctx: &egui::Context) {
         let has_data = self.active().is_some();
-        let waiting = self.timeline_listing() || !self.scripted_presses.is_empty();
+        let waiting =
+            self.timeline_listing() || !self.scripted_presses.is_empty() || self.reextracting();
         let Some(state) = self.screenshot.as_mut() else {
             return;
         };
@@ -23,7 +24,7 @@ impl LoudscapeApp {
             return;
         }
         if waiting {
-            // Wait for the tags of a timeline and for the scripted key presses.
+            // Wait for the tags of a timeline, the scripted key presses and a re-extraction.
             ctx.request_repaint();
             return;
         }
