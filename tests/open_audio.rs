@@ -141,7 +141,7 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
         "one cloud in the cache, nothing partial: {cached:?}"
     );
     assert!(
-        cached[0].ends_with(".ply") && cached[0].len() == 64 + 4,
+        cached[0].ends_with(".ply") && cached[0].len() == 64 + 1 + 16 + 4,
         "{cached:?}"
     );
     let cloud_file = cache.join(&cached[0]);

@@ -171,8 +171,8 @@ pub fn find_extractor(audio: &Path) -> Result<Extractor, ExtractError> {
 }
 
 /// [`cloud_for_audio`] with the cache folder given and the extractor found by `find` (its
-/// version is part of the key; it is run only on a cache miss: a cached song opens without
-/// Python).
+/// version names the cloud; it is run only on a cache miss, and where none is found the newest
+/// cloud of the song under these settings opens: a cached song opens without Python).
 pub fn cloud_for_audio_with(
     audio: &Path,
     settings: &Settings,
@@ -187,9 +187,17 @@ pub fn cloud_for_audio_with(
         stage: "hashing".into(),
         fraction: 0.0,
     });
-    let extractor = find()?;
-    let key = cache::key(audio, settings, &extractor.version)?;
-    let ply = dir.join(format!("{key}.ply"));
+    let key = cache::key(audio, settings)?;
+    let extractor = match find() {
+        Ok(extractor) => extractor,
+        // No extractor to ask for its version: the newest cloud of the song still opens.
+        Err(not_found) => {
+            return cache::newest_of_any_version(dir, &key)
+                .map(|ply| (ply, true))
+                .ok_or(not_found);
+        }
+    };
+    let ply = dir.join(cache::file_name(&key, &extractor.version));
     if ply.is_file() {
         return Ok((ply, true));
     }
