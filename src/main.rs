@@ -34,6 +34,10 @@ struct Cli {
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
 
+    /// Press these keys once the data is shown (`?`, `F`, `Ctrl+S`; for tests).
+    #[arg(long, hide = true)]
+    press: Vec<String>,
+
     /// Print the full error chain and backtraces.
     #[arg(long, global = true)]
     debug: bool,
@@ -179,6 +183,7 @@ fn main() -> ExitCode {
                 view: cli.view,
                 compare: cli.compare,
                 seek: cli.seek,
+                press: cli.press,
             })
         }),
         Some(Command::Render(args)) => commands::render::run(*args),

@@ -10,7 +10,7 @@ use std::process::{Command, Output};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use loudscape::extract::{self, ExtractError, Progress, Settings};
+use loudscape::extract::{self, ExtractError, Extractor, Progress, Settings};
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -24,6 +24,13 @@ fn extractor() -> PathBuf {
         program.display()
     );
     program
+}
+
+/// The project's extractor with its installed version.
+fn found() -> Extractor {
+    let path = extractor();
+    let version = extract::version::of(&path).expect("the extractor's version");
+    Extractor { path, version }
 }
 
 /// A fresh folder under tests/output for one test.
@@ -134,7 +141,7 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
         "one cloud in the cache, nothing partial: {cached:?}"
     );
     assert!(
-        cached[0].ends_with(".ply") && cached[0].len() == 64 + 4,
+        cached[0].ends_with(".ply") && cached[0].len() == 64 + 1 + 16 + 4,
         "{cached:?}"
     );
     let cloud_file = cache.join(&cached[0]);
@@ -230,7 +237,7 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
         &song,
         &settings,
         &cache,
-        || Ok(extractor()),
+        || Ok(found()),
         &cancel,
         &mut |p: &Progress| {
             stages.push(p.stage.clone());
@@ -253,7 +260,7 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
         &song,
         &settings,
         &cache,
-        || Ok(extractor()),
+        || Ok(found()),
         &cancel,
         &mut |p: &Progress| fractions.push(p.fraction),
     )
@@ -268,11 +275,39 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
         &song,
         &settings,
         &cache,
-        || Err("the cache must answer without the extractor".into()),
+        // The same version at a path that runs nothing: the cache answers without running it.
+        || {
+            Ok(Extractor {
+                path: dir.join("no-extractor-here"),
+                version: found().version,
+            })
+        },
         &cancel,
         &mut |_| {},
     )
     .expect("cached");
     assert!(hit && again == ply);
     assert!(start.elapsed().as_secs_f32() < 1.0, "{:?}", start.elapsed());
+
+    // A new extractor does not reuse the old one's cloud: it misses (and, not being there,
+    // fails to run), leaving the old cloud alone.
+    let newer = extract::cloud_for_audio_with(
+        &song,
+        &settings,
+        &cache,
+        || {
+            Ok(Extractor {
+                path: dir.join("no-extractor-here"),
+                version: format!("{}-newer", found().version),
+            })
+        },
+        &cancel,
+        &mut |_| {},
+    );
+    assert!(
+        matches!(newer, Err(ExtractError::Failed { .. })),
+        "a new extractor's version hit the old cloud: {:?}",
+        newer.map(|r| r.0)
+    );
+    assert!(ply.is_file());
 }

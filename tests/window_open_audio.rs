@@ -87,3 +87,58 @@ fn window_opens_a_song_and_reopens_it_from_the_cache() {
     assert!(drawn_share(&second_shot) > 0.05);
     eprintln!("window with extraction {first_s:.1} s, from the cache {second_s:.1} s");
 }
+
+#[test]
+fn a_new_floor_re_extracts_keeping_the_old_cloud_until_the_new_one_is_ready() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
+    );
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let extractor = repo.join(".venv/bin/loudscape-extract");
+    assert!(
+        extractor.is_file(),
+        "install the extractor with `make venv`"
+    );
+    let dir = common::output_dir().join("window_reextract");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let song = dir.join("demo.flac");
+    std::fs::copy(repo.join("data/demo_song.flac"), &song).unwrap();
+    let shot = dir.join("reextracted.png");
+    // The Extraction panel's floor set to 30 dB (as its slider would), then Ctrl+E.
+    let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .arg(&song)
+        .arg("--screenshot")
+        .arg(&shot)
+        .args(["--press", "floor=30", "--press", "Ctrl+E"])
+        .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
+        .env("LOUDSCAPE_EXTRACT", &extractor)
+        .output()
+        .expect("start loudscape");
+    let err = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "loudscape failed: {err}");
+    assert!(
+        err.contains("extracting again (") && err.contains("--floor-db 30"),
+        "{err}"
+    );
+    let replaced = err
+        .lines()
+        .find(|l| l.contains("replaces the one shown"))
+        .unwrap_or_else(|| panic!("the old cloud was not on screen when the new came: {err}"));
+    let counts: Vec<usize> = replaced
+        .split(['(', ' '])
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    assert_eq!(counts.len(), 2, "{replaced}");
+    assert!(
+        counts[0] < counts[1],
+        "a 30 dB floor keeps fewer points than the default 80: {replaced}"
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.join("cache")).unwrap().count(),
+        2,
+        "one cloud per floor in the cache"
+    );
+    assert!(drawn_share(&shot) > 0.02, "the new cloud is not drawn");
+}

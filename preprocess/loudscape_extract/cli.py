@@ -19,7 +19,7 @@ from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
 from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
-from loudscape_extract.progress import Progress
+from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
 from loudscape_extract.timeline import (
@@ -29,6 +29,8 @@ from loudscape_extract.timeline import (
     Z_MEASURES,
     build_timeline,
     default_cache_dir,
+    discover_audio,
+    read_tags,
 )
 from loudscape_extract.version import PROG, __version__
 
@@ -179,6 +181,19 @@ def build_parser() -> argparse.ArgumentParser:
     )
     timeline.add_argument("--no-cache", action="store_true", help="neither read nor write it")
     timeline.add_argument(
+        "--list-songs",
+        action="store_true",
+        help="only list the audio files found and the year, title and artist of their tags "
+        "(with --progress json: one object a song, then done); nothing is written",
+    )
+    timeline.add_argument(
+        "--progress",
+        choices=("text", "json"),
+        default="text",
+        help="json: one JSON object a song on stdout as each finishes (song, songs_done, "
+        "songs_total, fraction), then the songs left out, then done or error",
+    )
+    timeline.add_argument(
         "--jobs",
         "-j",
         type=_positive_int,
@@ -266,11 +281,46 @@ def run_song(args: argparse.Namespace, progress: Progress) -> int:
     return 0
 
 
-def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
-    """The timeline subcommand: build, then a summary on stderr; 1 when any song failed."""
+def list_songs(args: argparse.Namespace, json_progress=None) -> int:
+    """``timeline --list-songs``: the songs found under the inputs with their tags, on stdout.
+
+    A program (the app, to ask for the missing years before building) reads one JSON object a
+    song, ``{"song", "year", "title", "artist", "tag_error"}`` (year null when the tags have
+    none), then ``{"done": ""}``; people read one ``path<TAB>year<TAB>title<TAB>artist`` line a
+    song.
+    """
+    if not args.inputs:
+        raise ExtractError("no input: give folders or files to list")
+    for path in discover_audio(args.inputs):
+        tags = read_tags(path)
+        if json_progress is not None:
+            json_progress.emit(
+                {
+                    "song": path,
+                    "year": tags["year"],
+                    "title": tags["title"],
+                    "artist": tags["artist"],
+                    "tag_error": tags["error"],
+                }
+            )
+        else:
+            year = "" if tags["year"] is None else str(tags["year"])
+            print(f"{path}\t{year}\t{tags['title']}\t{tags['artist']}", flush=True)
+    if json_progress is not None:
+        json_progress.done("")
+    return 0
+
+
+def run_timeline(args: argparse.Namespace, *, tty: bool, json_progress=None) -> int:
+    """The timeline subcommand: build, then a summary on stderr; 1 when any song failed.
+
+    ``json_progress`` (a :class:`JsonTimelineProgress`) hears every song as it finishes.
+    """
     width = [0]
 
     def progress(done: int, total: int, path: str) -> None:
+        if json_progress is not None:
+            json_progress(done, total, path)
         if tty:
             line = f"{PROG}: [{done}/{total}] {os.path.basename(path)}"[:100]
             print("\r" + line.ljust(width[0]), end="", file=sys.stderr, flush=True)
@@ -300,6 +350,9 @@ def run_timeline(args: argparse.Namespace, *, tty: bool) -> int:
         if tty and width[0]:
             print("\r" + " " * width[0] + "\r", end="", file=sys.stderr, flush=True)
     elapsed = time.perf_counter() - start
+    if json_progress is not None:
+        json_progress.left_out(without_year=result.without_year, failed=result.failed)
+        json_progress.done(args.output)
     for note in result.notes:
         _say(f"warning: {note}")
     for path in result.without_year:
@@ -366,15 +419,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
     if getattr(args, "progress", "text") == "json":
-        from loudscape_extract.progress import JsonProgress
-
-        progress = JsonProgress()
+        progress = JsonTimelineProgress() if args.command == "timeline" else JsonProgress()
     try:
         with sigterm_raises():
             if args.command == "song":
                 return run_song(args, progress)
+            if args.command == "timeline" and args.list_songs:
+                return list_songs(args, progress if hasattr(progress, "left_out") else None)
             if args.command == "timeline":
-                return run_timeline(args, tty=not args.quiet and sys.stderr.isatty())
+                return run_timeline(
+                    args,
+                    tty=not args.quiet and sys.stderr.isatty(),
+                    json_progress=progress if hasattr(progress, "left_out") else None,
+                )
             if args.command == "export":
                 return run_export(args)
             return run_report(args)

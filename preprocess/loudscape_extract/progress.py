@@ -10,6 +10,19 @@ object a line::
     {"done": "OUT"}
 
 and on failure ``{"error": "..."}`` as its last line (the usual error line still goes to stderr).
+
+``loudscape-extract timeline ... --progress json`` (``JsonTimelineProgress``) prints one object
+a song as each finishes (in the order they finish), then the songs left out for want of a year
+and those that failed, then ``done``::
+
+    {"stage": "songs", "fraction": 0.5, "song": "a.flac", "songs_done": 1, "songs_total": 2}
+    {"stage": "songs", "fraction": 1.0, "song": "b.flac", "songs_done": 2, "songs_total": 2,
+     "failed": "b.flac: silent"}
+    {"without_year": ["c.flac"], "failed": {"b.flac": "b.flac: silent"}}
+    {"done": "timeline.ply"}
+
+A song's line carries ``failed`` only when it failed. The keys ``done`` and ``error`` appear
+only in the last line, as for a song.
 The fractions are the share of a typical song's extraction time spent before each stage starts
 (the streamed pipeline of stream.py, measured on a 3-minute 44.1 kHz stereo song: the second
 decoding pass, with the loudness and true-peak filters, takes most of it); they only grow.
@@ -24,7 +37,7 @@ from typing import TextIO
 
 from loudscape_extract.version import PROG
 
-__all__ = ["STAGES", "JsonProgress", "Progress"]
+__all__ = ["STAGES", "JsonProgress", "JsonTimelineProgress", "Progress"]
 
 
 class Progress:
@@ -89,3 +102,27 @@ class JsonProgress:
     def error(self, message: str) -> None:
         """The last line of a failed run: the same text as the error line on stderr."""
         self.emit({"error": message})
+
+
+class JsonTimelineProgress(JsonProgress):
+    """Per-song JSON lines of a timeline build (see the module's description).
+
+    Called as the timeline's progress callback, ``(songs_done, songs_total, path)``; the
+    failures seen so far are given by ``failed`` (path -> reason) when known.
+    """
+
+    def __call__(self, done: int, total: int, path: str, failed: str | None = None) -> None:  # type: ignore[override]
+        record = {
+            "stage": "songs",
+            "fraction": done / total if total else 1.0,
+            "song": path,
+            "songs_done": done,
+            "songs_total": total,
+        }
+        if failed:
+            record["failed"] = failed
+        self.emit(record)
+
+    def left_out(self, *, without_year: list[str], failed: dict[str, str]) -> None:
+        """The songs the timeline does not hold: without a year, and failed."""
+        self.emit({"without_year": list(without_year), "failed": dict(failed)})

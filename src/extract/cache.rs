@@ -2,7 +2,10 @@
 //! audio's bytes and the settings, in `$LOUDSCAPE_CACHE_DIR`, else `$XDG_CACHE_HOME/loudscape/
 //! clouds`, else `~/.cache/loudscape/clouds` (beside the extractor's own timeline cache). A
 //! renamed or moved song still hits; an edited one misses. The extractor writes each file
-//! atomically, so a file in the cache is always whole.
+//! atomically, so a file in the cache is always whole. The file's name carries the extractor's
+//! version too (`KEY-VERSIONHASH.ply`, `version.rs`): a new extractor writes new clouds instead
+//! of reusing an older one's; where no extractor can be found at all, the newest cloud of the
+//! song under these settings still opens (a cached song needs no Python).
 
 use std::fs::File;
 use std::io::Read;
@@ -13,7 +16,7 @@ use sha2::{Digest, Sha256};
 use super::{ExtractError, Settings};
 
 /// Bumped when what the key covers changes meaning (a new extractor output, say).
-const KEY_VERSION: &str = "loudscape-cloud-cache 1";
+const KEY_VERSION: &str = "loudscape-cloud-cache 2";
 
 /// The cache folder (not created here).
 pub fn dir() -> PathBuf {
@@ -28,8 +31,35 @@ pub fn dir() -> PathBuf {
     base.join("loudscape").join("clouds")
 }
 
+/// The cloud file of `key` written by the extractor of `extractor_version`:
+/// `KEY-VERSIONHASH.ply`, 16 hex digits of the version's SHA-256.
+pub fn file_name(key: &str, extractor_version: &str) -> String {
+    let version: String = Sha256::digest(extractor_version.as_bytes())
+        .iter()
+        .take(8)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    format!("{key}-{version}.ply")
+}
+
+/// The newest cloud of `key` in `dir` by any extractor (when none can be found to ask).
+pub fn newest_of_any_version(dir: &Path, key: &str) -> Option<PathBuf> {
+    let prefix = format!("{key}-");
+    std::fs::read_dir(dir)
+        .ok()?
+        .flatten()
+        .filter(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            name.starts_with(&prefix) && name.ends_with(".ply") && !name.contains(".partial-")
+        })
+        .filter_map(|e| Some((e.metadata().ok()?.modified().ok()?, e.path())))
+        .max()
+        .map(|(_, path)| path)
+}
+
 /// The cache key of `audio` under `settings`: hex SHA-256 of the key version, the settings'
-/// flags and the file's bytes.
+/// flags and the file's bytes (the extractor's version goes into the file name:
+/// [`file_name`]).
 pub fn key(audio: &Path, settings: &Settings) -> Result<String, ExtractError> {
     let io = |e: std::io::Error| ExtractError::Io {
         path: audio.to_owned(),
@@ -44,6 +74,7 @@ pub fn key(audio: &Path, settings: &Settings) -> Result<String, ExtractError> {
     }
     let mut hasher = Sha256::new();
     hasher.update(KEY_VERSION.as_bytes());
+    hasher.update([0]);
     for arg in settings.arguments() {
         hasher.update(arg.as_bytes());
         hasher.update([0]);
@@ -68,7 +99,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn key_follows_content_and_settings_not_the_name() {
+    fn key_follows_content_settings_and_extractor_not_the_name() {
         let dir = std::env::temp_dir().join(format!("loudscape-cache-key-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (a, b, c) = (dir.join("a.wav"), dir.join("b.wav"), dir.join("c.wav"));
@@ -80,11 +111,32 @@ mod tests {
         assert_eq!(key_a.len(), 64);
         assert_eq!(key_a, key(&b, &settings).unwrap());
         assert_ne!(key_a, key(&c, &settings).unwrap());
+        let (old, new) = (file_name(&key_a, "0.1.0"), file_name(&key_a, "0.1.1"));
+        assert_ne!(old, new, "a new extractor, a new cloud");
+        assert!(
+            old.starts_with(&key_a) && old.len() == 64 + 1 + 16 + 4,
+            "{old}"
+        );
+        assert_eq!(newest_of_any_version(&dir, &key_a), None);
+        std::fs::write(dir.join(&old), b"ply").unwrap();
+        assert_eq!(newest_of_any_version(&dir, &key_a), Some(dir.join(&old)));
         let log = Settings {
             freq_scale: "log".into(),
             ..Settings::default()
         };
         assert_ne!(key_a, key(&a, &log).unwrap());
+        for changed in [
+            Settings {
+                n_fft: 4096,
+                ..Settings::default()
+            },
+            Settings {
+                floor_db: Some(60.0),
+                ..Settings::default()
+            },
+        ] {
+            assert_ne!(key_a, key(&a, &changed).unwrap(), "{changed:?}");
+        }
         assert!(key(&dir, &settings).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }

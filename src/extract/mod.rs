@@ -11,6 +11,8 @@
 pub mod cache;
 pub mod child;
 pub mod locate;
+pub mod timeline;
+pub mod version;
 
 use std::fs::File;
 use std::io::Read;
@@ -20,6 +22,7 @@ use std::sync::atomic::AtomicBool;
 use thiserror::Error;
 
 use crate::data::cloud::{CloudError, PointCloud};
+pub use version::Extractor;
 
 /// The extraction settings that change the cloud; part of the cache key.
 #[derive(Clone, Debug, PartialEq)]
@@ -148,19 +151,33 @@ pub fn cloud_for_audio(
         audio,
         settings,
         &cache::dir(),
-        locate::extractor,
+        || find_extractor(audio),
         cancel,
         on_progress,
     )
 }
 
-/// [`cloud_for_audio`] with the cache folder given and the extractor found by `find` (only
-/// called on a cache miss: a cached song opens without Python).
+/// The extractor (see [`locate`]) and its version (see [`version`]); errors name `audio`.
+pub fn find_extractor(audio: &Path) -> Result<Extractor, ExtractError> {
+    let path = locate::extractor().map_err(|looked| ExtractError::NotFound {
+        audio: audio.to_owned(),
+        looked,
+    })?;
+    let version = version::of(&path).map_err(|reason| ExtractError::Failed {
+        audio: audio.to_owned(),
+        reason,
+    })?;
+    Ok(Extractor { path, version })
+}
+
+/// [`cloud_for_audio`] with the cache folder given and the extractor found by `find` (its
+/// version names the cloud; it is run only on a cache miss, and where none is found the newest
+/// cloud of the song under these settings opens: a cached song opens without Python).
 pub fn cloud_for_audio_with(
     audio: &Path,
     settings: &Settings,
     dir: &Path,
-    find: impl FnOnce() -> Result<PathBuf, String>,
+    find: impl FnOnce() -> Result<Extractor, ExtractError>,
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> Result<(PathBuf, bool), ExtractError> {
@@ -171,20 +188,25 @@ pub fn cloud_for_audio_with(
         fraction: 0.0,
     });
     let key = cache::key(audio, settings)?;
-    let ply = dir.join(format!("{key}.ply"));
+    let extractor = match find() {
+        Ok(extractor) => extractor,
+        // No extractor to ask for its version: the newest cloud of the song still opens.
+        Err(not_found) => {
+            return cache::newest_of_any_version(dir, &key)
+                .map(|ply| (ply, true))
+                .ok_or(not_found);
+        }
+    };
+    let ply = dir.join(cache::file_name(&key, &extractor.version));
     if ply.is_file() {
         return Ok((ply, true));
     }
-    let extractor = find().map_err(|looked| ExtractError::NotFound {
-        audio: audio.to_owned(),
-        looked,
-    })?;
     std::fs::create_dir_all(dir).map_err(|e| ExtractError::Io {
         path: dir.to_owned(),
         reason: format!("cannot create the cache folder: {e}"),
     })?;
     child::run(
-        &extractor,
+        &extractor.path,
         &absolute,
         audio,
         &ply,

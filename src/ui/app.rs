@@ -16,6 +16,7 @@ use crate::ui::bridge::{ViewCallback, ViewResources};
 use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::persistence::Remembered;
+use crate::ui::shortcuts::{self, Action};
 use crate::ui::state::{LoudscapeApp, SaveShot, ScreenshotState, Slot};
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
@@ -46,6 +47,9 @@ pub struct WindowOptions {
     pub compare: Option<PathBuf>,
     /// Start playback at this many seconds once the song's audio is ready.
     pub seek: Option<f64>,
+    /// Keys to press once the data is shown (`?`, `Ctrl+S`; for tests: they go through the
+    /// same key handling as real keys).
+    pub press: Vec<String>,
 }
 
 /// Opens the window and runs until it closes.
@@ -136,7 +140,22 @@ impl LoudscapeApp {
             moving_divisor: [1; 3],
             slot_cameras: [None, None],
             renders_seen: (0, 0),
-            open: Default::default(),
+            open: crate::ui::open::OpenPanel {
+                // A scripted run keeps a recent list only where it is told to.
+                recent: crate::ui::recent::RecentFiles::load(
+                    (persist || std::env::var_os("LOUDSCAPE_STATE_DIR").is_some())
+                        .then(crate::ui::recent::default_store)
+                        .flatten(),
+                ),
+                years: crate::ui::timeline_build::YearBook::load(
+                    (persist || std::env::var_os("LOUDSCAPE_STATE_DIR").is_some())
+                        .then(crate::ui::recent::default_store)
+                        .flatten()
+                        .map(|recent| recent.with_file_name("years.json")),
+                ),
+                ..Default::default()
+            },
+            scripted_presses: options.press,
             freq_axis: Default::default(),
             compare: None,
             pending_seek: options.seek,
@@ -147,9 +166,7 @@ impl LoudscapeApp {
         if let Some(view) = options.view {
             app.settings.view = view;
         }
-        for file in files {
-            app.start_loading(file);
-        }
+        app.start_opening(files);
         if let Some(b) = compare {
             app.compare_with(b);
         }
@@ -246,13 +263,12 @@ impl LoudscapeApp {
                 moved = true;
             }
         }
-        let keys_free = !ui.ctx().egui_wants_keyboard_input();
         let mut fitted_now = false;
-        if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::F)) {
+        if shortcuts::pressed(ui.ctx(), Action::Fit) {
             self.fit();
             (moved, fitted_now) = (true, true);
         }
-        if keys_free && ui.ctx().input(|i| i.key_pressed(egui::Key::R)) {
+        if shortcuts::pressed(ui.ctx(), Action::ResetView) {
             self.reset_view();
             (moved, fitted_now) = (true, true);
         }
@@ -363,6 +379,24 @@ impl LoudscapeApp {
 }
 
 impl eframe::App for LoudscapeApp {
+    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        // Scripted presses (tests), once the data is shown or nothing is loading.
+        if !self.scripted_presses.is_empty()
+            && (self.active().is_some() || self.loading.is_empty())
+            && self.scripted_input_ready()
+        {
+            for name in std::mem::take(&mut self.scripted_presses) {
+                if self.scripted_setting(&name) {
+                    continue;
+                }
+                match shortcuts::key_event(&name) {
+                    Some(event) => raw_input.events.push(event),
+                    None => self.messages.push(format!("--press {name}: no such key")),
+                }
+            }
+        }
+    }
+
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         if self.persist {
             eframe::set_value(storage, eframe::APP_KEY, &self.remembered());
@@ -409,12 +443,12 @@ impl eframe::App for LoudscapeApp {
         });
         // A drop with Shift held is B of an A/B compare.
         let shift = ctx.input(|i| i.modifiers.shift);
-        for path in dropped {
-            if shift && self.song.is_some() {
+        if shift && self.song.is_some() {
+            for path in dropped {
                 self.compare_with(path);
-            } else {
-                self.start_loading(path);
             }
+        } else if !dropped.is_empty() {
+            self.start_opening(dropped);
         }
 
         egui::Panel::left("controls")
@@ -425,14 +459,19 @@ impl eframe::App for LoudscapeApp {
             });
         self.audio.poll(&ctx);
         self.compare_keys(&ctx);
-        let keys_free = !ctx.egui_wants_keyboard_input();
-        if keys_free && ctx.input(|i| i.key_pressed(egui::Key::Space)) && self.active == Slot::Song
-        {
+        if self.active == Slot::Song && shortcuts::pressed(&ctx, Action::PlayPause) {
             self.audio.toggle();
         }
-        if ctx.input_mut(|i| i.consume_key(egui::Modifiers::COMMAND, egui::Key::S)) {
+        if shortcuts::pressed(&ctx, Action::SavePng) {
             self.save_shot.requested = true;
         }
+        if shortcuts::pressed(&ctx, Action::Reextract) {
+            self.reextract_shown_song();
+        }
+        if shortcuts::pressed(&ctx, Action::Open) {
+            self.open_dialog_or_say_why(false);
+        }
+        self.shortcuts_overlay(&ctx);
         if self.active == Slot::Song && self.song.is_some() {
             egui::Panel::bottom("transport").show(ui, |ui| {
                 ui.add_space(3.0);

@@ -74,7 +74,7 @@ pub(super) struct CompareState {
     labels: Option<AxisLabels>,
     hover: Option<(glam::Vec2, Vec<Reading>)>,
     /// The compare dialog's answer.
-    dialog: Option<Receiver<Option<PathBuf>>>,
+    dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
     field: String,
 }
 
@@ -328,7 +328,7 @@ impl LoudscapeApp {
                 .on_hover_text("B beside the song (A); or drop a file with Shift held")
                 .clicked()
             {
-                let receiver = crate::ui::open::open_dialog();
+                let receiver = crate::ui::open::open_dialog(false);
                 let state = self
                     .compare
                     .get_or_insert_with(|| CompareState::new(PathBuf::new()));
@@ -342,7 +342,7 @@ impl LoudscapeApp {
             match receiver.try_recv() {
                 Ok(picked) => {
                     state.dialog = None;
-                    start = start.or(picked);
+                    start = start.or(picked.and_then(|paths| paths.into_iter().next()));
                 }
                 Err(TryRecvError::Disconnected) => state.dialog = None,
                 Err(TryRecvError::Empty) => {
@@ -433,10 +433,10 @@ impl LoudscapeApp {
         let Some(state) = self.compare.as_ref() else {
             return;
         };
-        if state.clouds.is_none() || ctx.egui_wants_keyboard_input() {
+        if state.clouds.is_none() {
             return;
         }
-        if ctx.input(|i| i.key_pressed(egui::Key::B)) {
+        if crate::ui::shortcuts::pressed(ctx, crate::ui::shortcuts::Action::SwapAb) {
             let to = match state.listening {
                 Listening::A => Listening::B,
                 Listening::B => Listening::A,

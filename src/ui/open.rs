@@ -2,8 +2,13 @@
 //! goes through the extractor and the cloud cache in `crate::extract`), its progress bar with the
 //! stage and a Cancel button, and the "Open" row of the side panel (a path field, and a native
 //! file dialog through `rfd`). The command-line argument, a dropped file, the path field and the
-//! dialog all end in [`LoudscapeApp::start_loading`], which calls [`open_path`] on a thread; the
-//! old view stays until the new cloud is installed.
+//! dialog all end in `start_opening` (`timeline_build.rs`: a folder or several songs are a
+//! timeline), and a song or a cloud in [`LoudscapeApp::start_loading`], which calls
+//! [`open_path`] on a thread; the old view stays until the new cloud is installed. Below the row: the recent files
+//! (`recent.rs`). The save dialog for screenshots ([`LoudscapeApp::ask_where_to_save`]) lives
+//! here too. Where no dialog can open (Linux without a desktop portal or zenity, as under Xvfb)
+//! the window says so and goes on as it did without dialogs (the path field; screenshots in the
+//! current folder).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -13,10 +18,55 @@ use eframe::egui::{self, RichText};
 
 use crate::data::cloud::PointCloud;
 use crate::extract::{self, Progress, Settings};
+use crate::ui::recent::RecentFiles;
 use crate::ui::state::{LoudscapeApp, Shared};
 
+/// The Open row's state: its text field, the dialogs while they are open, the recent files,
+/// the extraction settings and the shortcuts overlay.
+#[derive(Default)]
+pub(super) struct OpenPanel {
+    pub(super) path: String,
+    /// The dialog's answer (`None`: closed without a choice).
+    pub(super) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
+    /// The save dialog's answer, while it is open.
+    pub(super) save_dialog: Option<Receiver<Option<PathBuf>>>,
+    /// Where the save dialog said to save the next screenshot.
+    pub(super) save_to: Option<PathBuf>,
+    pub(super) recent: RecentFiles,
+    /// The `?` overlay is shown (`shortcuts.rs`).
+    pub(super) show_shortcuts: bool,
+    /// The extraction settings for the next song opened, and those of the song shown
+    /// (`extract_settings.rs`).
+    pub(super) extract: crate::ui::extract_settings::ExtractChoices,
+    /// A timeline on its way: tags being read, or the years dialog (`timeline_build.rs`).
+    pub(super) timeline: Option<crate::ui::timeline_build::TimelineBuild>,
+    /// The songs of the timeline being built, a row each as they finish.
+    pub(super) timeline_rows: crate::ui::timeline_build::Rows,
+    /// The loading row of the timeline being built.
+    pub(super) building: Option<PathBuf>,
+    /// Years typed for songs whose tags lack one.
+    pub(super) years: crate::ui::timeline_build::YearBook,
+}
+
+/// Whether a native file dialog can open here. On Linux rfd asks the desktop portal over
+/// D-Bus, then zenity; with neither (a bare X server such as Xvfb) it would return at once as if
+/// the user had cancelled, so the window does not offer it.
+pub(super) fn dialogs_available() -> bool {
+    if !cfg!(target_os = "linux") {
+        return true;
+    }
+    let bus = std::env::var_os("DBUS_SESSION_BUS_ADDRESS").is_some_and(|v| !v.is_empty());
+    let zenity = std::env::var_os("PATH")
+        .is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join("zenity").is_file()));
+    bus || zenity
+}
+
+/// Why there is no dialog, for the window's messages.
+pub(super) const NO_DIALOG: &str =
+    "no file dialog can open here (no desktop portal on D-Bus and no zenity)";
+
 /// Audio the dialog offers (the extractor reads these); clouds are `.ply`.
-const AUDIO_EXTENSIONS: [&str; 9] = [
+pub(super) const AUDIO_EXTENSIONS: [&str; 9] = [
     "wav", "flac", "ogg", "oga", "opus", "mp3", "aiff", "aif", "aifc",
 ];
 
@@ -35,17 +85,48 @@ pub fn open_path(path: &Path, settings: &Settings, shared: &Shared) -> Result<Po
 
 /// The native Open dialog, built here (macOS wants dialogs made on the main thread) and awaited
 /// on a thread so the window keeps drawing; the answer comes through the receiver.
-pub(super) fn open_dialog() -> Receiver<Option<PathBuf>> {
+/// Several songs chosen become a timeline; `folder` asks for a folder (a timeline of the songs
+/// in it).
+pub(super) fn open_dialog(folder: bool) -> Receiver<Option<Vec<PathBuf>>> {
     let (sender, receiver) = channel();
+    if folder {
+        let dialog = rfd::AsyncFileDialog::new()
+            .set_title("Open a folder of songs as a timeline")
+            .pick_folder();
+        std::thread::spawn(move || {
+            let picked = pollster::block_on(dialog).map(|f| vec![f.path().to_path_buf()]);
+            let _ = sender.send(picked);
+        });
+        return receiver;
+    }
     let dialog = rfd::AsyncFileDialog::new()
-        .set_title("Open a song or a loudscape cloud")
+        .set_title("Open a song, several songs (a timeline) or a loudscape cloud")
         .add_filter(
             "Songs and clouds",
             &[&AUDIO_EXTENSIONS[..], &["ply"]].concat(),
         )
         .add_filter("Songs", &AUDIO_EXTENSIONS)
         .add_filter("Clouds (.ply)", &["ply"])
-        .pick_file();
+        .pick_files();
+    std::thread::spawn(move || {
+        let picked = pollster::block_on(dialog)
+            .map(|files| files.iter().map(|f| f.path().to_path_buf()).collect());
+        let _ = sender.send(picked);
+    });
+    receiver
+}
+
+/// The native Save dialog for a PNG, suggesting `default_name` in the current folder.
+fn save_dialog(default_name: &str) -> Receiver<Option<PathBuf>> {
+    let (sender, receiver) = channel();
+    let mut dialog = rfd::AsyncFileDialog::new()
+        .set_title("Save the view as PNG")
+        .add_filter("PNG image", &["png"])
+        .set_file_name(default_name);
+    if let Ok(dir) = std::env::current_dir() {
+        dialog = dialog.set_directory(dir);
+    }
+    let dialog = dialog.save_file();
     std::thread::spawn(move || {
         let picked = pollster::block_on(dialog).map(|file| file.path().to_path_buf());
         let _ = sender.send(picked);
@@ -66,27 +147,47 @@ impl LoudscapeApp {
             let field = ui.add(
                 egui::TextEdit::singleline(&mut self.open.path)
                     .hint_text("song.ogg or cloud.ply")
-                    .desired_width(170.0),
+                    .desired_width(95.0),
             );
             let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
             if enter && !self.open.path.trim().is_empty() {
                 let path = PathBuf::from(self.open.path.trim());
-                self.start_loading(path);
+                self.start_opening(vec![path]);
             }
             let button = ui
                 .add_enabled(self.open.dialog.is_none(), egui::Button::new("Open…"))
-                .on_hover_text("a song (wav, flac, ogg, opus, mp3, aiff) or a .ply cloud");
+                .on_hover_text("a song (wav, flac, ogg, opus, mp3, aiff) or a .ply cloud (Ctrl+O)");
             if button.clicked() {
-                self.open.dialog = Some(open_dialog());
+                self.open_dialog_or_say_why(false);
+            }
+            if ui
+                .add_enabled(self.open.dialog.is_none(), egui::Button::new("Folder…"))
+                .on_hover_text("a folder of songs: one timeline, songs placed by year")
+                .clicked()
+            {
+                self.open_dialog_or_say_why(true);
+            }
+            if ui
+                .small_button("?")
+                .on_hover_text("keyboard shortcuts (?)")
+                .clicked()
+            {
+                self.open.show_shortcuts = !self.open.show_shortcuts;
             }
         });
+        self.poll_save_dialog(ui.ctx());
+        self.timeline_build_panel(ui);
+        self.recent_files(ui);
+        self.extraction_controls(ui);
         let answer = self.open.dialog.as_ref().map(|r| r.try_recv());
         match answer {
             Some(Ok(picked)) => {
                 self.open.dialog = None;
-                if let Some(path) = picked {
-                    self.open.path = path.display().to_string();
-                    self.start_loading(path);
+                if let Some(paths) = picked.filter(|p| !p.is_empty()) {
+                    if let [path] = &paths[..] {
+                        self.open.path = path.display().to_string();
+                    }
+                    self.start_opening(paths);
                 }
             }
             Some(Err(std::sync::mpsc::TryRecvError::Disconnected)) => self.open.dialog = None,
@@ -95,6 +196,99 @@ impl LoudscapeApp {
                     .request_repaint_after(std::time::Duration::from_millis(100));
             }
             None => {}
+        }
+    }
+
+    /// Opens the Open dialog, or says why it cannot (Ctrl+O and the Open… button).
+    pub(super) fn open_dialog_or_say_why(&mut self, folder: bool) {
+        if self.open.dialog.is_some() {
+            return;
+        }
+        if dialogs_available() {
+            self.open.dialog = Some(open_dialog(folder));
+        } else {
+            self.notice = Some(format!("{NO_DIALOG}: type a path in the field"));
+        }
+    }
+
+    /// Asks where to save a screenshot with the native dialog; true when it opened (its answer
+    /// saves later, through `open.save_to`). False where none can open: the caller saves as it
+    /// did before, and `notice` will say why there was no dialog.
+    pub(super) fn ask_where_to_save(&mut self, default_name: &Path) -> bool {
+        if self.open.save_dialog.is_some() {
+            return true;
+        }
+        if !dialogs_available() {
+            self.open.save_to = None;
+            return false;
+        }
+        self.open.save_dialog = Some(save_dialog(&default_name.display().to_string()));
+        true
+    }
+
+    /// The save dialog's answer: a path saves the screenshot there on this frame.
+    pub(super) fn poll_save_dialog(&mut self, ctx: &egui::Context) {
+        let answer = self.open.save_dialog.as_ref().map(|r| r.try_recv());
+        match answer {
+            Some(Ok(picked)) => {
+                self.open.save_dialog = None;
+                if let Some(path) = picked {
+                    self.open.save_to = Some(path);
+                    self.save_shot.requested = true;
+                }
+            }
+            Some(Err(std::sync::mpsc::TryRecvError::Disconnected)) => {
+                self.open.save_dialog = None;
+            }
+            Some(Err(std::sync::mpsc::TryRecvError::Empty)) => {
+                ctx.request_repaint_after(std::time::Duration::from_millis(100));
+            }
+            None => {}
+        }
+    }
+
+    /// The recent files, newest first: a click opens one; a missing one is shown as such.
+    fn recent_files(&mut self, ui: &mut egui::Ui) {
+        let entries = self.open.recent.entries();
+        if entries.is_empty() {
+            return;
+        }
+        let mut open = None;
+        egui::CollapsingHeader::new("Recent")
+            .default_open(true)
+            .show(ui, |ui| {
+                for (path, present) in entries {
+                    let name = file_name(&path);
+                    if present {
+                        let link = ui
+                            .add(egui::Button::new(RichText::new(&name).small()).frame(false))
+                            .on_hover_text(path.display().to_string());
+                        if link.clicked() {
+                            open = Some(path);
+                        }
+                    } else {
+                        ui.label(
+                            RichText::new(format!("{name} (missing)"))
+                                .small()
+                                .weak()
+                                .strikethrough(),
+                        )
+                        .on_hover_text(format!("not found: {}", path.display()));
+                    }
+                }
+            });
+        if let Some(path) = open {
+            self.open.path = path.display().to_string();
+            self.start_opening(vec![path]);
+        }
+    }
+
+    /// A file (song, cloud) or folder opened as `path` into `cloud`: first in the recent list.
+    /// A timeline of several songs is named by no one path: its cloud (in the cache) is kept.
+    pub(super) fn opened(&mut self, path: &Path, cloud: &Path) {
+        let kept = if path.exists() { path } else { cloud };
+        if let Err(message) = self.open.recent.add(kept) {
+            log::warn!("{message}");
         }
     }
 

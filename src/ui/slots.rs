@@ -21,8 +21,12 @@ impl LoudscapeApp {
         let thread_path = path.clone();
         let shared = crate::ui::state::Shared::default();
         let thread_shared = shared.clone();
+        // Audio is extracted with the side panel's settings (`extract_settings.rs`).
+        let settings = self.open.extract.next.clone();
+        if crate::ui::extract_settings::named_like_audio(&path) {
+            self.open.extract.shown = Some((path.clone(), settings.clone()));
+        }
         std::thread::spawn(move || {
-            let settings = crate::extract::Settings::default();
             let result = crate::ui::open::open_path(&thread_path, &settings, &thread_shared);
             let _ = sender.send(result);
         });
@@ -67,7 +71,10 @@ impl LoudscapeApp {
         };
         for (path, result) in finished {
             match result {
-                Ok(cloud) => self.install(render_state, cloud),
+                Ok(cloud) => {
+                    self.opened(&path, &cloud.path);
+                    self.install(render_state, cloud);
+                }
                 Err(message) => {
                     log::error!("{message}");
                     self.messages.push(format!("{}: {message}", path.display()));
@@ -85,6 +92,15 @@ impl LoudscapeApp {
         let id = self.next_id;
         self.next_id += 1;
         if let Some(old) = self.slot(slot) {
+            if old.cloud.path == cloud.path {
+                // A re-extraction: the old cloud was shown until now.
+                eprintln!(
+                    "loudscape: {}: the new cloud ({} points) replaces the one shown ({} points)",
+                    cloud.path.display(),
+                    cloud.points.len(),
+                    old.cloud.points.len()
+                );
+            }
             ViewResources::remove(render_state, old.id);
         }
         ViewResources::upload(render_state, id, &cloud);

@@ -83,6 +83,8 @@ pub(super) struct LoudscapeApp {
     pub(super) pending_seek: Option<f64>,
     /// The loudness strip under the Song view (`strip.rs`).
     pub(super) strip: crate::ui::strip::LoudnessStrip,
+    /// Key presses a scripted run (`--press`, tests) still has to make (`shortcuts.rs`).
+    pub(super) scripted_presses: Vec<String>,
 }
 
 /// Which of the two data slots.
@@ -181,13 +183,8 @@ impl Default for SaveShot {
     }
 }
 
-/// The Open row: its text field and the file dialog while it is open.
-#[derive(Default)]
-pub(super) struct OpenPanel {
-    pub(super) path: String,
-    /// The dialog's answer (`None`: closed without a choice).
-    pub(super) dialog: Option<std::sync::mpsc::Receiver<Option<std::path::PathBuf>>>,
-}
+/// The Open row, recent files, extraction settings and shortcuts overlay (`open.rs`).
+pub(super) use crate::ui::open::OpenPanel;
 
 /// What a loading thread shares with the window.
 #[derive(Clone, Default)]

@@ -14,11 +14,18 @@ use crate::ui::state::LoudscapeApp;
 impl LoudscapeApp {
     pub(super) fn handle_screenshot(&mut self, ctx: &egui::Context) {
         let has_data = self.active().is_some();
+        let waiting =
+            self.timeline_listing() || !self.scripted_presses.is_empty() || self.reextracting();
         let Some(state) = self.screenshot.as_mut() else {
             return;
         };
         if state.done.load(Ordering::SeqCst) {
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            return;
+        }
+        if waiting {
+            // Wait for the tags of a timeline, the scripted key presses and a re-extraction.
+            ctx.request_repaint();
             return;
         }
         if !has_data && self.loading.is_empty() && self.messages.is_empty() {
@@ -81,20 +88,33 @@ impl LoudscapeApp {
         else {
             return;
         };
-        let Some(loaded) = self.active() else {
+        if self.active().is_none() {
             return;
-        };
+        }
         if self.save_shot.custom_size {
             view.width = self.save_shot.size[0].max(1);
             view.height = self.save_shot.size[1].max(1);
         }
-        let path = if self.save_shot.path.trim().is_empty() {
-            crate::ui::screenshot::timestamped_name(std::time::SystemTime::now())
+        // Ctrl+S and Save PNG ask where (native dialog) unless the field names a file; where
+        // no dialog can open, the timestamped name in the current folder, as before.
+        let mut no_dialog = false;
+        let path = if let Some(chosen) = self.open.save_to.take() {
+            chosen
+        } else if self.save_shot.path.trim().is_empty() {
+            let name = crate::ui::screenshot::timestamped_name(std::time::SystemTime::now());
+            if self.ask_where_to_save(&name) {
+                return;
+            }
+            no_dialog = true;
+            name
         } else {
             PathBuf::from(self.save_shot.path.trim())
         };
         let mut settings = self.settings.clone();
         settings.markers = self.markers();
+        let Some(loaded) = self.active() else {
+            return;
+        };
         let result =
             ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
                 .and_then(|image| crate::ui::screenshot::save_png(&image, &path));
@@ -103,10 +123,15 @@ impl LoudscapeApp {
                 // The full path: a bare name lands in the folder the window was started from.
                 let shown = std::path::absolute(&path).unwrap_or(path);
                 self.notice = Some(format!(
-                    "saved {} ({}×{})",
+                    "saved {} ({}×{}){}",
                     shown.display(),
                     view.width,
-                    view.height
+                    view.height,
+                    if no_dialog {
+                        format!("; {}", crate::ui::open::NO_DIALOG)
+                    } else {
+                        String::new()
+                    }
                 ));
             }
             Err(e) => self.messages.push(e.to_string()),

@@ -1,0 +1,147 @@
+//! Recent files: the songs, clouds and folders the window opened, newest first, kept in
+//! `recent.json` in the state folder (`$LOUDSCAPE_STATE_DIR`, else `$XDG_STATE_HOME/loudscape`,
+//! else `~/.local/state/loudscape`) as soon as each opens, so the list survives a crash as well
+//! as a restart. The Open panel lists them; one that is no longer there is shown as missing and
+//! cannot be clicked. Scripted screenshot runs keep no list unless `$LOUDSCAPE_STATE_DIR` names
+//! one (tests).
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// How many files the list keeps.
+pub(super) const MAX_RECENT: usize = 10;
+/// How often the panel looks again whether the files are still there.
+const RECHECK: Duration = Duration::from_secs(2);
+
+/// The recent-files list and where it is kept.
+#[derive(Default)]
+pub(super) struct RecentFiles {
+    /// Newest first.
+    pub(super) files: Vec<PathBuf>,
+    /// Whether each file (or folder) was there when last looked at.
+    present: Vec<bool>,
+    checked: Option<Instant>,
+    /// The list's file; `None`: not kept (a scripted run).
+    store: Option<PathBuf>,
+}
+
+/// The state folder's `recent.json`.
+pub(super) fn default_store() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os("LOUDSCAPE_STATE_DIR").filter(|d| !d.is_empty()) {
+        return Some(PathBuf::from(dir).join("recent.json"));
+    }
+    let base = std::env::var_os("XDG_STATE_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local").join("state"))
+        })?;
+    Some(base.join("loudscape").join("recent.json"))
+}
+
+/// `path` with `file` moved to the front (absolute), without repeats, at most
+/// [`MAX_RECENT`].
+pub(super) fn with_first(mut files: Vec<PathBuf>, file: &Path) -> Vec<PathBuf> {
+    let file = std::path::absolute(file).unwrap_or_else(|_| file.to_owned());
+    files.retain(|f| f != &file);
+    files.insert(0, file);
+    files.truncate(MAX_RECENT);
+    files
+}
+
+impl RecentFiles {
+    /// The list kept in `store` (empty when it is missing or unreadable: a list of recent
+    /// files is not worth an error).
+    pub(super) fn load(store: Option<PathBuf>) -> Self {
+        let files = store
+            .as_ref()
+            .and_then(|s| std::fs::read(s).ok())
+            .and_then(|bytes| serde_json::from_slice::<Vec<PathBuf>>(&bytes).ok())
+            .unwrap_or_default();
+        let mut recent = Self {
+            files,
+            store,
+            ..Self::default()
+        };
+        recent.files.truncate(MAX_RECENT);
+        recent.recheck();
+        recent
+    }
+
+    /// Puts `file` first and saves the list (written beside and renamed: never half a file).
+    pub(super) fn add(&mut self, file: &Path) -> Result<(), String> {
+        self.files = with_first(std::mem::take(&mut self.files), file);
+        self.recheck();
+        let Some(store) = &self.store else {
+            return Ok(());
+        };
+        let text = serde_json::to_vec_pretty(&self.files).map_err(|e| e.to_string())?;
+        let fail =
+            |e: std::io::Error| format!("{}: cannot keep the recent files: {e}", store.display());
+        if let Some(dir) = store.parent() {
+            std::fs::create_dir_all(dir).map_err(fail)?;
+        }
+        let temporary = store.with_extension(format!("json.{}.tmp", std::process::id()));
+        std::fs::write(&temporary, text).map_err(fail)?;
+        std::fs::rename(&temporary, store).map_err(|e| {
+            let _ = std::fs::remove_file(&temporary);
+            fail(e)
+        })
+    }
+
+    /// Looks again which files are there.
+    pub(super) fn recheck(&mut self) {
+        self.present = self.files.iter().map(|f| f.exists()).collect();
+        self.checked = Some(Instant::now());
+    }
+
+    /// The files with whether each is there (looked at again every few seconds).
+    pub(super) fn entries(&mut self) -> Vec<(PathBuf, bool)> {
+        if self.checked.is_none_or(|t| t.elapsed() > RECHECK) {
+            self.recheck();
+        }
+        self.files
+            .iter()
+            .cloned()
+            .zip(self.present.iter().copied())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn newest_first_no_repeats_capped_kept_and_missing_seen() {
+        let dir = std::env::temp_dir().join(format!("loudscape-recent-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let store = dir.join("state").join("recent.json");
+        let mut recent = RecentFiles::load(Some(store.clone()));
+        assert!(recent.files.is_empty());
+        for i in 0..12 {
+            let file = dir.join(format!("song{i}.wav"));
+            std::fs::write(&file, b"x").unwrap();
+            recent.add(&file).unwrap();
+        }
+        recent.add(&dir.join("song5.wav")).unwrap();
+        assert_eq!(recent.files.len(), MAX_RECENT);
+        assert_eq!(recent.files[0], dir.join("song5.wav"));
+        assert_eq!(recent.files[1], dir.join("song11.wav"));
+        assert_eq!(
+            recent
+                .files
+                .iter()
+                .filter(|f| f.ends_with("song5.wav"))
+                .count(),
+            1
+        );
+        std::fs::remove_file(dir.join("song11.wav")).unwrap();
+        let mut again = RecentFiles::load(Some(store));
+        assert_eq!(again.files, recent.files, "the list survives a restart");
+        let entries = again.entries();
+        assert_eq!(entries[1], (dir.join("song11.wav"), false));
+        assert!(entries[0].1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,531 @@
+//! A folder or several songs become a timeline from the window. The paths (command line, drop,
+//! Open dialog, recent files) go through [`LoudscapeApp::start_opening`]: clouds open as before,
+//! a single song is a Song, and a folder or two songs or more are one timeline, built by
+//! `crate::extract::timeline` on a thread: the tags are read first (`--list-songs`); songs
+//! without a year get one remembered from an earlier answer (`years.json` in the state folder,
+//! keyed by the song's absolute path) or are listed in a dialog where the user types it, or
+//! skips (the songs then placed in order, `--x-by order`); then the build, with a row a song
+//! as each finishes and Cancel. The finished timeline goes through the same loading slot as any
+//! cloud, so the old view stays until it is installed.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::{Arc, Mutex};
+
+use eframe::egui::{self, RichText};
+
+use crate::extract::timeline::{self, Line, Placement, SongTags};
+use crate::extract::{Progress, cache};
+use crate::ui::shortcuts::{self, Action};
+use crate::ui::state::{Loading, LoudscapeApp, Shared};
+
+/// Years typed by the user, by song (absolute path), kept in `years.json` beside the recent
+/// files.
+#[derive(Default)]
+pub(super) struct YearBook {
+    years: BTreeMap<PathBuf, i32>,
+    store: Option<PathBuf>,
+}
+
+impl YearBook {
+    pub(super) fn load(store: Option<PathBuf>) -> Self {
+        let years = store
+            .as_ref()
+            .and_then(|s| std::fs::read(s).ok())
+            .and_then(|b| serde_json::from_slice::<BTreeMap<PathBuf, i32>>(&b).ok())
+            .unwrap_or_default();
+        Self { years, store }
+    }
+
+    pub(super) fn get(&self, song: &Path) -> Option<i32> {
+        self.years.get(&absolute(song)).copied()
+    }
+
+    /// Remembers `years` and saves the book (written beside and renamed).
+    pub(super) fn remember(&mut self, years: &[(PathBuf, i32)]) -> Result<(), String> {
+        for (song, year) in years {
+            self.years.insert(absolute(song), *year);
+        }
+        let Some(store) = &self.store else {
+            return Ok(());
+        };
+        let fail = |e: std::io::Error| format!("{}: cannot keep the years: {e}", store.display());
+        if let Some(dir) = store.parent() {
+            std::fs::create_dir_all(dir).map_err(fail)?;
+        }
+        let text = serde_json::to_vec_pretty(&self.years).map_err(|e| e.to_string())?;
+        let temporary = store.with_extension(format!("json.{}.tmp", std::process::id()));
+        std::fs::write(&temporary, text).map_err(fail)?;
+        std::fs::rename(&temporary, store).map_err(|e| {
+            let _ = std::fs::remove_file(&temporary);
+            fail(e)
+        })
+    }
+}
+
+fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_owned())
+}
+
+/// A year as typed: four digits in a plausible range.
+pub(super) fn parse_year(text: &str) -> Option<i32> {
+    let year: i32 = text.trim().parse().ok()?;
+    (1860..=2100).contains(&year).then_some(year)
+}
+
+/// Where a timeline build is.
+pub(super) enum TimelineBuild {
+    /// Reading the tags.
+    Listing {
+        inputs: Vec<PathBuf>,
+        receiver: Receiver<Result<Vec<SongTags>, String>>,
+        shared: Shared,
+    },
+    /// Asking for the years the tags lack: the songs and the text typed for each.
+    AskYears {
+        inputs: Vec<PathBuf>,
+        songs: Vec<SongTags>,
+        typed: Vec<String>,
+        focused: bool,
+    },
+}
+
+/// The songs of a build as they finish (shown a row each).
+#[derive(Default)]
+pub(super) struct SongRows {
+    pub(super) rows: Vec<(PathBuf, Option<String>)>,
+    pub(super) total: usize,
+}
+
+/// Whether these paths make a timeline: a folder, or two audio files or more.
+pub(super) fn makes_timeline(paths: &[PathBuf]) -> bool {
+    let audio = paths
+        .iter()
+        .filter(|p| !p.is_dir() && crate::extract::is_audio(p))
+        .count();
+    paths.iter().any(|p| p.is_dir()) || audio >= 2
+}
+
+fn name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+impl LoudscapeApp {
+    /// Opens what was chosen: clouds and a lone song as before, a folder or several songs as
+    /// one timeline.
+    pub(super) fn start_opening(&mut self, paths: Vec<PathBuf>) {
+        if !makes_timeline(&paths) {
+            for path in paths {
+                self.start_loading(path);
+            }
+            return;
+        }
+        let (songs, clouds): (Vec<PathBuf>, Vec<PathBuf>) = paths
+            .into_iter()
+            .partition(|p| p.is_dir() || crate::extract::is_audio(p));
+        for cloud in clouds {
+            self.start_loading(cloud);
+        }
+        self.start_timeline(songs);
+    }
+
+    /// Reads the tags of the songs under `inputs` on a thread (the first step of a build).
+    pub(super) fn start_timeline(&mut self, inputs: Vec<PathBuf>) {
+        let (sender, receiver) = channel();
+        let shared = Shared::default();
+        let thread_shared = shared.clone();
+        let thread_inputs = inputs.clone();
+        let what = describe(&inputs);
+        std::thread::spawn(move || {
+            let result = crate::extract::find_extractor(Path::new(&what))
+                .map_err(|e| e.to_string())
+                .and_then(|extractor| {
+                    timeline::list_songs(&extractor, &thread_inputs, &thread_shared.cancel)
+                        .map_err(|reason| format!("{what}: {reason}"))
+                });
+            let _ = sender.send(result);
+        });
+        self.open.timeline = Some(TimelineBuild::Listing {
+            inputs,
+            receiver,
+            shared,
+        });
+    }
+
+    /// Builds the timeline of `songs` (years known), or in order, on the loading thread.
+    fn build_timeline(&mut self, inputs: &[PathBuf], placement: Placement) {
+        let (sender, receiver) = channel();
+        let shared = Shared::default();
+        let thread_shared = shared.clone();
+        let rows = self.open.timeline_rows.clone();
+        if let Ok(mut rows) = rows.lock() {
+            *rows = SongRows::default();
+        }
+        let what = describe(inputs);
+        // A single folder names the build (and the recent files); several songs, a description.
+        let label = match inputs {
+            [folder] if folder.is_dir() => folder.clone(),
+            _ => PathBuf::from(&what),
+        };
+        self.open.building = Some(label.clone());
+        std::thread::spawn(move || {
+            let mut on_song = |line: Line| {
+                if let Line::SongDone {
+                    song,
+                    done,
+                    total,
+                    failed,
+                } = line
+                {
+                    eprintln!(
+                        "loudscape: {what}: song {done} of {total}: {}{}",
+                        song.display(),
+                        failed
+                            .as_deref()
+                            .map(|f| format!(" failed: {f}"))
+                            .unwrap_or_default()
+                    );
+                    if let Ok(mut slot) = thread_shared.progress.lock() {
+                        *slot = Some(Progress {
+                            stage: format!("song {done} of {total}"),
+                            fraction: done as f32 / total.max(1) as f32,
+                        });
+                    }
+                    if let Ok(mut rows) = rows.lock() {
+                        rows.total = total;
+                        rows.rows.push((song, failed));
+                    }
+                }
+            };
+            if let Ok(mut slot) = thread_shared.progress.lock() {
+                *slot = Some(Progress {
+                    stage: "songs".into(),
+                    fraction: 0.0,
+                });
+            }
+            let result = crate::extract::find_extractor(Path::new(&what))
+                .map_err(|e| e.to_string())
+                .and_then(|extractor| {
+                    timeline::build(
+                        &extractor,
+                        &placement,
+                        &cache::dir(),
+                        &thread_shared.cancel,
+                        &mut on_song,
+                    )
+                    .map_err(|reason| format!("{what}: the timeline failed: {reason}"))
+                })
+                .and_then(|(ply, hit)| {
+                    let how = if hit { "from the cache" } else { "built" };
+                    eprintln!("loudscape: {what}: timeline {how}: {}", ply.display());
+                    crate::data::cloud::load(&ply).map_err(|e| e.to_string())
+                });
+            let _ = sender.send(result);
+        });
+        self.loading.push(Loading {
+            path: label,
+            receiver,
+            shared,
+        });
+    }
+
+    /// The timeline build's rows and dialog; called every frame from the Open row.
+    pub(super) fn timeline_build_panel(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        let mut next = None;
+        match &mut self.open.timeline {
+            None => {}
+            Some(TimelineBuild::Listing {
+                inputs,
+                receiver,
+                shared,
+            }) => {
+                ui.horizontal(|ui| {
+                    ui.spinner();
+                    ui.label(format!("reading the tags of {}", describe(inputs)));
+                    if ui.small_button("Cancel").clicked() {
+                        shared.cancel.store(true, Ordering::Relaxed);
+                    }
+                });
+                ctx.request_repaint_after(std::time::Duration::from_millis(100));
+                match receiver.try_recv() {
+                    Ok(Ok(songs)) => next = Some(Ok((inputs.clone(), songs))),
+                    Ok(Err(message)) => next = Some(Err(message)),
+                    Err(TryRecvError::Disconnected) => {
+                        next = Some(Err("the tag reader stopped".into()));
+                    }
+                    Err(TryRecvError::Empty) => {}
+                }
+            }
+            Some(TimelineBuild::AskYears { .. }) => self.years_dialog(&ctx),
+        }
+        match next {
+            Some(Ok((inputs, songs))) => self.listed(inputs, songs),
+            Some(Err(message)) => {
+                self.open.timeline = None;
+                if !message.ends_with("cancelled") {
+                    log::error!("{message}");
+                    self.messages.push(message);
+                }
+            }
+            None => {}
+        }
+        let rows = self.open.timeline_rows.lock().ok().map(|r| {
+            (
+                r.total,
+                r.rows
+                    .iter()
+                    .map(|(p, f)| (name(p), f.clone()))
+                    .collect::<Vec<_>>(),
+            )
+        });
+        let building = self
+            .loading
+            .iter()
+            .any(|l| Some(&l.path) == self.open.building.as_ref());
+        if let Some((total, rows)) = rows.filter(|_| building) {
+            ui.label(RichText::new(format!("Timeline: {} of {total} songs", rows.len())).small());
+            for (song, failed) in rows.iter().rev().take(8) {
+                match failed {
+                    None => ui.label(RichText::new(format!("✔ {song}")).small()),
+                    Some(reason) => ui
+                        .label(RichText::new(format!("✘ {song}")).small().weak())
+                        .on_hover_text(reason.as_str()),
+                };
+            }
+        }
+    }
+
+    /// The tags are read: build at once when every song has a year (from its tags or
+    /// remembered), else ask.
+    fn listed(&mut self, inputs: Vec<PathBuf>, mut songs: Vec<SongTags>) {
+        songs.retain(|s| s.tag_error.is_none());
+        if songs.is_empty() {
+            self.open.timeline = None;
+            self.messages.push(format!(
+                "{}: no audio file to build a timeline of",
+                describe(&inputs)
+            ));
+            return;
+        }
+        for song in &mut songs {
+            if song.year.is_none() {
+                song.year = self.open.years.get(&song.path);
+            }
+        }
+        let missing: Vec<&SongTags> = songs.iter().filter(|s| s.year.is_none()).collect();
+        if missing.is_empty() {
+            self.open.timeline = None;
+            self.build_timeline(&inputs, by_year(&songs));
+            return;
+        }
+        eprintln!(
+            "loudscape: {}: {} song(s) without a year: {}",
+            describe(&inputs),
+            missing.len(),
+            missing
+                .iter()
+                .map(|s| name(&s.path))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let typed = vec![String::new(); songs.len()];
+        self.open.timeline = Some(TimelineBuild::AskYears {
+            inputs,
+            songs,
+            typed,
+            focused: false,
+        });
+    }
+
+    /// The dialog listing the songs without a year.
+    fn years_dialog(&mut self, ctx: &egui::Context) {
+        let Some(TimelineBuild::AskYears {
+            inputs,
+            songs,
+            typed,
+            focused,
+        }) = &mut self.open.timeline
+        else {
+            return;
+        };
+        let mut choice = None;
+        egui::Window::new("Songs without a year")
+            .collapsible(false)
+            .resizable(false)
+            .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
+            .show(ctx, |ui| {
+                ui.label("Their tags give no year. Type one to place them by year:");
+                ui.add_space(4.0);
+                egui::Grid::new("years").num_columns(2).show(ui, |ui| {
+                    for (song, text) in songs.iter().zip(typed.iter_mut()) {
+                        if song.year.is_some() {
+                            continue;
+                        }
+                        ui.label(name(&song.path))
+                            .on_hover_text(song.path.display().to_string());
+                        let field = ui.add(
+                            egui::TextEdit::singleline(text)
+                                .hint_text("year")
+                                .desired_width(60.0),
+                        );
+                        if !*focused {
+                            field.request_focus();
+                            *focused = true;
+                        }
+                        if !text.is_empty() && parse_year(text).is_none() {
+                            ui.label(RichText::new("not a year").small().weak());
+                        }
+                        ui.end_row();
+                    }
+                });
+                ui.add_space(6.0);
+                let all_typed = songs
+                    .iter()
+                    .zip(typed.iter())
+                    .all(|(s, t)| s.year.is_some() || parse_year(t).is_some());
+                let some_typed = typed.iter().any(|t| parse_year(t).is_some());
+                let with_year = songs.iter().filter(|s| s.year.is_some()).count();
+                ui.horizontal(|ui| {
+                    let label = if all_typed {
+                        "Build by year"
+                    } else {
+                        "Build by year, leaving the others out"
+                    };
+                    let enter = shortcuts::pressed(ctx, Action::Confirm);
+                    if ui
+                        .add_enabled(some_typed || with_year > 0, egui::Button::new(label))
+                        .clicked()
+                        || (enter && (some_typed || with_year > 0))
+                    {
+                        choice = Some(true);
+                    }
+                    if ui
+                        .button("Skip: place in order")
+                        .on_hover_text("no years: each song an equal span (--x-by order)")
+                        .clicked()
+                    {
+                        choice = Some(false);
+                    }
+                    if ui.button("Cancel").clicked() {
+                        choice = None;
+                        *focused = false;
+                        songs.clear();
+                    }
+                });
+            });
+        let cancelled = songs.is_empty();
+        let inputs = inputs.clone();
+        let songs = songs.clone();
+        let typed = typed.clone();
+        if cancelled {
+            self.open.timeline = None;
+            return;
+        }
+        match choice {
+            Some(true) => {
+                let mut answered = Vec::new();
+                let mut placed = songs.clone();
+                for (song, text) in placed.iter_mut().zip(&typed) {
+                    if song.year.is_none()
+                        && let Some(year) = parse_year(text)
+                    {
+                        song.year = Some(year);
+                        answered.push((song.path.clone(), year));
+                    }
+                }
+                if let Err(message) = self.open.years.remember(&answered) {
+                    self.messages.push(message);
+                }
+                self.open.timeline = None;
+                self.build_timeline(&inputs, by_year(&placed));
+            }
+            Some(false) => {
+                self.open.timeline = None;
+                let paths = songs.iter().map(|s| s.path.clone()).collect();
+                self.build_timeline(&inputs, Placement::InOrder(paths));
+            }
+            None => {}
+        }
+    }
+
+    /// Whether a timeline is on its way (the scripted screenshot waits for it).
+    pub(super) fn timeline_listing(&self) -> bool {
+        matches!(self.open.timeline, Some(TimelineBuild::Listing { .. }))
+    }
+}
+
+/// The songs with a year, placed by it.
+fn by_year(songs: &[SongTags]) -> Placement {
+    Placement::ByYear(
+        songs
+            .iter()
+            .filter_map(|s| {
+                s.year
+                    .map(|y| (s.path.clone(), y, s.title.clone(), s.artist.clone()))
+            })
+            .collect(),
+    )
+}
+
+/// "timeline of music/" or "timeline of 3 songs", naming the build in rows and messages.
+fn describe(inputs: &[PathBuf]) -> String {
+    match inputs {
+        [one] => format!("timeline of {}", name(one)),
+        many => format!("timeline of {} songs and folders", many.len()),
+    }
+}
+
+/// Shared song rows of the build on its way.
+pub(super) type Rows = Arc<Mutex<SongRows>>;
+
+impl LoudscapeApp {
+    /// Scripted presses wait for the years dialog's field to have the keyboard.
+    pub(super) fn scripted_input_ready(&self) -> bool {
+        match &self.open.timeline {
+            Some(TimelineBuild::Listing { .. }) => false,
+            Some(TimelineBuild::AskYears { focused, .. }) => *focused,
+            None => true,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn years_parse_and_are_remembered_across_loads() {
+        assert_eq!(parse_year(" 1999 "), Some(1999));
+        assert_eq!(parse_year("99"), None);
+        assert_eq!(parse_year("abcd"), None);
+        let dir = std::env::temp_dir().join(format!("loudscape-years-{}", std::process::id()));
+        let store = dir.join("years.json");
+        let mut book = YearBook::load(Some(store.clone()));
+        book.remember(&[(dir.join("a.wav"), 1984)]).unwrap();
+        let again = YearBook::load(Some(store));
+        assert_eq!(again.get(&dir.join("a.wav")), Some(1984));
+        assert_eq!(again.get(&dir.join("b.wav")), None);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn folders_and_several_songs_make_timelines() {
+        let dir = std::env::temp_dir().join(format!("loudscape-makes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (a, b, c) = (dir.join("a.wav"), dir.join("b.wav"), dir.join("c.ply"));
+        for p in [&a, &b] {
+            std::fs::write(p, b"RIFF").unwrap();
+        }
+        std::fs::write(&c, b"ply\n").unwrap();
+        assert!(!makes_timeline(std::slice::from_ref(&a)));
+        assert!(!makes_timeline(&[a.clone(), c.clone()]));
+        assert!(makes_timeline(&[a.clone(), b.clone()]));
+        assert!(makes_timeline(std::slice::from_ref(&dir)));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
