@@ -1,7 +1,8 @@
 //! Voxelization: turns a cloud's points into the [`VoxelGrid`] that the volume and surface views
 //! read (paper sections 3.1 and 3.4).
 //!
-//! Reads: the points (uploaded here in chunks, five f32 per point, the PLY record). Writes: a
+//! Reads: the points (uploaded here in chunks, or the points view's buffers through
+//! [`VoxelizePass::prepare_from_buffers`]; five f32 per point, the PLY record). Writes: a
 //! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
 //! shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
 //! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual carry; scale
@@ -166,6 +167,11 @@ pub fn grid_box(points: &[Point]) -> (Vec3, Vec3) {
             max = max.max(q);
         }
     }
+    grid_box_of_bounds(min, max)
+}
+
+/// [`grid_box`] from the points' bounding box `[min, max]` (not finite: no points).
+pub fn grid_box_of_bounds(min: Vec3, max: Vec3) -> (Vec3, Vec3) {
     if !min.is_finite() || !max.is_finite() {
         return (Vec3::splat(-1.0), Vec3::splat(1.0));
     }
@@ -412,8 +418,75 @@ impl VoxelizePass {
         if points.len() > MAX_POINTS {
             return Err(VoxelizeError::TooManyPoints(points.len()));
         }
-        let dims = UVec3::splat(resolution);
         let (box_min, box_max) = grid_box(points);
+        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
+            .clamp(1, u64::from(u32::MAX / 5)) as usize;
+        let buffers: Vec<(wgpu::Buffer, u32)> = points
+            .chunks(per_chunk)
+            .enumerate()
+            .map(|(i, slice)| {
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(&format!("voxelize::points_{i}")),
+                    contents: bytemuck::cast_slice(slice),
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+                (buffer, slice.len() as u32)
+            })
+            .collect();
+        self.prepare_job(
+            device,
+            buffers,
+            (box_min, box_max),
+            resolution,
+            smoothing_sigma,
+        )
+    }
+
+    /// As [`VoxelizePass::prepare`], reading points already on the GPU: `chunks` are storage
+    /// buffers of five f32 a point (the PLY record; each at most one storage binding and fewer
+    /// than `u32::MAX / 5` points) with their point counts, and `bounds` is the points' bounding
+    /// box (`PointCloud::bounds`). Nothing is uploaded: the points view's buffers
+    /// (`PointsGpu::chunk_buffers`) serve, so the cloud is on the device once.
+    pub fn prepare_from_buffers<'a>(
+        &self,
+        device: &wgpu::Device,
+        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
+        Self::check_resolution(device, resolution)?;
+        if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
+            return Err(VoxelizeError::Smoothing(smoothing_sigma));
+        }
+        let buffers: Vec<(wgpu::Buffer, u32)> = chunks
+            .into_iter()
+            .filter(|(_, count)| *count > 0)
+            .map(|(b, count)| (b.clone(), count))
+            .collect();
+        let total: usize = buffers.iter().map(|(_, c)| *c as usize).sum();
+        if total > MAX_POINTS {
+            return Err(VoxelizeError::TooManyPoints(total));
+        }
+        let (min, max) = if total == 0 {
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY))
+        } else {
+            bounds
+        };
+        let box_ = grid_box_of_bounds(min, max);
+        self.prepare_job(device, buffers, box_, resolution, smoothing_sigma)
+    }
+
+    fn prepare_job(
+        &self,
+        device: &wgpu::Device,
+        mut buffers: Vec<(wgpu::Buffer, u32)>,
+        (box_min, box_max): (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
+        let point_count: usize = buffers.iter().map(|(_, c)| *c as usize).sum();
+        let dims = UVec3::splat(resolution);
         let per_unit = voxels_per_unit(dims, box_min, box_max);
         let voxels = u64::from(dims.x * dims.y * dims.z);
         let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
@@ -437,36 +510,22 @@ impl VoxelizePass {
         let density = storage("voxelize::density_grid", group4_count * 16, copy);
         let hp_mean = storage("voxelize::hp_mean_grid", group4_count * 16, copy);
 
-        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
-            .clamp(1, u64::from(u32::MAX / 5)) as usize;
         // An empty cloud still binds one (zero) point, with a count of 0.
-        let zero = [Point {
-            position: [0.0; 3],
-            scalar: 0.0,
-            hp: 0.0,
-        }];
-        let slices: Vec<&[Point]> = if points.is_empty() {
-            vec![&zero[..0]]
-        } else {
-            points.chunks(per_chunk).collect()
-        };
-        let mut chunks = Vec::new();
-        for (i, slice) in slices.into_iter().enumerate() {
-            let contents: &[u8] = if slice.is_empty() {
-                bytemuck::cast_slice(&zero)
-            } else {
-                bytemuck::cast_slice(slice)
-            };
-            let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(&format!("voxelize::points_{i}")),
-                contents,
+        if buffers.is_empty() {
+            let zero = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("voxelize::points_empty"),
+                contents: &[0u8; std::mem::size_of::<Point>()],
                 usage: wgpu::BufferUsages::STORAGE,
             });
+            buffers.push((zero, 0));
+        }
+        let mut chunks = Vec::new();
+        for (i, (points_buffer, count)) in buffers.into_iter().enumerate() {
             let params = VoxelParams {
                 dims: [dims.x, dims.y, dims.z, 0],
                 box_min: box_min.extend(0.0).into(),
                 voxels_per_unit: per_unit.extend(0.0).into(),
-                counts: [slice.len() as u32, 0, (PERCENTILE * 1e6).round() as u32, 0],
+                counts: [count, 0, (PERCENTILE * 1e6).round() as u32, 0],
                 scales: [
                     FIXED_POINT_SCALE as f32,
                     HISTOGRAM_LOG2_MIN,
@@ -497,7 +556,7 @@ impl VoxelizePass {
                 entries: &entries,
             });
             chunks.push(Chunk {
-                count: slice.len() as u32,
+                count,
                 bind_group,
                 _points: points_buffer,
                 _params: params_buffer,
@@ -569,7 +628,7 @@ impl VoxelizePass {
             dims,
             box_min,
             box_max,
-            point_count: points.len(),
+            point_count,
             chunks,
             loudness_sums,
             hp_sums,
@@ -709,6 +768,30 @@ impl VoxelizePass {
         smoothing_sigma: f32,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
         let job = self.prepare(device, points, resolution, smoothing_sigma)?;
+        self.build(device, queue, job)
+    }
+
+    /// As [`VoxelizePass::voxelize`], from points already on the GPU (see
+    /// [`VoxelizePass::prepare_from_buffers`]).
+    pub fn voxelize_buffers<'a>(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        let job = self.prepare_from_buffers(device, chunks, bounds, resolution, smoothing_sigma)?;
+        self.build(device, queue, job)
+    }
+
+    fn build(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        job: VoxelizeJob,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("voxelize::build"),
         });
