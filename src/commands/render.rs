@@ -273,13 +273,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     settings.surface.iso_value = iso_value;
     args.volume.apply(&mut settings)?;
     args.colours.apply(&mut settings)?;
-    let cloud = load_cloud(&args.input)?;
+    let mut cloud = load_cloud(&args.input)?;
     settings.points.size_px = args
         .point_size
         .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
     let gpu = GpuContext::new_headless()?;
     let renderer = Renderer::new(&gpu.device);
-    let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
+    // One frame, no picking: on the stored frequency axis the host's copy of the points goes
+    // as they reach the device (the grid is built from the device's copy); a remapped axis
+    // keeps it for the remapped grid box.
+    let mut data = if freq_axis == FreqAxis::Linear {
+        SceneData::upload_draining(&gpu.device, &gpu.queue, &renderer, &mut cloud)
+    } else {
+        SceneData::upload(&gpu.device, &gpu.queue, &renderer, &cloud)
+    };
     data.set_freq_axis(&gpu.device, &renderer, &cloud, freq_axis)
         .map_err(anyhow::Error::msg)?;
     if matches!(view, ViewKind::Volume | ViewKind::Surface) {
@@ -374,7 +381,7 @@ pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
     let renderer = Renderer::new(&gpu.device);
     for (input, outputs) in args.inputs.iter().zip(&outputs) {
         let cloud = load_cloud(input)?;
-        let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
+        let mut data = SceneData::upload(&gpu.device, &gpu.queue, &renderer, &cloud);
         for (view, output) in ViewKind::ALL.into_iter().zip(outputs) {
             let mut settings = RenderSettings {
                 view,

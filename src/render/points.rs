@@ -11,7 +11,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::data::cloud::Point;
+use crate::data::cloud::{POINT_BYTES, Point};
 use crate::data::freq_axis::{FreqMapping, FreqParams};
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
@@ -72,22 +72,106 @@ pub struct PointsGpu {
 
 impl PointsGpu {
     /// Uploads `points`, split into chunks of at most `max_chunk_bytes` (use
-    /// [`PointsGpu::chunk_limit`] for the device's own limit).
+    /// [`PointsGpu::chunk_limit`] for the device's own limit). Each chunk goes through a staging
+    /// copy of its own size, so the host briefly holds a second copy of the largest chunk (and,
+    /// on a software rasterizer, the buffer itself lives in host memory too): use
+    /// [`PointsGpu::upload_bounded`] for large clouds.
     pub fn upload(
         device: &wgpu::Device,
         pass: &PointsPass,
         points: &[Point],
         max_chunk_bytes: u64,
     ) -> Self {
-        let per_chunk = (max_chunk_bytes / std::mem::size_of::<Point>() as u64).max(1) as usize;
+        Self::upload_with(pass, device, points, max_chunk_bytes, |label, slice| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(slice),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            })
+        })
+    }
+
+    /// As [`PointsGpu::upload`], but the points travel in pieces of at most `staging_bytes`
+    /// through the queue, each piece's staging memory released (the queue waited on) before the
+    /// next is written: the host never holds more than one piece besides `points` and the
+    /// buffers. The GPU buffers are identical to [`PointsGpu::upload`]'s.
+    pub fn upload_bounded(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pass: &PointsPass,
+        points: &[Point],
+        max_chunk_bytes: u64,
+        staging_bytes: u64,
+    ) -> Self {
+        let per_piece = (staging_bytes / POINT_BYTES as u64).max(1) as usize;
+        Self::upload_with(pass, device, points, max_chunk_bytes, |label, slice| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (std::mem::size_of_val(slice) as u64).max(POINT_BYTES as u64),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            for (i, piece) in slice.chunks(per_piece).enumerate() {
+                let offset = (i * per_piece * POINT_BYTES) as u64;
+                queue.write_buffer(&buffer, offset, bytemuck::cast_slice(piece));
+                flush_writes(device, queue);
+            }
+            buffer
+        })
+    }
+
+    /// As [`PointsGpu::upload_bounded`], taking the points: they are sent from the end, and
+    /// after each piece the vector is cut and shrunk, so the host's copy and the device's never
+    /// add up to much more than one cloud (on a software rasterizer the device's copy is host
+    /// memory). `points` is empty afterwards.
+    pub fn upload_draining(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pass: &PointsPass,
+        points: &mut Vec<Point>,
+        max_chunk_bytes: u64,
+        staging_bytes: u64,
+    ) -> Self {
+        let per_chunk = (max_chunk_bytes / POINT_BYTES as u64).max(1) as usize;
+        let per_piece = (staging_bytes / POINT_BYTES as u64).max(1) as usize;
+        let gpu = Self::upload_with(pass, device, points, max_chunk_bytes, |label, slice| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: std::mem::size_of_val(slice) as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        for (c, chunk) in gpu.chunks.iter().enumerate().rev() {
+            let start = c * per_chunk;
+            let mut piece_end = start + chunk.count as usize;
+            while piece_end > start {
+                let piece_start = start + (piece_end - start - 1) / per_piece * per_piece;
+                let offset = ((piece_start - start) * POINT_BYTES) as u64;
+                let piece = &points[piece_start..piece_end];
+                queue.write_buffer(&chunk.points, offset, bytemuck::cast_slice(piece));
+                flush_writes(device, queue);
+                points.truncate(piece_start);
+                points.shrink_to_fit();
+                piece_end = piece_start;
+            }
+        }
+        *points = Vec::new();
+        gpu
+    }
+
+    fn upload_with(
+        pass: &PointsPass,
+        device: &wgpu::Device,
+        points: &[Point],
+        max_chunk_bytes: u64,
+        mut make_buffer: impl FnMut(&str, &[Point]) -> wgpu::Buffer,
+    ) -> Self {
+        let per_chunk = (max_chunk_bytes / POINT_BYTES as u64).max(1) as usize;
         let freq_table = freq_table_buffer(device, &[crate::data::freq_axis::HIDDEN]);
         let mut chunks = Vec::new();
         for (i, slice) in points.chunks(per_chunk).enumerate() {
-            let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(&format!("points::cloud_chunk_{i}")),
-                contents: bytemuck::cast_slice(slice),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            });
+            let points_buffer = make_buffer(&format!("points::cloud_chunk_{i}"), slice);
             let params = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(&format!("points::params_{i}")),
                 size: std::mem::size_of::<PointParams>() as u64,
@@ -135,6 +219,12 @@ impl PointsGpu {
                 &self.freq_table,
             );
         }
+    }
+
+    /// Each chunk's point buffer (five f32 a point, the PLY record) and its point count, in
+    /// cloud order: the voxelizer reads the points from here instead of uploading them again.
+    pub fn chunk_buffers(&self) -> impl Iterator<Item = (&wgpu::Buffer, u32)> {
+        self.chunks.iter().map(|c| (&c.points, c.count))
     }
 
     /// The largest chunk one storage binding and one buffer can hold on this device.
@@ -257,6 +347,48 @@ impl PointsPass {
             pass.draw(0..3, 0..chunk.count.div_ceil(stride));
         }
     }
+
+    /// Draws the points `range` (indices into the whole cloud, across chunks) at stride 1: one
+    /// slice of a progressive frame (see [`progressive_ranges`]). Call [`PointsPass::prepare`]
+    /// with `moving = false` first, so every chunk's stride is 1.
+    pub fn draw_range(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameBinding,
+        points: &PointsGpu,
+        range: std::ops::Range<u64>,
+    ) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &frame.bind_group, &[]);
+        let mut chunk_start = 0u64;
+        for chunk in &points.chunks {
+            let chunk_end = chunk_start + u64::from(chunk.count);
+            let (a, b) = (range.start.max(chunk_start), range.end.min(chunk_end));
+            if a < b {
+                pass.set_bind_group(1, &chunk.bind_group, &[]);
+                pass.draw(0..3, (a - chunk_start) as u32..(b - chunk_start) as u32);
+            }
+            chunk_start = chunk_end;
+        }
+    }
+}
+
+/// Submits the queue's pending writes and waits for them, which releases their staging memory.
+fn flush_writes(device: &wgpu::Device, queue: &wgpu::Queue) {
+    let index = queue.submit([]);
+    let _ = device.poll(wgpu::PollType::Wait {
+        submission_index: Some(index),
+        timeout: None,
+    });
+}
+
+/// The slices of a progressive points frame: `0..total` cut into consecutive ranges of at most
+/// `per_slice` points, each point in exactly one (none for an empty cloud).
+pub fn progressive_ranges(total: u64, per_slice: u64) -> Vec<std::ops::Range<u64>> {
+    let per_slice = per_slice.max(1);
+    (0..total.div_ceil(per_slice))
+        .map(|i| i * per_slice..((i + 1) * per_slice).min(total))
+        .collect()
 }
 
 impl PointStyle {

@@ -21,8 +21,13 @@ use crate::view::frame_view::FrameView;
 // Volume view and voxel grid.
 use crate::render::grid::VoxelGrid;
 use crate::render::grid::difference::DifferencePass;
-use crate::render::grid::voxelize::{VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass};
+use crate::render::grid::voxelize::{
+    VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass, grid_box_mapped,
+};
 use crate::render::volume::{VolumeGpu, VolumePass, VolumeSettings};
+
+/// Staging per piece when [`SceneData::upload`] sends a cloud's points.
+pub const UPLOAD_STAGING_BYTES: u64 = 32 << 20;
 
 /// What the 3D view shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -133,6 +138,52 @@ impl SceneData {
         max_chunk_bytes: u64,
     ) -> Self {
         let points = PointsGpu::upload(device, &renderer.points, &cloud.points, max_chunk_bytes);
+        Self::with_points(device, cloud, points)
+    }
+
+    /// As [`SceneData::new`], the points sent through the queue in pieces of
+    /// [`UPLOAD_STAGING_BYTES`] (see `PointsGpu::upload_bounded`): what the window and the
+    /// `render` command use, so a cloud's upload costs the host one piece of staging, not a
+    /// second copy of the cloud. Once this returns (and [`SceneData::ensure_grid`] builds grids
+    /// from the GPU copy), `cloud.points` is needed only for picking.
+    pub fn upload(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        renderer: &Renderer,
+        cloud: &PointCloud,
+    ) -> Self {
+        let points = PointsGpu::upload_bounded(
+            device,
+            queue,
+            &renderer.points,
+            &cloud.points,
+            PointsGpu::chunk_limit(device),
+            UPLOAD_STAGING_BYTES,
+        );
+        Self::with_points(device, cloud, points)
+    }
+
+    /// As [`SceneData::upload`], taking the host's points as they are sent
+    /// (`PointsGpu::upload_draining`): for a caller that never picks (the `render` command).
+    /// `cloud.points` is empty afterwards; its bounds, metadata and path stay.
+    pub fn upload_draining(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        renderer: &Renderer,
+        cloud: &mut PointCloud,
+    ) -> Self {
+        let points = PointsGpu::upload_draining(
+            device,
+            queue,
+            &renderer.points,
+            &mut cloud.points,
+            PointsGpu::chunk_limit(device),
+            UPLOAD_STAGING_BYTES,
+        );
+        Self::with_points(device, cloud, points)
+    }
+
+    fn with_points(device: &wgpu::Device, cloud: &PointCloud, points: PointsGpu) -> Self {
         let (box_min, box_max) = data_box(cloud);
         let axes = cloud.meta.axes.clone();
         Self {
@@ -183,7 +234,9 @@ impl SceneData {
         self.freq.as_ref().map_or(FreqAxis::Linear, |m| m.axis)
     }
 
-    /// Builds the voxel grid of `cloud` (the cloud this data was made from) unless one with the
+    /// Builds the voxel grid of `cloud` (the cloud this data was made from; its mode and bounds
+    /// are read, the points come from the GPU copy; on a remapped frequency axis the host's
+    /// points give the remapped box) unless one with the
     /// same resolution and smoothing exists. Returns whether it was rebuilt. Never per frame:
     /// call when the view needs a grid, the cloud is loaded or the voxel settings change.
     pub fn ensure_grid(
@@ -206,14 +259,28 @@ impl SceneData {
         // Free the old grid before building the new one.
         self.volume = None;
         self.grid = None;
-        let (grid, stats) = renderer.voxelize.voxelize_mapped(
-            device,
-            queue,
-            &cloud.points,
-            resolution,
-            settings.smoothing_sigma,
-            self.freq.as_ref(),
-        )?;
+        // From the points already on the device: no second upload. On the stored axis the
+        // host's copy of the points is not read (a caller may have dropped it); a remapped
+        // axis reads it for the remapped box.
+        let (grid, stats) = match self.freq.as_ref() {
+            None => renderer.voxelize.voxelize_buffers(
+                device,
+                queue,
+                self.points.chunk_buffers(),
+                (cloud.bounds.min, cloud.bounds.max),
+                resolution,
+                settings.smoothing_sigma,
+            )?,
+            Some(mapping) => renderer.voxelize.voxelize_buffers_in_box(
+                device,
+                queue,
+                self.points.chunk_buffers(),
+                grid_box_mapped(&cloud.points, Some(mapping)),
+                resolution,
+                settings.smoothing_sigma,
+                Some(mapping),
+            )?,
+        };
         self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
         self.grid = Some(grid);
         self.grid_stats = Some(stats);
@@ -354,29 +421,11 @@ impl Renderer {
                     .prepare(queue, volume, &settings.volume, view.moving);
             }
         }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("scene::main_pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &target.color_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(clear_colour(settings.colours.background)),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &target.depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = begin_main_pass(
+            encoder,
+            target,
+            Some(clear_colour(settings.colours.background)),
+        );
         let Some(data) = data else {
             return;
         };
@@ -406,4 +455,84 @@ impl Renderer {
         self.markers
             .draw(&mut pass, &self.frame, settings.markers.len());
     }
+
+    /// One slice of a progressive points frame (`points::progressive_ranges`) into `target`:
+    /// the slice that starts at point 0 clears the target; every slice adds its points over what
+    /// the target holds (colour and depth kept); the slice that ends at the last point draws the
+    /// box and the markers. After all slices the target holds exactly what [`Renderer::render`]
+    /// draws at rest.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_points_slice(
+        &self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &RenderTarget,
+        data: &SceneData,
+        view: &FrameView,
+        settings: &RenderSettings,
+        range: std::ops::Range<u64>,
+    ) {
+        let first = range.start == 0;
+        let last = range.end >= data.points.total;
+        if first {
+            self.frame.write(queue, view);
+            self.markers.prepare(queue, &settings.markers);
+            self.points
+                .prepare(queue, &data.points, &settings.points, false);
+        }
+        let mut pass = begin_main_pass(
+            encoder,
+            target,
+            first.then(|| clear_colour(settings.colours.background)),
+        );
+        self.points
+            .draw_range(&mut pass, &self.frame, &data.points, range);
+        // The box and the markers after every point, in the single pass's order.
+        if last {
+            if settings.show_box {
+                self.lines.draw(&mut pass, &self.frame, &data.box_lines);
+            }
+            self.markers
+                .draw(&mut pass, &self.frame, settings.markers.len());
+        }
+    }
+}
+
+/// The scene's render pass into `target`: cleared to the background (`clear`) or loading what the
+/// target holds.
+fn begin_main_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &RenderTarget,
+    clear: Option<wgpu::Color>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("scene::main_pass"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &target.color_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: match clear {
+                    Some(color) => wgpu::LoadOp::Clear(color),
+                    None => wgpu::LoadOp::Load,
+                },
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &target.depth_view,
+            depth_ops: Some(wgpu::Operations {
+                load: if clear.is_some() {
+                    wgpu::LoadOp::Clear(1.0)
+                } else {
+                    wgpu::LoadOp::Load
+                },
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }

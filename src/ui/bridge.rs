@@ -119,7 +119,14 @@ impl ViewResources {
     pub fn upload(render_state: &egui_wgpu::RenderState, id: u64, cloud: &PointCloud) {
         let mut renderer = render_state.renderer.write();
         if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
-            let data = SceneData::new(&render_state.device, &resources.renderer, cloud);
+            // The old buffers go first, so two clouds' buffers never coexist.
+            resources.scenes.remove(&id);
+            let data = SceneData::upload(
+                &render_state.device,
+                &render_state.queue,
+                &resources.renderer,
+                cloud,
+            );
             resources.scenes.insert(id, data);
             resources.cache.invalidate();
         }

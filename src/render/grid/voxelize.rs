@@ -1,7 +1,8 @@
 //! Voxelization: turns a cloud's points into the [`VoxelGrid`] that the volume and surface views
 //! read (paper sections 3.1 and 3.4).
 //!
-//! Reads: the points (uploaded here in chunks, five f32 per point, the PLY record). Writes: a
+//! Reads: the points (uploaded here in chunks, or the points view's buffers through
+//! [`VoxelizePass::prepare_from_buffers`]; five f32 per point, the PLY record). Writes: a
 //! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
 //! shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
 //! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual carry; scale
@@ -171,6 +172,23 @@ pub fn grid_box(points: &[Point]) -> (Vec3, Vec3) {
             max = max.max(q);
         }
     }
+    grid_box_of_bounds(min, max)
+}
+
+/// The chunks of points already on the device, owned (a buffer handle is a reference count),
+/// empty ones left out.
+fn owned_chunks<'a>(
+    chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+) -> Vec<(wgpu::Buffer, u32)> {
+    chunks
+        .into_iter()
+        .filter(|(_, count)| *count > 0)
+        .map(|(b, count)| (b.clone(), count))
+        .collect()
+}
+
+/// [`grid_box`] from the points' bounding box `[min, max]` (not finite: no points).
+pub fn grid_box_of_bounds(min: Vec3, max: Vec3) -> (Vec3, Vec3) {
     if !min.is_finite() || !max.is_finite() {
         return (Vec3::splat(-1.0), Vec3::splat(1.0));
     }
@@ -495,9 +513,89 @@ impl VoxelizePass {
         if points.len() > MAX_POINTS {
             return Err(VoxelizeError::TooManyPoints(points.len()));
         }
-        let dims = UVec3::splat(resolution);
         let (box_min, box_max) =
             grid_box_override.unwrap_or_else(|| grid_box_mapped(points, mapping));
+        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
+            .clamp(1, u64::from(u32::MAX / 5)) as usize;
+        let buffers: Vec<(wgpu::Buffer, u32)> = points
+            .chunks(per_chunk)
+            .enumerate()
+            .map(|(i, slice)| {
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(&format!("voxelize::points_{i}")),
+                    contents: bytemuck::cast_slice(slice),
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+                (buffer, slice.len() as u32)
+            })
+            .collect();
+        self.prepare_job(
+            device,
+            buffers,
+            (box_min, box_max),
+            resolution,
+            smoothing_sigma,
+            mapping,
+        )
+    }
+
+    /// As [`VoxelizePass::prepare`], reading points already on the GPU: `chunks` are storage
+    /// buffers of five f32 a point (the PLY record; each at most one storage binding and fewer
+    /// than `u32::MAX / 5` points) with their point counts, and `bounds` is the points' bounding
+    /// box (`PointCloud::bounds`). Nothing is uploaded: the points view's buffers
+    /// (`PointsGpu::chunk_buffers`) serve, so the cloud is on the device once.
+    pub fn prepare_from_buffers<'a>(
+        &self,
+        device: &wgpu::Device,
+        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
+        let buffers = owned_chunks(chunks);
+        let total: usize = buffers.iter().map(|(_, c)| *c as usize).sum();
+        let (min, max) = if total == 0 {
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY))
+        } else {
+            bounds
+        };
+        let box_ = grid_box_of_bounds(min, max);
+        self.prepare_job(device, buffers, box_, resolution, smoothing_sigma, None)
+    }
+
+    /// As [`VoxelizePass::prepare_from_buffers`], on the frequency axis `mapping` and in the
+    /// grid box `grid_box` (for a remapped axis, [`grid_box_mapped`] of the host's points).
+    pub fn prepare_from_buffers_in_box<'a>(
+        &self,
+        device: &wgpu::Device,
+        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+        grid_box: (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+        mapping: Option<&FreqMapping>,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
+        let buffers = owned_chunks(chunks);
+        self.prepare_job(device, buffers, grid_box, resolution, smoothing_sigma, mapping)
+    }
+
+    fn prepare_job(
+        &self,
+        device: &wgpu::Device,
+        mut buffers: Vec<(wgpu::Buffer, u32)>,
+        (box_min, box_max): (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+        mapping: Option<&FreqMapping>,
+    ) -> Result<VoxelizeJob, VoxelizeError> {
+        Self::check_resolution(device, resolution)?;
+        if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
+            return Err(VoxelizeError::Smoothing(smoothing_sigma));
+        }
+        let point_count: usize = buffers.iter().map(|(_, c)| *c as usize).sum();
+        if point_count > MAX_POINTS {
+            return Err(VoxelizeError::TooManyPoints(point_count));
+        }
+        let dims = UVec3::splat(resolution);
         let per_unit = voxels_per_unit(dims, box_min, box_max);
         let voxels = u64::from(dims.x * dims.y * dims.z);
         let freq = mapping.map_or(FreqParams::IDENTITY, FreqMapping::params);
@@ -529,37 +627,24 @@ impl VoxelizePass {
         let density = storage("voxelize::density_grid", group4_count * 16, copy);
         let hp_mean = storage("voxelize::hp_mean_grid", group4_count * 16, copy);
 
-        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
-            .clamp(1, u64::from(u32::MAX / 5)) as usize;
         // An empty cloud still binds one (zero) point, with a count of 0.
-        let zero = [Point {
-            position: [0.0; 3],
-            scalar: 0.0,
-            hp: 0.0,
-        }];
-        let slices: Vec<&[Point]> = if points.is_empty() {
-            vec![&zero[..0]]
-        } else {
-            points.chunks(per_chunk).collect()
-        };
-        let mut chunks = Vec::new();
-        for (i, slice) in slices.into_iter().enumerate() {
-            let first = (i * per_chunk) as u32;
-            let contents: &[u8] = if slice.is_empty() {
-                bytemuck::cast_slice(&zero)
-            } else {
-                bytemuck::cast_slice(slice)
-            };
-            let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(&format!("voxelize::points_{i}")),
-                contents,
+        if buffers.is_empty() {
+            let zero = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("voxelize::points_empty"),
+                contents: &[0u8; std::mem::size_of::<Point>()],
                 usage: wgpu::BufferUsages::STORAGE,
             });
+            buffers.push((zero, 0));
+        }
+        let mut chunks = Vec::new();
+        // Each chunk's first point's index in the cloud: the frequency jitter's seed.
+        let mut first = 0u32;
+        for (i, (points_buffer, count)) in buffers.into_iter().enumerate() {
             let params = VoxelParams {
                 dims: [dims.x, dims.y, dims.z, 0],
                 box_min: box_min.extend(0.0).into(),
                 voxels_per_unit: per_unit.extend(0.0).into(),
-                counts: [slice.len() as u32, 0, (PERCENTILE * 1e6).round() as u32, 0],
+                counts: [count, 0, (PERCENTILE * 1e6).round() as u32, 0],
                 scales: [
                     FIXED_POINT_SCALE as f32,
                     HISTOGRAM_LOG2_MIN,
@@ -591,8 +676,9 @@ impl VoxelizePass {
                 layout: &self.main_layout,
                 entries: &entries,
             });
+            first += count;
             chunks.push(Chunk {
-                count: slice.len() as u32,
+                count,
                 bind_group,
                 _points: points_buffer,
                 _params: params_buffer,
@@ -664,7 +750,7 @@ impl VoxelizePass {
             dims,
             box_min,
             box_max,
-            point_count: points.len(),
+            point_count,
             chunks,
             loudness_sums,
             hp_sums,
@@ -876,6 +962,54 @@ impl VoxelizePass {
             mapping,
             grid_box_override,
         )?;
+        self.build(device, queue, job)
+    }
+
+    /// As [`VoxelizePass::voxelize`], from points already on the GPU (see
+    /// [`VoxelizePass::prepare_from_buffers`]).
+    pub fn voxelize_buffers<'a>(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        let job = self.prepare_from_buffers(device, chunks, bounds, resolution, smoothing_sigma)?;
+        self.build(device, queue, job)
+    }
+
+    /// As [`VoxelizePass::voxelize_buffers`], on the frequency axis `mapping` in `grid_box`
+    /// (see [`VoxelizePass::prepare_from_buffers_in_box`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn voxelize_buffers_in_box<'a>(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+        grid_box: (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+        mapping: Option<&FreqMapping>,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        let job = self.prepare_from_buffers_in_box(
+            device,
+            chunks,
+            grid_box,
+            resolution,
+            smoothing_sigma,
+            mapping,
+        )?;
+        self.build(device, queue, job)
+    }
+
+    fn build(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        job: VoxelizeJob,
+    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("voxelize::build"),
         });
