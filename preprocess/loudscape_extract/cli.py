@@ -219,8 +219,9 @@ def build_parser() -> argparse.ArgumentParser:
     report = commands.add_parser(
         "report",
         help="plot a timeline's per-year loudness metrics (PNG, optional CSV)",
-        description="Per year: integrated loudness, crest factor (median and 5th-95th "
-        "percentile band over songs), loudness range and hp mean, from a timeline PLY.",
+        description="Per year, from a timeline PLY: integrated loudness with streaming "
+        "targets, PLR, DR, PSR (the songs, their median, a 5th-95th percentile band where a "
+        "year has 5 songs or more), loudness range, hp mean and songs per year.",
     )
     report.add_argument("input", help="timeline PLY written by the timeline command")
     report.add_argument("-o", "--output", default="report.png", help="PNG file to write (.png)")
