@@ -24,6 +24,10 @@ declare -A need=(
   [libsndfile1]=/usr/lib/x86_64-linux-gnu/libsndfile.so.1
   [libusb-1.0-0]=/usr/lib/x86_64-linux-gnu/libusb-1.0.so.0
   [python3-venv]=/usr/lib/python3/dist-packages/venv
+  # The window tests and `make bench-window` drive the real window: xdotool, XTest, DAMAGE.
+  [xdotool]=/usr/bin/xdotool
+  [libxtst6]=/usr/lib/x86_64-linux-gnu/libXtst.so.6
+  [libxdamage1]=/usr/lib/x86_64-linux-gnu/libXdamage.so.1
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then
