@@ -6,9 +6,9 @@
 //! [`markers`], [`volume`] (with [`transfer`]), [`composite`]; [`shaders`] composes the WGSL;
 //! [`colormap`] holds the colour maps and background every pass reads (the palette uniform).
 
-pub mod compare;
 pub mod colormap;
 pub mod colormap_data;
+pub mod compare;
 pub mod composite;
 pub mod gpu;
 pub mod grid;

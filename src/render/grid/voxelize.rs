@@ -575,7 +575,14 @@ impl VoxelizePass {
         mapping: Option<&FreqMapping>,
     ) -> Result<VoxelizeJob, VoxelizeError> {
         let buffers = owned_chunks(chunks);
-        self.prepare_job(device, buffers, grid_box, resolution, smoothing_sigma, mapping)
+        self.prepare_job(
+            device,
+            buffers,
+            grid_box,
+            resolution,
+            smoothing_sigma,
+            mapping,
+        )
     }
 
     fn prepare_job(
