@@ -186,7 +186,10 @@ fn main() -> ExitCode {
                 press: cli.press,
             })
         }),
-        Some(Command::Render(args)) => commands::render::run(*args),
+        Some(Command::Render(args)) => match args.compare.clone() {
+            Some(compare) => commands::render_compare::run_args(*args, &compare),
+            None => commands::render::run(*args),
+        },
         Some(Command::RenderDemo(args)) => commands::render::run_demo(args),
         Some(Command::Voxelize(args)) => commands::voxelize::run(args),
         Some(Command::Mesh(args)) => commands::mesh::run(args),

@@ -240,15 +240,10 @@ fn parse_freq_axis(name: &str) -> anyhow::Result<FreqAxis> {
         .with_context(|| format!("frequency axis '{name}' is not one of linear, log, mel"))
 }
 
+/// `loudscape render` of one cloud (with `--compare`, `render_compare::run_args` runs instead).
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    let mut inputs = vec![args.input.as_path()];
-    inputs.extend(args.compare.as_deref());
-    check_output(&args.output, &["png"], &inputs)?;
+    check_output(&args.output, &["png"], &[args.input.as_path()])?;
     let size = parse_size(&args.size)?;
-    if let Some(compare) = args.compare.as_deref() {
-        let (settings, camera) = compare_settings(&args)?;
-        return super::render_compare::run(&args, compare, settings, camera, size);
-    }
     let view = parse_view(&args.view)?;
     let camera = match &args.camera {
         Some(text) => {
@@ -315,7 +310,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
 
 /// The settings and camera of a compare render: every option but --view, checked as for one
 /// cloud.
-fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Option<Camera>)> {
+pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Option<Camera>)> {
     let camera = match &args.camera {
         Some(text) => {
             let (az, el, dist) = parse_camera(text)?;

@@ -38,7 +38,16 @@ pub fn parse_compare_view(
     }
 }
 
-/// `loudscape render A --compare B ...`, after the common checks of `render::run`.
+/// `loudscape render A --compare B ...`: the output checked against both inputs, then the
+/// common options checked as for one cloud ([`super::render::compare_settings`]).
+pub fn run_args(args: super::render::RenderArgs, compare: &std::path::Path) -> anyhow::Result<()> {
+    super::args::check_output(&args.output, &["png"], &[args.input.as_path(), compare])?;
+    let size = super::args::parse_size(&args.size)?;
+    let (settings, camera) = super::render::compare_settings(&args)?;
+    run(&args, compare, settings, camera, size)
+}
+
+/// `loudscape render A --compare B ...`, after the checks of [`run_args`].
 pub fn run(
     args: &super::render::RenderArgs,
     compare: &std::path::Path,

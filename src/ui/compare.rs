@@ -7,10 +7,7 @@
 //! louder, white at zero, blue where A is), its signed range at the ends and 0 in the middle.
 
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect, Stroke};
-use eframe::egui_wgpu;
 
-use crate::render::gpu::context::GpuContext;
-use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::palette::hp_color_u8;
 
@@ -109,73 +106,6 @@ pub fn paint_title(painter: &egui::Painter, rect: Rect, text: &str) {
         FontId::proportional(15.0),
         TEXT,
     );
-}
-
-/// Runs egui once offscreen with `paint` and draws its shapes over what `target` holds (as
-/// `labels::draw_headless` does for the axis labels alone).
-pub fn draw_headless_overlay(
-    gpu: &GpuContext,
-    target: &RenderTarget,
-    paint: impl FnMut(&egui::Painter, Rect),
-) {
-    let mut paint = paint;
-    let (w, h) = (target.width, target.height);
-    let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32, h as f32));
-    let ctx = egui::Context::default();
-    let input = egui::RawInput {
-        screen_rect: Some(rect),
-        ..Default::default()
-    };
-    let mut output = ctx.run_ui(input, |ui| {
-        paint(ui.painter(), rect);
-    });
-    let shapes = std::mem::take(&mut output.shapes);
-    let primitives = ctx.tessellate(shapes, 1.0);
-    let mut renderer = egui_wgpu::Renderer::new(
-        &gpu.device,
-        COLOR_FORMAT,
-        egui_wgpu::RendererOptions::default(),
-    );
-    for (id, deltas) in &output.textures_delta.set {
-        for delta in deltas {
-            renderer.update_texture(&gpu.device, &gpu.queue, *id, delta);
-        }
-    }
-    output.textures_delta.clear();
-    let screen = egui_wgpu::ScreenDescriptor {
-        size_in_pixels: [w, h],
-        pixels_per_point: 1.0,
-    };
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("compare::overlay"),
-        });
-    let extra =
-        renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
-    {
-        let mut pass = encoder
-            .begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("compare::overlay"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target.color_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            })
-            .forget_lifetime();
-        renderer.render(&mut pass, &primitives, &screen);
-    }
-    gpu.queue
-        .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
 }
 
 #[cfg(test)]

@@ -11,8 +11,9 @@ use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::headless::render_frame;
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use crate::render::volume::{TransferPreset, VolumeSettings};
-use crate::ui::compare::{draw_headless_overlay, paint_diverging_legend, paint_title};
+use crate::ui::compare::{paint_diverging_legend, paint_title};
 use crate::ui::labels;
+use crate::ui::screenshot::paint_headless;
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
 
@@ -95,7 +96,7 @@ fn render_one(
 ) -> anyhow::Result<image::RgbaImage> {
     let target = render_frame(gpu, renderer, Some(data), view, settings);
     let axis_labels = labels::axis_labels(cloud, data);
-    draw_headless_overlay(gpu, &target, |painter, rect| {
+    paint_headless(gpu, &target, |painter, rect| {
         if labels_on {
             labels::paint(painter, rect, view, &axis_labels);
         }

@@ -9,8 +9,6 @@ use glam::Vec3;
 use crate::data::axes::Axis;
 use crate::data::cloud::PointCloud;
 use crate::render::colormap::Background;
-use crate::render::gpu::context::GpuContext;
-use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::SceneData;
 use crate::view::frame_view::FrameView;
 
@@ -231,20 +229,6 @@ pub fn paint_on(
         );
         painter.galley(text_rect.min, galley, color);
     }
-}
-
-/// Draws the labels of `cloud` over what `target` holds, without a window.
-pub fn draw_headless(
-    gpu: &GpuContext,
-    target: &RenderTarget,
-    view: &FrameView,
-    cloud: &PointCloud,
-    data: &SceneData,
-) {
-    let labels = axis_labels(cloud, data);
-    crate::ui::screenshot::paint_headless(gpu, target, |painter, rect| {
-        paint(painter, rect, view, &labels);
-    });
 }
 
 /// Lines describing a cloud for the side panel: where it came from and its loudness metrics.
