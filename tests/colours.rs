@@ -216,8 +216,7 @@ fn volume_pictures_carry_the_density_key() {
     };
     settings.colours.density = DensityColourMap::Viridis;
     let image = demo_picture(&settings, 640, 400);
-    let strip =
-        loudscape::render::transfer::legend(TransferPreset::Classic, &settings.colours, 101);
+    let strip = settings.colours.legend(TransferPreset::Classic, 101);
     for t in [0.1f32, 0.5, 0.9] {
         let [r, g, b, _] = strip[(t * 100.0).round() as usize];
         assert_near(
@@ -400,8 +399,7 @@ fn render_demo_pictures_carry_legends() {
                 hp: HpColourMap::Viridis,
                 ..light()
             };
-            let [r, g, b, _] =
-                loudscape::render::transfer::legend(TransferPreset::Classic, &colours, 101)[90];
+            let [r, g, b, _] = colours.legend(TransferPreset::Classic, 101)[90];
             [r, g, b]
         } else if view == "surface" {
             HpColourMap::Viridis.surface().sample_u8(0.9)

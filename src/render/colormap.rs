@@ -287,6 +287,33 @@ pub struct Colours {
 }
 
 impl Colours {
+    /// `width` colours of the transfer function (`preset` shaped, coloured by `colours`' density
+    /// ramp) from density 0 to 1 as RGBA8, over the background: the colour mixed with the
+    /// background by 0.25 + 0.75 of its opacity, so transparent densities fade toward the
+    /// background as they do in the picture, and still show their hue.
+    pub fn legend(&self, preset: TransferPreset, width: usize) -> Vec<[u8; 4]> {
+        let colours = self;
+        let background = colours.background.rgb();
+        (0..width)
+            .map(|i| {
+                let s = i as f32 / (width.max(2) - 1) as f32;
+                let [r, g, b, a] = colours.transfer(preset, s);
+                let k = 0.25 + 0.75 * a;
+                let mix = |v: f32, bg: f32| {
+                    (((v * k) + bg * (1.0 - k)) * 255.0)
+                        .round()
+                        .clamp(0.0, 255.0) as u8
+                };
+                let bg = if colours.background.is_light() {
+                    background
+                } else {
+                    [0.0; 3]
+                };
+                [mix(r, bg[0]), mix(g, bg[1]), mix(b, bg[2]), 255]
+            })
+            .collect()
+    }
+
     /// The volume's density ramp for `preset`, oriented for the background (reversed on light).
     pub fn density_ramp(&self, preset: TransferPreset) -> Ramp {
         Ramp {
@@ -360,6 +387,14 @@ mod tests {
     /// Values as matplotlib 3.11 gives them for `cmap(i / 255)` (the listed entries i = 0,
     /// 128, 255), spelled here from matplotlib's `_cm_listed.py`, and the hex codes the maps'
     /// authors publish for their ends.
+    #[test]
+    fn a_transfer_legend_has_the_width_asked() {
+        assert_eq!(
+            Colours::default().legend(TransferPreset::Classic, 16).len(),
+            16
+        );
+    }
+
     #[test]
     fn matplotlib_maps_sample_to_their_published_values() {
         let cases: [(&str, Ramp, [[f32; 3]; 3]); 4] = [

@@ -104,42 +104,6 @@ impl TransferPreset {
         let [r, g, b] = ramp(self.stops(), t);
         [r, g, b, alpha]
     }
-
-    /// `width` colours from density 0 to 1 as RGBA8 over black, for a legend strip (opacity
-    /// shown as brightness), with the preset's own ramp on the dark background.
-    pub fn legend(self, width: usize) -> Vec<[u8; 4]> {
-        legend(self, &crate::render::colormap::Colours::default(), width)
-    }
-}
-
-/// `width` colours of the transfer function (`preset` shaped, coloured by `colours`' density
-/// ramp) from density 0 to 1 as RGBA8, over `colours`' background: the colour mixed with the
-/// background by 0.25 + 0.75 of its opacity, so transparent densities fade toward the
-/// background as they do in the picture, and still show their hue.
-pub fn legend(
-    preset: TransferPreset,
-    colours: &crate::render::colormap::Colours,
-    width: usize,
-) -> Vec<[u8; 4]> {
-    let background = colours.background.rgb();
-    (0..width)
-        .map(|i| {
-            let s = i as f32 / (width.max(2) - 1) as f32;
-            let [r, g, b, a] = colours.transfer(preset, s);
-            let k = 0.25 + 0.75 * a;
-            let mix = |v: f32, bg: f32| {
-                (((v * k) + bg * (1.0 - k)) * 255.0)
-                    .round()
-                    .clamp(0.0, 255.0) as u8
-            };
-            let bg = if colours.background.is_light() {
-                background
-            } else {
-                [0.0; 3]
-            };
-            [mix(r, bg[0]), mix(g, bg[1]), mix(b, bg[2]), 255]
-        })
-        .collect()
 }
 
 /// Piecewise-linear ramp through four stops at t = 0, 1/3, 2/3, 1.
@@ -180,6 +144,5 @@ mod tests {
         // Glacial is the steepest at the top.
         assert!(TransferPreset::Glacial.shape(1.0).1 >= TransferPreset::Classic.shape(1.0).1);
         assert_eq!(TransferPreset::parse("ember"), Some(TransferPreset::Ember));
-        assert_eq!(TransferPreset::Classic.legend(16).len(), 16);
     }
 }

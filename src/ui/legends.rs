@@ -67,7 +67,7 @@ pub(super) fn surface(ui: &mut egui::Ui, map: HpColourMap) {
 /// The transfer function's colour over density 0..1, faded toward the background where it is
 /// transparent.
 pub(super) fn transfer(ui: &mut egui::Ui, preset: TransferPreset, colours: &Colours) {
-    let colours = crate::render::transfer::legend(preset, colours, STEPS);
+    let colours = colours.legend(preset, STEPS);
     strip(
         ui,
         |i| {
@@ -247,7 +247,7 @@ pub fn paint_picture(painter: &egui::Painter, rect: egui::Rect, legend: &Picture
             paint_key_text(painter, strip, title, &ends, legend.background);
         }
         Key::Density { preset, colours } => {
-            let colours_at = crate::render::transfer::legend(*preset, colours, STRIP_STEPS);
+            let colours_at = colours.legend(*preset, STRIP_STEPS);
             paint_strip(
                 painter,
                 strip,
