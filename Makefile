@@ -22,8 +22,8 @@ system:
 
 $(VENV)/.installed: preprocess/pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e './preprocess[dev]'
+	$(PY) -m pip install -q --no-cache-dir --upgrade pip
+	$(PY) -m pip install -q --no-cache-dir -e './preprocess[dev]'
 	touch $@
 
 venv: $(VENV)/.installed
