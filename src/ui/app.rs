@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use eframe::egui::{self, Color32};
 use eframe::egui_wgpu;
 
+use crate::render::points::PointStyle;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::ui::audio::AudioPanel;
 use crate::ui::bridge::{ViewCallback, ViewResources};
@@ -29,6 +30,10 @@ const MOVING_FRAME_MS: f32 = 45.0;
 /// How far (in wheel notches) the window's fit steps back from a tight fit of the box, so the
 /// labels outside the box stay in view: 0.9^-1 = 11 % farther.
 const LABEL_MARGIN_STEPS: f32 = 1.0;
+/// The fewest points the Points view draws while moving (fewer no longer show the music's shape).
+const MIN_MOVING_POINTS: u32 = 5_000;
+/// The most it draws while moving, whatever the device's pace.
+const MAX_MOVING_POINTS: u32 = 1 << 30;
 /// The coarsest reduction while moving: one pixel in `MAX_MOVING_DIVISOR` per side.
 const MAX_MOVING_DIVISOR: u32 = 4;
 /// A press shorter than this still counts as a click. egui measures it in frame times, so on a
@@ -138,6 +143,7 @@ impl LoudscapeApp {
             notice: None,
             needs_repaint: false,
             moving_divisor: [1; 3],
+            moving_points: PointStyle::default().max_points_moving,
             slot_cameras: [None, None],
             renders_seen: (0, 0),
             open: crate::ui::open::OpenPanel {
@@ -281,11 +287,16 @@ impl LoudscapeApp {
         // The volume and the surface are drawn while moving too, at a resolution the device can
         // keep up with: the divisor follows the pace of the frames while moving.
         let kind = self.settings.view as usize;
-        if moving && self.settings.view != ViewKind::Points {
+        // The points view draws a subset while moving, as many points as the pace allows.
+        if moving {
             let busy = ui.ctx().requested_repaint_last_pass();
             let dt = ui.ctx().input(|i| i.unstable_dt) * 1000.0;
-            self.moving_divisor[kind] =
-                next_moving_divisor(self.moving_divisor[kind], busy.then_some(dt));
+            if self.settings.view == ViewKind::Points {
+                self.moving_points = next_moving_points(self.moving_points, busy.then_some(dt));
+            } else {
+                self.moving_divisor[kind] =
+                    next_moving_divisor(self.moving_divisor[kind], busy.then_some(dt));
+            }
         }
         if moving {
             ui.ctx().request_repaint();
@@ -326,6 +337,9 @@ impl LoudscapeApp {
         }
         let mut settings = self.settings.clone();
         settings.markers = self.markers();
+        if self.settings.view == ViewKind::Points {
+            settings.points.max_points_moving = self.moving_points;
+        }
         let mut render_view = view;
         if moving && self.settings.view != ViewKind::Points {
             let divisor = self.moving_divisor[kind].max(1);
@@ -580,9 +594,45 @@ pub(super) fn next_moving_divisor(divisor: u32, frame_ms: Option<f32>) -> u32 {
     }
 }
 
+/// The points drawn while moving after a frame that took `frame_ms` (None: says nothing about
+/// the device): fewer when frames are slower than [`MOVING_FRAME_MS`], more when well under it,
+/// never below [`MIN_MOVING_POINTS`]. On a fast device it grows past any cloud's size, so every
+/// point is drawn while moving too.
+pub(super) fn next_moving_points(points: u32, frame_ms: Option<f32>) -> u32 {
+    let next = match frame_ms {
+        Some(ms) if ms > MOVING_FRAME_MS => points as f32 * 0.75,
+        Some(ms) if ms < MOVING_FRAME_MS * 0.6 => points as f32 * 1.25,
+        _ => points as f32,
+    };
+    (next as u32).clamp(MIN_MOVING_POINTS, MAX_MOVING_POINTS)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn moving_points_follow_the_pace_and_stay_in_range() {
+        let mut n = PointStyle::default().max_points_moving;
+        for _ in 0..40 {
+            n = next_moving_points(n, Some(400.0));
+        }
+        assert_eq!(
+            n, MIN_MOVING_POINTS,
+            "slow frames shrink the subset to the floor"
+        );
+        assert_eq!(next_moving_points(n, None), n, "idle frames say nothing");
+        assert_eq!(next_moving_points(n, Some(MOVING_FRAME_MS * 0.8)), n);
+        let mut grown = n;
+        for _ in 0..5 {
+            grown = next_moving_points(grown, Some(5.0));
+        }
+        assert!(grown > 2 * n, "fast frames grow it: {n} -> {grown}");
+        for _ in 0..200 {
+            grown = next_moving_points(grown, Some(5.0));
+        }
+        assert_eq!(grown, MAX_MOVING_POINTS);
+    }
 
     #[test]
     fn moving_divisor_follows_the_pace_and_stays_in_range() {

@@ -69,6 +69,8 @@ pub(super) struct LoudscapeApp {
     pub(super) needs_repaint: bool,
     /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
     pub(super) moving_divisor: [u32; 3],
+    /// Points the Points view draws while moving, following the device's pace.
+    pub(super) moving_points: u32,
     /// The camera each data slot (Song, Timeline) was left with.
     pub(super) slot_cameras: [Option<Camera>; 2],
     /// Scene renders counted by the view and the frame they were last seen to change.
