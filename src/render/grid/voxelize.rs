@@ -14,7 +14,7 @@
 //! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field. The
 //! grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only when the
 //! cloud or the settings change (see `SceneData::ensure_grid`). With a frequency axis
-//! ([`VoxelizePass::voxelize_mapped`], src/data/freq_axis.rs) `accumulate` first remaps each
+//! ([`VoxelizePass::voxelize_with`], src/data/freq_axis.rs) `accumulate` first remaps each
 //! point's z as the points shader does, and the box is that of the remapped points.
 
 use glam::{UVec3, Vec3};
@@ -462,39 +462,6 @@ impl VoxelizePass {
         self.prepare_with(device, points, resolution, smoothing_sigma, None, None)
     }
 
-    /// As [`VoxelizePass::prepare`], with the points' z on the frequency axis `mapping`.
-    pub fn prepare_mapped(
-        &self,
-        device: &wgpu::Device,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
-        mapping: Option<&FreqMapping>,
-    ) -> Result<VoxelizeJob, VoxelizeError> {
-        self.prepare_with(device, points, resolution, smoothing_sigma, mapping, None)
-    }
-
-    /// As [`VoxelizePass::prepare`], in a given grid box (`None`: the cloud's own,
-    /// [`grid_box`]); an A/B compare builds both grids in one box. Points outside it count in
-    /// the nearest border voxel.
-    pub fn prepare_in_box(
-        &self,
-        device: &wgpu::Device,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
-        grid_box_override: Option<(Vec3, Vec3)>,
-    ) -> Result<VoxelizeJob, VoxelizeError> {
-        self.prepare_with(
-            device,
-            points,
-            resolution,
-            smoothing_sigma,
-            None,
-            grid_box_override,
-        )
-    }
-
     /// The general form of [`VoxelizePass::prepare`]: the frequency axis `mapping` and a grid
     /// box (`None`: the mapped cloud's own).
     pub fn prepare_with(
@@ -907,28 +874,8 @@ impl VoxelizePass {
         )
     }
 
-    /// As [`VoxelizePass::voxelize`], with the points' z on the frequency axis `mapping`.
-    pub fn voxelize_mapped(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
-        mapping: Option<&FreqMapping>,
-    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        self.voxelize_with(
-            device,
-            queue,
-            points,
-            resolution,
-            smoothing_sigma,
-            mapping,
-            None,
-        )
-    }
-
-    /// As [`VoxelizePass::voxelize`], in a given grid box (see [`VoxelizePass::prepare_in_box`]).
+    /// As [`VoxelizePass::voxelize`], in a given grid box (`None`: the cloud's own, [`grid_box`]; an A/B compare builds both grids in one box, and
+    /// points outside it count in the nearest border voxel).
     pub fn voxelize_in_box(
         &self,
         device: &wgpu::Device,
