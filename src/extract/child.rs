@@ -4,13 +4,12 @@
 //! to a temporary name beside the cache file, renamed into place only when it succeeded, so a
 //! cancelled or failed run (the child killed, its partial output removed) leaves nothing.
 
-use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc;
 use std::time::Duration;
 
+use super::lines::{LinedChild, Next, last_words};
 use super::{ExtractError, Progress, Settings};
 
 /// One line of the extractor's `--progress json` output.
@@ -103,61 +102,38 @@ pub fn run(
         audio: name.to_owned(),
         reason,
     };
-    let mut child = Command::new(extractor)
-        .arg("song")
-        .arg(audio)
-        .arg("-o")
-        .arg(&partial)
-        .args(settings.arguments())
-        .args(["--progress", "json"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .map_err(|e| failed(format!("cannot start {}: {e}", extractor.display())))?;
-    let stdout = child.stdout.take().expect("stdout is piped");
-    let mut stderr = child.stderr.take().expect("stderr is piped");
-    let (lines_in, lines) = mpsc::channel();
-    let reader = std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if lines_in.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let errors = std::thread::spawn(move || {
-        let mut text = String::new();
-        let _ = stderr.read_to_string(&mut text);
-        text
-    });
+    let child = LinedChild::spawn(
+        Command::new(extractor)
+            .arg("song")
+            .arg(audio)
+            .arg("-o")
+            .arg(&partial)
+            .args(settings.arguments())
+            .args(["--progress", "json"]),
+    )
+    .map_err(|e| failed(format!("cannot start {}: {e}", extractor.display())))?;
     let mut done = false;
     let mut error = None;
     loop {
         if cancel.load(Ordering::Relaxed) {
-            let _ = child.kill();
-            let _ = child.wait();
-            let _ = reader.join();
-            let _ = errors.join();
+            child.kill();
             remove_partial(&partial);
             return Err(ExtractError::Cancelled {
                 audio: name.to_owned(),
             });
         }
-        match lines.recv_timeout(Duration::from_millis(50)) {
-            Ok(line) => match parse_line(&line) {
+        match child.next_line() {
+            Next::Line(line) => match parse_line(&line) {
                 Line::Progress(progress) => on_progress(&progress),
                 Line::Done => done = true,
                 Line::Error(message) => error = Some(message),
                 Line::Other => {}
             },
-            Err(mpsc::RecvTimeoutError::Timeout) => {}
-            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            Next::Waiting => {}
+            Next::Closed => break,
         }
     }
-    let status = child.wait().map_err(|e| failed(e.to_string()))?;
-    let _ = reader.join();
-    let stderr_text = errors.join().unwrap_or_default();
+    let (status, stderr_text) = child.finish().map_err(|e| failed(e.to_string()))?;
     if status.success() && done && partial.is_file() {
         return std::fs::rename(&partial, output).map_err(|e| {
             remove_partial(&partial);
@@ -168,18 +144,9 @@ pub fn run(
         });
     }
     remove_partial(&partial);
-    let reason = error.unwrap_or_else(|| {
-        let last = stderr_text.lines().rev().find(|l| !l.trim().is_empty());
-        match last {
-            Some(line) => line
-                .trim()
-                .trim_start_matches("loudscape-extract: ")
-                .trim_start_matches("error: ")
-                .to_string(),
-            None => format!("it exited with {status} and said nothing"),
-        }
-    });
-    Err(failed(reason))
+    Err(failed(
+        error.unwrap_or_else(|| last_words(&stderr_text, status)),
+    ))
 }
 
 #[cfg(test)]

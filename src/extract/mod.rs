@@ -10,6 +10,7 @@
 
 pub mod cache;
 pub mod child;
+pub mod lines;
 pub mod locate;
 pub mod timeline;
 pub mod version;

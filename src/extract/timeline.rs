@@ -9,16 +9,14 @@
 
 use std::ffi::OsString;
 use std::fmt::Write as _;
-use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc;
-use std::time::Duration;
 
 use sha2::{Digest, Sha256};
 
 use super::Extractor;
+use super::lines::{LinedChild, Next, last_words};
 
 /// A song found for a timeline, with its tags.
 #[derive(Clone, Debug, PartialEq)]
@@ -111,66 +109,29 @@ pub fn run_lines(
     cancel: &AtomicBool,
     on_line: &mut dyn FnMut(Line),
 ) -> Result<(), String> {
-    let mut child = Command::new(extractor)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
+    let child = LinedChild::spawn(Command::new(extractor).args(args))
         .map_err(|e| format!("cannot start {}: {e}", extractor.display()))?;
-    let stdout = child.stdout.take().expect("stdout is piped");
-    let mut stderr = child.stderr.take().expect("stderr is piped");
-    let (lines_in, lines) = mpsc::channel();
-    let reader = std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if lines_in.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let errors = std::thread::spawn(move || {
-        let mut text = String::new();
-        let _ = stderr.read_to_string(&mut text);
-        text
-    });
     let (mut done, mut error) = (false, None);
     loop {
         if cancel.load(Ordering::Relaxed) {
-            let _ = child.kill();
-            let _ = child.wait();
-            let _ = reader.join();
-            let _ = errors.join();
+            child.kill();
             return Err("cancelled".into());
         }
-        match lines.recv_timeout(Duration::from_millis(50)) {
-            Ok(text) => match parse_line(&text) {
+        match child.next_line() {
+            Next::Line(text) => match parse_line(&text) {
                 Line::Done => done = true,
                 Line::Error(message) => error = Some(message),
                 line => on_line(line),
             },
-            Err(mpsc::RecvTimeoutError::Timeout) => {}
-            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            Next::Waiting => {}
+            Next::Closed => break,
         }
     }
-    let status = child.wait().map_err(|e| e.to_string())?;
-    let _ = reader.join();
-    let stderr_text = errors.join().unwrap_or_default();
+    let (status, stderr_text) = child.finish().map_err(|e| e.to_string())?;
     if done && error.is_none() {
         return Ok(());
     }
-    Err(error.unwrap_or_else(|| {
-        stderr_text
-            .lines()
-            .rev()
-            .find(|l| !l.trim().is_empty())
-            .map(|l| {
-                l.trim()
-                    .trim_start_matches("loudscape-extract: ")
-                    .to_string()
-            })
-            .unwrap_or_else(|| format!("it exited with {status} and said nothing"))
-    }))
+    Err(error.unwrap_or_else(|| last_words(&stderr_text, status)))
 }
 
 /// The songs under `inputs` with their tags (`timeline --list-songs`).
