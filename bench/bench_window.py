@@ -452,7 +452,7 @@ def main() -> int:
     parser.add_argument(
         "--iso-slider",
         type=lambda s: tuple(int(v) for v in s.split(",")),
-        default=(40, 75, 268),
+        default=(20, 95, 408),
         help="X0,X1,Y: the isovalue slider's rail in the Surface view (window pixels)",
     )
     parser.add_argument("--no-iso", dest="iso", action="store_false")

@@ -335,6 +335,74 @@ fn buffers_grow_until_the_surface_fits() {
     }
 }
 
+/// The mesh's triangles as sorted records of their corners' position, normal and hp bits, each
+/// rotated to start at its smallest corner (winding kept), independent of vertex order.
+fn triangle_set(mesh: &CpuMesh) -> Vec<[[u32; 7]; 3]> {
+    let corner = |i: u32| {
+        let (p, n) = (mesh.positions[i as usize], mesh.normals[i as usize]);
+        [p.x, p.y, p.z, n.x, n.y, n.z, mesh.hp[i as usize]].map(f32::to_bits)
+    };
+    let mut triangles: Vec<[[u32; 7]; 3]> = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            let mut c = [corner(t[0]), corner(t[1]), corner(t[2])];
+            let first = (0..3).min_by_key(|&k| c[k]).unwrap();
+            c.rotate_left(first);
+            c
+        })
+        .collect();
+    triangles.sort_unstable();
+    triangles
+}
+
+/// The window's worker extracts in slices, one submission per pass, so frames can run between
+/// them; the mesh is the same, vertex for vertex and index for index, as one submission's, for
+/// both methods, also when the buffers must grow (the sphere's area is checked against the
+/// analytic one above, so this is the CPU-reference-checked surface).
+#[test]
+fn sliced_extraction_equals_one_submission() {
+    let gpu = common::gpu();
+    let frame = FrameBinding::new(&gpu.device);
+    for (grid, iso_value) in [
+        (grid_from(&gpu, 64, sphere), 0.5),
+        (grid_from(&gpu, 40, torus), 0.35),
+    ] {
+        for method in [MT, DC] {
+            let settings = SurfaceSettings {
+                method,
+                iso_value,
+                lit: true,
+            };
+            let whole = extract(&gpu, &surface_pass(&gpu), &grid, method, iso_value);
+            assert!(whole.triangle_count() > 100, "{}", method.name());
+            for pass in [
+                surface_pass(&gpu),
+                SurfacePass::with_capacity(&gpu.device, &frame, 64, 96),
+            ] {
+                let surface = ExtractedSurface::new();
+                let (counts, submissions) = pass
+                    .extract_in_slices(&gpu.queue, &surface, &grid, &settings)
+                    .expect("sliced extraction");
+                assert!(counts.fits(), "{counts:?}");
+                // Six passes, six submissions per try (more when the buffers grew).
+                assert!(submissions >= 6, "{submissions} submissions");
+                assert_eq!(submissions % 6, 0, "{submissions} submissions");
+                let sliced = pass.read_mesh(&gpu.queue, &surface).expect("read back");
+                // The active list is filled by atomics, so vertex order differs from run to run:
+                // compare the triangles, each as its corners' data in winding order.
+                assert_eq!(sliced.positions.len(), whole.positions.len());
+                assert_eq!(
+                    triangle_set(&sliced),
+                    triangle_set(&whole),
+                    "{}",
+                    method.name()
+                );
+            }
+        }
+    }
+}
+
 /// The window's path: an isovalue changed on every frame (a dragged slider) never waits for the
 /// GPU, the last mesh stays drawable meanwhile, and once the requests stop the surface shown is
 /// the one of the last isovalue, equal to a blocking extraction of it.

@@ -16,7 +16,7 @@ use std::sync::{Arc, Condvar, Mutex};
 use crate::render::grid::VoxelGrid;
 use crate::render::surface::SurfaceSettings;
 use crate::render::surface::buffers::MeshBuffers;
-use crate::render::surface::pass::{Methods, extract_until_fits};
+use crate::render::surface::methods::{Methods, extract_until_fits};
 use crate::render::surface::state::{CacheKey, Finished, Mailbox, SurfaceState};
 
 /// A queue of work in which a new item replaces a waiting one with the same key (the latest
@@ -145,8 +145,9 @@ pub(crate) fn run_job(device: &wgpu::Device, queue: &wgpu::Queue, methods: &Meth
         buffers: Some(spare.unwrap_or_else(|| MeshBuffers::new(device, v, i))),
         ..Default::default()
     };
+    let mut submissions = 0;
     let result = extract_until_fits(
-        true,
+        Some(&mut submissions),
         device,
         queue,
         methods,

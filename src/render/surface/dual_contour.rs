@@ -21,7 +21,7 @@
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
 use crate::render::surface::buffers::MeshBuffers;
-use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines};
+use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines, Slicer};
 
 /// The dual contouring pipelines, built once.
 pub struct DualContourPass {
@@ -47,7 +47,8 @@ impl DualContourPass {
     }
 
     /// Records the extraction of the surface at `iso_value` into `buffers`; with `timestamps`,
-    /// each pass writes its start and end (see [`ExtractionPipelines::record`]).
+    /// each pass writes its start and end; with `slice`, each pass is a submission of its own (see
+    /// [`ExtractionPipelines::record`]).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -58,6 +59,7 @@ impl DualContourPass {
         buffers: &mut MeshBuffers,
         iso_value: f32,
         timestamps: Option<&wgpu::QuerySet>,
+        slice: Option<&mut Slicer<'_>>,
     ) {
         self.pipelines.record(
             device,
@@ -68,6 +70,7 @@ impl DualContourPass {
             buffers,
             iso_value,
             timestamps,
+            slice,
         );
     }
 }

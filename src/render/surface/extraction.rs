@@ -167,6 +167,7 @@ impl ExtractionPipelines {
         buffers: &mut MeshBuffers,
         iso_value: f32,
         timestamps: Option<&wgpu::QuerySet>,
+        mut slice: Option<&mut Slicer<'_>>,
     ) {
         let label = format!("{}::extract", self.name);
         buffers.write_params(queue, grid, iso_value);
@@ -194,16 +195,59 @@ impl ExtractionPipelines {
             (second, Dispatch::Indirect(&buffers.dispatch)),
             (&self.finalize, Dispatch::Direct([1, 1])),
         ];
-        record_dispatches(encoder, &label, &bind_group, &before, timestamps, 0);
-        encoder.copy_buffer_to_buffer(
-            &buffers.indirect,
-            ACTIVE_DISPATCH_OFFSET,
-            &buffers.dispatch,
-            0,
-            DISPATCH_SIZE,
-        );
-        record_dispatches(encoder, &label, &bind_group, &after, timestamps, 3);
+        let Some(slice) = slice.as_mut() else {
+            record_dispatches(encoder, &label, &bind_group, &before, timestamps, 0);
+            copy_dispatch(encoder, buffers);
+            record_dispatches(encoder, &label, &bind_group, &after, timestamps, 3);
+            return;
+        };
+        // One submission per pass, the same work in the same order (the copy of the dispatch
+        // arguments rides with the pass before it); the caller submits what follows the last.
+        for (i, work) in before.iter().enumerate() {
+            let first = i as u32;
+            record_dispatches(
+                encoder,
+                &label,
+                &bind_group,
+                std::slice::from_ref(work),
+                timestamps,
+                first,
+            );
+            if i + 1 == before.len() {
+                copy_dispatch(encoder, buffers);
+            }
+            slice(encoder);
+        }
+        for (i, work) in after.iter().enumerate() {
+            let first = (before.len() + i) as u32;
+            record_dispatches(
+                encoder,
+                &label,
+                &bind_group,
+                std::slice::from_ref(work),
+                timestamps,
+                first,
+            );
+            if i + 1 < after.len() {
+                slice(encoder);
+            }
+        }
     }
+}
+
+/// Ends a slice of an extraction: submits what `encoder` holds, leaves a fresh encoder in its
+/// place and waits for the GPU (see [`crate::render::surface::methods`]).
+pub(crate) type Slicer<'a> = dyn FnMut(&mut wgpu::CommandEncoder) + 'a;
+
+/// Copies the indirect dispatch over the active cells where the per-active passes read it.
+fn copy_dispatch(encoder: &mut wgpu::CommandEncoder, buffers: &MeshBuffers) {
+    encoder.copy_buffer_to_buffer(
+        &buffers.indirect,
+        ACTIVE_DISPATCH_OFFSET,
+        &buffers.dispatch,
+        0,
+        DISPATCH_SIZE,
+    );
 }
 
 /// Dispatches recorded by an extraction.

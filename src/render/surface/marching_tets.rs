@@ -23,7 +23,7 @@
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
 use crate::render::surface::buffers::MeshBuffers;
-use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines};
+use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines, Slicer};
 use wgpu::util::DeviceExt;
 
 /// The six tetrahedra of a cell as cube-corner indices (bit 0: x, bit 1: y, bit 2: z), each a
@@ -150,7 +150,8 @@ impl MarchingTetsPass {
     }
 
     /// Records the extraction of the surface at `iso_value` into `buffers`; with `timestamps`,
-    /// each pass writes its start and end (see [`ExtractionPipelines::record`]).
+    /// each pass writes its start and end; with `slice`, each pass is a submission of its own (see
+    /// [`ExtractionPipelines::record`]).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -161,13 +162,14 @@ impl MarchingTetsPass {
         buffers: &mut MeshBuffers,
         iso_value: f32,
         timestamps: Option<&wgpu::QuerySet>,
+        slice: Option<&mut Slicer<'_>>,
     ) {
         let cases = [wgpu::BindGroupEntry {
             binding: 10,
             resource: self.cases.as_entire_binding(),
         }];
         self.pipelines.record(
-            device, queue, encoder, &cases, grid, buffers, iso_value, timestamps,
+            device, queue, encoder, &cases, grid, buffers, iso_value, timestamps, slice,
         );
     }
 }

@@ -29,6 +29,7 @@ pub mod draw;
 pub mod dual_contour;
 pub mod extraction;
 pub mod marching_tets;
+pub mod methods;
 pub mod pass;
 pub mod state;
 

@@ -4,41 +4,21 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 
-use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::uniform_entry;
-use crate::render::gpu::readback::{map_buffer, read_buffer};
+use crate::render::gpu::readback::read_buffer;
 use crate::render::gpu::target::COLOR_FORMAT;
 use crate::render::gpu::timing::Timestamps;
 use crate::render::grid::VoxelGrid;
 use crate::render::points::depth_state;
 use crate::render::shaders;
 use crate::render::surface::background::{BackgroundExtractor, Job, share_grid};
-use crate::render::surface::buffers::{
-    COUNTERS_SIZE, INDEXED_ARGS_OFFSET, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
-};
+use crate::render::surface::buffers::{INDEXED_ARGS_OFFSET, MeshVertex};
 use crate::render::surface::cpu_mesh::CpuMesh;
 use crate::render::surface::draw::SurfaceStyle;
-use crate::render::surface::dual_contour::DualContourPass;
-use crate::render::surface::extraction::EXTRACTION_PASSES;
-use crate::render::surface::marching_tets::MarchingTetsPass;
-use crate::render::surface::state::{CacheKey, ExtractedSurface, SurfaceState};
+use crate::render::surface::methods::{Methods, TIMESTAMPS, extract_until_fits};
+use crate::render::surface::state::{CacheKey, ExtractedSurface};
 use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, SurfaceSettings};
-
-/// The pipelines of both extraction methods.
-pub(crate) struct Methods {
-    pub(crate) marching_tets: MarchingTetsPass,
-    pub(crate) dual_contour: DualContourPass,
-}
-
-impl Methods {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
-        Self {
-            marching_tets: MarchingTetsPass::new(device),
-            dual_contour: DualContourPass::new(device),
-        }
-    }
-}
 
 /// Extraction and drawing of the Surface view, built once per device.
 pub struct SurfacePass {
@@ -56,8 +36,6 @@ pub struct SurfacePass {
     /// Per-pass GPU timestamps of blocking extractions (benchmarks), when enabled.
     timing: Option<Timestamps>,
 }
-
-const TIMESTAMPS: u32 = 2 * EXTRACTION_PASSES as u32;
 
 impl SurfacePass {
     /// Initial room: 1 Mi vertices (32 MiB) and 3 Mi indices; buffers grow as surfaces need.
@@ -251,7 +229,7 @@ impl SurfacePass {
         let mut state = surface.lock();
         state.requested = None;
         extract_until_fits(
-            false,
+            None,
             &self.device,
             queue,
             self.methods(),
@@ -261,6 +239,34 @@ impl SurfacePass {
             grid,
             settings,
         )
+    }
+
+    /// As [`SurfacePass::extract_blocking`], but the way the window's worker thread extracts:
+    /// one submission per pass, each waited for by polling, so other submissions to the queue
+    /// run between them. Returns the counts and how many submissions it took (tests compare
+    /// the mesh with [`SurfacePass::extract_blocking`]'s).
+    pub fn extract_in_slices(
+        &self,
+        queue: &wgpu::Queue,
+        surface: &ExtractedSurface,
+        grid: &VoxelGrid,
+        settings: &SurfaceSettings,
+    ) -> Result<(SurfaceCounts, usize), SurfaceError> {
+        let mut state = surface.lock();
+        state.requested = None;
+        let mut submissions = 0;
+        let counts = extract_until_fits(
+            Some(&mut submissions),
+            &self.device,
+            queue,
+            self.methods(),
+            self.initial_capacity,
+            None,
+            &mut state,
+            grid,
+            settings,
+        )?;
+        Ok((counts, submissions))
     }
 
     /// Reads the last extracted surface back to the CPU (waits for the GPU).
@@ -318,170 +324,5 @@ impl SurfacePass {
         pass.set_vertex_buffer(0, buffers.vertices.slice(..));
         pass.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed_indirect(&buffers.indirect, INDEXED_ARGS_OFFSET);
-    }
-}
-
-/// The largest number of `element_size`-byte elements one buffer binding may hold.
-fn element_limit(device: &wgpu::Device, element_size: u64) -> u64 {
-    (storage_binding_limit(device) / element_size).min(u64::from(u32::MAX))
-}
-
-/// Grows the buffers to hold `counts`; an error when the device cannot.
-fn grow(
-    device: &wgpu::Device,
-    state: &mut SurfaceState,
-    counts: &SurfaceCounts,
-) -> Result<(), SurfaceError> {
-    let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64, max: u64| {
-        if needed <= capacity {
-            return Ok(capacity);
-        }
-        let limit = element_limit(device, size).min(max);
-        let wanted = u64::from(needed).next_power_of_two().min(limit);
-        if wanted < u64::from(needed) {
-            return Err(SurfaceError::TooLarge {
-                what,
-                needed: u64::from(needed),
-                limit,
-            });
-        }
-        Ok(wanted as u32)
-    };
-    // Marching tetrahedra's cell map cannot address more vertices.
-    let max_vertices = match counts.method {
-        SurfaceMethod::MarchingTetrahedra => MAX_MAPPED_VERTICES,
-        SurfaceMethod::DualContouring => u64::MAX,
-    };
-    let vertices = grow_to(
-        counts.vertices_needed,
-        counts.vertex_capacity,
-        "vertices",
-        std::mem::size_of::<MeshVertex>() as u64,
-        max_vertices,
-    )?;
-    let indices = grow_to(
-        counts.indices_needed,
-        counts.index_capacity,
-        "indices",
-        4,
-        u64::MAX,
-    )?;
-    log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
-    state.buffers = Some(MeshBuffers::new(device, vertices, indices));
-    state.key = None;
-    Ok(())
-}
-
-/// Maps a MAP_READ buffer by polling the device without blocking it, a millisecond apart. A
-/// blocking poll holds the device's fence while it waits, so every `queue.submit` of the
-/// window's frames (which needs that fence) would wait for the whole extraction.
-fn map_polling(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, SurfaceError> {
-    use std::sync::Arc;
-    use std::sync::atomic::{AtomicU8, Ordering};
-    let state = Arc::new(AtomicU8::new(0));
-    let callback_state = state.clone();
-    let slice = buffer.slice(..);
-    slice.map_async(wgpu::MapMode::Read, move |result| {
-        callback_state.store(if result.is_ok() { 1 } else { 2 }, Ordering::Release);
-    });
-    loop {
-        device
-            .poll(wgpu::PollType::Poll)
-            .map_err(|e| SurfaceError::Readback(e.to_string()))?;
-        match state.load(Ordering::Acquire) {
-            0 => std::thread::sleep(std::time::Duration::from_millis(1)),
-            1 => break,
-            _ => return Err(SurfaceError::Readback("mapping the counters failed".into())),
-        }
-    }
-    let bytes = slice
-        .get_mapped_range()
-        .map_err(|e| SurfaceError::Readback(e.to_string()))?
-        .to_vec();
-    buffer.unmap();
-    Ok(bytes)
-}
-
-/// Extracts the surface into `state`'s buffers and waits for its size, growing the buffers and
-/// extracting again until it fits (or cannot fit: then the error, with the counts kept).
-/// `background`: waits by polling (see [`map_polling`]), so other threads can submit meanwhile.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn extract_until_fits(
-    background: bool,
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    methods: &Methods,
-    initial_capacity: (u32, u32),
-    timing: Option<&Timestamps>,
-    state: &mut SurfaceState,
-    grid: &VoxelGrid,
-    settings: &SurfaceSettings,
-) -> Result<SurfaceCounts, SurfaceError> {
-    loop {
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("surface::extract"),
-        });
-        let (v, i) = initial_capacity;
-        let buffers = state
-            .buffers
-            .get_or_insert_with(|| MeshBuffers::new(device, v, i));
-        let timestamps = timing.map(|t| &t.set);
-        match settings.method {
-            SurfaceMethod::MarchingTetrahedra => methods.marching_tets.record(
-                device,
-                queue,
-                &mut encoder,
-                grid,
-                buffers,
-                settings.iso_value,
-                timestamps,
-            ),
-            SurfaceMethod::DualContouring => methods.dual_contour.record(
-                device,
-                queue,
-                &mut encoder,
-                grid,
-                buffers,
-                settings.iso_value,
-                timestamps,
-            ),
-        }
-        state.key = Some(CacheKey::new(grid, settings));
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("surface::counters_readback"),
-            size: COUNTERS_SIZE,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
-        if let Some(timing) = timing {
-            timing.resolve(&mut encoder, TIMESTAMPS);
-        }
-        let (vertex_capacity, index_capacity) = (buffers.vertex_capacity, buffers.index_capacity);
-        queue.submit([encoder.finish()]);
-        let bytes = if background {
-            map_polling(device, &staging)?
-        } else {
-            map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?
-        };
-        let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
-        let counts = SurfaceCounts {
-            method: settings.method,
-            vertices_needed: raw[0],
-            indices_needed: raw[1],
-            vertex_capacity,
-            index_capacity,
-        };
-        state.counts = Some(counts);
-        if counts.fits() {
-            state.error = None;
-            return Ok(counts);
-        }
-        if let Err(e) = grow(device, state, &counts) {
-            // The truncated surface stays drawable, with the reason beside it.
-            state.key = Some(CacheKey::new(grid, settings));
-            state.error = Some(e.to_string());
-            return Err(e);
-        }
     }
 }

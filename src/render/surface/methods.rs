@@ -1,0 +1,251 @@
+//! The extraction itself, shared by the blocking path ([`SurfacePass`]) and the window's
+//! worker thread ([`background`]): both methods' pipelines ([`Methods`]) and
+//! [`extract_until_fits`], which extracts, reads the counters back and grows the buffers until
+//! the surface fits. On the worker the extraction goes to the GPU in slices, one submission per
+//! pass, each waited for by polling, so the window's frame submissions (lavapipe has one queue)
+//! slip in between instead of waiting for the whole extraction.
+//!
+//! [`SurfacePass`]: crate::render::surface::pass::SurfacePass
+//! [`background`]: crate::render::surface::background
+
+use crate::render::gpu::context::storage_binding_limit;
+use crate::render::gpu::readback::map_buffer;
+use crate::render::gpu::timing::Timestamps;
+use crate::render::grid::VoxelGrid;
+use crate::render::surface::buffers::{
+    COUNTERS_SIZE, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
+};
+use crate::render::surface::dual_contour::DualContourPass;
+use crate::render::surface::extraction::{EXTRACTION_PASSES, Slicer};
+use crate::render::surface::marching_tets::MarchingTetsPass;
+use crate::render::surface::state::{CacheKey, SurfaceState};
+use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, SurfaceSettings};
+
+/// Timestamps of a timed extraction: a start and an end per pass.
+pub(crate) const TIMESTAMPS: u32 = 2 * EXTRACTION_PASSES as u32;
+
+/// The pipelines of both extraction methods.
+pub(crate) struct Methods {
+    pub(crate) marching_tets: MarchingTetsPass,
+    pub(crate) dual_contour: DualContourPass,
+}
+
+impl Methods {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        Self {
+            marching_tets: MarchingTetsPass::new(device),
+            dual_contour: DualContourPass::new(device),
+        }
+    }
+}
+
+/// The largest number of `element_size`-byte elements one buffer binding may hold.
+fn element_limit(device: &wgpu::Device, element_size: u64) -> u64 {
+    (storage_binding_limit(device) / element_size).min(u64::from(u32::MAX))
+}
+
+/// Grows the buffers to hold `counts`; an error when the device cannot.
+fn grow(
+    device: &wgpu::Device,
+    state: &mut SurfaceState,
+    counts: &SurfaceCounts,
+) -> Result<(), SurfaceError> {
+    let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64, max: u64| {
+        if needed <= capacity {
+            return Ok(capacity);
+        }
+        let limit = element_limit(device, size).min(max);
+        let wanted = u64::from(needed).next_power_of_two().min(limit);
+        if wanted < u64::from(needed) {
+            return Err(SurfaceError::TooLarge {
+                what,
+                needed: u64::from(needed),
+                limit,
+            });
+        }
+        Ok(wanted as u32)
+    };
+    // Marching tetrahedra's cell map cannot address more vertices.
+    let max_vertices = match counts.method {
+        SurfaceMethod::MarchingTetrahedra => MAX_MAPPED_VERTICES,
+        SurfaceMethod::DualContouring => u64::MAX,
+    };
+    let vertices = grow_to(
+        counts.vertices_needed,
+        counts.vertex_capacity,
+        "vertices",
+        std::mem::size_of::<MeshVertex>() as u64,
+        max_vertices,
+    )?;
+    let indices = grow_to(
+        counts.indices_needed,
+        counts.index_capacity,
+        "indices",
+        4,
+        u64::MAX,
+    )?;
+    log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
+    state.buffers = Some(MeshBuffers::new(device, vertices, indices));
+    state.key = None;
+    Ok(())
+}
+
+/// Maps a MAP_READ buffer by polling the device without blocking it, a millisecond apart. A
+/// blocking poll holds the device's fence while it waits, so every `queue.submit` of the
+/// window's frames (which needs that fence) would wait for the whole extraction.
+fn map_polling(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, SurfaceError> {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU8, Ordering};
+    let state = Arc::new(AtomicU8::new(0));
+    let callback_state = state.clone();
+    let slice = buffer.slice(..);
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        callback_state.store(if result.is_ok() { 1 } else { 2 }, Ordering::Release);
+    });
+    loop {
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| SurfaceError::Readback(e.to_string()))?;
+        match state.load(Ordering::Acquire) {
+            0 => std::thread::sleep(std::time::Duration::from_millis(1)),
+            1 => break,
+            _ => return Err(SurfaceError::Readback("mapping the counters failed".into())),
+        }
+    }
+    let bytes = slice
+        .get_mapped_range()
+        .map_err(|e| SurfaceError::Readback(e.to_string()))?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}
+
+/// Waits for the work submitted so far by polling the device without blocking it (see
+/// [`map_polling`]).
+fn wait_polling(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), SurfaceError> {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let done = Arc::new(AtomicBool::new(false));
+    let callback_done = done.clone();
+    queue.on_submitted_work_done(move || callback_done.store(true, Ordering::Release));
+    loop {
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| SurfaceError::Readback(e.to_string()))?;
+        if done.load(Ordering::Acquire) {
+            return Ok(());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+}
+
+/// Extracts the surface into `state`'s buffers and waits for its size, growing the buffers and
+/// extracting again until it fits (or cannot fit: then the error, with the counts kept).
+/// `slices` (the window's worker): submits each pass on its own and waits for it by polling (see
+/// [`map_polling`]), so other threads' submissions run between them; counts the submissions
+/// there. The result is the same as in one submission.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn extract_until_fits(
+    mut slices: Option<&mut usize>,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    methods: &Methods,
+    initial_capacity: (u32, u32),
+    timing: Option<&Timestamps>,
+    state: &mut SurfaceState,
+    grid: &VoxelGrid,
+    settings: &SurfaceSettings,
+) -> Result<SurfaceCounts, SurfaceError> {
+    loop {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("surface::extract"),
+        });
+        let (v, i) = initial_capacity;
+        let buffers = state
+            .buffers
+            .get_or_insert_with(|| MeshBuffers::new(device, v, i));
+        let timestamps = timing.map(|t| &t.set);
+        let mut slice_error = None;
+        let mut sliced = 0usize;
+        let mut submit_slice = |encoder: &mut wgpu::CommandEncoder| {
+            let done = std::mem::replace(
+                encoder,
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("surface::extract"),
+                }),
+            );
+            queue.submit([done.finish()]);
+            sliced += 1;
+            if slice_error.is_none() {
+                slice_error = wait_polling(device, queue).err();
+            }
+        };
+        let slicer: Option<&mut Slicer<'_>> = match slices {
+            Some(_) => Some(&mut submit_slice),
+            None => None,
+        };
+        match settings.method {
+            SurfaceMethod::MarchingTetrahedra => methods.marching_tets.record(
+                device,
+                queue,
+                &mut encoder,
+                grid,
+                buffers,
+                settings.iso_value,
+                timestamps,
+                slicer,
+            ),
+            SurfaceMethod::DualContouring => methods.dual_contour.record(
+                device,
+                queue,
+                &mut encoder,
+                grid,
+                buffers,
+                settings.iso_value,
+                timestamps,
+                slicer,
+            ),
+        }
+        state.key = Some(CacheKey::new(grid, settings));
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("surface::counters_readback"),
+            size: COUNTERS_SIZE,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        encoder.copy_buffer_to_buffer(&buffers.counters, 0, &staging, 0, COUNTERS_SIZE);
+        if let Some(timing) = timing {
+            timing.resolve(&mut encoder, TIMESTAMPS);
+        }
+        let (vertex_capacity, index_capacity) = (buffers.vertex_capacity, buffers.index_capacity);
+        queue.submit([encoder.finish()]);
+        if let Some(e) = slice_error {
+            return Err(e);
+        }
+        let bytes = if let Some(count) = slices.as_deref_mut() {
+            *count += sliced + 1;
+            map_polling(device, &staging)?
+        } else {
+            map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?
+        };
+        let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
+        let counts = SurfaceCounts {
+            method: settings.method,
+            vertices_needed: raw[0],
+            indices_needed: raw[1],
+            vertex_capacity,
+            index_capacity,
+        };
+        state.counts = Some(counts);
+        if counts.fits() {
+            state.error = None;
+            return Ok(counts);
+        }
+        if let Err(e) = grow(device, state, &counts) {
+            // The truncated surface stays drawable, with the reason beside it.
+            state.key = Some(CacheKey::new(grid, settings));
+            state.error = Some(e.to_string());
+            return Err(e);
+        }
+    }
+}
