@@ -23,7 +23,7 @@ pub const INITIAL_BUDGET: u64 = 100_000;
 pub const TARGET_FRAME: Duration = Duration::from_millis(30);
 /// The budget never falls below the measured one: a frame slow for other reasons (egui, the
 /// composite, a loaded machine) must not shrink the slices to nothing (with a 20,000 floor a
-/// 4.4 M-point cloud took ~17 s to fill in on lavapipe, most of each frame not the points).
+/// 4.4 M-point cloud needed about 20 s to fill in on lavapipe, most of each frame not points).
 pub const MIN_BUDGET: u64 = INITIAL_BUDGET;
 /// Gaps longer than this between two refining frames are not a frame's time (the window was
 /// hidden or waited for input): they do not adapt the budget.
