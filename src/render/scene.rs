@@ -474,12 +474,16 @@ impl Renderer {
     ) {
         let first = range.start == 0;
         let last = range.end >= data.points.total;
-        if first {
-            self.frame.write(queue, view);
-            self.markers.prepare(queue, &settings.markers);
-            self.points
-                .prepare(queue, &data.points, &settings.points, false);
-        }
+        // Every slice, not only the first: between two frames' slices another render (a
+        // screenshot, a moving frame) may have written these uniforms. They are small.
+        self.frame.write(queue, view);
+        self.frame.write_palette(
+            queue,
+            &PaletteUniforms::new(&settings.colours, settings.volume.preset),
+        );
+        self.markers.prepare(queue, &settings.markers);
+        self.points
+            .prepare(queue, &data.points, &settings.points, false);
         let mut pass = begin_main_pass(
             encoder,
             target,
@@ -495,6 +499,38 @@ impl Renderer {
             self.markers
                 .draw(&mut pass, &self.frame, settings.markers.len());
         }
+    }
+
+    /// The box and the markers of `settings` over what `target` holds (points drawn slice by
+    /// slice, copied in): the last step of a progressive frame, redrawn alone when only the
+    /// markers (the playhead) change.
+    pub fn render_overlay(
+        &self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &RenderTarget,
+        data: &SceneData,
+        view: &FrameView,
+        settings: &RenderSettings,
+    ) {
+        self.frame.write(queue, view);
+        self.markers.prepare(queue, &settings.markers);
+        let mut pass = begin_main_pass(encoder, target, None);
+        if settings.show_box {
+            self.lines.draw(&mut pass, &self.frame, &data.box_lines);
+        }
+        self.markers
+            .draw(&mut pass, &self.frame, settings.markers.len());
+    }
+}
+
+/// Whether [`Renderer::render`] draws `data`'s points (not a surface or a volume) at rest with
+/// `settings`: the frames a progressive points render can stand for.
+pub fn draws_points_at_rest(settings: &RenderSettings, data: &SceneData) -> bool {
+    match settings.view {
+        ViewKind::Points => true,
+        ViewKind::Surface => data.grid.is_none(),
+        ViewKind::Volume => data.volume.is_none(),
     }
 }
 

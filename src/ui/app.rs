@@ -136,6 +136,7 @@ impl LoudscapeApp {
             surface_error: None,
             surface_empty: false,
             surface_busy: false,
+            refining: None,
             iso_sweep,
             camera_fitted: false,
             busy: None,
@@ -374,6 +375,9 @@ impl LoudscapeApp {
             }
             if self.surface_busy {
                 busy_badge(&painter, rect, "extracting surface…");
+            } else if let Some(done) = self.refining {
+                let percent = (done * 100.0).floor();
+                busy_badge(&painter, rect, &format!("refining points… {percent:.0} %"));
             }
         } else {
             let text = if self.loading.is_empty() {
@@ -444,6 +448,13 @@ impl eframe::App for LoudscapeApp {
         if self.surface_busy {
             // Come back for the finished surface; the frames in between only composite.
             ctx.request_repaint_after(Duration::from_millis(30));
+        }
+        self.refining = frame
+            .wgpu_render_state()
+            .and_then(|render_state| ViewResources::refining(render_state, &ctx));
+        if self.refining.is_some() {
+            // The next slice of the points (ui/progressive.rs).
+            ctx.request_repaint();
         }
         if std::mem::take(&mut self.needs_repaint) {
             ctx.request_repaint();

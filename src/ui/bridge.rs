@@ -28,6 +28,10 @@ pub struct ViewResources {
     pub scenes: HashMap<u64, SceneData>,
     /// What the target holds, to skip frames that would render the same scene again.
     pub cache: FrameCache,
+    /// Large clouds at rest: drawn a slice a frame (`ui/progressive.rs`).
+    pub progressive: crate::ui::progressive::ProgressivePoints,
+    /// To ask for the next frame from `prepare` while the points fill in.
+    repaint: Option<egui::Context>,
 }
 
 /// Everything a render of the scene depends on. Two frames with equal keys draw the same image
@@ -107,6 +111,8 @@ impl ViewResources {
             target: None,
             scenes: HashMap::new(),
             cache: FrameCache::default(),
+            progressive: Default::default(),
+            repaint: None,
         };
         render_state
             .renderer
@@ -274,6 +280,15 @@ impl ViewResources {
         }
     }
 
+    /// The fraction of the points drawn while a progressive render is under way.
+    /// `ctx` is kept to ask for the next frame when a refinement starts in a frame's paint.
+    pub fn refining(render_state: &egui_wgpu::RenderState, ctx: &egui::Context) -> Option<f32> {
+        let mut renderer = render_state.renderer.write();
+        let resources = renderer.callback_resources.get_mut::<ViewResources>()?;
+        resources.repaint.get_or_insert_with(|| ctx.clone());
+        resources.progressive.refine.progress()
+    }
+
     /// Scene renders so far (for the frame read-out and the tests).
     pub fn renders(render_state: &egui_wgpu::RenderState) -> u64 {
         let renderer = render_state.renderer.read();
@@ -330,6 +345,30 @@ impl CallbackTrait for ViewCallback {
             return Vec::new();
         };
         let data = self.cloud_id.and_then(|id| res.scenes.get(&id));
+        // At rest, a cloud larger than a frame's budget is drawn a slice a frame; the window
+        // asks for the next frame while `ViewResources::refining` says so.
+        if let Some(data) = data
+            && !self.view.moving
+            && crate::render::scene::draws_points_at_rest(&self.settings, data)
+            && res.progressive.refine.wants(data.points.total)
+        {
+            let complete = res.progressive.frame(
+                device,
+                queue,
+                encoder,
+                &res.renderer,
+                target,
+                data,
+                &key,
+                &self.view,
+                &self.settings,
+            );
+            res.cache.finish(key, complete);
+            if !complete && let Some(ctx) = &res.repaint {
+                ctx.request_repaint();
+            }
+            return Vec::new();
+        }
         res.renderer
             .render(queue, encoder, target, data, &self.view, &self.settings);
         // Complete even while a surface is extracted in the background: the last mesh is what

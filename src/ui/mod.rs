@@ -23,6 +23,7 @@ pub mod legends;
 mod open;
 mod panels;
 mod persistence;
+pub mod progressive;
 mod recent;
 pub mod screenshot;
 mod shortcuts;

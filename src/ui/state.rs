@@ -61,6 +61,8 @@ pub(super) struct LoudscapeApp {
     pub(super) surface_empty: bool,
     /// A surface is being extracted in the background (the last one is shown meanwhile).
     pub(super) surface_busy: bool,
+    /// Progressive points: the fraction drawn while the view fills in (`ui/progressive.rs`).
+    pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
     pub(super) iso_sweep: Option<crate::ui::iso_sweep::IsoSweep>,
     /// A line of news that is not an error (where a screenshot went), in the normal colour.

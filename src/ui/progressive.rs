@@ -1,0 +1,308 @@
+//! Progressive points in the window: at rest, a cloud too large to draw in one frame is drawn a
+//! slice a frame (`Renderer::render_points_slice`) into a target of its own, and every frame
+//! copies what that target holds into the view's target and draws the box and the markers over
+//! it (`Renderer::render_overlay`). So the window never stalls for a whole cloud, the picture
+//! fills in over a few frames, and a playhead moving during playback only redraws the markers:
+//! it neither restarts the refinement nor, once complete, redraws a point.
+//!
+//! [`Refine`] is the scheduler (no GPU): which slice a frame draws, when to start over, and the
+//! per-frame point budget, adapted from the measured time between refining frames.
+
+use std::ops::Range;
+use std::time::{Duration, Instant};
+
+use crate::render::gpu::target::RenderTarget;
+use crate::render::scene::{Renderer, SceneData};
+use crate::ui::bridge::RenderKey;
+use crate::view::frame_view::FrameView;
+
+/// Points drawn in the first slice before any measurement: about what lavapipe draws in 30 ms
+/// at 1280x720 (5.3 M points in ~1.5 s, one submission, docs/PERFORMANCE.md).
+pub const INITIAL_BUDGET: u64 = 100_000;
+/// The frame time a slice aims at while refining (the window answers within it).
+pub const TARGET_FRAME: Duration = Duration::from_millis(30);
+/// The budget never falls below the measured one: a frame slow for other reasons (egui, the
+/// composite, a loaded machine) must not shrink the slices to nothing (with a 20,000 floor a
+/// 4.4 M-point cloud needed about 20 s to fill in on lavapipe, most of each frame not points).
+pub const MIN_BUDGET: u64 = INITIAL_BUDGET;
+/// Gaps longer than this between two refining frames are not a frame's time (the window was
+/// hidden or waited for input): they do not adapt the budget.
+const MAX_MEASURED: Duration = Duration::from_millis(500);
+
+/// The slice scheduler of one view.
+#[derive(Debug)]
+pub struct Refine {
+    /// The scene the points target holds or is filling: the render key without what the
+    /// overlay draws (markers, box), so that a playhead change keeps the slices drawn.
+    key: Option<RenderKey>,
+    /// Points of the cloud drawn so far into the points target.
+    next: u64,
+    total: u64,
+    /// Points per slice (adapted).
+    pub budget: u64,
+    /// When the last slice was recorded, to measure the frame time.
+    last_slice: Option<Instant>,
+}
+
+impl Default for Refine {
+    fn default() -> Self {
+        Self {
+            key: None,
+            next: 0,
+            total: 0,
+            budget: INITIAL_BUDGET,
+            last_slice: None,
+        }
+    }
+}
+
+/// The part of `key` the points depend on: markers and the box are drawn over them.
+pub fn points_key(key: &RenderKey) -> RenderKey {
+    let mut key = key.clone();
+    key.settings.markers.clear();
+    key.settings.show_box = false;
+    key
+}
+
+impl Refine {
+    /// Whether a frame at rest showing `total` points goes the progressive way: the cloud is
+    /// larger than one frame's budget, or a refinement of it is under way.
+    pub fn wants(&self, total: u64) -> bool {
+        total > self.budget || (self.key.is_some() && self.total == total && !self.complete())
+    }
+
+    /// The slice a frame of `key` (at rest, `total` points) draws into the points target now,
+    /// or `None` when the target already holds all of them. A key whose points differ from
+    /// the target's (camera, size, style, cloud, GPU data) starts over from point 0; one that
+    /// differs only in markers or the box continues. `now` is the frame's time.
+    pub fn step(&mut self, key: &RenderKey, total: u64, now: Instant) -> Option<Range<u64>> {
+        let points = points_key(key);
+        if self.key.as_ref() != Some(&points) || self.total != total {
+            self.key = Some(points);
+            self.next = 0;
+            self.total = total;
+            self.last_slice = None;
+        } else if self.complete() {
+            return None;
+        } else if let Some(last) = self.last_slice {
+            self.adapt(now.saturating_duration_since(last));
+        }
+        let range = self.next..(self.next + self.budget).min(total);
+        self.next = range.end;
+        self.last_slice = (!self.complete()).then_some(now);
+        Some(range)
+    }
+
+    /// Scales the budget towards [`TARGET_FRAME`] from one measured frame (at most halving or
+    /// doubling it a frame, so one odd frame does not swing it).
+    fn adapt(&mut self, frame: Duration) {
+        if frame.is_zero() || frame > MAX_MEASURED {
+            return;
+        }
+        let scale = (TARGET_FRAME.as_secs_f64() / frame.as_secs_f64()).clamp(0.5, 2.0);
+        self.budget = ((self.budget as f64 * scale) as u64).max(MIN_BUDGET);
+    }
+
+    /// All points of the current key are in the points target.
+    pub fn complete(&self) -> bool {
+        self.next >= self.total
+    }
+
+    /// The fraction drawn while a refinement is under way; `None` when complete or idle.
+    pub fn progress(&self) -> Option<f32> {
+        (self.key.is_some() && !self.complete() && self.total > 0)
+            .then(|| self.next as f32 / self.total as f32)
+    }
+
+    /// Forgets the points target (resized, or shown something else in between).
+    pub fn reset(&mut self) {
+        self.key = None;
+        self.next = 0;
+        self.total = 0;
+        self.last_slice = None;
+    }
+}
+
+/// The GPU side: the points target and its scheduler.
+#[derive(Default)]
+pub struct ProgressivePoints {
+    target: Option<RenderTarget>,
+    pub refine: Refine,
+}
+
+impl ProgressivePoints {
+    /// Records one progressive frame of `key` into `target`: the next slice (if any) into the
+    /// points target, then its copy and the overlay into `target`. Returns whether the picture
+    /// is complete (false: draw again next frame).
+    #[allow(clippy::too_many_arguments)]
+    pub fn frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        renderer: &Renderer,
+        target: &RenderTarget,
+        data: &SceneData,
+        key: &RenderKey,
+        view: &FrameView,
+        settings: &crate::render::scene::RenderSettings,
+    ) -> bool {
+        let (w, h) = (target.width, target.height);
+        if !self.target.as_ref().is_some_and(|t| t.has_size(w, h)) {
+            self.target = Some(RenderTarget::new(device, w, h));
+            self.refine.reset();
+        }
+        let Some(points) = self.target.as_ref() else {
+            return true;
+        };
+        if let Some(range) = self.refine.step(key, data.points.total, Instant::now()) {
+            // Only points go into the points target; the overlay is drawn into the view's.
+            let mut bare = settings.clone();
+            bare.markers.clear();
+            bare.show_box = false;
+            renderer.render_points_slice(queue, encoder, points, data, view, &bare, range);
+        }
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        for (from, to) in [
+            (&points.color, &target.color),
+            (&points.depth, &target.depth),
+        ] {
+            encoder.copy_texture_to_texture(from.as_image_copy(), to.as_image_copy(), size);
+        }
+        renderer.render_overlay(queue, encoder, target, data, view, settings);
+        self.refine.complete()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::markers::MarkerBox;
+    use crate::render::scene::RenderSettings;
+    use crate::view::camera::Camera;
+
+    fn key(settings: &RenderSettings) -> RenderKey {
+        let view = FrameView::at_rest(Camera::default(), glam::Mat4::IDENTITY, 640, 400);
+        RenderKey::new(&view, settings, Some(1), 0)
+    }
+
+    /// Runs frames of `key` until complete; returns the ranges drawn.
+    fn run(refine: &mut Refine, key: &RenderKey, total: u64, t: &mut Instant) -> Vec<Range<u64>> {
+        let mut ranges = Vec::new();
+        while let Some(r) = refine.step(key, total, *t) {
+            ranges.push(r);
+            *t += TARGET_FRAME;
+            assert!(ranges.len() < 1000, "never completes");
+        }
+        ranges
+    }
+
+    #[test]
+    fn completes_after_total_over_budget_frames_covering_every_point_once() {
+        let mut refine = Refine::default();
+        let mut t = Instant::now();
+        let total = 1_050_000;
+        let k = key(&RenderSettings::default());
+        assert!(refine.wants(total));
+        assert!(
+            !refine.wants(INITIAL_BUDGET),
+            "a cloud within the budget renders at once"
+        );
+        // Frames exactly on target: the budget stays, so 11 slices of 100,000 (the last 50,000).
+        let ranges = run(&mut refine, &k, total, &mut t);
+        assert_eq!(ranges.len(), 11);
+        assert_eq!(ranges[0].start, 0);
+        assert!(ranges.windows(2).all(|w| w[0].end == w[1].start));
+        assert_eq!(ranges.last().unwrap().end, total);
+        assert!(refine.complete());
+        assert_eq!(refine.progress(), None);
+        // Complete: the same key draws nothing more.
+        assert_eq!(refine.step(&k, total, t), None);
+        // And the progressive path stays: its target holds the points for the overlay.
+        assert!(refine.wants(total));
+    }
+
+    #[test]
+    fn a_camera_change_restarts_and_a_playhead_change_does_not() {
+        let mut refine = Refine::default();
+        let mut t = Instant::now();
+        let total = 1_000_000;
+        let mut settings = RenderSettings::default();
+        let k = key(&settings);
+        assert_eq!(refine.step(&k, total, t), Some(0..100_000));
+        t += TARGET_FRAME;
+        assert_eq!(refine.step(&k, total, t), Some(100_000..200_000));
+        assert!((refine.progress().unwrap() - 0.2).abs() < 1e-6);
+
+        // Playback: the playhead moves every frame; the slices go on where they were.
+        for i in 0..3 {
+            settings.markers = vec![MarkerBox::playhead(0.1 * i as f32)];
+            t += TARGET_FRAME;
+            let r = refine.step(&key(&settings), total, t).expect("a slice");
+            assert_eq!(r.start, 200_000 + i * 100_000, "playhead frame {i}");
+        }
+        // The box toggled: drawn by the overlay, the points stay.
+        settings.show_box = false;
+        t += TARGET_FRAME;
+        assert_eq!(
+            refine.step(&key(&settings), total, t).unwrap().start,
+            500_000
+        );
+
+        // The camera moved (an orbit ended elsewhere): back to point 0.
+        let mut moved = key(&settings);
+        moved.camera.orbit(5.0, 0.0, 400.0);
+        t += TARGET_FRAME;
+        assert_eq!(refine.step(&moved, total, t), Some(0..100_000));
+        // New GPU data (revision) or another point style: back to 0 too.
+        let mut revised = moved.clone();
+        revised.revision += 1;
+        t += TARGET_FRAME;
+        assert_eq!(refine.step(&revised, total, t).unwrap().start, 0);
+        let mut styled = revised.clone();
+        styled.settings.points.size_px += 1.0;
+        t += TARGET_FRAME;
+        assert_eq!(refine.step(&styled, total, t).unwrap().start, 0);
+
+        // Once complete, playhead frames draw no slice (only the overlay).
+        let ranges = run(&mut refine, &styled, total, &mut t);
+        assert_eq!(ranges.last().unwrap().end, total);
+        let mut playing = styled.clone();
+        playing.settings.markers = vec![MarkerBox::playhead(0.9)];
+        assert_eq!(refine.step(&playing, total, t), None);
+    }
+
+    #[test]
+    fn the_budget_follows_the_measured_frame_time() {
+        let mut refine = Refine::default();
+        let mut t = Instant::now();
+        let k = key(&RenderSettings::default());
+        let total = 100_000_000;
+        refine.step(&k, total, t);
+        // A slow device: 120 ms frames halve the budget each frame, down to the floor.
+        for _ in 0..10 {
+            t += Duration::from_millis(120);
+            refine.step(&k, total, t);
+        }
+        assert_eq!(refine.budget, MIN_BUDGET);
+        // A fast one: 5 ms frames double it each frame.
+        let before = refine.budget;
+        t += Duration::from_millis(5);
+        refine.step(&k, total, t);
+        assert_eq!(refine.budget, before * 2);
+        // 60 ms: halved towards 30 ms.
+        let before = refine.budget;
+        t += Duration::from_millis(60);
+        refine.step(&k, total, t);
+        assert_eq!(refine.budget, before / 2);
+        // A long gap (window hidden) is not a frame time.
+        let before = refine.budget;
+        t += Duration::from_secs(3);
+        refine.step(&k, total, t);
+        assert_eq!(refine.budget, before);
+    }
+}
