@@ -17,6 +17,7 @@ use crate::data::cloud::PointCloud;
 use crate::render::composite::CompositePass;
 use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
+pub use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::view::frame_view::FrameView;
 
 /// GPU state owned by the window, kept in egui_wgpu's callback resources.
@@ -32,74 +33,6 @@ pub struct ViewResources {
     pub progressive: crate::ui::progressive::ProgressivePoints,
     /// To ask for the next frame from `prepare` while the points fill in.
     repaint: Option<egui::Context>,
-}
-
-/// Everything a render of the scene depends on. Two frames with equal keys draw the same image
-/// (the hover read-out, tooltips and panels are egui shapes over it, not part of it).
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderKey {
-    pub camera: crate::view::camera::Camera,
-    pub world_from_data: glam::Mat4,
-    pub size: (u32, u32),
-    pub moving: bool,
-    pub settings: RenderSettings,
-    pub cloud_id: Option<u64>,
-    /// Bumped whenever a cloud's GPU data changes (upload, new grid, removal).
-    pub revision: u64,
-}
-
-impl RenderKey {
-    pub fn new(
-        view: &FrameView,
-        settings: &RenderSettings,
-        cloud_id: Option<u64>,
-        revision: u64,
-    ) -> Self {
-        Self {
-            camera: view.camera,
-            world_from_data: view.world_from_data,
-            size: (view.width, view.height),
-            moving: view.moving,
-            settings: settings.clone(),
-            cloud_id,
-            revision,
-        }
-    }
-}
-
-/// The key of the last render and how many renders there were (the window shows the count's
-/// rate; the tests check that a hover-only frame adds none).
-#[derive(Debug, Default)]
-pub struct FrameCache {
-    last: Option<RenderKey>,
-    /// Scene renders so far.
-    pub renders: u64,
-    /// GPU data revision: bumped by every change to a cloud's [`SceneData`].
-    pub revision: u64,
-}
-
-impl FrameCache {
-    /// Whether a frame with `key` must render the scene (the target holds something else).
-    /// Counts the render when it must.
-    pub fn begin(&mut self, key: &RenderKey) -> bool {
-        if self.last.as_ref() == Some(key) {
-            return false;
-        }
-        self.renders += 1;
-        true
-    }
-
-    /// Records what the target now holds; `complete` false when the render was one step of
-    /// several (a surface still growing its buffers), so the next frame renders again.
-    pub fn finish(&mut self, key: RenderKey, complete: bool) {
-        self.last = complete.then_some(key);
-    }
-
-    /// Forgets what the target holds (its size or contents changed outside a render).
-    pub fn invalidate(&mut self) {
-        self.last = None;
-        self.revision += 1;
-    }
 }
 
 impl ViewResources {

@@ -15,6 +15,7 @@ pub mod compare;
 pub mod compare_shot;
 mod compare_window;
 mod extract_settings;
+pub mod frame_cache;
 mod freq_axis;
 mod hover;
 mod iso_sweep;

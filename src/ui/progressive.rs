@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::{Renderer, SceneData};
-use crate::ui::bridge::RenderKey;
+use crate::ui::frame_cache::RenderKey;
 use crate::view::frame_view::FrameView;
 
 /// Points drawn in the first slice before any measurement: about what lavapipe draws in 30 ms
