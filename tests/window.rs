@@ -54,4 +54,25 @@ fn window_opens_and_shows_the_demo() {
         "the 3D view looks blank: {:.2}% coloured pixels",
         share * 100.0
     );
+    // The side panel keeps egui's panel colour: the window is cleared to it and the panels are
+    // drawn without a fill of their own (ui/app.rs `panel_frame`), so most of the panel's
+    // pixels (all but its text and widgets) are exactly that colour.
+    let fill = eframe::egui::Visuals::dark().panel_fill;
+    let mut panel = 0usize;
+    let mut same = 0usize;
+    for y in 0..h {
+        for x in 0..(w / 5) {
+            let p = image.get_pixel(x, y);
+            panel += 1;
+            if (p[0], p[1], p[2]) == (fill.r(), fill.g(), fill.b()) {
+                same += 1;
+            }
+        }
+    }
+    let share = same as f64 / panel as f64;
+    assert!(
+        share > 0.5,
+        "the side panel is not egui's panel colour {fill:?}: {:.1}% of its pixels are",
+        share * 100.0
+    );
 }

@@ -397,6 +397,12 @@ impl LoudscapeApp {
 }
 
 impl eframe::App for LoudscapeApp {
+    /// The frame is cleared to the panels' colour, which the panels then leave unpainted
+    /// ([`panel_frame`]).
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        visuals.panel_fill.to_normalized_gamma_f32()
+    }
+
     fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
         // Scripted presses (tests), once the data is shown or nothing is loading.
         if !self.scripted_presses.is_empty()
@@ -477,6 +483,7 @@ impl eframe::App for LoudscapeApp {
         }
 
         egui::Panel::left("controls")
+            .frame(panel_frame(ui.style()))
             .resizable(false)
             .exact_size(270.0)
             .show(ui, |ui| {
@@ -498,21 +505,25 @@ impl eframe::App for LoudscapeApp {
         }
         self.shortcuts_overlay(&ctx);
         if self.active == Slot::Song && self.song.is_some() {
-            egui::Panel::bottom("transport").show(ui, |ui| {
-                ui.add_space(3.0);
-                self.audio.bar(ui);
-                ui.add_space(2.0);
-            });
+            egui::Panel::bottom("transport")
+                .frame(panel_frame(ui.style()))
+                .show(ui, |ui| {
+                    ui.add_space(3.0);
+                    self.audio.bar(ui);
+                    ui.add_space(2.0);
+                });
             if let Some(song) = &self.song {
                 self.strip.sync(song.id, &song.cloud);
             }
             if self.strip.has_curves() {
                 let (strip, audio) = (&self.strip, &mut self.audio);
-                egui::Panel::bottom("loudness_strip").show(ui, |ui| {
-                    if let Some(t) = strip.show(ui, audio.time_s().unwrap_or(0.0)) {
-                        audio.seek(t);
-                    }
-                });
+                egui::Panel::bottom("loudness_strip")
+                    .frame(panel_frame(ui.style()))
+                    .show(ui, |ui| {
+                        if let Some(t) = strip.show(ui, audio.time_s().unwrap_or(0.0)) {
+                            audio.seek(t);
+                        }
+                    });
             }
         }
         egui::CentralPanel::default()
@@ -552,6 +563,15 @@ impl LoudscapeApp {
             self.camera,
         )
     }
+}
+
+/// The frame of the window's panels: egui's own, without its fill. The window is cleared to the
+/// panels' colour ([`eframe::App::clear_color`]), so the fill would paint every panel pixel a
+/// second time; on a software rasterizer (lavapipe, llvmpipe) egui's per-pixel shading of those
+/// rectangles was a third of every frame's cost (docs/PERFORMANCE.md), on a GPU it is nothing.
+/// The picture is the same.
+pub(super) fn panel_frame(style: &egui::Style) -> egui::Frame {
+    egui::Frame::side_top_panel(style).fill(Color32::TRANSPARENT)
 }
 
 /// A spinner and `text` in the top-left corner of the 3D view, over a dark plate.
