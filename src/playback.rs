@@ -1,8 +1,10 @@
 //! Playback of the song a cloud was extracted from, and the clock the playhead follows.
 //!
-//! The song is decoded once into memory ([`decode`]). A [`Player`] hands it to an
-//! [`AudioBackend`] (rodio on the default output device in the app, mocks in tests) as a
-//! [`TrackSource`] that counts the frames it gives the device in a shared [`Transport`]. That
+//! The song is never decoded whole: [`decode`] probes the file and reads its format and length,
+//! and a [`TrackSource`] decodes it while it plays, a couple of seconds ahead on its own thread
+//! (see [`stream`]), so a song's memory is that buffer whatever its length. A [`Player`] hands
+//! the source to an [`AudioBackend`] (rodio on the default output device in the app, mocks in
+//! tests); the source counts the frames it gives the device in a shared [`Transport`]. That
 //! count is the clock: the playhead reads it through [`AudioClock`], so picture and sound cannot
 //! drift apart however long the song, whatever the wall clock does. Seeking and pausing write the
 //! transport; the source reads it for every frame. Between two device callbacks the count stands
@@ -10,6 +12,8 @@
 //!
 //! No device (CI machines, a headless server) is not an error of the app: [`Player::new`] keeps
 //! the reason in [`PlayerState::NoDevice`] and every other feature works.
+
+pub mod stream;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -19,6 +23,7 @@ use std::time::{Duration, Instant};
 use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
+use stream::{OpenError, Reader, Ring, Shared};
 
 /// Why the song cannot be played.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -40,29 +45,34 @@ pub enum PlaybackError {
     Empty { path: PathBuf },
 }
 
-/// A decoded song: interleaved samples in memory.
-#[derive(Clone, Debug)]
+/// A playable song: its file, format and length. The samples stay in the file; a
+/// [`TrackSource`] decodes them as they play. Cheap to clone.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Track {
     pub path: PathBuf,
-    pub samples: Arc<[f32]>,
     pub channels: u16,
     pub sample_rate: u32,
+    frames: u64,
 }
 
 impl Track {
+    /// Frames in the song (samples per channel).
     pub fn frames(&self) -> u64 {
-        (self.samples.len() / usize::from(self.channels.max(1))) as u64
+        self.frames
     }
 
     pub fn duration_s(&self) -> f64 {
-        self.frames() as f64 / f64::from(self.sample_rate.max(1))
+        self.frames as f64 / f64::from(self.sample_rate.max(1))
     }
 }
 
 /// Formats symphonia (as configured in Cargo.toml) decodes, by file extension.
 const PLAYABLE: [&str; 6] = ["wav", "wave", "flac", "ogg", "mp3", "oga"];
 
-/// Decodes a whole audio file into memory.
+/// Opens an audio file for playback: probes its format, decodes its first packet (a file whose
+/// audio does not decode fails here, with the message it always gave) and takes its length from
+/// the container (FLAC, WAV and Ogg state it; when a file does not, its packets are counted
+/// without decoding them, one read of the file). Nothing is kept in memory but that.
 pub fn decode(path: &Path) -> Result<Track, PlaybackError> {
     let extension = path
         .extension()
@@ -79,36 +89,52 @@ pub fn decode(path: &Path) -> Result<Track, PlaybackError> {
     if ["opus", "m4a", "aac", "mp4", "wma", "aiff", "aif"].contains(&extension.as_str()) {
         return Err(unsupported());
     }
-    let file = std::fs::File::open(path).map_err(|e| PlaybackError::Open {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    let decoder = rodio::Decoder::try_from(file).map_err(|e| match e {
-        rodio::decoder::DecoderError::UnrecognizedFormat
-        | rodio::decoder::DecoderError::NoStreams => unsupported(),
-        other => PlaybackError::Decode {
-            path: path.to_path_buf(),
-            reason: other.to_string(),
-        },
-    })?;
-    use rodio::Source;
-    let channels = decoder.channels().get();
-    let sample_rate = decoder.sample_rate().get();
-    let samples: Vec<f32> = decoder.collect();
-    if samples.is_empty() {
-        return Err(if PLAYABLE.contains(&extension.as_str()) {
+    let open = |path: &Path| {
+        Reader::open(path).map_err(|e| match e {
+            OpenError::Open(reason) => PlaybackError::Open {
+                path: path.to_path_buf(),
+                reason,
+            },
+            OpenError::Unsupported => unsupported(),
+            OpenError::Decode(reason) => PlaybackError::Decode {
+                path: path.to_path_buf(),
+                reason,
+            },
+        })
+    };
+    let mut reader = open(path)?;
+    let empty = || {
+        if PLAYABLE.contains(&extension.as_str()) {
             PlaybackError::Empty {
                 path: path.to_path_buf(),
             }
         } else {
             unsupported()
+        }
+    };
+    if !reader.fill() {
+        return Err(empty());
+    }
+    let channels = u16::try_from(reader.channels).unwrap_or(u16::MAX).max(1);
+    let sample_rate = reader.sample_rate.unwrap_or(0);
+    if sample_rate == 0 {
+        return Err(PlaybackError::Decode {
+            path: path.to_path_buf(),
+            reason: "the file states no sample rate".into(),
         });
+    }
+    let frames = match reader.stated_frames {
+        Some(frames) => frames,
+        None => open(path)?.count_frames(),
+    };
+    if frames == 0 {
+        return Err(empty());
     }
     Ok(Track {
         path: path.to_path_buf(),
-        samples: samples.into(),
         channels,
         sample_rate,
+        frames,
     })
 }
 
@@ -159,6 +185,9 @@ pub struct Transport {
     loop_end: AtomicU64,
     /// Set when the song is replaced: its source ends and leaves the mixer.
     retired: AtomicBool,
+    /// Counts the jumps of the position (seeks) and the resyncs the source asked for: the
+    /// decoder restarts from the position when it changes, and frames decoded before are stale.
+    serial: AtomicU64,
     frames: u64,
 }
 
@@ -170,6 +199,7 @@ impl Transport {
             loop_start: AtomicU64::new(0),
             loop_end: AtomicU64::new(0),
             retired: AtomicBool::new(false),
+            serial: AtomicU64::new(0),
             frames,
         }
     }
@@ -178,13 +208,34 @@ impl Transport {
         self.position.load(Ordering::Acquire)
     }
 
+    /// Frames in the track.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
     pub fn is_playing(&self) -> bool {
         self.playing.load(Ordering::Acquire)
+    }
+
+    /// How many times the position jumped (or the source asked the decoder to resync); frames
+    /// play in order between two changes.
+    pub fn serial(&self) -> u64 {
+        self.serial.load(Ordering::Acquire)
+    }
+
+    fn is_retired(&self) -> bool {
+        self.retired.load(Ordering::Acquire)
+    }
+
+    /// Tells the decoder to start again from the position.
+    fn resync(&self) {
+        self.serial.fetch_add(1, Ordering::AcqRel);
     }
 
     pub fn set_playing(&self, playing: bool) {
         if playing && self.position() >= self.frames {
             self.position.store(self.loop_start(), Ordering::Release);
+            self.resync();
         }
         self.playing.store(playing, Ordering::Release);
     }
@@ -192,6 +243,7 @@ impl Transport {
     pub fn seek(&self, frame: u64) {
         self.position
             .store(frame.min(self.frames), Ordering::Release);
+        self.resync();
     }
 
     fn loop_start(&self) -> u64 {
@@ -202,7 +254,8 @@ impl Transport {
         }
     }
 
-    /// Loops `[start, end)` frames; None plays to the end and stops.
+    /// Loops `[start, end)` frames; None plays to the end and stops. Frames already decoded in
+    /// the old order are replaced only where the order differs (the source resyncs there).
     pub fn set_loop(&self, range: Option<(u64, u64)>) {
         match range {
             Some((start, end)) if end > start => {
@@ -214,14 +267,22 @@ impl Transport {
         }
     }
 
+    /// The frame that plays after `at`: the next one, or the loop's start at the loop's end
+    /// (the order the decoder fills the buffer in).
+    fn after(&self, at: u64) -> u64 {
+        let loop_end = self.loop_end.load(Ordering::Acquire);
+        let next = at + 1;
+        if loop_end > 0 && next >= loop_end {
+            self.loop_start.load(Ordering::Acquire)
+        } else {
+            next
+        }
+    }
+
     /// Advances by one frame from `at` (unless a seek moved the position meanwhile), wrapping
     /// at the loop end and stopping at the track's end. Returns the next frame to play.
     fn advance(&self, at: u64) -> Option<u64> {
-        let loop_end = self.loop_end.load(Ordering::Acquire);
-        let mut next = at + 1;
-        if loop_end > 0 && next >= loop_end {
-            next = self.loop_start.load(Ordering::Acquire);
-        }
+        let next = self.after(at);
         let _ = self
             .position
             .compare_exchange(at, next, Ordering::AcqRel, Ordering::Acquire);
@@ -251,22 +312,84 @@ impl AudioClock for Transport {
 }
 
 /// The track as a rodio source: plays from the transport's position while it is playing, and
-/// silence while paused (the stream stays open so resuming is instant).
+/// silence while paused (the stream stays open so resuming is instant). Its decoder thread
+/// fills a ring of [`stream::BUFFER_SECONDS`] of frames ahead; the source (on the audio
+/// callback) only takes frames from it. Right after a seek, until the decoder has the new
+/// position's frames, it plays silence and the clock stands (a few milliseconds).
 pub struct TrackSource {
-    track: Track,
+    channels: u16,
+    sample_rate: u32,
     transport: Arc<Transport>,
+    shared: Arc<Shared>,
+    /// The frame being handed out, one sample per channel.
+    current: Vec<f32>,
     frame: u64,
     channel: u16,
 }
 
 impl TrackSource {
+    /// The source of `track`, with its decoder thread started.
     pub fn new(track: Track, transport: Arc<Transport>) -> Self {
+        let channels = track.channels.max(1);
+        let shared = Arc::new(Shared {
+            ring: Ring::new(
+                stream::buffer_frames(track.sample_rate),
+                usize::from(channels),
+            ),
+            closed: AtomicBool::new(false),
+        });
+        stream::spawn(
+            track.path.clone(),
+            usize::from(channels),
+            transport.clone(),
+            shared.clone(),
+        );
         Self {
-            track,
+            channels,
+            sample_rate: track.sample_rate,
             transport,
+            shared,
+            current: vec![0.0; usize::from(channels)],
             frame: 0,
             channel: 0,
         }
+    }
+
+    /// The ring of decoded frames between the decoder thread and the device: its capacity bounds
+    /// the source's audio memory.
+    pub fn ring(&self) -> &Ring {
+        &self.shared.ring
+    }
+
+    /// Whether the next frame the transport wants is decoded (then `next` plays it rather than
+    /// silence). Drops the frames a seek made stale; asks the decoder to resync when the buffered
+    /// frames are not in the order the transport plays (a loop range set since they were
+    /// decoded).
+    pub fn is_buffered(&mut self) -> bool {
+        let ring = &self.shared.ring;
+        // Bounded: at most the ring's frames are dropped per call.
+        for _ in 0..=ring.capacity() {
+            // The serial first: a seek's position is visible once its serial is.
+            let serial = stream::serial_bits(self.transport.serial());
+            let position = self.transport.position();
+            let Some(tag) = ring.front() else {
+                return false;
+            };
+            if stream::tag_serial(tag) != serial {
+                ring.skip();
+            } else if stream::tag_frame(tag) == position {
+                return true;
+            } else {
+                self.transport.resync();
+            }
+        }
+        false
+    }
+}
+
+impl Drop for TrackSource {
+    fn drop(&mut self) {
+        self.shared.closed.store(true, Ordering::Release);
     }
 }
 
@@ -274,22 +397,27 @@ impl Iterator for TrackSource {
     type Item = f32;
 
     fn next(&mut self) -> Option<f32> {
-        let channels = self.track.channels.max(1);
+        let channels = self.channels;
         if self.channel == 0 {
-            if self.transport.retired.load(Ordering::Acquire) {
+            if self.transport.is_retired() {
                 return None;
             }
             if !self.transport.is_playing() {
+                // Paused: keep the buffer at the position (a seek while paused refills it).
+                self.is_buffered();
                 return Some(0.0);
             }
-            self.frame = self.transport.position();
-            if self.frame >= self.track.frames() {
+            if self.transport.position() >= self.transport.frames() {
                 self.transport.set_playing(false);
                 return Some(0.0);
             }
+            if !self.is_buffered() {
+                return Some(0.0);
+            }
+            self.frame = self.transport.position();
+            self.shared.ring.pop(&mut self.current);
         }
-        let index = self.frame as usize * usize::from(channels) + usize::from(self.channel);
-        let sample = self.track.samples.get(index).copied().unwrap_or(0.0);
+        let sample = self.current[usize::from(self.channel)];
         self.channel += 1;
         if self.channel == channels {
             self.channel = 0;
@@ -307,11 +435,10 @@ impl rodio::Source for TrackSource {
         None
     }
     fn channels(&self) -> rodio::ChannelCount {
-        std::num::NonZero::new(self.track.channels.max(1)).unwrap_or(std::num::NonZero::<u16>::MIN)
+        std::num::NonZero::new(self.channels.max(1)).unwrap_or(std::num::NonZero::<u16>::MIN)
     }
     fn sample_rate(&self) -> rodio::SampleRate {
-        std::num::NonZero::new(self.track.sample_rate.max(1))
-            .unwrap_or(std::num::NonZero::<u32>::MIN)
+        std::num::NonZero::new(self.sample_rate.max(1)).unwrap_or(std::num::NonZero::<u32>::MIN)
     }
     fn total_duration(&self) -> Option<Duration> {
         None

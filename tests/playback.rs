@@ -1,8 +1,10 @@
 //! Playback without a sound card: the playhead follows a mocked audio clock, seeking moves it,
 //! time maps onto the cloud's x axis as the metadata says, and a missing device is a state, not
-//! a panic.
+//! a panic. The song streams from its file: long synthesized WAV and FLAC files play the samples
+//! a whole decode gives, from any frame, around loops, through a buffer of fixed capacity.
 
 use std::cell::Cell;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -59,41 +61,75 @@ fn playhead_follows_the_audio_clock_not_the_wall_clock() {
     assert_eq!(playhead.time_s(&paused, last + Duration::from_secs(9)), 0.5);
 }
 
-fn ramp_track(frames: usize, channels: u16, sample_rate: u32) -> Track {
+/// A scratch folder of this test process.
+fn scratch(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("loudscape-playback-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// A float WAV whose every sample is its frame number (exact in f32 below 2^24), opened for
+/// playback.
+fn ramp_track(dir: &Path, frames: usize, channels: u16, sample_rate: u32) -> Track {
     let samples: Vec<f32> = (0..frames * usize::from(channels))
         .map(|i| (i / usize::from(channels)) as f32)
         .collect();
-    Track {
-        path: "ramp.wav".into(),
-        samples: samples.into(),
-        channels,
-        sample_rate,
+    let path = dir.join(format!("ramp-{frames}-{channels}-{sample_rate}.wav"));
+    write_wav_f32(&path, channels, sample_rate, &samples);
+    loudscape::playback::decode(&path).expect("ramp decodes")
+}
+
+/// The next `frames` frames the source plays while playing, interleaved, skipping the silence
+/// it gives while its decoder catches up after a seek (that silence does not move the clock).
+fn play(source: &mut TrackSource, channels: usize, frames: usize) -> Vec<f32> {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let mut out = Vec::with_capacity(frames * channels);
+    while out.len() < frames * channels {
+        if !source.is_buffered() {
+            assert!(Instant::now() < deadline, "the decoder never caught up");
+            std::thread::sleep(Duration::from_micros(200));
+            continue;
+        }
+        for _ in 0..channels {
+            out.push(source.next().expect("the source lives"));
+        }
+    }
+    out
+}
+
+/// Waits until the frame at the transport's position is decoded.
+fn wait_buffered(source: &mut TrackSource) {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while !source.is_buffered() {
+        assert!(Instant::now() < deadline, "the decoder never caught up");
+        std::thread::sleep(Duration::from_micros(200));
     }
 }
 
 #[test]
 fn the_source_counts_frames_and_seeking_moves_it() {
-    let track = ramp_track(1000, 2, 100);
+    let dir = scratch("counts");
+    let track = ramp_track(&dir, 1000, 2, 100);
+    assert_eq!(track.frames(), 1000);
     let transport = Arc::new(Transport::new(1000));
     let mut source = TrackSource::new(track, transport.clone());
-    // Paused: silence, the clock stands.
+    // Paused: silence, the clock stands (however long the decoder has had).
+    wait_buffered(&mut source);
     assert_eq!(source.next(), Some(0.0));
     assert_eq!(transport.frames_played(), 0);
     transport.set_playing(true);
-    let played: Vec<f32> = (0..20).map(|_| source.next().unwrap_or(-1.0)).collect();
+    let played = play(&mut source, 2, 10);
     assert_eq!(&played[..4], &[0.0, 0.0, 1.0, 1.0]);
     assert_eq!(transport.frames_played(), 10);
     transport.seek(500);
-    assert_eq!(source.next(), Some(500.0));
-    assert_eq!(source.next(), Some(500.0));
+    assert_eq!(play(&mut source, 2, 1), vec![500.0, 500.0]);
     assert_eq!(transport.frames_played(), 501);
-    // Loop [600, 610): after the end it wraps.
+    // Loop [600, 610): after the end it wraps (the loop set after the seek: the frames decoded
+    // past 609 are replaced where the order differs).
     transport.seek(605);
     transport.set_loop(Some((600, 610)));
-    let frames: Vec<f32> = (0..20)
-        .map(|_| source.next().unwrap_or(-1.0))
-        .step_by(2)
-        .collect();
+    let frames: Vec<f32> = play(&mut source, 2, 10).into_iter().step_by(2).collect();
     assert_eq!(
         frames,
         vec![
@@ -103,12 +139,16 @@ fn the_source_counts_frames_and_seeking_moves_it() {
     // At the end it stops.
     transport.set_loop(None);
     transport.seek(998);
-    for _ in 0..4 {
-        source.next();
-    }
+    play(&mut source, 2, 2);
+    assert_eq!(source.next(), Some(0.0));
     assert!(!transport.is_playing());
     assert_eq!(transport.frames_played(), 1000);
     assert_eq!(source.next(), Some(0.0));
+    // Playing again from the end restarts at the start.
+    transport.set_playing(true);
+    assert_eq!(play(&mut source, 2, 1), vec![0.0, 0.0]);
+    drop(source);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 struct NoDevice;
@@ -133,7 +173,9 @@ impl AudioBackend for Silent {
 fn without_a_device_the_player_says_so_and_keeps_working() {
     let mut player = Player::new(&NoDevice);
     assert_eq!(player.no_device(), Some("no default output device"));
-    player.load(ramp_track(100, 1, 100));
+    let dir = scratch("no-device");
+    player.load(ramp_track(&dir, 100, 1, 100));
+    let _ = std::fs::remove_dir_all(&dir);
     player.toggle();
     assert!(!player.is_playing());
     player.seek_s(0.5);
@@ -145,7 +187,9 @@ fn without_a_device_the_player_says_so_and_keeps_working() {
 fn seeking_in_seconds_lands_on_the_right_frame() {
     let mut player = Player::new(&Silent);
     assert!(player.no_device().is_none());
-    player.load(ramp_track(44_100 * 3, 2, 44_100));
+    let dir = scratch("seconds");
+    player.load(ramp_track(&dir, 44_100 * 3, 2, 44_100));
+    let _ = std::fs::remove_dir_all(&dir);
     player.seek_s(1.5);
     let transport = player.loaded.as_ref().expect("loaded").transport.clone();
     assert_eq!(transport.frames_played(), 66_150);
@@ -183,8 +227,7 @@ fn time_maps_onto_the_x_axis_of_the_metadata() {
 #[test]
 fn the_demo_song_resolves_and_unplayable_formats_say_why() {
     let repo = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let dir = std::env::temp_dir().join(format!("loudscape-playback-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = scratch("formats");
     let opus = dir.join("song.opus");
     std::fs::write(&opus, b"OggS not really").expect("write");
     let err = loudscape::playback::decode(&opus).expect_err("opus is not playable");
@@ -203,7 +246,27 @@ fn the_demo_song_resolves_and_unplayable_formats_say_why() {
     let track = loudscape::playback::decode(&wav).expect("wav decodes");
     assert_eq!(track.sample_rate, 8000);
     assert_eq!(track.frames(), 4);
-    assert!((track.samples[1] - 0.5).abs() < 1e-3);
+    let transport = Arc::new(Transport::new(track.frames()));
+    let mut source = TrackSource::new(track, transport.clone());
+    transport.set_playing(true);
+    let played = play(&mut source, 1, 4);
+    assert_eq!(played, vec![0.0, 0.5, -0.5, 0.0]);
+    drop(source);
+    // A file that cannot be opened, one that is not audio, one without samples: one clear
+    // message each.
+    let err = loudscape::playback::decode(&dir.join("missing.wav")).expect_err("missing");
+    assert!(
+        matches!(err, PlaybackError::Open { .. }) && err.to_string().contains("cannot open"),
+        "{err}"
+    );
+    let garbage = dir.join("garbage.wav");
+    std::fs::write(&garbage, vec![7u8; 4096]).expect("write");
+    let err = loudscape::playback::decode(&garbage).expect_err("not audio");
+    assert!(matches!(err, PlaybackError::Unsupported { .. }), "{err}");
+    let empty = dir.join("empty.wav");
+    write_wav(&empty, 8000, &[]);
+    let err = loudscape::playback::decode(&empty).expect_err("no samples");
+    assert!(matches!(err, PlaybackError::Empty { .. }), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -226,4 +289,257 @@ fn write_wav(path: &std::path::Path, rate: u32, samples: &[i16]) {
         b.extend_from_slice(&s.to_le_bytes());
     }
     std::fs::write(path, b).expect("write wav");
+}
+
+fn write_wav_f32(path: &Path, channels: u16, rate: u32, samples: &[f32]) {
+    let data_len = (samples.len() * 4) as u32;
+    let mut b = Vec::with_capacity(44 + samples.len() * 4);
+    b.extend_from_slice(b"RIFF");
+    b.extend_from_slice(&(36 + data_len).to_le_bytes());
+    b.extend_from_slice(b"WAVEfmt ");
+    b.extend_from_slice(&16u32.to_le_bytes());
+    b.extend_from_slice(&3u16.to_le_bytes()); // IEEE float
+    b.extend_from_slice(&channels.to_le_bytes());
+    b.extend_from_slice(&rate.to_le_bytes());
+    b.extend_from_slice(&(rate * 4 * u32::from(channels)).to_le_bytes());
+    b.extend_from_slice(&(4 * channels).to_le_bytes());
+    b.extend_from_slice(&32u16.to_le_bytes());
+    b.extend_from_slice(b"data");
+    b.extend_from_slice(&data_len.to_le_bytes());
+    for s in samples {
+        b.extend_from_slice(&s.to_le_bytes());
+    }
+    std::fs::write(path, b).expect("write wav");
+}
+
+fn write_wav_16(path: &Path, channels: u16, rate: u32, samples: &[i16]) {
+    let data_len = (samples.len() * 2) as u32;
+    let mut b = Vec::with_capacity(44 + samples.len() * 2);
+    b.extend_from_slice(b"RIFF");
+    b.extend_from_slice(&(36 + data_len).to_le_bytes());
+    b.extend_from_slice(b"WAVEfmt ");
+    b.extend_from_slice(&16u32.to_le_bytes());
+    b.extend_from_slice(&1u16.to_le_bytes());
+    b.extend_from_slice(&channels.to_le_bytes());
+    b.extend_from_slice(&rate.to_le_bytes());
+    b.extend_from_slice(&(rate * 2 * u32::from(channels)).to_le_bytes());
+    b.extend_from_slice(&(2 * channels).to_le_bytes());
+    b.extend_from_slice(&16u16.to_le_bytes());
+    b.extend_from_slice(b"data");
+    b.extend_from_slice(&data_len.to_le_bytes());
+    for s in samples {
+        b.extend_from_slice(&s.to_le_bytes());
+    }
+    std::fs::write(path, b).expect("write wav");
+}
+
+fn crc8(bytes: &[u8]) -> u8 {
+    let mut crc = 0u8;
+    for &byte in bytes {
+        crc ^= byte;
+        for _ in 0..8 {
+            crc = if crc & 0x80 != 0 {
+                (crc << 1) ^ 0x07
+            } else {
+                crc << 1
+            };
+        }
+    }
+    crc
+}
+
+fn crc16(bytes: &[u8]) -> u16 {
+    let mut crc = 0u16;
+    for &byte in bytes {
+        crc ^= u16::from(byte) << 8;
+        for _ in 0..8 {
+            crc = if crc & 0x8000 != 0 {
+                (crc << 1) ^ 0x8005
+            } else {
+                crc << 1
+            };
+        }
+    }
+    crc
+}
+
+/// A 16-bit FLAC of `samples` (interleaved) in blocks of `block` frames, each subframe stored
+/// verbatim (no seek table: symphonia seeks by searching the frames).
+fn write_flac(path: &Path, channels: u16, rate: u32, block: usize, samples: &[i16]) {
+    let ch = usize::from(channels);
+    let total = (samples.len() / ch) as u64;
+    let mut b = Vec::new();
+    b.extend_from_slice(b"fLaC");
+    b.extend_from_slice(&[0x80, 0, 0, 34]); // last block, STREAMINFO, 34 bytes
+    b.extend_from_slice(&(block as u16).to_be_bytes());
+    b.extend_from_slice(&(block as u16).to_be_bytes());
+    b.extend_from_slice(&[0; 6]); // frame sizes unknown
+    let packed: u64 = (u64::from(rate) << 44)
+        | (u64::from(channels - 1) << 41)
+        | (15u64 << 36)
+        | (total & ((1 << 36) - 1));
+    b.extend_from_slice(&packed.to_be_bytes());
+    b.extend_from_slice(&[0; 16]); // no MD5
+    for (number, frames) in samples.chunks(block * ch).enumerate() {
+        let start = b.len();
+        let n = frames.len() / ch;
+        b.extend_from_slice(&[0xFF, 0xF8]); // sync, fixed block size
+        b.push(0x70); // block size: 16 bits follow; sample rate from STREAMINFO
+        b.push(((channels as u8 - 1) << 4) | 0x08); // independent channels, 16 bits
+        // The frame number, UTF-8 coded.
+        let number = number as u32;
+        if number < 0x80 {
+            b.push(number as u8);
+        } else if number < 0x800 {
+            b.push(0xC0 | (number >> 6) as u8);
+            b.push(0x80 | (number & 0x3F) as u8);
+        } else {
+            assert!(number < 0x10000);
+            b.push(0xE0 | (number >> 12) as u8);
+            b.push(0x80 | ((number >> 6) & 0x3F) as u8);
+            b.push(0x80 | (number & 0x3F) as u8);
+        }
+        b.extend_from_slice(&((n - 1) as u16).to_be_bytes());
+        let header_crc = crc8(&b[start..]);
+        b.push(header_crc);
+        for c in 0..ch {
+            b.push(0x02); // VERBATIM, no wasted bits
+            for f in 0..n {
+                b.extend_from_slice(&frames[f * ch + c].to_be_bytes());
+            }
+        }
+        let frame_crc = crc16(&b[start..]);
+        b.extend_from_slice(&frame_crc.to_be_bytes());
+    }
+    std::fs::write(path, b).expect("write flac");
+}
+
+/// Noise (so a frame off anywhere shows) with a slow sweep, interleaved.
+fn noise(frames: usize, channels: u16) -> Vec<i16> {
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    (0..frames * usize::from(channels))
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 48) as i16
+        })
+        .collect()
+}
+
+/// What decoding the whole file with rodio gives (the way the window decoded songs before they
+/// streamed).
+fn whole(path: &Path) -> Vec<f32> {
+    let file = std::fs::File::open(path).expect("open");
+    rodio::Decoder::try_from(file)
+        .expect("rodio decodes")
+        .collect()
+}
+
+/// Streams `path` whole, seeks to frames around packet edges and checks each against `reference`
+/// and the samples written; a loop over a packet edge wraps in order without a resync.
+fn check_streaming(path: &Path, channels: u16, rate: u32, written: &[i16], packet: u64) {
+    let ch = usize::from(channels);
+    let reference = whole(path);
+    assert_eq!(reference.len(), written.len(), "rodio decodes every sample");
+    for (r, w) in reference.iter().zip(written) {
+        assert_eq!(r.to_bits(), (f32::from(*w) / 32_768.0).to_bits());
+    }
+    let track = loudscape::playback::decode(path).expect("decodes");
+    let frames = (written.len() / ch) as u64;
+    assert_eq!(track.frames(), frames, "the length from the container");
+    assert_eq!((track.channels, track.sample_rate), (channels, rate));
+    let transport = Arc::new(Transport::new(track.frames()));
+    let mut source = TrackSource::new(track, transport.clone());
+    // Memory: the buffer holds two seconds of frames, a small share of the song.
+    let capacity = source.ring().capacity();
+    assert_eq!(capacity, loudscape::playback::stream::buffer_frames(rate));
+    assert!(capacity as f64 <= 2.0 * f64::from(rate) + 1.0);
+    assert!(
+        frames > 10 * capacity as u64,
+        "the song is longer than the buffer"
+    );
+    // The whole song, bit for bit.
+    transport.set_playing(true);
+    let mut streamed = Vec::with_capacity(reference.len());
+    let chunk = 4_000;
+    while (streamed.len() / ch) < frames as usize {
+        let left = frames as usize - streamed.len() / ch;
+        streamed.extend(play(&mut source, ch, left.min(chunk)));
+        assert!(source.ring().len() <= capacity);
+    }
+    assert_eq!(transport.frames_played(), frames);
+    assert!(!transport.is_playing(), "it stops at the end");
+    let same = streamed
+        .iter()
+        .zip(&reference)
+        .all(|(a, b)| a.to_bits() == b.to_bits());
+    assert!(same, "the stream differs from the whole decode");
+    // Seeking to a frame gives the samples from that frame.
+    transport.set_playing(true);
+    for frame in [
+        0,
+        1,
+        packet - 1,
+        packet,
+        packet + 1,
+        frames / 3 + 7,
+        frames / 2,
+        frames - packet - 3,
+        frames - 5,
+        5 * packet + 11,
+    ] {
+        transport.seek(frame);
+        let n = 64.min((frames - frame) as usize);
+        let got = play(&mut source, ch, n);
+        let at = frame as usize * ch;
+        assert_eq!(
+            got,
+            reference[at..at + n * ch],
+            "after a seek to frame {frame}"
+        );
+        assert_eq!(transport.frames_played(), frame + n as u64);
+        transport.set_playing(true);
+    }
+    // A loop across a packet edge, set before the seek into it: it wraps three times in order,
+    // and the decoder never had to resync (it decoded in the loop's order).
+    let (a, b) = (3 * packet - 100, 4 * packet + 257);
+    transport.set_loop(Some((a, b)));
+    transport.seek(b - 10);
+    wait_buffered(&mut source);
+    let serial = transport.serial();
+    let len = (b - a) as usize;
+    let got = play(&mut source, ch, 10 + 3 * len);
+    let mut expected = reference[(b as usize - 10) * ch..b as usize * ch].to_vec();
+    for _ in 0..3 {
+        expected.extend_from_slice(&reference[a as usize * ch..b as usize * ch]);
+    }
+    assert_eq!(got, expected, "the loop plays in order");
+    assert_eq!(transport.serial(), serial, "the loop was decoded in order");
+    assert_eq!(transport.frames_played(), a, "back at the loop's start");
+}
+
+#[test]
+fn a_long_wav_streams_the_samples_of_a_whole_decode() {
+    let dir = scratch("long-wav");
+    // Two minutes of mono noise at 22.05 kHz: 60 times the buffer.
+    let (rate, channels) = (22_050, 1);
+    let written = noise(rate as usize * 120, channels);
+    let path = dir.join("long.wav");
+    write_wav_16(&path, channels, rate, &written);
+    // symphonia's WAV packets: 1152 frames for this format.
+    check_streaming(&path, channels, rate, &written, 1152);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_long_flac_streams_the_samples_of_a_whole_decode() {
+    let dir = scratch("long-flac");
+    // A minute of stereo noise at 44.1 kHz in 4096-frame FLAC blocks.
+    let (rate, channels) = (44_100, 2);
+    let written = noise(rate as usize * 60, channels);
+    let path = dir.join("long.flac");
+    write_flac(&path, channels, rate, 4096, &written);
+    check_streaming(&path, channels, rate, &written, 4096);
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -30,7 +30,7 @@ pub struct AudioPanel {
     /// The playback time of the current frame, seconds.
     time_s: f64,
     no_device_said: bool,
-    /// The decoded song now in the player (shared samples), for an A/B swap to hand back.
+    /// The song now in the player (its file and length: it streams), for an A/B swap to hand back.
     track: Option<Track>,
 }
 
