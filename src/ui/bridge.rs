@@ -302,6 +302,10 @@ impl CallbackTrait for ViewCallback {
             }
             return Vec::new();
         }
+        // The target shows another scene now (the volume or surface once its grid is built, a
+        // moving frame): the slices drawn so far are no longer on screen, and a refinement left
+        // unfinished would keep the window asking for frames at rest.
+        res.progressive.refine.reset();
         res.renderer
             .render(queue, encoder, target, data, &self.view, &self.settings);
         // Complete even while a surface is extracted in the background: the last mesh is what
