@@ -15,7 +15,8 @@ use clap::{CommandFactory, Parser, Subcommand};
     about = "See how music is loud: audio point clouds in 3D"
 )]
 struct Cli {
-    /// Song and/or timeline point clouds (.ply) to open in the window.
+    /// Song and/or timeline point clouds (.ply), or audio files (extracted by loudscape-extract
+    /// and cached; several audio files or a folder become a timeline), to open in the window.
     files: Vec<PathBuf>,
 
     /// Open the window in this view: points, surface or volume.

@@ -13,7 +13,7 @@ use loudscape::view::frame_view::FrameView;
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// The cloud to measure with (points and volume parts; a timeline gets its 224^3 grid).
+    /// The cloud (or audio file) to measure with (points and volume parts; a timeline gets its 224^3 grid).
     #[arg(default_value = super::args::DEMO_SONG)]
     pub input: PathBuf,
     /// Frame size as WIDTHxHEIGHT (points and volume frames).

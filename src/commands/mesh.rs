@@ -26,7 +26,7 @@ use crate::commands::args::{
 
 #[derive(clap::Args, Debug)]
 pub struct MeshArgs {
-    /// The point cloud (.ply), or a density field (.npy: float32 or float64, shape (nz, ny, nx),
+    /// The point cloud (.ply), an audio file (WAV, FLAC, Ogg, MP3...), extracted by loudscape-extract and cached, or a density field (.npy: float32 or float64, shape (nz, ny, nx),
     /// or (fields, nz, ny, nx) with the mean hp as field 1, as `loudscape voxelize` writes).
     pub input: PathBuf,
     /// Extraction method: mt (marching tetrahedra) or dc (dual contouring).

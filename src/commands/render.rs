@@ -23,7 +23,7 @@ use crate::commands::args::{
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// The point cloud (.ply).
+    /// The point cloud (.ply), or an audio file (WAV, FLAC, Ogg, MP3...), extracted by loudscape-extract and cached.
     pub input: PathBuf,
     /// What to draw: points, surface or volume.
     #[arg(long, default_value = "points")]

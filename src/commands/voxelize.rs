@@ -23,7 +23,7 @@ use crate::commands::args::{
 
 #[derive(clap::Args, Debug)]
 pub struct VoxelizeArgs {
-    /// The point cloud (.ply).
+    /// The point cloud (.ply), or an audio file (WAV, FLAC, Ogg, MP3...), extracted by loudscape-extract and cached.
     pub input: PathBuf,
     /// Voxels per side (64 to 384); by default 128 for a song, 224 for a timeline.
     #[arg(long)]
