@@ -65,6 +65,8 @@ fn isovalue_sweep_keeps_the_window_drawing_and_ends_on_the_last_value() {
     );
     // The window drew frames while extractions ran (it did not wait for them).
     assert!(busy >= 2.0, "{line}");
+    // Each request extracts the coarse surface of the level of detail first.
+    assert!(value(line, "coarse_installed") >= 1.0, "{line}");
     assert!(frames > installed, "{line}");
     // The last surface is on screen.
     let image = image::open(&shot).expect("screenshot").to_rgba8();

@@ -15,6 +15,7 @@ use crate::render::lines::{LinesGpu, LinesPass, box_with_ticks};
 use crate::render::markers::{MarkerBox, MarkersPass};
 use crate::render::points::{PointStyle, PointsGpu, PointsPass};
 use crate::render::surface::SurfaceSettings;
+use crate::render::surface::lod::SurfaceDetail;
 use crate::render::surface::pass::SurfacePass;
 use crate::render::surface::state::ExtractedSurface;
 use crate::view::frame_view::FrameView;
@@ -74,6 +75,9 @@ pub struct RenderSettings {
     pub points_while_moving: bool,
     /// Colour maps (hp, density) and the background (`render::colormap`).
     pub colours: Colours,
+    /// Which of the surface's meshes the Surface view draws (level of detail: the window asks
+    /// for the coarse one while moving on a slow device; `render::surface::lod`).
+    pub surface_detail: SurfaceDetail,
 }
 
 impl Default for RenderSettings {
@@ -88,6 +92,7 @@ impl Default for RenderSettings {
             surface: SurfaceSettings::default(),
             points_while_moving: false,
             colours: Colours::default(),
+            surface_detail: SurfaceDetail::Full,
         }
     }
 }
@@ -431,7 +436,13 @@ impl Renderer {
         };
         match (settings.view, &data.volume) {
             (ViewKind::Surface, _) if data.grid.is_some() => {
-                self.surface.draw(&mut pass, &self.frame, &data.surface);
+                self.surface.draw(
+                    &mut pass,
+                    &self.frame,
+                    &data.surface,
+                    data.grid.as_ref().map(|grid| (grid, &settings.surface)),
+                    settings.surface_detail,
+                );
             }
             // A slow device may ask for the points as a stand-in while the camera moves.
             (ViewKind::Volume, Some(volume)) if !(view.moving && settings.points_while_moving) => {

@@ -17,6 +17,7 @@ pub const SURFACE_DRAW: &str = include_str!("../../shaders/surface/draw.wgsl");
 pub const VOXELIZE: &str = include_str!("../../shaders/grid/voxelize.wgsl");
 pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
 pub const DIFFERENCE: &str = include_str!("../../shaders/grid/difference.wgsl");
+pub const DOWNSAMPLE: &str = include_str!("../../shaders/grid/downsample.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -41,6 +42,10 @@ pub fn voxelize() -> String {
 
 pub fn difference() -> String {
     DIFFERENCE.to_string()
+}
+
+pub fn downsample() -> String {
+    DOWNSAMPLE.to_string()
 }
 
 pub fn volume() -> String {
@@ -76,6 +81,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("voxelize", voxelize()),
         ("volume", volume()),
         ("difference", difference()),
+        ("downsample", downsample()),
     ]
 }
 

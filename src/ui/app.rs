@@ -12,6 +12,7 @@ use eframe::egui_wgpu;
 
 use crate::render::points::PointStyle;
 use crate::render::scene::{RenderSettings, ViewKind};
+use crate::render::surface::lod::{SurfaceDetail, detail_for};
 use crate::ui::audio::AudioPanel;
 use crate::ui::bridge::{ViewCallback, ViewResources};
 use crate::ui::hover::paint_readings;
@@ -145,6 +146,10 @@ impl LoudscapeApp {
             needs_repaint: false,
             moving_divisor: [1; 3],
             moving_points: PointStyle::default().max_points_moving,
+            iso_dragging: false,
+            surface_pace: Default::default(),
+            surface_detail: Default::default(),
+            surface_triangles: 0,
             slot_cameras: [None, None],
             renders_seen: (0, 0),
             open: crate::ui::open::OpenPanel {
@@ -299,6 +304,25 @@ impl LoudscapeApp {
                     next_moving_divisor(self.moving_divisor[kind], busy.then_some(dt));
             }
         }
+        // Level of detail: the coarse surface stands in while moving or dragging the isovalue
+        // when frames of the full one are too slow (render::surface::lod).
+        if self.settings.view == ViewKind::Surface {
+            if moving || self.iso_dragging {
+                let busy = ui.ctx().requested_repaint_last_pass();
+                let dt = ui.ctx().input(|i| i.unstable_dt) * 1000.0;
+                self.surface_pace.observe(
+                    busy.then_some(dt),
+                    self.surface_detail == SurfaceDetail::Full,
+                    self.surface_triangles,
+                );
+            }
+            self.surface_detail = detail_for(
+                self.surface_pace.full_too_slow(),
+                moving,
+                self.iso_dragging,
+                self.surface_busy,
+            );
+        }
         if moving {
             ui.ctx().request_repaint();
         } else if self.last_motion.take().is_some() {
@@ -340,6 +364,9 @@ impl LoudscapeApp {
         settings.markers = self.markers();
         if self.settings.view == ViewKind::Points {
             settings.points.max_points_moving = self.moving_points;
+        }
+        if self.settings.view == ViewKind::Surface {
+            settings.surface_detail = self.surface_detail;
         }
         let mut render_view = view;
         if moving && self.settings.view != ViewKind::Points {
@@ -444,13 +471,17 @@ impl eframe::App for LoudscapeApp {
         self.apply_freq_axis(frame);
         self.poll_compare(&ctx, frame);
         self.fetch_grid(frame);
+        let surface_status = frame
+            .wgpu_render_state()
+            .zip(self.active().map(|l| l.id))
+            .map(|(render_state, id)| ViewResources::surface_status(render_state, id));
         self.surface_busy = self.settings.view == ViewKind::Surface
-            && frame
-                .wgpu_render_state()
-                .zip(self.active().map(|l| l.id))
-                .is_some_and(|(render_state, id)| {
-                    ViewResources::surface_status(render_state, id).2
-                });
+            && surface_status.as_ref().is_some_and(|status| status.2);
+        self.surface_triangles = surface_status
+            .and_then(|status| status.0)
+            .map_or(0, |counts| counts.triangles());
+        // Set again by the isovalue slider (or a scripted sweep) while it is dragged.
+        self.iso_dragging = false;
         if self.surface_busy {
             // Come back for the finished surface; the frames in between only composite.
             ctx.request_repaint_after(Duration::from_millis(30));

@@ -2,9 +2,10 @@
 //! `--screenshot` run in the Surface view, the window sets one isovalue a frame once the first
 //! surface is shown (as a dragged slider does), waits until the surface of the last value is on
 //! screen, and prints one line on stderr, `iso sweep: values=N frames=N busy_frames=N
-//! longest_frame_ms=X installed=N shown_iso=X`: the frames it drew, how many of them while an
-//! extraction ran, the longest frame on the UI thread, the extractions installed and the
-//! isovalue of the surface shown. The screenshot is taken after it.
+//! longest_frame_ms=X installed=N coarse_installed=N shown_iso=X`: the frames it drew, how many
+//! of them while an extraction ran, the longest frame on the UI thread, the extractions
+//! installed (full and coarse surfaces of the level of detail) and the isovalue of the surface
+//! shown. The screenshot is taken after it.
 
 use std::time::Instant;
 
@@ -26,6 +27,7 @@ pub(super) struct IsoSweep {
     frames: u32,
     busy_frames: u32,
     installed_before: u64,
+    coarse_before: u64,
     pub(super) done: bool,
 }
 
@@ -45,13 +47,25 @@ impl IsoSweep {
             frames: 0,
             busy_frames: 0,
             installed_before: 0,
+            coarse_before: 0,
             done: false,
         })
     }
 }
 
-/// The active cloud's surface: (shown isovalue, extracting, installed extractions).
-fn surface_of(render_state: &egui_wgpu::RenderState, id: u64) -> Option<(Option<f32>, bool, u64)> {
+impl IsoSweep {
+    /// Whether it is setting values (as a dragged slider does), not waiting to start or done.
+    pub(super) fn sweeping(&self) -> bool {
+        self.next.is_some() && !self.done
+    }
+}
+
+/// The active cloud's surface: (shown isovalue, extracting, installed extractions, installed
+/// coarse surfaces).
+fn surface_of(
+    render_state: &egui_wgpu::RenderState,
+    id: u64,
+) -> Option<(Option<f32>, bool, u64, u64)> {
     let renderer = render_state.renderer.read();
     let scene = renderer
         .callback_resources
@@ -62,6 +76,7 @@ fn surface_of(render_state: &egui_wgpu::RenderState, id: u64) -> Option<(Option<
         scene.surface.shown_iso_value(),
         scene.surface.needs_another_frame(),
         scene.surface.installed(),
+        scene.surface.coarse_installed(),
     ))
 }
 
@@ -83,7 +98,7 @@ impl LoudscapeApp {
             self.settings.view = ViewKind::Surface;
             return false;
         }
-        let Some((shown, busy, installed)) = surface_of(render_state, id) else {
+        let Some((shown, busy, installed, coarse)) = surface_of(render_state, id) else {
             return false;
         };
         let now = Instant::now();
@@ -94,6 +109,7 @@ impl LoudscapeApp {
                 if shown.is_some() && !busy {
                     sweep.next = Some(0);
                     sweep.installed_before = installed;
+                    sweep.coarse_before = coarse;
                     sweep.last_frame = Some(now);
                 }
                 return false;
@@ -120,12 +136,13 @@ impl LoudscapeApp {
         }
         eprintln!(
             "iso sweep: values={} frames={} busy_frames={} longest_frame_ms={:.1} installed={} \
-             shown_iso={}",
+             coarse_installed={} shown_iso={}",
             sweep.values.len(),
             sweep.frames,
             sweep.busy_frames,
             sweep.longest_ms,
             installed - sweep.installed_before,
+            coarse - sweep.coarse_before,
             shown.unwrap_or(f32::NAN),
         );
         sweep.done = true;

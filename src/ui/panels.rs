@@ -247,8 +247,11 @@ impl LoudscapeApp {
                 ui.selectable_value(&mut surface.method, method, method.name());
             }
         });
-        ui.add(egui::Slider::new(&mut surface.iso_value, 0.0..=1.0).text("isovalue"))
+        let slider = ui
+            .add(egui::Slider::new(&mut surface.iso_value, 0.0..=1.0).text("isovalue"))
             .on_hover_text("The loudness density the surface encloses");
+        let sweeping = self.iso_sweep.as_ref().is_some_and(|s| s.sweeping());
+        self.iso_dragging = slider.dragged() || sweeping;
         ui.checkbox(&mut surface.lit, "lit from above");
         if self.surface_busy {
             ui.horizontal(|ui| {

@@ -73,6 +73,14 @@ pub(super) struct LoudscapeApp {
     pub(super) moving_divisor: [u32; 3],
     /// Points the Points view draws while moving, following the device's pace.
     pub(super) moving_points: u32,
+    /// The isovalue slider is being dragged (or a scripted sweep sets a value a frame).
+    pub(super) iso_dragging: bool,
+    /// The pace of the full surface's moving frames: whether the coarse one stands in.
+    pub(super) surface_pace: crate::render::surface::lod::DetailPace,
+    /// The surface mesh the last frame asked for (level of detail).
+    pub(super) surface_detail: crate::render::surface::lod::SurfaceDetail,
+    /// Triangles of the active cloud's full surface.
+    pub(super) surface_triangles: u32,
     /// The camera each data slot (Song, Timeline) was left with.
     pub(super) slot_cameras: [Option<Camera>; 2],
     /// Scene renders counted by the view and the frame they were last seen to change.

@@ -8,6 +8,7 @@
 //! in the voxel (0.5 where a voxel holds none).
 
 pub mod difference;
+pub mod downsample;
 pub mod reference;
 pub mod voxelize;
 

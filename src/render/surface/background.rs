@@ -8,16 +8,25 @@
 //! same surface replaces the waiting one, so a dragged isovalue slider extracts the value it
 //! was at when the worker became free and, last, the value it was left at, never a backlog.
 //!
+//! Level of detail ([`crate::render::surface::lod`]): a job first extracts the coarse surface
+//! from the grid downsampled (built once per grid, kept in the mailbox) in one submission and
+//! posts it, then the full one in slices. A full extraction that a newer request for the same
+//! surface overtakes is dropped between two slices (its buffers are kept for the next job), so
+//! during a sweep the worker goes from one coarse surface to the next and the full one of the
+//! value the slider stops at follows.
+//!
 //! [`ExtractedSurface::install_finished`]: crate::render::surface::state::ExtractedSurface::install_finished
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Condvar, Mutex};
 
 use crate::render::grid::VoxelGrid;
-use crate::render::surface::SurfaceSettings;
+use crate::render::grid::downsample::DownsamplePass;
 use crate::render::surface::buffers::MeshBuffers;
-use crate::render::surface::methods::{Methods, extract_until_fits};
+use crate::render::surface::lod::COARSE_LEVELS;
+use crate::render::surface::methods::{Methods, Submit, extract_until_fits};
 use crate::render::surface::state::{CacheKey, Finished, Mailbox, SurfaceState};
+use crate::render::surface::{SurfaceError, SurfaceSettings};
 
 /// A queue of work in which a new item replaces a waiting one with the same key (the latest
 /// request for a thing is the only one worth doing). Items with other keys wait in order.
@@ -73,6 +82,11 @@ impl<K: PartialEq, T> Coalescer<K, T> {
         }
     }
 
+    /// Whether an item waits under `key` for which `pred` holds.
+    pub fn waiting(&self, key: &K, pred: impl Fn(&T) -> bool) -> bool {
+        self.lock().0.iter().any(|(k, item)| k == key && pred(item))
+    }
+
     /// Items waiting.
     pub fn len(&self) -> usize {
         self.lock().0.len()
@@ -99,6 +113,32 @@ pub(crate) struct Job {
     /// Room the last surface needed: new buffers start at least this large.
     pub(crate) capacity: (u32, u32),
     pub(crate) mailbox: Arc<Mailbox>,
+    /// The coarse surface to extract first (level of detail); None: the full one only.
+    pub(crate) coarse: Option<CoarseJob>,
+}
+
+/// The coarse part of a [`Job`]: buffers to reuse and the room to start with.
+pub(crate) struct CoarseJob {
+    pub(crate) spare: Option<MeshBuffers>,
+    pub(crate) capacity: (u32, u32),
+}
+
+/// What a worker keeps between jobs.
+pub(crate) struct Worker {
+    pub(crate) methods: Methods,
+    pub(crate) downsample: DownsamplePass,
+    /// The buffers of a full extraction that was dropped (superseded), for the next job.
+    pub(crate) pool: Option<MeshBuffers>,
+}
+
+impl Worker {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        Self {
+            methods: Methods::new(device),
+            downsample: DownsamplePass::new(device),
+            pool: None,
+        }
+    }
 }
 
 /// The worker thread and its queue of jobs (one waiting job per surface).
@@ -113,9 +153,12 @@ impl BackgroundExtractor {
         std::thread::Builder::new()
             .name("surface-extraction".into())
             .spawn(move || {
-                let methods = Methods::new(&device);
-                while let Some((_, job)) = worker_jobs.take() {
-                    run_job(&device, &queue, &methods, job);
+                let mut worker = Worker::new(&device);
+                while let Some((slot, job)) = worker_jobs.take() {
+                    let key = job.key.clone();
+                    // Overtaken: a request for other settings of this surface waits.
+                    let superseded = || worker_jobs.waiting(&slot, |next| next.key != key);
+                    run_job(&device, &queue, &mut worker, job, &superseded);
                 }
             })?;
         Ok(Self { jobs })
@@ -135,11 +178,23 @@ impl Drop for BackgroundExtractor {
     }
 }
 
-/// Extracts one job (waiting for the GPU on this thread) and posts the result.
-pub(crate) fn run_job(device: &wgpu::Device, queue: &wgpu::Queue, methods: &Methods, job: Job) {
+/// Extracts one job (waiting for the GPU on this thread) and posts the result: the coarse
+/// surface first when the job asks for one, then the full one, dropped when `superseded` says
+/// so between two of its slices.
+pub(crate) fn run_job(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    worker: &mut Worker,
+    mut job: Job,
+    superseded: &dyn Fn() -> bool,
+) {
+    if let Some(coarse) = job.coarse.take() {
+        run_coarse(device, queue, worker, &job, coarse);
+    }
     let (v, i) = job.capacity;
     let spare = job
         .spare
+        .or_else(|| worker.pool.take())
         .filter(|b| b.vertex_capacity >= v && b.index_capacity >= i);
     let mut state = SurfaceState {
         buffers: Some(spare.unwrap_or_else(|| MeshBuffers::new(device, v, i))),
@@ -147,16 +202,24 @@ pub(crate) fn run_job(device: &wgpu::Device, queue: &wgpu::Queue, methods: &Meth
     };
     let mut submissions = 0;
     let result = extract_until_fits(
-        Some(&mut submissions),
+        Submit::Worker {
+            sliced: true,
+            submissions: &mut submissions,
+            superseded,
+        },
         device,
         queue,
-        methods,
+        &worker.methods,
         (v, i),
         None,
         &mut state,
         &job.grid,
         &job.settings,
     );
+    if let Err(SurfaceError::Superseded) = result {
+        worker.pool = state.buffers;
+        return;
+    }
     let error = result.err().map(|e| {
         log::warn!("{e}");
         e.to_string()
@@ -166,6 +229,67 @@ pub(crate) fn run_job(device: &wgpu::Device, queue: &wgpu::Queue, methods: &Meth
         buffers: state.buffers,
         counts: state.counts,
         error,
+    });
+}
+
+/// The coarse surface of `job`: downsamples the grid (once per grid), extracts from it in one
+/// submission, waited for by polling, and posts the mesh.
+fn run_coarse(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    worker: &Worker,
+    job: &Job,
+    coarse: CoarseJob,
+) {
+    let grid = {
+        let mut cached = job
+            .mailbox
+            .coarse_grid
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        match cached.as_ref() {
+            Some((key, grid)) if key.same_grid(&job.key) => share_grid(grid),
+            _ => {
+                let grid = worker
+                    .downsample
+                    .downsample(device, queue, &job.grid, COARSE_LEVELS);
+                let shared = share_grid(&grid);
+                *cached = Some((job.key.clone(), grid));
+                shared
+            }
+        }
+    };
+    let (v, i) = coarse.capacity;
+    let mut state = SurfaceState {
+        buffers: coarse
+            .spare
+            .filter(|b| b.vertex_capacity >= v && b.index_capacity >= i),
+        ..Default::default()
+    };
+    let mut submissions = 0;
+    let result = extract_until_fits(
+        Submit::Worker {
+            sliced: false,
+            submissions: &mut submissions,
+            superseded: &|| false,
+        },
+        device,
+        queue,
+        &worker.methods,
+        (v, i),
+        None,
+        &mut state,
+        &grid,
+        &job.settings,
+    );
+    if let Err(e) = result {
+        log::warn!("coarse surface: {e}");
+    }
+    job.mailbox.post_coarse(Finished {
+        key: job.key.clone(),
+        buffers: state.buffers,
+        counts: state.counts,
+        error: None,
     });
 }
 
@@ -212,6 +336,22 @@ mod tests {
         assert_eq!(queue.try_take(), Some(("song", 0.4)));
         assert_eq!(queue.try_take(), Some(("timeline", 0.5)));
         assert_eq!(queue.try_take(), None);
+    }
+
+    /// What the worker asks between two slices of a full extraction: does a request for other
+    /// settings of the same surface wait? Not for another surface's, nor for the same settings.
+    #[test]
+    fn waiting_sees_only_newer_requests_for_the_same_surface() {
+        let queue: Coalescer<&str, f32> = Coalescer::default();
+        let running = 0.30;
+        let newer = |v: &f32| *v != running;
+        assert!(!queue.waiting(&"song", newer));
+        queue.submit("timeline", 0.5);
+        assert!(!queue.waiting(&"song", newer), "another surface");
+        queue.submit("song", 0.30);
+        assert!(!queue.waiting(&"song", newer), "the same settings again");
+        queue.submit("song", 0.35);
+        assert!(queue.waiting(&"song", newer));
     }
 
     /// A waiting worker wakes for a request and stops when the queue closes.

@@ -141,12 +141,27 @@ fn wait_polling(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), Surfac
 
 /// Extracts the surface into `state`'s buffers and waits for its size, growing the buffers and
 /// extracting again until it fits (or cannot fit: then the error, with the counts kept).
-/// `slices` (the window's worker): submits each pass on its own and waits for it by polling (see
-/// [`map_polling`]), so other threads' submissions run between them; counts the submissions
-/// there. The result is the same as in one submission.
+/// [`Submit::Worker`] (the window's worker) waits by polling and, sliced, submits each pass on
+/// its own (see [`map_polling`]), so other threads' submissions run between them; counts the
+/// submissions there. The result is the same as in one submission.
+/// How an extraction goes to the GPU and is waited for.
+pub(crate) enum Submit<'a> {
+    /// One submission, waited for by blocking (tests, export, headless).
+    Blocking,
+    /// The window's worker: waits by polling (see [`map_polling`]); `sliced`: one submission
+    /// per pass; `submissions` counts them; `superseded` is asked before each slice and, once
+    /// true, the rest of the extraction is dropped
+    /// ([`SurfaceError::Superseded`]).
+    Worker {
+        sliced: bool,
+        submissions: &'a mut usize,
+        superseded: &'a dyn Fn() -> bool,
+    },
+}
+
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn extract_until_fits(
-    mut slices: Option<&mut usize>,
+    mut submit: Submit<'_>,
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     methods: &Methods,
@@ -167,6 +182,11 @@ pub(crate) fn extract_until_fits(
         let timestamps = timing.map(|t| &t.set);
         let mut slice_error = None;
         let mut sliced = 0usize;
+        let mut dropped = false;
+        let superseded = match &submit {
+            Submit::Worker { superseded, .. } => Some(*superseded),
+            Submit::Blocking => None,
+        };
         let mut submit_slice = |encoder: &mut wgpu::CommandEncoder| {
             let done = std::mem::replace(
                 encoder,
@@ -174,15 +194,20 @@ pub(crate) fn extract_until_fits(
                     label: Some("surface::extract"),
                 }),
             );
+            // A newer request waits: the rest of this one is recorded but never submitted.
+            dropped = dropped || superseded.is_some_and(|f| f());
+            if dropped {
+                return;
+            }
             queue.submit([done.finish()]);
             sliced += 1;
             if slice_error.is_none() {
                 slice_error = wait_polling(device, queue).err();
             }
         };
-        let slicer: Option<&mut Slicer<'_>> = match slices {
-            Some(_) => Some(&mut submit_slice),
-            None => None,
+        let slicer: Option<&mut Slicer<'_>> = match submit {
+            Submit::Worker { sliced: true, .. } => Some(&mut submit_slice),
+            _ => None,
         };
         match settings.method {
             SurfaceMethod::MarchingTetrahedra => methods.marching_tets.record(
@@ -218,15 +243,22 @@ pub(crate) fn extract_until_fits(
             timing.resolve(&mut encoder, TIMESTAMPS);
         }
         let (vertex_capacity, index_capacity) = (buffers.vertex_capacity, buffers.index_capacity);
+        if dropped {
+            state.key = None;
+            return Err(SurfaceError::Superseded);
+        }
         queue.submit([encoder.finish()]);
         if let Some(e) = slice_error {
             return Err(e);
         }
-        let bytes = if let Some(count) = slices.as_deref_mut() {
-            *count += sliced + 1;
-            map_polling(device, &staging)?
-        } else {
-            map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?
+        let bytes = match &mut submit {
+            Submit::Worker { submissions, .. } => {
+                **submissions += sliced + 1;
+                map_polling(device, &staging)?
+            }
+            Submit::Blocking => {
+                map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?
+            }
         };
         let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
         let counts = SurfaceCounts {

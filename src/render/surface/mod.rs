@@ -19,7 +19,9 @@
 //! needed more room the buffers grow and the surface is extracted again (never silently
 //! truncated: see [`state::ExtractedSurface::counts`]). The window never waits for any of it:
 //! [`background`] extracts on its own thread into spare buffers, coalescing requests, while the
-//! last mesh is drawn. Tests and export use [`pass::SurfacePass::extract_blocking`] and
+//! last mesh is drawn. For interaction it also keeps a coarse surface, extracted first from the
+//! grid downsampled (level of detail, [`lod`]), which a slow device draws while the camera moves
+//! or the isovalue is dragged. Tests and export use [`pass::SurfacePass::extract_blocking`] and
 //! [`pass::SurfacePass::read_mesh`], which do wait.
 
 pub mod background;
@@ -28,6 +30,7 @@ pub mod cpu_mesh;
 pub mod draw;
 pub mod dual_contour;
 pub mod extraction;
+pub mod lod;
 pub mod marching_tets;
 pub mod methods;
 pub mod pass;
@@ -116,6 +119,8 @@ pub enum SurfaceError {
     },
     #[error("no surface has been extracted yet")]
     NotExtracted,
+    #[error("a newer surface was asked for before this one was done")]
+    Superseded,
 }
 
 /// How much a surface needed and how much room it had.

@@ -1,6 +1,6 @@
 //! [`SurfacePass`]: extraction and drawing of the Surface view, built once per device.
 
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 use glam::Vec3;
 
@@ -12,11 +12,12 @@ use crate::render::gpu::timing::Timestamps;
 use crate::render::grid::VoxelGrid;
 use crate::render::points::depth_state;
 use crate::render::shaders;
-use crate::render::surface::background::{BackgroundExtractor, Job, share_grid};
+use crate::render::surface::background::{BackgroundExtractor, CoarseJob, Job, Worker, share_grid};
 use crate::render::surface::buffers::{INDEXED_ARGS_OFFSET, MeshVertex};
 use crate::render::surface::cpu_mesh::CpuMesh;
 use crate::render::surface::draw::SurfaceStyle;
-use crate::render::surface::methods::{Methods, TIMESTAMPS, extract_until_fits};
+use crate::render::surface::lod::{Level, SurfaceDetail};
+use crate::render::surface::methods::{Methods, Submit, TIMESTAMPS, extract_until_fits};
 use crate::render::surface::state::{CacheKey, ExtractedSurface};
 use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, SurfaceSettings};
 
@@ -29,6 +30,8 @@ pub struct SurfacePass {
     /// The window's extraction thread, started by the first [`SurfacePass::prepare`] (None
     /// inside when the thread could not start: then prepare extracts in place).
     background: OnceLock<Option<BackgroundExtractor>>,
+    /// What [`SurfacePass::prepare`] extracts with in place when the thread could not start.
+    fallback: Mutex<Option<Worker>>,
     pipeline: wgpu::RenderPipeline,
     style: wgpu::Buffer,
     style_bind_group: wgpu::BindGroup,
@@ -104,6 +107,7 @@ impl SurfacePass {
             device: device.clone(),
             methods: OnceLock::new(),
             background: OnceLock::new(),
+            fallback: Mutex::new(None),
             pipeline,
             style,
             style_bind_group,
@@ -187,6 +191,16 @@ impl SurfacePass {
             let capacity = state.buffers.as_ref().map_or(self.initial_capacity, |b| {
                 (b.vertex_capacity, b.index_capacity)
             });
+            // The coarse grid has a quarter of the cells per level, and its surface about a
+            // quarter of the triangles: start there, then keep the room it needed.
+            let (v, i) = self.initial_capacity;
+            let shrink = 2 * crate::render::surface::lod::COARSE_LEVELS;
+            let coarse_capacity = state
+                .coarse
+                .as_ref()
+                .map_or((v >> shrink, i >> shrink), |c| {
+                    (c.buffers.vertex_capacity, c.buffers.index_capacity)
+                });
             Job {
                 key: wanted,
                 grid: share_grid(grid),
@@ -194,6 +208,10 @@ impl SurfacePass {
                 spare: state.spare.take(),
                 capacity,
                 mailbox: surface.mailbox.clone(),
+                coarse: Some(CoarseJob {
+                    spare: state.coarse_spare.take(),
+                    capacity: coarse_capacity,
+                }),
             }
         };
         let background = self.background.get_or_init(|| {
@@ -205,11 +223,14 @@ impl SurfacePass {
             Some(background) => background.submit(job),
             // No thread: extract here (waits), as before there was one.
             None => {
+                let mut fallback = self.fallback.lock().unwrap_or_else(|e| e.into_inner());
+                let worker = fallback.get_or_insert_with(|| Worker::new(&self.device));
                 crate::render::surface::background::run_job(
                     &self.device,
                     queue,
-                    self.methods(),
+                    worker,
                     job,
+                    &|| false,
                 );
                 surface.install_finished();
             }
@@ -229,7 +250,7 @@ impl SurfacePass {
         let mut state = surface.lock();
         state.requested = None;
         extract_until_fits(
-            None,
+            Submit::Blocking,
             &self.device,
             queue,
             self.methods(),
@@ -256,7 +277,11 @@ impl SurfacePass {
         state.requested = None;
         let mut submissions = 0;
         let counts = extract_until_fits(
-            Some(&mut submissions),
+            Submit::Worker {
+                sliced: true,
+                submissions: &mut submissions,
+                superseded: &|| false,
+            },
             &self.device,
             queue,
             self.methods(),
@@ -275,8 +300,26 @@ impl SurfacePass {
         queue: &wgpu::Queue,
         surface: &ExtractedSurface,
     ) -> Result<CpuMesh, SurfaceError> {
+        self.read_level(queue, surface, Level::Full)
+    }
+
+    /// Reads one of the surface's meshes back to the CPU: the full one ([`SurfacePass::read_mesh`])
+    /// or the coarse one of the level of detail (waits for the GPU).
+    pub fn read_level(
+        &self,
+        queue: &wgpu::Queue,
+        surface: &ExtractedSurface,
+        level: Level,
+    ) -> Result<CpuMesh, SurfaceError> {
         let state = surface.lock();
-        let (Some(buffers), Some(counts)) = (&state.buffers, state.counts) else {
+        let mesh = match level {
+            Level::Full => state.buffers.as_ref().zip(state.counts),
+            Level::Coarse => state
+                .coarse
+                .as_ref()
+                .and_then(|c| Some(&c.buffers).zip(c.counts)),
+        };
+        let Some((buffers, counts)) = mesh else {
             return Err(SurfaceError::NotExtracted);
         };
         let read = |buffer: &wgpu::Buffer, bytes: u64| -> Result<Vec<u8>, SurfaceError> {
@@ -307,15 +350,26 @@ impl SurfacePass {
         })
     }
 
-    /// Draws the extracted surface with the indirect arguments the GPU wrote.
+    /// Draws the extracted surface with the indirect arguments the GPU wrote: the full mesh or
+    /// the coarse one, as `detail` asks of what is ready (see
+    /// [`crate::render::surface::lod::choose_mesh`]), `grid` and `settings` being the current
+    /// ones.
     pub fn draw(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         frame: &FrameBinding,
         surface: &ExtractedSurface,
+        current: Option<(&VoxelGrid, &SurfaceSettings)>,
+        detail: SurfaceDetail,
     ) {
         let state = surface.lock();
-        let (Some(buffers), Some(_)) = (&state.buffers, &state.key) else {
+        let wanted = current.map(|(grid, settings)| CacheKey::new(grid, settings));
+        let buffers = match ExtractedSurface::level_to_draw(&state, detail, wanted.as_ref()) {
+            Some(Level::Full) => state.buffers.as_ref(),
+            Some(Level::Coarse) => state.coarse.as_ref().map(|c| &c.buffers),
+            None => None,
+        };
+        let Some(buffers) = buffers else {
             return;
         };
         pass.set_pipeline(&self.pipeline);

@@ -1,6 +1,7 @@
 //! One cloud's extracted surface ([`ExtractedSurface`], owned by its `SceneData`): the mesh
 //! buffers, what they were extracted from (the cache key), the surface asked of the background
-//! extraction and the mailbox its result arrives in. The per-device
+//! extraction and the mailbox its result arrives in; beside them the coarse mesh of the level of
+//! detail ([`super::lod`]) and, in the mailbox, the coarse grid it is extracted from. The per-device
 //! [`SurfacePass`](crate::render::surface::pass::SurfacePass) fills and draws it, so each cloud
 //! (Song, Timeline) keeps its own surface.
 
@@ -10,6 +11,7 @@ use glam::UVec3;
 
 use crate::render::grid::VoxelGrid;
 use crate::render::surface::buffers::MeshBuffers;
+use crate::render::surface::lod::{Level, SurfaceDetail, choose_mesh};
 use crate::render::surface::{SurfaceCounts, SurfaceMethod, SurfaceSettings};
 
 /// Identifies the extracted surface: a change re-extracts it.
@@ -35,6 +37,22 @@ impl CacheKey {
             box_bits: [a.x, a.y, a.z, b.x, b.y, b.z].map(f32::to_bits),
         }
     }
+
+    /// Whether both keys were extracted from the same grid (whatever the method and isovalue).
+    pub(crate) fn same_grid(&self, other: &CacheKey) -> bool {
+        self.density == other.density
+            && self.hp_mean == other.hp_mean
+            && self.dims == other.dims
+            && self.box_bits == other.box_bits
+    }
+}
+
+/// The coarse mesh of a surface (level of detail): its buffers and the full surface's key it
+/// stands for (the full grid's, method and isovalue).
+pub(crate) struct CoarseMesh {
+    pub(crate) buffers: MeshBuffers,
+    pub(crate) key: CacheKey,
+    pub(crate) counts: Option<SurfaceCounts>,
 }
 
 #[derive(Default)]
@@ -51,6 +69,13 @@ pub(crate) struct SurfaceState {
     pub(crate) requested: Option<CacheKey>,
     /// Background extractions installed so far.
     pub(crate) installed: u64,
+    /// The coarse mesh (level of detail), extracted before the full one by the background
+    /// extraction; None before the first and outside the window (blocking extractions).
+    pub(crate) coarse: Option<CoarseMesh>,
+    /// The coarse mesh drawn before `coarse`, reused by the next background extraction.
+    pub(crate) coarse_spare: Option<MeshBuffers>,
+    /// Coarse meshes installed so far.
+    pub(crate) coarse_installed: u64,
 }
 
 /// A finished background extraction, waiting to be installed.
@@ -61,29 +86,43 @@ pub(crate) struct Finished {
     pub(crate) error: Option<String>,
 }
 
-/// Where the background extraction leaves its result for the window to pick up.
+/// Where the background extraction leaves its results for the window to pick up (the full
+/// mesh and the coarse one, each in its own slot), and the coarse grid it keeps for the level of
+/// detail.
 #[derive(Default)]
 pub(crate) struct Mailbox {
     finished: Mutex<Option<Finished>>,
+    coarse: Mutex<Option<Finished>>,
+    /// The coarse grid and the key of the full one it was downsampled from (built and read by
+    /// the worker only).
+    pub(crate) coarse_grid: Mutex<Option<(CacheKey, VoxelGrid)>>,
+}
+
+fn lock<T>(slot: &Mutex<T>) -> MutexGuard<'_, T> {
+    slot.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl Mailbox {
     pub(crate) fn post(&self, finished: Finished) {
-        *self.finished.lock().unwrap_or_else(|e| e.into_inner()) = Some(finished);
+        *lock(&self.finished) = Some(finished);
+    }
+
+    /// Leaves a coarse mesh (its `buffers` and `key`; counts and error are the full one's
+    /// business).
+    pub(crate) fn post_coarse(&self, finished: Finished) {
+        *lock(&self.coarse) = Some(finished);
     }
 
     fn take(&self) -> Option<Finished> {
-        self.finished
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .take()
+        lock(&self.finished).take()
+    }
+
+    fn take_coarse(&self) -> Option<Finished> {
+        lock(&self.coarse).take()
     }
 
     fn is_full(&self) -> bool {
-        self.finished
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .is_some()
+        lock(&self.finished).is_some() || lock(&self.coarse).is_some()
     }
 }
 
@@ -137,8 +176,9 @@ impl ExtractedSurface {
     /// (the one it replaces is kept as the next extraction's spare). Returns whether the surface
     /// changed, so the window renders the scene again. Never waits for the GPU.
     pub fn install_finished(&self) -> bool {
+        let coarse = self.install_coarse();
         let Some(finished) = self.mailbox.take() else {
-            return false;
+            return coarse;
         };
         let mut state = self.lock();
         if state.requested.as_ref() == Some(&finished.key) {
@@ -153,6 +193,45 @@ impl ExtractedSurface {
         state.counts = finished.counts;
         state.error = finished.error;
         true
+    }
+
+    /// Installs a finished coarse mesh, if one arrived (the one it replaces is kept as the next
+    /// coarse extraction's spare).
+    fn install_coarse(&self) -> bool {
+        let Some(finished) = self.mailbox.take_coarse() else {
+            return false;
+        };
+        let mut state = self.lock();
+        if let Some(buffers) = finished.buffers {
+            let old = state.coarse.replace(CoarseMesh {
+                buffers,
+                key: finished.key,
+                counts: finished.counts,
+            });
+            if let Some(old) = old {
+                state.coarse_spare = Some(old.buffers);
+            }
+            state.coarse_installed += 1;
+        }
+        true
+    }
+
+    /// Coarse meshes installed so far (the level of detail; the window's tests read it).
+    pub fn coarse_installed(&self) -> u64 {
+        self.lock().coarse_installed
+    }
+
+    /// Which mesh a frame asking for `detail` draws, `wanted` being the key of the current
+    /// settings (None: no grid).
+    pub(crate) fn level_to_draw(
+        state: &SurfaceState,
+        detail: SurfaceDetail,
+        wanted: Option<&CacheKey>,
+    ) -> Option<Level> {
+        let matches = |key: &CacheKey| wanted == Some(key);
+        let full = state.buffers.as_ref().and(state.key.as_ref()).map(matches);
+        let coarse = state.coarse.as_ref().map(|c| matches(&c.key));
+        choose_mesh(detail, full, coarse)
     }
 
     /// How many background extractions were installed (fewer than requests when they were
