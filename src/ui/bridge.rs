@@ -10,6 +10,7 @@
 //! over a cloud of millions of points costs a composite, not a scene.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor};
 
@@ -38,6 +39,7 @@ pub struct ViewResources {
 impl ViewResources {
     pub fn install(render_state: &egui_wgpu::RenderState) {
         let device = &render_state.device;
+        device.on_uncaptured_error(Arc::new(on_device_error));
         let resources = ViewResources {
             renderer: Renderer::new(device),
             composite: CompositePass::new(device, render_state.target_format),
@@ -232,6 +234,38 @@ impl ViewResources {
     }
 }
 
+/// The window's device errors: wgpu's own rule (an error is a bug: panic with it), except a
+/// surface reconfiguration that found the queue busy. eframe reconfigures the window's surface
+/// on the UI thread when the window is resized or the swapchain says it is suboptimal, and
+/// wgpu refuses when work was submitted while it waited for the device to go idle, which the
+/// surface extraction thread does (render/surface/background.rs). The surface keeps its
+/// previous configuration and eframe configures it again on the next frame, so that one is
+/// only logged.
+fn on_device_error(error: wgpu::Error) {
+    if is_busy_reconfigure(&error) {
+        log::warn!("surface reconfiguration deferred: {error}");
+        return;
+    }
+    panic!("wgpu error: {error}");
+}
+
+/// Whether `error` is wgpu's "failed to wait for GPU to come idle before reconfiguring the
+/// surface" (work submitted from another thread during the wait).
+fn is_busy_reconfigure(error: &wgpu::Error) -> bool {
+    use wgpu::wgc::present::ConfigureSurfaceError;
+    let mut source: Option<&(dyn std::error::Error + 'static)> = Some(error);
+    while let Some(e) = source {
+        if matches!(
+            e.downcast_ref::<ConfigureSurfaceError>(),
+            Some(ConfigureSurfaceError::GpuWaitTimeout)
+        ) {
+            return true;
+        }
+        source = e.source();
+    }
+    false
+}
+
 /// One frame of the 3D view.
 pub struct ViewCallback {
     pub view: FrameView,
@@ -331,6 +365,44 @@ use eframe::egui;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Only the busy-queue reconfiguration is let through, as wgpu reports it (the configure
+    /// error inside wgpu-core's context error); any other device error stays fatal.
+    #[test]
+    fn only_a_busy_surface_reconfiguration_is_forgiven() {
+        use wgpu::wgc::error::ContextError;
+        use wgpu::wgc::present::ConfigureSurfaceError;
+        let validation = |inner: ConfigureSurfaceError| wgpu::Error::Validation {
+            source: Box::new(ContextError {
+                fn_ident: "Surface::configure",
+                source: Box::new(inner),
+                label: String::new(),
+            }),
+            description: String::new(),
+        };
+        assert!(is_busy_reconfigure(&validation(
+            ConfigureSurfaceError::GpuWaitTimeout
+        )));
+        assert!(!is_busy_reconfigure(&validation(
+            ConfigureSurfaceError::InvalidSurface
+        )));
+        let other = wgpu::Error::Validation {
+            source: Box::new(std::io::Error::other(
+                "a bind group does not match its layout",
+            )),
+            description: String::new(),
+        };
+        assert!(!is_busy_reconfigure(&other));
+        assert!(
+            std::panic::catch_unwind(|| on_device_error(wgpu::Error::Validation {
+                source: Box::new(std::io::Error::other("bad")),
+                description: String::new(),
+            }))
+            .is_err(),
+            "other errors still panic"
+        );
+        on_device_error(validation(ConfigureSurfaceError::GpuWaitTimeout));
+    }
     use crate::view::camera::Camera;
 
     fn view(frame_index: u32) -> FrameView {
