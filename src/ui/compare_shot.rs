@@ -100,10 +100,22 @@ fn render_one(
         if labels_on {
             labels::paint(painter, rect, view, &axis_labels);
         }
-        paint_title(painter, rect, title);
-        if let Some((measure, range)) = legend {
-            let legend_rect = egui_rect(rect.right() - 170.0, rect.top() + 40.0, 160.0, 180.0);
-            paint_diverging_legend(painter, legend_rect, measure, range);
+        match legend {
+            Some((measure, range)) => {
+                paint_title(painter, rect, title);
+                let legend_rect = egui_rect(rect.right() - 170.0, rect.top() + 40.0, 160.0, 180.0);
+                paint_diverging_legend(painter, legend_rect, measure, range);
+            }
+            None => {
+                // A half of the side-by-side picture: its title ("A: name") and the colour key
+                // of what it draws, as every picture carries.
+                let mut picture = crate::ui::legends::picture_legend(cloud, settings);
+                picture.name = title.to_string();
+                // The view and its settings are the same in both halves and say more than a
+                // half has room for beside its key.
+                picture.detail.clear();
+                crate::ui::legends::paint_picture(painter, rect, &picture);
+            }
         }
     });
     Ok(target.read_rgba(&gpu.device, &gpu.queue)?)

@@ -204,12 +204,21 @@ pub fn picture_legend(cloud: &PointCloud, settings: &RenderSettings) -> PictureL
 pub const KEY_SIZE: egui::Vec2 = egui::vec2(220.0, 14.0);
 /// Margin between the picture's edge and the legend.
 pub const MARGIN: f32 = 14.0;
+/// The narrowest key strip: room for its end labels and the middle tick between them.
+const KEY_MIN_WIDTH: f32 = 180.0;
 
 /// Where the colour strip of a picture of `rect` lies (top right, under the key's title):
-/// [`KEY_SIZE`], narrower in narrow pictures (at most 30 % of the width) so the name keeps
-/// its room.
+/// [`KEY_SIZE`], narrower in narrow pictures (at most 30 % of the width, at least
+/// `KEY_MIN_WIDTH`) so the name keeps its room; [`paint_picture`] moves it under the name where
+/// the two would still meet.
 pub fn key_strip_rect(rect: egui::Rect) -> egui::Rect {
-    let size = egui::vec2(KEY_SIZE.x.min(rect.width() * 0.3), KEY_SIZE.y);
+    // Never narrower than its end labels need ("0 percussive" ... "harmonic 1").
+    let width = KEY_SIZE
+        .x
+        .min((rect.width() * 0.3).max(KEY_MIN_WIDTH))
+        .min(rect.width() - 2.0 * MARGIN)
+        .max(0.0);
+    let size = egui::vec2(width, KEY_SIZE.y);
     egui::Rect::from_min_size(
         egui::pos2(rect.right() - MARGIN - size.x, rect.top() + MARGIN + 18.0),
         size,
@@ -225,21 +234,40 @@ pub fn paint_picture(painter: &egui::Painter, rect: egui::Rect, legend: &Picture
     let ink = colour(legend.background.ink(true));
     let soft = colour(legend.background.ink(false));
     let top_left = rect.min + egui::vec2(MARGIN, MARGIN);
-    painter.text(
+    let name = painter.text(
         top_left,
         egui::Align2::LEFT_TOP,
         &legend.name,
         egui::FontId::proportional(16.0),
         ink,
     );
-    painter.text(
+    let detail = painter.text(
         top_left + egui::vec2(0.0, 21.0),
         egui::Align2::LEFT_TOP,
         &legend.detail,
         egui::FontId::proportional(12.0),
         soft,
     );
-    let strip = key_strip_rect(rect);
+    let mut strip = key_strip_rect(rect);
+    // A picture too narrow for the name and the key side by side (a half of a compare
+    // picture) gets the key under the name, at least wide enough for its end labels.
+    let text_right = if legend.detail.is_empty() {
+        name.right()
+    } else {
+        name.right().max(detail.right())
+    };
+    if text_right + 2.0 * MARGIN > strip.left() {
+        let width = KEY_SIZE.x.min(rect.width() - 2.0 * MARGIN).max(0.0);
+        let below = if legend.detail.is_empty() {
+            name.bottom()
+        } else {
+            detail.bottom()
+        };
+        strip = egui::Rect::from_min_size(
+            egui::pos2(rect.right() - MARGIN - width, below + 22.0),
+            egui::vec2(width, KEY_SIZE.y),
+        );
+    }
     match &legend.key {
         Key::Hp { ramp, title } => {
             paint_strip(painter, strip, |t| ramp.sample_u8(t), legend.background);
@@ -318,13 +346,16 @@ fn paint_key_text(
 ) {
     let ink = colour(background.ink(true));
     let soft = colour(background.ink(false));
-    painter.text(
-        egui::pos2(strip.left(), strip.top() - 4.0),
-        egui::Align2::LEFT_BOTTOM,
-        title,
-        egui::FontId::proportional(13.0),
-        ink,
-    );
+    // Over the strip from its left end; a title longer than the strip (a narrow picture) ends
+    // at the strip's right end instead of running off the picture.
+    let galley = painter.layout_no_wrap(title.to_owned(), egui::FontId::proportional(13.0), ink);
+    let size = galley.size();
+    let left = if size.x > strip.width() {
+        strip.right() - size.x
+    } else {
+        strip.left()
+    };
+    painter.galley(egui::pos2(left, strip.top() - 4.0 - size.y), galley, ink);
     for (at, text) in ticks {
         let x = strip.left() + strip.width() * at;
         painter.line_segment(
