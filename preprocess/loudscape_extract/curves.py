@@ -5,7 +5,8 @@ and the true-peak overs, on the 100 ms segment grid the dynamics already use.
 - short-term loudness: 3 s windows (30 segments), one every 100 ms (:class:`Dynamics`);
 - PSR: the short-term window's true peak minus its loudness (NaN below -70 LUFS);
 - overs: runs of segments whose true peak (4x oversampled, DC-free signal as PSR's) exceeds
-  0 dBTP, and -1 dBTP, as ``[start_s, end_s]`` intervals.
+  0 dBTP, and -1 dBTP, as ``[start_s, end_s]`` intervals; at most :data:`MAX_OVERS`, the
+  closest neighbours merged past that.
 
 A curve has at most :data:`MAX_CURVE_POINTS` values: past 20 minutes at 10 Hz every k-th
 window is kept (``rate_hz`` says which). Values are rounded to 0.1 dB; ``null`` where not
@@ -26,7 +27,8 @@ __all__ = ["MAX_CURVE_POINTS", "MAX_OVERS", "MOMENTARY_SEGMENTS", "loudness_curv
 MOMENTARY_SEGMENTS = 4
 #: 20 minutes at 10 Hz; a 60-minute song's three curves stay near 250 KB of JSON.
 MAX_CURVE_POINTS = 12000
-#: Intervals kept per overs list (the first ones in time); ``*_count`` says how many in all.
+#: Intervals kept per overs list; past it, neighbouring intervals are merged (the smallest gaps
+#: first) so the list still covers the whole song; ``*_count`` says how many there were.
 MAX_OVERS = 2000
 _OVER_LEVELS = (("overs_0dbtp", 0.0), ("overs_1dbtp", -1.0))
 
@@ -43,6 +45,24 @@ def _intervals(flags: np.ndarray, boundaries: np.ndarray, rate: float) -> list[l
         [round(boundaries[a] / rate, 3), round(boundaries[b] / rate, 3)]
         for a, b in zip(starts, stops, strict=True)
     ]
+
+
+def _merged(intervals: list[list[float]], limit: int) -> list[list[float]]:
+    """At most ``limit`` intervals covering every one of ``intervals``: the gaps between
+    neighbours are closed, smallest first, until ``limit`` remain (a long song's overs stay
+    marked everywhere they occur instead of only in its first part)."""
+    if len(intervals) <= limit:
+        return intervals
+    if limit <= 0:
+        return []
+    starts = np.array([a for a, _ in intervals])
+    ends = np.array([b for _, b in intervals])
+    gaps = starts[1:] - ends[:-1]
+    # Keep the (limit - 1) widest gaps open; ties close the later ones first (stable sort).
+    keep = np.sort(np.argsort(-gaps, kind="stable")[: limit - 1])
+    first = np.concatenate([[0], keep + 1])
+    last = np.concatenate([keep, [len(intervals) - 1]])
+    return [[float(starts[a]), float(ends[b])] for a, b in zip(first, last, strict=True)]
 
 
 def loudness_curves(
@@ -98,6 +118,6 @@ def loudness_curves(
     for key, level in _OVER_LEVELS:
         over = np.asarray(segment_peak) > 10.0 ** (level / 20.0)
         intervals = _intervals(over, boundaries, float(sample_rate))
-        curves[key] = intervals[:MAX_OVERS]
+        curves[key] = _merged(intervals, MAX_OVERS)
         curves[f"{key}_count"] = len(intervals)
     return curves

@@ -8,7 +8,7 @@ import pytest
 import soundfile
 from test_dynamics import RATE, dynamic_stereo, ebur128
 
-from loudscape_extract.curves import MAX_CURVE_POINTS, loudness_curves
+from loudscape_extract.curves import MAX_CURVE_POINTS, MAX_OVERS, _merged, loudness_curves
 from loudscape_extract.dynamics import dynamics_from_segments
 from loudscape_extract.song import extract_song
 
@@ -107,3 +107,27 @@ def test_whole_track_and_streamed_curves_agree(tmp_path):
         a, b = np.array(whole[key], dtype=float), np.array(streamed[key], dtype=float)
         np.testing.assert_allclose(a, b, atol=0.11, err_msg=key)
     assert whole["overs_1dbtp"] == streamed["overs_1dbtp"]
+
+
+def test_past_the_cap_overs_are_merged_not_cut_off():
+    # 5,000 one-segment overs spread over an hour, every 0.72 s, with wider gaps every tenth.
+    intervals = []
+    t = 0.0
+    for i in range(5000):
+        intervals.append([round(t, 3), round(t + 0.1, 3)])
+        t += 2.0 if i % 10 == 9 else 0.5
+    merged = _merged(intervals, MAX_OVERS)
+    assert len(merged) == MAX_OVERS
+    # Every over is inside one merged interval, and the merged ones are in order, disjoint.
+    starts = np.array([a for a, _ in merged])
+    ends = np.array([b for _, b in merged])
+    assert np.all(starts[1:] > ends[:-1])
+    for a, b in intervals:
+        k = np.searchsorted(starts, a, side="right") - 1
+        assert starts[k] <= a and b <= ends[k]
+    # The whole song is still covered: the last over is kept, not cut off at the cap.
+    assert merged[-1][1] == intervals[-1][1] and merged[0][0] == intervals[0][0]
+    # Only the narrow gaps were closed: every wide (1.9 s) gap is still open.
+    gaps = starts[1:] - ends[:-1]
+    assert np.sum(gaps > 1.8) == 499
+    assert _merged(intervals[:10], MAX_OVERS) == intervals[:10]
