@@ -217,9 +217,33 @@ pub(super) fn paint_readings(
         .map(|r| format!("{}: {}", r.name, r.value))
         .collect::<Vec<_>>()
         .join("\n");
-    let galley =
-        painter.layout_no_wrap(text, egui::FontId::monospace(12.0), Color32::from_gray(230));
+    let (min, galley) = readout_layout(rect, pos, |wrap| {
+        painter.layout(
+            text.clone(),
+            egui::FontId::monospace(12.0),
+            Color32::from_gray(230),
+            wrap,
+        )
+    });
     let size = galley.size() + egui::vec2(12.0, 8.0);
+    let frame = egui::Rect::from_min_size(min, size);
+    painter.rect_filled(frame, 4.0, Color32::from_black_alpha(200));
+    painter.galley(min + egui::vec2(6.0, 4.0), galley, Color32::from_gray(230));
+}
+
+/// Where the read-out box goes: right of and below the cursor, flipped to the other side where
+/// it would leave the view, and always inside the view: a line longer than the view (a long
+/// song title) wraps at its width instead of running off it. `layout(wrap_width)` lays the text
+/// out; returns the box's top-left corner and the laid-out text.
+fn readout_layout(
+    rect: egui::Rect,
+    pos: egui::Pos2,
+    layout: impl Fn(f32) -> std::sync::Arc<egui::Galley>,
+) -> (egui::Pos2, std::sync::Arc<egui::Galley>) {
+    const PAD: egui::Vec2 = egui::vec2(12.0, 8.0);
+    const EDGE: f32 = 4.0;
+    let galley = layout((rect.width() - PAD.x - 2.0 * EDGE).max(40.0));
+    let size = galley.size() + PAD;
     let mut min = pos + egui::vec2(16.0, 12.0);
     if min.x + size.x > rect.right() {
         min.x = pos.x - 16.0 - size.x;
@@ -227,7 +251,54 @@ pub(super) fn paint_readings(
     if min.y + size.y > rect.bottom() {
         min.y = pos.y - 12.0 - size.y;
     }
-    let frame = egui::Rect::from_min_size(min, size);
-    painter.rect_filled(frame, 4.0, Color32::from_black_alpha(200));
-    painter.galley(min + egui::vec2(6.0, 4.0), galley, Color32::from_gray(230));
+    min.x = min.x.max(rect.left() + EDGE);
+    min.y = min.y.max(rect.top() + EDGE);
+    (min, galley)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A read-out longer than the view (a 10,000-song timeline's long title, the cursor near the
+    /// view's left edge) stays inside the view, wrapped, and so does a short one at any corner.
+    #[test]
+    fn the_readout_box_stays_inside_the_view() {
+        let ctx = egui::Context::default();
+        let view = egui::Rect::from_min_size(egui::pos2(270.0, 0.0), egui::vec2(400.0, 300.0));
+        let long = format!(
+            "song: {}",
+            "A Song Title Of Ordinary Length, Part 01653 ".repeat(3)
+        );
+        let mut output = ctx.run_ui(Default::default(), |ui| {
+            let painter = egui::Painter::new(ui.ctx().clone(), egui::LayerId::background(), view);
+            for text in [long.as_str(), "time: 0:01.0\nlevel: -12.0 dB"] {
+                for pos in [
+                    view.left_top(),
+                    view.right_top(),
+                    view.left_bottom(),
+                    view.right_bottom(),
+                    view.center(),
+                    egui::pos2(300.0, 150.0),
+                ] {
+                    let (min, galley) = readout_layout(view, pos, |wrap| {
+                        painter.layout(
+                            text.to_string(),
+                            egui::FontId::monospace(12.0),
+                            Color32::WHITE,
+                            wrap,
+                        )
+                    });
+                    let frame =
+                        egui::Rect::from_min_size(min, galley.size() + egui::vec2(12.0, 8.0));
+                    assert!(
+                        frame.left() >= view.left() && frame.right() <= view.right() + 0.5,
+                        "{text:.20}… at {pos:?}: {frame:?} leaves {view:?} sideways"
+                    );
+                    assert!(frame.top() >= view.top(), "{frame:?} above {view:?}");
+                }
+            }
+        });
+        output.textures_delta.clear();
+    }
 }
