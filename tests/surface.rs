@@ -1,6 +1,7 @@
 //! Isosurfaces on the GPU (lavapipe where there is no GPU), read back and checked against
 //! analytic answers: sphere area, closed 2-manifolds of the right genus, dual-contouring vertices
-//! inside their cells, outward normals, degenerate isovalues, buffer growth, golden images.
+//! inside their cells, outward normals, degenerate isovalues, buffer growth, golden images; and
+//! the CPU engine (used where the device is the CPU) held to the GPU passes' surface.
 
 mod common;
 
@@ -13,6 +14,7 @@ use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::surface::cpu::SurfaceEngine;
 use loudscape::render::surface::cpu_mesh::CpuMesh;
 use loudscape::render::surface::pass::SurfacePass;
 use loudscape::render::surface::state::ExtractedSurface;
@@ -84,10 +86,20 @@ fn extract(
     pass.read_mesh(&gpu.queue, &surface).expect("read back")
 }
 
+/// The GPU passes, whatever the device (these tests check the shaders; the CPU engine is held
+/// to them by `cpu_engine_extracts_the_gpu_surface_triangle_for_triangle`).
 fn surface_pass(gpu: &GpuContext) -> SurfacePass {
-    let frame = FrameBinding::new(&gpu.device);
-    SurfacePass::new(&gpu.device, &frame)
+    engine_pass(gpu, SurfaceEngine::Gpu)
 }
+
+fn engine_pass(gpu: &GpuContext, engine: SurfaceEngine) -> SurfacePass {
+    let frame = FrameBinding::new(&gpu.device);
+    SurfacePass::new(&gpu.device, &frame).with_engine(engine)
+}
+
+/// The window runs whichever engine suits the device (the CPU on lavapipe): its paths are
+/// tested on both.
+const ENGINES: [SurfaceEngine; 2] = [SurfaceEngine::Gpu, SurfaceEngine::Cpu];
 
 /// Every undirected edge of the welded mesh is in exactly two triangles, the two use it in
 /// opposite directions (consistent orientation); returns V - E + F.
@@ -291,18 +303,22 @@ fn buffers_grow_until_the_surface_fits() {
     let grid = grid_from(&gpu, 40, torus);
     let reference = extract(&gpu, &surface_pass(&gpu), &grid, DC, 0.5);
     let reference_mt = extract(&gpu, &surface_pass(&gpu), &grid, MT, 0.5);
-    for (method, triangles) in [
+    for ((method, triangles), engine) in [
         (MT, reference_mt.triangle_count()),
         (DC, reference.triangle_count()),
-    ] {
+    ]
+    .into_iter()
+    .flat_map(|case| ENGINES.map(|engine| (case, engine)))
+    {
+        let small = || SurfacePass::with_capacity(&gpu.device, &frame, 64, 96).with_engine(engine);
         // Blocking path.
-        let small = SurfacePass::with_capacity(&gpu.device, &frame, 64, 96);
-        let mesh = extract(&gpu, &small, &grid, method, 0.5);
+        let small_blocking = small();
+        let mesh = extract(&gpu, &small_blocking, &grid, method, 0.5);
         assert_eq!(mesh.triangle_count(), triangles);
 
         // Interactive path: extracted on the background thread (which grows its buffers until
         // the surface fits); frames go on meanwhile and the result is installed when ready.
-        let small = SurfacePass::with_capacity(&gpu.device, &frame, 64, 96);
+        let small = small();
         let settings = SurfaceSettings {
             method,
             iso_value: 0.5,
@@ -378,7 +394,8 @@ fn sliced_extraction_equals_one_submission() {
             assert!(whole.triangle_count() > 100, "{}", method.name());
             for pass in [
                 surface_pass(&gpu),
-                SurfacePass::with_capacity(&gpu.device, &frame, 64, 96),
+                SurfacePass::with_capacity(&gpu.device, &frame, 64, 96)
+                    .with_engine(SurfaceEngine::Gpu),
             ] {
                 let surface = ExtractedSurface::new();
                 let (counts, submissions) = pass
@@ -410,8 +427,8 @@ fn sliced_extraction_equals_one_submission() {
 fn interactive_isovalue_sweep_ends_on_the_last_value() {
     let gpu = common::gpu();
     let grid = grid_from(&gpu, 48, torus);
-    let pass = surface_pass(&gpu);
-    for method in [MT, DC] {
+    for (method, engine) in [MT, DC].into_iter().flat_map(|m| ENGINES.map(|e| (m, e))) {
+        let pass = engine_pass(&gpu, engine);
         let surface = ExtractedSurface::new();
         let frame = |iso_value: f32| {
             let settings = SurfaceSettings {
@@ -427,7 +444,7 @@ fn interactive_isovalue_sweep_ends_on_the_last_value() {
         };
         let sweep: Vec<f32> = (0..=16).map(|i| 0.3 + 0.02 * i as f32).collect();
         let last = *sweep.last().unwrap();
-        let reference = extract(&gpu, &surface_pass(&gpu), &grid, method, last);
+        let reference = extract(&gpu, &engine_pass(&gpu, engine), &grid, method, last);
         let mut busy_frames = 0;
         for &iso in &sweep {
             frame(iso);
@@ -664,15 +681,15 @@ fn the_window_path_keeps_a_coarse_surface_beside_the_full_one() {
     let grid = grid_from(&gpu, 64, torus);
     let coarse_grid =
         DownsamplePass::new(&gpu.device).downsample(&gpu.device, &gpu.queue, &grid, COARSE_LEVELS);
-    let pass = surface_pass(&gpu);
-    for method in [MT, DC] {
+    for (method, engine) in [MT, DC].into_iter().flat_map(|m| ENGINES.map(|e| (m, e))) {
+        let pass = engine_pass(&gpu, engine);
         let settings = SurfaceSettings {
             method,
             iso_value: 0.45,
             lit: true,
         };
-        let full = extract(&gpu, &surface_pass(&gpu), &grid, method, 0.45);
-        let coarse = extract(&gpu, &surface_pass(&gpu), &coarse_grid, method, 0.45);
+        let full = extract(&gpu, &engine_pass(&gpu, engine), &grid, method, 0.45);
+        let coarse = extract(&gpu, &engine_pass(&gpu, engine), &coarse_grid, method, 0.45);
         let surface = ExtractedSurface::new();
         let mut frames = 0;
         loop {
@@ -707,4 +724,172 @@ fn the_window_path_keeps_a_coarse_surface_beside_the_full_one() {
             method.name()
         );
     }
+}
+
+/// The CPU engine (render/surface/cpu/) extracts the same surface as the GPU passes: the same
+/// vertices and the same triangles with the same winding (matched vertex for vertex; positions,
+/// normals and hp equal up to float rounding, as fused multiply-adds may differ), on
+/// fields with every kind of cell (a sphere, a torus, a slab cut by the border, a lumpy field
+/// with empty blocks on odd dims, the song-like benchmark field), at isovalues inside, at and
+/// beyond the field's range, and through buffers that must grow. Every property the tests above
+/// prove of the GPU's surface thereby holds for the CPU's.
+#[test]
+fn cpu_engine_extracts_the_gpu_surface_triangle_for_triangle() {
+    let gpu = common::gpu();
+    let frame = FrameBinding::new(&gpu.device);
+    let lumpy_dims = UVec3::new(37, 22, 29);
+    let (density, hp) = lumpy_fields(lumpy_dims);
+    let lumpy = VoxelGrid::from_fields(
+        &gpu.device,
+        lumpy_dims,
+        Vec3::new(-1.0, -0.5, -2.0),
+        Vec3::new(1.0, 0.7, 1.5),
+        &density,
+        &hp,
+    );
+    let song_dims = UVec3::splat(48);
+    let (song_density, song_hp) = song_like_field(song_dims);
+    let song = VoxelGrid::from_fields(
+        &gpu.device,
+        song_dims,
+        Vec3::splat(-1.0),
+        Vec3::ONE,
+        &song_density,
+        &song_hp,
+    );
+    let cases = [
+        (grid_from(&gpu, 40, sphere), vec![0.5, 0.2, 0.93]),
+        (grid_from(&gpu, 40, torus), vec![0.35]),
+        (grid_from(&gpu, 24, |p| 0.5 - p.y * 3.0), vec![0.5]),
+        (lumpy, vec![0.05, 0.3, 0.59, 0.0, 1.0, -0.1]),
+        (song, vec![0.3, 0.6]),
+    ];
+    let (gpu_pass, cpu_pass) = (surface_pass(&gpu), engine_pass(&gpu, SurfaceEngine::Cpu));
+    let small_cpu =
+        SurfacePass::with_capacity(&gpu.device, &frame, 64, 96).with_engine(SurfaceEngine::Cpu);
+    let mut compared = 0;
+    let mut worst = Difference::default();
+    for (grid, isos) in &cases {
+        for &iso in isos {
+            for method in [MT, DC] {
+                let expected = extract(&gpu, &gpu_pass, grid, method, iso);
+                for pass in [&cpu_pass, &small_cpu] {
+                    let mesh = extract(&gpu, pass, grid, method, iso);
+                    assert_eq!(
+                        mesh.positions.len(),
+                        expected.positions.len(),
+                        "{} at {iso}: vertices",
+                        method.name()
+                    );
+                    let error = same_surface(&mesh, &expected);
+                    assert!(
+                        error.position <= 1e-4 && error.normal <= 1e-5 && error.hp <= 1e-6,
+                        "{} at {iso}: {error:?}",
+                        method.name()
+                    );
+                    worst = worst.max(error);
+                }
+                compared += expected.triangle_count();
+            }
+        }
+    }
+    assert!(compared > 100_000, "only {compared} triangles compared");
+    println!("largest difference between the engines: {worst:?}");
+}
+
+/// The largest differences between matched vertices of two meshes: position (in voxels of a
+/// 2-unit box over 40 samples, so data units / 0.05), normal, hp.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Difference {
+    position: f32,
+    normal: f32,
+    hp: f32,
+}
+
+impl Difference {
+    fn max(self, other: Self) -> Self {
+        Self {
+            position: self.position.max(other.position),
+            normal: self.normal.max(other.normal),
+            hp: self.hp.max(other.hp),
+        }
+    }
+}
+
+/// Asserts that `a` and `b` are the same surface up to rounding: every vertex of `a` matches a
+/// distinct vertex of `b` (the nearest unused one in position, normal and hp), and under that
+/// matching the triangles, with their winding, are the same set. Returns the largest difference
+/// between matched vertices.
+fn same_surface(a: &CpuMesh, b: &CpuMesh) -> Difference {
+    assert_eq!(a.positions.len(), b.positions.len(), "vertices");
+    assert_eq!(a.indices.len(), b.indices.len(), "indices");
+    let cell = 1e-3f32;
+    let bucket = |p: Vec3| (p / cell).floor().as_ivec3();
+    let mut buckets: HashMap<glam::IVec3, Vec<u32>> = HashMap::new();
+    for (i, &p) in b.positions.iter().enumerate() {
+        buckets.entry(bucket(p)).or_default().push(i as u32);
+    }
+    let mut used = vec![false; b.positions.len()];
+    let mut to_b = vec![0u32; a.positions.len()];
+    let mut worst = Difference::default();
+    for (i, &p) in a.positions.iter().enumerate() {
+        let home = bucket(p);
+        let mut best: Option<(f32, u32)> = None;
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let Some(list) = buckets.get(&(home + glam::IVec3::new(dx, dy, dz))) else {
+                        continue;
+                    };
+                    for &j in list {
+                        if used[j as usize] {
+                            continue;
+                        }
+                        let d = (b.positions[j as usize] - p).length()
+                            + (b.normals[j as usize] - a.normals[i]).length()
+                            + (b.hp[j as usize] - a.hp[i]).abs();
+                        if best.is_none_or(|(e, _)| d < e) {
+                            best = Some((d, j));
+                        }
+                    }
+                }
+            }
+        }
+        let (_, j) = best.unwrap_or_else(|| panic!("vertex {i} at {p} has no match"));
+        used[j as usize] = true;
+        to_b[i] = j;
+        let j = j as usize;
+        worst = worst.max(Difference {
+            position: (b.positions[j] - p).abs().max_element() / 0.05,
+            normal: (b.normals[j] - a.normals[i]).abs().max_element(),
+            hp: (b.hp[j] - a.hp[i]).abs(),
+        });
+    }
+    let canonical = |t: [u32; 3]| {
+        let first = (0..3).min_by_key(|&k| t[k]).unwrap();
+        let mut t = t;
+        t.rotate_left(first);
+        t
+    };
+    let mut ta: Vec<[u32; 3]> = a
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            canonical([
+                to_b[t[0] as usize],
+                to_b[t[1] as usize],
+                to_b[t[2] as usize],
+            ])
+        })
+        .collect();
+    let mut tb: Vec<[u32; 3]> = b
+        .indices
+        .chunks_exact(3)
+        .map(|t| canonical([t[0], t[1], t[2]]))
+        .collect();
+    ta.sort_unstable();
+    tb.sort_unstable();
+    let differing = ta.iter().zip(&tb).filter(|(x, y)| x != y).count();
+    assert_eq!(differing, 0, "{differing} of {} triangles differ", ta.len());
+    worst
 }

@@ -15,6 +15,7 @@ use loudscape::data::synthetic::song_like_field;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
+use loudscape::render::surface::cpu::{Phases, SurfaceEngine};
 use loudscape::render::surface::pass::SurfacePass;
 use loudscape::render::surface::state::ExtractedSurface;
 use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
@@ -24,11 +25,13 @@ use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
 pub struct SurfaceTiming {
     pub field: String,
     pub method: SurfaceMethod,
+    pub engine: SurfaceEngine,
     pub median_ms: f64,
     pub triangles: u32,
 }
 
-/// Runs the isosurface benchmarks `runs` times each and prints one line per result.
+/// Runs the isosurface benchmarks `runs` times each, on both engines (the GPU passes and the
+/// CPU extraction), and prints one line per result.
 pub fn run(
     runs: usize,
     iso_value: f32,
@@ -41,16 +44,27 @@ pub fn run(
         gpu.describe()
     );
     let frame = FrameBinding::new(&gpu.device);
-    let pass = SurfacePass::new(&gpu.device, &frame);
-    // A second pass object times each dispatch apart (which adds pass boundaries), so the
-    // wall-clock figures above come from the untimed one.
-    let mut timed_pass = SurfacePass::new(&gpu.device, &frame);
-    let (surface, timed_surface) = (ExtractedSurface::new(), ExtractedSurface::new());
+    let preferred = SurfaceEngine::preferred(&gpu.device);
+    let gpu_pass = SurfacePass::new(&gpu.device, &frame).with_engine(SurfaceEngine::Gpu);
+    let cpu_pass = SurfacePass::new(&gpu.device, &frame).with_engine(SurfaceEngine::Cpu);
+    // A third pass object times each dispatch apart (which adds pass boundaries), so the
+    // wall-clock figures come from the untimed one.
+    let mut timed_pass = SurfacePass::new(&gpu.device, &frame).with_engine(SurfaceEngine::Gpu);
     let timed = timed_pass.enable_pass_timing(&gpu.queue);
     println!(
-        "  times: submit to read-back of the counts, wall clock{}",
+        "  the app extracts with: {} ({})",
+        preferred.name(),
+        match preferred {
+            SurfaceEngine::Cpu => "this adapter is a CPU",
+            SurfaceEngine::Gpu => "this adapter is a GPU",
+        }
+    );
+    println!(
+        "  times: engine gpu: submit to read-back of the counts{}; engine cpu: extraction and \
+         upload into the GPU buffers, waited for (the grid is read back once per grid, timed \
+         apart), per phase: wall clock",
         if timed {
-            "; per pass: GPU timestamps, in separate runs with each pass on its own"
+            ", per pass: GPU timestamps, in separate runs with each pass on its own"
         } else {
             " (no timestamp queries on this adapter: no per-pass times)"
         }
@@ -78,57 +92,103 @@ pub fn run(
                 iso_value,
                 lit: true,
             };
-            // Warm-up: compiles pipelines and grows the buffers to fit.
-            let counts = match pass.extract_blocking(&gpu.queue, &surface, &grid, &settings) {
-                Ok(counts) => counts,
-                Err(e) => {
-                    println!("surface {name} {} error: {e}", method.short_name());
-                    continue;
-                }
-            };
-            let mut times = Vec::with_capacity(runs);
-            for _ in 0..runs {
+            for (engine, pass) in [
+                (SurfaceEngine::Gpu, &gpu_pass),
+                (SurfaceEngine::Cpu, &cpu_pass),
+            ] {
+                let surface = ExtractedSurface::new();
+                // Warm-up: compiles pipelines, grows the buffers to fit, reads the grid back
+                // for the CPU.
                 let start = Instant::now();
-                pass.extract_blocking(&gpu.queue, &surface, &grid, &settings)?;
-                times.push(start.elapsed().as_secs_f64() * 1e3);
-            }
-            // Per pass: the timed pass object, warmed up like the untimed one.
-            let mut per_pass: Vec<(&str, Vec<f64>)> = Vec::new();
-            if timed {
-                timed_pass.extract_blocking(&gpu.queue, &timed_surface, &grid, &settings)?;
+                let counts = match pass.extract_blocking(&gpu.queue, &surface, &grid, &settings) {
+                    Ok(counts) => counts,
+                    Err(e) => {
+                        println!("surface {name} {} error: {e}", method.short_name());
+                        continue;
+                    }
+                };
+                let first_ms = start.elapsed().as_secs_f64() * 1e3;
+                let first_grid_ms = phase(&pass.cpu_phases(), "grid");
+                let mut times = Vec::with_capacity(runs);
+                let mut phases: Vec<(&str, Vec<f64>)> = Vec::new();
                 for _ in 0..runs {
-                    timed_pass.extract_blocking(&gpu.queue, &timed_surface, &grid, &settings)?;
-                    let passes = timed_pass.pass_times_ms(method)?.unwrap_or_default();
-                    per_pass.resize_with(passes.len(), || ("", Vec::new()));
-                    for ((name, times), (pass_name, ms)) in per_pass.iter_mut().zip(passes) {
-                        *name = pass_name;
-                        times.push(ms);
+                    let start = Instant::now();
+                    pass.extract_blocking(&gpu.queue, &surface, &grid, &settings)?;
+                    times.push(start.elapsed().as_secs_f64() * 1e3);
+                    if engine == SurfaceEngine::Cpu {
+                        let laps = pass.cpu_phases().times;
+                        phases.resize_with(laps.len(), || ("", Vec::new()));
+                        for ((name, times), (lap, ms)) in phases.iter_mut().zip(laps) {
+                            *name = lap;
+                            times.push(ms);
+                        }
                     }
                 }
-            }
-            let median_ms = median(&mut times);
-            let area = pass.read_mesh(&gpu.queue, &surface)?.area();
-            println!(
-                "surface {name} {} median_ms={median_ms:.2} triangles={} area={area:.5}",
-                method.short_name(),
-                counts.triangles()
-            );
-            if !per_pass.is_empty() {
-                let passes: Vec<String> = per_pass
+                // Per pass on the GPU: the timed pass object, warmed up like the untimed one.
+                if engine == SurfaceEngine::Gpu && timed {
+                    let timed_surface = ExtractedSurface::new();
+                    timed_pass.extract_blocking(&gpu.queue, &timed_surface, &grid, &settings)?;
+                    for _ in 0..runs {
+                        timed_pass.extract_blocking(
+                            &gpu.queue,
+                            &timed_surface,
+                            &grid,
+                            &settings,
+                        )?;
+                        let passes = timed_pass.pass_times_ms(method)?.unwrap_or_default();
+                        phases.resize_with(passes.len(), || ("", Vec::new()));
+                        for ((name, times), (pass_name, ms)) in phases.iter_mut().zip(passes) {
+                            *name = pass_name;
+                            times.push(ms);
+                        }
+                    }
+                }
+                let median_ms = median(&mut times);
+                let area = pass.read_mesh(&gpu.queue, &surface)?.area();
+                println!(
+                    "surface {name} {} engine={} median_ms={median_ms:.2} triangles={} \
+                     area={area:.5}",
+                    method.short_name(),
+                    engine.name(),
+                    counts.triangles()
+                );
+                let laps: Vec<String> = phases
                     .iter_mut()
                     .map(|(name, ms)| format!("{name} {:.2}", median(ms)))
                     .collect();
-                println!("  per pass (ms, median): {}", passes.join(", "));
+                match engine {
+                    SurfaceEngine::Gpu if !laps.is_empty() => {
+                        println!("  per pass (ms, median): {}", laps.join(", "));
+                    }
+                    SurfaceEngine::Cpu => println!(
+                        "  per phase (ms, median): {}; first extraction {first_ms:.1} ms, of \
+                         which reading the grid back {first_grid_ms:.1} ms",
+                        laps.join(", ")
+                    ),
+                    SurfaceEngine::Gpu => {}
+                }
+                if engine == preferred {
+                    results.push(SurfaceTiming {
+                        field: name.to_string(),
+                        method,
+                        engine,
+                        median_ms,
+                        triangles: counts.triangles(),
+                    });
+                }
             }
-            results.push(SurfaceTiming {
-                field: name.to_string(),
-                method,
-                median_ms,
-                triangles: counts.triangles(),
-            });
         }
     }
     Ok(results)
+}
+
+/// The time of phase `name` in `phases` (0 when it is not there).
+fn phase(phases: &Phases, name: &str) -> f64 {
+    phases
+        .times
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or(0.0, |(_, ms)| *ms)
 }
 
 /// The paper's figures (Metal, paper section 5) beside ours.
@@ -143,10 +203,12 @@ pub fn print_paper_comparison(results: &[SurfaceTiming]) {
     for r in results {
         if let Some(ms) = paper(&r.field, r.method) {
             println!(
-                "  {} {}: {:.2} ms here, {ms} ms in the paper (Metal): {:.2}x, {} triangles",
+                "  {} {}: {:.2} ms here ({} engine), {ms} ms in the paper (Metal): {:.2}x, {} \
+                 triangles",
                 r.field,
                 r.method.name(),
                 r.median_ms,
+                r.engine.name(),
                 r.median_ms / ms,
                 r.triangles
             );

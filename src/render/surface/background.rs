@@ -23,6 +23,7 @@ use std::sync::{Arc, Condvar, Mutex};
 use crate::render::grid::VoxelGrid;
 use crate::render::grid::downsample::DownsamplePass;
 use crate::render::surface::buffers::MeshBuffers;
+use crate::render::surface::cpu::SurfaceEngine;
 use crate::render::surface::lod::COARSE_LEVELS;
 use crate::render::surface::methods::{Methods, Submit, extract_until_fits};
 use crate::render::surface::state::{CacheKey, Finished, Mailbox, SurfaceState};
@@ -132,9 +133,9 @@ pub(crate) struct Worker {
 }
 
 impl Worker {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    pub(crate) fn new(device: &wgpu::Device, engine: SurfaceEngine) -> Self {
         Self {
-            methods: Methods::new(device),
+            methods: Methods::new(device, engine),
             downsample: DownsamplePass::new(device),
             pool: None,
         }
@@ -147,13 +148,17 @@ pub(crate) struct BackgroundExtractor {
 }
 
 impl BackgroundExtractor {
-    pub(crate) fn spawn(device: wgpu::Device, queue: wgpu::Queue) -> std::io::Result<Self> {
+    pub(crate) fn spawn(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        engine: SurfaceEngine,
+    ) -> std::io::Result<Self> {
         let jobs: Arc<Coalescer<usize, Job>> = Arc::default();
         let worker_jobs = jobs.clone();
         std::thread::Builder::new()
             .name("surface-extraction".into())
             .spawn(move || {
-                let mut worker = Worker::new(&device);
+                let mut worker = Worker::new(&device, engine);
                 while let Some((slot, job)) = worker_jobs.take() {
                     let key = job.key.clone();
                     // Overtaken: a request for other settings of this surface waits.

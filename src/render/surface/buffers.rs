@@ -93,12 +93,12 @@ impl MeshBuffers {
             vertices: make(
                 "surface::vertex_buffer",
                 u64::from(vertex_capacity) * std::mem::size_of::<MeshVertex>() as u64,
-                storage | wgpu::BufferUsages::VERTEX,
+                storage | wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             ),
             indices: make(
                 "surface::index_buffer",
                 u64::from(index_capacity) * 4,
-                storage | wgpu::BufferUsages::INDEX,
+                storage | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
             ),
             counters: make(
                 "surface::counters",

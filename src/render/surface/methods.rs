@@ -8,6 +8,8 @@
 //! [`SurfacePass`]: crate::render::surface::pass::SurfacePass
 //! [`background`]: crate::render::surface::background
 
+use std::sync::Mutex;
+
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::readback::map_buffer;
 use crate::render::gpu::timing::Timestamps;
@@ -15,6 +17,7 @@ use crate::render::grid::VoxelGrid;
 use crate::render::surface::buffers::{
     COUNTERS_SIZE, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
 };
+use crate::render::surface::cpu::{self, CpuGrids, CpuMesh32, Phases, SurfaceEngine};
 use crate::render::surface::dual_contour::DualContourPass;
 use crate::render::surface::extraction::{EXTRACTION_PASSES, Slicer};
 use crate::render::surface::marching_tets::MarchingTetsPass;
@@ -24,17 +27,27 @@ use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, Surface
 /// Timestamps of a timed extraction: a start and an end per pass.
 pub(crate) const TIMESTAMPS: u32 = 2 * EXTRACTION_PASSES as u32;
 
-/// The pipelines of both extraction methods.
+/// Both extraction methods: their pipelines, or on the CPU engine the grids read back for them.
 pub(crate) struct Methods {
+    pub(crate) engine: SurfaceEngine,
     pub(crate) marching_tets: MarchingTetsPass,
     pub(crate) dual_contour: DualContourPass,
+    pub(crate) cpu_grids: CpuGrids,
+    /// The phases of the last CPU extraction (benchmarks).
+    pub(crate) cpu_phases: Mutex<Phases>,
+    /// The last CPU extraction's mesh, whose memory the next one reuses.
+    pub(crate) cpu_mesh: Mutex<CpuMesh32>,
 }
 
 impl Methods {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    pub(crate) fn new(device: &wgpu::Device, engine: SurfaceEngine) -> Self {
         Self {
+            engine,
             marching_tets: MarchingTetsPass::new(device),
             dual_contour: DualContourPass::new(device),
+            cpu_grids: CpuGrids::default(),
+            cpu_phases: Mutex::default(),
+            cpu_mesh: Mutex::default(),
         }
     }
 }
@@ -93,7 +106,10 @@ fn grow(
 /// Maps a MAP_READ buffer by polling the device without blocking it, a millisecond apart. A
 /// blocking poll holds the device's fence while it waits, so every `queue.submit` of the
 /// window's frames (which needs that fence) would wait for the whole extraction.
-fn map_polling(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, SurfaceError> {
+pub(crate) fn map_polling(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<u8>, SurfaceError> {
     use std::sync::Arc;
     use std::sync::atomic::{AtomicU8, Ordering};
     let state = Arc::new(AtomicU8::new(0));
@@ -171,6 +187,18 @@ pub(crate) fn extract_until_fits(
     grid: &VoxelGrid,
     settings: &SurfaceSettings,
 ) -> Result<SurfaceCounts, SurfaceError> {
+    if methods.engine == SurfaceEngine::Cpu {
+        return extract_on_cpu(
+            submit,
+            device,
+            queue,
+            methods,
+            initial_capacity,
+            state,
+            grid,
+            settings,
+        );
+    }
     loop {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("surface::extract"),
@@ -278,6 +306,102 @@ pub(crate) fn extract_until_fits(
             state.key = Some(CacheKey::new(grid, settings));
             state.error = Some(e.to_string());
             return Err(e);
+        }
+    }
+}
+
+/// [`extract_until_fits`] on the CPU engine: the grid read back once (kept for the next
+/// isovalue), the surface extracted on the CPU's cores, the buffers grown to it before it is
+/// written, and the upload waited for as `submit` says.
+#[allow(clippy::too_many_arguments)]
+fn extract_on_cpu(
+    mut submit: Submit<'_>,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    methods: &Methods,
+    initial_capacity: (u32, u32),
+    state: &mut SurfaceState,
+    grid: &VoxelGrid,
+    settings: &SurfaceSettings,
+) -> Result<SurfaceCounts, SurfaceError> {
+    let blocking = matches!(submit, Submit::Blocking);
+    let map = |buffer: &wgpu::Buffer| {
+        if blocking {
+            map_buffer(device, buffer).map_err(|e| SurfaceError::Readback(e.to_string()))
+        } else {
+            map_polling(device, buffer)
+        }
+    };
+    let mut phases = Phases::default();
+    let mut mesh = methods.cpu_mesh.lock().unwrap_or_else(|e| e.into_inner());
+    let started = std::time::Instant::now();
+    let key = CacheKey::new(grid, settings);
+    let cpu_grid = methods.cpu_grids.get(device, queue, grid, &key, map)?;
+    phases.lap("grid", started);
+    cpu::extract(
+        &cpu_grid,
+        settings.method,
+        settings.iso_value,
+        cpu::default_threads(),
+        &mut phases,
+        &mut mesh,
+    );
+    if let Submit::Worker { superseded, .. } = &submit
+        && superseded()
+    {
+        state.key = None;
+        return Err(SurfaceError::Superseded);
+    }
+    let started = std::time::Instant::now();
+    let (v, i) = initial_capacity;
+    let buffers = state
+        .buffers
+        .get_or_insert_with(|| MeshBuffers::new(device, v, i));
+    let wanted = SurfaceCounts {
+        method: settings.method,
+        vertices_needed: mesh.vertices().len().min(u32::MAX as usize) as u32,
+        indices_needed: mesh.indices().len().min(u32::MAX as usize) as u32,
+        vertex_capacity: buffers.vertex_capacity,
+        index_capacity: buffers.index_capacity,
+    };
+    let grown = if wanted.fits() {
+        Ok(())
+    } else {
+        grow(device, state, &wanted)
+    };
+    let buffers = state
+        .buffers
+        .get_or_insert_with(|| MeshBuffers::new(device, v, i));
+    cpu::upload(queue, buffers, &mesh);
+    let counts = SurfaceCounts {
+        vertex_capacity: buffers.vertex_capacity,
+        index_capacity: buffers.index_capacity,
+        ..wanted
+    };
+    queue.submit([]);
+    match &mut submit {
+        Submit::Blocking => device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| SurfaceError::Readback(e.to_string()))?,
+        Submit::Worker { submissions, .. } => {
+            **submissions += 1;
+            wait_polling(device, queue)?;
+        }
+    }
+    phases.lap("upload", started);
+    *methods.cpu_phases.lock().unwrap_or_else(|e| e.into_inner()) = phases;
+    state.key = Some(CacheKey::new(grid, settings));
+    state.counts = Some(counts);
+    match grown {
+        Ok(()) => {
+            state.error = None;
+            Ok(counts)
+        }
+        Err(e) => {
+            // The truncated surface stays drawable, with the reason beside it.
+            state.error = Some(e.to_string());
+            Err(e)
         }
     }
 }

@@ -26,6 +26,7 @@
 
 pub mod background;
 pub mod buffers;
+pub mod cpu;
 pub mod cpu_mesh;
 pub mod draw;
 pub mod dual_contour;

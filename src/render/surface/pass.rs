@@ -14,6 +14,7 @@ use crate::render::points::depth_state;
 use crate::render::shaders;
 use crate::render::surface::background::{BackgroundExtractor, CoarseJob, Job, Worker, share_grid};
 use crate::render::surface::buffers::{INDEXED_ARGS_OFFSET, MeshVertex};
+use crate::render::surface::cpu::{Phases, SurfaceEngine};
 use crate::render::surface::cpu_mesh::CpuMesh;
 use crate::render::surface::draw::SurfaceStyle;
 use crate::render::surface::lod::{Level, SurfaceDetail};
@@ -38,6 +39,8 @@ pub struct SurfacePass {
     initial_capacity: (u32, u32),
     /// Per-pass GPU timestamps of blocking extractions (benchmarks), when enabled.
     timing: Option<Timestamps>,
+    /// Where surfaces are extracted ([`SurfaceEngine::preferred`] for the device unless set).
+    engine: SurfaceEngine,
 }
 
 impl SurfacePass {
@@ -113,7 +116,31 @@ impl SurfacePass {
             style_bind_group,
             initial_capacity: (vertices, indices),
             timing: None,
+            engine: SurfaceEngine::preferred(device),
         }
+    }
+
+    /// The same pass extracting with `engine` (tests and benchmarks compare the two).
+    pub fn with_engine(mut self, engine: SurfaceEngine) -> Self {
+        self.engine = engine;
+        self.methods = OnceLock::new();
+        self.background = OnceLock::new();
+        *self.fallback.get_mut().unwrap_or_else(|e| e.into_inner()) = None;
+        self
+    }
+
+    /// Where this pass extracts surfaces.
+    pub fn engine(&self) -> SurfaceEngine {
+        self.engine
+    }
+
+    /// The phases of the last blocking extraction on the CPU engine (empty before one).
+    pub fn cpu_phases(&self) -> Phases {
+        self.methods()
+            .cpu_phases
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
     }
 
     /// Makes [`SurfacePass::extract_blocking`] time each pass with GPU timestamps, for
@@ -156,7 +183,8 @@ impl SurfacePass {
     }
 
     fn methods(&self) -> &Methods {
-        self.methods.get_or_init(|| Methods::new(&self.device))
+        self.methods
+            .get_or_init(|| Methods::new(&self.device, self.engine))
     }
 
     /// Interactive path: when the method, isovalue or grid changed, asks the background thread
@@ -215,7 +243,7 @@ impl SurfacePass {
             }
         };
         let background = self.background.get_or_init(|| {
-            BackgroundExtractor::spawn(self.device.clone(), queue.clone())
+            BackgroundExtractor::spawn(self.device.clone(), queue.clone(), self.engine)
                 .inspect_err(|e| log::warn!("no surface extraction thread: {e}"))
                 .ok()
         });
@@ -224,7 +252,7 @@ impl SurfacePass {
             // No thread: extract here (waits), as before there was one.
             None => {
                 let mut fallback = self.fallback.lock().unwrap_or_else(|e| e.into_inner());
-                let worker = fallback.get_or_insert_with(|| Worker::new(&self.device));
+                let worker = fallback.get_or_insert_with(|| Worker::new(&self.device, self.engine));
                 crate::render::surface::background::run_job(
                     &self.device,
                     queue,

@@ -1,0 +1,260 @@
+//! Dual contouring on the CPU: the same surface as shaders/surface/dual_contour.wgsl (one QEF
+//! vertex per active cell, biased toward the crossings' mass point and clamped into the cell;
+//! quads across the crossing edges from each cell's corner 0), written in cell order.
+//!
+//! Reads: a [`CpuGrid`]. Writes: [`MeshVertex`] records and triangle indices (two triangles per
+//! quad). Sweeps as in [`super::marching_tets`]: inside bits, a count per cell row (active
+//! cells, which are the vertices, and six indices per quad), then each row writes its vertices
+//! and quads, finding the vertices of the cells below it in y and z through those rows' maps.
+
+use glam::{IVec3, Vec3};
+
+use crate::render::surface::buffers::MeshVertex;
+use crate::render::surface::cpu::grid::{
+    CpuGrid, InsideBits, balanced_ranges, corner_offset, corner_step, weighted_hp,
+};
+use crate::render::surface::cpu::{CpuMesh32, Phases};
+
+/// The pull toward the mass point, relative to one unit-normal plane (QEF_BIAS in
+/// shaders/surface/dual_contour.wgsl).
+const QEF_BIAS: f32 = 0.5;
+
+/// The lower corner of cube edge e (0..11): edges 4a .. 4a + 3 run along axis a.
+#[inline]
+fn cube_edge_start(e: u32) -> u32 {
+    let j = e & 3;
+    match e >> 2 {
+        0 => j << 1,
+        1 => (j & 1) | ((j & 2) << 1),
+        _ => j,
+    }
+}
+
+/// Bit a set when the edge from the cell's corner 0 along axis a crosses the isovalue and the
+/// four cells around it exist (`base` is the cell's lowest sample).
+#[inline]
+fn quad_edges(base: IVec3, mask: u32) -> u32 {
+    let mut edges = 0;
+    for axis in 0..3 {
+        let (b, c) = ((axis + 1) % 3, (axis + 2) % 3);
+        if base[b] < 0 || base[c] < 0 {
+            continue;
+        }
+        if (mask >> (1 << axis)) & 1 != mask & 1 {
+            edges |= 1 << axis;
+        }
+    }
+    edges
+}
+
+/// The dual contouring surface of `grid` at `iso` on `threads` threads.
+pub fn extract(grid: &CpuGrid, iso: f32, threads: usize, phases: &mut Phases, out: &mut CpuMesh32) {
+    let started = std::time::Instant::now();
+    let bits = InsideBits::new(grid, iso, threads);
+    phases.lap("inside bits", started);
+    let (cells_y, cells_z) = (grid.dims.y as usize + 1, grid.dims.z as usize + 1);
+    let rows = cells_y * cells_z;
+
+    // Per cell row: active cells (its vertices) and indices.
+    let started = std::time::Instant::now();
+    let mut counts = vec![[0u32; 2]; rows];
+    let per = rows.div_ceil(threads.max(1)).max(1);
+    std::thread::scope(|scope| {
+        for (chunk, out) in counts.chunks_mut(per).enumerate() {
+            let bits = &bits;
+            scope.spawn(move || {
+                for (r, count) in out.iter_mut().enumerate() {
+                    let row = chunk * per + r;
+                    let (cy, cz) = (row % cells_y, row / cells_y);
+                    bits.row_cells(cy, cz, |cx, mask| {
+                        count[0] += 1;
+                        let base = CpuGrid::cell_sample(cx, cy, cz);
+                        count[1] += 6 * quad_edges(base, mask).count_ones();
+                    });
+                }
+            });
+        }
+    });
+    let mut vertex_start = Vec::with_capacity(rows + 1);
+    let mut index_start = Vec::with_capacity(rows + 1);
+    let (mut v, mut i) = (0usize, 0usize);
+    for c in &counts {
+        vertex_start.push(v);
+        index_start.push(i);
+        v += c[0] as usize;
+        i += c[1] as usize;
+    }
+    vertex_start.push(v);
+    index_start.push(i);
+    phases.lap("classify", started);
+
+    let started = std::time::Instant::now();
+    let (vertices, indices) = out.make_room(v, i);
+    let ranges = balanced_ranges(rows, threads, |r| u64::from(counts[r][0]));
+    std::thread::scope(|scope| {
+        let (mut vertex_rest, mut index_rest) = (vertices, indices);
+        for range in ranges {
+            let v_len = vertex_start[range.end] - vertex_start[range.start];
+            let i_len = index_start[range.end] - index_start[range.start];
+            let (vertex_out, vertex_tail) = vertex_rest.split_at_mut(v_len);
+            let (index_out, index_tail) = index_rest.split_at_mut(i_len);
+            (vertex_rest, index_rest) = (vertex_tail, index_tail);
+            let (bits, vertex_start, index_start) = (&bits, &vertex_start, &index_start);
+            scope.spawn(move || {
+                let width = bits.cells_x() + 1;
+                let mut maps = [
+                    vec![0u32; width],
+                    vec![0u32; width],
+                    vec![0u32; width],
+                    vec![0u32; width],
+                ];
+                let (v0, i0) = (vertex_start[range.start], index_start[range.start]);
+                for row in range {
+                    let (cy, cz) = (row % cells_y, row / cells_y);
+                    // The vertices of this row and of the rows one below in y, z and both.
+                    for (k, map) in maps.iter_mut().enumerate() {
+                        let (dy, dz) = (k & 1, k >> 1);
+                        if cy < dy || cz < dz {
+                            continue;
+                        }
+                        let (y, z) = (cy - dy, cz - dz);
+                        let mut next = vertex_start[y + cells_y * z] as u32;
+                        bits.row_cells(y, z, |cx, _| {
+                            map[cx] = next;
+                            next += 1;
+                        });
+                    }
+                    let vertices =
+                        &mut vertex_out[vertex_start[row] - v0..vertex_start[row + 1] - v0];
+                    let indices = &mut index_out[index_start[row] - i0..index_start[row + 1] - i0];
+                    let (mut vertex_out, mut index_out) = (0usize, 0usize);
+                    bits.row_cells(cy, cz, |cx, mask| {
+                        vertices[vertex_out] = cell_vertex(grid, iso, cx, cy, cz, mask);
+                        vertex_out += 1;
+                        let s = CpuGrid::cell_sample(cx, cy, cz);
+                        let edges = quad_edges(s, mask);
+                        for axis in 0..3 {
+                            if (edges >> axis) & 1 == 0 {
+                                continue;
+                            }
+                            // The four cells around the edge, counter-clockwise seen from
+                            // +axis (as in the shader's `quads`): s - eb - ec, s - ec, s, s - eb.
+                            let own = maps[0][cx];
+                            let mut q = match axis {
+                                0 => [maps[3][cx], maps[2][cx], own, maps[1][cx]],
+                                1 => [maps[2][cx - 1], maps[0][cx - 1], own, maps[2][cx]],
+                                _ => [maps[1][cx - 1], maps[1][cx], own, maps[0][cx - 1]],
+                            };
+                            if mask & 1 == 0 {
+                                // Inside beyond the edge: the surface faces -axis.
+                                q.swap(1, 3);
+                            }
+                            indices[index_out..index_out + 6]
+                                .copy_from_slice(&[q[0], q[1], q[2], q[0], q[2], q[3]]);
+                            index_out += 6;
+                        }
+                    });
+                }
+            });
+        }
+    });
+    phases.lap("vertices and quads", started);
+    out.active_cells = v as u64;
+}
+
+/// The vertex of active cell (cx, cy, cz) with corner mask `mask` (as `cell_vertices` in the
+/// shader).
+#[inline]
+fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: u32) -> MeshVertex {
+    let origin = grid.cell_origin(cx, cy, cz);
+    let strides = grid.strides();
+    let (d, h) = (grid.density(), grid.hp());
+    let mut values = [0.0f32; 8];
+    let mut gradients = [Vec3::ZERO; 8];
+    for k in 0..8u32 {
+        let at = origin + corner_step(strides, k);
+        values[k as usize] = d[at];
+        gradients[k as usize] = grid.gradient(at);
+    }
+    let mut count = 0u32;
+    let (mut mass, mut normal_sum, mut b) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+    let (mut a00, mut a01, mut a02, mut a11, mut a12, mut a22) = (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for e in 0..12u32 {
+        let ka = cube_edge_start(e);
+        let kb = ka | (1 << (e >> 2));
+        if (mask >> ka) & 1 == (mask >> kb) & 1 {
+            continue;
+        }
+        let (va, vb) = (values[ka as usize], values[kb as usize]);
+        let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+        let pa = corner_offset(ka);
+        let p = pa + (corner_offset(kb) - pa) * t;
+        let (ga, gb) = (gradients[ka as usize], gradients[kb as usize]);
+        let g = ga + (gb - ga) * t;
+        let length = g.length();
+        let n = if length > 1e-20 {
+            g / length
+        } else {
+            Vec3::ZERO
+        };
+        a00 += n.x * n.x;
+        a01 += n.x * n.y;
+        a02 += n.x * n.z;
+        a11 += n.y * n.y;
+        a12 += n.y * n.z;
+        a22 += n.z * n.z;
+        b += n * n.dot(p);
+        mass += p;
+        normal_sum += n;
+        count += 1;
+    }
+    mass /= count.max(1) as f32;
+    // (A + bias I) y = b - A mass, y = x - mass, solved by the adjugate.
+    let rhs = b - Vec3::new(
+        a00 * mass.x + a01 * mass.y + a02 * mass.z,
+        a01 * mass.x + a11 * mass.y + a12 * mass.z,
+        a02 * mass.x + a12 * mass.y + a22 * mass.z,
+    );
+    a00 += QEF_BIAS;
+    a11 += QEF_BIAS;
+    a22 += QEF_BIAS;
+    let c00 = a11 * a22 - a12 * a12;
+    let c01 = a02 * a12 - a01 * a22;
+    let c02 = a01 * a12 - a02 * a11;
+    let c11 = a00 * a22 - a02 * a02;
+    let c12 = a01 * a02 - a00 * a12;
+    let c22 = a00 * a11 - a01 * a01;
+    let det = a00 * c00 + a01 * c01 + a02 * c02;
+    let mut local = mass;
+    if det.abs() > 1e-12 {
+        let y = Vec3::new(
+            c00 * rhs.x + c01 * rhs.y + c02 * rhs.z,
+            c01 * rhs.x + c11 * rhs.y + c12 * rhs.z,
+            c02 * rhs.x + c12 * rhs.y + c22 * rhs.z,
+        ) / det;
+        local = mass + y;
+    }
+    local = local.clamp(Vec3::ZERO, Vec3::ONE);
+
+    let mut gradient = Vec3::ZERO;
+    let (mut hp_sum, mut weight_sum) = (0.0f32, 0.0f32);
+    for k in 0..8u32 {
+        let c = corner_offset(k);
+        let weights = c * local + (Vec3::ONE - c) * (Vec3::ONE - local);
+        gradient += weights.x * weights.y * weights.z * gradients[k as usize];
+        let w = values[k as usize].max(0.0);
+        hp_sum += w * h[origin + corner_step(strides, k)];
+        weight_sum += w;
+    }
+    let mut normal = grid.outward_normal(gradient);
+    if normal == Vec3::ZERO {
+        normal = grid.outward_normal(normal_sum);
+    }
+    let base = CpuGrid::cell_sample(cx, cy, cz).as_vec3();
+    MeshVertex {
+        position: grid.data_position(base + local).to_array(),
+        hp: weighted_hp(hp_sum, weight_sum),
+        normal: normal.to_array(),
+        pad: 0.0,
+    }
+}
