@@ -104,7 +104,7 @@ impl LoudscapeApp {
         let iso_sweep = options
             .screenshot
             .as_ref()
-            .and_then(|_| crate::ui::iso_sweep::IsoSweep::from_env());
+            .and_then(|_| crate::ui::state::iso_sweep::IsoSweep::from_env());
         let mut app = Self {
             song: None,
             timeline: None,
@@ -152,14 +152,14 @@ impl LoudscapeApp {
             surface_triangles: 0,
             slot_cameras: [None, None],
             renders_seen: (0, 0),
-            open: crate::ui::open::OpenPanel {
+            open: crate::ui::state::open::OpenPanel {
                 // A scripted run keeps a recent list only where it is told to.
                 recent: crate::ui::recent::RecentFiles::load(
                     (persist || std::env::var_os("LOUDSCAPE_STATE_DIR").is_some())
                         .then(crate::ui::recent::default_store)
                         .flatten(),
                 ),
-                years: crate::ui::timeline_build::YearBook::load(
+                years: crate::ui::state::timeline_build::YearBook::load(
                     (persist || std::env::var_os("LOUDSCAPE_STATE_DIR").is_some())
                         .then(crate::ui::recent::default_store)
                         .flatten()

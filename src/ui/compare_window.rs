@@ -1,7 +1,9 @@
 //! The window's A/B compare: B loaded beside the Song slot's cloud (A), both moved onto the
 //! union of their axes, drawn side by side (two viewports, one camera: the same camera input
 //! moves both) or as their difference grid, hover read-outs of A and B, and the A/B audio
-//! switch (key B, or the panel's buttons) that keeps the playback position.
+//! switch (key B, or the panel's buttons) that keeps the playback position. What it keeps
+//! between frames ([`CompareState`]) is `state/compare_window.rs`; here are its methods on
+//! `LoudscapeApp`.
 //!
 //! GPU side: [`CompareResources`] sits in egui_wgpu's callback resources beside the bridge's
 //! `ViewResources` (whose renderer it borrows) and holds the [`CompareScene`] and one offscreen
@@ -29,7 +31,8 @@ use crate::ui::bridge::ViewResources;
 use crate::ui::compare::{paint_diverging_legend, paint_title};
 use crate::ui::compare_shot::difference_settings;
 use crate::ui::hover::paint_readings;
-use crate::ui::labels::{self, AxisLabels};
+use crate::ui::labels;
+use crate::ui::state::compare_window::{CompareLayout, CompareState, DifferenceCopy, Listening};
 use crate::ui::state::{LoudscapeApp, Slot};
 use crate::view::frame_view::FrameView;
 use crate::view::pick::{self, Reading};
@@ -37,93 +40,12 @@ use crate::view::pick::{self, Reading};
 /// Points between the two halves of the side-by-side view.
 pub(super) const GAP: f32 = 4.0;
 
-/// How the compare is shown.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum CompareLayout {
-    /// The normal view of A alone.
-    Off,
-    SideBySide,
-    Difference,
-}
-
-/// Which song is heard.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Listening {
-    A,
-    B,
-}
-
-/// The window's compare state (one field of `LoudscapeApp`).
-pub(super) struct CompareState {
-    pub(super) path: PathBuf,
-    receiver: Option<Receiver<Result<PointCloud, String>>>,
-    /// A and B on the union axes, as the GPU scene holds them (for hover and labels).
-    clouds: Option<Arc<(PointCloud, PointCloud)>>,
-    b_loaded: Option<Arc<PointCloud>>,
-    /// The Song slot's cloud id the GPU scene was built for.
-    built_for: Option<u64>,
-    pub(super) layout: CompareLayout,
-    pub(super) measure: DifferenceMeasure,
-    pub(super) listening: Listening,
-    /// The decoded song not playing now (A's while B plays and the other way round).
-    other_track: Option<Track>,
-    decoding: Option<Receiver<Result<Track, PlaybackError>>>,
-    /// The difference's CPU copy for read-outs: the shown grid and the signed values.
-    difference: Option<DifferenceCopy>,
-    pub(super) error: Option<String>,
-    labels: Option<AxisLabels>,
-    hover: Option<(glam::Vec2, Vec<Reading>)>,
-    /// The compare dialog's answer.
-    dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
-    field: String,
-}
-
-struct DifferenceCopy {
-    shown: Field,
-    difference: Vec<f32>,
-    columns: Vec<f32>,
-    measure: DifferenceMeasure,
-    range: f32,
-}
-
-impl CompareState {
-    pub(super) fn new(path: PathBuf) -> Self {
-        Self {
-            field: path.display().to_string(),
-            path,
-            receiver: None,
-            clouds: None,
-            b_loaded: None,
-            built_for: None,
-            layout: CompareLayout::SideBySide,
-            measure: DifferenceMeasure::Density,
-            listening: Listening::A,
-            other_track: None,
-            decoding: None,
-            difference: None,
-            error: None,
-            labels: None,
-            hover: None,
-            dialog: None,
-        }
-    }
-
-    /// Whether the view shows the compare now.
-    pub(super) fn shown(&self) -> bool {
-        self.layout != CompareLayout::Off && self.clouds.is_some()
-    }
-
-    pub(super) fn side_by_side(&self) -> bool {
-        self.layout == CompareLayout::SideBySide && self.clouds.is_some()
-    }
-}
-
 /// Loads B on a thread, as the Open row loads any file.
 fn load_b(path: PathBuf) -> Receiver<Result<PointCloud, String>> {
     let (sender, receiver) = channel();
     std::thread::spawn(move || {
         let settings = crate::extract::Settings::default();
-        let shared = crate::ui::state::Shared::default();
+        let shared = crate::ui::state::loading::Shared::default();
         let _ = sender.send(crate::ui::open::open_path(&path, &settings, &shared));
     });
     receiver

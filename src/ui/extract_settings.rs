@@ -4,6 +4,8 @@
 //! --floor-db --freq-scale --n-fft --hop`) and part of the cloud cache's key. "Re-extract" opens
 //! the same song again with the new settings on the loading thread: the old cloud stays on
 //! screen, with the progress bar below, until the new one is ready (or from the cache at once).
+//! The choices themselves (`ExtractChoices`, kept in the Open row) are
+//! `state/extract_settings.rs`.
 
 use std::path::{Path, PathBuf};
 
@@ -16,15 +18,6 @@ use crate::ui::state::LoudscapeApp;
 pub(super) const DEFAULT_FLOOR_DB: f32 = 80.0;
 /// FFT sizes offered (the hop is half).
 const FFT_SIZES: [u32; 5] = [512, 1024, 2048, 4096, 8192];
-
-/// The settings being chosen, and those the song on screen was asked for.
-#[derive(Clone, Debug, Default)]
-pub(super) struct ExtractChoices {
-    /// Used for the next song opened from audio.
-    pub(super) next: Settings,
-    /// The song on screen (audio) and the settings its extraction was started with.
-    pub(super) shown: Option<(PathBuf, Settings)>,
-}
 
 /// Whether `path` names audio by its extension (the song slot's cloud is named by its audio
 /// when it came from it). No file is read: this runs every frame.

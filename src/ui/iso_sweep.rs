@@ -5,7 +5,8 @@
 //! longest_frame_ms=X installed=N coarse_installed=N shown_iso=X`: the frames it drew, how many
 //! of them while an extraction ran, the longest frame on the UI thread, the extractions
 //! installed (full and coarse surfaces of the level of detail) and the isovalue of the surface
-//! shown. The screenshot is taken after it.
+//! shown. The screenshot is taken after it. The sweep's state (`IsoSweep`, read from the
+//! environment) is `state/iso_sweep.rs`; here is its step, one a frame.
 
 use std::time::Instant;
 
@@ -14,51 +15,6 @@ use eframe::egui_wgpu;
 use crate::render::scene::ViewKind;
 use crate::ui::bridge::ViewResources;
 use crate::ui::state::LoudscapeApp;
-
-/// The environment variable that asks for a sweep (screenshot runs only).
-pub const ISO_SWEEP_VAR: &str = "LOUDSCAPE_ISO_SWEEP";
-
-pub(super) struct IsoSweep {
-    values: Vec<f32>,
-    /// Values set so far (None: waiting for the first surface).
-    next: Option<usize>,
-    last_frame: Option<Instant>,
-    longest_ms: f64,
-    frames: u32,
-    busy_frames: u32,
-    installed_before: u64,
-    coarse_before: u64,
-    pub(super) done: bool,
-}
-
-impl IsoSweep {
-    /// The sweep asked for in the environment, if any (a list of isovalues).
-    pub(super) fn from_env() -> Option<Self> {
-        let text = std::env::var(ISO_SWEEP_VAR).ok()?;
-        let values: Vec<f32> = text
-            .split(',')
-            .filter_map(|v| v.trim().parse().ok())
-            .collect();
-        (!values.is_empty()).then_some(Self {
-            values,
-            next: None,
-            last_frame: None,
-            longest_ms: 0.0,
-            frames: 0,
-            busy_frames: 0,
-            installed_before: 0,
-            coarse_before: 0,
-            done: false,
-        })
-    }
-}
-
-impl IsoSweep {
-    /// Whether it is setting values (as a dragged slider does), not waiting to start or done.
-    pub(super) fn sweeping(&self) -> bool {
-        self.next.is_some() && !self.done
-    }
-}
 
 /// The active cloud's surface: (shown isovalue, extracting, installed extractions, installed
 /// coarse surfaces).

@@ -1,10 +1,11 @@
 //! The window and everything egui (nothing else in the crate knows egui): [`app`] opens the
-//! window and draws a frame over the state in `state.rs`, whose behaviour is split by concern
-//! (`slots.rs`, `panels.rs`, `legends.rs`, `hover.rs`, `persistence.rs`,
-//! `window_screenshot.rs`). egui meets the render passes in two places: [`bridge`] (the
-//! window's egui_wgpu paint callback: prepare renders offscreen, paint composites) and
-//! [`labels`] (axis labels, also drawn headless into a render target); [`screenshot`] renders a
-//! view offscreen and saves PNGs, [`audio`] is the transport bar.
+//! window and draws a frame over the state in `state/` (the floor under the behaviour files),
+//! whose behaviour is split by concern (`slots.rs`, `panels.rs`, `legends.rs`, `hover.rs`,
+//! `persistence.rs`, `window_screenshot.rs`, `open.rs`, `compare_window.rs`, ...). egui meets
+//! the render passes in two places: [`bridge`] (the window's egui_wgpu paint callback: prepare
+//! renders offscreen, paint composites) and [`labels`] (axis labels, also drawn headless into a
+//! render target); [`screenshot`] renders a view offscreen and saves PNGs, [`audio`] is the
+//! transport bar.
 
 mod alsa_quiet;
 pub mod app;

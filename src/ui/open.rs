@@ -4,11 +4,11 @@
 //! file dialog through `rfd`). The command-line argument, a dropped file, the path field and the
 //! dialog all end in `start_opening` (`timeline_build.rs`: a folder or several songs are a
 //! timeline), and a song or a cloud in [`LoudscapeApp::start_loading`], which calls
-//! [`open_path`] on a thread; the old view stays until the new cloud is installed. Below the row: the recent files
-//! (`recent.rs`). The save dialog for screenshots ([`LoudscapeApp::ask_where_to_save`]) lives
-//! here too. Where no dialog can open (Linux without a desktop portal or zenity, as under Xvfb)
-//! the window says so and goes on as it did without dialogs (the path field; screenshots in the
-//! current folder).
+//! [`open_path`] on a thread; the old view stays until the new cloud is installed. Below the
+//! row: the recent files (`recent.rs`). The row's state (`OpenPanel`) is `state/open.rs`. The
+//! save dialog for screenshots ([`LoudscapeApp::ask_where_to_save`]) lives here too. Where no
+//! dialog can open (Linux without a desktop portal or zenity, as under Xvfb) the window says so
+//! and goes on as it did without dialogs (the path field; screenshots in the current folder).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -18,35 +18,8 @@ use eframe::egui::{self, RichText};
 
 use crate::data::cloud::PointCloud;
 use crate::extract::{self, Progress, Settings};
-use crate::ui::recent::RecentFiles;
-use crate::ui::state::{LoudscapeApp, Shared};
-
-/// The Open row's state: its text field, the dialogs while they are open, the recent files,
-/// the extraction settings and the shortcuts overlay.
-#[derive(Default)]
-pub(super) struct OpenPanel {
-    pub(super) path: String,
-    /// The dialog's answer (`None`: closed without a choice).
-    pub(super) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
-    /// The save dialog's answer, while it is open.
-    pub(super) save_dialog: Option<Receiver<Option<PathBuf>>>,
-    /// Where the save dialog said to save the next screenshot.
-    pub(super) save_to: Option<PathBuf>,
-    pub(super) recent: RecentFiles,
-    /// The `?` overlay is shown (`shortcuts.rs`).
-    pub(super) show_shortcuts: bool,
-    /// The extraction settings for the next song opened, and those of the song shown
-    /// (`extract_settings.rs`).
-    pub(super) extract: crate::ui::extract_settings::ExtractChoices,
-    /// A timeline on its way: tags being read, or the years dialog (`timeline_build.rs`).
-    pub(super) timeline: Option<crate::ui::timeline_build::TimelineBuild>,
-    /// The songs of the timeline being built, a row each as they finish.
-    pub(super) timeline_rows: crate::ui::timeline_build::Rows,
-    /// The loading row of the timeline being built.
-    pub(super) building: Option<PathBuf>,
-    /// Years typed for songs whose tags lack one.
-    pub(super) years: crate::ui::timeline_build::YearBook,
-}
+use crate::ui::state::LoudscapeApp;
+use crate::ui::state::loading::Shared;
 
 /// Whether a native file dialog can open here. On Linux rfd asks the desktop portal over
 /// D-Bus, then zenity; with neither (a bare X server such as Xvfb) it would return at once as if

@@ -13,13 +13,14 @@ use crate::data::cloud::PointCloud;
 use crate::render::scene::{ViewKind, world_from_data};
 use crate::ui::bridge::ViewResources;
 use crate::ui::labels;
-use crate::ui::state::{Loaded, Loading, LoudscapeApp, Slot};
+use crate::ui::state::loading::Loading;
+use crate::ui::state::{Loaded, LoudscapeApp, Slot};
 
 impl LoudscapeApp {
     pub(super) fn start_loading(&mut self, path: PathBuf) {
         let (sender, receiver) = channel();
         let thread_path = path.clone();
-        let shared = crate::ui::state::Shared::default();
+        let shared = crate::ui::state::loading::Shared::default();
         let thread_shared = shared.clone();
         // Audio is extracted with the side panel's settings (`extract_settings.rs`).
         let settings = self.open.extract.next.clone();

@@ -6,97 +6,26 @@
 //! keyed by the song's absolute path) or are listed in a dialog where the user types it, or
 //! skips (the songs then placed in order, `--x-by order`); then the build, with a row a song
 //! as each finishes and Cancel. The finished timeline goes through the same loading slot as any
-//! cloud, so the old view stays until it is installed.
+//! cloud, so the old view stays until it is installed. What a build keeps between frames
+//! (`TimelineBuild`, the song rows, the years book) is `state/timeline_build.rs`.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
-use std::sync::mpsc::{Receiver, TryRecvError, channel};
-use std::sync::{Arc, Mutex};
+use std::sync::mpsc::{TryRecvError, channel};
 
 use eframe::egui::{self, RichText};
 
 use crate::extract::timeline::{self, Line, Placement, SongTags};
 use crate::extract::{Progress, cache};
 use crate::ui::shortcuts::{self, Action};
-use crate::ui::state::{Loading, LoudscapeApp, Shared};
-
-/// Years typed by the user, by song (absolute path), kept in `years.json` beside the recent
-/// files.
-#[derive(Default)]
-pub(super) struct YearBook {
-    years: BTreeMap<PathBuf, i32>,
-    store: Option<PathBuf>,
-}
-
-impl YearBook {
-    pub(super) fn load(store: Option<PathBuf>) -> Self {
-        let years = store
-            .as_ref()
-            .and_then(|s| std::fs::read(s).ok())
-            .and_then(|b| serde_json::from_slice::<BTreeMap<PathBuf, i32>>(&b).ok())
-            .unwrap_or_default();
-        Self { years, store }
-    }
-
-    pub(super) fn get(&self, song: &Path) -> Option<i32> {
-        self.years.get(&absolute(song)).copied()
-    }
-
-    /// Remembers `years` and saves the book (written beside and renamed).
-    pub(super) fn remember(&mut self, years: &[(PathBuf, i32)]) -> Result<(), String> {
-        for (song, year) in years {
-            self.years.insert(absolute(song), *year);
-        }
-        let Some(store) = &self.store else {
-            return Ok(());
-        };
-        let fail = |e: std::io::Error| format!("{}: cannot keep the years: {e}", store.display());
-        if let Some(dir) = store.parent() {
-            std::fs::create_dir_all(dir).map_err(fail)?;
-        }
-        let text = serde_json::to_vec_pretty(&self.years).map_err(|e| e.to_string())?;
-        let temporary = store.with_extension(format!("json.{}.tmp", std::process::id()));
-        std::fs::write(&temporary, text).map_err(fail)?;
-        std::fs::rename(&temporary, store).map_err(|e| {
-            let _ = std::fs::remove_file(&temporary);
-            fail(e)
-        })
-    }
-}
-
-fn absolute(path: &Path) -> PathBuf {
-    std::path::absolute(path).unwrap_or_else(|_| path.to_owned())
-}
+use crate::ui::state::LoudscapeApp;
+use crate::ui::state::loading::{Loading, Shared};
+use crate::ui::state::timeline_build::{SongRows, TimelineBuild};
 
 /// A year as typed: four digits in a plausible range.
 pub(super) fn parse_year(text: &str) -> Option<i32> {
     let year: i32 = text.trim().parse().ok()?;
     (1860..=2100).contains(&year).then_some(year)
-}
-
-/// Where a timeline build is.
-pub(super) enum TimelineBuild {
-    /// Reading the tags.
-    Listing {
-        inputs: Vec<PathBuf>,
-        receiver: Receiver<Result<Vec<SongTags>, String>>,
-        shared: Shared,
-    },
-    /// Asking for the years the tags lack: the songs and the text typed for each.
-    AskYears {
-        inputs: Vec<PathBuf>,
-        songs: Vec<SongTags>,
-        typed: Vec<String>,
-        focused: bool,
-    },
-}
-
-/// The songs of a build as they finish (shown a row each).
-#[derive(Default)]
-pub(super) struct SongRows {
-    pub(super) rows: Vec<(PathBuf, Option<String>)>,
-    pub(super) total: usize,
 }
 
 /// Whether these paths make a timeline: a folder, or two audio files or more.
@@ -480,9 +409,6 @@ fn describe(inputs: &[PathBuf]) -> String {
     }
 }
 
-/// Shared song rows of the build on its way.
-pub(super) type Rows = Arc<Mutex<SongRows>>;
-
 impl LoudscapeApp {
     /// Scripted presses wait for the years dialog's field to have the keyboard.
     pub(super) fn scripted_input_ready(&self) -> bool {
@@ -499,18 +425,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn years_parse_and_are_remembered_across_loads() {
+    fn years_parse() {
         assert_eq!(parse_year(" 1999 "), Some(1999));
         assert_eq!(parse_year("99"), None);
         assert_eq!(parse_year("abcd"), None);
-        let dir = std::env::temp_dir().join(format!("loudscape-years-{}", std::process::id()));
-        let store = dir.join("years.json");
-        let mut book = YearBook::load(Some(store.clone()));
-        book.remember(&[(dir.join("a.wav"), 1984)]).unwrap();
-        let again = YearBook::load(Some(store));
-        assert_eq!(again.get(&dir.join("a.wav")), Some(1984));
-        assert_eq!(again.get(&dir.join("b.wav")), None);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

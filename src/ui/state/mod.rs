@@ -1,9 +1,24 @@
-//! What the window keeps between frames: [`LoudscapeApp`] and the types of its fields. The
-//! behaviour lives beside it, one file a concern, each adding its methods to `LoudscapeApp`:
-//! `app.rs` (opening the window, one frame, camera input), `slots.rs` (loading and installing
-//! clouds), `panels.rs` (the side panel), `hover.rs` (picking and markers), `persistence.rs`
-//! (what is remembered between runs) and `window_screenshot.rs` (the two screenshot paths).
-//! Keeping the state in its own file lets those files see it without importing each other.
+//! What the window keeps between frames: [`LoudscapeApp`] and the types of its fields. This
+//! folder is the floor under the window's behaviour, which lives in `ui/`, one file a concern,
+//! each adding its methods to `LoudscapeApp`: `app.rs` (opening the window, one frame, camera
+//! input), `slots.rs` (loading and installing clouds), `panels.rs` (the side panel), `hover.rs`
+//! (picking and markers), `persistence.rs` (what is remembered between runs),
+//! `window_screenshot.rs` (the two screenshot paths) and more. A concern with state of its own
+//! keeps it here under the same name: `open.rs` (the Open row, [`open::OpenPanel`]),
+//! `extract_settings.rs` (the extraction settings it holds), `timeline_build.rs` (a timeline
+//! on its way, the years typed), `compare_window.rs` (the A/B compare) and `iso_sweep.rs` (the
+//! scripted isovalue sweep); `loading.rs` is a load on its way and what its thread shares.
+//! This file holds `LoudscapeApp` and the small types of its other fields (which slot, a loaded
+//! cloud, the hover, the screenshot, the "Save PNG" panel).
+//!
+//! Nothing here imports a behaviour file: only the floors below (`audio.rs`, `labels.rs`,
+//! `recent.rs`, `strip.rs`, and the crate's data, view and render types), and within the
+//! folder only downward (this file imports its children; `open.rs` imports
+//! `extract_settings.rs` and `timeline_build.rs`, which imports `loading.rs`; none imports this
+//! file). So each behaviour file sees the whole state without importing another for a type, and
+//! no import runs back up. A type's own plain methods (those that need no `LoudscapeApp`) and
+//! their tests sit with it here; its fields are open to `ui/` (`pub(in crate::ui)`), because
+//! the behaviour files read and write them.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -19,6 +34,18 @@ use crate::ui::labels;
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
 use crate::view::pick::Reading;
+
+pub(super) mod compare_window;
+pub(super) mod extract_settings;
+pub(super) mod iso_sweep;
+pub(super) mod loading;
+pub(super) mod open;
+pub(super) mod timeline_build;
+
+use compare_window::CompareState;
+use iso_sweep::IsoSweep;
+use loading::Loading;
+use open::OpenPanel;
 
 /// The window's state: the two data slots, the render settings, the camera and what each
 /// panel keeps between frames.
@@ -64,7 +91,7 @@ pub(super) struct LoudscapeApp {
     /// Progressive points: the fraction drawn while the view fills in (`ui/progressive.rs`).
     pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
-    pub(super) iso_sweep: Option<crate::ui::iso_sweep::IsoSweep>,
+    pub(super) iso_sweep: Option<IsoSweep>,
     /// A line of news that is not an error (where a screenshot went), in the normal colour.
     pub(super) notice: Option<String>,
     /// Draw again next frame (the surface is still growing its buffers).
@@ -90,7 +117,7 @@ pub(super) struct LoudscapeApp {
     /// The frequency axis chosen for songs (`freq_axis.rs`).
     pub(super) freq_axis: crate::data::freq_axis::FreqAxis,
     /// The A/B compare with a second song (`compare_window.rs`).
-    pub(super) compare: Option<crate::ui::compare_window::CompareState>,
+    pub(super) compare: Option<CompareState>,
     /// Where to put the playhead once the song's audio is ready (`--seek`).
     pub(super) pending_seek: Option<f64>,
     /// The loudness strip under the Song view (`strip.rs`).
@@ -140,13 +167,6 @@ pub(super) struct Loaded {
     pub(super) view_points_pending: Option<Receiver<Vec<crate::data::cloud::Point>>>,
 }
 
-pub(super) struct Loading {
-    pub(super) path: PathBuf,
-    pub(super) receiver: Receiver<Result<PointCloud, String>>,
-    /// Progress and cancel of an extraction (`open.rs`).
-    pub(super) shared: Shared,
-}
-
 /// What is under the cursor, recomputed only when the cursor or the view changed.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct HoverKey {
@@ -193,16 +213,4 @@ impl Default for SaveShot {
             requested: false,
         }
     }
-}
-
-/// The Open row, recent files, extraction settings and shortcuts overlay (`open.rs`).
-pub(super) use crate::ui::open::OpenPanel;
-
-/// What a loading thread shares with the window.
-#[derive(Clone, Default)]
-pub(super) struct Shared {
-    /// The extractor's latest stage (audio only).
-    pub(super) progress: std::sync::Arc<std::sync::Mutex<Option<crate::extract::Progress>>>,
-    /// Set by the Cancel button: the extractor is killed and its partial output removed.
-    pub(super) cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
