@@ -7,8 +7,10 @@
 //! tests); the source counts the frames it gives the device in a shared [`Transport`]. That
 //! count is the clock: the playhead reads it through [`AudioClock`], so picture and sound cannot
 //! drift apart however long the song, whatever the wall clock does. Seeking and pausing write the
-//! transport; the source reads it for every frame. Between two device callbacks the count stands
-//! still, so [`Playhead`] interpolates over at most one callback period with the wall clock.
+//! transport; the source reads it for every frame, and the decoder thread, asleep while the buffer
+//! is full or the song decoded to its end, is woken by what changes it. Between two device
+//! callbacks the count stands still, so [`Playhead`] interpolates over at most one callback period
+//! with the wall clock.
 //!
 //! No device (CI machines, a headless server) is not an error of the app: [`Player::new`] keeps
 //! the reason in [`PlayerState::NoDevice`] and every other feature works.
@@ -16,8 +18,9 @@
 pub mod stream;
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::{Thread, ThreadId};
 use std::time::{Duration, Instant};
 
 use thiserror::Error;
@@ -189,6 +192,10 @@ pub struct Transport {
     /// decoder restarts from the position when it changes, and frames decoded before are stale.
     serial: AtomicU64,
     frames: u64,
+    /// The decoder threads filling sources of this transport (one in the app): every change of
+    /// what they wait on wakes them. Locked only on the UI's side (seek, play, loop, replace)
+    /// and when a decoder starts or ends, never on the audio callback.
+    decoders: Mutex<Vec<Thread>>,
 }
 
 impl Transport {
@@ -201,6 +208,35 @@ impl Transport {
             retired: AtomicBool::new(false),
             serial: AtomicU64::new(0),
             frames,
+            decoders: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// Registers a decoder thread to wake on changes (by the thread itself, as it starts).
+    pub(crate) fn add_decoder(&self, thread: Thread) {
+        self.decoders
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .push(thread);
+    }
+
+    /// Forgets a decoder thread that ended.
+    pub(crate) fn remove_decoder(&self, id: ThreadId) {
+        self.decoders
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .retain(|t| t.id() != id);
+    }
+
+    /// Wakes the decoders: they re-check the serial, the loop and whether the song was replaced.
+    fn wake_decoders(&self) {
+        for thread in self
+            .decoders
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .iter()
+        {
+            thread.unpark();
         }
     }
 
@@ -227,15 +263,24 @@ impl Transport {
         self.retired.load(Ordering::Acquire)
     }
 
-    /// Tells the decoder to start again from the position.
+    /// Tells the decoder to start again from the position. Does not wake it: the caller does
+    /// (the UI's side through [`Self::wake_decoders`], the callback through its source's own
+    /// handle, without a lock).
     fn resync(&self) {
         self.serial.fetch_add(1, Ordering::AcqRel);
+    }
+
+    /// Marks the song replaced: its source ends and its decoder thread with it.
+    fn retire(&self) {
+        self.retired.store(true, Ordering::Release);
+        self.wake_decoders();
     }
 
     pub fn set_playing(&self, playing: bool) {
         if playing && self.position() >= self.frames {
             self.position.store(self.loop_start(), Ordering::Release);
             self.resync();
+            self.wake_decoders();
         }
         self.playing.store(playing, Ordering::Release);
     }
@@ -244,6 +289,7 @@ impl Transport {
         self.position
             .store(frame.min(self.frames), Ordering::Release);
         self.resync();
+        self.wake_decoders();
     }
 
     fn loop_start(&self) -> u64 {
@@ -265,6 +311,9 @@ impl Transport {
             }
             _ => self.loop_end.store(0, Ordering::Release),
         }
+        // The loop decides the order a decoder fills in ([`Self::after`]); a parked one only
+        // re-checks (its buffered frames are replaced by a resync where the order differs).
+        self.wake_decoders();
     }
 
     /// The frame that plays after `at`: the next one, or the loop's start at the loop's end
@@ -331,13 +380,10 @@ impl TrackSource {
     /// The source of `track`, with its decoder thread started.
     pub fn new(track: Track, transport: Arc<Transport>) -> Self {
         let channels = track.channels.max(1);
-        let shared = Arc::new(Shared {
-            ring: Ring::new(
-                stream::buffer_frames(track.sample_rate),
-                usize::from(channels),
-            ),
-            closed: AtomicBool::new(false),
-        });
+        let shared = Arc::new(Shared::new(Ring::new(
+            stream::buffer_frames(track.sample_rate),
+            usize::from(channels),
+        )));
         stream::spawn(
             track.path.clone(),
             usize::from(channels),
@@ -377,10 +423,12 @@ impl TrackSource {
             };
             if stream::tag_serial(tag) != serial {
                 ring.skip();
+                self.shared.took();
             } else if stream::tag_frame(tag) == position {
                 return true;
             } else {
                 self.transport.resync();
+                self.shared.wake();
             }
         }
         false
@@ -390,6 +438,7 @@ impl TrackSource {
 impl Drop for TrackSource {
     fn drop(&mut self) {
         self.shared.closed.store(true, Ordering::Release);
+        self.shared.wake();
     }
 }
 
@@ -416,6 +465,7 @@ impl Iterator for TrackSource {
             }
             self.frame = self.transport.position();
             self.shared.ring.pop(&mut self.current);
+            self.shared.took();
         }
         let sample = self.current[usize::from(self.channel)];
         self.channel += 1;
@@ -546,7 +596,7 @@ impl Player {
         if let Some(old) = self.loaded.take() {
             // The old source keeps feeding silence; stop it from advancing.
             old.transport.set_playing(false);
-            old.transport.retired.store(true, Ordering::Release);
+            old.transport.retire();
         }
     }
 

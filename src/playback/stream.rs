@@ -9,11 +9,19 @@
 //! callback plays a frame only when both match where the transport stands, drops the ones a
 //! seek made stale, and asks for a resync when the order is not the one it needs (a loop range
 //! changed while frames were buffered).
+//!
+//! The decoder thread sleeps (parks, no timeout) whenever it has nothing to do: the ring is full
+//! (always so while paused) or the song is decoded to its end. It is woken when there is work:
+//! by the callback once it has taken a quarter of the ring ([`refill_at`]: 1.5 s still buffered,
+//! so a refill never starts late), by the [`Transport`] on a seek, a loop change or when the song
+//! is replaced, and by the source when it asks for a resync or is dropped. Every wake re-checks
+//! all it waits on, and an unpark that comes before the park makes the park return at once, so
+//! no wake is lost.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
-use std::time::Duration;
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering, fence};
+use std::sync::{Arc, OnceLock};
+use std::thread::Thread;
 
 use symphonia::core::audio::SampleBuffer;
 use symphonia::core::codecs::{CODEC_TYPE_NULL, Decoder, DecoderOptions};
@@ -32,6 +40,13 @@ pub const BUFFER_SECONDS: f64 = 2.0;
 /// song's length.
 pub fn buffer_frames(sample_rate: u32) -> usize {
     (f64::from(sample_rate.max(1)) * BUFFER_SECONDS).ceil() as usize
+}
+
+/// Free frames in a ring of `capacity` at which the callback wakes the decoder waiting for room:
+/// a quarter of it (0.5 s of the 2 s), so the decoder refills in bursts a couple of times a second
+/// while three quarters (1.5 s) are still buffered, never once per callback and never late.
+pub fn refill_at(capacity: usize) -> usize {
+    (capacity / 4).max(1)
 }
 
 /// Why a file cannot be opened for decoding.
@@ -321,7 +336,8 @@ impl Ring {
         self.len() == 0
     }
 
-    /// Producer: room for this many frames.
+    /// Room for this many frames (exact on the producer side; on the consumer side at least
+    /// this many, as the producer may have pushed since).
     fn free(&self) -> usize {
         self.capacity - self.len()
     }
@@ -370,6 +386,54 @@ pub(crate) struct Shared {
     pub(crate) ring: Ring,
     /// Set when the source is dropped: the thread ends.
     pub(crate) closed: AtomicBool,
+    /// The decoder thread, set once by the thread itself before it first looks at what it waits
+    /// on (so a change before it is set is seen by that first look).
+    decoder: OnceLock<Thread>,
+    /// Set by the decoder before it parks because the ring is full; the consumer clears it and
+    /// wakes the decoder once [`refill_at`] frames are free.
+    wants_room: AtomicBool,
+    /// How many times the decoder woke from a park (a measure of its idle cost).
+    wakeups: AtomicU64,
+}
+
+impl Shared {
+    pub(crate) fn new(ring: Ring) -> Self {
+        Self {
+            ring,
+            closed: AtomicBool::new(false),
+            decoder: OnceLock::new(),
+            wants_room: AtomicBool::new(false),
+            wakeups: AtomicU64::new(0),
+        }
+    }
+
+    /// Wakes the decoder thread (if it runs yet): it re-checks everything it waits on.
+    pub(crate) fn wake(&self) {
+        if let Some(thread) = self.decoder.get() {
+            thread.unpark();
+        }
+    }
+
+    /// Consumer, after each frame it took or dropped: wakes the decoder waiting for room once
+    /// there is room for [`refill_at`] frames. Lock-free and, until then, two atomic loads.
+    pub(crate) fn took(&self) {
+        if self.ring.free() < refill_at(self.ring.capacity) {
+            return;
+        }
+        // Pairs with the fence in `park`: either the decoder sees this frame taken
+        // before it parks, or this sees `wants_room` set and wakes it.
+        fence(Ordering::SeqCst);
+        if self.wants_room.load(Ordering::Relaxed) && self.wants_room.swap(false, Ordering::AcqRel)
+        {
+            self.wake();
+        }
+    }
+
+    /// How many times the decoder thread woke from a park so far.
+    #[cfg(test)]
+    pub(crate) fn wakeups(&self) -> u64 {
+        self.wakeups.load(Ordering::Relaxed)
+    }
 }
 
 /// Starts the decoder thread of a track: it fills `shared.ring` from the transport's position,
@@ -383,10 +447,37 @@ pub(crate) fn spawn(
 ) {
     let spawned = std::thread::Builder::new()
         .name("loudscape-audio-decoder".into())
-        .spawn(move || run(&path, channels, &transport, &shared));
+        .spawn(move || {
+            let me = std::thread::current();
+            let id = me.id();
+            // Registered before `run` first looks at the transport: no change is missed.
+            let _ = shared.decoder.set(me.clone());
+            transport.add_decoder(me);
+            run(&path, channels, &transport, &shared);
+            transport.remove_decoder(id);
+        });
     if let Err(e) = spawned {
         log::warn!("cannot start the audio decoder: {e}");
     }
+}
+
+/// Parks the decoder until something it waits on may have changed. `for_room`: it waits for the
+/// consumer to free room in the full ring (otherwise only for the transport or the source: the
+/// song is decoded to its end).
+fn park(shared: &Shared, for_room: bool) {
+    if for_room {
+        shared.wants_room.store(true, Ordering::Relaxed);
+        // Pairs with the fence in `Shared::took`.
+        fence(Ordering::SeqCst);
+        if shared.ring.free() >= refill_at(shared.ring.capacity) {
+            // The consumer took frames meanwhile and may have missed the flag: go on filling.
+            shared.wants_room.store(false, Ordering::Relaxed);
+            return;
+        }
+    }
+    std::thread::park();
+    shared.wakeups.fetch_add(1, Ordering::Relaxed);
+    shared.wants_room.store(false, Ordering::Relaxed);
 }
 
 fn run(path: &Path, channels: usize, transport: &Transport, shared: &Shared) {
@@ -415,7 +506,7 @@ fn run(path: &Path, channels: usize, transport: &Transport, shared: &Shared) {
         }
         let total = transport.frames();
         if next >= total || ring.free() == 0 {
-            std::thread::park_timeout(Duration::from_millis(2));
+            park(shared, next < total);
             continue;
         }
         let frame_tag = serial_bits(now);
@@ -443,5 +534,189 @@ fn run(path: &Path, channels: usize, transport: &Transport, shared: &Shared) {
                 break;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The decoder's idle cost, measured in wake-ups: none while paused or at the song's end, a
+    //! few a second while playing, and the buffer never runs low.
+
+    use std::path::{Path, PathBuf};
+    use std::sync::Arc;
+    use std::time::{Duration, Instant};
+
+    use super::refill_at;
+    use crate::playback::{TrackSource, Transport, decode};
+
+    const RATE: u32 = 8_000;
+
+    /// A mono 16-bit WAV of `frames` frames whose sample at frame `i` is `i % 32768`.
+    fn ramp_wav(name: &str, frames: usize) -> (PathBuf, PathBuf) {
+        let dir = std::env::temp_dir().join(format!(
+            "loudscape-decoder-idle-{}-{name}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let data: Vec<u8> = (0..frames)
+            .flat_map(|i| ((i % 32_768) as i16).to_le_bytes())
+            .collect();
+        let mut b = Vec::with_capacity(44 + data.len());
+        b.extend_from_slice(b"RIFF");
+        b.extend_from_slice(&(36 + data.len() as u32).to_le_bytes());
+        b.extend_from_slice(b"WAVEfmt ");
+        b.extend_from_slice(&16u32.to_le_bytes());
+        b.extend_from_slice(&1u16.to_le_bytes()); // PCM
+        b.extend_from_slice(&1u16.to_le_bytes()); // mono
+        b.extend_from_slice(&RATE.to_le_bytes());
+        b.extend_from_slice(&(RATE * 2).to_le_bytes());
+        b.extend_from_slice(&2u16.to_le_bytes());
+        b.extend_from_slice(&16u16.to_le_bytes());
+        b.extend_from_slice(b"data");
+        b.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        b.extend_from_slice(&data);
+        let path = dir.join("ramp.wav");
+        std::fs::write(&path, b).expect("write wav");
+        (dir, path)
+    }
+
+    fn open(path: &Path) -> (Arc<Transport>, TrackSource) {
+        let track = decode(path).expect("ramp decodes");
+        let transport = Arc::new(Transport::new(track.frames()));
+        let source = TrackSource::new(track, transport.clone());
+        (transport, source)
+    }
+
+    fn until(what: &str, mut done: impl FnMut() -> bool) {
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while !done() {
+            assert!(Instant::now() < deadline, "timed out waiting until {what}");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    /// Wake-ups of the decoder over one second in which the source is called as a device
+    /// would call it (a callback of 10 ms every 10 ms), paused or stopped.
+    fn wakeups_over_a_second(source: &mut TrackSource) -> u64 {
+        let before = source.shared.wakeups();
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(1) {
+            for _ in 0..RATE / 100 {
+                assert_eq!(source.next(), Some(0.0), "paused: silence");
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        source.shared.wakeups() - before
+    }
+
+    fn decoders(transport: &Transport) -> usize {
+        transport
+            .decoders
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .len()
+    }
+
+    #[test]
+    fn the_decoder_sleeps_while_paused_and_at_the_end_and_wakes_for_a_seek() {
+        let frames = RATE as usize * 10;
+        let (dir, path) = ramp_wav("paused", frames);
+        let (transport, mut source) = open(&path);
+        let capacity = source.ring().capacity();
+        // Paused with a full ring: the decoder has nothing to do (a 2 ms poll woke ~500 times).
+        until("the ring is full", || source.ring().len() == capacity);
+        let paused = wakeups_over_a_second(&mut source);
+        assert!(paused <= 3, "{paused} wake-ups in a second while paused");
+        // Played to the end: decoded to the end, it sleeps again.
+        transport.seek(frames as u64 - 100);
+        transport.set_playing(true);
+        until("the song ends", || {
+            source.next();
+            !transport.is_playing()
+        });
+        assert_eq!(transport.position(), frames as u64);
+        let ended = wakeups_over_a_second(&mut source);
+        assert!(ended <= 3, "{ended} wake-ups in a second at the end");
+        // A seek wakes it (nothing else would: the ring is empty, the consumer takes nothing),
+        // and it decodes the frames from there.
+        transport.seek(12_345);
+        until("the seek's frame is decoded", || source.is_buffered());
+        transport.set_playing(true);
+        let mut got = Vec::new();
+        for _ in 0..3 {
+            got.push(source.next().expect("the source lives"));
+        }
+        let expected: Vec<f32> = (12_345..12_348)
+            .map(|i| f32::from((i % 32_768) as i16) / 32_768.0)
+            .collect();
+        assert_eq!(got, expected);
+        drop(source);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn real_time_playback_refills_in_bursts_and_never_runs_low() {
+        let frames = RATE as usize * 10;
+        let (dir, path) = ramp_wav("playing", frames);
+        let (transport, mut source) = open(&path);
+        let capacity = source.ring().capacity();
+        until("the ring is full", || source.ring().len() == capacity);
+        transport.set_playing(true);
+        // 1.5 s of playback in real time, in 10 ms callbacks.
+        let before = source.shared.wakeups();
+        let start = Instant::now();
+        let (mut taken, mut lowest, mut silent) = (0usize, capacity, 0usize);
+        while start.elapsed() < Duration::from_millis(1_500) {
+            let due = (start.elapsed().as_secs_f64() * f64::from(RATE)) as usize;
+            while taken < due {
+                if !source.is_buffered() {
+                    silent += 1;
+                }
+                let sample = source.next().expect("the source lives");
+                let expected = f32::from((taken % 32_768) as i16) / 32_768.0;
+                assert_eq!(sample, expected, "frame {taken}");
+                taken += 1;
+                lowest = lowest.min(source.ring().len());
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let wakeups = source.shared.wakeups() - before;
+        assert_eq!(silent, 0, "the buffer ran dry");
+        assert_eq!(transport.position(), taken as u64);
+        // Woken once a quarter of the ring is free: 1.5 s still buffered at each refill.
+        let floor = capacity - refill_at(capacity);
+        assert!(
+            lowest + RATE as usize / 2 >= floor && lowest >= RATE as usize / 2,
+            "the buffer fell to {lowest} frames of {capacity} (refill at {floor})"
+        );
+        // 1.5 s of frames taken, a refill each 0.5 s: about three (a 2 ms poll woke ~750 times).
+        assert!(
+            (1..=10).contains(&wakeups),
+            "{wakeups} wake-ups in 1.5 s of playback"
+        );
+        drop(source);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_sleeping_decoder_ends_when_its_song_is_replaced_or_its_source_dropped() {
+        let (dir, path) = ramp_wav("ends", RATE as usize * 10);
+        // Replaced (the source stays in the mixer until its next callback).
+        let (transport, source) = open(&path);
+        until("the ring is full", || {
+            source.ring().len() == source.ring().capacity()
+        });
+        assert_eq!(decoders(&transport), 1);
+        transport.retire();
+        until("the decoder ends", || decoders(&transport) == 0);
+        drop(source);
+        // Dropped.
+        let (transport, source) = open(&path);
+        until("the ring is full", || {
+            source.ring().len() == source.ring().capacity()
+        });
+        drop(source);
+        until("the decoder ends", || decoders(&transport) == 0);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
