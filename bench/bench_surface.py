@@ -1,7 +1,9 @@
 """Isosurface extraction: loudscape's GPU passes against scikit-image, on the same fields.
 
-Runs ``loudscape bench --fields-dir DIR`` (which times marching tetrahedra and dual contouring
-on a song-like field at 128^3 and 224^3 and writes each field as a .npy file: float32, C order,
+Runs ``loudscape bench --fields-dir DIR`` (which times marching tetrahedra and dual contouring,
+on both engines (the GPU passes, and the CPU extraction the app uses where the device is the
+CPU), on a song-like field at 128^3 and 224^3 and writes each field as a .npy file: float32,
+C order,
 shape (nz, ny, nx), voxel centres at -1 + (index + 0.5) * 2 / n), then times
 ``skimage.measure.marching_cubes`` on those fields at the same isovalue in the same run, padded
 by one zero voxel as loudscape closes surfaces at the grid border, and prints the ratios and the
@@ -102,10 +104,13 @@ def main() -> int:
             print(done.stderr.strip().splitlines()[-1], file=sys.stderr)
             return 1
         ours = {}
-        pattern = r"surface (\S+) (mt|dc) median_ms=([\d.]+) triangles=(\d+) area=([\d.]+)"
+        pattern = (
+            r"surface (\S+) (mt|dc) engine=(gpu|cpu) median_ms=([\d.]+) triangles=(\d+)"
+            r" area=([\d.]+)"
+        )
         for match in re.finditer(pattern, done.stdout):
-            name, method, ms, tris, area = match.groups()
-            ours[(name, method)] = (float(ms), int(tris), float(area))
+            name, method, engine, ms, tris, area = match.groups()
+            ours[(name, method, engine)] = (float(ms), int(tris), float(area))
         print(f"\nscikit-image {args.runs} runs each, iso {args.iso}:")
         for npy in sorted(Path(tmp).glob("*.npy")):
             name = npy.stem
@@ -118,15 +123,21 @@ def main() -> int:
             else:
                 print(f"    VTK flying edges: {flying[0]:.1f} ms, {flying[1]} triangles")
             for method in ("mt", "dc"):
-                if (name, method) not in ours:
-                    print(f"    {method}: no result")
-                    continue
-                our_ms, _, our_area = ours[(name, method)]
-                versus_vtk = "" if flying is None else f", {flying[0] / our_ms:.2f}x VTK's"
-                print(
-                    f"    {method}: {our_ms:.1f} ms, {ms / our_ms:.2f}x scikit-image's speed"
-                    f"{versus_vtk}, area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
-                )
+                for engine in ("gpu", "cpu"):
+                    if (name, method, engine) not in ours:
+                        print(f"    {method} ({engine} engine): no result")
+                        continue
+                    our_ms, _, our_area = ours[(name, method, engine)]
+                    versus_vtk = (
+                        ""
+                        if flying is None
+                        else f", {our_ms / flying[0]:.2f}x VTK's time"
+                    )
+                    print(
+                        f"    {method} ({engine} engine): {our_ms:.1f} ms,"
+                        f" {ms / our_ms:.2f}x scikit-image's speed{versus_vtk},"
+                        f" area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
+                    )
     # The ratio moves with the machine's load: llvmpipe's threads share the cores with any
     # other work, single-threaded scikit-image less so.
     print(f"load average after: {load_average()}")

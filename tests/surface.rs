@@ -817,9 +817,10 @@ impl Difference {
 }
 
 /// Asserts that `a` and `b` are the same surface up to rounding: every vertex of `a` matches a
-/// distinct vertex of `b` (the nearest unused one in position, normal and hp), and under that
-/// matching the triangles, with their winding, are the same set. Returns the largest difference
-/// between matched vertices.
+/// vertex of `b` (the nearest in position, normal and hp, preferring one not matched yet;
+/// vertices of `b` equal in every value count as one, as they are where several edges meet at a
+/// corner the isovalue crosses exactly), and under that matching the triangles, with their
+/// winding, are the same set. Returns the largest difference between matched vertices.
 fn same_surface(a: &CpuMesh, b: &CpuMesh) -> Difference {
     assert_eq!(a.positions.len(), b.positions.len(), "vertices");
     assert_eq!(a.indices.len(), b.indices.len(), "indices");
@@ -831,6 +832,15 @@ fn same_surface(a: &CpuMesh, b: &CpuMesh) -> Difference {
     }
     let mut used = vec![false; b.positions.len()];
     let mut to_b = vec![0u32; a.positions.len()];
+    // One representative of each set of vertices of `b` equal in every value.
+    let mut first_of: HashMap<[u32; 7], u32> = HashMap::new();
+    let representative: Vec<u32> = (0..b.positions.len())
+        .map(|j| {
+            let (p, n) = (b.positions[j], b.normals[j]);
+            let key = [p.x, p.y, p.z, n.x, n.y, n.z, b.hp[j]].map(f32::to_bits);
+            *first_of.entry(key).or_insert(j as u32)
+        })
+        .collect();
     let mut worst = Difference::default();
     for (i, &p) in a.positions.iter().enumerate() {
         let home = bucket(p);
@@ -842,12 +852,10 @@ fn same_surface(a: &CpuMesh, b: &CpuMesh) -> Difference {
                         continue;
                     };
                     for &j in list {
-                        if used[j as usize] {
-                            continue;
-                        }
                         let d = (b.positions[j as usize] - p).length()
                             + (b.normals[j as usize] - a.normals[i]).length()
-                            + (b.hp[j as usize] - a.hp[i]).abs();
+                            + (b.hp[j as usize] - a.hp[i]).abs()
+                            + if used[j as usize] { 1e-3 } else { 0.0 };
                         if best.is_none_or(|(e, _)| d < e) {
                             best = Some((d, j));
                         }
@@ -857,7 +865,7 @@ fn same_surface(a: &CpuMesh, b: &CpuMesh) -> Difference {
         }
         let (_, j) = best.unwrap_or_else(|| panic!("vertex {i} at {p} has no match"));
         used[j as usize] = true;
-        to_b[i] = j;
+        to_b[i] = representative[j as usize];
         let j = j as usize;
         worst = worst.max(Difference {
             position: (b.positions[j] - p).abs().max_element() / 0.05,
@@ -885,7 +893,15 @@ fn same_surface(a: &CpuMesh, b: &CpuMesh) -> Difference {
     let mut tb: Vec<[u32; 3]> = b
         .indices
         .chunks_exact(3)
-        .map(|t| canonical([t[0], t[1], t[2]]))
+        .map(|t| {
+            canonical(
+                t.iter()
+                    .map(|&j| representative[j as usize])
+                    .collect::<Vec<_>>()
+                    .try_into()
+                    .unwrap(),
+            )
+        })
         .collect();
     ta.sort_unstable();
     tb.sort_unstable();

@@ -17,7 +17,7 @@ use crate::render::grid::VoxelGrid;
 use crate::render::surface::buffers::{
     COUNTERS_SIZE, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
 };
-use crate::render::surface::cpu::{self, CpuGrids, CpuMesh32, Phases, SurfaceEngine};
+use crate::render::surface::cpu::{self, CpuGrids, Phases, SurfaceEngine};
 use crate::render::surface::dual_contour::DualContourPass;
 use crate::render::surface::extraction::{EXTRACTION_PASSES, Slicer};
 use crate::render::surface::marching_tets::MarchingTetsPass;
@@ -35,8 +35,6 @@ pub(crate) struct Methods {
     pub(crate) cpu_grids: CpuGrids,
     /// The phases of the last CPU extraction (benchmarks).
     pub(crate) cpu_phases: Mutex<Phases>,
-    /// The last CPU extraction's mesh, whose memory the next one reuses.
-    pub(crate) cpu_mesh: Mutex<CpuMesh32>,
 }
 
 impl Methods {
@@ -47,7 +45,6 @@ impl Methods {
             dual_contour: DualContourPass::new(device),
             cpu_grids: CpuGrids::default(),
             cpu_phases: Mutex::default(),
-            cpu_mesh: Mutex::default(),
         }
     }
 }
@@ -333,34 +330,31 @@ fn extract_on_cpu(
         }
     };
     let mut phases = Phases::default();
-    let mut mesh = methods.cpu_mesh.lock().unwrap_or_else(|e| e.into_inner());
     let started = std::time::Instant::now();
     let key = CacheKey::new(grid, settings);
     let cpu_grid = methods.cpu_grids.get(device, queue, grid, &key, map)?;
     phases.lap("grid", started);
-    cpu::extract(
-        &cpu_grid,
-        settings.method,
-        settings.iso_value,
-        cpu::default_threads(),
-        &mut phases,
-        &mut mesh,
-    );
+    let extraction = cpu::CpuExtraction {
+        grid: &cpu_grid,
+        method: settings.method,
+        iso: settings.iso_value,
+        threads: cpu::default_threads(),
+    };
+    let plan = extraction.plan(&mut phases);
     if let Submit::Worker { superseded, .. } = &submit
         && superseded()
     {
         state.key = None;
         return Err(SurfaceError::Superseded);
     }
-    let started = std::time::Instant::now();
     let (v, i) = initial_capacity;
     let buffers = state
         .buffers
         .get_or_insert_with(|| MeshBuffers::new(device, v, i));
     let wanted = SurfaceCounts {
         method: settings.method,
-        vertices_needed: mesh.vertices().len().min(u32::MAX as usize) as u32,
-        indices_needed: mesh.indices().len().min(u32::MAX as usize) as u32,
+        vertices_needed: plan.vertices().min(u32::MAX as usize) as u32,
+        indices_needed: plan.indices().min(u32::MAX as usize) as u32,
         vertex_capacity: buffers.vertex_capacity,
         index_capacity: buffers.index_capacity,
     };
@@ -369,10 +363,18 @@ fn extract_on_cpu(
     } else {
         grow(device, state, &wanted)
     };
+    let started = std::time::Instant::now();
     let buffers = state
         .buffers
         .get_or_insert_with(|| MeshBuffers::new(device, v, i));
-    cpu::upload(queue, buffers, &mesh);
+    let fits = grown.is_ok()
+        && plan.vertices() <= buffers.vertex_capacity as usize
+        && plan.indices() <= buffers.index_capacity as usize;
+    if !(fits && cpu::write_into(queue, buffers, &extraction, &plan)) {
+        cpu::write_truncated(queue, buffers, extraction.mesh(&plan), plan.active_cells);
+    }
+    phases.lap("vertices and triangles", started);
+    let started = std::time::Instant::now();
     let counts = SurfaceCounts {
         vertex_capacity: buffers.vertex_capacity,
         index_capacity: buffers.index_capacity,

@@ -3,17 +3,18 @@
 //! quads across the crossing edges from each cell's corner 0), written in cell order.
 //!
 //! Reads: a [`CpuGrid`]. Writes: [`MeshVertex`] records and triangle indices (two triangles per
-//! quad). Sweeps as in [`super::marching_tets`]: inside bits, a count per cell row (active
-//! cells, which are the vertices, and six indices per quad), then each row writes its vertices
-//! and quads, finding the vertices of the cells below it in y and z through those rows' maps.
+//! quad). As in [`super::marching_tets`], [`plan`] counts (each active cell is a vertex and has
+//! six indices per quad it owns) and [`write`] writes each cell row's vertices and quads,
+//! finding the vertices of the cells below it in y and z through those rows' maps.
 
 use glam::{IVec3, Vec3};
 
 use crate::render::surface::buffers::MeshVertex;
-use crate::render::surface::cpu::grid::{
-    CpuGrid, InsideBits, balanced_ranges, corner_offset, corner_step, weighted_hp,
-};
-use crate::render::surface::cpu::{CpuMesh32, Phases};
+use wgpu::WriteOnly;
+
+use crate::render::surface::cpu::Phases;
+use crate::render::surface::cpu::grid::{CpuGrid, corner_offset, corner_step, weighted_hp};
+use crate::render::surface::cpu::plan::Plan;
 
 /// The pull toward the mass point, relative to one unit-normal plane (QEF_BIAS in
 /// shaders/surface/dual_contour.wgsl).
@@ -47,119 +48,69 @@ fn quad_edges(base: IVec3, mask: u32) -> u32 {
     edges
 }
 
-/// The dual contouring surface of `grid` at `iso` on `threads` threads.
-pub fn extract(grid: &CpuGrid, iso: f32, threads: usize, phases: &mut Phases, out: &mut CpuMesh32) {
-    let started = std::time::Instant::now();
-    let bits = InsideBits::new(grid, iso, threads);
-    phases.lap("inside bits", started);
-    let (cells_y, cells_z) = (grid.dims.y as usize + 1, grid.dims.z as usize + 1);
-    let rows = cells_y * cells_z;
+/// Counts the dual contouring surface of `grid` at `iso` on `threads` threads.
+pub fn plan(grid: &CpuGrid, iso: f32, threads: usize, phases: &mut Phases) -> Plan {
+    Plan::new(grid, iso, threads, phases, |cx, cy, cz, mask| {
+        let base = CpuGrid::cell_sample(cx, cy, cz);
+        [1, 6 * quad_edges(base, mask).count_ones()]
+    })
+}
 
-    // Per cell row: active cells (its vertices) and indices.
-    let started = std::time::Instant::now();
-    let mut counts = vec![[0u32; 2]; rows];
-    let per = rows.div_ceil(threads.max(1)).max(1);
-    std::thread::scope(|scope| {
-        for (chunk, out) in counts.chunks_mut(per).enumerate() {
-            let bits = &bits;
-            scope.spawn(move || {
-                for (r, count) in out.iter_mut().enumerate() {
-                    let row = chunk * per + r;
-                    let (cy, cz) = (row % cells_y, row / cells_y);
-                    bits.row_cells(cy, cz, |cx, mask| {
-                        count[0] += 1;
-                        let base = CpuGrid::cell_sample(cx, cy, cz);
-                        count[1] += 6 * quad_edges(base, mask).count_ones();
-                    });
+/// Writes the surface `plan` counted into `vertices` and `indices` (see [`Plan::write`]).
+pub fn write(
+    grid: &CpuGrid,
+    iso: f32,
+    plan: &Plan,
+    threads: usize,
+    vertices: WriteOnly<'_, [u8]>,
+    indices: WriteOnly<'_, [u8]>,
+) {
+    let width = plan.cells_x + 1;
+    plan.write(
+        threads,
+        vertices,
+        indices,
+        || -> [Vec<u32>; 4] { std::array::from_fn(|_| vec![0u32; width]) },
+        |maps, rows, row, vertices, indices| {
+            let cells_y = rows.cells_y;
+            let (cy, cz) = (row % cells_y, row / cells_y);
+            // The vertices of this row and of the rows one below in y, z and both.
+            for (k, map) in maps.iter_mut().enumerate() {
+                let (dy, dz) = (k & 1, k >> 1);
+                if cy < dy || cz < dz {
+                    continue;
                 }
-            });
-        }
-    });
-    let mut vertex_start = Vec::with_capacity(rows + 1);
-    let mut index_start = Vec::with_capacity(rows + 1);
-    let (mut v, mut i) = (0usize, 0usize);
-    for c in &counts {
-        vertex_start.push(v);
-        index_start.push(i);
-        v += c[0] as usize;
-        i += c[1] as usize;
-    }
-    vertex_start.push(v);
-    index_start.push(i);
-    phases.lap("classify", started);
-
-    let started = std::time::Instant::now();
-    let (vertices, indices) = out.make_room(v, i);
-    let ranges = balanced_ranges(rows, threads, |r| u64::from(counts[r][0]));
-    std::thread::scope(|scope| {
-        let (mut vertex_rest, mut index_rest) = (vertices, indices);
-        for range in ranges {
-            let v_len = vertex_start[range.end] - vertex_start[range.start];
-            let i_len = index_start[range.end] - index_start[range.start];
-            let (vertex_out, vertex_tail) = vertex_rest.split_at_mut(v_len);
-            let (index_out, index_tail) = index_rest.split_at_mut(i_len);
-            (vertex_rest, index_rest) = (vertex_tail, index_tail);
-            let (bits, vertex_start, index_start) = (&bits, &vertex_start, &index_start);
-            scope.spawn(move || {
-                let width = bits.cells_x() + 1;
-                let mut maps = [
-                    vec![0u32; width],
-                    vec![0u32; width],
-                    vec![0u32; width],
-                    vec![0u32; width],
-                ];
-                let (v0, i0) = (vertex_start[range.start], index_start[range.start]);
-                for row in range {
-                    let (cy, cz) = (row % cells_y, row / cells_y);
-                    // The vertices of this row and of the rows one below in y, z and both.
-                    for (k, map) in maps.iter_mut().enumerate() {
-                        let (dy, dz) = (k & 1, k >> 1);
-                        if cy < dy || cz < dz {
-                            continue;
-                        }
-                        let (y, z) = (cy - dy, cz - dz);
-                        let mut next = vertex_start[y + cells_y * z] as u32;
-                        bits.row_cells(y, z, |cx, _| {
-                            map[cx] = next;
-                            next += 1;
-                        });
+                let (y, z) = (cy - dy, cz - dz);
+                let first = rows.vertex_start[y + cells_y * z] as u32;
+                for (vertex, (cx, _)) in (first..).zip(rows.cells(y, z)) {
+                    map[cx] = vertex;
+                }
+            }
+            for (cx, mask) in rows.cells(cy, cz) {
+                vertices.push(cell_vertex(grid, iso, cx, cy, cz, mask));
+                let s = CpuGrid::cell_sample(cx, cy, cz);
+                let edges = quad_edges(s, mask);
+                for axis in 0..3 {
+                    if (edges >> axis) & 1 == 0 {
+                        continue;
                     }
-                    let vertices =
-                        &mut vertex_out[vertex_start[row] - v0..vertex_start[row + 1] - v0];
-                    let indices = &mut index_out[index_start[row] - i0..index_start[row + 1] - i0];
-                    let (mut vertex_out, mut index_out) = (0usize, 0usize);
-                    bits.row_cells(cy, cz, |cx, mask| {
-                        vertices[vertex_out] = cell_vertex(grid, iso, cx, cy, cz, mask);
-                        vertex_out += 1;
-                        let s = CpuGrid::cell_sample(cx, cy, cz);
-                        let edges = quad_edges(s, mask);
-                        for axis in 0..3 {
-                            if (edges >> axis) & 1 == 0 {
-                                continue;
-                            }
-                            // The four cells around the edge, counter-clockwise seen from
-                            // +axis (as in the shader's `quads`): s - eb - ec, s - ec, s, s - eb.
-                            let own = maps[0][cx];
-                            let mut q = match axis {
-                                0 => [maps[3][cx], maps[2][cx], own, maps[1][cx]],
-                                1 => [maps[2][cx - 1], maps[0][cx - 1], own, maps[2][cx]],
-                                _ => [maps[1][cx - 1], maps[1][cx], own, maps[0][cx - 1]],
-                            };
-                            if mask & 1 == 0 {
-                                // Inside beyond the edge: the surface faces -axis.
-                                q.swap(1, 3);
-                            }
-                            indices[index_out..index_out + 6]
-                                .copy_from_slice(&[q[0], q[1], q[2], q[0], q[2], q[3]]);
-                            index_out += 6;
-                        }
-                    });
+                    // The four cells around the edge, counter-clockwise seen from +axis (as in
+                    // the shader's `quads`): s - eb - ec, s - ec, s, s - eb.
+                    let own = maps[0][cx];
+                    let mut q = match axis {
+                        0 => [maps[3][cx], maps[2][cx], own, maps[1][cx]],
+                        1 => [maps[2][cx - 1], maps[0][cx - 1], own, maps[2][cx]],
+                        _ => [maps[1][cx - 1], maps[1][cx], own, maps[0][cx - 1]],
+                    };
+                    if mask & 1 == 0 {
+                        // Inside beyond the edge: the surface faces -axis.
+                        q.swap(1, 3);
+                    }
+                    indices.extend_from_slice(&[q[0], q[1], q[2], q[0], q[2], q[3]]);
                 }
-            });
-        }
-    });
-    phases.lap("vertices and quads", started);
-    out.active_cells = v as u64;
+            }
+        },
+    );
 }
 
 /// The vertex of active cell (cx, cy, cz) with corner mask `mask` (as `cell_vertices` in the
@@ -168,14 +119,10 @@ pub fn extract(grid: &CpuGrid, iso: f32, threads: usize, phases: &mut Phases, ou
 fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: u32) -> MeshVertex {
     let origin = grid.cell_origin(cx, cy, cz);
     let strides = grid.strides();
-    let (d, h) = (grid.density(), grid.hp());
-    let mut values = [0.0f32; 8];
-    let mut gradients = [Vec3::ZERO; 8];
-    for k in 0..8u32 {
-        let at = origin + corner_step(strides, k);
-        values[k as usize] = d[at];
-        gradients[k as usize] = grid.gradient(at);
-    }
+    let h = grid.hp();
+    let values = grid.corners(origin);
+    let gradients: [Vec3; 8] =
+        std::array::from_fn(|k| grid.corner_gradient(origin, &values, k as u32));
     let mut count = 0u32;
     let (mut mass, mut normal_sum, mut b) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
     let (mut a00, mut a01, mut a02, mut a11, mut a12, mut a22) = (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);

@@ -112,6 +112,32 @@ impl CpuGrid {
         )
     }
 
+    /// The eight corner values of the cell whose lowest sample is at padded index `origin`.
+    #[inline]
+    pub fn corners(&self, origin: usize) -> [f32; 8] {
+        let strides = self.strides();
+        std::array::from_fn(|k| self.density[origin + corner_step(strides, k as u32)])
+    }
+
+    /// [`CpuGrid::gradient`] at corner k of the cell at `origin` whose corner values are
+    /// `values`: along each axis the neighbour inside the cell is a corner, so only the three
+    /// beyond it are loaded (the same differences of the same samples, so the same values).
+    #[inline]
+    pub fn corner_gradient(&self, origin: usize, values: &[f32; 8], k: u32) -> Vec3 {
+        let strides = self.strides();
+        let at = origin + corner_step(strides, k);
+        let d = &self.density;
+        let axis = |a: u32| {
+            let inside = values[(k ^ (1 << a)) as usize];
+            if (k >> a) & 1 == 1 {
+                0.5 * (d[at + strides[a as usize]] - inside)
+            } else {
+                0.5 * (inside - d[at - strides[a as usize]])
+            }
+        };
+        Vec3::new(axis(0), axis(1), axis(2))
+    }
+
     /// Unit normal in data space pointing toward lower density from a grid-unit gradient; zero
     /// when the gradient vanishes (as `outward_normal` in shaders/surface/extraction.wgsl).
     #[inline]
@@ -313,6 +339,26 @@ mod tests {
                     }
                 }
                 assert_eq!(seen, expected, "cell row ({cy}, {cz})");
+            }
+        }
+    }
+
+    #[test]
+    fn corner_gradients_are_the_central_differences() {
+        let dims = UVec3::new(9, 7, 6);
+        let g = grid(dims, |x, y, z| {
+            ((x * 7 + y * 13 + z * 29) % 11) as f32 / 10.0
+        });
+        let strides = g.strides();
+        for (cx, cy, cz) in [(0, 0, 0), (3, 2, 1), (9, 7, 6), (5, 0, 6)] {
+            let origin = g.cell_origin(cx, cy, cz);
+            let values = g.corners(origin);
+            for k in 0..8 {
+                assert_eq!(
+                    g.corner_gradient(origin, &values, k),
+                    g.gradient(origin + corner_step(strides, k)),
+                    "cell ({cx}, {cy}, {cz}) corner {k}"
+                );
             }
         }
     }

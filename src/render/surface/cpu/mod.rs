@@ -13,12 +13,15 @@
 //! Reads: a [`VoxelGrid`], read back once per grid into a padded [`CpuGrid`] (kept for the next
 //! isovalue). Writes: the mesh into [`MeshBuffers`] (vertices, indices, counters and the indexed
 //! indirect draw, as the GPU's `finalize` leaves them), so drawing, read-back and export do not
-//! know which engine ran. Files: [`grid`] (the padded grid and the cell sweep both methods
-//! share), [`marching_tets`], [`dual_contour`].
+//! know which engine ran. The mesh goes straight into the queue's staging memory, written by
+//! every thread in turn, with no copy of its own. Files: [`grid`] (the padded grid, the inside
+//! bits and the cell sweep), [`plan`] (counting the output and writing it on all threads, both
+//! methods' skeleton), [`marching_tets`], [`dual_contour`].
 
 pub mod dual_contour;
 pub mod grid;
 pub mod marching_tets;
+pub mod plan;
 
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -30,6 +33,8 @@ use crate::render::surface::buffers::{INDEXED_ARGS_OFFSET, MeshBuffers, MeshVert
 use crate::render::surface::state::CacheKey;
 use crate::render::surface::{SurfaceError, SurfaceMethod};
 use grid::CpuGrid;
+use plan::Plan;
+use wgpu::WriteOnly;
 
 /// Where the surface is extracted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,47 +73,6 @@ impl SurfaceEngine {
     }
 }
 
-/// A surface extracted on the CPU, in the GPU's vertex records. Reused from one extraction to
-/// the next, so its memory is not allocated (and faulted in) again for every isovalue.
-#[derive(Default)]
-pub struct CpuMesh32 {
-    vertices: Vec<MeshVertex>,
-    indices: Vec<u32>,
-    vertex_count: usize,
-    index_count: usize,
-    /// Cells that straddle the isovalue.
-    pub active_cells: u64,
-}
-
-impl CpuMesh32 {
-    pub fn vertices(&self) -> &[MeshVertex] {
-        &self.vertices[..self.vertex_count]
-    }
-
-    pub fn indices(&self) -> &[u32] {
-        &self.indices[..self.index_count]
-    }
-
-    /// Room for `vertices` vertices and `indices` indices, to be overwritten whole: the memory
-    /// of earlier extractions is reused (and given back when it is over four times the need).
-    fn make_room(&mut self, vertices: usize, indices: usize) -> (&mut [MeshVertex], &mut [u32]) {
-        fn fit<T: Clone>(v: &mut Vec<T>, n: usize, fill: T) {
-            if v.len() > 4 * n.max(1 << 16) {
-                v.truncate(n);
-                v.shrink_to_fit();
-            }
-            if v.len() < n {
-                v.resize(n, fill);
-            }
-        }
-        fit(&mut self.vertices, vertices, MeshVertex::zeroed());
-        fit(&mut self.indices, indices, 0);
-        self.vertex_count = vertices;
-        self.index_count = indices;
-        (&mut self.vertices[..vertices], &mut self.indices[..indices])
-    }
-}
-
 /// Wall-clock time of each phase of a CPU extraction, in milliseconds, by name.
 #[derive(Clone, Debug, Default)]
 pub struct Phases {
@@ -123,20 +87,52 @@ impl Phases {
     }
 }
 
-/// Extracts the surface of `grid` with `method` at `iso` on `threads` threads into `out`.
-pub fn extract(
-    grid: &CpuGrid,
-    method: SurfaceMethod,
-    iso: f32,
-    threads: usize,
-    phases: &mut Phases,
-    out: &mut CpuMesh32,
-) {
-    match method {
-        SurfaceMethod::MarchingTetrahedra => {
-            marching_tets::extract(grid, iso, threads, phases, out);
+/// An extraction on the CPU: `grid`, `method`, `iso` and the threads it runs on.
+pub struct CpuExtraction<'a> {
+    pub grid: &'a CpuGrid,
+    pub method: SurfaceMethod,
+    pub iso: f32,
+    pub threads: usize,
+}
+
+impl CpuExtraction<'_> {
+    /// Counts the surface (inside bits, each cell row's vertices and indices).
+    pub fn plan(&self, phases: &mut Phases) -> Plan {
+        match self.method {
+            SurfaceMethod::MarchingTetrahedra => {
+                marching_tets::plan(self.grid, self.iso, self.threads, phases)
+            }
+            SurfaceMethod::DualContouring => {
+                dual_contour::plan(self.grid, self.iso, self.threads, phases)
+            }
         }
-        SurfaceMethod::DualContouring => dual_contour::extract(grid, iso, threads, phases, out),
+    }
+
+    /// Writes the surface `plan` counted: exactly `plan.vertices()` [`MeshVertex`] records and
+    /// `plan.indices()` indices.
+    pub fn write(&self, plan: &Plan, vertices: WriteOnly<'_, [u8]>, indices: WriteOnly<'_, [u8]>) {
+        let (grid, iso, threads) = (self.grid, self.iso, self.threads);
+        match self.method {
+            SurfaceMethod::MarchingTetrahedra => {
+                marching_tets::write(grid, iso, plan, threads, vertices, indices);
+            }
+            SurfaceMethod::DualContouring => {
+                dual_contour::write(grid, iso, plan, threads, vertices, indices);
+            }
+        }
+    }
+
+    /// The whole surface in memory (where it cannot go straight to the GPU: a surface larger
+    /// than the device's buffers, and tests).
+    pub fn mesh(&self, plan: &Plan) -> (Vec<MeshVertex>, Vec<u32>) {
+        let mut vertices = vec![MeshVertex::zeroed(); plan.vertices()];
+        let mut indices = vec![0u32; plan.indices()];
+        self.write(
+            plan,
+            WriteOnly::from(bytemuck::cast_slice_mut::<MeshVertex, u8>(&mut vertices)),
+            WriteOnly::from(bytemuck::cast_slice_mut::<u32, u8>(&mut indices)),
+        );
+        (vertices, indices)
     }
 }
 
@@ -207,50 +203,110 @@ impl CpuGrids {
     }
 }
 
-/// Writes `mesh` into `buffers` as the GPU extraction leaves its output: the vertices and
-/// indices that fit (a triangle with a vertex that does not fit becomes degenerate, as on the
-/// GPU), the counters (which count what the surface needs) and the indexed indirect draw of the
-/// whole triangles that fit. Returns (vertices, indices) needed.
-pub(crate) fn upload(queue: &wgpu::Queue, buffers: &MeshBuffers, mesh: &CpuMesh32) -> (u32, u32) {
-    let needed_vertices = mesh.vertices().len().min(u32::MAX as usize) as u32;
-    let needed_indices = mesh.indices().len().min(u32::MAX as usize) as u32;
-    let vertex_count = mesh.vertices().len().min(buffers.vertex_capacity as usize);
-    if vertex_count > 0 {
-        queue.write_buffer(
-            &buffers.vertices,
-            0,
-            bytemuck::cast_slice(&mesh.vertices()[..vertex_count]),
-        );
-    }
-    // Whole triangles only, so every index below the drawn count is written.
-    let index_capacity = (buffers.index_capacity - buffers.index_capacity % 3) as usize;
-    let index_count = mesh.indices().len().min(index_capacity);
-    if index_count > 0 {
-        let indices = &mesh.indices()[..index_count];
-        if vertex_count == mesh.vertices().len() {
-            queue.write_buffer(&buffers.indices, 0, bytemuck::cast_slice(indices));
-        } else {
-            let clean: Vec<u32> = indices
-                .chunks_exact(3)
-                .flat_map(|t| {
-                    if t.iter().all(|&i| (i as usize) < vertex_count) {
-                        [t[0], t[1], t[2]]
-                    } else {
-                        [0; 3]
-                    }
-                })
-                .collect();
-            queue.write_buffer(&buffers.indices, 0, bytemuck::cast_slice(&clean));
-        }
-    }
-    let active = mesh.active_cells.min(u64::from(u32::MAX)) as u32;
-    let counters = [needed_vertices, needed_indices, active, 0];
+/// Writes the surface `plan` counted straight into `buffers` (through the queue's staging
+/// memory), which must hold it, with the counters and the indexed indirect draw as the GPU's
+/// `finalize` leaves them. Returns false (nothing written) when the queue has no staging memory
+/// to give.
+pub(crate) fn write_into(
+    queue: &wgpu::Queue,
+    buffers: &MeshBuffers,
+    extraction: &CpuExtraction<'_>,
+    plan: &Plan,
+) -> bool {
+    let vertex_bytes = (plan.vertices() * std::mem::size_of::<MeshVertex>()) as u64;
+    let index_bytes = (plan.indices() * 4) as u64;
+    let view = |buffer: &wgpu::Buffer, bytes: u64| match wgpu::BufferSize::new(bytes) {
+        Some(size) => queue.write_buffer_with(buffer, 0, size).map(Some),
+        None => Some(None),
+    };
+    let (Some(mut vertices), Some(mut indices)) = (
+        view(&buffers.vertices, vertex_bytes),
+        view(&buffers.indices, index_bytes),
+    ) else {
+        return false;
+    };
+    extraction.write(
+        plan,
+        vertices
+            .as_mut()
+            .map_or_else(WriteOnly::default, |v| v.slice(..)),
+        indices
+            .as_mut()
+            .map_or_else(WriteOnly::default, |v| v.slice(..)),
+    );
+    drop((vertices, indices));
+    write_counts(
+        queue,
+        buffers,
+        [plan.vertices(), plan.indices()],
+        plan.active_cells,
+        plan.indices(),
+    );
+    true
+}
+
+/// The counters (what the surface needs) and the indexed indirect draw of `drawn` indices.
+fn write_counts(
+    queue: &wgpu::Queue,
+    buffers: &MeshBuffers,
+    needed: [usize; 2],
+    active_cells: u64,
+    drawn: usize,
+) {
+    let clamp = |n: u64| n.min(u64::from(u32::MAX)) as u32;
+    let counters = [
+        clamp(needed[0] as u64),
+        clamp(needed[1] as u64),
+        clamp(active_cells),
+        0,
+    ];
     queue.write_buffer(&buffers.counters, 0, bytemuck::cast_slice(&counters));
-    let draw = [index_count as u32, 1, 0, 0, 0];
+    let draw = [clamp(drawn as u64), 1, 0, 0, 0];
     queue.write_buffer(
         &buffers.indirect,
         INDEXED_ARGS_OFFSET,
         bytemuck::cast_slice(&draw),
     );
-    (needed_vertices, needed_indices)
+}
+
+/// Writes the part of a surface that fits into `buffers` (too small for it: the device cannot
+/// hold more), as the GPU extraction leaves a truncated surface: the vertices that fit, whole
+/// triangles only, a triangle with a vertex that does not fit made degenerate, the counters
+/// saying what the whole surface needs.
+pub(crate) fn write_truncated(
+    queue: &wgpu::Queue,
+    buffers: &MeshBuffers,
+    (vertices, indices): (Vec<MeshVertex>, Vec<u32>),
+    active_cells: u64,
+) {
+    let vertex_count = vertices.len().min(buffers.vertex_capacity as usize);
+    if vertex_count > 0 {
+        queue.write_buffer(
+            &buffers.vertices,
+            0,
+            bytemuck::cast_slice(&vertices[..vertex_count]),
+        );
+    }
+    let index_capacity = (buffers.index_capacity - buffers.index_capacity % 3) as usize;
+    let index_count = indices.len().min(index_capacity);
+    let clean: Vec<u32> = indices[..index_count]
+        .chunks_exact(3)
+        .flat_map(|t| {
+            if t.iter().all(|&i| (i as usize) < vertex_count) {
+                [t[0], t[1], t[2]]
+            } else {
+                [0; 3]
+            }
+        })
+        .collect();
+    if !clean.is_empty() {
+        queue.write_buffer(&buffers.indices, 0, bytemuck::cast_slice(&clean));
+    }
+    write_counts(
+        queue,
+        buffers,
+        [vertices.len(), indices.len()],
+        active_cells,
+        index_count,
+    );
 }

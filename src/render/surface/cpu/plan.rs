@@ -1,0 +1,261 @@
+//! The two sweeps of a CPU extraction that both methods share: [`Plan::new`] counts each cell
+//! row's vertices and indices (whose prefix sums give every row its place in the output, so the
+//! result is the same whatever the number of threads), then [`Plan::write`] runs the method's row
+//! writer over the rows on all threads, each thread writing its rows' share of the output
+//! straight into the destination (the GPU's staging memory, through [`WriteOnly`]) in batches
+//! from a small buffer that stays in cache.
+
+use std::ops::Range;
+use std::time::Instant;
+
+use wgpu::WriteOnly;
+
+use crate::render::surface::buffers::MeshVertex;
+use crate::render::surface::cpu::Phases;
+use crate::render::surface::cpu::grid::{CpuGrid, InsideBits, balanced_ranges};
+
+/// Vertices a thread gathers before it copies them out (and a quarter as many indices' worth
+/// of bytes).
+const BATCH: usize = 4096;
+
+/// What a row writer is given: the rows' active cells and places in the output.
+pub struct Rows<'a> {
+    /// Each row's active cells, `cx << 8 | mask` in increasing cx, from `cell_start[row]`.
+    cells: &'a [u32],
+    cell_start: &'a [usize],
+    /// First vertex of each cell row (and the total at the end).
+    pub vertex_start: &'a [usize],
+    pub cells_y: usize,
+    pub cells_z: usize,
+}
+
+impl Rows<'_> {
+    /// The active cells (cx, corner mask) of cell row (cy, cz), in increasing cx.
+    #[inline]
+    pub fn cells(&self, cy: usize, cz: usize) -> impl Iterator<Item = (usize, u32)> + '_ {
+        let row = cy + self.cells_y * cz;
+        self.cells[self.cell_start[row]..self.cell_start[row + 1]]
+            .iter()
+            .map(|&c| ((c >> 8) as usize, c & 0xff))
+    }
+}
+
+/// The counted surface: each cell row's active cells and place in the output.
+pub struct Plan {
+    /// Cells along x.
+    pub cells_x: usize,
+    cells: Vec<u32>,
+    cell_start: Vec<usize>,
+    vertex_start: Vec<usize>,
+    index_start: Vec<usize>,
+    /// Active cells per row (to balance the threads).
+    row_active: Vec<u32>,
+    pub active_cells: u64,
+    cells_y: usize,
+    cells_z: usize,
+}
+
+impl Plan {
+    /// Inside bits of `grid` at `iso`, then the active cells of every cell row and their
+    /// output, `count(cx, cy, cz, mask)` ([vertices, indices]) each, on `threads` threads.
+    pub fn new(
+        grid: &CpuGrid,
+        iso: f32,
+        threads: usize,
+        phases: &mut Phases,
+        count: impl Fn(usize, usize, usize, u32) -> [u32; 2] + Sync,
+    ) -> Self {
+        let started = Instant::now();
+        let bits = InsideBits::new(grid, iso, threads);
+        phases.lap("inside bits", started);
+        let started = Instant::now();
+        let (cells_y, cells_z) = (grid.dims.y as usize + 1, grid.dims.z as usize + 1);
+        let rows = cells_y * cells_z;
+        let mut counts = vec![[0u32; 3]; rows];
+        let per = rows.div_ceil(threads.max(1)).max(1);
+        let chunk_cells: Vec<Vec<u32>> = std::thread::scope(|scope| {
+            let workers: Vec<_> = counts
+                .chunks_mut(per)
+                .enumerate()
+                .map(|(chunk, out)| {
+                    let (bits, count) = (&bits, &count);
+                    scope.spawn(move || {
+                        let mut cells = Vec::new();
+                        for (r, c) in out.iter_mut().enumerate() {
+                            let row = chunk * per + r;
+                            let (cy, cz) = (row % cells_y, row / cells_y);
+                            bits.row_cells(cy, cz, |cx, mask| {
+                                let [v, i] = count(cx, cy, cz, mask);
+                                c[0] += v;
+                                c[1] += i;
+                                c[2] += 1;
+                                cells.push((cx as u32) << 8 | mask);
+                            });
+                        }
+                        cells
+                    })
+                })
+                .collect();
+            workers
+                .into_iter()
+                .map(|w| w.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect()
+        });
+        let cells = chunk_cells.concat();
+        let mut vertex_start = Vec::with_capacity(rows + 1);
+        let mut index_start = Vec::with_capacity(rows + 1);
+        let mut cell_start = Vec::with_capacity(rows + 1);
+        let (mut v, mut i, mut active) = (0usize, 0usize, 0usize);
+        for c in &counts {
+            vertex_start.push(v);
+            index_start.push(i);
+            cell_start.push(active);
+            v += c[0] as usize;
+            i += c[1] as usize;
+            active += c[2] as usize;
+        }
+        vertex_start.push(v);
+        index_start.push(i);
+        cell_start.push(active);
+        phases.lap("classify", started);
+        Self {
+            cells_x: bits.cells_x(),
+            cells,
+            cell_start,
+            vertex_start,
+            index_start,
+            row_active: counts.iter().map(|c| c[2]).collect(),
+            active_cells: active as u64,
+            cells_y,
+            cells_z,
+        }
+    }
+
+    pub fn vertices(&self) -> usize {
+        *self.vertex_start.last().unwrap_or(&0)
+    }
+
+    pub fn indices(&self) -> usize {
+        *self.index_start.last().unwrap_or(&0)
+    }
+
+    /// Writes the surface: `vertices` and `indices` are exactly [`Plan::vertices`] vertex
+    /// records and [`Plan::indices`] indices long; `row(state, rows, row, vertices, indices)`
+    /// appends one cell row's output (in cell order), with a `state` per thread from
+    /// `make_state`.
+    pub fn write<S>(
+        &self,
+        threads: usize,
+        vertices: WriteOnly<'_, [u8]>,
+        indices: WriteOnly<'_, [u8]>,
+        make_state: impl Fn() -> S + Sync,
+        row: impl Fn(&mut S, &Rows<'_>, usize, &mut Vec<MeshVertex>, &mut Vec<u32>) + Sync,
+    ) {
+        let vertex_size = std::mem::size_of::<MeshVertex>();
+        assert_eq!(
+            vertices.len(),
+            self.vertices() * vertex_size,
+            "vertex output"
+        );
+        assert_eq!(indices.len(), self.indices() * 4, "index output");
+        let rows = Rows {
+            cells: &self.cells,
+            cell_start: &self.cell_start,
+            vertex_start: &self.vertex_start,
+            cells_y: self.cells_y,
+            cells_z: self.cells_z,
+        };
+        let ranges = balanced_ranges(self.row_active.len(), threads, |r| {
+            u64::from(self.row_active[r])
+        });
+        std::thread::scope(|scope| {
+            let (mut vertex_rest, mut index_rest) = (vertices, indices);
+            for range in ranges {
+                let v_bytes = self.span(&self.vertex_start, &range) * vertex_size;
+                let i_bytes = self.span(&self.index_start, &range) * 4;
+                let (vertex_out, vertex_tail) = vertex_rest.split_at(v_bytes);
+                let (index_out, index_tail) = index_rest.split_at(i_bytes);
+                (vertex_rest, index_rest) = (vertex_tail, index_tail);
+                let (rows, make_state, row) = (&rows, &make_state, &row);
+                let share = Share(vertex_out, index_out);
+                scope.spawn(move || {
+                    let (vertex_out, index_out) = share.into_parts();
+                    let mut state = make_state();
+                    let mut out = Batches::new(vertex_out, index_out);
+                    for r in range {
+                        row(&mut state, rows, r, &mut out.vertices, &mut out.indices);
+                        if out.vertices.len() >= BATCH || out.indices.len() >= 4 * BATCH {
+                            out.flush();
+                        }
+                    }
+                    out.flush();
+                    out.assert_full();
+                });
+            }
+        });
+    }
+
+    fn span(&self, starts: &[usize], range: &Range<usize>) -> usize {
+        starts[range.end] - starts[range.start]
+    }
+}
+
+/// A thread's share of the output, sent to it. `WriteOnly<[u8]>` is an exclusive borrow of
+/// bytes, sent like a `&mut [u8]`; wgpu 30 implements `Send` for `WriteOnly<T>` only where `T`
+/// is sized, so the share travels wrapped.
+struct Share<'a>(WriteOnly<'a, [u8]>, WriteOnly<'a, [u8]>);
+
+// SAFETY: each `WriteOnly<'a, [u8]>` is a unique borrow of a byte range for 'a (wgpu's own
+// `WriteOnly::split_at` made the ranges disjoint), which is `Send` as `&'a mut [u8]` is; the
+// wrapper only moves the two to the one thread that writes them.
+unsafe impl Send for Share<'_> {}
+
+impl<'a> Share<'a> {
+    fn into_parts(self) -> (WriteOnly<'a, [u8]>, WriteOnly<'a, [u8]>) {
+        (self.0, self.1)
+    }
+}
+
+/// A thread's output: batches gathered in cache, copied out in order.
+struct Batches<'a> {
+    vertex_out: WriteOnly<'a, [u8]>,
+    index_out: WriteOnly<'a, [u8]>,
+    vertex_at: usize,
+    index_at: usize,
+    vertices: Vec<MeshVertex>,
+    indices: Vec<u32>,
+}
+
+impl<'a> Batches<'a> {
+    fn new(vertex_out: WriteOnly<'a, [u8]>, index_out: WriteOnly<'a, [u8]>) -> Self {
+        Self {
+            vertex_out,
+            index_out,
+            vertex_at: 0,
+            index_at: 0,
+            vertices: Vec::with_capacity(2 * BATCH),
+            indices: Vec::with_capacity(8 * BATCH),
+        }
+    }
+
+    fn flush(&mut self) {
+        let bytes: &[u8] = bytemuck::cast_slice(&self.vertices);
+        self.vertex_out
+            .slice(self.vertex_at..self.vertex_at + bytes.len())
+            .copy_from_slice(bytes);
+        self.vertex_at += bytes.len();
+        self.vertices.clear();
+        let bytes: &[u8] = bytemuck::cast_slice(&self.indices);
+        self.index_out
+            .slice(self.index_at..self.index_at + bytes.len())
+            .copy_from_slice(bytes);
+        self.index_at += bytes.len();
+        self.indices.clear();
+    }
+
+    /// Every byte of the thread's share was written (the counts and the writers agree).
+    fn assert_full(&self) {
+        assert_eq!(self.vertex_at, self.vertex_out.len(), "vertices written");
+        assert_eq!(self.index_at, self.index_out.len(), "indices written");
+    }
+}
