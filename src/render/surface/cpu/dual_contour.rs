@@ -3,8 +3,8 @@
 //! quads across the crossing edges from each cell's corner 0), written in cell order.
 //!
 //! Reads: a [`CpuGrid`]. Writes: [`MeshVertex`] records and triangle indices (two triangles per
-//! quad). As in [`super::marching_tets`], [`plan`] counts (each active cell is a vertex and has
-//! six indices per quad it owns) and [`write`] writes each cell row's vertices and quads,
+//! quad). As in [`super::marching_tets`], [`plan()`] counts (each active cell is a vertex and has
+//! six indices per quad it owns) and [`write()`] writes each cell row's vertices and quads,
 //! finding the vertices of the cells below it in y and z through those rows' maps.
 
 use glam::{IVec3, Vec3};

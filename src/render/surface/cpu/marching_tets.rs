@@ -1,9 +1,9 @@
 //! Marching tetrahedra on the CPU: the same surface as shaders/surface/marching_tets.wgsl (the
 //! same split, case table, edge owners, vertex placement, normals and hp), written in cell order.
 //!
-//! Reads: a [`CpuGrid`]. Writes: [`MeshVertex`] records and triangle indices. [`plan`] counts
+//! Reads: a [`CpuGrid`]. Writes: [`MeshVertex`] records and triangle indices. [`plan()`] counts
 //! each active cell's vertices (one per crossed edge it owns: the seven from its corner 0) and
-//! indices (three per triangle of its case) through [`Plan`]; [`write`] then writes each cell
+//! indices (three per triangle of its case) through [`Plan`]; [`write()`] then writes each cell
 //! row's vertices and triangles in its place, finding the vertex of an edge owned by a
 //! neighbouring cell through that row's map of first vertices. Deterministic: the output is the
 //! same whatever the number of threads.
