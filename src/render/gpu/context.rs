@@ -15,11 +15,17 @@ pub enum ContextError {
     NoDevice { adapter: String, reason: String },
 }
 
-/// Optional features we use when the adapter has them; everything works without them.
+/// Optional features we use when the adapter has them; everything works without them. On an
+/// adapter that is the CPU, also mappable vertex and index buffers: there every buffer is host
+/// memory, and the CPU surface extraction writes its mesh straight into the buffers it is drawn
+/// from (render/surface/cpu/).
 pub fn wanted_features(adapter: &wgpu::Adapter) -> wgpu::Features {
-    let optional = wgpu::Features::TIMESTAMP_QUERY
+    let mut optional = wgpu::Features::TIMESTAMP_QUERY
         | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
         | wgpu::Features::FLOAT32_FILTERABLE;
+    if adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+        optional |= wgpu::Features::MAPPABLE_PRIMARY_BUFFERS;
+    }
     adapter.features() & optional
 }
 

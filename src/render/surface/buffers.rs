@@ -73,6 +73,9 @@ pub struct MeshBuffers {
     pub vertex_capacity: u32,
     pub index_capacity: u32,
     pub active_capacity: u32,
+    /// `vertices` and `indices` can be mapped for writing (the device has mappable primary
+    /// buffers: an adapter that is the CPU, see `wanted_features`).
+    pub host_writable: bool,
 }
 
 impl MeshBuffers {
@@ -81,6 +84,14 @@ impl MeshBuffers {
         let index_capacity = index_capacity.max(6);
         let active_capacity = vertex_capacity.max(index_capacity / 3);
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let host_writable = device
+            .features()
+            .contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS);
+        let written = if host_writable {
+            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_WRITE
+        } else {
+            wgpu::BufferUsages::COPY_DST
+        };
         let make = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -93,12 +104,12 @@ impl MeshBuffers {
             vertices: make(
                 "surface::vertex_buffer",
                 u64::from(vertex_capacity) * std::mem::size_of::<MeshVertex>() as u64,
-                storage | wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                storage | wgpu::BufferUsages::VERTEX | written,
             ),
             indices: make(
                 "surface::index_buffer",
                 u64::from(index_capacity) * 4,
-                storage | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+                storage | wgpu::BufferUsages::INDEX | written,
             ),
             counters: make(
                 "surface::counters",
@@ -130,6 +141,7 @@ impl MeshBuffers {
             vertex_capacity,
             index_capacity,
             active_capacity,
+            host_writable,
         }
     }
 

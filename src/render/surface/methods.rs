@@ -133,6 +133,54 @@ pub(crate) fn map_polling(
     Ok(bytes)
 }
 
+/// Maps each (buffer, bytes) of `ranges` with a nonzero length for writing from its start and
+/// waits for the mappings: blocking, or by polling without blocking the device (see
+/// [`map_polling`]).
+fn map_for_writing(
+    device: &wgpu::Device,
+    ranges: &[(&wgpu::Buffer, u64)],
+    blocking: bool,
+) -> Result<(), SurfaceError> {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let (done, failed) = (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)));
+    let mut wanted = 0;
+    for &(buffer, bytes) in ranges {
+        if bytes == 0 {
+            continue;
+        }
+        wanted += 1;
+        let (done, failed) = (done.clone(), failed.clone());
+        buffer
+            .slice(..bytes)
+            .map_async(wgpu::MapMode::Write, move |result| {
+                if result.is_err() {
+                    failed.fetch_add(1, Ordering::AcqRel);
+                }
+                done.fetch_add(1, Ordering::AcqRel);
+            });
+    }
+    while done.load(Ordering::Acquire) < wanted {
+        let poll = if blocking {
+            wgpu::PollType::wait_indefinitely()
+        } else {
+            wgpu::PollType::Poll
+        };
+        device
+            .poll(poll)
+            .map_err(|e| SurfaceError::Readback(e.to_string()))?;
+        if !blocking && done.load(Ordering::Acquire) < wanted {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+    }
+    if failed.load(Ordering::Acquire) > 0 {
+        return Err(SurfaceError::Readback(
+            "mapping the mesh buffers for writing failed".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// Waits for the work submitted so far by polling the device without blocking it (see
 /// [`map_polling`]).
 fn wait_polling(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), SurfaceError> {
@@ -370,7 +418,11 @@ fn extract_on_cpu(
     let fits = grown.is_ok()
         && plan.vertices() <= buffers.vertex_capacity as usize
         && plan.indices() <= buffers.index_capacity as usize;
-    if !(fits && cpu::write_into(queue, buffers, &extraction, &plan)) {
+    if fits && buffers.host_writable {
+        // The buffers are host memory: written in place, no staging copy.
+        map_for_writing(device, &cpu::write_ranges(buffers, &plan), blocking)?;
+        cpu::write_mapped(queue, buffers, &extraction, &plan)?;
+    } else if !(fits && cpu::write_into(queue, buffers, &extraction, &plan)) {
         cpu::write_truncated(queue, buffers, extraction.mesh(&plan), plan.active_cells);
     }
     phases.lap("vertices and triangles", started);

@@ -245,6 +245,69 @@ pub(crate) fn write_into(
     true
 }
 
+/// Writes the surface `plan` counted straight into `buffers`, mapped for writing by the caller
+/// over the first `plan.vertices()` vertices and `plan.indices()` indices (through
+/// [`write_ranges`]), and unmaps them; then the counters and the draw, as [`write_into`].
+pub(crate) fn write_mapped(
+    queue: &wgpu::Queue,
+    buffers: &MeshBuffers,
+    extraction: &CpuExtraction<'_>,
+    plan: &Plan,
+) -> Result<(), SurfaceError> {
+    let view = |buffer: &wgpu::Buffer, bytes: u64| {
+        if bytes == 0 {
+            return Ok(None);
+        }
+        buffer
+            .slice(..bytes)
+            .get_mapped_range_mut()
+            .map(Some)
+            .map_err(|e| SurfaceError::Readback(e.to_string()))
+    };
+    let [(_, vertex_bytes), (_, index_bytes)] = write_ranges(buffers, plan);
+    {
+        let mut vertices = view(&buffers.vertices, vertex_bytes)?;
+        let mut indices = view(&buffers.indices, index_bytes)?;
+        extraction.write(
+            plan,
+            vertices
+                .as_mut()
+                .map_or_else(WriteOnly::default, |v| v.slice(..)),
+            indices
+                .as_mut()
+                .map_or_else(WriteOnly::default, |v| v.slice(..)),
+        );
+    }
+    if vertex_bytes > 0 {
+        buffers.vertices.unmap();
+    }
+    if index_bytes > 0 {
+        buffers.indices.unmap();
+    }
+    write_counts(
+        queue,
+        buffers,
+        [plan.vertices(), plan.indices()],
+        plan.active_cells,
+        plan.indices(),
+    );
+    Ok(())
+}
+
+/// The buffers and byte ranges [`write_mapped`] writes (a zero length is not mapped).
+pub(crate) fn write_ranges<'b>(
+    buffers: &'b MeshBuffers,
+    plan: &Plan,
+) -> [(&'b wgpu::Buffer, u64); 2] {
+    [
+        (
+            &buffers.vertices,
+            (plan.vertices() * std::mem::size_of::<MeshVertex>()) as u64,
+        ),
+        (&buffers.indices, (plan.indices() * 4) as u64),
+    ]
+}
+
 /// The counters (what the surface needs) and the indexed indirect draw of `drawn` indices.
 fn write_counts(
     queue: &wgpu::Queue,
