@@ -736,6 +736,15 @@ fn the_window_path_keeps_a_coarse_surface_beside_the_full_one() {
 #[test]
 fn cpu_engine_extracts_the_gpu_surface_triangle_for_triangle() {
     let gpu = common::gpu();
+    // On a CPU adapter (lavapipe) this runs the path the app takes there: the mesh written
+    // into mapped mesh buffers.
+    if gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+        assert!(
+            gpu.device
+                .features()
+                .contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS)
+        );
+    }
     let frame = FrameBinding::new(&gpu.device);
     let lumpy_dims = UVec3::new(37, 22, 29);
     let (density, hp) = lumpy_fields(lumpy_dims);
@@ -908,4 +917,55 @@ fn same_surface(a: &CpuMesh, b: &CpuMesh) -> Difference {
     let differing = ta.iter().zip(&tb).filter(|(x, y)| x != y).count();
     assert_eq!(differing, 0, "{differing} of {} triangles differ", ta.len());
     worst
+}
+
+/// Where the mesh buffers cannot be mapped (a device without mappable primary buffers: the CPU
+/// engine pinned on a GPU), the CPU engine builds the mesh in memory and writes it through the
+/// queue: the same surface as the GPU passes, through buffers that must grow.
+#[test]
+fn cpu_engine_writes_through_the_queue_where_buffers_cannot_be_mapped() {
+    let gpu = common::gpu();
+    let plain = {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
+        let instance = wgpu::Instance::new(desc);
+        let adapter =
+            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+                .expect("adapter");
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .expect("device");
+        GpuContext {
+            adapter,
+            device,
+            queue,
+        }
+    };
+    assert!(
+        !plain
+            .device
+            .features()
+            .contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS)
+    );
+    let frame = FrameBinding::new(&plain.device);
+    for method in [MT, DC] {
+        let expected = extract(
+            &gpu,
+            &surface_pass(&gpu),
+            &grid_from(&gpu, 40, torus),
+            method,
+            0.35,
+        );
+        for pass in [
+            SurfacePass::new(&plain.device, &frame),
+            SurfacePass::with_capacity(&plain.device, &frame, 64, 96),
+        ] {
+            let pass = pass.with_engine(SurfaceEngine::Cpu);
+            let mesh = extract(&plain, &pass, &grid_from(&plain, 40, torus), method, 0.35);
+            let error = same_surface(&mesh, &expected);
+            assert!(error.position <= 1e-4, "{}: {error:?}", method.name());
+        }
+    }
 }

@@ -422,8 +422,8 @@ fn extract_on_cpu(
         // The buffers are host memory: written in place, no staging copy.
         map_for_writing(device, &cpu::write_ranges(buffers, &plan), blocking)?;
         cpu::write_mapped(queue, buffers, &extraction, &plan)?;
-    } else if !(fits && cpu::write_into(queue, buffers, &extraction, &plan)) {
-        cpu::write_truncated(queue, buffers, extraction.mesh(&plan), plan.active_cells);
+    } else {
+        cpu::write_from_memory(queue, buffers, extraction.mesh(&plan), plan.active_cells);
     }
     phases.lap("vertices and triangles", started);
     let started = std::time::Instant::now();

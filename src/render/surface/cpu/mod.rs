@@ -13,8 +13,10 @@
 //! Reads: a [`VoxelGrid`], read back once per grid into a padded [`CpuGrid`] (kept for the next
 //! isovalue). Writes: the mesh into [`MeshBuffers`] (vertices, indices, counters and the indexed
 //! indirect draw, as the GPU's `finalize` leaves them), so drawing, read-back and export do not
-//! know which engine ran. The mesh goes straight into the queue's staging memory, written by
-//! every thread in turn, with no copy of its own. Files: [`grid`] (the padded grid, the inside
+//! know which engine ran. On a CPU adapter the mesh buffers are host memory that can be mapped
+//! (`wanted_features`), and every thread writes its share of the mesh straight into them;
+//! elsewhere (the engine pinned on a GPU) the mesh is built in memory and written through the
+//! queue. Files: [`grid`] (the padded grid, the inside
 //! bits and the cell sweep), [`plan`] (counting the output and writing it on all threads, both
 //! methods' skeleton), [`marching_tets`], [`dual_contour`].
 
@@ -203,51 +205,10 @@ impl CpuGrids {
     }
 }
 
-/// Writes the surface `plan` counted straight into `buffers` (through the queue's staging
-/// memory), which must hold it, with the counters and the indexed indirect draw as the GPU's
-/// `finalize` leaves them. Returns false (nothing written) when the queue has no staging memory
-/// to give.
-pub(crate) fn write_into(
-    queue: &wgpu::Queue,
-    buffers: &MeshBuffers,
-    extraction: &CpuExtraction<'_>,
-    plan: &Plan,
-) -> bool {
-    let vertex_bytes = (plan.vertices() * std::mem::size_of::<MeshVertex>()) as u64;
-    let index_bytes = (plan.indices() * 4) as u64;
-    let view = |buffer: &wgpu::Buffer, bytes: u64| match wgpu::BufferSize::new(bytes) {
-        Some(size) => queue.write_buffer_with(buffer, 0, size).map(Some),
-        None => Some(None),
-    };
-    let (Some(mut vertices), Some(mut indices)) = (
-        view(&buffers.vertices, vertex_bytes),
-        view(&buffers.indices, index_bytes),
-    ) else {
-        return false;
-    };
-    extraction.write(
-        plan,
-        vertices
-            .as_mut()
-            .map_or_else(WriteOnly::default, |v| v.slice(..)),
-        indices
-            .as_mut()
-            .map_or_else(WriteOnly::default, |v| v.slice(..)),
-    );
-    drop((vertices, indices));
-    write_counts(
-        queue,
-        buffers,
-        [plan.vertices(), plan.indices()],
-        plan.active_cells,
-        plan.indices(),
-    );
-    true
-}
-
 /// Writes the surface `plan` counted straight into `buffers`, mapped for writing by the caller
 /// over the first `plan.vertices()` vertices and `plan.indices()` indices (through
-/// [`write_ranges`]), and unmaps them; then the counters and the draw, as [`write_into`].
+/// [`write_ranges`]), and unmaps them; then the counters (what the surface needs) and the
+/// indexed indirect draw, as the GPU's `finalize` leaves them.
 pub(crate) fn write_mapped(
     queue: &wgpu::Queue,
     buffers: &MeshBuffers,
@@ -332,11 +293,12 @@ fn write_counts(
     );
 }
 
-/// Writes the part of a surface that fits into `buffers` (too small for it: the device cannot
-/// hold more), as the GPU extraction leaves a truncated surface: the vertices that fit, whole
-/// triangles only, a triangle with a vertex that does not fit made degenerate, the counters
-/// saying what the whole surface needs.
-pub(crate) fn write_truncated(
+/// Writes a surface held in memory into `buffers` through the queue (where they cannot be
+/// mapped: a device that is not the CPU), as much as fits, as the GPU extraction leaves a
+/// surface too large for the device: the vertices that fit, whole triangles only, a triangle
+/// with a vertex that does not fit made degenerate, the counters saying what the whole surface
+/// needs.
+pub(crate) fn write_from_memory(
     queue: &wgpu::Queue,
     buffers: &MeshBuffers,
     (vertices, indices): (Vec<MeshVertex>, Vec<u32>),

@@ -2,7 +2,7 @@
 //! row's vertices and indices (whose prefix sums give every row its place in the output, so the
 //! result is the same whatever the number of threads), then [`Plan::write`] runs the method's row
 //! writer over the rows on all threads, each thread writing its rows' share of the output
-//! straight into the destination (the GPU's staging memory, through [`WriteOnly`]) in batches
+//! straight into the destination (mapped mesh buffers, through [`WriteOnly`]) in batches
 //! from a small buffer that stays in cache.
 
 use std::ops::Range;
