@@ -15,7 +15,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke demo clean bench-window
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke demo clean bench-window bench-surface
 
 system:
 	@bash scripts/setup-system.sh
@@ -89,6 +89,11 @@ bench-timeline: venv
 # Peak memory of Song extraction on 5, 20 and 60-minute tracks.
 bench-memory: venv
 	$(PY) bench/bench_memory.py
+
+# Isosurfaces, both engines (GPU passes, CPU extraction) against VTK's flying edges and
+# scikit-image's marching cubes on the same fields, in the same run.
+bench-surface: build venv
+	$(PY) bench/bench_surface.py --loudscape target/release/loudscape --runs 9
 
 # The window's frame loop under recorded input, release build under Xvfb at 1280x720: orbit
 # frame rates per view, hover read-out latency, isovalue sweep rate, on the demo and a ~5 M-point
