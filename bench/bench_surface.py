@@ -1,10 +1,9 @@
-"""Isosurface extraction: loudscape's GPU passes against scikit-image, on the same fields.
+"""Isosurface extraction: loudscape's two engines against scikit-image and VTK, same fields.
 
-Runs ``loudscape bench --fields-dir DIR`` (which times marching tetrahedra and dual contouring,
+Runs ``loudscape bench --fields-dir DIR``, which times marching tetrahedra and dual contouring
 on both engines (the GPU passes, and the CPU extraction the app uses where the device is the
-CPU), on a song-like field at 128^3 and 224^3 and writes each field as a .npy file: float32,
-C order,
-shape (nz, ny, nx), voxel centres at -1 + (index + 0.5) * 2 / n), then times
+CPU) on a song-like field at 128^3 and 224^3 and writes each field as a .npy file (float32,
+C order, shape (nz, ny, nx), voxel centres at -1 + (index + 0.5) * 2 / n); then times
 ``skimage.measure.marching_cubes`` on those fields at the same isovalue in the same run, padded
 by one zero voxel as loudscape closes surfaces at the grid border, and prints the ratios and the
 surface areas. When VTK is installed (``pip install vtk``) its flying edges
@@ -128,11 +127,7 @@ def main() -> int:
                         print(f"    {method} ({engine} engine): no result")
                         continue
                     our_ms, _, our_area = ours[(name, method, engine)]
-                    versus_vtk = (
-                        ""
-                        if flying is None
-                        else f", {our_ms / flying[0]:.2f}x VTK's time"
-                    )
+                    versus_vtk = "" if flying is None else f", {our_ms / flying[0]:.2f}x VTK's time"
                     print(
                         f"    {method} ({engine} engine): {our_ms:.1f} ms,"
                         f" {ms / our_ms:.2f}x scikit-image's speed{versus_vtk},"
