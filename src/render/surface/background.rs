@@ -193,6 +193,15 @@ pub(crate) fn run_job(
     mut job: Job,
     superseded: &dyn Fn() -> bool,
 ) {
+    // Asked again for the surface just posted and not yet installed (the isovalue went A -> B
+    // -> A while A was extracted, so A waited behind itself): installing that one answers this
+    // request too. Its spare buffers are kept for the next job.
+    if job.mailbox.holds(&job.key) {
+        if worker.pool.is_none() {
+            worker.pool = job.spare;
+        }
+        return;
+    }
     if let Some(coarse) = job.coarse.take() {
         run_coarse(device, queue, worker, &job, coarse);
     }
@@ -328,6 +337,63 @@ mod tests {
         assert_eq!(queue.len(), 1);
         assert_eq!(queue.try_take(), Some(("song", 0.55)));
         assert!(queue.is_empty());
+    }
+
+    /// A -> B -> A while A is extracted: the second request for A, taken once A's mesh is
+    /// posted and before the window installs it, is answered by that mesh instead of being
+    /// extracted again; once it is installed, a request for A extracts again.
+    #[test]
+    fn a_request_for_the_mesh_just_posted_is_not_extracted_again() {
+        use crate::render::gpu::context::GpuContext;
+        use crate::render::surface::state::ExtractedSurface;
+        let gpu = GpuContext::new_headless().expect("a GPU adapter (lavapipe will do)");
+        let n = 16u32;
+        let field: Vec<f32> = (0..n * n * n)
+            .map(|i| {
+                let p = glam::UVec3::new(i % n, (i / n) % n, i / (n * n)).as_vec3();
+                (1.0 - (p - glam::Vec3::splat(7.5)).length() / 6.0).max(0.0)
+            })
+            .collect();
+        let grid = VoxelGrid::from_fields(
+            &gpu.device,
+            glam::UVec3::splat(n),
+            glam::Vec3::splat(-1.0),
+            glam::Vec3::ONE,
+            &field,
+            &vec![0.5; field.len()],
+        );
+        let settings = SurfaceSettings::default();
+        let surface = ExtractedSurface::new();
+        let engine = SurfaceEngine::preferred(&gpu.device);
+        let mut worker = Worker::new(&gpu.device, engine);
+        let job = |spare| Job {
+            key: CacheKey::new(&grid, &settings),
+            grid: share_grid(&grid),
+            settings,
+            spare,
+            capacity: (1024, 3072),
+            mailbox: surface.mailbox.clone(),
+            coarse: None,
+        };
+        run_job(&gpu.device, &gpu.queue, &mut worker, job(None), &|| false);
+        let key = CacheKey::new(&grid, &settings);
+        assert!(surface.mailbox.holds(&key));
+        let spare = MeshBuffers::new(&gpu.device, 8, 8);
+        run_job(
+            &gpu.device,
+            &gpu.queue,
+            &mut worker,
+            job(Some(spare)),
+            &|| false,
+        );
+        // Not extracted again: the spare was not used but kept.
+        assert_eq!(worker.pool.as_ref().map(|b| b.vertex_capacity), Some(8));
+        assert!(surface.install_finished());
+        assert!(surface.counts().is_some_and(|c| c.triangles() > 0));
+        assert!(!surface.mailbox.holds(&key));
+        // Installed: the same request now extracts (and posts) again.
+        run_job(&gpu.device, &gpu.queue, &mut worker, job(None), &|| false);
+        assert!(surface.mailbox.holds(&key));
     }
 
     /// Requests for different surfaces (Song and Timeline) do not replace each other and are

@@ -117,6 +117,11 @@ impl Mailbox {
         lock(&self.finished).take()
     }
 
+    /// Whether the full mesh of `key` waits here to be installed.
+    pub(crate) fn holds(&self, key: &CacheKey) -> bool {
+        lock(&self.finished).as_ref().is_some_and(|f| f.key == *key)
+    }
+
     fn take_coarse(&self) -> Option<Finished> {
         lock(&self.coarse).take()
     }
