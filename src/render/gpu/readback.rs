@@ -1,5 +1,6 @@
 //! Reading GPU buffers back to the CPU, waiting for the GPU: [`read_buffer`] copies into a
-//! staging buffer and maps it; [`map_buffer`] maps a MAP_READ buffer already filled. (The
+//! staging buffer ([`copy_to_staging`]) and maps it; [`map_buffer`] maps a MAP_READ buffer
+//! already filled. (The
 //! window's surface counters are read without waiting; see `render::surface::pass`.)
 
 use thiserror::Error;
@@ -22,6 +23,20 @@ pub fn read_buffer(
     if size == 0 {
         return Ok(Vec::new());
     }
+    let staging = copy_to_staging(device, queue, label, source, size);
+    map_buffer(device, &staging)
+}
+
+/// Copies `size` (> 0) bytes from the start of `source` (which needs COPY_SRC) into a new
+/// MAP_READ staging buffer labelled `label` and submits the copy, without waiting: the caller
+/// maps the buffer as it waits best ([`map_buffer`] blocks).
+pub fn copy_to_staging(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    label: &str,
+    source: &wgpu::Buffer,
+    size: u64,
+) -> wgpu::Buffer {
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size,
@@ -32,7 +47,7 @@ pub fn read_buffer(
         device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
     encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
     queue.submit([encoder.finish()]);
-    map_buffer(device, &staging)
+    staging
 }
 
 /// Maps a MAP_READ buffer after the queue's work is done and returns a copy of its bytes.

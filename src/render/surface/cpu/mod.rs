@@ -30,6 +30,7 @@ use std::time::Instant;
 
 use bytemuck::Zeroable;
 
+use crate::render::gpu::readback::copy_to_staging;
 use crate::render::grid::VoxelGrid;
 use crate::render::surface::buffers::{INDEXED_ARGS_OFFSET, MeshBuffers, MeshVertex};
 use crate::render::surface::state::CacheKey;
@@ -62,15 +63,6 @@ impl SurfaceEngine {
         match self {
             Self::Gpu => "gpu",
             Self::Cpu => "cpu",
-        }
-    }
-
-    /// Parses "gpu" / "cpu" (any case).
-    pub fn parse(text: &str) -> Option<Self> {
-        match text.trim().to_ascii_lowercase().as_str() {
-            "gpu" => Some(Self::Gpu),
-            "cpu" => Some(Self::Cpu),
-            _ => None,
         }
     }
 }
@@ -154,7 +146,7 @@ pub(crate) struct CpuGrids {
 const KEPT_GRIDS: usize = 3;
 
 impl CpuGrids {
-    /// The CPU copy of `grid`, read back (waiting with `wait`) unless it is kept already.
+    /// The CPU copy of `grid`, read back (mapped with `map`) unless it is kept already.
     pub(crate) fn get(
         &self,
         device: &wgpu::Device,
@@ -171,26 +163,11 @@ impl CpuGrids {
             return Ok(found);
         }
         let bytes = grid.voxel_count() * 4;
-        let staging = |label: &str| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.max(4),
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            })
+        let read = |label: &str, field: &wgpu::Buffer| {
+            map(&copy_to_staging(device, queue, label, field, bytes))
         };
-        let (density, hp) = (
-            staging("surface::cpu_density_readback"),
-            staging("surface::cpu_hp_readback"),
-        );
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("surface::cpu_grid_readback"),
-        });
-        encoder.copy_buffer_to_buffer(&grid.density, 0, &density, 0, bytes);
-        encoder.copy_buffer_to_buffer(&grid.hp_mean, 0, &hp, 0, bytes);
-        queue.submit([encoder.finish()]);
-        let density = map(&density)?;
-        let hp = map(&hp)?;
+        let density = read("surface::cpu_density_readback", &grid.density)?;
+        let hp = read("surface::cpu_hp_readback", &grid.hp_mean)?;
         let n = grid.voxel_count() as usize;
         let cpu = Arc::new(CpuGrid::new(
             grid.dims,
