@@ -2,6 +2,7 @@
 // markers are markers.wgsl). Prepended: utils/frame.wgsl, utils/palette.wgsl (line_ink turns
 // the lines to dark ink on the light background).
 
+// Keep in sync with `LineVertex` in src/render/lines.rs (28 bytes: vec3 then vec4).
 struct LineVertex {
     @location(0) position: vec3<f32>,
     @location(1) color: vec4<f32>,

@@ -929,14 +929,17 @@ fn cpu_engine_writes_through_the_queue_where_buffers_cannot_be_mapped() {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
         let instance = wgpu::Instance::new(desc);
-        let adapter =
-            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-                .expect("adapter");
+        let adapter = pollster::block_on(
+            instance.request_adapter(&wgpu::RequestAdapterOptions::default()),
+        )
+        .expect(
+            "no GPU adapter found: the GPU tests need one (mesa-vulkan-drivers gives lavapipe)",
+        );
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             required_limits: adapter.limits(),
             ..Default::default()
         }))
-        .expect("device");
+        .expect("the adapter found refused a device");
         GpuContext {
             adapter,
             device,

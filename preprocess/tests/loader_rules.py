@@ -1,4 +1,4 @@
-"""The app loader's rules (docs/FORMAT.md, src/cloud.rs, src/axes.rs), written out again
+"""The app loader's rules (docs/FORMAT.md, src/data/cloud/, src/data/axes.rs), written out again
 independently of the package's own check, for tests that must see what the app would see."""
 
 import json

@@ -183,7 +183,8 @@ def test_truncated_flac(tmp_path, capsys):
     source.write_bytes(source.read_bytes()[:60])
     out = tmp_path / "o.ply"
     status, err = run(["song", source, "-o", out], capsys)
-    assert_clean_failure(status, err, names=source, reason="", out=out)
+    # 60 bytes hold the FLAC header and no audio frame: nothing decodes, so it is refused.
+    assert_clean_failure(status, err, names=source, reason="cannot decode", out=out)
 
 
 def test_unsupported_format(tmp_path, capsys):

@@ -9,12 +9,15 @@ use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::shaders;
 
+/// One end of a line segment, as the vertex stage reads it (keep in sync with `LineVertex` in
+/// shaders/lines.wgsl: position at location 0, colour at location 1, no padding between them).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct LineVertex {
     pub position: [f32; 3],
     pub color: [f32; 4],
 }
+const _: () = assert!(std::mem::size_of::<LineVertex>() == 28);
 
 /// Line segments on the GPU, two vertices each.
 pub struct LinesGpu {

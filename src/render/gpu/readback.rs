@@ -7,8 +7,9 @@ use thiserror::Error;
 
 #[derive(Debug, Error)]
 pub enum ReadbackError {
-    #[error("reading the rendered image back from the GPU failed: {0}")]
-    Map(String),
+    /// `what` names the data (a buffer's label, "the rendered image"), `reason` wgpu's words.
+    #[error("reading {what} back from the GPU failed: {reason}")]
+    Map { what: String, reason: String },
 }
 
 /// Copies `size` bytes from the start of `source` (which needs COPY_SRC) into a staging buffer
@@ -24,7 +25,7 @@ pub fn read_buffer(
         return Ok(Vec::new());
     }
     let staging = copy_to_staging(device, queue, label, source, size);
-    map_buffer(device, &staging)
+    map_buffer(device, &staging, label)
 }
 
 /// Copies `size` (> 0) bytes from the start of `source` (which needs COPY_SRC) into a new
@@ -50,8 +51,17 @@ pub fn copy_to_staging(
     staging
 }
 
-/// Maps a MAP_READ buffer after the queue's work is done and returns a copy of its bytes.
-pub fn map_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, ReadbackError> {
+/// Maps a MAP_READ buffer after the queue's work is done and returns a copy of its bytes;
+/// `what` names the data in the error.
+pub fn map_buffer(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    what: &str,
+) -> Result<Vec<u8>, ReadbackError> {
+    let failed = |reason: String| ReadbackError::Map {
+        what: what.to_string(),
+        reason,
+    };
     let slice = buffer.slice(..);
     let (sender, receiver) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |result| {
@@ -59,14 +69,14 @@ pub fn map_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8
     });
     device
         .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| ReadbackError::Map(e.to_string()))?;
+        .map_err(|e| failed(e.to_string()))?;
     receiver
         .recv()
-        .map_err(|e| ReadbackError::Map(e.to_string()))?
-        .map_err(|e| ReadbackError::Map(e.to_string()))?;
+        .map_err(|e| failed(e.to_string()))?
+        .map_err(|e| failed(e.to_string()))?;
     let bytes = slice
         .get_mapped_range()
-        .map_err(|e| ReadbackError::Map(e.to_string()))?
+        .map_err(|e| failed(e.to_string()))?
         .to_vec();
     buffer.unmap();
     Ok(bytes)

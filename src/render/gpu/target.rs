@@ -104,12 +104,16 @@ impl RenderTarget {
             },
         );
         queue.submit([encoder.finish()]);
-        let bytes = map_buffer(device, &buffer)?;
+        let bytes = map_buffer(device, &buffer, "the rendered image")?;
         let mut pixels = Vec::with_capacity((unpadded * self.height) as usize);
         for row in bytes.chunks_exact(padded as usize) {
             pixels.extend_from_slice(&row[..unpadded as usize]);
         }
-        image::RgbaImage::from_raw(self.width, self.height, pixels)
-            .ok_or_else(|| ReadbackError::Map("image size mismatch".into()))
+        image::RgbaImage::from_raw(self.width, self.height, pixels).ok_or_else(|| {
+            ReadbackError::Map {
+                what: "the rendered image".into(),
+                reason: "its size does not match the target's".into(),
+            }
+        })
     }
 }

@@ -62,7 +62,9 @@ impl Timestamps {
     /// The ticks of the last resolved queries (waits for the GPU).
     pub fn read_ticks(&self, device: &wgpu::Device) -> Result<Vec<u64>, ReadbackError> {
         Ok(bytemuck::pod_collect_to_vec(&map_buffer(
-            device, &self.read,
+            device,
+            &self.read,
+            "the GPU timestamps",
         )?))
     }
 

@@ -329,9 +329,8 @@ pub(crate) fn extract_until_fits(
                 **submissions += sliced + 1;
                 map_polling(device, &staging)?
             }
-            Submit::Blocking => {
-                map_buffer(device, &staging).map_err(|e| SurfaceError::Readback(e.to_string()))?
-            }
+            Submit::Blocking => map_buffer(device, &staging, "the surface counters")
+                .map_err(|e| SurfaceError::Readback(e.to_string()))?,
         };
         let raw: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
         let counts = SurfaceCounts {
@@ -372,7 +371,8 @@ fn extract_on_cpu(
     let blocking = matches!(submit, Submit::Blocking);
     let map = |buffer: &wgpu::Buffer| {
         if blocking {
-            map_buffer(device, buffer).map_err(|e| SurfaceError::Readback(e.to_string()))
+            map_buffer(device, buffer, "surface data")
+                .map_err(|e| SurfaceError::Readback(e.to_string()))
         } else {
             map_polling(device, buffer)
         }
