@@ -14,7 +14,7 @@ import time
 from collections.abc import Sequence
 
 from loudscape_extract import export
-from loudscape_extract.dynamics import HIGHPASS_HZ, dc_warning
+from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
@@ -360,8 +360,8 @@ def run_timeline(args: argparse.Namespace, *, tty: bool, json_progress=None) -> 
         _say(f"skipped: {path}: no year in its tags")
     for path, reason in sorted(result.failed.items()):
         _say(f"skipped: {path}: {reason}")
-    for path, offset in result.dc_offsets:
-        _say(f"warning: {dc_warning(path, offset)}")
+    for item in result.metadata.get("warnings", []):
+        _say(f"warning: {item['path']}: {item['message']}")
     if not args.quiet:
         songs = result.metadata["songs"]
         _say(

@@ -17,6 +17,7 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.notices import warnings_problem
 
 __all__ = [
     "AXIS_NAMES",
@@ -95,7 +96,8 @@ def check_points(points: np.ndarray, *, path: str | None = None) -> None:
 def check_metadata(metadata: dict, *, n_points: int, path: str | None = None) -> None:
     """The metadata rules of :func:`check_cloud` alone, for a cloud of ``n_points`` points:
     JSON-encodable without NaN or infinity, ``point_count`` equal to ``n_points``, five valid
-    axes.
+    axes, and ``warnings`` (when present; also each timeline song's) an array of
+    ``{"kind", "message"}`` objects, with ``"path"`` at the top of a timeline.
 
     Raises
     ------
@@ -115,6 +117,16 @@ def check_metadata(metadata: dict, *, n_points: int, path: str | None = None) ->
         problem = _axis_problem(axes.get(name))
         if problem:
             _fail(f"axes.{name}: {problem}", path)
+    timeline = metadata.get("mode") == "timeline"
+    if "warnings" in metadata:
+        problem = warnings_problem(metadata["warnings"], with_path=timeline)
+        if problem:
+            _fail(f"warnings{problem}", path)
+    for index, song in enumerate((metadata.get("songs") or []) if timeline else []):
+        if isinstance(song, dict) and "warnings" in song:
+            problem = warnings_problem(song["warnings"])
+            if problem:
+                _fail(f"songs[{index}].warnings{problem}", path)
 
 
 def check_cloud(points: np.ndarray, metadata: dict, *, path: str | None = None) -> None:

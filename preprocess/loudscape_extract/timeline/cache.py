@@ -13,6 +13,7 @@ import uuid
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.notices import warnings_problem
 from loudscape_extract.timeline.frames import SongFrames
 
 __all__ = [
@@ -28,7 +29,7 @@ __all__ = [
 ]
 
 #: Bump when what is cached (or how it is computed) changes: old entries are then ignored.
-CACHE_VERSION = 4
+CACHE_VERSION = 5
 #: Temporaries are named ``ENTRY.HOST.UNIQUE.PID`` + this; see :func:`remove_temporaries`.
 TEMPORARY_SUFFIX = ".tmp"
 
@@ -85,6 +86,7 @@ def save_entry(path: str, song: SongFrames) -> None:
         "n_frames_total": int(song.n_frames_total),
         "metrics": song.metrics,
         "warning": song.warning,
+        "signal": [dict(item) for item in song.signal],
     }
     temporary = f"{path}.{_host()}.{uuid.uuid4().hex[:12]}.{os.getpid()}{TEMPORARY_SUFFIX}"
     try:
@@ -121,6 +123,7 @@ def read_entry(path: str) -> tuple[SongFrames | None, str]:
         n_frames_total = int(head["n_frames_total"])
         metrics = head["metrics"]
         warning = head.get("warning", "")
+        signal = head.get("signal", [])
     except ValueError:
         return None, "its head line is not JSON"
     except (KeyError, TypeError, AttributeError):
@@ -130,9 +133,18 @@ def read_entry(path: str) -> tuple[SongFrames | None, str]:
         return None, f"{len(body)} bytes of series for {n} frames"
     if not isinstance(metrics, dict) or not isinstance(warning, str) or n > n_frames_total:
         return None, "inconsistent frame counts or metrics"
+    if warnings_problem(signal):
+        return None, "its signal warnings are not a list of warnings"
     values = np.frombuffer(body, dtype="<f4").astype(np.float32).reshape(len(_SERIES), n)
     series = dict(zip(_SERIES, values, strict=True))
-    return SongFrames(**series, n_frames_total=n_frames_total, metrics=metrics, warning=warning), ""
+    song = SongFrames(
+        **series,
+        n_frames_total=n_frames_total,
+        metrics=metrics,
+        warning=warning,
+        signal=tuple(signal),
+    )
+    return song, ""
 
 
 def load_entry(path: str) -> SongFrames | None:
