@@ -292,7 +292,11 @@ def list_songs(args: argparse.Namespace, json_progress=None) -> int:
     """
     if not args.inputs:
         raise ExtractError("no input: give folders or files to list")
-    for path in discover_audio(args.inputs):
+    passed_over: dict = {}
+    found = discover_audio(args.inputs, skipped=passed_over)
+    for path, reason in passed_over.items():
+        _say(f"skipped: {path}: {reason}")
+    for path in found:
         tags = read_tags(path)
         if json_progress is not None:
             json_progress.emit(
