@@ -16,6 +16,7 @@ import soundfile
 
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.messages import shorten
+from loudscape_extract.ogg import ogg_damage
 from loudscape_extract.paths import check_regular_input
 
 __all__ = [
@@ -91,10 +92,12 @@ def decode_audio(path: str | os.PathLike, *, strict: bool = False) -> Audio:
     Decoding runs block by block and is checked against what the container promises (the
     frame count of FLAC's STREAMINFO, an mp3's Xing/Info header or libsndfile's count, the
     ``data`` / ``SSND`` chunk size of WAV and AIFF, the end-of-stream page of Ogg Vorbis and
-    Opus); a decoder error mid-stream keeps what was decoded before it. A short or damaged
-    file is then decoded as far as it goes and ``audio.warning`` says how far (or, with
-    ``strict``, it is an error). The decoder libraries' own chatter on file descriptor 2
-    (libmpg123's ``Note:`` lines) is captured; its error lines become part of the warning.
+    Opus, and every Ogg page's CRC and sequence number, :func:`ogg.ogg_damage`, since the Ogg
+    decoders pass over damaged pages in silence); a decoder error mid-stream keeps what was
+    decoded before it. A short or damaged file is then decoded as far as it goes and
+    ``audio.warning`` says how far (or, with ``strict``, it is an error). The decoder
+    libraries' own chatter on file descriptor 2 (libmpg123's ``Note:`` lines) is captured;
+    its error lines become part of the warning.
 
     Parameters
     ----------
@@ -233,7 +236,10 @@ def _decode_problem(
     else:
         how_much = f"decoded {decoded / sample_rate:.2f} s"
     reason = f" ({'; '.join(reasons)})" if reasons else ""
-    return f"truncated or corrupt audio: {how_much}{reason}"
+    # Pages failing their CRC are damage, not a missing end: say so first.
+    crc = "fail their CRC" in container_problem
+    head = "corrupt audio" if crc else "truncated or corrupt audio"
+    return f"{head}: {how_much}{reason}"
 
 
 def _promised_frames(
@@ -253,7 +259,8 @@ def _promised_frames(
     if file_format == "AIFF":
         return _aiff_frames(head), ""
     if file_format == "OGG":
-        return None, _ogg_end_problem(tail, size)
+        problems = [ogg_damage(name), _ogg_end_problem(tail, size)]
+        return None, "; ".join(problem for problem in problems if problem)
     if file_format == "MP3":
         return (_libsndfile_frames(name) if _mp3_has_frame_count(head) else None), ""
     return _libsndfile_frames(name), ""

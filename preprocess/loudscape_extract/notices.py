@@ -120,7 +120,8 @@ def clip_notice(runs: int, clipped_samples: int, first_s: float | None) -> dict 
     when = "" if first_s is None else f", the first at {first_s:.3f} s"
     return notice(
         "clipping",
-        f"clipped: {runs} run(s) of {CLIP_RUN} or more consecutive full-scale samples "
+        f"clipped: {runs} run(s) of {CLIP_RUN} or more consecutive samples at or beyond full "
+        "scale "
         f"({clipped_samples} samples in runs{when})",
     )
 
