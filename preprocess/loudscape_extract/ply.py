@@ -25,6 +25,7 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.paths import fsync_directory, write_failure
 
 __all__ = [
     "MAX_LINE_BYTES",
@@ -252,8 +253,9 @@ def _meta_from_lines(lines: Iterable[tuple[int, str]], name: str) -> dict:
 def write_atomically(path: str | os.PathLike, parts: Iterable[bytes | np.ndarray]) -> None:
     """Write ``parts`` in order to a temporary file beside ``path``, then ``os.replace`` it.
 
-    An interrupted or failed write leaves no partial file at ``path``. Arrays are written with
-    ``tofile`` (their bytes as they are in memory).
+    An interrupted or failed write leaves no partial file at ``path``; the data is synced to
+    the disk before the rename and the folder after it. Arrays are written as their bytes in
+    memory (C order). A full disk is reported as such (:func:`paths.write_failure`).
 
     Raises
     ------
@@ -274,16 +276,20 @@ def write_atomically(path: str | os.PathLike, parts: Iterable[bytes | np.ndarray
         with handle:
             for part in parts:
                 if isinstance(part, np.ndarray):
-                    part.tofile(handle)
+                    # Through Python's write (not tofile): a full disk is ENOSPC, not a count.
+                    handle.write(np.ascontiguousarray(part).reshape(-1).view(np.uint8).data)
                 else:
                     handle.write(part)
+            handle.flush()
+            os.fsync(handle.fileno())  # the data is on disk before the name points at it
         os.chmod(handle.name, 0o666 & ~_umask())
         os.replace(handle.name, name)
+        fsync_directory(directory)
     except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(handle.name)
         if isinstance(exc, OSError):
-            raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=name) from exc
+            raise ExtractError(write_failure(exc, directory=directory), path=name) from exc
         raise
 
 
