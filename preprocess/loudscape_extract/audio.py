@@ -123,7 +123,7 @@ def decode_audio(path: str | os.PathLike, *, strict: bool = False) -> Audio:
     extension = os.path.splitext(name)[1].lower()
     with _captured_fd2() as chatter:
         try:
-            with soundfile.SoundFile(name) as handle:
+            with soundfile.SoundFile(os.fsencode(name)) as handle:
                 sample_rate = int(handle.samplerate)
                 if not MIN_SAMPLE_RATE <= sample_rate <= MAX_SAMPLE_RATE:
                     raise ExtractError(
@@ -269,7 +269,7 @@ def _promised_frames(
 def _libsndfile_frames(name: str) -> int | None:
     with _captured_fd2():
         try:
-            frames = int(soundfile.info(name).frames)
+            frames = int(soundfile.info(os.fsencode(name)).frames)
         except (soundfile.LibsndfileError, RuntimeError):
             return None
     return frames if frames > 0 else None
@@ -424,7 +424,7 @@ def audio_info(path: str | os.PathLike) -> AudioInfo:
     extension = os.path.splitext(name)[1].lower()
     with _captured_fd2():
         try:
-            info = soundfile.info(name)
+            info = soundfile.info(os.fsencode(name))
         except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
             raise _open_error(name, extension, exc) from exc
         except OSError as exc:
@@ -484,7 +484,7 @@ def read_blocks(
     start = 0
     with _captured_fd2() as chatter:
         try:
-            handle = soundfile.SoundFile(name)
+            handle = soundfile.SoundFile(os.fsencode(name))
         except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
             raise _open_error(name, extension, exc) from exc
         except OSError as exc:

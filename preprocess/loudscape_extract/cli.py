@@ -18,7 +18,7 @@ from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
-from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
+from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES, MAX_FLOOR_DB
 from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
@@ -37,34 +37,45 @@ from loudscape_extract.version import PROG, __version__
 __all__ = ["build_parser", "main"]
 
 
+#: Ranges of the numeric flags: wide enough for any real use, narrow enough that a typo
+#: (``--floor-db 1e308``, ``--n-fft 1000000000``, ``--jobs 99999``) is refused at once with a
+#: clear line instead of overflowing, exhausting memory or forking without end.
+MAX_N_FFT = 1 << 16
+MAX_HOP = 1 << 16
+MAX_FRAMES_PER_SONG = 1_000_000
+MAX_POINTS_FLAG = 2_000_000_000
+MAX_JOBS = max(256, 4 * (os.cpu_count() or 1))
+
+
+def _integer(text: str, low: int, high: int, *, even: bool = False) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not low <= value <= high or (even and value % 2):
+        kind = "an even integer" if even else "an integer"
+        raise argparse.ArgumentTypeError(f"must be {kind} from {low:,} to {high:,}, got {text}")
+    return value
+
+
 def _positive_even(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 4 or value % 2:
-        raise argparse.ArgumentTypeError(f"must be an even integer >= 4, got {value}")
-    return value
+    return _integer(text, 4, MAX_N_FFT, even=True)
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
+def _hop(text: str) -> int:
+    return _integer(text, 1, MAX_HOP)
 
 
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
+def _frames_per_song(text: str) -> int:
+    return _integer(text, 1, MAX_FRAMES_PER_SONG)
+
+
+def _max_points(text: str) -> int:
+    return _integer(text, 0, MAX_POINTS_FLAG)
+
+
+def _jobs(text: str) -> int:
+    return _integer(text, 1, MAX_JOBS)
 
 
 def _non_negative_db(text: str) -> float:
@@ -72,8 +83,10 @@ def _non_negative_db(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of dB, got {text!r}") from None
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    if not 0 <= value <= MAX_FLOOR_DB:  # NaN fails too
+        raise argparse.ArgumentTypeError(
+            f"must be a number of dB from 0 to {MAX_FLOOR_DB:g} (0 keeps every bin), got {text}"
+        )
     return value
 
 
@@ -96,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", help="PLY file to write (default: the input's name with .ply)"
     )
     song.add_argument("--n-fft", type=_positive_even, default=2048, help="STFT size (2048)")
-    song.add_argument("--hop", type=_positive_int, default=1024, help="STFT hop (1024)")
+    song.add_argument("--hop", type=_hop, default=1024, help="STFT hop (1024)")
     song.add_argument(
         "--floor-db",
         type=_non_negative_db,
@@ -161,20 +174,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     timeline.add_argument(
         "--frames-per-song",
-        type=_positive_int,
+        type=_frames_per_song,
         default=1024,
         help="frames sampled evenly per song (1024; fewer if a song has fewer, or if "
         "--max-points needs it)",
     )
     timeline.add_argument(
         "--max-points",
-        type=_non_negative_int,
+        type=_max_points,
         default=DEFAULT_MAX_POINTS,
         help=f"lower the frames per song so the cloud stays under this many points, but not "
         f"below {MIN_FRAMES_PER_SONG} a song ({DEFAULT_MAX_POINTS:,}; 0: no cap)",
     )
     timeline.add_argument("--n-fft", type=_positive_even, default=2048, help="STFT size (2048)")
-    timeline.add_argument("--hop", type=_positive_int, default=1024, help="STFT hop (1024)")
+    timeline.add_argument("--hop", type=_hop, default=1024, help="STFT hop (1024)")
     timeline.add_argument(
         "--cache-dir",
         help="per-song feature cache (default $XDG_CACHE_HOME/loudscape or ~/.cache/loudscape)",
@@ -196,7 +209,7 @@ def build_parser() -> argparse.ArgumentParser:
     timeline.add_argument(
         "--jobs",
         "-j",
-        type=_positive_int,
+        type=_jobs,
         default=os.cpu_count() or 1,
         help="songs in parallel worker processes (default: number of cores); with --dask, "
         "the local cluster's workers",

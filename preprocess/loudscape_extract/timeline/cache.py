@@ -164,8 +164,8 @@ def read_entry(path: str) -> tuple[SongFrames | None, str]:
         metrics = head["metrics"]
         warning = head.get("warning", "")
         signal = head.get("signal", [])
-    except ValueError:
-        return None, "its head line is not JSON"
+    except (ValueError, RecursionError):
+        return None, "its head line is not JSON (or nested too deeply)"
     except (KeyError, TypeError, AttributeError):
         return None, "its head line lacks frame counts or metrics"
     body = data[end + 1 :]
