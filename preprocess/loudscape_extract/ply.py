@@ -428,7 +428,12 @@ def read_ply(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
     properties = []
     for line in lines:
         if line.startswith("element vertex "):
-            n_points = int(line.split()[2])
+            try:
+                n_points = int(line.split()[2])
+            except (IndexError, ValueError):
+                raise ExtractError(f"bad vertex count {line.split()[2:]}", path=name) from None
+            if n_points < 0:
+                raise ExtractError(f"negative vertex count {n_points}", path=name)
         elif line.startswith("property "):
             properties.append(tuple(line.split()[1:]))
     if n_points is None or properties != [("float", p) for p in PROPERTIES]:
