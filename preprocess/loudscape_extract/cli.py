@@ -18,6 +18,8 @@ from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
+from loudscape_extract.notices import warning_lines
+from loudscape_extract.ply import read_ply_metadata
 from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES, MAX_FLOOR_DB
 from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
@@ -409,14 +411,22 @@ def run_export(args: argparse.Namespace) -> int:
     """The export subcommand: one VTK XML PolyData file, then the ``wrote ...`` summary."""
     output = args.output or os.path.splitext(args.input)[0] + ".vtp"
     n_points = export.export_vtp(args.input, output)
+    _say_cloud_warnings(args.input)
     if not args.quiet:
         _say(f"wrote {output} ({n_points} points, VTK XML PolyData)")
     return 0
 
 
+def _say_cloud_warnings(path: str) -> None:
+    """The warnings a cloud carries (docs/FORMAT.md, "Warnings"), one ``warning:`` line each."""
+    for line in warning_lines(read_ply_metadata(path)):
+        _say(f"warning: {line}")
+
+
 def run_report(args: argparse.Namespace) -> int:
     """The report subcommand: PNG (and CSV), then ``wrote ...`` summaries."""
     rows = write_report(args.input, args.output, csv_path=args.csv)
+    _say_cloud_warnings(args.input)
     if not args.quiet:
         songs = sum(row["songs"] for row in rows)
         _say(f"wrote {args.output} ({songs} song(s), {len(rows)} year(s))")

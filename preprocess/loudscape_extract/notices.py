@@ -26,6 +26,7 @@ __all__ = [
     "notice",
     "timeline_warnings",
     "track_warnings",
+    "warning_lines",
     "warnings_problem",
 ]
 
@@ -144,6 +145,21 @@ def track_warnings(*, decode_warning: str, metrics: dict, signal: list | tuple =
 def timeline_warnings(songs: list) -> list:
     """The top-level array of a timeline: each song's warnings with its ``path``."""
     return [{**item, "path": song["path"]} for song in songs for item in song.get("warnings", [])]
+
+
+def warning_lines(metadata: dict) -> list[str]:
+    """``<file>: <message>`` for each warning of a cloud's metadata, as every reader shows
+    them: the song's path (timeline: the warning's ``path``; song: ``source.path``)."""
+    items = metadata.get("warnings")
+    if not isinstance(items, list):
+        return []
+    source = metadata.get("source") if isinstance(metadata.get("source"), dict) else {}
+    lines = []
+    for item in items:
+        if isinstance(item, dict):
+            where = item.get("path") or source.get("path") or "?"
+            lines.append(f"{where}: {item.get('message', '')}")
+    return lines
 
 
 def warnings_problem(value: object, *, with_path: bool = False) -> str:

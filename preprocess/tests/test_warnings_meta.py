@@ -203,3 +203,24 @@ def test_format_fixtures_with_warnings_pass_the_contract():
     check_metadata(timeline, n_points=points.shape[0])
     paths = [w["path"] for w in timeline["warnings"]]
     assert paths[1:] == [os.fsdecode(NON_UTF8_TIMELINE_PATH)] * 2  # kept byte for byte
+
+
+def test_export_and_report_show_the_warnings_a_cloud_carries(tmp_path, capsys):
+    import os
+
+    from loudscape_extract.format_fixtures import SONG_WARNINGS
+
+    folder = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "fixtures", "format")
+    song = os.path.join(folder, "song_v2_warnings.ply")
+    status, err = run(["export", song, "-o", tmp_path / "s.vtp", "-q"], capsys)
+    assert status == 0, err
+    source = read_ply(song)[1]["source"]["path"]
+    assert warning_lines(err) == [
+        f"loudscape-extract: warning: {source}: {w['message']}" for w in SONG_WARNINGS
+    ]
+    timeline = os.path.join(folder, "timeline_v2_warnings.ply")
+    status, err = run(["report", timeline, "-o", tmp_path / "r.png", "-q"], capsys)
+    assert status == 0, err
+    expected = read_ply(timeline)[1]["warnings"]
+    assert len(warning_lines(err)) == len(expected) == 3
+    assert all(f"{w['path']}: {w['message']}" in err for w in expected[:1])
