@@ -63,6 +63,7 @@ def test_non_utf8_file_name_extracts_in_both_modes(tmp_path, capsys):
         ("timeline", "--max-points", "1e3", "expected an integer"),
         ("timeline", "--jobs", "99999", "from 1 to"),
         ("timeline", "--n-fft", "6.5", "expected an integer"),
+        ("timeline", "--hop", "4096", "larger than --n-fft 2048"),
     ],
 )
 def test_numeric_flags_are_range_checked(tmp_path, capsys, command, flag, value, needle):
@@ -70,7 +71,8 @@ def test_numeric_flags_are_range_checked(tmp_path, capsys, command, flag, value,
         main([command, str(tmp_path / "x.flac"), "-o", str(tmp_path / "o.ply"), flag, value])
     err = capsys.readouterr().err
     assert exit_info.value.code == 2
-    assert f"argument {flag}" in err and needle in err and "Traceback" not in err
+    assert needle in err and "Traceback" not in err
+    assert f"argument {flag}" in err or flag in err
 
 
 def test_library_refuses_an_absurd_floor(tmp_path):
