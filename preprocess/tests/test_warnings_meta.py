@@ -72,7 +72,7 @@ def test_antiphase_channels_warn_with_the_figure(tmp_path, capsys):
     assert kinds == ["channels_cancel"]
     message = meta["warnings"][0]["message"]
     drop = float(message.split("it is ")[1].split(" dB")[0])
-    assert drop > 60  # about 70 dB: the noise against the music
+    assert drop > 60  # 65.0 dB: the noise against the music
     assert "channels_cancel" not in err and f"{source}: the channels cancel" in err
     # The metrics still measure the channels: a loud file, not a silent one.
     assert meta["metrics"]["integrated_lufs"] > -30
