@@ -259,8 +259,11 @@ def _promised_frames(
     if file_format == "AIFF":
         return _aiff_frames(head), ""
     if file_format == "OGG":
+        # libsndfile counts an Ogg's frames from its last granule position: a decoder that
+        # drops damaged pages (Opus) decodes less than that, which is then said.
         problems = [ogg_damage(name), _ogg_end_problem(tail, size)]
-        return None, "; ".join(problem for problem in problems if problem)
+        promised = _libsndfile_frames(name)
+        return promised, "; ".join(problem for problem in problems if problem)
     if file_format == "MP3":
         return (_libsndfile_frames(name) if _mp3_has_frame_count(head) else None), ""
     return _libsndfile_frames(name), ""
