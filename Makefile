@@ -15,7 +15,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke demo clean bench-window bench-surface
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke fuzz-py demo clean bench-window bench-surface
 
 system:
 	@bash scripts/setup-system.sh
@@ -77,6 +77,13 @@ fuzz-smoke:
 
 fuzz:
 	$(CARGO) run -q --release --example fuzz_ply -- --inputs $(N)
+
+# The Python readers of untrusted files (manifest parser, PLY readers) fuzzed with hypothesis,
+# each input under a time and memory limit (preprocess/tests/fuzz_py.py); a few seconds of it
+# run in test-py. FUZZ_PY_SECONDS=3600 for a long run.
+FUZZ_PY_SECONDS ?= 300
+fuzz-py: venv
+	OPENBLAS_NUM_THREADS=1 PYTHONPATH=preprocess $(VENV)/bin/python preprocess/tests/fuzz_py.py --seconds $(FUZZ_PY_SECONDS)
 
 test: system lint-rust lint-py test-rust test-py test-mesh fuzz-smoke
 

@@ -16,6 +16,7 @@ import soundfile
 
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.messages import shorten
+from loudscape_extract.ogg import ogg_damage
 from loudscape_extract.paths import check_regular_input
 
 __all__ = [
@@ -91,10 +92,12 @@ def decode_audio(path: str | os.PathLike, *, strict: bool = False) -> Audio:
     Decoding runs block by block and is checked against what the container promises (the
     frame count of FLAC's STREAMINFO, an mp3's Xing/Info header or libsndfile's count, the
     ``data`` / ``SSND`` chunk size of WAV and AIFF, the end-of-stream page of Ogg Vorbis and
-    Opus); a decoder error mid-stream keeps what was decoded before it. A short or damaged
-    file is then decoded as far as it goes and ``audio.warning`` says how far (or, with
-    ``strict``, it is an error). The decoder libraries' own chatter on file descriptor 2
-    (libmpg123's ``Note:`` lines) is captured; its error lines become part of the warning.
+    Opus, and every Ogg page's CRC and sequence number, :func:`ogg.ogg_damage`, since the Ogg
+    decoders pass over damaged pages in silence); a decoder error mid-stream keeps what was
+    decoded before it. A short or damaged file is then decoded as far as it goes and
+    ``audio.warning`` says how far (or, with ``strict``, it is an error). The decoder
+    libraries' own chatter on file descriptor 2 (libmpg123's ``Note:`` lines) is captured;
+    its error lines become part of the warning.
 
     Parameters
     ----------
@@ -120,7 +123,7 @@ def decode_audio(path: str | os.PathLike, *, strict: bool = False) -> Audio:
     extension = os.path.splitext(name)[1].lower()
     with _captured_fd2() as chatter:
         try:
-            with soundfile.SoundFile(name) as handle:
+            with soundfile.SoundFile(os.fsencode(name)) as handle:
                 sample_rate = int(handle.samplerate)
                 if not MIN_SAMPLE_RATE <= sample_rate <= MAX_SAMPLE_RATE:
                     raise ExtractError(
@@ -233,7 +236,10 @@ def _decode_problem(
     else:
         how_much = f"decoded {decoded / sample_rate:.2f} s"
     reason = f" ({'; '.join(reasons)})" if reasons else ""
-    return f"truncated or corrupt audio: {how_much}{reason}"
+    # Pages failing their CRC are damage, not a missing end: say so first.
+    crc = "fail their CRC" in container_problem
+    head = "corrupt audio" if crc else "truncated or corrupt audio"
+    return f"{head}: {how_much}{reason}"
 
 
 def _promised_frames(
@@ -253,7 +259,11 @@ def _promised_frames(
     if file_format == "AIFF":
         return _aiff_frames(head), ""
     if file_format == "OGG":
-        return None, _ogg_end_problem(tail, size)
+        # libsndfile counts an Ogg's frames from its last granule position: a decoder that
+        # drops damaged pages (Opus) decodes less than that, which is then said.
+        problems = [ogg_damage(name), _ogg_end_problem(tail, size)]
+        promised = _libsndfile_frames(name)
+        return promised, "; ".join(problem for problem in problems if problem)
     if file_format == "MP3":
         return (_libsndfile_frames(name) if _mp3_has_frame_count(head) else None), ""
     return _libsndfile_frames(name), ""
@@ -262,7 +272,7 @@ def _promised_frames(
 def _libsndfile_frames(name: str) -> int | None:
     with _captured_fd2():
         try:
-            frames = int(soundfile.info(name).frames)
+            frames = int(soundfile.info(os.fsencode(name)).frames)
         except (soundfile.LibsndfileError, RuntimeError):
             return None
     return frames if frames > 0 else None
@@ -417,7 +427,7 @@ def audio_info(path: str | os.PathLike) -> AudioInfo:
     extension = os.path.splitext(name)[1].lower()
     with _captured_fd2():
         try:
-            info = soundfile.info(name)
+            info = soundfile.info(os.fsencode(name))
         except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
             raise _open_error(name, extension, exc) from exc
         except OSError as exc:
@@ -477,7 +487,7 @@ def read_blocks(
     start = 0
     with _captured_fd2() as chatter:
         try:
-            handle = soundfile.SoundFile(name)
+            handle = soundfile.SoundFile(os.fsencode(name))
         except (soundfile.LibsndfileError, RuntimeError, TypeError, ValueError) as exc:
             raise _open_error(name, extension, exc) from exc
         except OSError as exc:

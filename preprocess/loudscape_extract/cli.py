@@ -14,11 +14,13 @@ import time
 from collections.abc import Sequence
 
 from loudscape_extract import export
-from loudscape_extract.dynamics import HIGHPASS_HZ, dc_warning
+from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
-from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
+from loudscape_extract.notices import warning_lines
+from loudscape_extract.ply import read_ply_metadata
+from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES, MAX_FLOOR_DB
 from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
@@ -37,34 +39,45 @@ from loudscape_extract.version import PROG, __version__
 __all__ = ["build_parser", "main"]
 
 
+#: Ranges of the numeric flags: wide enough for any real use, narrow enough that a typo
+#: (``--floor-db 1e308``, ``--n-fft 1000000000``, ``--jobs 99999``) is refused at once with a
+#: clear line instead of overflowing, exhausting memory or forking without end.
+MAX_N_FFT = 1 << 16
+MAX_HOP = 1 << 16
+MAX_FRAMES_PER_SONG = 1_000_000
+MAX_POINTS_FLAG = 2_000_000_000
+MAX_JOBS = max(256, 4 * (os.cpu_count() or 1))
+
+
+def _integer(text: str, low: int, high: int, *, even: bool = False) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not low <= value <= high or (even and value % 2):
+        kind = "an even integer" if even else "an integer"
+        raise argparse.ArgumentTypeError(f"must be {kind} from {low:,} to {high:,}, got {text}")
+    return value
+
+
 def _positive_even(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 4 or value % 2:
-        raise argparse.ArgumentTypeError(f"must be an even integer >= 4, got {value}")
-    return value
+    return _integer(text, 4, MAX_N_FFT, even=True)
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
+def _hop(text: str) -> int:
+    return _integer(text, 1, MAX_HOP)
 
 
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
+def _frames_per_song(text: str) -> int:
+    return _integer(text, 1, MAX_FRAMES_PER_SONG)
+
+
+def _max_points(text: str) -> int:
+    return _integer(text, 0, MAX_POINTS_FLAG)
+
+
+def _jobs(text: str) -> int:
+    return _integer(text, 1, MAX_JOBS)
 
 
 def _non_negative_db(text: str) -> float:
@@ -72,8 +85,10 @@ def _non_negative_db(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of dB, got {text!r}") from None
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    if not 0 <= value <= MAX_FLOOR_DB:  # NaN fails too
+        raise argparse.ArgumentTypeError(
+            f"must be a number of dB from 0 to {MAX_FLOOR_DB:g} (0 keeps every bin), got {text}"
+        )
     return value
 
 
@@ -96,7 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", help="PLY file to write (default: the input's name with .ply)"
     )
     song.add_argument("--n-fft", type=_positive_even, default=2048, help="STFT size (2048)")
-    song.add_argument("--hop", type=_positive_int, default=1024, help="STFT hop (1024)")
+    song.add_argument("--hop", type=_hop, default=1024, help="STFT hop (1024)")
     song.add_argument(
         "--floor-db",
         type=_non_negative_db,
@@ -161,20 +176,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     timeline.add_argument(
         "--frames-per-song",
-        type=_positive_int,
+        type=_frames_per_song,
         default=1024,
         help="frames sampled evenly per song (1024; fewer if a song has fewer, or if "
         "--max-points needs it)",
     )
     timeline.add_argument(
         "--max-points",
-        type=_non_negative_int,
+        type=_max_points,
         default=DEFAULT_MAX_POINTS,
         help=f"lower the frames per song so the cloud stays under this many points, but not "
         f"below {MIN_FRAMES_PER_SONG} a song ({DEFAULT_MAX_POINTS:,}; 0: no cap)",
     )
     timeline.add_argument("--n-fft", type=_positive_even, default=2048, help="STFT size (2048)")
-    timeline.add_argument("--hop", type=_positive_int, default=1024, help="STFT hop (1024)")
+    timeline.add_argument("--hop", type=_hop, default=1024, help="STFT hop (1024)")
     timeline.add_argument(
         "--cache-dir",
         help="per-song feature cache (default $XDG_CACHE_HOME/loudscape or ~/.cache/loudscape)",
@@ -196,7 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
     timeline.add_argument(
         "--jobs",
         "-j",
-        type=_positive_int,
+        type=_jobs,
         default=os.cpu_count() or 1,
         help="songs in parallel worker processes (default: number of cores); with --dask, "
         "the local cluster's workers",
@@ -292,7 +307,11 @@ def list_songs(args: argparse.Namespace, json_progress=None) -> int:
     """
     if not args.inputs:
         raise ExtractError("no input: give folders or files to list")
-    for path in discover_audio(args.inputs):
+    passed_over: dict = {}
+    found = discover_audio(args.inputs, skipped=passed_over)
+    for path, reason in passed_over.items():
+        _say(f"skipped: {path}: {reason}")
+    for path in found:
         tags = read_tags(path)
         if json_progress is not None:
             json_progress.emit(
@@ -360,8 +379,8 @@ def run_timeline(args: argparse.Namespace, *, tty: bool, json_progress=None) -> 
         _say(f"skipped: {path}: no year in its tags")
     for path, reason in sorted(result.failed.items()):
         _say(f"skipped: {path}: {reason}")
-    for path, offset in result.dc_offsets:
-        _say(f"warning: {dc_warning(path, offset)}")
+    for item in result.metadata.get("warnings", []):
+        _say(f"warning: {item['path']}: {item['message']}")
     if not args.quiet:
         songs = result.metadata["songs"]
         _say(
@@ -392,14 +411,22 @@ def run_export(args: argparse.Namespace) -> int:
     """The export subcommand: one VTK XML PolyData file, then the ``wrote ...`` summary."""
     output = args.output or os.path.splitext(args.input)[0] + ".vtp"
     n_points = export.export_vtp(args.input, output)
+    _say_cloud_warnings(args.input)
     if not args.quiet:
         _say(f"wrote {output} ({n_points} points, VTK XML PolyData)")
     return 0
 
 
+def _say_cloud_warnings(path: str) -> None:
+    """The warnings a cloud carries (docs/FORMAT.md, "Warnings"), one ``warning:`` line each."""
+    for line in warning_lines(read_ply_metadata(path)):
+        _say(f"warning: {line}")
+
+
 def run_report(args: argparse.Namespace) -> int:
     """The report subcommand: PNG (and CSV), then ``wrote ...`` summaries."""
     rows = write_report(args.input, args.output, csv_path=args.csv)
+    _say_cloud_warnings(args.input)
     if not args.quiet:
         songs = sum(row["songs"] for row in rows)
         _say(f"wrote {args.output} ({songs} song(s), {len(rows)} year(s))")
@@ -416,7 +443,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.command == "song" and args.hop > args.n_fft:
+    if args.command in ("song", "timeline") and args.hop > args.n_fft:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
     if getattr(args, "progress", "text") == "json":

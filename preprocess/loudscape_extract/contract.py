@@ -17,10 +17,12 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.notices import warnings_problem
 
 __all__ = [
     "AXIS_NAMES",
     "check_cloud",
+    "check_loadable",
     "check_metadata",
     "check_points",
     "checked_blocks",
@@ -66,11 +68,15 @@ def _axis_problem(value: object) -> str:
     return ""
 
 
-def _fail(reason: str, path: str | None):
-    raise ExtractError(f"refusing to write a file the app cannot load: {reason}", path=path)
+_WRITING = "refusing to write a file the app cannot load"
+_READING = "not a cloud the app loads"
 
 
-def check_points(points: np.ndarray, *, path: str | None = None) -> None:
+def _fail(reason: str, path: str | None, refusal: str = _WRITING):
+    raise ExtractError(f"{refusal}: {reason}", path=path)
+
+
+def check_points(points: np.ndarray, *, path: str | None = None, refusal: str = _WRITING) -> None:
     """The point rules of :func:`check_cloud` alone: shape (n, 5), every value finite, x y z
     in [-1, 1], scalar and hp in [0, 1]. For a cloud written block by block, run on each block.
 
@@ -81,21 +87,24 @@ def check_points(points: np.ndarray, *, path: str | None = None) -> None:
     """
     points = np.asarray(points)
     if points.ndim != 2 or points.shape[1] != 5:
-        _fail(f"points must have shape (n, 5), found {points.shape}", path)
+        _fail(f"points must have shape (n, 5), found {points.shape}", path, refusal)
     for column, (name, (low, high)) in enumerate(zip(AXIS_NAMES, _COLUMN_RANGES, strict=True)):
         values = points[:, column]
         if values.size == 0:
             continue
         if not np.isfinite(values).all():
-            _fail(f"column {name} has a NaN or infinite value", path)
+            _fail(f"column {name} has a NaN or infinite value", path, refusal)
         if values.min() < low or values.max() > high:
-            _fail(f"column {name} leaves [{low:g}, {high:g}]", path)
+            _fail(f"column {name} leaves [{low:g}, {high:g}]", path, refusal)
 
 
-def check_metadata(metadata: dict, *, n_points: int, path: str | None = None) -> None:
+def check_metadata(
+    metadata: dict, *, n_points: int, path: str | None = None, refusal: str = _WRITING
+) -> None:
     """The metadata rules of :func:`check_cloud` alone, for a cloud of ``n_points`` points:
     JSON-encodable without NaN or infinity, ``point_count`` equal to ``n_points``, five valid
-    axes.
+    axes, and ``warnings`` (when present; also each timeline song's) an array of
+    ``{"kind", "message"}`` objects, with ``"path"`` at the top of a timeline.
 
     Raises
     ------
@@ -105,16 +114,52 @@ def check_metadata(metadata: dict, *, n_points: int, path: str | None = None) ->
     try:
         json.dumps(metadata, allow_nan=False)
     except (TypeError, ValueError) as exc:
-        _fail(f"metadata is not plain JSON ({exc})", path)
-    if metadata.get("point_count") != n_points:
-        _fail(f"point_count {metadata.get('point_count')!r} is not {n_points}", path)
+        _fail(f"metadata is not plain JSON ({exc})", path, refusal)
+    count = metadata.get("point_count")
+    if isinstance(count, bool) or count != n_points:
+        _fail(f"point_count {count!r} is not {n_points}", path, refusal)
     axes = metadata.get("axes")
     if not isinstance(axes, dict):
-        _fail("metadata has no axes object", path)
+        _fail("metadata has no axes object", path, refusal)
     for name in AXIS_NAMES:
         problem = _axis_problem(axes.get(name))
         if problem:
-            _fail(f"axes.{name}: {problem}", path)
+            _fail(f"axes.{name}: {problem}", path, refusal)
+    timeline = metadata.get("mode") == "timeline"
+    if "warnings" in metadata:
+        problem = warnings_problem(metadata["warnings"], with_path=timeline)
+        if problem:
+            _fail(f"warnings{problem}", path, refusal)
+    for index, song in enumerate((metadata.get("songs") or []) if timeline else []):
+        if isinstance(song, dict) and "warnings" in song:
+            problem = warnings_problem(song["warnings"])
+            if problem:
+                _fail(f"songs[{index}].warnings{problem}", path, refusal)
+
+
+def check_loadable(
+    points: np.ndarray, metadata: dict, *, path: str | None = None, block: int = 1 << 20
+) -> None:
+    """Refuse a cloud read from a file that the app's loader would refuse (what
+    ``loudscape-extract export`` accepts): ``format_version`` the integer 1 or 2 (``2``, not
+    ``"2"`` or ``2.0``), ``mode`` song or timeline, and :func:`check_cloud`'s rules (the
+    points checked ``block`` rows at a time, so a memory-mapped cloud of any size is checked
+    in bounded memory).
+
+    Raises
+    ------
+    ExtractError
+        ``not a cloud the app loads: <the first violation>``.
+    """
+    version = metadata.get("format_version")
+    if isinstance(version, bool) or not isinstance(version, int) or version not in (1, 2):
+        _fail(f"format_version must be the integer 1 or 2, found {version!r}", path, _READING)
+    if metadata.get("mode") not in ("song", "timeline"):
+        _fail(f"mode must be song or timeline, found {metadata.get('mode')!r}", path, _READING)
+    n = int(np.asarray(points).shape[0]) if np.ndim(points) else 0
+    check_metadata(metadata, n_points=n, path=path, refusal=_READING)
+    for start in range(0, n, block):
+        check_points(points[start : start + block], path=path, refusal=_READING)
 
 
 def check_cloud(points: np.ndarray, metadata: dict, *, path: str | None = None) -> None:

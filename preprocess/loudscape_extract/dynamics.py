@@ -39,6 +39,7 @@ __all__ = [
     "SHORT_TERM_SEGMENTS",
     "Dynamics",
     "dc_and_highpass",
+    "dc_message",
     "dc_warning",
     "dr_block_length",
     "dr_from_blocks",
@@ -61,12 +62,17 @@ _DR_BLOCK_S = 3.0
 _DR_LOUDEST = 0.2
 
 
-def dc_warning(path: str, offset: float) -> str:
-    """The one-line warning for a large DC offset."""
+def dc_message(offset: float) -> str:
+    """The one-line warning for a large DC offset, without the file name."""
     return (
-        f"{path}: DC offset {offset:.3f} of full scale "
+        f"DC offset {offset:.3f} of full scale "
         f"({20.0 * math.log10(offset):.1f} dBFS) removed before level, crest, PSR and DR"
     )
+
+
+def dc_warning(path: str, offset: float) -> str:
+    """The one-line warning for a large DC offset."""
+    return f"{path}: {dc_message(offset)}"
 
 
 def highpass_sos(cutoff_hz: float, *, sample_rate: float) -> np.ndarray:

@@ -27,6 +27,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from loudscape_extract.contract import check_loadable
 from loudscape_extract.paths import check_output_path, check_regular_input
 from loudscape_extract.ply import encode_metadata, map_ply, write_atomically
 
@@ -113,12 +114,14 @@ def export_vtp(source: str, output: str) -> int:
     Raises
     ------
     ExtractError
-        Unreadable or malformed input, an output that is the input, an output not ending in
-        ``.vtp``, or an output that cannot be written.
+        Unreadable or malformed input, a cloud the app's loader refuses
+        (:func:`contract.check_loadable`), an output that is the input, an output not ending
+        in ``.vtp``, or an output that cannot be written.
     """
     check_regular_input(source)
     check_output_path(output, inputs=[source], extensions=(".vtp",))
     points, metadata = map_ply(source)
+    check_loadable(points, metadata, path=source)  # the app's loader's rules, not looser
     write_atomically(output, vtp_parts(points, metadata))
     return int(points.shape[0])
 

@@ -14,6 +14,9 @@ metadata object exactly as its JSON text parses, ``_bytes_b64`` keys included):
   (Latin-1, not UTF-8).
 - ``timeline_v2_non_utf8``: the timeline with song 2's ``path`` and one ``skipped`` path not
   UTF-8.
+- ``song_v2_warnings``: the song with a ``warnings`` array (a truncation and a DC offset).
+- ``timeline_v2_warnings``: the three-song timeline with warnings on songs 1 and 3 (song 3's
+  path not UTF-8), in their ``songs[i].warnings`` and, with ``path``, at the top level.
 - with ``--large`` (not committed, about 5 MB): ``timeline_v2_10000_songs``, the metadata of a
   10,000-song timeline (about 490 bytes a song, as the extractor writes for real libraries),
   eight points a song.
@@ -30,12 +33,25 @@ import sys
 
 import numpy as np
 
+from loudscape_extract.notices import timeline_warnings
 from loudscape_extract.ply import read_ply, write_ply
 
 SONG_SOURCE = os.path.join(os.path.dirname(__file__), "..", "..", "data", "fixture_song.ply")
 NON_UTF8_SONG_PATH = b"data/caf\xe9 \xff.wav"
 NON_UTF8_TIMELINE_PATH = b"music/Bj\xf6rk/Debut/01 Human Behaviour.mp3"
 NON_UTF8_SKIPPED_PATH = b"music/\xff\xfe broken name.wav"
+SONG_WARNINGS = [
+    {
+        "kind": "truncated",
+        "message": "truncated or corrupt audio: decoded 1.49 s of the 4.00 s the file promises "
+        "(37.2 %)",
+    },
+    {
+        "kind": "dc_offset",
+        "message": "DC offset 0.300 of full scale (-10.5 dBFS) removed before level, crest, "
+        "PSR and DR",
+    },
+]
 
 
 def timeline_metadata(n_songs: int, *, points_per_song: int) -> dict:
@@ -212,6 +228,14 @@ def write_format_fixtures(out_dir: str, *, large: bool = False) -> list[str]:
         {"path": os.fsdecode(NON_UTF8_SKIPPED_PATH), "reason": "no year in tags"}
     ]
     written += _write(out_dir, "timeline_v2_non_utf8", points, timeline, 2)
+    warned = {**song_meta, "warnings": SONG_WARNINGS}
+    written += _write(out_dir, "song_v2_warnings", song_points, warned, 2)
+    timeline = timeline_metadata(3, points_per_song=4)
+    timeline["songs"][2]["path"] = os.fsdecode(NON_UTF8_TIMELINE_PATH)
+    timeline["songs"][0]["warnings"] = SONG_WARNINGS[:1]
+    timeline["songs"][2]["warnings"] = SONG_WARNINGS
+    timeline["warnings"] = timeline_warnings(timeline["songs"])
+    written += _write(out_dir, "timeline_v2_warnings", points, timeline, 2)
     return written
 
 

@@ -10,13 +10,22 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import stat
 from collections.abc import Iterable
 
 from loudscape_extract.errors import ExtractError
 
-__all__ = ["atomic_output", "check_output_path", "check_regular_input", "same_file"]
+__all__ = [
+    "atomic_output",
+    "check_output_path",
+    "check_regular_input",
+    "fsync_directory",
+    "fsync_path",
+    "same_file",
+    "write_failure",
+]
 
 
 def _kind(mode: int) -> str:
@@ -128,12 +137,50 @@ def atomic_output(output: str):
     try:
         yield temporary
         os.chmod(temporary, 0o666 & ~_umask())
+        fsync_path(temporary)
         os.replace(temporary, output)
+        fsync_directory(directory)
     except OSError as exc:
-        raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=output) from exc
+        raise ExtractError(write_failure(exc, directory=directory), path=output) from exc
     finally:
         with contextlib.suppress(OSError):
             os.unlink(temporary)
+
+
+def fsync_path(path: str) -> None:
+    """Flush a written file's data to the disk (before it is renamed into place, so a power
+    cut cannot leave a renamed file whose data never arrived)."""
+    descriptor = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(descriptor)
+    finally:
+        os.close(descriptor)
+
+
+def fsync_directory(directory: str) -> None:
+    """Flush a folder's entries (a rename into it) to the disk; best effort: a file system
+    that cannot sync a folder does not fail the write."""
+    with contextlib.suppress(OSError):
+        descriptor = os.open(directory, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        try:
+            os.fsync(descriptor)
+        finally:
+            os.close(descriptor)
+
+
+def write_failure(exc: OSError, *, directory: str) -> str:
+    """The one-line reason a write into ``directory`` failed: a full disk or quota says so
+    plainly (numpy's "N requested and M written" becomes "no space left")."""
+    full = exc.errno in (errno.ENOSPC, errno.EDQUOT) or "requested and" in str(exc)
+    if full:
+        try:
+            stats = os.statvfs(directory)
+            free = f", {stats.f_bavail * stats.f_frsize:,} bytes free"
+        except OSError:
+            free = ""
+        what = "disk quota exceeded" if exc.errno == errno.EDQUOT else "no space left"
+        return f"{what} on the device of {directory!r}{free}; nothing was written"
+    return f"cannot write file ({exc.strerror or exc})"
 
 
 def _umask() -> int:

@@ -25,6 +25,7 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.paths import fsync_directory, write_failure
 
 __all__ = [
     "MAX_LINE_BYTES",
@@ -240,6 +241,12 @@ def _meta_from_lines(lines: Iterable[tuple[int, str]], name: str) -> dict:
         if not isinstance(metadata, dict):
             raise ValueError("not a JSON object")
         return decode_metadata(metadata)
+    except RecursionError:
+        raise ExtractError(
+            f"header line {number}: bad loudscape-meta JSON (nested too deeply: arrays or "
+            "objects inside each other hundreds of levels down; the format has a few)",
+            path=name,
+        ) from None
     except ValueError as exc:
         raise ExtractError(
             f"header line {number}: bad loudscape-meta JSON ({exc})", path=name
@@ -252,8 +259,9 @@ def _meta_from_lines(lines: Iterable[tuple[int, str]], name: str) -> dict:
 def write_atomically(path: str | os.PathLike, parts: Iterable[bytes | np.ndarray]) -> None:
     """Write ``parts`` in order to a temporary file beside ``path``, then ``os.replace`` it.
 
-    An interrupted or failed write leaves no partial file at ``path``. Arrays are written with
-    ``tofile`` (their bytes as they are in memory).
+    An interrupted or failed write leaves no partial file at ``path``; the data is synced to
+    the disk before the rename and the folder after it. Arrays are written as their bytes in
+    memory (C order). A full disk is reported as such (:func:`paths.write_failure`).
 
     Raises
     ------
@@ -274,16 +282,20 @@ def write_atomically(path: str | os.PathLike, parts: Iterable[bytes | np.ndarray
         with handle:
             for part in parts:
                 if isinstance(part, np.ndarray):
-                    part.tofile(handle)
+                    # Through Python's write (not tofile): a full disk is ENOSPC, not a count.
+                    handle.write(np.ascontiguousarray(part).reshape(-1).view(np.uint8).data)
                 else:
                     handle.write(part)
+            handle.flush()
+            os.fsync(handle.fileno())  # the data is on disk before the name points at it
         os.chmod(handle.name, 0o666 & ~_umask())
         os.replace(handle.name, name)
+        fsync_directory(directory)
     except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(handle.name)
         if isinstance(exc, OSError):
-            raise ExtractError(f"cannot write file ({exc.strerror or exc})", path=name) from exc
+            raise ExtractError(write_failure(exc, directory=directory), path=name) from exc
         raise
 
 
@@ -416,7 +428,12 @@ def read_ply(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
     properties = []
     for line in lines:
         if line.startswith("element vertex "):
-            n_points = int(line.split()[2])
+            try:
+                n_points = int(line.split()[2])
+            except (IndexError, ValueError):
+                raise ExtractError(f"bad vertex count {line.split()[2:]}", path=name) from None
+            if n_points < 0:
+                raise ExtractError(f"negative vertex count {n_points}", path=name)
         elif line.startswith("property "):
             properties.append(tuple(line.split()[1:]))
     if n_points is None or properties != [("float", p) for p in PROPERTIES]:
@@ -432,18 +449,37 @@ def _header_line_iter(handle, name: str, max_header_bytes: int) -> Iterator[tupl
     read = 0
     number = 1
     while read < max_header_bytes:
-        line = handle.readline()
+        line = handle.readline(max_header_bytes - read)  # bounded: a file without newlines
         if not line:
-            break
+            raise ExtractError("not a PLY file (no 'end_header')", path=name)
         read += len(line)
         number += 1
         if line in (b"end_header\n", b"end_header\r\n"):
             return
         yield number, line.decode("ascii", errors="replace").rstrip("\n").removesuffix("\r")
-    raise ExtractError("not a PLY file (no 'end_header')", path=name)
+    # Over the limit: say which it is, a header too large or no header at all (the rest of
+    # the file is scanned in bounded pieces for end_header).
+    carry = b""
+    while chunk := handle.read(1 << 20):
+        if b"\nend_header\n" in carry + chunk:
+            raise ExtractError(
+                f"the header is larger than the {max_header_bytes / (1 << 20):g} MiB a reader "
+                "holds (it does end with end_header; see docs/FORMAT.md, Header size)",
+                path=name,
+            )
+        carry = chunk[-16:]
+    raise ExtractError(
+        f"not a PLY file (no 'end_header' in its first {max_header_bytes / (1 << 20):g} MiB "
+        "or after)",
+        path=name,
+    )
 
 
-def read_ply_metadata(path: str | os.PathLike, *, max_header_bytes: int = 64 << 20) -> dict:
+#: The largest header the readers hold (the app's limit, docs/FORMAT.md "Header size").
+MAX_HEADER_BYTES = 64 << 20
+
+
+def read_ply_metadata(path: str | os.PathLike, *, max_header_bytes: int = MAX_HEADER_BYTES) -> dict:
     """The metadata object of a PLY file (version 1 or 2), reading only its header ({} when
     absent).
 
@@ -478,7 +514,7 @@ def map_ply(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
         with open(name, "rb") as handle:
             if handle.readline() not in (b"ply\n", b"ply\r\n"):
                 raise ExtractError("not a PLY file (no 'ply' line)", path=name)
-            lines = list(_header_line_iter(handle, name, 1 << 40))
+            lines = list(_header_line_iter(handle, name, MAX_HEADER_BYTES))
             offset = handle.tell()
             size = os.fstat(handle.fileno()).st_size
     except OSError as exc:

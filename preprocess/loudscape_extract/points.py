@@ -26,6 +26,7 @@ from loudscape_extract.spectrogram import a_weighting_db
 
 __all__ = [
     "DEFAULT_FLOOR_DB",
+    "MAX_FLOOR_DB",
     "FREQ_SCALES",
     "AUDIBLE_HZ",
     "SCALAR_MAX_DB",
@@ -38,6 +39,9 @@ __all__ = [
 #: Bins more than this many dB below the track's loudest bin are dropped (0 keeps every bin);
 #: above it the floor fades in (:mod:`loudscape_extract.floor`).
 DEFAULT_FLOOR_DB = 80.0
+#: The largest noise floor (dB below the loudest bin): beyond any audio's range (24-bit PCM
+#: spans 144 dB), and small enough that 10 ** (floor / 10) stays a float64.
+MAX_FLOOR_DB = 400.0
 #: ``scalar`` maps the A-weighted bin level linearly to [0, 1] over a range that holds every
 #: drawn bin at or above :data:`AUDIBLE_HZ`: ``[y_min + A_min, y_max + A_max]``, with ``A_min``,
 #: ``A_max`` the A-weighting gains' range over those bins, widened to at least
@@ -131,8 +135,8 @@ def song_points(
     """
     if freq_scale not in FREQ_SCALES:
         raise ExtractError(f"freq_scale must be one of {FREQ_SCALES}, got {freq_scale!r}")
-    if not (floor_db >= 0 and math.isfinite(floor_db)):
-        raise ExtractError(f"floor_db must be a finite number >= 0, got {floor_db}")
+    if not 0 <= floor_db <= MAX_FLOOR_DB:  # NaN fails too
+        raise ExtractError(f"floor_db must be from 0 to {MAX_FLOOR_DB:g} dB, got {floor_db}")
     kept_frames = np.flatnonzero(~features.frames.silent)
     if kept_frames.size == 0:
         raise ExtractError("audio is entirely silent (no frame has a non-zero sample)")

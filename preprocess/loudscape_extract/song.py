@@ -6,8 +6,8 @@ import warnings
 from collections.abc import Callable
 
 from loudscape_extract.contract import checked_blocks
-from loudscape_extract.dynamics import DC_WARN_THRESHOLD, dc_warning
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.notices import track_warnings
 from loudscape_extract.paths import check_output_path
 from loudscape_extract.ply import write_ply_blocks
 from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata
@@ -53,8 +53,9 @@ def extract_song(
     progress : callable, optional
         Called with a short message before each stage.
     warn : callable, optional
-        Called with a one-line warning about the input (a truncated or corrupt file, a large
-        DC offset); default :func:`warnings.warn`.
+        Called with a one-line warning about the input, ``"<source>: <message>"`` (a truncated
+        or corrupt file, a large DC offset, cancelling channels, clipping); default
+        :func:`warnings.warn`. The same warnings go into the metadata's ``warnings``.
     block_samples, block_frames : int
         Decoding and STFT block sizes (:mod:`loudscape_extract.stream`): memory is bounded by
         them and by the decoded mono mix, whatever the track's length; the output does not
@@ -83,17 +84,17 @@ def extract_song(
         )
         say(f"{track.duration_s:.1f} s, {track.sample_rate} Hz, {track.n_channels} channel(s)")
         say("building points: counting those above the floor")
-        if track.warning:
-            _warn(warn, f"{source}: {track.warning}")
         cloud, blocks = song_point_blocks(track, floor_db=floor, freq_scale=freq_scale)
     except ExtractError as exc:
         if exc.path is None:
             exc.path = source
         raise
-    offset = track.metrics.get("dc_offset") or 0.0
-    if offset > DC_WARN_THRESHOLD:
-        _warn(warn, dc_warning(source, offset))
+    found = track_warnings(decode_warning=track.warning, metrics=track.metrics, signal=track.signal)
+    for item in found:
+        _warn(warn, f"{source}: {item['message']}")
     metadata = song_metadata(track, cloud, generator=GENERATOR, source_format=track.source_format)
+    if found:  # absent: nothing to say (docs/FORMAT.md, "Warnings")
+        metadata["warnings"] = found
     say("harmonic-percussive separation and the points, block by block")
 
     def produced():

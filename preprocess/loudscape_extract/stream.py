@@ -69,6 +69,7 @@ from loudscape_extract.loudness import (
     k_weighting_sos,
     loudness_from_energy,
 )
+from loudscape_extract.notices import ClipRuns, cancel_notice, clip_notice
 from loudscape_extract.spectrogram import (
     a_weighting_db,
     frame_count,
@@ -120,6 +121,9 @@ class DecodedMono:
         Whether any decoded sample is non-zero.
     warning : str
         Non-empty when the file is truncated or corrupt (:attr:`Audio.warning`).
+    signal : tuple of dict
+        Warnings about the signal found while decoding (:func:`notices.cancel_notice`,
+        :func:`notices.clip_notice`).
     """
 
     info: AudioInfo
@@ -128,6 +132,7 @@ class DecodedMono:
     sample_peak: float
     any_nonzero: bool
     warning: str = ""
+    signal: tuple = ()
 
     @property
     def n_samples(self) -> int:
@@ -149,6 +154,8 @@ def decode_pass(
     peak = 0.0
     any_nonzero = False
     n = 0
+    channel_squares = mono_squares = 0.0
+    clips = ClipRuns(info.n_channels)
     for start, samples in read_blocks(info, block=block, report=report):
         count = samples.shape[0]
         if start + count > mono.shape[0]:  # the header understated the length
@@ -157,11 +164,21 @@ def decode_pass(
             mono = grown
         mono[start : start + count] = mix_to_mono(samples)
         sums += samples.sum(axis=0, dtype=np.float64)
+        block_mono = mono[start : start + count]
+        mono_squares += float(np.dot(block_mono, block_mono.astype(np.float64)))
+        channel_squares += float(np.einsum("ij,ij->", samples, samples, dtype=np.float64))
+        clips.feed(start, samples)
         block_peak = float(np.abs(samples).max())
         peak = max(peak, block_peak)
         any_nonzero = any_nonzero or block_peak > 0
         n = start + count
     warning = check_decoded(info, decoded=n, report=report, strict=strict)
+    signal = [
+        cancel_notice(mono_squares, channel_squares / info.n_channels)
+        if info.n_channels > 1
+        else None,
+        clip_notice(clips.runs, clips.samples, clips.first_s(info.sample_rate)),
+    ]
     return DecodedMono(
         info=info,
         mono=mono[:n],
@@ -169,6 +186,7 @@ def decode_pass(
         sample_peak=peak,
         any_nonzero=any_nonzero,
         warning=warning,
+        signal=tuple(item for item in signal if item),
     )
 
 
@@ -561,6 +579,10 @@ class StreamedTrack:
     kernel_size, block_frames : int
     warning : str
         Non-empty when the file is truncated or corrupt: how much was decoded, and why.
+    curves : dict or None
+        The loudness curves (:func:`loudness_curves`).
+    signal : tuple of dict
+        Warnings about the signal found while decoding (:attr:`DecodedMono.signal`).
     """
 
     path: str
@@ -582,6 +604,7 @@ class StreamedTrack:
     block_frames: int
     warning: str = ""
     curves: dict | None = None
+    signal: tuple = ()
 
     @property
     def duration_s(self) -> float:
@@ -749,6 +772,7 @@ def stream_track(
         kernel_size=kernel_size,
         block_frames=block_frames,
         warning=decoded.warning,
+        signal=decoded.signal,
         curves=loudness_curves(
             stats.energy,
             stats.boundaries,

@@ -3,7 +3,6 @@ appends each block as it comes: :func:`loudscape_extract.ply.write_ply_blocks`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -13,7 +12,7 @@ from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.floor import floor_keep_mask
 from loudscape_extract.format import axis, frequency_axis, hp_axis, level_axis, scalar_axis
-from loudscape_extract.points import FREQ_SCALES, _normalize, scalar_range
+from loudscape_extract.points import FREQ_SCALES, MAX_FLOOR_DB, _normalize, scalar_range
 from loudscape_extract.spectrogram import LEVEL_FLOOR_DB, level_db
 from loudscape_extract.stream import StreamedTrack, spectral_blocks
 
@@ -58,8 +57,8 @@ def song_point_blocks(
     """
     if freq_scale not in FREQ_SCALES:
         raise ExtractError(f"freq_scale must be one of {FREQ_SCALES}, got {freq_scale!r}")
-    if not (floor_db >= 0 and math.isfinite(floor_db)):
-        raise ExtractError(f"floor_db must be a finite number >= 0, got {floor_db}")
+    if not 0 <= floor_db <= MAX_FLOOR_DB:  # NaN fails too
+        raise ExtractError(f"floor_db must be from 0 to {MAX_FLOOR_DB:g} dB, got {floor_db}")
     silent = track.frames.silent
     kept_frames = np.flatnonzero(~silent)
     if kept_frames.size == 0:

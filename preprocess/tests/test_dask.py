@@ -84,6 +84,7 @@ def test_max_points_lowers_frames_per_song(tmp_path, capsys):
 def test_cache_entry_round_trip_and_damage(tmp_path):
     from loudscape_extract.timeline.cache import load_entry, save_entry
     from loudscape_extract.timeline.frames import SongFrames
+    from loudscape_extract.timeline.layout import METRIC_KEYS
 
     n = 7
     series = {
@@ -93,7 +94,9 @@ def test_cache_entry_round_trip_and_damage(tmp_path):
         )
     }
     series["psr_db"][2] = np.nan
-    song = SongFrames(**series, n_frames_total=9, metrics={"dr_db": 8.5, "lra_lu": None})
+    series["hp_mean"] /= 10.0  # a ratio in [0, 1]
+    metrics = {**dict.fromkeys(METRIC_KEYS), "dr_db": 8.5}  # an entry has them all
+    song = SongFrames(**series, n_frames_total=9, metrics=metrics)
     path = str(tmp_path / "entry.frames")
     save_entry(path, song)
     assert os.listdir(tmp_path) == ["entry.frames"]

@@ -28,9 +28,17 @@ def read_vtp(path):
     return xml, arrays
 
 
+AXES = {n: {"min": 0.0, "max": 1.0} for n in ("x", "y", "z", "scalar", "hp")}
+
+
 def cloud(tmp_path, n=9, name="c.ply"):
     points = np.random.default_rng(5).uniform(0, 1, (n, 5)).astype(np.float32)
-    meta = {"mode": "song", "point_count": n, "source": {"path": os.fsdecode(b"a\xff b.wav")}}
+    meta = {
+        "mode": "song",
+        "point_count": n,
+        "axes": AXES,
+        "source": {"path": os.fsdecode(b"a\xff b.wav")},
+    }
     path = tmp_path / name
     write_ply(path, points=points, metadata=meta)
     return path, points
@@ -101,3 +109,56 @@ def test_export_bad_inputs_one_line(tmp_path, capsys, monkeypatch, args, message
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.ply", "c.ply"]
+
+
+def raw_cloud(path, meta_json, points):
+    """A PLY written by hand (version-1 layout), so the metadata can break any rule."""
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        f"comment loudscape-meta {meta_json}\n"
+        f"element vertex {points.shape[0]}\n"
+        + "".join(f"property float {n}\n" for n in ("x", "y", "z", "scalar", "hp"))
+        + "end_header\n"
+    )
+    path.write_bytes(header.encode() + points.astype("<f4").tobytes())
+
+
+def good_meta(n, **changes):
+    meta = {"format_version": 1, "mode": "song", "point_count": n, "axes": AXES}
+    meta.update(changes)
+    return {k: v for k, v in meta.items() if v is not None}
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda m, p: (json.dumps(good_meta(4, format_version=3)), p), "format_version"),
+        (lambda m, p: (json.dumps(good_meta(4, format_version="2")), p), "format_version"),
+        (lambda m, p: (json.dumps(good_meta(4, format_version=2.0)), p), "format_version"),
+        (lambda m, p: (json.dumps(good_meta(4, mode="video")), p), "mode"),
+        (lambda m, p: (m, np.where(np.arange(5) == 0, 1.5, p)), "column x leaves [-1, 1]"),
+        (lambda m, p: (m, np.where(np.arange(5) == 3, np.nan, p)), "column scalar has a NaN"),
+        (lambda m, p: (json.dumps(good_meta(5)), p), "point_count 5 is not 4"),
+        (lambda m, p: (json.dumps(good_meta(4, point_count=True)), p[:1]), "point_count True"),
+        (lambda m, p: (m.replace("1.0}", "NaN}", 1), p), "not plain JSON"),
+        (lambda m, p: (m.replace("1.0}", "Infinity}", 1), p), "not plain JSON"),
+        (lambda m, p: (json.dumps(good_meta(4, axes={"x": AXES["x"]})), p), "axes.y"),
+        (lambda m, p: (json.dumps(good_meta(4, axes=None)), p), "no axes"),
+    ],
+)
+def test_export_refuses_what_the_app_refuses(tmp_path, capsys, change, message):
+    points = np.full((4, 5), 0.5, np.float32)
+    meta_json, bad_points = change(json.dumps(good_meta(4)), points)
+    raw_cloud(tmp_path / "bad.ply", meta_json, bad_points)
+    assert main(["export", str(tmp_path / "bad.ply")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a cloud the app loads" in err and message in err, err
+    assert not (tmp_path / "bad.vtp").exists()
+
+
+def test_export_accepts_every_format_fixture(tmp_path):
+    folder = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "fixtures", "format")
+    for name in sorted(os.listdir(folder)):
+        if name.endswith(".ply"):
+            out = tmp_path / (name[:-4] + ".vtp")
+            assert main(["export", os.path.join(folder, name), "-o", str(out), "-q"]) == 0, name

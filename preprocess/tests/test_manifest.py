@@ -67,11 +67,17 @@ def test_quoted_comma_is_a_value_and_unquoted_comma_is_explained(songs, capsys):
 
 
 def test_line_numbers_count_blank_lines_and_multiline_values(songs, capsys):
-    text = 'path,year,title\n\ns0.wav,1990,"two\nlines"\ns1.wav,17\n'
+    text = 'path,year,title\n\ns0.wav,1990,"two"\n\ns1.wav,17\n'
     status, err, manifest, out = timeline(songs, text, capsys)
     assert_manifest_error(status, err, out, manifest, "line 5", "year 17")
     with pytest.raises(ExtractError, match="line 5: year 17"):
         read_manifest(str(manifest))  # the library refuses it the same way
+    # A value over several lines is refused (it is what an unbalanced quote looks like).
+    text = 'path,year,title\n\ns0.wav,1990,"two\nlines"\ns1.wav,17\n'
+    status, err, manifest, out = timeline(songs, text, capsys)
+    assert_manifest_error(status, err, out, manifest, "line 3:", "lines 3-4")
+    with pytest.raises(ExtractError, match="line 3: a quoted value runs over lines 3-4"):
+        read_manifest(str(manifest))
 
 
 @pytest.mark.parametrize("year", [1700, 1859, 3000])
@@ -148,9 +154,71 @@ def test_other_manifest_problems_name_the_line(songs, capsys):
         ("path,year\ns0.wav,1990\n,1991\n", "line 3", "empty path"),
         ("path,year\ns0.wav,1990\nmissing.wav,1991\n", "line 3", "missing.wav"),
         ("file,when\ns0.wav,1990\n", "line 1", "needs columns path and year"),
-        # An unclosed quote runs to the end of the file, as the csv module reads it.
-        ('path,year\ns0.wav,1990\n"s1.wav,1991\n', "line 3", "s1.wav,1991'"),
+        # An unclosed quote is named with its line and what it starts.
+        ('path,year\ns0.wav,1990\n"s1.wav,1991\n', "line 3", "'\"s1.wav,1991'"),
     ]
     for text, line, needle in cases:
         status, err, manifest, out = timeline(songs, text, capsys)
         assert_manifest_error(status, err, out, manifest, line, needle)
+
+
+def test_unbalanced_quote_is_an_error_naming_its_line(songs, capsys):
+    # Lenient CSV read the next two rows into the title: one song, exit 0, in silence.
+    text = 'path,year,title\ns0.wav,2001,"Unterminated title,a\ns1.wav,2002,B\ns2.wav,2003,C\n'
+    status, err, manifest, out = timeline(songs, text, capsys)
+    assert_manifest_error(status, err, out, manifest, "line 2:", "never closed", "Unterminated")
+
+
+def test_quoted_value_over_several_lines_is_an_error(songs, capsys):
+    text = 'path,year,title\ns0.wav,2001,"Two\nlines"\ns1.wav,2002,B\n'
+    status, err, manifest, out = timeline(songs, text, capsys)
+    assert_manifest_error(status, err, out, manifest, "line 2:", "lines 2-3", "one line")
+
+
+def test_a_balanced_quote_with_a_doubled_quote_is_fine(songs, capsys):
+    text = 'path,year,title\ns0.wav,2001,"Say ""hi"", then go"\ns1.wav,2002,B\n'
+    status, err, _, out = timeline(songs, text, capsys)
+    assert status == 0, err
+    assert [s["title"] for s in read_ply(out)[1]["songs"]] == ['Say "hi", then go', "B"]
+
+
+def test_blank_year_places_the_song_last_by_order_and_is_an_error_by_year(songs, capsys):
+    manifest = songs / "songs.csv"
+    manifest.write_text("path,year\ns0.wav,\ns1.wav,1990\ns2.wav,1980\n")
+    out = songs / "t.ply"
+    status, err = run(
+        ["timeline", "--manifest", manifest, "-o", out, "--x-by", "order", *FAST], capsys
+    )
+    assert status == 0, err
+    songs_meta = read_ply(out)[1]["songs"]
+    assert [(os.path.basename(s["path"]), s["year"]) for s in songs_meta] == [
+        ("s2.wav", 1980),
+        ("s1.wav", 1990),
+        ("s0.wav", None),
+    ]
+    status, err, _, out = timeline(songs, manifest.read_text(), capsys)
+    assert_manifest_error(status, err, out, manifest, "line 2: no year", "--x-by order")
+
+
+def test_broken_symlink_and_fifo_in_a_folder_are_reported(tmp_path, capsys):
+    from test_timeline import tag
+
+    folder = tmp_path / "m"
+    folder.mkdir()
+    y = musical_signal(sample_rate=RATE, duration_s=1.0) * 0.5
+    soundfile.write(folder / "s.flac", y.astype(np.float32), RATE)
+    tag(folder / "s.flac", year=1990, title="S")
+    (folder / "gone.flac").symlink_to(folder / "moved-away.flac")
+    os.mkfifo(folder / "pipe.ogg")
+    out = tmp_path / "t.ply"
+    status, err = run(["timeline", folder, "-o", out, *FAST, "-q"], capsys)
+    assert status == 1 and out.exists()
+    lines = err.splitlines()
+    assert f"loudscape-extract: skipped: {folder / 'gone.flac'}: broken symbolic link" in err
+    assert "moved-away.flac" in err
+    assert f"skipped: {folder / 'pipe.ogg'}: not a regular file: a FIFO" in err
+    assert "2 song(s) failed and were skipped" in lines[-1]
+    skipped = read_ply(out)[1]["extraction"]["skipped"]
+    assert sorted(os.path.basename(s["path"]) for s in skipped) == ["gone.flac", "pipe.ogg"]
+    status, err = run(["timeline", "--list-songs", folder], capsys)
+    assert status == 0 and "skipped:" in err and "gone.flac" in err

@@ -139,7 +139,7 @@ def test_song_on_a_fifo_is_refused_at_once(tmp_path):
         assert_one_line(result.stderr)
 
 
-def test_fifo_in_a_folder_is_passed_over(tmp_path, capsys):
+def test_fifo_in_a_folder_is_passed_over_and_reported(tmp_path, capsys):
     import mutagen.flac
 
     y = musical_signal(sample_rate=RATE, duration_s=1.0) * 0.5
@@ -149,7 +149,9 @@ def test_fifo_in_a_folder_is_passed_over(tmp_path, capsys):
     tags.save()
     os.mkfifo(tmp_path / "pipe.flac")
     status, err = run(["timeline", tmp_path, "-o", tmp_path / "t.ply", "--no-cache", "-q"], capsys)
-    assert status == 0 and err == ""
+    # Not read (it would block), but said: a song the user meant may be missing.
+    assert status == 1 and (tmp_path / "t.ply").exists()
+    assert f"skipped: {tmp_path / 'pipe.flac'}: not a regular file: a FIFO" in err
 
 
 @pytest.mark.parametrize("quiet", [False, True])

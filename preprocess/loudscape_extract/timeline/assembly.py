@@ -9,6 +9,7 @@ from loudscape_extract.contract import check_cloud
 from loudscape_extract.dynamics import DC_WARN_THRESHOLD
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import FORMAT_VERSION, MODE_TIMELINE
+from loudscape_extract.notices import timeline_warnings
 from loudscape_extract.paths import check_output_path
 from loudscape_extract.ply import write_ply
 from loudscape_extract.timeline.engine import compute_all
@@ -39,7 +40,8 @@ class TimelineResult:
     cached: int
     #: Frames drawn per song (the request, lowered by the point cap).
     frames_per_song: int = 0
-    #: One line each: repaired cache entries, files listed twice, truncated or corrupt songs.
+    #: One line each: repaired cache entries, files listed twice. The warnings about songs
+    #: (truncated or corrupt, DC offset, ...) are in ``metadata["warnings"]``.
     notes: list = field(default_factory=list)
     #: (path, DC offset) of songs whose offset is over DC_WARN_THRESHOLD.
     dc_offsets: list = field(default_factory=list)
@@ -68,9 +70,10 @@ def build_timeline(
     Songs that fail to decode are skipped and listed in ``result.failed`` (and in the
     metadata's ``extraction.skipped``); songs without a year likewise in ``without_year``
     (with ``x_by="order"`` they are placed after the dated songs instead). A truncated or
-    corrupt song is used as far as it decodes, with a line in ``result.notes`` (``strict``: it
-    fails instead). The output is checked first: it must end with .ply and be none of the
-    inputs (the songs, the manifest). ``z_measure`` is one of :data:`Z_MEASURES`;
+    corrupt song is used as far as it decodes, with a warning in its ``songs[i]["warnings"]``
+    and the top-level ``warnings`` of the metadata (``strict``: it fails instead). The output
+    is checked first: it must end with .ply and be none of the inputs (the songs, the
+    manifest). ``z_measure`` is one of :data:`Z_MEASURES`;
     ``highpass_hz`` high-pass filters each song before its dynamics (see
     :func:`track_features`).
 
@@ -117,9 +120,6 @@ def build_timeline(
         on_done=on_done,
         notes=notes,
     )
-    notes += [
-        f"{path}: {songs[path].warning}" for path in paths if path in songs and songs[path].warning
-    ]
     failed.update(tag_failures)
     good = [e for e in entries if e.path in songs]
     if not good:
@@ -160,6 +160,9 @@ def build_timeline(
             "generator": GENERATOR,
         },
     }
+    found = timeline_warnings(layout["songs"])
+    if found:  # absent: nothing to say
+        metadata["warnings"] = found
     check_cloud(points, metadata, path=output)
     write_ply(output, points=points, metadata=metadata)
     return TimelineResult(

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import os
 import socket
 import uuid
@@ -13,13 +14,18 @@ import uuid
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.messages import shorten
+from loudscape_extract.notices import warnings_problem
+from loudscape_extract.paths import fsync_directory
 from loudscape_extract.timeline.frames import SongFrames
+from loudscape_extract.timeline.layout import METRIC_KEYS
 
 __all__ = [
     "CACHE_VERSION",
     "ENTRY_SUFFIX",
     "cache_key",
     "default_cache_dir",
+    "entry_problem",
     "file_sha256",
     "load_entry",
     "read_entry",
@@ -28,7 +34,7 @@ __all__ = [
 ]
 
 #: Bump when what is cached (or how it is computed) changes: old entries are then ignored.
-CACHE_VERSION = 4
+CACHE_VERSION = 5
 #: Temporaries are named ``ENTRY.HOST.UNIQUE.PID`` + this; see :func:`remove_temporaries`.
 TEMPORARY_SUFFIX = ".tmp"
 
@@ -56,16 +62,33 @@ def cache_key(path: str, *, n_fft: int, hop_length: int, highpass_hz: float | No
     return f"{file_sha256(path)}-n{n_fft}-h{hop_length}{highpass}-v{CACHE_VERSION}"
 
 
-_MAGIC = b"loudscape-frames 1\n"
+#: The first line: this, the sha256 of everything after the line in hex, a newline.
+_MAGIC = b"loudscape-frames 2 "
+_OLD_MAGIC = b"loudscape-frames "
 _SERIES = ("rms_dbfs", "crest_db", "loudness_a_db", "hp_mean", "psr_db", "crest_3s_db")
+#: What each series may hold: (lowest, highest, NaN allowed). Ranges are wide (a float file
+#: may be +60 dBFS, a frame of one tiny sample -900 dB); they catch garbage, not odd music.
+#: A series not listed here (a new one) gets the default: NaN or a finite |value| <= 1e4.
+_SERIES_RANGES = {
+    "rms_dbfs": (-1000.0, 70.0, False),  # non-silent frames only: always a level
+    "crest_db": (-0.01, 100.0, False),  # peak >= RMS
+    "loudness_a_db": (-1500.0, 100.0, True),
+    "hp_mean": (0.0, 1.0, True),
+    "psr_db": (-50.0, 200.0, True),  # NaN: the 3 s window is under the gate
+    "crest_3s_db": (-0.01, 200.0, True),
+}
+_DEFAULT_RANGE = (-1e4, 1e4, True)
+#: Metrics every entry carries (the ones the timeline shows); each a finite number or null.
+_REQUIRED_METRICS = METRIC_KEYS
 #: File name ending of an entry.
 ENTRY_SUFFIX = ".frames"
 _HOSTNAME = socket.gethostname()
 
 
 def save_entry(path: str, song: SongFrames) -> None:
-    """Write one entry atomically: a magic line, one JSON line (frame count, metrics, the
-    decoder's warning), then the six float32 series back to back (little endian). One read and
+    """Write one entry atomically: a magic line with the sha256 of the rest, one JSON line
+    (frame count, metrics, the decoder's and the signal's warnings), then the float32 series
+    back to back (little endian). The data is synced to the disk before the rename. One read and
     no parsing beyond a short JSON line bring it back (an ``.npz`` took about 10 ms a song: a
     zip directory and eight array headers), which is what a warm rebuild of 10,000 songs spends
     its time on.
@@ -85,22 +108,31 @@ def save_entry(path: str, song: SongFrames) -> None:
         "n_frames_total": int(song.n_frames_total),
         "metrics": song.metrics,
         "warning": song.warning,
+        "signal": [dict(item) for item in song.signal],
     }
     temporary = f"{path}.{_host()}.{uuid.uuid4().hex[:12]}.{os.getpid()}{TEMPORARY_SUFFIX}"
+    content = json.dumps(head, allow_nan=False).encode("ascii") + b"\n"
+    content += np.concatenate(series).tobytes()
+    digest = hashlib.sha256(content).hexdigest().encode("ascii")
     try:
         with open(temporary, "wb") as handle:
-            handle.write(_MAGIC)
-            handle.write(json.dumps(head, allow_nan=False).encode("ascii") + b"\n")
-            handle.write(np.concatenate(series).tobytes())
+            handle.write(_MAGIC + digest + b"\n")
+            handle.write(content)
+            handle.flush()
+            os.fsync(handle.fileno())
         os.replace(temporary, path)
+        fsync_directory(directory)
     finally:
         with contextlib.suppress(OSError):
             os.unlink(temporary)
 
 
 def read_entry(path: str) -> tuple[SongFrames | None, str]:
-    """One cache entry, or ``(None, reason)`` when it cannot be used (missing, truncated,
-    empty, not an entry, a bad head line, or series of the wrong length)."""
+    """One cache entry, or ``(None, reason)`` when it cannot be used: missing, empty, not an
+    entry, its content not matching its checksum (truncated, overwritten, flipped bits), a bad
+    head line, series of the wrong length, or values no extraction gives
+    (:func:`entry_problem`: non-finite or out-of-range series, missing or non-finite
+    metrics)."""
     try:
         with open(path, "rb") as handle:
             data = handle.read()
@@ -111,18 +143,29 @@ def read_entry(path: str) -> tuple[SongFrames | None, str]:
     if not data:
         return None, "empty file"
     if not data.startswith(_MAGIC):
+        if data.startswith(_OLD_MAGIC):
+            return None, "an entry of an older layout"
         return None, "not a loudscape-frames entry"
-    end = data.find(b"\n", len(_MAGIC))
+    digest_end = data.find(b"\n", len(_MAGIC))
+    if digest_end < 0:
+        return None, "truncated in its first line"
+    content = data[digest_end + 1 :]
+    digest = hashlib.sha256(content).hexdigest().encode("ascii")
+    if data[len(_MAGIC) : digest_end] != digest:
+        return None, "its content does not match its checksum (damaged or cut)"
+    data = content
+    end = data.find(b"\n")
     if end < 0:
         return None, "truncated in its head line"
     try:
-        head = json.loads(data[len(_MAGIC) : end])
+        head = json.loads(data[:end])
         n = int(head["frames"])
         n_frames_total = int(head["n_frames_total"])
         metrics = head["metrics"]
         warning = head.get("warning", "")
-    except ValueError:
-        return None, "its head line is not JSON"
+        signal = head.get("signal", [])
+    except (ValueError, RecursionError):
+        return None, "its head line is not JSON (or nested too deeply)"
     except (KeyError, TypeError, AttributeError):
         return None, "its head line lacks frame counts or metrics"
     body = data[end + 1 :]
@@ -130,9 +173,53 @@ def read_entry(path: str) -> tuple[SongFrames | None, str]:
         return None, f"{len(body)} bytes of series for {n} frames"
     if not isinstance(metrics, dict) or not isinstance(warning, str) or n > n_frames_total:
         return None, "inconsistent frame counts or metrics"
+    if warnings_problem(signal):
+        return None, "its signal warnings are not a list of warnings"
     values = np.frombuffer(body, dtype="<f4").astype(np.float32).reshape(len(_SERIES), n)
     series = dict(zip(_SERIES, values, strict=True))
-    return SongFrames(**series, n_frames_total=n_frames_total, metrics=metrics, warning=warning), ""
+    problem = entry_problem(series, metrics)
+    if problem:
+        return None, problem
+    song = SongFrames(
+        **series,
+        n_frames_total=n_frames_total,
+        metrics=metrics,
+        warning=warning,
+        signal=tuple(signal),
+    )
+    return song, ""
+
+
+def entry_problem(series: dict, metrics: dict) -> str:
+    """Why an entry's values are not what an extraction gives (``""`` when they are): each
+    series checked against its range in ``_SERIES_RANGES`` (any series, named there or not),
+    every metric in ``_REQUIRED_METRICS`` present, each metric a finite number or null."""
+    for name, values in series.items():
+        low, high, nan_ok = _SERIES_RANGES.get(name, _DEFAULT_RANGE)
+        values = np.asarray(values, dtype=np.float64)
+        nan = np.isnan(values)
+        if nan.any() and not nan_ok:
+            return f"series {name} holds NaN"
+        finite = values[~nan]
+        if not np.isfinite(finite).all():
+            return f"series {name} holds an infinite value"
+        if finite.size and (finite.min() < low or finite.max() > high):
+            return (
+                f"series {name} spans {finite.min():.4g}..{finite.max():.4g}, outside the "
+                f"plausible {low:g}..{high:g}"
+            )
+    missing = [key for key in _REQUIRED_METRICS if key not in metrics]
+    if missing:
+        more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
+        return f"metrics lack {missing[0]}{more}"
+    for key, value in metrics.items():
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return f"metric {key} is not a number ({shorten(value, 40)})"
+        if not math.isfinite(value) or abs(value) > 1e6:
+            return f"metric {key} is {value!r}"
+    return ""
 
 
 def load_entry(path: str) -> SongFrames | None:

@@ -55,8 +55,8 @@ def song_frames(
 ) -> tuple[SongFrames, bool]:
     """One song's frames, from the cache when its content and parameters match.
 
-    An entry that cannot be read (truncated, empty, wrong shapes) is recomputed and replaced,
-    and a line saying so is appended to ``notes``.
+    An entry that cannot be used (:func:`read_entry`: checksum, shapes, values) is recomputed
+    and replaced, and a line saying so is appended to ``notes``.
 
     Returns
     -------
@@ -79,8 +79,7 @@ def song_frames(
             return song, True
         if notes is not None:
             notes.append(
-                f"{path}: its cache entry {entry} could not be read ({problem}); "
-                "recomputed and replaced"
+                f"{path}: its cache entry {entry} is unusable ({problem}); recomputed and replaced"
             )
     song = compute_song_frames(
         path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict

@@ -27,6 +27,9 @@ class SongFrames:
         The Song metrics plus ``hp_mean`` (mean over non-silent frames of the frame hp).
     warning : str
         The decoder's note (:attr:`Audio.warning`): non-empty for a truncated or corrupt file.
+    signal : tuple of dict
+        Warnings about the signal found while decoding (:attr:`StreamedTrack.signal`:
+        cancelling channels, clipping).
     """
 
     rms_dbfs: np.ndarray
@@ -38,6 +41,7 @@ class SongFrames:
     warning: str = ""
     psr_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     crest_3s_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
+    signal: tuple = ()
 
 
 def compute_song_frames(
@@ -76,4 +80,5 @@ def frames_of(features: TrackFeatures | StreamedTrack, *, warning: str = "") -> 
         warning=warning,
         psr_db=frames.psr_db[keep].astype(np.float32),
         crest_3s_db=frames.crest_3s_db[keep].astype(np.float32),
+        signal=tuple(getattr(features, "signal", ())),
     )

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import csv
 import datetime
+import io
 import os
 import re
+import stat
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -42,8 +44,12 @@ class SongEntry:
     artist: str = ""
 
 
-def discover_audio(inputs: Sequence[str]) -> list[str]:
-    """Audio files among ``inputs`` (files as given; folders searched recursively), sorted."""
+def discover_audio(inputs: Sequence[str], *, skipped: dict | None = None) -> list[str]:
+    """Audio files among ``inputs`` (files as given; folders searched recursively), sorted.
+
+    In a folder, a name with an audio extension that is not a regular file (a broken symbolic
+    link, a FIFO, which would block its reader forever, a device) is passed over and,
+    when ``skipped`` is given, put there with the reason (path -> reason)."""
     found: list[str] = []
     for item in inputs:
         if os.path.isdir(item):
@@ -51,11 +57,13 @@ def discover_audio(inputs: Sequence[str]) -> list[str]:
                 dirs.sort()
                 for name in sorted(files):
                     full = os.path.join(root, name)
-                    # Regular files only: a FIFO named .wav would block its reader forever.
-                    if os.path.splitext(name)[1].lower() in SUPPORTED_EXTENSIONS and (
-                        os.path.isfile(full)
-                    ):
+                    if not _audio_name(name):
+                        continue
+                    reason = _not_regular(full)
+                    if not reason:
                         found.append(full)
+                    elif skipped is not None:
+                        skipped[full] = reason
         elif os.path.exists(item):
             check_regular_input(item)
             found.append(item)
@@ -63,10 +71,45 @@ def discover_audio(inputs: Sequence[str]) -> list[str]:
             raise ExtractError("no such file or folder", path=item)
     if not found:
         listed = ", ".join(inputs)
+        passed = ""
+        if skipped:
+            first, why = next(iter(skipped.items()))
+            passed = f"; {len(skipped)} passed over, first: {first}: {why}"
         raise ExtractError(
-            f"no audio files found (looked for {', '.join(SUPPORTED_EXTENSIONS)})", path=listed
+            f"no audio files found (looked for {', '.join(SUPPORTED_EXTENSIONS)}){passed}",
+            path=listed,
         )
     return found
+
+
+def _audio_name(name: str) -> bool:
+    return os.path.splitext(name)[1].lower() in SUPPORTED_EXTENSIONS
+
+
+def _not_regular(path: str) -> str:
+    """Why ``path`` is not a regular file to read (``""`` when it is one)."""
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        if os.path.islink(path):
+            try:
+                target = os.readlink(path)
+            except OSError:
+                target = "?"
+            return f"broken symbolic link (its target {shorten(target)} does not exist)"
+        return "vanished while the folder was read"
+    except OSError as exc:
+        return f"cannot read file ({exc.strerror or exc})"
+    if stat.S_ISREG(info.st_mode):
+        return ""
+    kind = (
+        "a directory"
+        if stat.S_ISDIR(info.st_mode)
+        else "a FIFO (named pipe)"
+        if stat.S_ISFIFO(info.st_mode)
+        else "a device or socket"
+    )
+    return f"not a regular file: {kind}"
 
 
 def parse_year(text: object) -> int | None:
@@ -126,18 +169,21 @@ def _year_problem(year: int) -> str:
     return f"year {year} is outside the plausible {low}-{high}"
 
 
-def read_manifest(path: str) -> list[SongEntry]:
+def read_manifest(path: str, *, need_year: bool = True) -> list[SongEntry]:
     """Songs from a CSV with columns ``path``, ``year`` and optionally ``title``, ``artist``.
 
     CSV as Python's csv module reads it (a comma inside a value needs double quotes). Paths are
     relative to the manifest's folder. Blank lines and empty trailing cells (a trailing comma)
     are ignored. Every problem raises :class:`ExtractError` naming the manifest, the line and
-    the offending value; a line with more cells than the header (an unquoted comma) is one.
+    the offending value; a line with more cells than the header (an unquoted comma) is one,
+    and so is a quoted value that is never closed or runs over lines. A blank year is an
+    error when ``need_year`` (``--x-by year``); otherwise (``--x-by order``) the song has no
+    year and is placed after the dated ones.
     """
-    return [entry for entry, _line in manifest_entries(path)]
+    return [entry for entry, _line in manifest_entries(path, need_year=need_year)]
 
 
-def manifest_entries(path: str) -> list[tuple[SongEntry, int]]:
+def manifest_entries(path: str, *, need_year: bool = True) -> list[tuple[SongEntry, int]]:
     """:func:`read_manifest`'s entries with the line each came from."""
     check_regular_input(path, what="manifest file")
     folder = os.path.dirname(path)
@@ -182,6 +228,16 @@ def manifest_entries(path: str) -> list[tuple[SongEntry, int]]:
             raise ExtractError(f"line {line}: no such file {shorten(song)}", path=path)
         if not os.path.isfile(song):
             raise ExtractError(f"line {line}: {shorten(song)} is not a regular file", path=path)
+        if not row.get("year") and not need_year:
+            entry = SongEntry(song, None, row.get("title", ""), row.get("artist", ""))
+            entries.append((entry, line))
+            continue
+        if not row.get("year"):
+            raise ExtractError(
+                f"line {line}: no year for {shorten(row['path'])} (placing songs by year needs "
+                "one; --x-by order places songs without one after the dated ones)",
+                path=path,
+            )
         try:
             year = int(row.get("year", ""))
         except ValueError:
@@ -200,8 +256,14 @@ def manifest_entries(path: str) -> list[tuple[SongEntry, int]]:
 
 
 def _csv_records(handle, path: str) -> list[tuple[int, list[str]]]:
-    """Non-blank CSV records, each with the line it starts on."""
-    reader = csv.reader(handle)
+    """Non-blank CSV records, each with the line it starts on.
+
+    Strict CSV: a double quote that is never closed, or a quoted value running over several
+    lines (an unbalanced quote in a line above swallows the lines after it), is an error
+    naming the line where the value starts, never a title holding the next rows."""
+    text = handle.read()
+    lines = text.splitlines()
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
     records = []
     line = 1
     while True:
@@ -210,7 +272,20 @@ def _csv_records(handle, path: str) -> list[tuple[int, list[str]]]:
         except StopIteration:
             return records
         except csv.Error as exc:
+            if "end of data" in str(exc):
+                start = shorten(lines[line - 1] if line <= len(lines) else "", 60)
+                raise ExtractError(
+                    f"line {line}: a double quote in {start} is never closed (an unbalanced "
+                    'quote; inside a quoted value write a quote as "")',
+                    path=path,
+                ) from None
             raise ExtractError(f"line {reader.line_num}: bad CSV ({exc})", path=path) from None
+        if any("\n" in cell or "\r" in cell for cell in cells):
+            raise ExtractError(
+                f"line {line}: a quoted value runs over lines {line}-{reader.line_num} (an "
+                "unbalanced double quote?); every manifest value must be on one line",
+                path=path,
+            )
         if any(cell.strip() for cell in cells):
             records.append((line, cells))
         line = reader.line_num + 1
@@ -264,7 +339,7 @@ def collect_entries(
         if inputs:
             raise ExtractError("give either folders/files or --manifest, not both")
         numbered, notes = _drop_duplicates(
-            manifest_entries(manifest),
+            manifest_entries(manifest, need_year=need_year),
             lambda item, first: (
                 f"{manifest}: line {item[1]}: {item[0].path} is the same file "
                 f"as line {first[1]} ({first[0].path}); kept once"
@@ -275,7 +350,7 @@ def collect_entries(
         if not inputs:
             raise ExtractError("no input: give folders or files, or --manifest songs.csv")
         found, notes = _drop_duplicates(
-            [SongEntry(path, 0) for path in discover_audio(inputs)],
+            [SongEntry(path, 0) for path in discover_audio(inputs, skipped=tag_failures)],
             lambda item, first: f"{item.path}: the same file as {first.path}; kept once",
         )
         entries = []

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import axis, hp_axis, level_axis, scalar_axis
+from loudscape_extract.notices import track_warnings
 from loudscape_extract.timeline.frames import SongFrames
 from loudscape_extract.timeline.inputs import SongEntry
 
@@ -108,6 +109,9 @@ class SampledSong:
     metrics : dict
     warning : str
         The decoder's note on a truncated or corrupt file (:attr:`SongFrames.warning`).
+    warnings : list of dict
+        Every warning about the song (:func:`notices.track_warnings`), as its ``songs[i]``
+        metadata carries them.
     """
 
     rms_dbfs: np.ndarray
@@ -119,6 +123,7 @@ class SampledSong:
     frames_total: int
     metrics: dict
     warning: str = ""
+    warnings: list = field(default_factory=list)
 
 
 def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> SampledSong:
@@ -138,6 +143,9 @@ def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> Sa
         frames_total=int(song.n_frames_total),
         metrics=dict(song.metrics),
         warning=song.warning,
+        warnings=track_warnings(
+            decode_warning=song.warning, metrics=song.metrics, signal=song.signal
+        ),
     )
 
 
@@ -318,6 +326,8 @@ def timeline_points(
                 "metrics": {k: _round(song.metrics.get(k)) for k in METRIC_KEYS},
             }
         )
+        if song.warnings:  # absent: nothing to say
+            described[-1]["warnings"] = [dict(item) for item in song.warnings]
         offset += m
     points = np.concatenate(blocks).astype(np.float32) if blocks else np.zeros((0, 5), np.float32)
     axes = {
