@@ -15,7 +15,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # Run under a virtual X server when there is no display (CI, ssh sessions), so the window tests run.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke demo clean bench-window bench-surface
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke demo clean bench-window bench-surface check-platforms
 
 system:
 	@bash scripts/setup-system.sh
@@ -78,7 +78,18 @@ fuzz-smoke:
 fuzz:
 	$(CARGO) run -q --release --example fuzz_ply -- --inputs $(N)
 
+# macOS and Windows kept building: the code checked for both (all targets, warnings as errors) in
+# a target folder of its own, so the host build is left alone. Needs rustup (downloads each
+# target's standard library once).
+PLATFORMS ?= aarch64-apple-darwin x86_64-pc-windows-msvc
+check-platforms: system
+	rustup target add $(PLATFORMS)
+	for t in $(PLATFORMS); do \
+		RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check --all-targets --target $$t || exit 1; \
+	done
+
 test: system lint-rust lint-py test-rust test-py test-mesh fuzz-smoke
+test: check-platforms
 
 # Benchmarks, not part of `make test` (minutes each; figures in docs/PERFORMANCE.md).
 # 1,000 short songs cold (process pool, two-worker Dask LocalCluster) and the warm rebuild of a
