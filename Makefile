@@ -89,7 +89,7 @@ check-platforms: system
 	done
 
 # The pip way: build the wheel (release build), install it into a fresh venv, render a song from it.
-test-wheel: system venv
+test-wheel: system
 	bash scripts/test-wheel.sh $(PYTHON)
 
 test: system lint-rust lint-py test-rust test-py test-mesh fuzz-smoke
