@@ -47,6 +47,9 @@ fn assert_one_line_error(output: &Output, needle: &str) {
     assert!(text.contains(needle), "{needle:?} not in {text}");
 }
 
+/// Unix only: it makes symbolic links, and only there do hard links count (`files::same_file`
+/// compares inodes on Unix, absolute paths elsewhere).
+#[cfg(unix)]
 #[test]
 fn outputs_that_are_inputs_are_refused_untouched() {
     let dir = folder("same_file");

@@ -1,7 +1,8 @@
-//! Finding `loudscape-extract`: `$LOUDSCAPE_EXTRACT` when set (and then only there); the project's virtual
-//! environment (`.venv/bin/`, on Windows `.venv/Scripts/`) in the folder of the `loudscape`
-//! binary or any folder above it (a checkout's `target/release/loudscape`) or in the current
-//! folder or above; beside the binary; on `PATH`.
+//! Finding `loudscape-extract`: `$LOUDSCAPE_EXTRACT` when set (and then only there); beside the
+//! binary (where `pip install .` puts both, the environment's `bin/` or `Scripts/`); the
+//! project's virtual environment (`.venv/bin/`, on Windows `.venv/Scripts/`) in the folder of the
+//! `loudscape` binary or any folder above it (a checkout's `target/release/loudscape`) or in the
+//! current folder or above; on `PATH`.
 
 use std::path::{Path, PathBuf};
 
@@ -25,21 +26,27 @@ fn venv_candidates(start: &Path) -> Vec<PathBuf> {
 
 /// Every place looked in without `$LOUDSCAPE_EXTRACT`, in order.
 pub fn candidates() -> Vec<PathBuf> {
-    let mut places = Vec::new();
     let exe_dir = std::env::current_exe()
         .ok()
         .and_then(|exe| exe.parent().map(Path::to_path_buf));
-    if let Some(dir) = &exe_dir {
-        places.extend(venv_candidates(dir));
-    }
-    if let Ok(cwd) = std::env::current_dir() {
-        places.extend(venv_candidates(&cwd));
-    }
-    if let Some(dir) = &exe_dir {
-        places.push(dir.join(NAME));
-    }
+    let cwd = std::env::current_dir().ok();
+    let mut places = places_in(exe_dir.as_deref(), cwd.as_deref());
     if let Some(path) = std::env::var_os("PATH") {
         places.extend(std::env::split_paths(&path).map(|dir| dir.join(NAME)));
+    }
+    places
+}
+
+/// Beside the binary first (an installed environment: the extractor installed with the app,
+/// not the one of a checkout the command happens to run in), then the virtual environments.
+fn places_in(exe_dir: Option<&Path>, cwd: Option<&Path>) -> Vec<PathBuf> {
+    let mut places = Vec::new();
+    if let Some(dir) = exe_dir {
+        places.push(dir.join(NAME));
+        places.extend(venv_candidates(dir));
+    }
+    if let Some(dir) = cwd {
+        places.extend(venv_candidates(dir));
     }
     places
 }
@@ -56,10 +63,7 @@ pub fn extractor() -> Result<PathBuf, String> {
     if let Some(found) = candidates().into_iter().find(|p| p.is_file()) {
         return Ok(found);
     }
-    Err(
-        ".venv/bin above the loudscape binary and the current folder, beside the binary, PATH"
-            .into(),
-    )
+    Err("beside the loudscape binary, .venv/bin above it and above the current folder, PATH".into())
 }
 
 #[cfg(test)]
@@ -72,5 +76,15 @@ mod tests {
         let venv = Path::new("/repo/.venv/bin").join(NAME);
         assert!(places.contains(&venv));
         assert!(places.len() >= 8);
+    }
+
+    #[test]
+    fn beside_the_binary_comes_before_any_venv() {
+        let bin = Path::new("/env/bin");
+        let places = places_in(Some(bin), Some(Path::new("/checkout")));
+        assert_eq!(places[0], bin.join(NAME));
+        let checkout_venv = Path::new("/checkout/.venv/bin").join(NAME);
+        let at = places.iter().position(|p| *p == checkout_venv);
+        assert!(at.is_some_and(|i| i > 0), "{places:?}");
     }
 }

@@ -82,6 +82,8 @@ pub fn run(options: WindowOptions) -> anyhow::Result<()> {
                 .wgpu_render_state
                 .as_ref()
                 .ok_or("no GPU render state: loudscape needs wgpu (Vulkan, Metal or DX12)")?;
+            crate::render::gpu::context::check_limits(&render_state.device.limits())
+                .map_err(|reason| format!("the GPU is too small for loudscape: {reason}"))?;
             ViewResources::install(render_state);
             cc.egui_ctx
                 .options_mut(|o| o.input_options.max_click_duration = MAX_CLICK_SECONDS);

@@ -13,16 +13,45 @@ pub enum ContextError {
     NoAdapter(String),
     #[error("the GPU adapter {adapter} refused a device: {reason}")]
     NoDevice { adapter: String, reason: String },
+    #[error("the GPU adapter {adapter} is too small for loudscape: {reason}")]
+    TooSmall { adapter: String, reason: String },
 }
 
-/// Optional features we use when the adapter has them; everything works without them. On an
-/// adapter that is the CPU, also mappable vertex and index buffers: there every buffer is host
-/// memory, and the CPU surface extraction writes its mesh straight into the buffers it is drawn
-/// from (render/surface/cpu/).
+/// Storage buffers the busiest compute pass binds in its one stage: marching tetrahedra's
+/// extraction (bindings 1-9 of shaders/surface/extraction.wgsl and its edge table,
+/// render/surface/extraction.rs). Above WebGPU's guaranteed 8: wgpu offers 29 on Metal, 16 on
+/// DX12 binding tiers 1-2 and more on tier 3, and Vulkan drivers (lavapipe included) more still;
+/// docs/ARCHITECTURE.md has the review.
+pub const STORAGE_BUFFERS_PER_STAGE: u32 = 10;
+
+/// The limits the passes cannot do without, checked before any pipeline is built, so that a
+/// GPU that lacks them is refused with one line instead of failing at the first pipeline. Buffer
+/// sizes need no check: the passes split their data by [`storage_binding_limit`].
+pub fn check_limits(limits: &wgpu::Limits) -> Result<(), String> {
+    let storage = limits.max_storage_buffers_per_shader_stage;
+    if storage < STORAGE_BUFFERS_PER_STAGE {
+        return Err(format!(
+            "it binds {storage} storage buffers per shader stage, the surface passes need \
+             {STORAGE_BUFFERS_PER_STAGE}"
+        ));
+    }
+    let invocations = limits.max_compute_invocations_per_workgroup;
+    if invocations < 256 || limits.max_compute_workgroup_size_x < 256 {
+        return Err(format!(
+            "its compute workgroups hold {invocations} invocations, the passes use 256"
+        ));
+    }
+    Ok(())
+}
+
+/// Optional features we use when the adapter has them; everything works without them
+/// (timings fall back to wall time). On an adapter that is the CPU, also mappable vertex and
+/// index buffers: there every buffer is host memory, and the CPU surface extraction writes its
+/// mesh straight into the buffers it is drawn from (render/surface/cpu/; elsewhere it copies).
+/// No filterable float textures: the volume samples its storage buffer by hand.
 pub fn wanted_features(adapter: &wgpu::Adapter) -> wgpu::Features {
-    let mut optional = wgpu::Features::TIMESTAMP_QUERY
-        | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
-        | wgpu::Features::FLOAT32_FILTERABLE;
+    let mut optional =
+        wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
     if adapter.get_info().device_type == wgpu::DeviceType::Cpu {
         optional |= wgpu::Features::MAPPABLE_PRIMARY_BUFFERS;
     }
@@ -55,6 +84,15 @@ impl GpuContext {
     /// Finds an adapter (a real GPU when there is one, otherwise a software one such as lavapipe)
     /// and opens a device on it.
     pub fn new_headless() -> Result<Self, ContextError> {
+        Self::new_headless_narrowed(|_, _| {})
+    }
+
+    /// As [`Self::new_headless`], on a device whose limits and features `narrow` lowers from
+    /// those asked of the adapter (tests: a device no bigger than a smaller GPU offers, which
+    /// wgpu then enforces).
+    pub fn new_headless_narrowed(
+        narrow: impl FnOnce(&mut wgpu::Limits, &mut wgpu::Features),
+    ) -> Result<Self, ContextError> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
         let instance = wgpu::Instance::new(desc);
@@ -66,13 +104,22 @@ impl GpuContext {
         };
         let adapter = pollster::block_on(instance.request_adapter(&options))
             .map_err(|e| ContextError::NoAdapter(e.to_string()))?;
-        let (device, queue) = pollster::block_on(
-            adapter.request_device(&device_descriptor(&adapter)),
-        )
-        .map_err(|e| ContextError::NoDevice {
+        let mut descriptor = device_descriptor(&adapter);
+        narrow(
+            &mut descriptor.required_limits,
+            &mut descriptor.required_features,
+        );
+        check_limits(&descriptor.required_limits).map_err(|reason| ContextError::TooSmall {
             adapter: adapter.get_info().name,
-            reason: e.to_string(),
+            reason,
         })?;
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|e| {
+                ContextError::NoDevice {
+                    adapter: adapter.get_info().name,
+                    reason: e.to_string(),
+                }
+            })?;
         Ok(Self {
             adapter,
             device,
@@ -102,4 +149,35 @@ pub fn describe_adapter(adapter: &wgpu::Adapter) -> String {
         "{} on {:?} ({:?})",
         info.name, info.backend, info.device_type
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn webgpu_minimum_limits_are_refused_with_the_reason() {
+        let reason = check_limits(&wgpu::Limits::default()).unwrap_err();
+        assert!(reason.contains("8 storage buffers"), "{reason}");
+        assert!(
+            reason.contains(&STORAGE_BUFFERS_PER_STAGE.to_string()),
+            "{reason}"
+        );
+        assert!(check_limits(&wgpu::Limits::downlevel_defaults()).is_err());
+    }
+
+    #[test]
+    fn metal_and_dx12_limits_as_wgpu_reports_them_are_enough() {
+        // wgpu-hal 30: Metal 31 buffer slots less 2 internal; DX12 tiers 1-2: 64 UAVs / 2 / 2;
+        // both 1024 invocations per workgroup.
+        for storage in [29, 16] {
+            let limits = wgpu::Limits {
+                max_storage_buffers_per_shader_stage: storage,
+                max_compute_invocations_per_workgroup: 1024,
+                max_compute_workgroup_size_x: 1024,
+                ..wgpu::Limits::default()
+            };
+            assert_eq!(check_limits(&limits), Ok(()), "{storage} storage buffers");
+        }
+    }
 }
