@@ -24,8 +24,10 @@ from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
 from loudscape_extract.timeline import (
     DEFAULT_MAX_POINTS,
+    DEFAULT_Y_MEASURE,
     DEFAULT_Z_MEASURE,
     MIN_FRAMES_PER_SONG,
+    Y_MEASURES,
     Z_MEASURES,
     build_timeline,
     default_cache_dir,
@@ -126,7 +128,8 @@ def build_parser() -> argparse.ArgumentParser:
         "timeline",
         help="many songs -> one chronological cloud (one point per sampled frame)",
         description="Many songs -> one point cloud ordered by year: x song position (by year "
-        "or by order), y frame RMS level (-60..0 dBFS), z the dynamics of the 3 s around each "
+        "or by order), y the frame's loudness (-60..0 LUFS, BS.1770 momentary by default; see "
+        "--y-measure), z the dynamics of the 3 s around each "
         "frame (PSR by default; see --z-measure; 1st-99th percentile over all songs), scalar "
         "A-weighted frame level, hp frame hp ratio. Years, titles and artists come from tags "
         "(mutagen) or from --manifest.",
@@ -145,6 +148,14 @@ def build_parser() -> argparse.ArgumentParser:
         default="year",
         help="x proportional to the year (default) or each song an equal span in order "
         "(songs without a year then come last instead of being left out)",
+    )
+    timeline.add_argument(
+        "--y-measure",
+        choices=Y_MEASURES,
+        default=DEFAULT_Y_MEASURE,
+        help="y axis: momentary (BS.1770 loudness of the 400 ms around the frame, LUFS; "
+        "default), short-term (of the 3 s around it), rms (the paper's unweighted frame RMS, "
+        "dBFS) or a-weighted (the frame's A-weighted level)",
     )
     timeline.add_argument(
         "--z-measure",
@@ -342,6 +353,7 @@ def run_timeline(args: argparse.Namespace, *, tty: bool, json_progress=None) -> 
             jobs=args.jobs,
             strict=args.strict,
             z_measure=args.z_measure,
+            y_measure=args.y_measure,
             highpass_hz=HIGHPASS_HZ if args.highpass else None,
             progress=progress,
             max_points=args.max_points,

@@ -28,7 +28,7 @@ __all__ = [
 ]
 
 #: Bump when what is cached (or how it is computed) changes: old entries are then ignored.
-CACHE_VERSION = 4
+CACHE_VERSION = 5
 #: Temporaries are named ``ENTRY.HOST.UNIQUE.PID`` + this; see :func:`remove_temporaries`.
 TEMPORARY_SUFFIX = ".tmp"
 
@@ -57,7 +57,16 @@ def cache_key(path: str, *, n_fft: int, hop_length: int, highpass_hz: float | No
 
 
 _MAGIC = b"loudscape-frames 1\n"
-_SERIES = ("rms_dbfs", "crest_db", "loudness_a_db", "hp_mean", "psr_db", "crest_3s_db")
+_SERIES = (
+    "rms_dbfs",
+    "crest_db",
+    "loudness_a_db",
+    "hp_mean",
+    "psr_db",
+    "crest_3s_db",
+    "momentary_lufs",
+    "short_term_lufs",
+)
 #: File name ending of an entry.
 ENTRY_SUFFIX = ".frames"
 _HOSTNAME = socket.gethostname()
@@ -65,7 +74,7 @@ _HOSTNAME = socket.gethostname()
 
 def save_entry(path: str, song: SongFrames) -> None:
     """Write one entry atomically: a magic line, one JSON line (frame count, metrics, the
-    decoder's warning), then the six float32 series back to back (little endian). One read and
+    decoder's warning), then the float32 series back to back (little endian). One read and
     no parsing beyond a short JSON line bring it back (an ``.npz`` took about 10 ms a song: a
     zip directory and eight array headers), which is what a warm rebuild of 10,000 songs spends
     its time on.
@@ -78,6 +87,8 @@ def save_entry(path: str, song: SongFrames) -> None:
     os.makedirs(directory, exist_ok=True)
     n = int(song.rms_dbfs.shape[0])
     series = [np.asarray(getattr(song, name), dtype="<f4") for name in _SERIES]
+    # the loudness series of a song built without them (empty) are stored as unknown (NaN)
+    series = [np.full(n, np.nan, "<f4") if s.shape == (0,) else s for s in series]
     if any(s.shape != (n,) for s in series):
         raise ValueError(f"series of unequal lengths {[s.shape for s in series]}")
     head = {
