@@ -18,6 +18,7 @@ from loudscape_extract.dynamics import HIGHPASS_HZ, dc_warning
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
+from loudscape_extract.normalization import NORMALIZE_CHOICES
 from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES
 from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
@@ -237,6 +238,13 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("input", help="timeline PLY written by the timeline command")
     report.add_argument("-o", "--output", default="report.png", help="PNG file to write (.png)")
     report.add_argument("--csv", help="also write the per-year table as CSV (.csv)")
+    report.add_argument(
+        "--normalize",
+        choices=NORMALIZE_CHOICES,
+        default="none",
+        help="also draw each song and year as heard after this playback normalization "
+        "(streaming services, broadcast; docs/DYNAMICS.md)",
+    )
 
     for sub in (song, timeline):
         sub.add_argument(
@@ -411,7 +419,7 @@ def run_export(args: argparse.Namespace) -> int:
 
 def run_report(args: argparse.Namespace) -> int:
     """The report subcommand: PNG (and CSV), then ``wrote ...`` summaries."""
-    rows = write_report(args.input, args.output, csv_path=args.csv)
+    rows = write_report(args.input, args.output, csv_path=args.csv, normalize=args.normalize)
     if not args.quiet:
         songs = sum(row["songs"] for row in rows)
         _say(f"wrote {args.output} ({songs} song(s), {len(rows)} year(s))")
