@@ -168,6 +168,7 @@ impl LoudscapeApp {
                 ..Default::default()
             },
             scripted_presses: options.press,
+            heard: Default::default(),
             freq_axis: Default::default(),
             compare: None,
             pending_seek: options.seek,
@@ -468,6 +469,7 @@ impl eframe::App for LoudscapeApp {
         }
         let before = self.shown_state();
         self.poll_loading(&ctx, frame);
+        self.apply_heard(frame);
         self.apply_freq_axis(frame);
         self.poll_compare(&ctx, frame);
         self.fetch_grid(frame);
