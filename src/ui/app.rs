@@ -56,6 +56,8 @@ pub struct WindowOptions {
     /// Keys to press once the data is shown (`?`, `Ctrl+S`; for tests: they go through the
     /// same key handling as real keys).
     pub press: Vec<String>,
+    /// The "level as heard" preset to show a timeline with (a key of `normalize::PRESETS`).
+    pub normalize: Option<&'static str>,
 }
 
 /// Opens the window and runs until it closes.
@@ -168,7 +170,7 @@ impl LoudscapeApp {
                 ..Default::default()
             },
             scripted_presses: options.press,
-            heard: Default::default(),
+            heard: crate::ui::normalize::Heard::starting(options.normalize),
             freq_axis: Default::default(),
             compare: None,
             pending_seek: options.seek,

@@ -183,6 +183,18 @@ pub struct Heard {
     shown: u64,
 }
 
+impl Heard {
+    /// The choice a window starts with: `key` (a preset's) is applied once a timeline is
+    /// shown.
+    pub fn starting(key: Option<&str>) -> Heard {
+        let index = key.and_then(|k| PRESETS.iter().position(|p| p.key == k));
+        Heard {
+            pending: index.map(Some),
+            ..Heard::default()
+        }
+    }
+}
+
 fn turn_up_words(turn_up: TurnUp) -> String {
     match turn_up {
         TurnUp::PeakCeiling(c) => format!("turns up to a {c:+.0} dBTP peak"),
@@ -198,7 +210,9 @@ impl LoudscapeApp {
             return;
         };
         if loaded.id != self.heard.shown {
-            self.heard = Heard::default(); // a newly loaded timeline is shown as mastered
+            // a newly loaded timeline is shown as mastered (unless a choice is on its way)
+            self.heard.preset = None;
+            self.heard.original = None;
         }
         let mut choice = self.heard.preset;
         let name = |choice: Option<usize>| {
@@ -243,10 +257,10 @@ impl LoudscapeApp {
     /// Installs the timeline shifted by the chosen preset (or as loaded), keeping the camera
     /// and the selected song.
     pub(super) fn apply_heard(&mut self, frame: &eframe::Frame) {
-        let Some(choice) = self.heard.pending.take() else {
+        let (Some(render_state), Some(loaded)) = (frame.wgpu_render_state(), &self.timeline) else {
             return;
         };
-        let (Some(render_state), Some(loaded)) = (frame.wgpu_render_state(), &self.timeline) else {
+        let Some(choice) = self.heard.pending.take() else {
             return;
         };
         let original = self
@@ -267,6 +281,10 @@ impl LoudscapeApp {
         };
         let selected = self.selected_song;
         self.keep_camera_loads += 1;
+        // the same file shifted, not a re-extraction: drop the shown copy first
+        if let Some(old) = self.timeline.take() {
+            crate::ui::bridge::ViewResources::remove(render_state, old.id);
+        }
         self.install(render_state, cloud);
         self.selected_song = selected;
         self.heard = Heard {
