@@ -31,6 +31,11 @@ struct Cli {
     #[arg(long)]
     seek: Option<f64>,
 
+    /// Show the timeline as heard after this playback normalization (the side panel's
+    /// "level as heard"): none, spotify, youtube, ebu_r128, ... (docs/DYNAMICS.md).
+    #[arg(long, default_value = "none")]
+    normalize: String,
+
     /// Save a screenshot of the window to this PNG once the data is shown, then close.
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
@@ -178,7 +183,10 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         None => check_screenshot(&cli).and_then(|()| {
+            let normalize = loudscape::ui::normalize::parse_preset(&cli.normalize)
+                .map_err(anyhow::Error::msg)?;
             loudscape::ui::run(loudscape::ui::WindowOptions {
+                normalize: normalize.map(|p| p.key),
                 files: cli.files,
                 screenshot: cli.screenshot,
                 view: cli.view,

@@ -104,6 +104,8 @@ fn bad_flags_fail_cleanly() {
         vec!["--size", "12"],
         vec!["--camera", "1,2"],
         vec!["--view", "hologram"],
+        vec!["--normalize", "tidal"],
+        vec!["--normalize", "spotify"], // a song cloud has no songs to normalize
     ] {
         let mut args = vec![
             "render",
@@ -126,6 +128,52 @@ fn bad_flags_fail_cleanly() {
     let output = loudscape(&["render", demo.to_str().unwrap(), "-o", "no/such/dir/x.png"]);
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr_lines(&output)[0].contains("no/such/dir"));
+}
+
+/// `--normalize` draws a timeline as heard: the loud modern songs of the demo come down to
+/// Spotify's -14 LUFS, so the picture changes; `none` is the file as it is.
+#[test]
+fn render_normalize_shifts_a_timeline() {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let demo = repo.join("data/demo_timeline.ply");
+    let mut images = Vec::new();
+    for preset in ["none", "spotify"] {
+        let out = temp(&format!("heard_{preset}.png"));
+        let output = loudscape(&[
+            "render",
+            demo.to_str().unwrap(),
+            "--size",
+            "320x200",
+            "--camera",
+            "0,0,4",
+            "--normalize",
+            preset,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_success(&output);
+        images.push(image::open(&out).expect("png").to_rgba8());
+    }
+    let plain = loudscape(&[
+        "render",
+        demo.to_str().unwrap(),
+        "--size",
+        "320x200",
+        "--camera",
+        "0,0,4",
+        "-o",
+        temp("heard_default.png").to_str().unwrap(),
+    ]);
+    assert_success(&plain);
+    let default = image::open(temp_path("heard_default.png"))
+        .expect("png")
+        .to_rgba8();
+    assert_eq!(images[0], default, "--normalize none is the file as it is");
+    assert_ne!(images[0], images[1], "--normalize spotify moved nothing");
+}
+
+fn temp_path(name: &str) -> PathBuf {
+    common::output_dir().join("cli").join(name)
 }
 
 /// A minimal .npy file (format 1.0) holding `values` as `descr` with the given shape text.

@@ -18,6 +18,7 @@ from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.messages import one_line
+from loudscape_extract.normalization import NORMALIZE_CHOICES
 from loudscape_extract.notices import warning_lines
 from loudscape_extract.ply import read_ply_metadata
 from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES, MAX_FLOOR_DB
@@ -26,8 +27,10 @@ from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
 from loudscape_extract.timeline import (
     DEFAULT_MAX_POINTS,
+    DEFAULT_Y_MEASURE,
     DEFAULT_Z_MEASURE,
     MIN_FRAMES_PER_SONG,
+    Y_MEASURES,
     Z_MEASURES,
     build_timeline,
     default_cache_dir,
@@ -141,7 +144,8 @@ def build_parser() -> argparse.ArgumentParser:
         "timeline",
         help="many songs -> one chronological cloud (one point per sampled frame)",
         description="Many songs -> one point cloud ordered by year: x song position (by year "
-        "or by order), y frame RMS level (-60..0 dBFS), z the dynamics of the 3 s around each "
+        "or by order), y the frame's loudness (-60..0 LUFS, BS.1770 momentary by default; see "
+        "--y-measure), z the dynamics of the 3 s around each "
         "frame (PSR by default; see --z-measure; 1st-99th percentile over all songs), scalar "
         "A-weighted frame level, hp frame hp ratio. Years, titles and artists come from tags "
         "(mutagen) or from --manifest.",
@@ -160,6 +164,14 @@ def build_parser() -> argparse.ArgumentParser:
         default="year",
         help="x proportional to the year (default) or each song an equal span in order "
         "(songs without a year then come last instead of being left out)",
+    )
+    timeline.add_argument(
+        "--y-measure",
+        choices=Y_MEASURES,
+        default=DEFAULT_Y_MEASURE,
+        help="y axis: momentary (BS.1770 loudness of the 400 ms around the frame, LUFS; "
+        "default), short-term (of the 3 s around it), rms (the paper's unweighted frame RMS, "
+        "dBFS) or a-weighted (the frame's A-weighted level)",
     )
     timeline.add_argument(
         "--z-measure",
@@ -241,6 +253,13 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("input", help="timeline PLY written by the timeline command")
     report.add_argument("-o", "--output", default="report.png", help="PNG file to write (.png)")
     report.add_argument("--csv", help="also write the per-year table as CSV (.csv)")
+    report.add_argument(
+        "--normalize",
+        choices=NORMALIZE_CHOICES,
+        default="none",
+        help="also draw each song and year as heard after this playback normalization "
+        "(streaming services, broadcast; docs/DYNAMICS.md)",
+    )
 
     for sub in (song, timeline):
         sub.add_argument(
@@ -361,6 +380,7 @@ def run_timeline(args: argparse.Namespace, *, tty: bool, json_progress=None) -> 
             jobs=args.jobs,
             strict=args.strict,
             z_measure=args.z_measure,
+            y_measure=args.y_measure,
             highpass_hz=HIGHPASS_HZ if args.highpass else None,
             progress=progress,
             max_points=args.max_points,
@@ -425,7 +445,7 @@ def _say_cloud_warnings(path: str) -> None:
 
 def run_report(args: argparse.Namespace) -> int:
     """The report subcommand: PNG (and CSV), then ``wrote ...`` summaries."""
-    rows = write_report(args.input, args.output, csv_path=args.csv)
+    rows = write_report(args.input, args.output, csv_path=args.csv, normalize=args.normalize)
     _say_cloud_warnings(args.input)
     if not args.quiet:
         songs = sum(row["songs"] for row in rows)

@@ -27,6 +27,7 @@ from loudscape_extract.errors import ExtractError
 from loudscape_extract.hpss import hp_ratio, hpss_masks
 from loudscape_extract.loudness import (
     loudness_from_energy,
+    momentary_per_frame,
     sample_peak_dbfs,
     segment_energy,
     true_peak_dbtp,
@@ -79,6 +80,9 @@ class FrameFeatures:
         PSR, 3 s crest factor and short-term loudness of the 3 s window centred on the frame
         (:mod:`loudscape_extract.dynamics`); NaN where not measurable. Empty arrays when
         built by :func:`frame_features` alone.
+    momentary_lufs : np.ndarray [shape=(n_frames,)]
+        BS.1770 momentary loudness of the 400 ms block centred on the frame
+        (:func:`~loudscape_extract.loudness.momentary_per_frame`); NaN where not measurable.
     """
 
     times_s: np.ndarray
@@ -91,6 +95,7 @@ class FrameFeatures:
     psr_db: np.ndarray = field(default_factory=lambda: np.zeros(0))
     crest_3s_db: np.ndarray = field(default_factory=lambda: np.zeros(0))
     short_term_lufs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    momentary_lufs: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 @dataclass(frozen=True)
@@ -345,6 +350,9 @@ def track_features(
         psr_db=np.where(frames.silent, np.nan, per_frame(dynamics.psr_db)),
         crest_3s_db=np.where(frames.silent, np.nan, per_frame(dynamics.crest_3s_db)),
         short_term_lufs=np.where(frames.silent, np.nan, per_frame(dynamics.short_term_lufs)),
+        momentary_lufs=np.where(
+            frames.silent, np.nan, momentary_per_frame(frames.times_s, *energy)
+        ),
     )
     # Loudness, LRA and PLR of the DC-free (and high-passed) signal; the peaks of the file as
     # decoded, as any meter reads them.

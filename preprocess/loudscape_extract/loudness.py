@@ -24,6 +24,7 @@ __all__ = [
     "loudness_from_energy",
     "loudness_metrics",
     "loudness_range",
+    "momentary_per_frame",
     "interpolator_taps",
     "sample_peak_dbfs",
     "segment_energy",
@@ -334,6 +335,35 @@ def true_peak_dbtp(
             best = max(best, float(upsampled.max()))
     best = max(best, float(np.abs(samples).max()) if n_samples else 0.0)
     return 20.0 * math.log10(best) if best > 0 else None
+
+
+def momentary_per_frame(
+    times_s: np.ndarray, energy: np.ndarray, boundaries: np.ndarray
+) -> np.ndarray:
+    """BS.1770 momentary loudness (400 ms, four 100 ms segments) centred on each time.
+
+    The block whose centre is nearest ``t`` starts at segment ``round((t - 0.2 s) / 0.1 s)``,
+    clamped to the track, so its centre is within 50 ms of ``t`` (away from the ends); it is
+    the value libebur128 reports as momentary loudness once the block's last segment is fed.
+
+    Parameters
+    ----------
+    times_s : np.ndarray [shape=(n_times,)]
+    energy, boundaries : np.ndarray
+        :func:`segment_energy`'s output.
+
+    Returns
+    -------
+    loudness : np.ndarray [shape=(n_times,)]
+        LUFS; NaN when the track is shorter than one block or the block is digital silence.
+    """
+    blocks = _blocks(np.asarray(energy), np.asarray(boundaries), 4)
+    times_s = np.asarray(times_s, dtype=np.float64)
+    if blocks.shape[0] == 0:
+        return np.full(times_s.shape, np.nan)
+    index = np.clip(np.round((times_s - 0.2) / _SEGMENT_S).astype(np.int64), 0, blocks.shape[0] - 1)
+    values = blocks[index]
+    return np.where(np.isfinite(values), values, np.nan)
 
 
 def loudness_from_energy(

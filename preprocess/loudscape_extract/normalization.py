@@ -17,7 +17,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["SERVICES", "Service", "normalization_gain", "streaming_gains"]
+__all__ = [
+    "BROADCAST",
+    "NORMALIZE_CHOICES",
+    "PRESETS",
+    "SERVICES",
+    "Service",
+    "normalization_gain",
+    "preset_gain",
+    "streaming_gains",
+]
 
 
 @dataclass(frozen=True)
@@ -50,6 +59,17 @@ SERVICES = (
     Service("youtube", "YouTube", -14.0, "never"),
     Service("aes_td1008", "AES TD1008 (track)", -16.0, "peak", -1.0),
 )
+
+#: Broadcast loudness standards: programmes are brought to the target both ways, the true
+#: peak kept under the standard's ceiling by a limiter (modelled as ``"free"`` turn-up).
+BROADCAST = (
+    Service("ebu_r128", "EBU R 128 (broadcast)", -23.0, "free"),
+    Service("atsc_a85", "ATSC A/85 (broadcast)", -24.0, "free"),
+)
+#: Every normalization preset by key (``--normalize``): the services, then broadcast.
+PRESETS = {service.key: service for service in SERVICES + BROADCAST}
+#: ``--normalize`` choices: ``none`` (the files as they are) and :data:`PRESETS`.
+NORMALIZE_CHOICES = ("none", *PRESETS)
 
 
 def normalization_gain(
@@ -87,3 +107,33 @@ def streaming_gains(metrics: dict) -> dict[str, float | None]:
         s.key: normalization_gain(s, integrated_lufs=integrated, true_peak_dbtp=peak)
         for s in SERVICES
     }
+
+
+def preset_gain(preset: str, metrics: dict) -> float | None:
+    """The gain in dB a ``--normalize`` preset applies to a song (0 for ``"none"``).
+
+    Parameters
+    ----------
+    preset : str
+        One of :data:`NORMALIZE_CHOICES`.
+    metrics : dict
+        With ``integrated_lufs`` and ``true_peak_dbtp``.
+
+    Returns
+    -------
+    gain_db : float or None
+        None when the song's loudness (or, for a peak-limited turn-up, its true peak) is
+        unknown.
+
+    Raises
+    ------
+    KeyError
+        An unknown preset.
+    """
+    if preset == "none":
+        return 0.0
+    return normalization_gain(
+        PRESETS[preset],
+        integrated_lufs=metrics.get("integrated_lufs"),
+        true_peak_dbtp=metrics.get("true_peak_dbtp"),
+    )

@@ -5,6 +5,10 @@ Reads only the file's metadata (:func:`read_ply_metadata`): each song's ``year``
 where years are missing, never drawn across them):
 
 - integrated loudness (LUFS), with the loudness targets of streaming services and broadcast;
+  with ``normalize`` a preset (``--normalize``), also each song and the year's median as heard
+  after that preset's playback gain (docs/DYNAMICS.md, "Streaming normalization");
+- the penalty: per year, the median number of dB each service and standard takes off
+  (negative: turns up);
 - PLR (true peak minus integrated loudness) and the TT DR value (dB);
 - PSR (median over the song of true peak minus short-term loudness, 3 s), with the 5th-95th
   percentile band of the year's songs only where a year has at least five songs;
@@ -23,7 +27,13 @@ import numpy as np
 
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.messages import shorten
-from loudscape_extract.normalization import SERVICES, streaming_gains
+from loudscape_extract.normalization import (
+    NORMALIZE_CHOICES,
+    PRESETS,
+    SERVICES,
+    preset_gain,
+    streaming_gains,
+)
 from loudscape_extract.paths import atomic_output, check_output_path, check_regular_input
 from loudscape_extract.ply import read_ply_metadata
 
@@ -70,28 +80,38 @@ REPORT_COLUMNS = (
     "crest_p95_db",
     "lra_lu_median",
     "hp_mean_median",
-)
+    "normalize",
+    "heard_integrated_lufs_median",
+) + tuple(f"{key}_penalty_db_median" for key in PRESETS)
 SONG_COLUMNS = (
-    "year",
-    "artist",
-    "title",
-    "path",
-    "integrated_lufs",
-    "lra_lu",
-    "sample_peak_dbfs",
-    "true_peak_dbtp",
-    "plr_db",
-    "dr_db",
-    "psr_median_db",
-    "psr_p10_db",
-    "psr_p90_db",
-    "psr_spread_db",
-    "crest_3s_median_db",
-    "crest_median_db",
-    "crest_p95_db",
-    "dc_offset",
-    "hp_mean",
-) + tuple(f"{service.key}_gain_db" for service in SERVICES)
+    (
+        "year",
+        "artist",
+        "title",
+        "path",
+        "integrated_lufs",
+        "lra_lu",
+        "sample_peak_dbfs",
+        "true_peak_dbtp",
+        "plr_db",
+        "dr_db",
+        "psr_median_db",
+        "psr_p10_db",
+        "psr_p90_db",
+        "psr_spread_db",
+        "crest_3s_median_db",
+        "crest_median_db",
+        "crest_p95_db",
+        "dc_offset",
+        "hp_mean",
+    )
+    + tuple(f"{service.key}_gain_db" for service in SERVICES)
+    + ("normalize", "heard_integrated_lufs")
+)
+
+
+#: The per-song columns read from the song's metrics as they are.
+METRIC_COLUMNS = SONG_COLUMNS[4 : SONG_COLUMNS.index("hp_mean") + 1]
 
 
 def _values(songs, key):
@@ -108,11 +128,21 @@ def _band(values, q):
     return float(np.percentile(values, q)) if values.size >= BAND_MIN_SONGS else None
 
 
-def per_year(metadata: dict) -> list[dict]:
+def heard_lufs(metrics: dict, normalize: str) -> float | None:
+    """A song's integrated loudness as heard after the ``normalize`` preset's gain."""
+    integrated = metrics.get("integrated_lufs")
+    gain = preset_gain(normalize, metrics)
+    return None if integrated is None or gain is None else integrated + gain
+
+
+def per_year(metadata: dict, *, normalize: str = "none") -> list[dict]:
     """One row per year that has songs (ascending), with the columns of :data:`REPORT_COLUMNS`.
 
     Percentiles are None for years with fewer than :data:`BAND_MIN_SONGS` songs. Songs
-    without a year (a timeline laid out by order) are left out.
+    without a year (a timeline laid out by order) are left out. ``<preset>_penalty_db_median``
+    is the median over the year's songs of the dB the preset takes off (``-gain``: negative
+    where it turns songs up); ``heard_integrated_lufs_median`` the median loudness after the
+    ``normalize`` preset's gain (None for ``"none"``).
     """
     songs = [s for s in metadata.get("songs") or [] if s.get("year") is not None]
     rows = []
@@ -128,7 +158,18 @@ def per_year(metadata: dict) -> list[dict]:
             crest_median_db=_stat(crest, np.median),
             crest_p5_db=_band(crest, 5.0),
             crest_p95_db=_band(crest, 95.0),
+            normalize=normalize,
         )
+        if normalize != "none":
+            heard = [heard_lufs(song["metrics"], normalize) for song in group]
+            row["heard_integrated_lufs_median"] = _stat(
+                np.array([h for h in heard if h is not None], dtype=float), np.median
+            )
+        for key in PRESETS:
+            taken = [preset_gain(key, song["metrics"]) for song in group]
+            row[f"{key}_penalty_db_median"] = _stat(
+                -np.array([t for t in taken if t is not None], dtype=float), np.median
+            )
         rows.append({column: row.get(column) for column in REPORT_COLUMNS})
     return rows
 
@@ -166,17 +207,20 @@ def _checked_songs(metadata, path: str) -> list[dict]:
     return checked
 
 
-def per_song(metadata: dict) -> list[dict]:
-    """One row per song, in the file's order, with the columns of :data:`SONG_COLUMNS`."""
+def per_song(metadata: dict, *, normalize: str = "none") -> list[dict]:
+    """One row per song, in the file's order, with the columns of :data:`SONG_COLUMNS`
+    (``heard_integrated_lufs``: after the ``normalize`` preset's gain)."""
     rows = []
     for song in metadata.get("songs") or []:
         metrics = song.get("metrics") or {}
         row = {k: song.get(k, "") for k in ("year", "artist", "title", "path")}
-        row.update({k: metrics.get(k) for k in SONG_COLUMNS[4:] if not k.endswith("_gain_db")})
+        row.update({k: metrics.get(k) for k in SONG_COLUMNS[4:] if k in METRIC_COLUMNS})
         gains = streaming_gains(metrics)
         row.update(
             {f"{key}_gain_db": None if g is None else round(g, 2) for key, g in gains.items()}
         )
+        row["normalize"] = normalize
+        row["heard_integrated_lufs"] = heard_lufs(metrics, normalize)
         rows.append(row)
     return rows
 
@@ -204,17 +248,24 @@ def _write_csv(path, columns, rows):
             )
 
 
-def write_report(path: str, output: str, *, csv_path: str | None = None) -> list[dict]:
+def write_report(
+    path: str, output: str, *, csv_path: str | None = None, normalize: str = "none"
+) -> list[dict]:
     """Plot the per-year metrics of the timeline at ``path`` into ``output`` (PNG).
 
     With ``csv_path``, also the per-year table there and the per-song table beside it
-    (:func:`songs_csv_path`).
+    (:func:`songs_csv_path`). ``normalize`` (one of :data:`NORMALIZE_CHOICES`) adds the
+    loudness as heard after that preset's playback gain.
 
     Raises
     ------
     ExtractError
         Not a readable PLY, not a timeline, no songs, or an output directory that is missing.
     """
+    if normalize not in NORMALIZE_CHOICES:
+        raise ExtractError(
+            f"--normalize must be one of {', '.join(NORMALIZE_CHOICES)}, got {normalize!r}"
+        )
     check_regular_input(path)
     check_output_path(output, inputs=[path], extensions=(".png",))
     if csv_path:
@@ -228,15 +279,19 @@ def write_report(path: str, output: str, *, csv_path: str | None = None) -> list
             extensions=(".csv",),
             flag="--csv",
         )
-    rows = per_year({"songs": songs})
+    rows = per_year({"songs": songs}, normalize=normalize)
     dated = [s for s in songs if s.get("year") is not None]
     if not dated:
         raise ExtractError("no song of the timeline has a year: nothing to plot by year", path=path)
     with atomic_output(output) as temporary:
-        _plot(rows, dated, temporary, title=os.path.basename(path))
+        _plot(rows, dated, temporary, title=os.path.basename(path), normalize=normalize)
     if csv_path:
         _write_csv(csv_path, REPORT_COLUMNS, rows)
-        _write_csv(songs_csv_path(csv_path), SONG_COLUMNS, per_song({"songs": songs}))
+        _write_csv(
+            songs_csv_path(csv_path),
+            SONG_COLUMNS,
+            per_song({"songs": songs}, normalize=normalize),
+        )
     return rows
 
 
@@ -309,20 +364,62 @@ def _song_panel(ax, songs, rows, key, column, *, color, label, band=None):
     ax.set_ylabel(label)
 
 
-def _plot(rows, songs, output, *, title):
+def _heard_panel(ax, songs, rows, normalize):
+    """The songs and the year's median as heard after ``normalize``'s gain, over the files'."""
+    name = PRESETS[normalize].name
+    present = [(s["year"], heard_lufs(s["metrics"], normalize)) for s in songs]
+    present = [(y, h) for y, h in present if h is not None]
+    ax.scatter(
+        [y for y, _ in present],
+        [h for _, h in present],
+        s=14,
+        facecolors="none",
+        edgecolors="C9",
+        label=f"songs as heard on {name}",
+        zorder=2,
+    )
+    years, values = _by_year(rows, "heard_integrated_lufs_median")
+    ax.plot(years, values, "s-", color="C9", label=f"median as heard on {name}", zorder=3)
+
+
+def _penalty_panel(ax, rows, normalize):
+    """Per year, the median dB each preset takes off (negative: turns up)."""
+    for i, (key, service) in enumerate(PRESETS.items()):
+        years, values = _by_year(rows, f"{key}_penalty_db_median")
+        chosen = key == normalize
+        ax.plot(
+            years,
+            values,
+            "o-" if chosen else ".-",
+            color=f"C{i}",
+            linewidth=2.2 if chosen else 1.0,
+            label=service.name,
+            zorder=3 if chosen else 2,
+        )
+    ax.axhline(0.0, color="0.35", linewidth=0.8)
+    ax.set_ylabel("penalty (dB taken off,\nmedian of the year)")
+    ax.legend(loc="upper left", fontsize=7, ncol=2)
+
+
+def _plot(rows, songs, output, *, title, normalize="none"):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(7, 1, figsize=(10, 19), sharex=True, constrained_layout=True)
-    fig.suptitle(f"Loudness and dynamics by year - {title} ({len(songs)} songs)", fontsize=13)
+    fig, axes = plt.subplots(8, 1, figsize=(10, 21.5), sharex=True, constrained_layout=True)
+    heard = "" if normalize == "none" else f", as heard on {PRESETS[normalize].name}"
+    fig.suptitle(
+        f"Loudness and dynamics by year - {title} ({len(songs)} songs){heard}", fontsize=13
+    )
 
     ax = axes[0]
     _song_panel(
         ax, songs, rows, "integrated_lufs", "integrated_lufs_median", color="C3",
-        label="integrated loudness\n(LUFS)",
+        label="integrated loudness\n(BS.1770, LUFS)",
     )  # fmt: skip
+    if normalize != "none":
+        _heard_panel(ax, songs, rows, normalize)
     for level, text in STREAMING_TARGETS_LUFS:
         ax.axhline(level, color="0.35", linewidth=0.8, linestyle="--", zorder=1)
         ax.annotate(
@@ -335,6 +432,8 @@ def _plot(rows, songs, output, *, title):
             color="0.3",
         )
     ax.legend(loc="lower right", fontsize=8)
+    _penalty_panel(axes[1], rows, normalize)
+    axes = axes[1:]
     _song_panel(
         axes[1], songs, rows, "plr_db", "plr_db_median", color="C1",
         label="PLR (dB)\ntrue peak - integrated",
@@ -362,7 +461,7 @@ def _plot(rows, songs, output, *, title):
     counts.set_ylabel("songs per year")
     counts.axhline(BAND_MIN_SONGS, color="C0", linewidth=0.8, linestyle=":")
     counts.set_xlabel("year")
-    for ax in axes:
+    for ax in fig.axes:
         ax.grid(True, alpha=0.3)
     try:
         fig.savefig(output, dpi=100, format="png")  # OSError: atomic_output names the file

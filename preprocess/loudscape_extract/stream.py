@@ -68,6 +68,7 @@ from loudscape_extract.loudness import (
     interpolator_taps,
     k_weighting_sos,
     loudness_from_energy,
+    momentary_per_frame,
 )
 from loudscape_extract.notices import ClipRuns, cancel_notice, clip_notice
 from loudscape_extract.spectrogram import (
@@ -734,6 +735,9 @@ def stream_track(
         psr_db=per_frame(dynamics.psr_db),
         crest_3s_db=per_frame(dynamics.crest_3s_db),
         short_term_lufs=per_frame(dynamics.short_term_lufs),
+        momentary_lufs=np.where(
+            silent, np.nan, momentary_per_frame(times, stats.energy, stats.boundaries)
+        ),
     )
     integrated, lra = loudness_from_energy(stats.energy, stats.boundaries)
     clean_peak = 20.0 * math.log10(dynamics.true_peak) if dynamics.true_peak > 0 else None

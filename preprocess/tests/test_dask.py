@@ -90,7 +90,16 @@ def test_cache_entry_round_trip_and_damage(tmp_path):
     series = {
         name: np.arange(n, dtype=np.float32) + i
         for i, name in enumerate(
-            ("rms_dbfs", "crest_db", "loudness_a_db", "hp_mean", "psr_db", "crest_3s_db")
+            (
+                "rms_dbfs",
+                "crest_db",
+                "loudness_a_db",
+                "hp_mean",
+                "psr_db",
+                "crest_3s_db",
+                "momentary_lufs",
+                "short_term_lufs",
+            )
         )
     }
     series["psr_db"][2] = np.nan

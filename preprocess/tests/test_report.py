@@ -82,6 +82,30 @@ def test_report_png_and_csv(tmp_path, capsys):
     assert "dr_db" in per_song[0] and "psr_median_db" in per_song[0]
 
 
+def test_report_as_heard_after_normalization(tmp_path, capsys):
+    path = tmp_path / "t.ply"
+    songs = [song(1975, -16.0, 9.0), song(2005, -7.0, 4.0), song(2005, -6.0, 3.0)]
+    for s in songs:
+        s["metrics"]["true_peak_dbtp"] = -0.5
+    timeline_file(path, songs)
+    png, table = tmp_path / "r.png", tmp_path / "r.csv"
+    args = ["report", str(path), "-o", str(png), "--csv", str(table), "--normalize", "youtube"]
+    assert main(args) == 0
+    with open(table) as handle:
+        rows = list(csv.DictReader(handle))
+    assert rows[0]["normalize"] == "youtube"
+    assert float(rows[0]["heard_integrated_lufs_median"]) == -16.0  # never turned up
+    assert float(rows[1]["heard_integrated_lufs_median"]) == -14.0
+    assert float(rows[1]["youtube_penalty_db_median"]) == 7.5
+    with open(songs_csv_path(str(table))) as handle:
+        heard = [float(r["heard_integrated_lufs"]) for r in csv.DictReader(handle)]
+    assert heard == [-16.0, -14.0, -14.0]
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        main(["report", str(path), "-o", str(png), "--normalize", "tidal"])
+    assert "tidal" in capsys.readouterr().err
+
+
 def test_report_bad_inputs(tmp_path, capsys):
     song_mode = tmp_path / "song.ply"
     write_ply(song_mode, points=np.zeros((1, 5)), metadata={"mode": "song"})

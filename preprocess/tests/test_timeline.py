@@ -117,6 +117,8 @@ def fake_song(n, *, rms=-20.0, crest=10.0):
         metrics={"integrated_lufs": -14.0, "hp_mean": 0.25},
         psr_db=np.full(n, crest + 1.0, np.float32),
         crest_3s_db=np.full(n, crest + 2.0, np.float32),
+        momentary_lufs=np.full(n, rms - 2.0, np.float32),
+        short_term_lufs=np.full(n, rms - 3.0, np.float32),
     )
 
 
@@ -155,10 +157,17 @@ def test_layout_order_spans_and_axes():
     assert (x_axis["min"], x_axis["max"], x_axis["unit"]) == (1980, 2002, "year")
     assert [t["label"] for t in x_axis["ticks"]] == ["1980", "1990", "2000"]
     assert x_axis["ticks"][0]["at"] == -1.0
-    # y: absolute dBFS scale, clamped; z: 1st-99th percentiles over the drawn frames.
+    # y: momentary loudness on an absolute -60 .. 0 scale, clamped; z: 1st-99th percentiles
+    # over the drawn frames.
     d = points[20:40]
     assert np.all(d[:, 1] == -1.0)
-    assert np.allclose(points[:20, 1], 2 * (-20 + 60) / 60 - 1)
+    assert np.allclose(points[:20, 1], 2 * (-22 + 60) / 60 - 1)
+    assert layout["axes"]["y"]["unit"] == "LUFS" and layout["axes"]["y"]["measure"] == "momentary"
+    for measure, level in (("short-term", -23.0), ("rms", -20.0), ("a-weighted", -30.0)):
+        other, _ = timeline_points(
+            entries, songs, frames_per_song=20, z_measure="crest-frame", y_measure=measure
+        )
+        assert np.allclose(other[:20, 1], 2 * (level + 60) / 60 - 1), measure
     z_axis = layout["axes"]["z"]
     all_crest = np.concatenate(
         [songs[p].crest_db[sample_frames(songs[p].crest_db.shape[0], 20)] for p in "adbc"]

@@ -66,6 +66,11 @@ pub struct RenderArgs {
     pub measure: String,
     #[command(flatten)]
     pub volume: VolumeArgs,
+    /// A timeline as heard after playback normalization: each song's y shifted by the gain the
+    /// preset applies (none, spotify, spotify_loud, spotify_quiet, youtube, aes_td1008,
+    /// ebu_r128, atsc_a85; docs/DYNAMICS.md).
+    #[arg(long, default_value = "none")]
+    pub normalize: String,
     /// The PNG file to write (.png; not the input).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -268,7 +273,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     settings.surface.iso_value = iso_value;
     args.volume.apply(&mut settings)?;
     args.colours.apply(&mut settings)?;
+    let preset =
+        loudscape::ui::normalize::parse_preset(&args.normalize).map_err(anyhow::Error::msg)?;
     let mut cloud = load_cloud(&args.input)?;
+    if let Some(preset) = preset {
+        cloud =
+            loudscape::ui::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)?;
+    }
     settings.points.size_px = args
         .point_size
         .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));

@@ -56,6 +56,8 @@ pub struct WindowOptions {
     /// Keys to press once the data is shown (`?`, `Ctrl+S`; for tests: they go through the
     /// same key handling as real keys).
     pub press: Vec<String>,
+    /// The "level as heard" preset to show a timeline with (a key of `normalize::PRESETS`).
+    pub normalize: Option<&'static str>,
 }
 
 /// Opens the window and runs until it closes.
@@ -170,6 +172,7 @@ impl LoudscapeApp {
                 ..Default::default()
             },
             scripted_presses: options.press,
+            heard: crate::ui::normalize::Heard::starting(options.normalize),
             freq_axis: Default::default(),
             compare: None,
             pending_seek: options.seek,
@@ -470,6 +473,7 @@ impl eframe::App for LoudscapeApp {
         }
         let before = self.shown_state();
         self.poll_loading(&ctx, frame);
+        self.apply_heard(frame);
         self.apply_freq_axis(frame);
         self.poll_compare(&ctx, frame);
         self.fetch_grid(frame);

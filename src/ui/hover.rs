@@ -165,6 +165,9 @@ impl LoudscapeApp {
                     value: song_title(song),
                 },
             );
+            if let Some((name, value)) = crate::ui::normalize::gain_reading(song) {
+                hover.readings.insert(1, Reading { name, value });
+            }
         }
         self.hover = Some((key, hover));
     }

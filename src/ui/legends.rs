@@ -434,9 +434,10 @@ pub fn paint_diverging(
     paint_key_text(painter, strip, title, &ticks, background);
 }
 
-/// How the y axis of `mode` is titled in pictures, with its reference: a timeline's y is the
-/// frame's RMS level in dBFS; a song's is each bin's level in dB re a full-scale sine (see
-/// docs/FORMAT.md). Other titles pass through.
+/// How the y axis of `mode` is titled in pictures, with its reference: an older timeline's
+/// "level" in dB is the frame's RMS level in dBFS (newer ones name their measure and unit,
+/// e.g. LUFS, and pass through); a song's is each STFT bin's level in dB re a full-scale sine
+/// (see docs/FORMAT.md). Other titles pass through.
 pub fn titled_with_reference(mode: DataMode, axis: usize, unit: &str, title: String) -> String {
     if axis != 1 || unit != "dB" {
         return title;
@@ -447,6 +448,7 @@ pub fn titled_with_reference(mode: DataMode, axis: usize, unit: &str, title: Str
         DataMode::Generic => return title,
     };
     match title.strip_suffix(" (dB)") {
+        Some("level") if mode == DataMode::Song => format!("bin level ({reference})"),
         Some(name) => format!("{name} ({reference})"),
         None => title,
     }
@@ -473,11 +475,16 @@ mod picture_tests {
         );
         assert_eq!(
             titled_with_reference(DataMode::Song, 1, "dB", "level (dB)".into()),
-            "level (dB re FS sine)"
+            "bin level (dB re FS sine)"
         );
         assert_eq!(
             titled_with_reference(DataMode::Timeline, 2, "dB", "PSR (dB)".into()),
             "PSR (dB)"
+        );
+        let loudness = "momentary loudness (BS.1770, 400 ms) (LUFS)";
+        assert_eq!(
+            titled_with_reference(DataMode::Timeline, 1, "LUFS", loudness.into()),
+            loudness
         );
     }
 }

@@ -22,6 +22,7 @@ mod hover;
 mod iso_sweep;
 pub mod labels;
 pub mod legends;
+pub mod normalize;
 mod open;
 mod panels;
 mod persistence;

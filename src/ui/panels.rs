@@ -126,6 +126,7 @@ impl LoudscapeApp {
         self.screenshot_controls(ui);
 
         if self.active == Slot::Timeline {
+            self.heard_choice(ui);
             self.timeline_song(ui);
         }
 
@@ -286,6 +287,9 @@ impl LoudscapeApp {
             return;
         };
         ui.label(RichText::new(song_title(song)).strong());
+        if let Some((name, gain)) = crate::ui::normalize::gain_reading(song) {
+            ui.label(RichText::new(format!("{name}: {gain}")).small());
+        }
         for line in song
             .metrics
             .as_ref()

@@ -17,10 +17,12 @@ from loudscape_extract.timeline.inputs import collect_entries
 from loudscape_extract.timeline.layout import (
     CREST_PERCENTILES,
     DEFAULT_MAX_POINTS,
+    DEFAULT_Y_MEASURE,
     DEFAULT_Z_MEASURE,
     LEVEL_MAX_DBFS,
     LEVEL_MIN_DBFS,
     X_BY,
+    Y_MEASURES,
     Z_MEASURES,
     frames_per_song_for,
     timeline_points,
@@ -60,6 +62,7 @@ def build_timeline(
     jobs: int = 1,
     strict: bool = False,
     z_measure: str = DEFAULT_Z_MEASURE,
+    y_measure: str = DEFAULT_Y_MEASURE,
     highpass_hz: float | None = None,
     progress: Callable[[int, int, str], None] | None = None,
     max_points: int | None = DEFAULT_MAX_POINTS,
@@ -73,7 +76,8 @@ def build_timeline(
     corrupt song is used as far as it decodes, with a warning in its ``songs[i]["warnings"]``
     and the top-level ``warnings`` of the metadata (``strict``: it fails instead). The output
     is checked first: it must end with .ply and be none of the inputs (the songs, the
-    manifest). ``z_measure`` is one of :data:`Z_MEASURES`;
+    manifest). ``z_measure`` is one of :data:`Z_MEASURES`, ``y_measure`` one of
+    :data:`Y_MEASURES`;
     ``highpass_hz`` high-pass filters each song before its dynamics (see
     :func:`track_features`).
 
@@ -92,6 +96,8 @@ def build_timeline(
         raise ExtractError(f"--x-by must be one of {', '.join(X_BY)}, got {x_by!r}")
     if z_measure not in Z_MEASURES:
         raise ExtractError(f"--z-measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
+    if y_measure not in Y_MEASURES:
+        raise ExtractError(f"--y-measure must be one of {', '.join(Y_MEASURES)}, got {y_measure!r}")
     check_output_path(output)
     entries, without_year, tag_failures, notes = collect_entries(
         inputs, manifest=manifest, need_year=x_by == "year"
@@ -128,7 +134,12 @@ def build_timeline(
             f"none of the {len(failed)} song(s) could be extracted (first: {first[0]}: {first[1]})"
         )
     points, layout = timeline_points(
-        good, songs, frames_per_song=drawn_per_song, x_by=x_by, z_measure=z_measure
+        good,
+        songs,
+        frames_per_song=drawn_per_song,
+        x_by=x_by,
+        z_measure=z_measure,
+        y_measure=y_measure,
     )
     dc_offsets = [
         (s["path"], s["metrics"]["dc_offset"])
@@ -151,6 +162,7 @@ def build_timeline(
             "hop_length": hop_length,
             "level_range_dbfs": [LEVEL_MIN_DBFS, LEVEL_MAX_DBFS],
             "crest_percentiles": list(CREST_PERCENTILES),
+            "y_measure": y_measure,
             "z_measure": z_measure,
             "z_percentiles": list(CREST_PERCENTILES),
             "dc_removed": True,

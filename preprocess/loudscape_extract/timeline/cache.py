@@ -34,7 +34,7 @@ __all__ = [
 ]
 
 #: Bump when what is cached (or how it is computed) changes: old entries are then ignored.
-CACHE_VERSION = 5
+CACHE_VERSION = 6
 #: Temporaries are named ``ENTRY.HOST.UNIQUE.PID`` + this; see :func:`remove_temporaries`.
 TEMPORARY_SUFFIX = ".tmp"
 
@@ -65,7 +65,16 @@ def cache_key(path: str, *, n_fft: int, hop_length: int, highpass_hz: float | No
 #: The first line: this, the sha256 of everything after the line in hex, a newline.
 _MAGIC = b"loudscape-frames 2 "
 _OLD_MAGIC = b"loudscape-frames "
-_SERIES = ("rms_dbfs", "crest_db", "loudness_a_db", "hp_mean", "psr_db", "crest_3s_db")
+_SERIES = (
+    "rms_dbfs",
+    "crest_db",
+    "loudness_a_db",
+    "hp_mean",
+    "psr_db",
+    "crest_3s_db",
+    "momentary_lufs",
+    "short_term_lufs",
+)
 #: What each series may hold: (lowest, highest, NaN allowed). Ranges are wide (a float file
 #: may be +60 dBFS, a frame of one tiny sample -900 dB); they catch garbage, not odd music.
 #: A series not listed here (a new one) gets the default: NaN or a finite |value| <= 1e4.
@@ -76,6 +85,9 @@ _SERIES_RANGES = {
     "hp_mean": (0.0, 1.0, True),
     "psr_db": (-50.0, 200.0, True),  # NaN: the 3 s window is under the gate
     "crest_3s_db": (-0.01, 200.0, True),
+    # BS.1770 loudness of the 400 ms / 3 s block around each frame; NaN where unmeasurable.
+    "momentary_lufs": (-1000.0, 100.0, True),
+    "short_term_lufs": (-1000.0, 100.0, True),
 }
 _DEFAULT_RANGE = (-1e4, 1e4, True)
 #: Metrics every entry carries (the ones the timeline shows); each a finite number or null.
@@ -101,6 +113,8 @@ def save_entry(path: str, song: SongFrames) -> None:
     os.makedirs(directory, exist_ok=True)
     n = int(song.rms_dbfs.shape[0])
     series = [np.asarray(getattr(song, name), dtype="<f4") for name in _SERIES]
+    # the loudness series of a song built without them (empty) are stored as unknown (NaN)
+    series = [np.full(n, np.nan, "<f4") if s.shape == (0,) else s for s in series]
     if any(s.shape != (n,) for s in series):
         raise ValueError(f"series of unequal lengths {[s.shape for s in series]}")
     head = {

@@ -21,6 +21,9 @@ class SongFrames:
     rms_dbfs, crest_db, loudness_a_db, hp_mean, psr_db, crest_3s_db : np.ndarray [shape=(n_frames,)]
         :class:`FrameFeatures` series restricted to the non-silent frames, in time order
         (``psr_db`` and ``crest_3s_db`` of the 3 s window centred on each frame).
+    momentary_lufs, short_term_lufs : np.ndarray [shape=(n_frames,)]
+        BS.1770 loudness of the 400 ms block and of the 3 s window centred on each frame
+        (the timeline's y measures ``momentary`` and ``short-term``); NaN where not measurable.
     n_frames_total : int
         All STFT frames, silent ones included.
     metrics : dict
@@ -42,6 +45,8 @@ class SongFrames:
     psr_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     crest_3s_db: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     signal: tuple = ()
+    momentary_lufs: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
+    short_term_lufs: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
 
 
 def compute_song_frames(
@@ -81,4 +86,13 @@ def frames_of(features: TrackFeatures | StreamedTrack, *, warning: str = "") -> 
         psr_db=frames.psr_db[keep].astype(np.float32),
         crest_3s_db=frames.crest_3s_db[keep].astype(np.float32),
         signal=tuple(getattr(features, "signal", ())),
+        momentary_lufs=_series(frames.momentary_lufs, keep),
+        short_term_lufs=_series(frames.short_term_lufs, keep),
     )
+
+
+def _series(values: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """``values[keep]`` as float32, all NaN when the series was not computed (empty)."""
+    if values.shape[0] != keep.shape[0]:
+        return np.full(int(keep.sum()), np.nan, np.float32)
+    return values[keep].astype(np.float32)

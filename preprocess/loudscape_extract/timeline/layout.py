@@ -10,7 +10,7 @@ import numpy as np
 
 from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.format import axis, hp_axis, level_axis, scalar_axis
+from loudscape_extract.format import axis, hp_axis, scalar_axis
 from loudscape_extract.notices import track_warnings
 from loudscape_extract.timeline.frames import SongFrames
 from loudscape_extract.timeline.inputs import SongEntry
@@ -26,7 +26,10 @@ __all__ = [
     "LEVEL_MIN_DBFS",
     "METRIC_KEYS",
     "SCALAR_FLOOR_DB",
+    "DEFAULT_Y_MEASURE",
     "DEFAULT_Z_MEASURE",
+    "Y_MEASURES",
+    "y_axis",
     "X_BY",
     "Z_MEASURES",
     "percentile_map",
@@ -52,6 +55,24 @@ _Z_LABELS = {
     "psr": "PSR (true peak - short-term loudness, 3 s)",
     "crest-3s": "crest factor (3 s)",
     "crest-frame": "crest factor (frame)",
+}
+#: The y axis: BS.1770 momentary loudness of the 400 ms block centred on the frame (default),
+#: short-term loudness of the 3 s window, the paper's unweighted frame RMS, or the frame's
+#: A-weighted level (docs/DYNAMICS.md, "The level axis").
+Y_MEASURES = ("momentary", "short-term", "rms", "a-weighted")
+DEFAULT_Y_MEASURE = "momentary"
+_Y_SERIES = {
+    "momentary": "momentary_lufs",
+    "short-term": "short_term_lufs",
+    "rms": "rms_dbfs",
+    "a-weighted": "loudness_a_db",
+}
+#: (label, unit) of each y measure: the axis names the measure and its reference.
+Y_LABELS = {
+    "momentary": ("momentary loudness (BS.1770, 400 ms)", "LUFS"),
+    "short-term": ("short-term loudness (BS.1770, 3 s)", "LUFS"),
+    "rms": ("RMS level (frame)", "dBFS"),
+    "a-weighted": ("A-weighted level (frame, re full-scale sine)", "dB"),
 }
 METRIC_KEYS = (
     "integrated_lufs",
@@ -102,6 +123,9 @@ class SampledSong:
     ----------
     rms_dbfs, measure, loudness_a_db, hp_mean : np.ndarray [shape=(n_drawn,)]
         The drawn frames' series; ``measure`` is the chosen z measure's.
+    momentary_lufs, short_term_lufs : np.ndarray [shape=(n_drawn,)]
+        The drawn frames' loudness (the y measures besides ``rms_dbfs`` and
+        ``loudness_a_db``).
     neutral : float or None
         Median of the z measure over all the song's non-silent frames (frames without a value
         take it); None when no frame has one.
@@ -124,6 +148,15 @@ class SampledSong:
     metrics: dict
     warning: str = ""
     warnings: list = field(default_factory=list)
+    momentary_lufs: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
+    short_term_lufs: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
+
+    def level(self, y_measure: str) -> np.ndarray:
+        """The drawn frames' y measure (one of :data:`Y_MEASURES`), NaN where unknown."""
+        values = getattr(self, _Y_SERIES[y_measure])
+        if values.shape != self.rms_dbfs.shape:  # a series the song was computed without
+            return np.full(self.rms_dbfs.shape, np.nan, np.float32)
+        return values
 
 
 def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> SampledSong:
@@ -146,7 +179,16 @@ def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> Sa
         warnings=track_warnings(
             decode_warning=song.warning, metrics=song.metrics, signal=song.signal
         ),
+        momentary_lufs=_drawn(song.momentary_lufs, index, song.rms_dbfs.shape[0]),
+        short_term_lufs=_drawn(song.short_term_lufs, index, song.rms_dbfs.shape[0]),
     )
+
+
+def _drawn(values: np.ndarray, index: np.ndarray, n: int) -> np.ndarray:
+    """``values[index]``, or NaN when the series is missing (a song built without it)."""
+    if values.shape[0] != n:
+        return np.full(index.shape, np.nan, np.float32)
+    return values[index]
 
 
 def sample_frames(n_frames: int, count: int) -> np.ndarray:
@@ -234,6 +276,12 @@ def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
     return axis("year", "year", first, last if last > first else last + 1, ticks=ticks)
 
 
+def y_axis(y_measure: str) -> dict:
+    """The y axis object of ``y_measure``: its label and unit, -60 .. 0, and ``measure``."""
+    label, unit = Y_LABELS[y_measure]
+    return {**axis(label, unit, LEVEL_MIN_DBFS, LEVEL_MAX_DBFS), "measure": y_measure}
+
+
 def _scalar_range(levels: Sequence[np.ndarray]) -> tuple[float, float]:
     """[-100, 0] dB, widened to whole dB so that no drawn frame's level is clipped."""
     values = np.concatenate([np.asarray(v, dtype=np.float64) for v in levels]) if levels else []
@@ -258,12 +306,14 @@ def timeline_points(
     frames_per_song: int,
     x_by: str = "year",
     z_measure: str = DEFAULT_Z_MEASURE,
+    y_measure: str = DEFAULT_Y_MEASURE,
 ) -> tuple[np.ndarray, dict]:
     """Points and the ``axes`` / ``songs`` metadata for songs that all have features.
 
     ``songs`` holds each song's :class:`SongFrames` (sampled here) or its
     :class:`SampledSong` (sampled already, with the same ``frames_per_song`` and
-    ``z_measure``, where the song was computed).
+    ``z_measure``, where the song was computed). ``y_measure`` (:data:`Y_MEASURES`) is the
+    frame level drawn on y, on the same -60 .. 0 scale whatever its unit.
 
     Returns
     -------
@@ -275,6 +325,8 @@ def timeline_points(
         raise ExtractError(f"x_by must be one of {', '.join(X_BY)}, got {x_by!r}")
     if z_measure not in Z_MEASURES:
         raise ExtractError(f"z_measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
+    if y_measure not in Y_MEASURES:
+        raise ExtractError(f"y_measure must be one of {', '.join(Y_MEASURES)}, got {y_measure!r}")
     if x_by == "year" and any(e.year is None for e in entries):
         raise ExtractError("x_by='year' needs a year for every song")
     entries = sort_entries(entries)
@@ -299,9 +351,10 @@ def timeline_points(
         song = drawn[entry.path]
         m = song.rms_dbfs.shape[0]
         x = x_min + (x_max - x_min) * (np.arange(m) + 0.5) / max(m, 1)
-        rms = np.nan_to_num(song.rms_dbfs.astype(np.float64), nan=-200.0, neginf=-200.0)
+        level = song.level(y_measure).astype(np.float64)
+        level = np.nan_to_num(level, nan=-200.0, neginf=-200.0)
         y = np.clip(
-            2.0 * (rms - LEVEL_MIN_DBFS) / (LEVEL_MAX_DBFS - LEVEL_MIN_DBFS) - 1.0, -1.0, 1.0
+            2.0 * (level - LEVEL_MIN_DBFS) / (LEVEL_MAX_DBFS - LEVEL_MIN_DBFS) - 1.0, -1.0, 1.0
         )
         # A frame without a value (a 3 s window under -70 LUFS) takes the song's median.
         neutral = crest_low if song.neutral is None else song.neutral
@@ -332,7 +385,7 @@ def timeline_points(
     points = np.concatenate(blocks).astype(np.float32) if blocks else np.zeros((0, 5), np.float32)
     axes = {
         "x": x_axis(entries, spans, x_by),
-        "y": level_axis(LEVEL_MIN_DBFS, LEVEL_MAX_DBFS),
+        "y": y_axis(y_measure),
         "z": {
             **axis(
                 _Z_LABELS[z_measure],

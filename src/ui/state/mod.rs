@@ -124,6 +124,8 @@ pub(super) struct LoudscapeApp {
     pub(super) strip: crate::ui::strip::LoudnessStrip,
     /// Key presses a scripted run (`--press`, tests) still has to make (`shortcuts.rs`).
     pub(super) scripted_presses: Vec<String>,
+    /// Timeline mode's "level as heard" choice (`normalize.rs`).
+    pub(super) heard: crate::ui::normalize::Heard,
 }
 
 /// Which of the two data slots.
