@@ -131,7 +131,7 @@ pub fn run_lines(
     if done && error.is_none() {
         return Ok(());
     }
-    Err(error.unwrap_or_else(|| last_words(&stderr_text, status)))
+    Err(error.unwrap_or_else(|| last_words(&stderr_text.tail, status)))
 }
 
 /// The songs under `inputs` with their tags (`timeline --list-songs`).
