@@ -492,6 +492,11 @@ impl MetaParts {
             ));
         }
         self.parts = index;
+        // Grown by an eighth at a time, not doubled: at most 12.5 % unused (large blocks are
+        // remapped, not copied, when they grow).
+        if self.text.capacity() - self.text.len() < chunk.len() {
+            self.text.reserve_exact(self.text.len() / 8 + chunk.len());
+        }
         self.text.push_str(chunk);
         Ok(())
     }

@@ -285,7 +285,7 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
 
 /// The metadata's JSON values may take at most this many times the size of its text, plus
 /// [`META_BASE_BYTES`] (docs/FORMAT.md, "Header size").
-pub const MAX_META_FACTOR: u64 = 4;
+pub const MAX_META_FACTOR: u64 = 6;
 /// Room any metadata has, whatever its shape (a short song's loudness curves are small numbers).
 pub const META_BASE_BYTES: u64 = 16 << 20;
 
