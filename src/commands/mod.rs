@@ -80,3 +80,33 @@ pub fn write_error(path: &Path, error: anyhow::Error) -> anyhow::Error {
     }
     error.context(format!("{}: cannot write", path.display()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A full disk reads as such, however it was reported: ENOSPC, a short write, or the PNG
+    /// encoder's I/O error (which used to read "cannot write file (N requested and M written)").
+    #[test]
+    fn a_full_disk_is_one_plain_line_naming_the_file() {
+        let path = Path::new("out/x.png");
+        for error in [
+            anyhow::Error::from(std::io::Error::from(std::io::ErrorKind::StorageFull)),
+            anyhow::Error::from(std::io::Error::new(
+                std::io::ErrorKind::WriteZero,
+                "cannot write file (868970 requested and 785814 written)",
+            )),
+            anyhow::Error::from(image::ImageError::IoError(std::io::Error::from(
+                std::io::ErrorKind::StorageFull,
+            ))),
+        ] {
+            let text = format!("{:#}", write_error(path, error));
+            assert_eq!(text, "out/x.png: cannot write: no space left on the device");
+        }
+        let other = write_error(path, anyhow::anyhow!("permission denied"));
+        assert_eq!(
+            format!("{other:#}"),
+            "out/x.png: cannot write: permission denied"
+        );
+    }
+}
