@@ -314,3 +314,39 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
     );
     assert!(ply.is_file());
 }
+
+/// A song cut at half its length: the real extractor warns, and `render` says so, on the first
+/// run and from the cache (before, it printed only `wrote x.png`).
+#[test]
+fn render_of_a_truncated_song_says_so_fresh_and_cached() {
+    let dir = fresh_dir("open_audio_truncated");
+    let (whole, song, cache) = (
+        dir.join("whole.wav"),
+        dir.join("cut.wav"),
+        dir.join("cache"),
+    );
+    write_song(&whole, 4.0);
+    let bytes = std::fs::read(&whole).unwrap();
+    std::fs::write(&song, &bytes[..bytes.len() / 2]).unwrap();
+    let png = dir.join("cut.png");
+    let args = [
+        "render".as_ref(),
+        song.as_os_str(),
+        "--size".as_ref(),
+        "160x120".as_ref(),
+        "-o".as_ref(),
+        png.as_os_str(),
+    ];
+    for run in ["fresh", "cached"] {
+        let output = loudscape(&args, &cache, &extractor());
+        let err = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{run}: {err}");
+        let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning: ")).collect();
+        assert_eq!(warnings.len(), 1, "{run}: {err}");
+        assert!(
+            warnings[0].starts_with(&format!("warning: {}: ", song.display()))
+                && warnings[0].contains("of the 4.00 s"),
+            "{run}: {err}"
+        );
+    }
+}
