@@ -66,17 +66,23 @@ test-mesh: system venv
 	$(CARGO) test --no-run -q
 	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
 
-# The PLY loader, its metadata parser and the axes/read-outs fuzzed (examples/fuzz_ply.rs):
-# a few seconds in `make test` in the overflow-checked debug build the tests already built (a
-# release build only for this would double CI's compile time); `make fuzz N=5000000` runs
-# millions of inputs in release. Crashing inputs are saved under fuzz-crashes/.
-FUZZ_SECONDS ?= 6
+# The fuzzers (docs/RELIABILITY.md): examples/fuzz_ply.rs mutates PLY bytes against the loader,
+# its metadata parser and the axes/read-outs; examples/fuzz_formats.rs builds version-2
+# metadata parts, streams of unknown length, .npy arrays and their .json descriptions from
+# their structure. Each input has a memory and time limit (an amplification is a finding).
+# `make test` runs a few seconds of each in the overflow-checked debug build the tests already
+# built (a release build only for this would double CI's compile time); `make fuzz N=5000000`
+# runs N inputs of each in release. Findings are saved under fuzz-crashes/.
+FUZZ_SECONDS ?= 3
 N ?= 1000000
 fuzz-smoke:
 	$(CARGO) run -q --example fuzz_ply -- --seconds $(FUZZ_SECONDS)
+	$(CARGO) run -q --example fuzz_formats -- --seconds $(FUZZ_SECONDS)
 
+# fuzz-py: the Python fuzzers (added with the extractor's side)
 fuzz:
 	$(CARGO) run -q --release --example fuzz_ply -- --inputs $(N)
+	$(CARGO) run -q --release --example fuzz_formats -- --inputs $(N)
 
 # The Python readers of untrusted files (manifest parser, PLY readers) fuzzed with hypothesis,
 # each input under a time and memory limit (preprocess/tests/fuzz_py.py); a few seconds of it

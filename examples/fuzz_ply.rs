@@ -14,10 +14,12 @@
 //! satisfy the format's invariants (docs/FORMAT.md): finite coordinates, x, y, z in [-1, 1] and
 //! scalar, hp in [0, 1] (with the reader's rounding slack), bounds that hold every point, axes
 //! that map values; and its axes' ticks, labels and read-outs must come out without a panic and
-//! in range. A broken invariant counts as a crash too.
+//! in range. A broken invariant counts as a crash too, and so does an amplification: an input
+//! that takes more memory than 32 MiB plus 64 bytes per input byte, or more than 2 s (10 s in the
+//! debug build), while it loads and is checked (examples/fuzz_common/mod.rs).
 //!
 //! Run: `cargo run --release --example fuzz_ply -- [--inputs N | --seconds S] [--seed K]`
-//! (`make fuzz N=...`; `make test` runs a few seconds of it in release and in a debug build with
+//! (`make fuzz N=...` in release; `make test` runs a few seconds of it in the debug build, with
 //! overflow checks). Exit status 1 when anything crashed.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -34,30 +36,13 @@ use serde_json::Value;
 /// harness, reported as usual.
 static IN_LOAD: AtomicBool = AtomicBool::new(false);
 
-/// xorshift64*: small, fast and reproducible from `--seed`.
-struct Rng(u64);
+#[path = "fuzz_common/mod.rs"]
+mod fuzz_common;
+use fuzz_common::{Counting, Limits, Rng};
 
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        if n == 0 {
-            0
-        } else {
-            (self.next() % n as u64) as usize
-        }
-    }
-    fn chance(&mut self, one_in: usize) -> bool {
-        self.below(one_in) == 0
-    }
-    fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
-        &items[self.below(items.len())]
-    }
-}
+/// Every allocation counted: an input's peak memory is checked against [`Limits`].
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
 
 struct Options {
     inputs: Option<u64>,
@@ -543,6 +528,7 @@ fn main() {
         }
     }));
     let mut rng = Rng(options.seed);
+    let limits = Limits::default_for_build();
     let mut tally = Tally::default();
     let start = Instant::now();
     let deadline = options.seconds.map(|s| start + Duration::from_secs_f64(s));
@@ -560,10 +546,16 @@ fn main() {
         }
         tally.run += 1;
         IN_LOAD.store(true, Ordering::Relaxed);
+        let watch = limits.start();
         let outcome = catch_unwind(AssertUnwindSafe(|| {
             cloud::load_from_bytes(&input, path).map(|cloud| check_cloud(&cloud))
         }));
         IN_LOAD.store(false, Ordering::Relaxed);
+        if let Err(why) = watch.check(&limits, input.len()) {
+            save_crash(&options.crashes, &input, &why, &tally);
+            tally.crashes += 1;
+            continue;
+        }
         match outcome {
             Ok(Ok(Ok(()))) => tally.accepted += 1,
             Ok(Err(rejected)) => {

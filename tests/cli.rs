@@ -270,3 +270,92 @@ fn mesh_reads_npy_fields_and_rejects_bad_ones() {
         assert!(!out.exists(), "{name}: an output file was written");
     }
 }
+
+/// `voxelize` writes the array and its description together or not at all (a long name whose
+/// temporary would pass 255 bytes included), and `mesh` refuses a description that is not of
+/// the array beside it (before: a 96^3 array beside a 64^3 description was meshed in silence).
+#[test]
+fn voxelize_pairs_appear_together_and_mesh_checks_them() {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let cloud = repo.join("data/fixture_song.ply");
+    let dir = common::output_dir().join("cli_pairs");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let long = dir.join(format!("{}.npy", "g".repeat(243)));
+    let output = loudscape(&[
+        "voxelize",
+        cloud.to_str().unwrap(),
+        "--res",
+        "64",
+        "-o",
+        long.to_str().unwrap(),
+    ]);
+    assert_success(&output);
+    let sidecar = PathBuf::from(format!("{}.json", long.display()));
+    assert!(long.is_file() && sidecar.is_file());
+    let names = |dir: &PathBuf| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect()
+    };
+    assert_eq!(names(&dir).len(), 2, "no temporaries: {:?}", names(&dir));
+
+    // The description cannot be put in place (a folder has its name): no array either.
+    let blocked = dir.join("blocked.npy");
+    std::fs::create_dir_all(dir.join("blocked.npy.json").join("x")).unwrap();
+    let output = loudscape(&[
+        "voxelize",
+        cloud.to_str().unwrap(),
+        "--res",
+        "64",
+        "-o",
+        blocked.to_str().unwrap(),
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    assert_eq!(
+        stderr_lines(&output).len(),
+        1,
+        "{:?}",
+        stderr_lines(&output)
+    );
+    assert!(
+        !blocked.exists(),
+        "the array was left without its description"
+    );
+    assert_eq!(names(&dir).len(), 3, "{:?}", names(&dir));
+
+    // A 16^3 array beside the 64^3 description, and one of another dtype: refused.
+    let n = 16usize;
+    let field = dir.join("mixed.npy");
+    std::fs::write(
+        &field,
+        npy_bytes("<f4", "(16, 16, 16)", &vec![0.5; n * n * n]),
+    )
+    .unwrap();
+    let mixed_sidecar = dir.join("mixed.npy.json");
+    std::fs::copy(&sidecar, &mixed_sidecar).unwrap();
+    let out = dir.join("mixed.obj");
+    let output = loudscape(&["mesh", field.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(1));
+    let lines = stderr_lines(&output);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(
+        lines[0].contains("mixed.npy.json")
+            && lines[0].contains("64x64x64")
+            && lines[0].contains("16x16x16"),
+        "{}",
+        lines[0]
+    );
+    assert!(!out.exists());
+    let mut meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&sidecar).unwrap()).unwrap();
+    meta["dims"] = serde_json::json!([16, 16, 16]);
+    meta["dtype"] = serde_json::json!("<f8");
+    std::fs::write(&mixed_sidecar, meta.to_string()).unwrap();
+    let output = loudscape(&["mesh", field.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let lines = stderr_lines(&output);
+    assert!(lines.len() == 1 && lines[0].contains("dtype"), "{lines:?}");
+    assert!(!out.exists());
+}

@@ -137,13 +137,14 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
     let cached = files_in(&cache);
     assert_eq!(
         cached.len(),
-        1,
-        "one cloud in the cache, nothing partial: {cached:?}"
+        2,
+        "one cloud and its checksum file in the cache, nothing partial: {cached:?}"
     );
     assert!(
         cached[0].ends_with(".ply") && cached[0].len() == 64 + 1 + 16 + 4,
         "{cached:?}"
     );
+    assert_eq!(cached[1], format!("{}.sum", cached[0]));
     let cloud_file = cache.join(&cached[0]);
     let written = std::fs::metadata(&cloud_file).unwrap().modified().unwrap();
     let image = image::open(&png).unwrap().to_rgba8();
@@ -249,14 +250,14 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
     assert!(
         matches!(result, Err(ExtractError::Cancelled { .. })),
         "not cancelled: {:?}",
-        result.map(|r| r.0)
+        result.map(|r| r.ply)
     );
     assert!(!stages.contains(&"write".to_string()), "{stages:?}");
     assert!(files_in(&cache).is_empty(), "{:?}", files_in(&cache));
 
     cancel.store(false, Ordering::Relaxed);
     let mut fractions = Vec::new();
-    let (ply, hit) = extract::cloud_for_audio_with(
+    let fresh = extract::cloud_for_audio_with(
         &song,
         &settings,
         &cache,
@@ -265,13 +266,15 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
         &mut |p: &Progress| fractions.push(p.fraction),
     )
     .expect("extract");
-    assert!(!hit && ply.is_file());
+    let ply = fresh.ply.expect("kept in the cache");
+    assert!(!fresh.hit && ply.is_file());
     assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
     let cloud = loudscape::data::cloud::load(&ply).unwrap();
     assert!(cloud.points.len() > 1000);
+    assert_eq!(fresh.cloud.points, cloud.points);
 
     let start = Instant::now();
-    let (again, hit) = extract::cloud_for_audio_with(
+    let again = extract::cloud_for_audio_with(
         &song,
         &settings,
         &cache,
@@ -286,7 +289,7 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
         &mut |_| {},
     )
     .expect("cached");
-    assert!(hit && again == ply);
+    assert!(again.hit && again.ply.as_ref() == Some(&ply));
     assert!(start.elapsed().as_secs_f32() < 1.0, "{:?}", start.elapsed());
 
     // A new extractor does not reuse the old one's cloud: it misses (and, not being there,
@@ -307,7 +310,43 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
     assert!(
         matches!(newer, Err(ExtractError::Failed { .. })),
         "a new extractor's version hit the old cloud: {:?}",
-        newer.map(|r| r.0)
+        newer.map(|r| r.ply)
     );
     assert!(ply.is_file());
+}
+
+/// A song cut at half its length: the real extractor warns, and `render` says so, on the first
+/// run and from the cache (before, it printed only `wrote x.png`).
+#[test]
+fn render_of_a_truncated_song_says_so_fresh_and_cached() {
+    let dir = fresh_dir("open_audio_truncated");
+    let (whole, song, cache) = (
+        dir.join("whole.wav"),
+        dir.join("cut.wav"),
+        dir.join("cache"),
+    );
+    write_song(&whole, 4.0);
+    let bytes = std::fs::read(&whole).unwrap();
+    std::fs::write(&song, &bytes[..bytes.len() / 2]).unwrap();
+    let png = dir.join("cut.png");
+    let args = [
+        "render".as_ref(),
+        song.as_os_str(),
+        "--size".as_ref(),
+        "160x120".as_ref(),
+        "-o".as_ref(),
+        png.as_os_str(),
+    ];
+    for run in ["fresh", "cached"] {
+        let output = loudscape(&args, &cache, &extractor());
+        let err = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{run}: {err}");
+        let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning: ")).collect();
+        assert_eq!(warnings.len(), 1, "{run}: {err}");
+        assert!(
+            warnings[0].starts_with(&format!("warning: {}: ", song.display()))
+                && warnings[0].contains("of the 4.00 s"),
+            "{run}: {err}"
+        );
+    }
 }

@@ -17,7 +17,15 @@ pub const DEMO_SONG: &str = "data/demo_song.ply";
 /// first, or found in the cloud cache. The error's own line already carries its cause (an OS
 /// error, say), so it goes on as one message, not as a chain that repeats it.
 pub fn load_cloud(path: &Path) -> anyhow::Result<PointCloud> {
-    loudscape::extract::open_for_command(path).map_err(|e| anyhow::anyhow!("{e}"))
+    let cloud = loudscape::extract::open_for_command(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    // An empty picture or grid with exit 0 would read as "the song is silent".
+    if cloud.is_empty() {
+        bail!(
+            "{}: the cloud holds no points (`element vertex 0`); there is nothing to draw",
+            path.display()
+        );
+    }
+    Ok(cloud)
 }
 
 /// The checks every output gets before any work: it is none of `inputs` (not even through a

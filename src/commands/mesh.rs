@@ -5,7 +5,6 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use glam::{UVec3, Vec3};
 use loudscape::data::cloud::PointCloud;
 use loudscape::data::field::Field;
 use loudscape::render::gpu::context::GpuContext;
@@ -165,6 +164,8 @@ pub fn read_field(path: &Path) -> anyhow::Result<Field> {
             npy.dims.z
         );
     }
+    // The description beside it must be of this array (dims, dtype, fields).
+    let (box_min, box_max) = super::npy::field_box(path, &npy)?;
     let mut fields = npy.fields.into_iter();
     let density = fields.next().expect("at least one field");
     let hp_mean = fields.next().unwrap_or_else(|| vec![0.5; density.len()]);
@@ -181,7 +182,6 @@ pub fn read_field(path: &Path) -> anyhow::Result<Field> {
             );
         }
     }
-    let (box_min, box_max) = field_box(path, npy.dims)?;
     Ok(Field {
         dims: npy.dims,
         box_min,
@@ -189,28 +189,6 @@ pub fn read_field(path: &Path) -> anyhow::Result<Field> {
         density,
         hp_mean,
     })
-}
-
-/// The box of a field: from `FIELD.npy.json` when there is one, else voxel units.
-fn field_box(path: &Path, dims: UVec3) -> anyhow::Result<(Vec3, Vec3)> {
-    let meta_path = PathBuf::from(format!("{}.json", path.display()));
-    if !meta_path.exists() {
-        return Ok((Vec3::splat(-0.5), dims.as_vec3() - 0.5));
-    }
-    let text = std::fs::read_to_string(&meta_path)
-        .with_context(|| format!("{}: cannot read", meta_path.display()))?;
-    let meta: serde_json::Value = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not JSON", meta_path.display()))?;
-    let corner = |key: &str| -> anyhow::Result<Vec3> {
-        let v: [f32; 3] = serde_json::from_value(meta[key].clone())
-            .with_context(|| format!("{}: '{key}' is not three numbers", meta_path.display()))?;
-        Ok(Vec3::from_array(v))
-    };
-    let (min, max) = (corner("box_min")?, corner("box_max")?);
-    if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
-        bail!("{}: the box is empty or not finite", meta_path.display());
-    }
-    Ok((min, max))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

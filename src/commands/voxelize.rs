@@ -84,32 +84,10 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}", args.input.display()))?;
     let density = grid.read_field(&gpu.device, &gpu.queue, &grid.density)?;
     let hp_mean = grid.read_field(&gpu.device, &gpu.queue, &grid.hp_mean)?;
-    let mut written = Vec::new();
-    match format {
-        Format::Npy => {
-            super::write_atomically(&args.output, |out| {
-                Ok(super::npy::write(out, &[&density, &hp_mean], grid.dims)?)
-            })?;
-            written.push(args.output.clone());
-        }
-        Format::Nrrd => {
-            let hp_path = hp_nrrd_path(&args.output);
-            let spacing = grid.voxel_size();
-            let origin = grid.box_min + spacing * 0.5;
-            for (path, field, what) in [
-                (&args.output, &density, "normalized loudness density"),
-                (&hp_path, &hp_mean, "mean hp (0 percussive, 1 harmonic)"),
-            ] {
-                super::write_atomically(path, |out| {
-                    write_nrrd(out, field, grid.dims, origin, spacing, what)
-                })?;
-                written.push(path.clone());
-            }
-        }
-    }
     let meta = serde_json::json!({
         "source": args.input.display().to_string(),
         "dims": [grid.dims.x, grid.dims.y, grid.dims.z],
+        "dtype": "<f4",
         "box_min": grid.box_min.to_array(),
         "box_max": grid.box_max.to_array(),
         "voxel_centre": "box_min + (index + 0.5) * (box_max - box_min) / dims",
@@ -124,11 +102,40 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
         "nonempty_voxels": stats.nonempty,
         "points": cloud.points.len(),
     });
-    super::write_atomically(&meta_path, |out| {
-        out.write_all(serde_json::to_string_pretty(&meta)?.as_bytes())?;
+    let meta_text = serde_json::to_string_pretty(&meta)?;
+    // The array(s) and the description appear together or not at all: all written and fsynced
+    // under temporary names, then renamed.
+    let written: Vec<PathBuf> = match format {
+        Format::Npy => vec![args.output.clone(), meta_path],
+        Format::Nrrd => vec![args.output.clone(), hp_nrrd_path(&args.output), meta_path],
+    };
+    let targets: Vec<&Path> = written.iter().map(PathBuf::as_path).collect();
+    let spacing = grid.voxel_size();
+    let origin = grid.box_min + spacing * 0.5;
+    loudscape::files::write_together(&targets, |i, out| -> anyhow::Result<()> {
+        match (format, i) {
+            (_, i) if i + 1 == targets.len() => out.write_all(meta_text.as_bytes())?,
+            (Format::Npy, _) => super::npy::write(out, &[&density, &hp_mean], grid.dims)?,
+            (Format::Nrrd, 0) => write_nrrd(
+                out,
+                &density,
+                grid.dims,
+                origin,
+                spacing,
+                "normalized loudness density",
+            )?,
+            (Format::Nrrd, _) => write_nrrd(
+                out,
+                &hp_mean,
+                grid.dims,
+                origin,
+                spacing,
+                "mean hp (0 percussive, 1 harmonic)",
+            )?,
+        }
         Ok(())
-    })?;
-    written.push(meta_path);
+    })
+    .map_err(|e| super::write_error(&args.output, e))?;
     let detail = format!(
         "{} points into {r}x{r}x{r}, {} voxels non-empty",
         cloud.points.len(),

@@ -230,7 +230,15 @@ impl Axis {
     /// ticks include the ends when those are round; log ticks lie strictly inside the axis.
     pub fn ticks(&self, max_count: usize) -> Vec<Tick> {
         if let Some(ticks) = &self.ticks {
-            return ticks.clone();
+            // Up to 100 as the file gives them; more (which no axis can show) thinned evenly to
+            // `max_count`, so a file's tick list cannot make every picture lay out a million
+            // labels.
+            let step = if ticks.len() > 100 {
+                ticks.len().div_ceil(max_count.max(1))
+            } else {
+                1
+            };
+            return ticks.iter().step_by(step).cloned().collect();
         }
         if max_count == 0 || self.problem().is_some() {
             return Vec::new();

@@ -361,6 +361,7 @@ mod tests {
             }),
             metrics: None,
             songs: Vec::new(),
+            warnings: Vec::new(),
             raw: serde_json::Value::Null,
         }
     }

@@ -5,4 +5,5 @@ pub mod cloud;
 pub mod compare;
 pub mod field;
 pub mod freq_axis;
+pub mod npy;
 pub mod synthetic;

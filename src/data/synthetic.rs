@@ -40,6 +40,7 @@ impl PointCloud {
                 stft: None,
                 metrics: None,
                 songs: Vec::new(),
+                warnings: Vec::new(),
                 raw: serde_json::Value::Null,
             },
         }

@@ -1,8 +1,12 @@
 //! The cloud cache: one PLY per (audio content, extraction settings), named by a SHA-256 of the
 //! audio's bytes and the settings, in `$LOUDSCAPE_CACHE_DIR`, else `$XDG_CACHE_HOME/loudscape/
 //! clouds`, else `~/.cache/loudscape/clouds` (beside the extractor's own timeline cache). A
-//! renamed or moved song still hits; an edited one misses. The extractor writes each file
-//! atomically, so a file in the cache is always whole. The file's name carries the extractor's
+//! renamed or moved song still hits; an edited one misses. Each cloud `NAME.ply` has a checksum
+//! file beside it, `NAME.ply.sum` (JSON: the cloud's SHA-256 and length, and the warnings the
+//! extractor printed): a cloud is used only when it matches it and loads ([`load_checked`]);
+//! anything else is extracted again and replaced. Both are written to a temporary name, fsynced
+//! and renamed, the cloud first ([`store`]). A cloud without a checksum file (written by an
+//! older loudscape) is used when it loads, and given one. The file's name carries the extractor's
 //! version too (`KEY-VERSIONHASH.ply`, `version.rs`): a new extractor writes new clouds instead
 //! of reusing an older one's; where no extractor can be found at all, the newest cloud of the
 //! song under these settings still opens (a cached song needs no Python).
@@ -11,9 +15,188 @@ use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
+use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::{ExtractError, Settings};
+use crate::data::cloud::{CloudWarning, PointCloud};
+use crate::files::{sync_parent, write_file_atomically};
+
+/// The checksum file of a cached cloud (`NAME.ply.sum`).
+pub fn sum_path(ply: &Path) -> PathBuf {
+    let mut name = ply.file_name().unwrap_or_default().to_os_string();
+    name.push(".sum");
+    ply.with_file_name(name)
+}
+
+/// What a checksum file holds.
+#[derive(Debug, Default, PartialEq, Serialize, Deserialize)]
+struct Sum {
+    /// SHA-256 of the cloud file, hex.
+    sha256: String,
+    /// The cloud file's length in bytes.
+    bytes: u64,
+    /// Warnings the extractor printed (without the audio's path) that its metadata may lack.
+    #[serde(default)]
+    said: Vec<String>,
+}
+
+/// Largest checksum file read (it holds a hash and a few warning lines).
+const MAX_SUM_BYTES: u64 = 1 << 20;
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A reader that hashes and counts what passes through it.
+struct Hashing<R> {
+    inner: R,
+    hasher: Sha256,
+    bytes: u64,
+}
+
+impl<R: Read> Read for Hashing<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.hasher.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+}
+
+/// Loads `ply` (a cloud file) while hashing it: the cloud and the SHA-256 and length of all the
+/// file's bytes.
+fn load_hashing(ply: &Path) -> Result<(PointCloud, String, u64), String> {
+    let file = File::open(ply).map_err(|e| format!("cannot open it: {e}"))?;
+    let len = file
+        .metadata()
+        .map_err(|e| format!("cannot read it: {e}"))?
+        .len();
+    let mut reader = Hashing {
+        inner: file,
+        hasher: Sha256::new(),
+        bytes: 0,
+    };
+    let cloud = crate::data::cloud::load_from_reader(&mut reader, ply, Some(len))
+        .map_err(|e| e.to_string())?;
+    std::io::copy(&mut reader, &mut std::io::sink()).map_err(|e| format!("cannot read it: {e}"))?;
+    let digest = hex(&reader.hasher.finalize());
+    Ok((cloud, digest, reader.bytes))
+}
+
+/// Adds the warnings the extractor printed to those of the cloud's metadata (each once).
+pub fn add_said(cloud: &mut PointCloud, said: &[String]) {
+    for message in said {
+        if !cloud.meta.warnings.iter().any(|w| &w.message == message) {
+            cloud.meta.warnings.push(CloudWarning {
+                kind: "extractor".into(),
+                message: message.clone(),
+                path: None,
+            });
+        }
+    }
+}
+
+/// Loads the cached cloud `ply` if it is whole: its checksum file matches its bytes (or there is
+/// none, from an older loudscape: it is written now, best effort) and the loader accepts it. The
+/// extractor's printed warnings recorded beside it are added to the cloud's.
+/// Errors: why it cannot be used (its bytes differ from its checksum, or it does not load).
+pub fn load_checked(ply: &Path) -> Result<PointCloud, String> {
+    let sum_file = sum_path(ply);
+    let recorded = match File::open(&sum_file) {
+        Ok(file) => {
+            let mut text = String::new();
+            file.take(MAX_SUM_BYTES)
+                .read_to_string(&mut text)
+                .map_err(|e| format!("its checksum file cannot be read: {e}"))?;
+            Some(
+                serde_json::from_str::<Sum>(&text)
+                    .map_err(|e| format!("its checksum file is damaged: {e}"))?,
+            )
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => {
+            return Err(format!("its checksum file cannot be read: {e}"));
+        }
+    };
+    let loaded = load_hashing(ply);
+    let Some(recorded) = recorded else {
+        let (cloud, sha256, bytes) = loaded?;
+        let _ = write_sum(ply, &sha256, bytes, &[]);
+        return Ok(cloud);
+    };
+    // The checksum speaks first: a damaged file is reported as such, whatever the loader says.
+    let (mut cloud, sha256, bytes) = match loaded {
+        Ok(done) => done,
+        Err(reason) => {
+            let actual = std::fs::metadata(ply).map(|m| m.len()).unwrap_or(0);
+            return Err(if actual != recorded.bytes {
+                format!(
+                    "{actual} bytes where its checksum file says {} ({reason})",
+                    recorded.bytes
+                )
+            } else {
+                reason
+            });
+        }
+    };
+    if bytes != recorded.bytes || sha256 != recorded.sha256 {
+        return Err(format!(
+            "its content does not match its checksum ({bytes} bytes, SHA-256 {}..., recorded {} \
+             bytes, {}...)",
+            &sha256[..12],
+            recorded.bytes,
+            recorded.sha256.get(..12).unwrap_or(&recorded.sha256)
+        ));
+    }
+    add_said(&mut cloud, &recorded.said);
+    Ok(cloud)
+}
+
+fn write_sum(ply: &Path, sha256: &str, bytes: u64, said: &[String]) -> std::io::Result<()> {
+    let sum = Sum {
+        sha256: sha256.to_string(),
+        bytes,
+        said: said.to_vec(),
+    };
+    let text = serde_json::to_string(&sum).map_err(std::io::Error::other)?;
+    write_file_atomically(&sum_path(ply), text.as_bytes())
+}
+
+/// Checks a freshly extracted cloud `partial` (it loads) and returns it with the extractor's
+/// printed warnings added; see [`store`] to keep it.
+pub fn load_fresh(partial: &Path, said: &[String]) -> Result<(PointCloud, String, u64), String> {
+    let (mut cloud, sha256, bytes) = load_hashing(partial)?;
+    add_said(&mut cloud, said);
+    Ok((cloud, sha256, bytes))
+}
+
+/// Moves a checked cloud `partial` (in a folder beside the cache, same file system) to `ply`
+/// with its checksum file: the cloud fsynced and renamed, then the checksum file written
+/// atomically, then the folder fsynced.
+pub fn store(
+    partial: &Path,
+    ply: &Path,
+    sha256: &str,
+    bytes: u64,
+    said: &[String],
+) -> std::io::Result<()> {
+    File::open(partial)?.sync_all()?;
+    // A stale checksum file must not vouch for the new cloud in between.
+    match std::fs::remove_file(sum_path(ply)) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e),
+        _ => {}
+    }
+    std::fs::rename(partial, ply)?;
+    sync_parent(ply);
+    write_sum(ply, sha256, bytes, said)
+}
+
+/// Removes a damaged cloud and its checksum file.
+pub fn remove(ply: &Path) {
+    let _ = std::fs::remove_file(ply);
+    let _ = std::fs::remove_file(sum_path(ply));
+}
 
 /// Bumped when what the key covers changes meaning (a new extractor output, say).
 const KEY_VERSION: &str = "loudscape-cloud-cache 2";

@@ -1,11 +1,13 @@
 //! Running the extractor: `loudscape-extract song AUDIO -o OUT --progress json` as a child
 //! process. Its stdout carries one JSON object a line (`{"stage", "fraction"}`, then `{"done"}`
-//! or `{"error"}`); stderr is kept for the reason when it fails without a JSON error. It writes
-//! to a temporary name beside the cache file, renamed into place only when it succeeded, so a
-//! cancelled or failed run (the child killed, its partial output removed) leaves nothing.
+//! or `{"error"}`); stderr is read as it comes, its tail kept for the reason when it fails
+//! without a JSON error and its `warning:` lines passed on (an extractor that only prints its
+//! warnings is still heard). It writes into a private folder the caller removes, so a cancelled,
+//! failed or interrupted run (the child killed, with its process group) leaves nothing.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
@@ -45,29 +47,11 @@ pub fn parse_line(text: &str) -> Line {
     }
 }
 
-/// Removes what a run may leave: the partial cloud and the extractor's atomic-write temporaries
-/// beside it (`.NAME.XXXX.tmp`).
-fn remove_partial(partial: &Path) {
-    let _ = std::fs::remove_file(partial);
-    let (Some(dir), Some(stem)) = (partial.parent(), partial.file_name()) else {
-        return;
-    };
-    let stem = stem.to_string_lossy().into_owned();
-    if let Ok(entries) = std::fs::read_dir(dir) {
-        for entry in entries.flatten() {
-            let name = entry.file_name().to_string_lossy().into_owned();
-            if name != stem && name.contains(&stem) {
-                let _ = std::fs::remove_file(entry.path());
-            }
-        }
-    }
-}
-
-/// Removes partial clouds older than a day beside `output`: left by a run whose app was killed
-/// before it could clean up (a live run's partial is minutes old at most).
-fn remove_stale_partials(output: &Path) {
-    let Some(dir) = output.parent() else { return };
-    let Ok(entries) = std::fs::read_dir(dir) else {
+/// Removes what runs of an app that was killed before it could clean up may have left beside
+/// `cache` more than a day ago (a live run's is minutes old at most): its private extraction
+/// folders (`.extract-PID-N`) and the partial clouds of older versions (`*.partial-PID.ply`).
+pub fn remove_stale_partials(cache: &Path) {
+    let Ok(entries) = std::fs::read_dir(cache) else {
         return;
     };
     for entry in entries.flatten() {
@@ -77,27 +61,39 @@ fn remove_stale_partials(output: &Path) {
             .ok()
             .and_then(|t| t.elapsed().ok())
             .is_some_and(|age| age > Duration::from_secs(24 * 3600));
-        if stale && entry.file_name().to_string_lossy().contains(".partial-") {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if stale && name.starts_with(SCRATCH_PREFIX) {
+            let _ = std::fs::remove_dir_all(entry.path());
+        } else if stale && name.contains(".partial-") {
             let _ = std::fs::remove_file(entry.path());
         }
     }
 }
 
-/// Runs `extractor` on `audio`, writing `output` when it succeeds; errors name the audio as
-/// `name`.
+/// The name of the private folder an extraction writes into (`.extract-PID-N`).
+pub const SCRATCH_PREFIX: &str = ".extract";
+
+/// A warning line of the extractor's stderr without the audio's path it starts with (the
+/// reader names the file itself), as one line.
+fn said(warning: &str, audio: &Path) -> String {
+    let prefix = format!("{}: ", audio.display());
+    let message = warning.strip_prefix(&prefix).unwrap_or(warning);
+    crate::data::cloud::one_line(message)
+}
+
+/// Runs `extractor` on `audio`, writing its cloud into `scratch` (a private folder: whatever the
+/// run leaves there goes with it); errors name the audio as `name`. Returns the cloud's path and
+/// the warnings the extractor printed on stderr (without the audio's path).
 pub fn run(
     extractor: &Path,
     audio: &Path,
     name: &Path,
-    output: &Path,
+    scratch: &Path,
     settings: &Settings,
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
-) -> Result<(), ExtractError> {
-    remove_stale_partials(output);
-    let mut partial_name = output.file_name().unwrap_or_default().to_os_string();
-    partial_name.push(format!(".partial-{}.ply", std::process::id()));
-    let partial: PathBuf = output.with_file_name(partial_name);
+) -> Result<(PathBuf, Vec<String>), ExtractError> {
+    let partial = scratch.join("cloud.ply");
     let failed = |reason: String| ExtractError::Failed {
         audio: name.to_owned(),
         reason,
@@ -117,7 +113,6 @@ pub fn run(
     loop {
         if cancel.load(Ordering::Relaxed) {
             child.kill();
-            remove_partial(&partial);
             return Err(ExtractError::Cancelled {
                 audio: name.to_owned(),
             });
@@ -133,19 +128,13 @@ pub fn run(
             Next::Closed => break,
         }
     }
-    let (status, stderr_text) = child.finish().map_err(|e| failed(e.to_string()))?;
+    let (status, stderr) = child.finish().map_err(|e| failed(e.to_string()))?;
     if status.success() && done && partial.is_file() {
-        return std::fs::rename(&partial, output).map_err(|e| {
-            remove_partial(&partial);
-            ExtractError::Io {
-                path: output.to_owned(),
-                reason: format!("cannot move the cloud into the cache: {e}"),
-            }
-        });
+        let warnings = stderr.warnings.iter().map(|w| said(w, audio)).collect();
+        return Ok((partial, warnings));
     }
-    remove_partial(&partial);
     Err(failed(
-        error.unwrap_or_else(|| last_words(&stderr_text, status)),
+        error.unwrap_or_else(|| last_words(&stderr.tail, status)),
     ))
 }
 
@@ -169,5 +158,15 @@ mod tests {
         );
         assert_eq!(parse_line("not json"), Line::Other);
         assert_eq!(parse_line(r#"{"stage": "x"}"#), Line::Other);
+    }
+
+    #[test]
+    fn printed_warnings_lose_the_audio_path_only() {
+        let audio = Path::new("/music/a.flac");
+        assert_eq!(
+            said("/music/a.flac: decoded 1.49 s of the 4.00 s", audio),
+            "decoded 1.49 s of the 4.00 s"
+        );
+        assert_eq!(said("other.flac: odd", audio), "other.flac: odd");
     }
 }

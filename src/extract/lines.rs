@@ -1,6 +1,8 @@
 //! An extractor child process read line by line: its stdout (the JSON progress protocol) comes
 //! through a channel that can be polled with a timeout, so the caller can check for a cancel
-//! between lines; its stderr is collected whole, for the error message when it fails.
+//! between lines; its stderr is read as it comes (a chatty child never blocks on a full pipe),
+//! keeping its last [`STDERR_TAIL_BYTES`] for the error message when it fails and every
+//! `warning:` line (at most [`MAX_WARNINGS`]) to pass on to the user.
 //! Shared by the song extraction (src/extract/child.rs) and the timeline runs
 //! (src/extract/timeline.rs).
 
@@ -14,6 +16,66 @@ use std::time::Duration;
 /// its cancel flag.
 const POLL: Duration = Duration::from_millis(50);
 
+/// How much of the end of the child's stderr is kept for the reason of a failure.
+pub const STDERR_TAIL_BYTES: usize = 64 * 1024;
+/// Most `warning:` lines kept from the child's stderr.
+pub const MAX_WARNINGS: usize = 100;
+
+/// What the child said on stderr: the tail of it, and its warnings.
+#[derive(Debug, Default)]
+pub struct Stderr {
+    /// The last [`STDERR_TAIL_BYTES`] or so, whole lines.
+    pub tail: String,
+    /// The text after `warning: ` of each line that has it (the extractor's prefix before it
+    /// dropped), in order, without repeats.
+    pub warnings: Vec<String>,
+}
+
+impl Stderr {
+    /// Reads `stream` to its end, a line at a time, keeping the tail and the warnings.
+    pub fn read_from(stream: impl Read) -> Stderr {
+        let mut out = Stderr::default();
+        let mut reader = BufReader::with_capacity(64 * 1024, stream);
+        let mut line = Vec::new();
+        loop {
+            line.clear();
+            // A line is cut at the tail's size, so one endless line cannot grow memory.
+            match (&mut reader)
+                .take(STDERR_TAIL_BYTES as u64)
+                .read_until(b'\n', &mut line)
+            {
+                Ok(0) | Err(_) => break,
+                Ok(_) => {}
+            }
+            let text = String::from_utf8_lossy(&line);
+            out.keep(&text);
+        }
+        out
+    }
+
+    fn keep(&mut self, line: &str) {
+        if let Some(at) = line.find("warning: ")
+            && self.warnings.len() < MAX_WARNINGS
+        {
+            let warning = line[at + "warning: ".len()..].trim().to_string();
+            if !warning.is_empty() && !self.warnings.contains(&warning) {
+                self.warnings.push(warning);
+            }
+        }
+        self.tail.push_str(line);
+        if !line.ends_with('\n') {
+            self.tail.push('\n');
+        }
+        if self.tail.len() > 2 * STDERR_TAIL_BYTES {
+            let mut cut = self.tail.len() - STDERR_TAIL_BYTES;
+            while !self.tail.is_char_boundary(cut) {
+                cut += 1;
+            }
+            self.tail.drain(..cut);
+        }
+    }
+}
+
 /// What [`LinedChild::next_line`] saw.
 pub enum Next {
     Line(String),
@@ -26,21 +88,24 @@ pub enum Next {
 /// A running child with its stdout read into a channel and its stderr into a string.
 pub struct LinedChild {
     child: Child,
+    /// Registered for the signal handler: the app's SIGINT/SIGTERM kills the child too.
+    _guard: crate::files::ChildGuard,
     lines: mpsc::Receiver<String>,
     reader: JoinHandle<()>,
-    errors: JoinHandle<String>,
+    errors: JoinHandle<Stderr>,
 }
 
 impl LinedChild {
-    /// Starts `command` with stdin closed and stdout and stderr piped.
+    /// Starts `command` with stdin closed and stdout and stderr piped, as the leader of its own
+    /// process group, killed with everything it started when the app is stopped by a signal.
     pub fn spawn(command: &mut Command) -> std::io::Result<Self> {
-        let mut child = command
+        let mut child = crate::files::own_process_group(command)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()?;
         let stdout = child.stdout.take().expect("stdout is piped");
-        let mut stderr = child.stderr.take().expect("stderr is piped");
+        let stderr = child.stderr.take().expect("stderr is piped");
         let (lines_in, lines) = mpsc::channel();
         let reader = std::thread::spawn(move || {
             for line in BufReader::new(stdout).lines() {
@@ -50,12 +115,9 @@ impl LinedChild {
                 }
             }
         });
-        let errors = std::thread::spawn(move || {
-            let mut text = String::new();
-            let _ = stderr.read_to_string(&mut text);
-            text
-        });
+        let errors = std::thread::spawn(move || Stderr::read_from(stderr));
         Ok(Self {
+            _guard: crate::files::ChildGuard::new(child.id()),
             child,
             lines,
             reader,
@@ -72,16 +134,17 @@ impl LinedChild {
         }
     }
 
-    /// Kills the child and waits for it and its reader threads.
+    /// Kills the child (and what it started) and waits for it and its reader threads.
     pub fn kill(mut self) {
+        crate::files::kill_process_group(self.child.id());
         let _ = self.child.kill();
         let _ = self.child.wait();
         let _ = self.reader.join();
         let _ = self.errors.join();
     }
 
-    /// Waits for the child to exit: its status and everything it wrote to stderr.
-    pub fn finish(mut self) -> std::io::Result<(ExitStatus, String)> {
+    /// Waits for the child to exit: its status and what it wrote to stderr.
+    pub fn finish(mut self) -> std::io::Result<(ExitStatus, Stderr)> {
         let status = self.child.wait()?;
         let _ = self.reader.join();
         let stderr = self.errors.join().unwrap_or_default();
@@ -125,7 +188,7 @@ mod tests {
         assert_eq!(seen, ["one", "two"]);
         let (status, stderr) = child.finish().unwrap();
         assert_eq!(status.code(), Some(3));
-        assert_eq!(last_words(&stderr, status), "bad.wav: silent");
+        assert_eq!(last_words(&stderr.tail, status), "bad.wav: silent");
     }
 
     #[test]
@@ -133,7 +196,41 @@ mod tests {
         let mut command = Command::new("sh");
         command.args(["-c", "exit 2"]);
         let (status, stderr) = LinedChild::spawn(&mut command).unwrap().finish().unwrap();
-        assert!(last_words(&stderr, status).contains("said nothing"));
+        assert!(last_words(&stderr.tail, status).contains("said nothing"));
+    }
+
+    /// A child that writes megabytes to stderr before its first stdout line (more than any pipe
+    /// holds) is not blocked, its warnings come through, and the tail kept stays bounded.
+    #[test]
+    fn a_chatty_stderr_neither_blocks_nor_grows() {
+        let mut command = Command::new("sh");
+        command.args([
+            "-c",
+            "echo 'loudscape-extract: warning: a.flac: decoded 1.49 s of 4.00 s' >&2; \
+             yes 'noise noise noise noise noise noise noise noise' | head -c 8000000 >&2; \
+             echo 'loudscape-extract: warning: a.flac: decoded 1.49 s of 4.00 s' >&2; \
+             echo done; echo 'last words' >&2",
+        ]);
+        let child = LinedChild::spawn(&mut command).unwrap();
+        let start = std::time::Instant::now();
+        let mut seen = Vec::new();
+        loop {
+            match child.next_line() {
+                Next::Line(line) => seen.push(line),
+                Next::Waiting => assert!(start.elapsed().as_secs() < 60, "blocked"),
+                Next::Closed => break,
+            }
+        }
+        assert_eq!(seen, ["done"]);
+        let (status, stderr) = child.finish().unwrap();
+        assert!(status.success());
+        assert_eq!(stderr.warnings, ["a.flac: decoded 1.49 s of 4.00 s"]);
+        assert!(
+            stderr.tail.len() <= 2 * STDERR_TAIL_BYTES,
+            "{}",
+            stderr.tail.len()
+        );
+        assert_eq!(last_words(&stderr.tail, status), "last words");
     }
 
     #[test]

@@ -88,6 +88,9 @@ pub enum ExtractError {
     Io { path: PathBuf, reason: String },
     #[error("{audio}: the extractor failed: {reason}")]
     Failed { audio: PathBuf, reason: String },
+    /// The input is refused before it is read (a FIFO, a device); the reason names it.
+    #[error("{reason}")]
+    Refused { reason: String },
     #[error("{audio}: extraction cancelled")]
     Cancelled { audio: PathBuf },
     #[error(transparent)]
@@ -97,8 +100,9 @@ pub enum ExtractError {
 /// What [`open_any`] opened.
 pub struct Opened {
     pub cloud: PointCloud,
-    /// For audio: the cached cloud file and whether it was already there.
-    pub extracted: Option<(PathBuf, bool)>,
+    /// For audio: the cached cloud file (`None` when the cache could not keep it) and whether
+    /// it was already there.
+    pub extracted: Option<(Option<PathBuf>, bool)>,
 }
 
 /// True unless the file is a PLY: named `.ply` (a broken one gets the PLY reader's error, not
@@ -123,31 +127,43 @@ pub fn open_any(
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> Result<Opened, ExtractError> {
+    // Before anything opens it: a FIFO or a device would block or never end.
+    crate::files::check_regular(path).map_err(|reason| ExtractError::Refused { reason })?;
     if !is_audio(path) {
         return Ok(Opened {
             cloud: crate::data::cloud::load(path)?,
             extracted: None,
         });
     }
-    let (ply, hit) = cloud_for_audio(path, settings, cancel, on_progress)?;
-    let mut cloud = crate::data::cloud::load(&ply)?;
+    let song = cloud_for_audio(path, settings, cancel, on_progress)?;
+    let mut cloud = song.cloud;
     // The song names the cloud (panel, messages, what the window remembers: reopened through
     // the cache), not the cache file's hash.
     cloud.path = path.to_owned();
     Ok(Opened {
         cloud,
-        extracted: Some((ply, hit)),
+        extracted: Some((song.ply, song.hit)),
     })
 }
 
-/// The cached cloud of `audio` under `settings`, extracting it first when it is not cached.
-/// Returns its path and whether it came from the cache.
+/// The cloud of a song, checked, with where it is kept.
+pub struct SongCloud {
+    /// Loaded and checked; its warnings hold those the extractor only printed.
+    pub cloud: PointCloud,
+    /// The cache file; `None` when the cache folder cannot be written (the cloud was extracted
+    /// to a temporary folder, already removed).
+    pub ply: Option<PathBuf>,
+    /// Whether it came from the cache.
+    pub hit: bool,
+}
+
+/// The cloud of `audio` under `settings`, from the cache or extracted first.
 pub fn cloud_for_audio(
     audio: &Path,
     settings: &Settings,
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
-) -> Result<(PathBuf, bool), ExtractError> {
+) -> Result<SongCloud, ExtractError> {
     cloud_for_audio_with(
         audio,
         settings,
@@ -171,9 +187,42 @@ pub fn find_extractor(audio: &Path) -> Result<Extractor, ExtractError> {
     Ok(Extractor { path, version })
 }
 
+/// The cached cloud `ply` of `audio` if it is whole ([`cache::load_checked`]); a damaged one is
+/// removed, with one line saying so.
+fn cached(audio: &Path, ply: &Path) -> Option<PointCloud> {
+    match cache::load_checked(ply) {
+        Ok(cloud) => Some(cloud),
+        Err(reason) => {
+            eprintln!(
+                "loudscape: {}: the cached cloud {} is damaged ({}); extracting it again",
+                audio.display(),
+                ply.display(),
+                crate::data::cloud::one_line(&reason)
+            );
+            cache::remove(ply);
+            None
+        }
+    }
+}
+
+/// Says once per run that the cache folder cannot be written.
+fn cache_not_writable(dir: &Path, reason: &std::io::Error) {
+    static SAID: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    if !SAID.swap(true, std::sync::atomic::Ordering::Relaxed) {
+        eprintln!(
+            "loudscape: warning: {}: cannot write the cloud cache ({reason}); songs are \
+             extracted to a temporary folder and not kept",
+            dir.display()
+        );
+    }
+}
+
 /// [`cloud_for_audio`] with the cache folder given and the extractor found by `find` (its
 /// version names the cloud; it is run only on a cache miss, and where none is found the newest
-/// cloud of the song under these settings opens: a cached song opens without Python).
+/// cloud of the song under these settings opens: a cached song opens without Python). A cached
+/// cloud is used only when whole (checksum and loader); a damaged one is extracted again. When
+/// the cache folder cannot be written the song is extracted to a temporary folder, with one
+/// warning.
 pub fn cloud_for_audio_with(
     audio: &Path,
     settings: &Settings,
@@ -181,7 +230,7 @@ pub fn cloud_for_audio_with(
     find: impl FnOnce() -> Result<Extractor, ExtractError>,
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
-) -> Result<(PathBuf, bool), ExtractError> {
+) -> Result<SongCloud, ExtractError> {
     // The extractor gets the absolute path: it is recorded in the cloud for playback.
     let absolute = std::path::absolute(audio).unwrap_or_else(|_| audio.to_owned());
     on_progress(&Progress {
@@ -193,29 +242,79 @@ pub fn cloud_for_audio_with(
         Ok(extractor) => extractor,
         // No extractor to ask for its version: the newest cloud of the song still opens.
         Err(not_found) => {
-            return cache::newest_of_any_version(dir, &key)
-                .map(|ply| (ply, true))
-                .ok_or(not_found);
+            let Some(ply) = cache::newest_of_any_version(dir, &key) else {
+                return Err(not_found);
+            };
+            return match cached(audio, &ply) {
+                Some(cloud) => Ok(SongCloud {
+                    cloud,
+                    ply: Some(ply),
+                    hit: true,
+                }),
+                None => Err(not_found),
+            };
         }
     };
     let ply = dir.join(cache::file_name(&key, &extractor.version));
-    if ply.is_file() {
-        return Ok((ply, true));
+    if ply.is_file()
+        && let Some(cloud) = cached(audio, &ply)
+    {
+        return Ok(SongCloud {
+            cloud,
+            ply: Some(ply),
+            hit: true,
+        });
     }
-    std::fs::create_dir_all(dir).map_err(|e| ExtractError::Io {
-        path: dir.to_owned(),
-        reason: format!("cannot create the cache folder: {e}"),
-    })?;
-    child::run(
+    // A private folder in the cache (same file system: the cloud is renamed into place), or,
+    // where the cache cannot be written, in the system's temporary folder.
+    let in_cache = std::fs::create_dir_all(dir)
+        .and_then(|()| crate::files::TempDir::create_in(dir, child::SCRATCH_PREFIX));
+    let (scratch, keep) = match in_cache {
+        Ok(scratch) => {
+            child::remove_stale_partials(dir);
+            (scratch, true)
+        }
+        Err(reason) => {
+            cache_not_writable(dir, &reason);
+            let scratch =
+                crate::files::TempDir::create_in(&std::env::temp_dir(), "loudscape-extract")
+                    .map_err(|e| ExtractError::Io {
+                        path: std::env::temp_dir(),
+                        reason: format!("cannot create a temporary folder: {e}"),
+                    })?;
+            (scratch, false)
+        }
+    };
+    let (partial, said) = child::run(
         &extractor.path,
         &absolute,
         audio,
-        &ply,
+        scratch.path(),
         settings,
         cancel,
         on_progress,
     )?;
-    Ok((ply, false))
+    let (cloud, sha256, bytes) =
+        cache::load_fresh(&partial, &said).map_err(|reason| ExtractError::Failed {
+            audio: audio.to_owned(),
+            reason: format!("it wrote a cloud that does not load: {reason}"),
+        })?;
+    let ply = match keep {
+        true => match cache::store(&partial, &ply, &sha256, bytes, &said) {
+            Ok(()) => Some(ply),
+            Err(reason) => {
+                cache::remove(&ply);
+                cache_not_writable(dir, &reason);
+                None
+            }
+        },
+        false => None,
+    };
+    Ok(SongCloud {
+        cloud,
+        ply,
+        hit: false,
+    })
 }
 
 /// [`open_any`] with default settings for the command line: progress lines (see
@@ -230,6 +329,7 @@ pub fn open_for_command(path: &Path) -> Result<PointCloud, ExtractError> {
 
 /// [`open_any`] telling stderr about it when `verbose`: one line a stage, and for audio where
 /// the cloud came from (extracted, or from the cache); `also` hears every progress report.
+/// The cloud's warnings are always said, one `warning: FILE: MESSAGE` line each.
 pub fn open_reporting(
     path: &Path,
     settings: &Settings,
@@ -256,10 +356,15 @@ pub fn open_reporting(
     if let Some((ply, hit)) = opened.extracted.as_ref().filter(|_| verbose) {
         let how = if *hit { "from the cache" } else { "extracted" };
         let seconds = start.elapsed().as_secs_f32();
-        eprintln!(
-            "loudscape: {name}: cloud {how} in {seconds:.2} s: {}",
-            ply.display()
-        );
+        let kept = match ply {
+            Some(ply) => ply.display().to_string(),
+            None => "not cached".into(),
+        };
+        eprintln!("loudscape: {name}: cloud {how} in {seconds:.2} s: {kept}");
+    }
+    // What the extractor found wrong or odd in the input, fresh or cached, always said.
+    for line in opened.cloud.warning_lines() {
+        eprintln!("{line}");
     }
     Ok(opened.cloud)
 }

@@ -131,7 +131,7 @@ pub fn run_lines(
     if done && error.is_none() {
         return Ok(());
     }
-    Err(error.unwrap_or_else(|| last_words(&stderr_text, status)))
+    Err(error.unwrap_or_else(|| last_words(&stderr_text.tail, status)))
 }
 
 /// The songs under `inputs` with their tags (`timeline --list-songs`).
@@ -256,13 +256,19 @@ pub fn build(
     args.extend(["--progress".into(), "json".into()]);
     let result = run_lines(&extractor.path, &args, cancel, on_song);
     let _ = std::fs::remove_file(&manifest);
+    // On disk before it is renamed into place, so a power cut leaves no half timeline.
     let moved = result.and_then(|()| {
-        std::fs::rename(&partial, &output).map_err(|e| {
-            format!(
-                "{}: cannot move the timeline into the cache: {e}",
-                output.display()
-            )
-        })
+        std::fs::File::open(&partial)
+            .and_then(|f| f.sync_all())
+            .and_then(|()| std::fs::rename(&partial, &output))
+            .map(|()| crate::files::sync_parent(&output))
+            .map_err(|e| {
+                format!(
+                    "{}: cannot move the timeline into the cache: {}",
+                    output.display(),
+                    crate::files::write_reason(&e)
+                )
+            })
     });
     if let Err(message) = moved {
         let _ = std::fs::remove_file(&partial);

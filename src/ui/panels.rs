@@ -331,6 +331,19 @@ pub(super) fn cloud_info(ui: &mut egui::Ui, cloud: &PointCloud) {
     for line in crate::ui::labels::describe_cloud(cloud) {
         ui.label(RichText::new(line).small());
     }
+    // What the extractor found wrong or odd in the input (truncated, clipping...), by the
+    // metrics it may have made less true.
+    for warning in cloud.warnings() {
+        let text = match &warning.path {
+            Some(song) => format!("warning: {song}: {}", warning.message),
+            None => format!("warning: {}", warning.message),
+        };
+        ui.label(
+            RichText::new(text)
+                .small()
+                .color(ui.visuals().warn_fg_color),
+        );
+    }
 }
 
 pub(super) fn group_thousands(n: u64) -> String {

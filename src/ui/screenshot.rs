@@ -166,15 +166,20 @@ pub fn save_png(image: &image::RgbaImage, path: &Path) -> Result<(), ScreenshotE
         path: path.to_path_buf(),
         reason,
     };
-    let mut tmp = TempFile::create(path, ".partial").map_err(|e| write_error(e.to_string()))?;
+    // A full disk reads as such, however the encoder put it.
+    let io_error = |e: std::io::Error| write_error(crate::files::write_reason(&e));
+    let mut tmp = TempFile::create(path, ".partial").map_err(io_error)?;
     {
         let mut out = std::io::BufWriter::new(tmp.file());
         image
             .write_to(&mut out, image::ImageFormat::Png)
-            .map_err(|e| write_error(e.to_string()))?;
-        std::io::Write::flush(&mut out).map_err(|e| write_error(e.to_string()))?;
+            .map_err(|e| match e {
+                image::ImageError::IoError(e) => io_error(e),
+                e => write_error(e.to_string()),
+            })?;
+        std::io::Write::flush(&mut out).map_err(io_error)?;
     }
-    tmp.persist(path).map_err(|e| write_error(e.to_string()))
+    tmp.persist(path).map_err(io_error)
 }
 
 /// `loudscape-20260123-142501.png` (UTC) for the given moment.

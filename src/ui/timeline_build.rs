@@ -151,7 +151,11 @@ impl LoudscapeApp {
                 .and_then(|(ply, hit)| {
                     let how = if hit { "from the cache" } else { "built" };
                     eprintln!("loudscape: {what}: timeline {how}: {}", ply.display());
-                    crate::data::cloud::load(&ply).map_err(|e| e.to_string())
+                    let cloud = crate::data::cloud::load(&ply).map_err(|e| e.to_string())?;
+                    for line in cloud.warning_lines() {
+                        eprintln!("{line}");
+                    }
+                    Ok(cloud)
                 });
             let _ = sender.send(result);
         });

@@ -68,10 +68,16 @@ impl<R: Read> Body<'_, R> {
             *column = index;
         }
         let count = self.vertex_count_as_usize(vertex)?;
-        let mut relative = match header.encoding {
+        let (mut relative, end) = match header.encoding {
             Encoding::Ascii => self.read_generic_ascii(vertex, count, columns)?,
             _ => self.read_generic_binary(vertex, count, columns)?,
         };
+        // Where the vertices are the file's only element, anything after them means the count is
+        // wrong (or the file is two files): refused, as loading the first N would show part of
+        // the data as if it were all of it.
+        if header.elements.len() == 1 {
+            self.check_nothing_after(vertex, end)?;
+        }
         let (points, ranges) = normalize_generic(&mut relative);
         let meta = CloudMeta {
             mode: DataMode::Generic,
@@ -81,9 +87,39 @@ impl<R: Read> Body<'_, R> {
             stft: None,
             metrics: None,
             songs: Vec::new(),
+            warnings: Vec::new(),
             raw: Value::Null,
         };
         Ok((points, meta))
+    }
+
+    /// Fails when data follows the last declared vertex, which ended at byte `end` (binary: any
+    /// byte; ascii: anything but white space).
+    fn check_nothing_after(&mut self, vertex: &Element, end: u64) -> Result<(), CloudError> {
+        let mut buf = [0u8; 64 * 1024];
+        let mut read = 0u64;
+        loop {
+            let n = read_full(&mut self.reader, &mut buf)
+                .map_err(|e| self.body_error(end + read, format!("cannot read: {e}")))?;
+            if n == 0 {
+                return Ok(());
+            }
+            let data = match self.header.encoding {
+                Encoding::Ascii => buf[..n].iter().position(|b| !b.is_ascii_whitespace()),
+                _ => Some(0),
+            };
+            if let Some(i) = data {
+                return Err(self.body_error(
+                    end + read + i as u64,
+                    format!(
+                        "data follows the last of the {} points declared on header line {} (the \
+                         file holds more points than it declares, or is damaged)",
+                        vertex.count, vertex.line
+                    ),
+                ));
+            }
+            read += n as u64;
+        }
     }
 
     /// Positions relative to the first point (kept as f32 without losing the precision of
@@ -93,7 +129,7 @@ impl<R: Read> Body<'_, R> {
         vertex: &Element,
         count: usize,
         columns: [usize; 3],
-    ) -> Result<GenericPositions, CloudError> {
+    ) -> Result<(GenericPositions, u64), CloudError> {
         let mut offsets = Vec::new();
         let mut record_bytes = 0usize;
         for property in &vertex.properties {
@@ -161,7 +197,10 @@ impl<R: Read> Body<'_, R> {
             }
             done += records;
         }
-        Ok(positions)
+        Ok((
+            positions,
+            self.header.byte_len + (count * record_bytes) as u64,
+        ))
     }
 
     pub(super) fn read_generic_ascii(
@@ -169,7 +208,7 @@ impl<R: Read> Body<'_, R> {
         vertex: &Element,
         count: usize,
         columns: [usize; 3],
-    ) -> Result<GenericPositions, CloudError> {
+    ) -> Result<(GenericPositions, u64), CloudError> {
         // Each value takes at least one character and one separator.
         let min_record_bytes = 2 * vertex.properties.len() as u64;
         let expected = vertex.count.saturating_mul(min_record_bytes);
@@ -285,9 +324,20 @@ impl<R: Read> Body<'_, R> {
                     offset: line_start,
                     reason: format!("line {line_no}: {reason}"),
                 })?;
+            if buf.last() != Some(&b'\n') {
+                // The last line of an ascii PLY ends with a line break like every other: a file
+                // that stops inside a record may have lost digits of its last number.
+                return Err(self.body_error(
+                    offset,
+                    format!(
+                        "line {line_no}: the file ends inside vertex record {index} (no line \
+                         break after it): cut short?"
+                    ),
+                ));
+            }
             index += 1;
         }
-        Ok(positions)
+        Ok((positions, offset))
     }
 }
 

@@ -185,13 +185,19 @@ pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<He
             Some((keyword, rest)) => (keyword, rest.trim()),
             None => (text.trim(), ""),
         };
-        let tokens: Vec<&str> = rest.split_whitespace().collect();
+        // A comment is not split: its words could number millions (a version-1 metadata line).
+        let tokens: Vec<&str> = if keyword == "comment" {
+            rest.split_whitespace().take(1).collect()
+        } else {
+            rest.split_whitespace().collect()
+        };
         if !complete && keyword != "end_header" {
             return Err(if consumed >= MAX_HEADER_BYTES {
                 error(
                     line_no,
                     format!(
-                        "the header is longer than {} MiB without `end_header`",
+                        "the header is longer than {} MiB, the most loudscape reads \
+                         (docs/FORMAT.md, \"Header size\")",
                         MAX_HEADER_BYTES >> 20
                     ),
                 )
@@ -486,6 +492,11 @@ impl MetaParts {
             ));
         }
         self.parts = index;
+        // Grown by an eighth at a time, not doubled: at most 12.5 % unused (large blocks are
+        // remapped, not copied, when they grow).
+        if self.text.capacity() - self.text.len() < chunk.len() {
+            self.text.reserve_exact(self.text.len() / 8 + chunk.len());
+        }
         self.text.push_str(chunk);
         Ok(())
     }

@@ -7,7 +7,8 @@ use serde::{Deserialize, Deserializer};
 use serde_json::Value;
 
 use super::{
-    Axes, Axis, CloudError, CloudMeta, DataMode, FORMAT_VERSIONS, Metrics, SongInfo, Source, Stft,
+    Axes, Axis, CloudError, CloudMeta, CloudWarning, DataMode, FORMAT_VERSIONS, Metrics, SongInfo,
+    Source, Stft,
 };
 
 /// The suffix of a member that holds the exact bytes of its sibling string (docs/FORMAT.md,
@@ -157,7 +158,29 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
         line,
         reason,
     };
-    let raw: Value = serde_json::from_str(json).map_err(|e| error(format!("invalid JSON: {e}")))?;
+    // What the values would take, counted before they are built: metadata made of tiny values
+    // (`[0,0,0,...]`) would take tens of times its text.
+    let cost = value_cost(json).unwrap_or(0);
+    let budget = MAX_META_FACTOR * json.len() as u64 + META_BASE_BYTES;
+    if cost > budget {
+        return Err(error(format!(
+            "the metadata would take about {} MB in memory, more than {MAX_META_FACTOR} times its \
+             {} MB of text (docs/FORMAT.md, \"Header size\")",
+            cost.div_ceil(1 << 20),
+            (json.len() as u64).div_ceil(1 << 20)
+        )));
+    }
+    let raw: Value = serde_json::from_str(json).map_err(|e| {
+        error(if e.to_string().starts_with("recursion limit exceeded") {
+            format!(
+                "the JSON nests deeper than {MAX_JSON_DEPTH} levels (column {}); loudscape \
+                 metadata is a few levels deep",
+                e.column()
+            )
+        } else {
+            format!("invalid JSON: {e}")
+        })
+    })?;
     let Some(object) = raw.as_object() else {
         return Err(error("expected a JSON object `{...}`".into()));
     };
@@ -246,6 +269,7 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
             .collect::<Result<_, _>>()?,
         Some(v) => return Err(error(format!("`songs` must be an array, found {v}"))),
     };
+    let warnings = parse_warnings(object.get("warnings")).map_err(error)?;
     Ok(CloudMeta {
         mode,
         axes,
@@ -254,8 +278,154 @@ pub(super) fn parse_meta(json: &str, line: usize, path: &Path) -> Result<CloudMe
         stft,
         metrics,
         songs,
+        warnings,
         raw,
     })
+}
+
+/// The metadata's JSON values may take at most this many times the size of its text, plus
+/// [`META_BASE_BYTES`] (docs/FORMAT.md, "Header size").
+pub const MAX_META_FACTOR: u64 = 6;
+/// Room any metadata has, whatever its shape (a short song's loudness curves are small numbers).
+pub const META_BASE_BYTES: u64 = 16 << 20;
+
+/// Bytes the `serde_json::Value` tree of `json` would take, counted in one pass that builds
+/// nothing: each value's 32 bytes, the heap of each string, an array's unused capacity (it grows
+/// by doubling) and an object's B-tree nodes (about 1.5 times key and value per member).
+/// Errors are those of the JSON (left to the real parse to report).
+pub(super) fn value_cost(json: &str) -> Result<u64, serde_json::Error> {
+    use serde::de::{DeserializeSeed, MapAccess, SeqAccess, Visitor};
+    const VALUE: u64 = 32;
+    const STRING: u64 = 24;
+    struct Cost<'a>(&'a mut u64);
+    impl<'de> DeserializeSeed<'de> for Cost<'_> {
+        type Value = ();
+        fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<(), D::Error> {
+            deserializer.deserialize_any(self)
+        }
+    }
+    impl<'de> Visitor<'de> for Cost<'_> {
+        type Value = ();
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("JSON")
+        }
+        fn visit_bool<E: serde::de::Error>(self, _: bool) -> Result<(), E> {
+            *self.0 += VALUE;
+            Ok(())
+        }
+        fn visit_i64<E: serde::de::Error>(self, _: i64) -> Result<(), E> {
+            *self.0 += VALUE;
+            Ok(())
+        }
+        fn visit_u64<E: serde::de::Error>(self, _: u64) -> Result<(), E> {
+            *self.0 += VALUE;
+            Ok(())
+        }
+        fn visit_f64<E: serde::de::Error>(self, _: f64) -> Result<(), E> {
+            *self.0 += VALUE;
+            Ok(())
+        }
+        fn visit_unit<E: serde::de::Error>(self) -> Result<(), E> {
+            *self.0 += VALUE;
+            Ok(())
+        }
+        fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<(), E> {
+            *self.0 += VALUE + v.len() as u64;
+            Ok(())
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+            let mut n = 0u64;
+            while seq.next_element_seed(Cost(&mut *self.0))?.is_some() {
+                n += 1;
+            }
+            *self.0 += VALUE + (n.next_power_of_two() - n) * VALUE;
+            Ok(())
+        }
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+            *self.0 += VALUE;
+            while let Some(key) = map.next_key::<std::borrow::Cow<'de, str>>()? {
+                let mut value = 0u64;
+                map.next_value_seed(Cost(&mut value))?;
+                // The value's own 32 bytes sit in the node, with the key's 24: half as much
+                // again for the nodes' unused slots.
+                *self.0 +=
+                    (STRING + VALUE) * 3 / 2 + key.len() as u64 + value.saturating_sub(VALUE);
+            }
+            Ok(())
+        }
+    }
+    let mut total = 0u64;
+    let mut deserializer = serde_json::Deserializer::from_str(json);
+    Cost(&mut total).deserialize(&mut deserializer)?;
+    Ok(total)
+}
+
+/// serde_json's nesting limit: deeper JSON is refused before it could exhaust the stack.
+const MAX_JSON_DEPTH: usize = 128;
+
+/// The longest warning message kept, in characters (a longer one is cut, with `...`).
+const MAX_WARNING_CHARS: usize = 1000;
+
+/// One line of text for a terminal: control characters (newlines, escapes) become spaces, and
+/// at most [`MAX_WARNING_CHARS`] characters.
+pub fn one_line(text: &str) -> String {
+    let mut out: String = text
+        .chars()
+        .take(MAX_WARNING_CHARS)
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
+    if text.chars().nth(MAX_WARNING_CHARS).is_some() {
+        out.push_str("...");
+    }
+    out.trim().to_string()
+}
+
+/// The `warnings` array (docs/FORMAT.md, "Warnings"): objects with a string `message`, a
+/// string `kind` and, in timeline mode, a string `path`. Absent or `null` is none; anything else
+/// is refused, as a warning that cannot be read must not vanish.
+fn parse_warnings(value: Option<&Value>) -> Result<Vec<CloudWarning>, String> {
+    let items = match value {
+        None | Some(Value::Null) => return Ok(Vec::new()),
+        Some(Value::Array(items)) => items,
+        Some(v) => return Err(format!("`warnings` must be an array, found {}", short(v))),
+    };
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let text = |key: &str, required: bool| -> Result<Option<String>, String> {
+                match item.get(key) {
+                    Some(Value::String(s)) => Ok(Some(one_line(s))),
+                    None | Some(Value::Null) if !required => Ok(None),
+                    None => Err(format!("`warnings[{i}]` has no string `{key}`")),
+                    Some(v) => Err(format!(
+                        "`warnings[{i}].{key}` must be a string, found {}",
+                        short(v)
+                    )),
+                }
+            };
+            if !item.is_object() {
+                return Err(format!(
+                    "`warnings[{i}]` must be an object {{\"kind\", \"message\"}}, found {}",
+                    short(item)
+                ));
+            }
+            Ok(CloudWarning {
+                kind: text("kind", true)?.unwrap_or_default(),
+                message: text("message", true)?.unwrap_or_default(),
+                path: text("path", false)?,
+            })
+        })
+        .collect()
+}
+
+/// A JSON value for a message: at most 60 characters of it.
+fn short(value: &Value) -> String {
+    let text = value.to_string();
+    match text.char_indices().nth(60) {
+        Some((cut, _)) => format!("{}...", &text[..cut]),
+        None => text,
+    }
 }
 
 /// Song mode's loudness over time (docs/FORMAT.md, "loudness"): momentary and short-term
@@ -341,6 +511,35 @@ pub fn loudness_curves(raw: &Value) -> Option<LoudnessCurves> {
 #[cfg(test)]
 mod loudness_tests {
     use super::*;
+
+    #[test]
+    fn warnings_are_read_kept_to_one_line_and_malformed_ones_refused() {
+        let parse = |json: &str| parse_warnings(Some(&serde_json::from_str(json).unwrap()));
+        assert!(parse("null").unwrap().is_empty());
+        assert!(parse("[]").unwrap().is_empty());
+        let read = parse(
+            r#"[{"kind": "truncated", "message": "decoded 1.49 s of the 4.00 s the file promises"},
+               {"kind": "clipping", "message": "two\nlines\u001b[31m", "path": "a.wav"}]"#,
+        )
+        .unwrap();
+        assert_eq!(read[0].kind, "truncated");
+        assert_eq!(read[0].path, None);
+        assert_eq!(read[1].message, "two lines [31m");
+        assert_eq!(read[1].path.as_deref(), Some("a.wav"));
+        for bad in [
+            r#"{"kind": "x"}"#,
+            r#"["text"]"#,
+            r#"[{"kind": "x"}]"#,
+            r#"[{"kind": "x", "message": 3}]"#,
+            r#"[{"message": "m"}]"#,
+            r#"[{"kind": "x", "message": "m", "path": 1}]"#,
+        ] {
+            let error = parse(bad).expect_err(bad);
+            assert!(error.contains("warnings"), "{error}");
+        }
+        let long = one_line(&"x".repeat(5000));
+        assert_eq!(long.len(), MAX_WARNING_CHARS + 3);
+    }
 
     #[test]
     fn loudness_curves_are_read_and_files_without_them_have_none() {

@@ -43,7 +43,7 @@ mod body;
 mod generic;
 mod header;
 mod meta;
-pub use meta::{LoudnessCurves, loudness_curves};
+pub use meta::{LoudnessCurves, loudness_curves, one_line};
 mod write;
 
 use body::Body;
@@ -117,6 +117,26 @@ impl PointCloud {
         self.points.is_empty()
     }
 
+    /// What the extractor found wrong or odd in the input; empty when nothing.
+    pub fn warnings(&self) -> &[CloudWarning] {
+        &self.meta.warnings
+    }
+
+    /// The warnings as the user reads them: `warning: FILE: MESSAGE`, FILE being the song a
+    /// timeline's warning concerns, else the cloud's path (for audio: the song's).
+    pub fn warning_lines(&self) -> Vec<String> {
+        self.warnings()
+            .iter()
+            .map(|w| {
+                let file = w
+                    .path
+                    .clone()
+                    .unwrap_or_else(|| self.path.display().to_string());
+                format!("warning: {file}: {}", w.message)
+            })
+            .collect()
+    }
+
     /// The points as bytes, ready for a GPU buffer (stride [`POINT_BYTES`]).
     pub fn as_bytes(&self) -> &[u8] {
         bytemuck::cast_slice(&self.points)
@@ -181,8 +201,23 @@ pub struct CloudMeta {
     pub metrics: Option<Metrics>,
     /// Timeline mode: one entry per song.
     pub songs: Vec<SongInfo>,
+    /// What the extractor found wrong or odd in the input (`warnings`; empty when none).
+    pub warnings: Vec<CloudWarning>,
     /// The whole JSON object as written (`Value::Null` for generic files).
     pub raw: Value,
+}
+
+/// One thing the extractor found wrong or odd in the input (docs/FORMAT.md, "Warnings"): a
+/// truncated or corrupt file, a DC offset, channels that cancel, clipping. Every command that
+/// uses the cloud says it, as [`PointCloud::warning_lines`] writes it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct CloudWarning {
+    /// `truncated`, `corrupt`, `dc_offset`, `channels_cancel`, `clipping` or a newer kind.
+    pub kind: String,
+    /// One line, without the file's name (control characters made spaces).
+    pub message: String,
+    /// Timeline mode: the song it concerns.
+    pub path: Option<String>,
 }
 
 /// Song mode: the audio the cloud was made from.
@@ -387,17 +422,24 @@ pub fn load_from_reader<R: Read>(
     len: Option<u64>,
 ) -> Result<PointCloud, CloudError> {
     let mut reader = BufReader::with_capacity(64 * 1024, reader);
-    let header = parse_header(&mut reader, path)?;
+    let mut header = parse_header(&mut reader, path)?;
     let remaining = len.map(|len| len.saturating_sub(header.byte_len));
+    // The JSON text goes as soon as it is parsed: only its values are kept.
+    let meta = match header.meta.as_mut() {
+        Some((line, json)) => {
+            let json = std::mem::take(json);
+            Some(parse_meta(&json, *line, path)?)
+        }
+        None => None,
+    };
     let mut body = Body {
         reader,
         path,
         header: &header,
         remaining,
     };
-    let (points, meta) = match &header.meta {
-        Some((line, json)) => {
-            let meta = parse_meta(json, *line, path)?;
+    let (points, meta) = match meta {
+        Some(meta) => {
             let points = body.read_loudscape(&meta)?;
             (points, meta)
         }

@@ -1,15 +1,16 @@
 //! NumPy `.npy` files of float fields on a grid: the writer behind `loudscape voxelize` and
-//! `loudscape bench --fields-dir`, and the reader behind `loudscape mesh FIELD.npy`.
+//! `loudscape bench --fields-dir`, and the reader behind `loudscape mesh FIELD.npy` (with the
+//! `FIELD.npy.json` description `voxelize` writes beside it, checked against the array).
 //!
 //! Layout: C order, x (the grid's first axis) varying fastest, so an array of shape
 //! `(nz, ny, nx)` or `(fields, nz, ny, nx)` holds voxel (i, j, k) of field f at
 //! `[f, k, j, i]`, the GPU buffers' layout.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use glam::UVec3;
+use glam::{UVec3, Vec3};
 
 /// Writes `fields` (each `dims` voxels) as one float32 array: shape `(nz, ny, nx)` for one
 /// field, `(fields, nz, ny, nx)` for several. Format version 1.0, header padded to 64 bytes.
@@ -38,11 +39,14 @@ pub struct NpyFields {
     pub dims: UVec3,
     /// One `Vec` per field, `dims` voxels each, x fastest.
     pub fields: Vec<Vec<f32>>,
+    /// The file's element type: `<f4` or `<f8`.
+    pub dtype: &'static str,
 }
 
 /// Reads a float32 or float64 array of shape `(nz, ny, nx)` (one field) or
 /// `(fields, nz, ny, nx)`, C order, little endian, format version 1, 2 or 3.
 pub fn read(path: &Path) -> anyhow::Result<NpyFields> {
+    crate::files::check_regular(path).map_err(anyhow::Error::msg)?;
     let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
     parse(&bytes).with_context(|| format!("{}", path.display()))
 }
@@ -66,9 +70,9 @@ pub fn parse(bytes: &[u8]) -> anyhow::Result<NpyFields> {
         .context("the header is cut short")?;
     let header = std::str::from_utf8(header).context("the header is not text")?;
     let descr = dict_value(header, "descr").context("the header has no 'descr'")?;
-    let size = match descr.trim_matches(['\'', '"']) {
-        "<f4" | "=f4" => 4,
-        "<f8" | "=f8" => 8,
+    let (size, dtype) = match descr.trim_matches(['\'', '"']) {
+        "<f4" | "=f4" => (4, "<f4"),
+        "<f8" | "=f8" => (8, "<f8"),
         other => bail!("the array holds '{other}'; expected little-endian float32 or float64"),
     };
     if dict_value(header, "fortran_order").map(str::trim) != Some("False") {
@@ -123,7 +127,114 @@ pub fn parse(bytes: &[u8]) -> anyhow::Result<NpyFields> {
                 .collect()
         })
         .collect();
-    Ok(NpyFields { dims, fields })
+    Ok(NpyFields {
+        dims,
+        fields,
+        dtype,
+    })
+}
+
+/// The box of a field: from `FIELD.npy.json` when there is one (which must describe this array:
+/// its `dims`, `dtype` and `fields` when it gives them), else voxel units.
+pub fn field_box(path: &Path, npy: &NpyFields) -> anyhow::Result<(Vec3, Vec3)> {
+    let meta_path = PathBuf::from(format!("{}.json", path.display()));
+    if !meta_path.exists() {
+        return Ok((Vec3::splat(-0.5), npy.dims.as_vec3() - 0.5));
+    }
+    crate::files::check_regular(&meta_path).map_err(anyhow::Error::msg)?;
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut std::io::Read::take(
+            std::fs::File::open(&meta_path)
+                .with_context(|| format!("{}: cannot read", meta_path.display()))?,
+            MAX_SIDECAR_BYTES + 1,
+        ),
+        &mut text,
+    )
+    .with_context(|| format!("{}: cannot read", meta_path.display()))?;
+    if text.len() as u64 > MAX_SIDECAR_BYTES {
+        bail!(
+            "{}: longer than {} MiB; a grid's description is a few hundred bytes",
+            meta_path.display(),
+            MAX_SIDECAR_BYTES >> 20
+        );
+    }
+    field_box_of(&text, &meta_path, path, npy)
+}
+
+/// The longest `FIELD.npy.json` read.
+pub const MAX_SIDECAR_BYTES: u64 = 1 << 20;
+
+/// [`field_box`] on the description's text (`meta_path`, `path`: for messages).
+pub fn field_box_of(
+    text: &str,
+    meta_path: &Path,
+    path: &Path,
+    npy: &NpyFields,
+) -> anyhow::Result<(Vec3, Vec3)> {
+    let meta: serde_json::Value =
+        serde_json::from_str(text).with_context(|| format!("{}: not JSON", meta_path.display()))?;
+    let corner = |key: &str| -> anyhow::Result<Vec3> {
+        let v: [f32; 3] = serde_json::from_value(meta[key].clone())
+            .with_context(|| format!("{}: '{key}' is not three numbers", meta_path.display()))?;
+        Ok(Vec3::from_array(v))
+    };
+    check_sidecar(&meta, meta_path, path, npy)?;
+    let (min, max) = (corner("box_min")?, corner("box_max")?);
+    if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
+        bail!("{}: the box is empty or not finite", meta_path.display());
+    }
+    Ok((min, max))
+}
+
+/// Refuses a description that is not of this array (a pair written apart, or half replaced):
+/// `dims` `[x, y, z]`, `dtype` and the number of `fields`, each when the description has it.
+pub fn check_sidecar(
+    meta: &serde_json::Value,
+    meta_path: &Path,
+    path: &Path,
+    npy: &NpyFields,
+) -> anyhow::Result<()> {
+    let mismatch = |what: &str, says: String, holds: String| {
+        anyhow::anyhow!(
+            "{}: describes {what} {says} but {} holds {holds}; the pair does not belong \
+             together (write both again with `loudscape voxelize`)",
+            meta_path.display(),
+            path.display()
+        )
+    };
+    let dims = npy.dims;
+    if let Some(value) = meta.get("dims") {
+        let said: [u32; 3] = serde_json::from_value(value.clone())
+            .with_context(|| format!("{}: 'dims' is not three sizes", meta_path.display()))?;
+        if said != dims.to_array() {
+            return Err(mismatch(
+                "a grid of",
+                format!("{}x{}x{}", said[0], said[1], said[2]),
+                format!("{}x{}x{}", dims.x, dims.y, dims.z),
+            ));
+        }
+    }
+    if let Some(value) = meta.get("dtype") {
+        let said = value.as_str().unwrap_or_default();
+        if said != npy.dtype {
+            return Err(mismatch(
+                "dtype",
+                format!("{value}"),
+                format!("'{}'", npy.dtype),
+            ));
+        }
+    }
+    if let Some(fields) = meta.get("fields").and_then(|f| f.as_array())
+        && fields.len() != npy.fields.len()
+    {
+        return Err(mismatch(
+            "fields:",
+            fields.len().to_string(),
+            npy.fields.len().to_string(),
+        ));
+    }
+    Ok(())
 }
 
 /// The text of `key`'s value in the header's Python dict literal (up to the next top-level
