@@ -79,8 +79,8 @@ fuzz-smoke:
 	$(CARGO) run -q --example fuzz_ply -- --seconds $(FUZZ_SECONDS)
 	$(CARGO) run -q --example fuzz_formats -- --seconds $(FUZZ_SECONDS)
 
-# fuzz-py: the Python fuzzers (added with the extractor's side)
-fuzz:
+# `make fuzz` also runs the Python fuzzers (fuzz-py below).
+fuzz: fuzz-py
 	$(CARGO) run -q --release --example fuzz_ply -- --inputs $(N)
 	$(CARGO) run -q --release --example fuzz_formats -- --inputs $(N)
 
