@@ -346,6 +346,7 @@ mod tests {
                 metrics: None,
                 songs: vec![song(0, 3, -8.0, 0.5), song(3, 3, -20.0, -5.0)],
                 raw: serde_json::Value::Null,
+                warnings: Vec::new(),
             },
         }
     }
