@@ -1,12 +1,14 @@
 //! Files the app writes, made safe: a temporary file beside the target that is renamed into place
 //! when complete and deleted on every other path (an error, a panic's unwinding, SIGTERM or
-//! SIGINT), and the check that an output is not one of the inputs (the same path, or the same
-//! file through a link).
+//! SIGINT), child processes writing such files killed on those paths too ([`ChildGuard`]), and
+//! the check that an output is not one of the inputs (the same path, or the same file through a
+//! link).
 
 use std::fs::File;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::process::{Child, ExitStatus};
+use std::sync::{Arc, Mutex};
 
 /// Temporary files in progress, deleted by the signal handler (see [`remove_temporaries_on_signal`]).
 /// Created and registered under this lock, so the handler sees every file that exists.
@@ -80,8 +82,73 @@ impl Drop for TempFile {
     }
 }
 
-/// Starts a thread that, on SIGTERM or SIGINT (SIGHUP too on Unix), deletes every temporary
-/// file in progress and exits with 128 + the signal number, as a shell reports it. Call once, from
+type SharedChild = Arc<Mutex<Child>>;
+
+/// Child processes killed by the signal handler before it deletes the temporary files (an
+/// encoder writing one must not go on writing, or recreate it).
+static CHILDREN: Mutex<Vec<(u64, SharedChild)>> = Mutex::new(Vec::new());
+
+fn children() -> std::sync::MutexGuard<'static, Vec<(u64, SharedChild)>> {
+    CHILDREN
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// A child process killed (and reaped) when dropped before [`ChildGuard::wait`], and on
+/// SIGTERM/SIGINT by [`remove_temporaries_on_signal`]'s handler.
+pub struct ChildGuard {
+    id: u64,
+    child: SharedChild,
+    done: bool,
+}
+
+impl ChildGuard {
+    /// Takes charge of `child` (take its pipes out first).
+    pub fn new(child: Child) -> Self {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let id = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let child = Arc::new(Mutex::new(child));
+        children().push((id, Arc::clone(&child)));
+        ChildGuard {
+            id,
+            child,
+            done: false,
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Child> {
+        self.child
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Waits for the process to end by itself (polling, so the signal handler can still kill it
+    /// meanwhile).
+    pub fn wait(mut self) -> io::Result<ExitStatus> {
+        loop {
+            let status = self.lock().try_wait()?;
+            if let Some(status) = status {
+                self.done = true;
+                return Ok(status);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
+}
+
+impl Drop for ChildGuard {
+    fn drop(&mut self) {
+        if !self.done {
+            let mut child = self.lock();
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+        children().retain(|(id, _)| *id != self.id);
+    }
+}
+
+/// Starts a thread that, on SIGTERM or SIGINT (SIGHUP too on Unix), kills the child processes in
+/// [`ChildGuard`]s, deletes every temporary file in progress and exits with 128 + the signal number, as a shell reports it. Call once, from
 /// a command-line program (the window keeps its own handling).
 #[cfg(unix)]
 pub fn remove_temporaries_on_signal() -> io::Result<()> {
@@ -91,7 +158,15 @@ pub fn remove_temporaries_on_signal() -> io::Result<()> {
         .name("loudscape::signals".into())
         .spawn(move || {
             if let Some(signal) = signals.forever().next() {
-                // Held until exit: no new temporary file can appear after the sweep.
+                // Held until exit: no new child or temporary file can appear after the sweep.
+                let running = children();
+                for (_, child) in running.iter() {
+                    let mut child = child
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner);
+                    let _ = child.kill();
+                    let _ = child.wait();
+                }
                 let list = temporaries();
                 for path in list.iter() {
                     let _ = std::fs::remove_file(path);

@@ -9,6 +9,8 @@ pub mod mesh;
 pub mod npy;
 pub mod render;
 pub mod render_compare;
+pub mod video;
+pub mod video_encode;
 pub mod voxelize;
 
 use std::io::Write;
