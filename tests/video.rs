@@ -446,3 +446,73 @@ fn sigterm_stops_at_once_and_leaves_no_file_and_no_encoder() {
     assert!(!partial.exists(), "the temporary file is left");
     assert_eq!(encoders(), 0, "ffmpeg is still running");
 }
+
+#[test]
+fn a_timeline_sweeps_across_its_years_over_a_silent_track() {
+    let path = out("timeline.mp4");
+    let output = loudscape(&[
+        "video",
+        repo().join("data/demo_timeline.ply").to_str().unwrap(),
+        "--view",
+        "timeline",
+        "--size",
+        "640x360",
+        "--fps",
+        "5",
+        "--sweep",
+        "2",
+        "--progress",
+        "none",
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert_success(&output);
+    let probe = ffprobe(&path);
+    let streams = probe["streams"].as_array().expect("streams");
+    assert_eq!(streams.len(), 2, "{probe}");
+    assert!(streams.iter().any(|s| s["codec_name"] == "aac"));
+    let frames = decode_frames(&path, SIZE);
+    assert_eq!(frames.len(), 10);
+    // The sweep moves: the first and the last frame differ, and each names a song at the
+    // bottom (the title's plate is there, over the background).
+    let (moved, _) = common::difference(&half(&frames[0]), &half(&frames[9]), 32);
+    assert!(moved > 0.01, "the sweep does not move ({moved})");
+    let bottom = |img: &image::RgbaImage| {
+        image::imageops::crop_imm(img, SIZE.0 / 4, SIZE.1 - 40, SIZE.0 / 2, 30).to_image()
+    };
+    for k in [0, 9] {
+        assert!(
+            common::coverage(&bottom(&frames[k])) > 0.05,
+            "frame {k}: no song title"
+        );
+    }
+}
+
+/// A real player shows it: mpv plays the golden video under Xvfb (software output), paused half
+/// way, and the screen holds that frame.
+#[test]
+fn mpv_plays_the_video_under_xvfb() {
+    let golden = repo().join("tests/golden/video_demo.mp4");
+    let shot = out("mpv_screen.png");
+    let script = format!(
+        "mpv --no-config --vo=x11 --ao=null --pause --start=0.5 --geometry=640x360+0+0 \
+         --no-border --no-osc --osd-level=0 '{}' >/dev/null 2>&1 & p=$!; sleep 4; \
+         import -window root '{}'; kill $p",
+        golden.display(),
+        shot.display()
+    );
+    let status = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x500x24", "bash", "-c", &script])
+        .status()
+        .expect("xvfb-run (install xvfb, mpv, imagemagick)");
+    assert!(status.success());
+    let screen = image::open(&shot).expect("screenshot").to_rgba8();
+    let shown = image::imageops::crop_imm(&screen, 0, 0, SIZE.0, SIZE.1).to_image();
+    let frame = &decode_frames(&golden, SIZE)[5];
+    let (share, mean) = common::difference(&half(&shown), &half(frame), 32);
+    assert!(
+        share < 0.05,
+        "mpv shows something else: {share} of pixels differ (mean {mean}); see {}",
+        shot.display()
+    );
+}

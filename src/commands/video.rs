@@ -9,7 +9,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
-use eframe::egui::{self, Align2, Color32, FontId, Pos2};
+use eframe::egui::{self, Color32, FontId, Pos2};
 use glam::Vec3;
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
@@ -524,7 +524,7 @@ fn render_video_frame(
                         loudscape::ui::legends::paint_picture(painter, rect, legend);
                     }
                     if let Some(title) = &title {
-                        paint_title(painter, rect, title, background.ink(true));
+                        paint_title(painter, rect, title, background);
                     }
                 });
             }
@@ -577,17 +577,26 @@ fn render_video_frame(
     }
 }
 
-/// The timeline song whose x range holds `x`.
+/// The timeline song under `x`, or else the nearest one (songs are bands with gaps between).
 fn song_at(cloud: &PointCloud, x: f32) -> Option<usize> {
     let x = f64::from(x);
+    let distance = |a: f64, b: f64| {
+        if x < a {
+            a - x
+        } else if x > b {
+            x - b
+        } else {
+            0.0
+        }
+    };
     cloud
         .meta
         .songs
         .iter()
-        .position(|s| match (s.x_min, s.x_max) {
-            (Some(a), Some(b)) => a <= x && x <= b,
-            _ => false,
-        })
+        .enumerate()
+        .filter_map(|(i, s)| Some((i, distance(s.x_min?, s.x_max?))))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
 }
 
 /// "Title · Artist (1994)" of timeline song `i`.
@@ -629,15 +638,30 @@ fn timeline_markers(cloud: &PointCloud, x: f32, song: Option<usize>) -> Vec<Mark
     markers
 }
 
-fn paint_title(painter: &egui::Painter, rect: egui::Rect, title: &str, ink: [u8; 3]) {
+fn paint_title(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    title: &str,
+    background: loudscape::render::colormap::Background,
+) {
     let size = (rect.height() / 22.0).clamp(14.0, 64.0);
-    painter.text(
-        Pos2::new(rect.center().x, rect.bottom() - size * 1.6),
-        Align2::CENTER_CENTER,
-        title,
+    let ink = background.ink(true);
+    let galley = painter.layout_no_wrap(
+        title.to_string(),
         FontId::proportional(size),
         Color32::from_rgb(ink[0], ink[1], ink[2]),
     );
+    let at = Pos2::new(
+        rect.center().x - galley.size().x / 2.0,
+        rect.bottom() - size * 2.2,
+    );
+    let plate = egui::Rect::from_min_size(at, galley.size()).expand(size * 0.3);
+    painter.rect_filled(
+        plate,
+        size * 0.2,
+        loudscape::ui::labels::label_plate(background),
+    );
+    painter.galley(at, galley, Color32::WHITE);
 }
 
 /// The strip of the song, without a playhead, `width` pixels wide.
