@@ -215,7 +215,7 @@ struct Plan {
 
 enum Drawn {
     One {
-        cloud: PointCloud,
+        cloud: Box<PointCloud>,
         data: Box<SceneData>,
         labels: Option<AxisLabels>,
         legend: Option<PictureLegend>,
@@ -380,7 +380,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
             let legend = (!args.no_legend)
                 .then(|| loudscape::ui::legends::picture_legend(&cloud, &settings));
             Drawn::One {
-                cloud,
+                cloud: Box::new(cloud),
                 data: Box::new(data),
                 labels,
                 legend,
@@ -675,9 +675,9 @@ fn render_strip(
     paint_headless(gpu, &target, |painter, rect| {
         strip.paint(painter, rect, None)
     });
-    Ok(target
+    target
         .read_rgba(&gpu.device, &gpu.queue)
-        .context("reading the loudness strip back from the GPU")?)
+        .context("reading the loudness strip back from the GPU")
 }
 
 /// The view over the strip, with the strip's playhead at `t` seconds.
