@@ -21,7 +21,7 @@ use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::ui::compare_shot::{CompareView, render_compare_image};
 use loudscape::ui::labels::AxisLabels;
 use loudscape::ui::legends::PictureLegend;
-use loudscape::ui::screenshot::paint_headless;
+use loudscape::ui::screenshot::{HeadlessPainter, paint_headless};
 use loudscape::ui::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
@@ -219,6 +219,7 @@ enum Drawn {
         data: Box<SceneData>,
         labels: Option<AxisLabels>,
         legend: Option<PictureLegend>,
+        overlay: Box<HeadlessPainter>,
     },
     Compare {
         scene: Box<CompareScene>,
@@ -384,6 +385,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
                 data: Box::new(data),
                 labels,
                 legend,
+                overlay: Box::new(HeadlessPainter::new(&gpu)),
             }
         }
     };
@@ -474,6 +476,7 @@ fn render_video_frame(
             data,
             labels,
             legend,
+            overlay,
         } => {
             let (head, title) = if plan.timeline {
                 let u = if plan.frames > 1 {
@@ -516,7 +519,7 @@ fn render_video_frame(
             );
             if labels.is_some() || legend.is_some() || title.is_some() {
                 let background = settings.colours.background;
-                paint_headless(gpu, &target, |painter, rect| {
+                overlay.paint(gpu, &target, |painter, rect| {
                     if let Some(labels) = labels.as_ref() {
                         loudscape::ui::labels::paint_on(painter, rect, &view, labels, background);
                     }
