@@ -1,7 +1,7 @@
 //! `loudscape video`: the file is what players and upload sites take (ffprobe: one H.264 yuv420p
 //! video stream and one AAC stream, the size, rate and length asked for); frame k is what
 //! `render --playhead` draws for start + k/fps; the sound track is the source passage to the
-//! sample; a 1-second golden video of the demo; bad requests fail cleanly; SIGTERM leaves no
+//! sample; a 1-second golden video of the demo; bad requests fail cleanly; SIGTERM and SIGINT leave no
 //! file and no encoder behind. Needs ffmpeg and ffprobe (scripts/setup-system.sh installs them).
 
 mod common;
@@ -385,6 +385,19 @@ fn bad_requests_fail_cleanly() {
         copy.to_str().unwrap(),
     ]);
     assert!(String::from_utf8_lossy(&output.stderr).contains("the output is the input"));
+    // render --playhead is for a song's time axis.
+    let png = out("timeline_playhead.png");
+    let timeline = repo().join("data/demo_timeline.ply");
+    let output = loudscape(&[
+        "render",
+        timeline.to_str().unwrap(),
+        "--playhead",
+        "3",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("--playhead needs a song cloud"));
     // Without ffmpeg: one line naming the package to install.
     let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
         .args(["video", d.as_str(), "-o", v])
@@ -401,9 +414,16 @@ fn bad_requests_fail_cleanly() {
 
 #[cfg(unix)]
 #[test]
-fn sigterm_stops_at_once_and_leaves_no_file_and_no_encoder() {
-    let video = out("killed.mp4");
-    let partial = out("killed.mp4.partial.mp4");
+fn sigterm_and_ctrl_c_stop_at_once_and_leave_no_file_and_no_encoder() {
+    for (signal, code) in [("TERM", 143), ("INT", 130)] {
+        stops_on(signal, code);
+    }
+}
+
+#[cfg(unix)]
+fn stops_on(signal: &str, code: i32) {
+    let video = out(&format!("killed_{signal}.mp4"));
+    let partial = out(&format!("killed_{signal}.mp4.partial.mp4"));
     let mut child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
         .args([
             "video",
@@ -436,13 +456,13 @@ fn sigterm_stops_at_once_and_leaves_no_file_and_no_encoder() {
     assert_eq!(encoders(), 1, "ffmpeg is not running");
     let sent = Instant::now();
     Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
+        .args([format!("-{signal}"), child.id().to_string()])
         .status()
         .unwrap();
     let status = child.wait().unwrap();
     assert!(sent.elapsed() < Duration::from_secs(5), "slow to stop");
-    assert_eq!(status.code(), Some(143));
-    assert!(!video.exists(), "a video was written after SIGTERM");
+    assert_eq!(status.code(), Some(code), "SIG{signal}");
+    assert!(!video.exists(), "a video was written after SIG{signal}");
     assert!(!partial.exists(), "the temporary file is left");
     assert_eq!(encoders(), 0, "ffmpeg is still running");
 }
