@@ -257,6 +257,36 @@ mod tests {
 
     #[cfg(unix)]
     #[test]
+    fn a_dropped_child_guard_kills_its_process_and_a_waited_one_reports_it() {
+        let child = std::process::Command::new("sleep")
+            .arg("30")
+            .spawn()
+            .unwrap();
+        let pid = child.id();
+        let guard = ChildGuard::new(child);
+        assert!(
+            children()
+                .iter()
+                .any(|(_, c)| c.lock().unwrap().id() == pid)
+        );
+        let start = std::time::Instant::now();
+        drop(guard);
+        assert!(start.elapsed() < std::time::Duration::from_secs(5));
+        assert!(
+            !Path::new(&format!("/proc/{pid}")).exists(),
+            "still running"
+        );
+        assert!(
+            children()
+                .iter()
+                .all(|(_, c)| c.lock().unwrap().id() != pid)
+        );
+        let done = std::process::Command::new("true").spawn().unwrap();
+        assert!(ChildGuard::new(done).wait().unwrap().success());
+    }
+
+    #[cfg(unix)]
+    #[test]
     fn links_are_the_same_file() {
         let dir = dir("links");
         let a = dir.join("c.ply");
