@@ -536,3 +536,52 @@ fn mpv_plays_the_video_under_xvfb() {
         shot.display()
     );
 }
+
+/// A compare video's frame is `render --compare --playhead` at its time too.
+#[test]
+fn a_compare_frame_is_render_compare_with_the_playhead() {
+    let path = out("compare.mp4");
+    let b = repo().join("data/fixture_song.ply");
+    let output = loudscape(&[
+        "video",
+        &demo(),
+        "--compare",
+        b.to_str().unwrap(),
+        "--view",
+        "compare",
+        "--size",
+        "640x360",
+        "--fps",
+        "5",
+        "--start",
+        "20",
+        "--end",
+        "20.4",
+        "--progress",
+        "none",
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert_success(&output);
+    let frames = decode_frames(&path, SIZE);
+    assert_eq!(frames.len(), 2);
+    let png = out("compare_render.png");
+    let output = loudscape(&[
+        "render",
+        &demo(),
+        "--compare",
+        b.to_str().unwrap(),
+        "--view",
+        "compare",
+        "--size",
+        "640x360",
+        "--playhead",
+        "20.2",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_success(&output);
+    let render = image::open(&png).unwrap().to_rgba8();
+    let (share, mean) = common::difference(&half(&frames[1]), &half(&render), 32);
+    assert!(share < 0.001, "{share} of pixels differ (mean {mean})");
+}
