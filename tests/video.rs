@@ -171,6 +171,7 @@ fn the_file_is_h264_and_aac_of_the_asked_size_rate_and_length() {
     let (v, a) = (video[0], audio[0]);
     assert_eq!(v["codec_name"], "h264");
     assert_eq!(v["pix_fmt"], "yuv420p");
+    assert_eq!(v["color_space"], "bt709", "the colour matrix is tagged");
     assert_eq!(v["width"], SIZE.0);
     assert_eq!(v["height"], SIZE.1);
     assert_eq!(v["r_frame_rate"], format!("{FPS}/1"));

@@ -128,10 +128,22 @@ pub fn ffmpeg_args(spec: &EncodeSpec, output: &Path) -> Vec<String> {
         .map(String::from),
     );
     args.push(spec.crf.to_string());
+    // BT.709 colour (HD video's), converted and tagged, so players do not guess (untagged HD
+    // is shown as BT.709 by most, while ffmpeg converts with BT.601 unless told).
     args.extend(
         [
+            "-vf",
+            "scale=out_color_matrix=bt709:out_range=tv",
             "-pix_fmt",
             "yuv420p",
+            "-colorspace",
+            "bt709",
+            "-color_primaries",
+            "bt709",
+            "-color_trc",
+            "bt709",
+            "-color_range",
+            "tv",
             "-c:a",
             "aac",
             "-b:a",
