@@ -176,11 +176,17 @@ impl Encoder {
         let ffmpeg = find_ffmpeg()?;
         let tmp = TempFile::create(output, ".partial.mp4")
             .with_context(|| format!("{}: cannot write", output.display()))?;
-        let mut child = Command::new(&ffmpeg)
+        let mut command = Command::new(&ffmpeg);
+        command
             .args(ffmpeg_args(spec, tmp.path()))
             .stdin(Stdio::piped())
             .stdout(Stdio::null())
-            .stderr(Stdio::piped())
+            .stderr(Stdio::piped());
+        // Its own process group: Ctrl+C in the terminal reaches loudscape alone, whose handler
+        // kills ffmpeg before removing the file (ffmpeg would otherwise finish the file itself).
+        #[cfg(unix)]
+        std::os::unix::process::CommandExt::process_group(&mut command, 0);
+        let mut child = command
             .spawn()
             .with_context(|| format!("cannot start {}", ffmpeg.display()))?;
         let stdin = child.stdin.take();
