@@ -21,7 +21,7 @@ use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::ui::compare_shot::{CompareView, render_compare_image};
 use loudscape::ui::labels::AxisLabels;
 use loudscape::ui::legends::PictureLegend;
-use loudscape::ui::screenshot::{HeadlessPainter, paint_headless};
+use loudscape::ui::screenshot::HeadlessPainter;
 use loudscape::ui::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
@@ -338,12 +338,12 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let strip = (!timeline && !args.no_strip && size.1 >= 360 && compare_view.is_none())
         .then(|| LoudnessStrip::for_cloud(&cloud))
         .flatten();
-    let view_height = size.1
-        - if strip.is_some() {
-            STRIP_HEIGHT as u32
-        } else {
-            0
-        };
+    let strip_height = if strip.is_some() {
+        strip_height_for(size.1)
+    } else {
+        0
+    };
+    let view_height = size.1 - strip_height;
 
     let gpu = GpuContext::new_headless()?;
     let fast = match detail.as_str() {
@@ -400,7 +400,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         timeline,
     };
     let strip_image = match &strip {
-        Some(strip) => Some(render_strip(&gpu, strip, size.0)?),
+        Some(strip) => Some(render_strip(&gpu, strip, size.0, strip_height)?),
         None => None,
     };
     let spec = EncodeSpec {
@@ -667,15 +667,23 @@ fn paint_title(
     painter.galley(at, galley, Color32::WHITE);
 }
 
-/// The strip of the song, without a playhead, `width` pixels wide.
+/// The strip's height in a frame `frame_height` pixels tall: the window's at 720 lines and
+/// below, in proportion above (so 1080p and 4K read alike); even, as the frame's sides are.
+pub fn strip_height_for(frame_height: u32) -> u32 {
+    let scale = (f64::from(frame_height) / 720.0).max(1.0);
+    2 * (f64::from(STRIP_HEIGHT) / 2.0 * scale).round() as u32
+}
+
+/// The strip of the song, without a playhead, `width` x `height` pixels.
 fn render_strip(
     gpu: &GpuContext,
     strip: &LoudnessStrip,
     width: u32,
+    height: u32,
 ) -> anyhow::Result<image::RgbaImage> {
-    let target =
-        loudscape::render::gpu::target::RenderTarget::new(&gpu.device, width, STRIP_HEIGHT as u32);
-    paint_headless(gpu, &target, |painter, rect| {
+    let target = loudscape::render::gpu::target::RenderTarget::new(&gpu.device, width, height);
+    let ppp = height as f32 / STRIP_HEIGHT;
+    HeadlessPainter::new(gpu).paint_scaled(gpu, &target, ppp, |painter, rect| {
         strip.paint(painter, rect, None)
     });
     target
@@ -695,10 +703,20 @@ fn stack_with_strip(
     let mut frame = image::RgbaImage::new(w, vh + sh);
     image::imageops::replace(&mut frame, view, 0, 0);
     image::imageops::replace(&mut frame, strip_image, 0, i64::from(vh));
-    let rect = egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32, sh as f32));
+    // The strip was painted in points, STRIP_HEIGHT tall; back to pixels.
+    let ppp = sh as f32 / STRIP_HEIGHT;
+    let rect = egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32 / ppp, STRIP_HEIGHT));
     let plot = LoudnessStrip::plot_rect(rect);
+    let plot = egui::Rect::from_min_max(
+        Pos2::new(plot.left() * ppp, plot.top() * ppp),
+        Pos2::new(plot.right() * ppp, plot.bottom() * ppp),
+    );
     let x = x_of_time(t, plot.left(), plot.right(), strip.duration_s());
-    let (x0, x1) = ((x - 0.75).floor().max(0.0) as u32, (x + 0.75).ceil() as u32);
+    let half_width = 0.75 * ppp;
+    let (x0, x1) = (
+        (x - half_width).floor().max(0.0) as u32,
+        (x + half_width).ceil() as u32,
+    );
     for px in x0..x1.min(w) {
         for py in 0..(plot.bottom().ceil() as u32).min(sh) {
             frame.put_pixel(px, vh + py, image::Rgba([255, 255, 255, 255]));
@@ -726,6 +744,10 @@ mod tests {
         assert_eq!(frame_count(1.0, 30), 30);
         assert_eq!(frame_count(2.5, 24), 60);
         assert_eq!(frame_count(0.001, 24), 1);
+        assert_eq!(strip_height_for(360), 118);
+        assert_eq!(strip_height_for(720), 118);
+        assert_eq!(strip_height_for(1080), 178);
+        assert_eq!(strip_height_for(2160), 354);
     }
 
     #[test]

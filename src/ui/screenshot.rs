@@ -127,12 +127,30 @@ impl HeadlessPainter {
         target: &RenderTarget,
         paint: impl FnOnce(&egui::Painter, Rect),
     ) {
+        self.paint_scaled(gpu, target, 1.0, paint);
+    }
+
+    /// As [`HeadlessPainter::paint`], `pixels_per_point` pixels a point (larger text and lines
+    /// on a larger picture); `paint` gets the rect in points.
+    pub fn paint_scaled(
+        &mut self,
+        gpu: &GpuContext,
+        target: &RenderTarget,
+        pixels_per_point: f32,
+        paint: impl FnOnce(&egui::Painter, Rect),
+    ) {
         let (w, h) = (target.width, target.height);
-        let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32, h as f32));
-        let input = egui::RawInput {
+        let ppp = pixels_per_point.max(0.1);
+        let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32 / ppp, h as f32 / ppp));
+        let mut input = egui::RawInput {
             screen_rect: Some(rect),
             ..Default::default()
         };
+        input
+            .viewports
+            .entry(egui::ViewportId::ROOT)
+            .or_default()
+            .native_pixels_per_point = Some(ppp);
         let mut paint = Some(paint);
         let mut output = self.ctx.run_ui(input, |ui| {
             if let Some(paint) = paint.take() {
@@ -140,7 +158,7 @@ impl HeadlessPainter {
             }
         });
         let shapes = std::mem::take(&mut output.shapes);
-        let primitives = self.ctx.tessellate(shapes, 1.0);
+        let primitives = self.ctx.tessellate(shapes, ppp);
         let renderer = &mut self.renderer;
         for (id, deltas) in &output.textures_delta.set {
             for delta in deltas {
@@ -149,7 +167,7 @@ impl HeadlessPainter {
         }
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [w, h],
-            pixels_per_point: 1.0,
+            pixels_per_point: ppp,
         };
         let mut encoder = gpu
             .device
