@@ -28,6 +28,10 @@ declare -A need=(
   [xdotool]=/usr/bin/xdotool
   [libxtst6]=/usr/lib/x86_64-linux-gnu/libXtst.so.6
   [libxdamage1]=/usr/lib/x86_64-linux-gnu/libXdamage.so.1
+  # `loudscape video` encodes with the ffmpeg command (H.264 + AAC); its tests read back with
+  # ffprobe and play under Xvfb with mpv.
+  [ffmpeg]=/usr/bin/ffmpeg
+  [mpv]=/usr/bin/mpv
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then

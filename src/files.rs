@@ -1,13 +1,15 @@
 //! Files the app writes, made safe: a temporary file beside the target that is renamed into place
 //! when complete and deleted on every other path (an error, a panic's unwinding, SIGTERM or
 //! SIGINT), a private temporary folder deleted the same way ([`TempDir`]), the child processes
-//! killed with the app on those signals ([`ChildGuard`]), and the check that an output is not one
-//! of the inputs (the same path, or the same file through a link).
+//! killed with the app on those signals ([`ChildGuard`] for a process group by id, [`OwnedChild`]
+//! for a child writing one of those files, killed and reaped), and the check that an output is
+//! not one of the inputs (the same path, or the same file through a link).
 
 use std::fs::File;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::process::{Child, ExitStatus};
+use std::sync::{Arc, Mutex};
 
 /// Temporary files in progress, deleted by the signal handler (see [`remove_temporaries_on_signal`]).
 /// Created and registered under this lock, so the handler sees every file that exists.
@@ -295,8 +297,74 @@ impl Drop for TempFile {
     }
 }
 
+type SharedChild = Arc<Mutex<Child>>;
+
+/// Child processes killed by the signal handler before it deletes the temporary files (an
+/// encoder writing one must not go on writing, or recreate it).
+static OWNED_CHILDREN: Mutex<Vec<(u64, SharedChild)>> = Mutex::new(Vec::new());
+
+fn owned_children() -> std::sync::MutexGuard<'static, Vec<(u64, SharedChild)>> {
+    OWNED_CHILDREN
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// A child process killed (and reaped) when dropped before [`OwnedChild::wait`], and on
+/// SIGTERM/SIGINT by [`remove_temporaries_on_signal`]'s handler.
+pub struct OwnedChild {
+    id: u64,
+    child: SharedChild,
+    done: bool,
+}
+
+impl OwnedChild {
+    /// Takes charge of `child` (take its pipes out first).
+    pub fn new(child: Child) -> Self {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let id = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let child = Arc::new(Mutex::new(child));
+        owned_children().push((id, Arc::clone(&child)));
+        OwnedChild {
+            id,
+            child,
+            done: false,
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Child> {
+        self.child
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Waits for the process to end by itself (polling, so the signal handler can still kill it
+    /// meanwhile).
+    pub fn wait(mut self) -> io::Result<ExitStatus> {
+        loop {
+            let status = self.lock().try_wait()?;
+            if let Some(status) = status {
+                self.done = true;
+                return Ok(status);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
+}
+
+impl Drop for OwnedChild {
+    fn drop(&mut self) {
+        if !self.done {
+            let mut child = self.lock();
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+        owned_children().retain(|(id, _)| *id != self.id);
+    }
+}
+
 /// Starts a thread that, on SIGTERM or SIGINT (SIGHUP too on Unix), kills every registered child
-/// process ([`ChildGuard`]), deletes every temporary file and folder in progress and exits with 128 + the signal number, as a shell reports it. Call once, from
+/// process ([`ChildGuard`]'s process groups, [`OwnedChild`]ren), deletes every temporary file and
+/// folder in progress and exits with 128 + the signal number, as a shell reports it. Call once, from
 /// a command-line program (the window keeps its own handling).
 #[cfg(unix)]
 pub fn remove_temporaries_on_signal() -> io::Result<()> {
@@ -310,6 +378,13 @@ pub fn remove_temporaries_on_signal() -> io::Result<()> {
                 let running = children();
                 for &pid in running.iter() {
                     kill_process_group(pid);
+                }
+                for (_, child) in owned_children().iter() {
+                    let mut child = child
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner);
+                    let _ = child.kill();
+                    let _ = child.wait();
                 }
                 let list = temporaries();
                 for path in list.iter() {
@@ -498,6 +573,36 @@ mod tests {
         std::fs::write(dir.join("a.ply"), b"ply").unwrap();
         assert!(check_regular(&dir.join("a.ply")).is_ok());
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_dropped_owned_child_kills_its_process_and_a_waited_one_reports_it() {
+        let child = std::process::Command::new("sleep")
+            .arg("30")
+            .spawn()
+            .unwrap();
+        let pid = child.id();
+        let guard = OwnedChild::new(child);
+        assert!(
+            owned_children()
+                .iter()
+                .any(|(_, c)| c.lock().unwrap().id() == pid)
+        );
+        let start = std::time::Instant::now();
+        drop(guard);
+        assert!(start.elapsed() < std::time::Duration::from_secs(5));
+        assert!(
+            !Path::new(&format!("/proc/{pid}")).exists(),
+            "still running"
+        );
+        assert!(
+            owned_children()
+                .iter()
+                .all(|(_, c)| c.lock().unwrap().id() != pid)
+        );
+        let done = std::process::Command::new("true").spawn().unwrap();
+        assert!(OwnedChild::new(done).wait().unwrap().success());
     }
 
     #[cfg(unix)]

@@ -68,6 +68,8 @@ enum Command {
     Mesh(commands::mesh::MeshArgs),
     /// Measure frame and pass timings on this machine's GPU.
     Bench(commands::bench::BenchArgs),
+    /// Make an MP4 video of a view with the playhead moving through the song, and its sound.
+    Video(Box<commands::video::VideoArgs>),
 }
 
 fn parse_view(name: &str) -> Result<loudscape::render::scene::ViewKind, String> {
@@ -203,6 +205,7 @@ fn main() -> ExitCode {
         Some(Command::Voxelize(args)) => commands::voxelize::run(args),
         Some(Command::Mesh(args)) => commands::mesh::run(args),
         Some(Command::Bench(args)) => commands::bench::run(args),
+        Some(Command::Video(args)) => commands::video::run(*args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -8,6 +8,8 @@ pub mod bench_volume;
 pub mod mesh;
 pub mod render;
 pub mod render_compare;
+pub mod video;
+pub mod video_encode;
 pub mod voxelize;
 
 /// `.npy` grids: in the library (`loudscape::data::npy`), where the fuzzers reach them too.

@@ -4,11 +4,12 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use loudscape::data::cloud::PointCloud;
+use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
 use loudscape::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::voxelize::VoxelSettings;
+use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::{TransferPreset, VolumeSettings};
@@ -71,6 +72,9 @@ pub struct RenderArgs {
     /// ebu_r128, atsc_a85; docs/DYNAMICS.md).
     #[arg(long, default_value = "none")]
     pub normalize: String,
+    /// Draw the playhead plane at this time, in seconds into the song (a song cloud).
+    #[arg(long)]
+    pub playhead: Option<f64>,
     /// The PNG file to write (.png; not the input).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -280,6 +284,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         cloud =
             loudscape::ui::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)?;
     }
+    if let Some(seconds) = args.playhead {
+        settings.markers = vec![playhead_marker(&cloud, seconds)?];
+    }
     settings.points.size_px = args
         .point_size
         .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
@@ -317,6 +324,23 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         &format!("{}x{} {}", size.0, size.1, view.name().to_lowercase()),
     );
     Ok(())
+}
+
+/// The playhead plane at `seconds` into the song of `cloud` (whose x axis is time).
+pub fn playhead_marker(cloud: &PointCloud, seconds: f64) -> anyhow::Result<MarkerBox> {
+    if cloud.meta.mode != DataMode::Song {
+        bail!(
+            "{}: --playhead needs a song cloud (its x axis is time)",
+            cloud.path.display()
+        );
+    }
+    if !seconds.is_finite() || seconds < 0.0 {
+        bail!("playhead {seconds} is not a time in seconds (0 or more)");
+    }
+    Ok(MarkerBox::playhead(loudscape::playback::time_to_x(
+        &cloud.meta.axes.x,
+        seconds,
+    )))
 }
 
 /// The settings and camera of a compare render: every option but --view, checked as for one

@@ -66,6 +66,10 @@ pub fn run(
     let renderer = Renderer::new(&gpu.device);
     let mut scene = CompareScene::new(&gpu.device, &renderer, &cloud_a, &cloud_b)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
+    // On the union of both time axes, where the compare draws.
+    if let Some(seconds) = args.playhead {
+        settings.markers = vec![super::render::playhead_marker(&scene.a, seconds)?];
+    }
     let image = render_compare_image(
         &gpu,
         &renderer,

@@ -32,7 +32,7 @@ pub mod screenshot;
 mod shortcuts;
 mod slots;
 mod state;
-mod strip;
+pub mod strip;
 mod timeline_build;
 mod window_screenshot;
 

@@ -96,67 +96,115 @@ pub fn paint_headless(
     target: &RenderTarget,
     paint: impl FnOnce(&egui::Painter, Rect),
 ) {
-    let (w, h) = (target.width, target.height);
-    let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32, h as f32));
-    let ctx = egui::Context::default();
-    let input = egui::RawInput {
-        screen_rect: Some(rect),
-        ..Default::default()
-    };
-    let mut paint = Some(paint);
-    let mut output = ctx.run_ui(input, |ui| {
-        if let Some(paint) = paint.take() {
-            paint(ui.painter(), rect);
-        }
-    });
-    let shapes = std::mem::take(&mut output.shapes);
-    let primitives = ctx.tessellate(shapes, 1.0);
-    let mut renderer = egui_wgpu::Renderer::new(
-        &gpu.device,
-        COLOR_FORMAT,
-        egui_wgpu::RendererOptions::default(),
-    );
-    for (id, deltas) in &output.textures_delta.set {
-        for delta in deltas {
-            renderer.update_texture(&gpu.device, &gpu.queue, *id, delta);
+    HeadlessPainter::new(gpu).paint(gpu, target, paint);
+}
+
+/// egui offscreen, kept between pictures (a video's frames): one context with its font atlas and
+/// one renderer, instead of building both for every picture as [`paint_headless`] does. Draws
+/// the same pixels.
+pub struct HeadlessPainter {
+    ctx: egui::Context,
+    renderer: egui_wgpu::Renderer,
+}
+
+impl HeadlessPainter {
+    pub fn new(gpu: &GpuContext) -> Self {
+        Self {
+            ctx: egui::Context::default(),
+            renderer: egui_wgpu::Renderer::new(
+                &gpu.device,
+                COLOR_FORMAT,
+                egui_wgpu::RendererOptions::default(),
+            ),
         }
     }
-    // Applied above; the renderer is dropped at the end, which frees its textures.
-    output.textures_delta.clear();
-    let screen = egui_wgpu::ScreenDescriptor {
-        size_in_pixels: [w, h],
-        pixels_per_point: 1.0,
-    };
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("screenshot::overlay"),
+
+    /// Runs egui over the whole of `target` (one point a pixel), lets `paint` draw with its
+    /// painter, and renders the shapes into `target` over what it holds.
+    pub fn paint(
+        &mut self,
+        gpu: &GpuContext,
+        target: &RenderTarget,
+        paint: impl FnOnce(&egui::Painter, Rect),
+    ) {
+        self.paint_scaled(gpu, target, 1.0, paint);
+    }
+
+    /// As [`HeadlessPainter::paint`], `pixels_per_point` pixels a point (larger text and lines
+    /// on a larger picture); `paint` gets the rect in points.
+    pub fn paint_scaled(
+        &mut self,
+        gpu: &GpuContext,
+        target: &RenderTarget,
+        pixels_per_point: f32,
+        paint: impl FnOnce(&egui::Painter, Rect),
+    ) {
+        let (w, h) = (target.width, target.height);
+        let ppp = pixels_per_point.max(0.1);
+        let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32 / ppp, h as f32 / ppp));
+        let mut input = egui::RawInput {
+            screen_rect: Some(rect),
+            ..Default::default()
+        };
+        input
+            .viewports
+            .entry(egui::ViewportId::ROOT)
+            .or_default()
+            .native_pixels_per_point = Some(ppp);
+        let mut paint = Some(paint);
+        let mut output = self.ctx.run_ui(input, |ui| {
+            if let Some(paint) = paint.take() {
+                paint(ui.painter(), rect);
+            }
         });
-    let extra =
-        renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
-    {
-        let mut pass = encoder
-            .begin_render_pass(&wgpu::RenderPassDescriptor {
+        let shapes = std::mem::take(&mut output.shapes);
+        let primitives = self.ctx.tessellate(shapes, ppp);
+        let renderer = &mut self.renderer;
+        for (id, deltas) in &output.textures_delta.set {
+            for delta in deltas {
+                renderer.update_texture(&gpu.device, &gpu.queue, *id, delta);
+            }
+        }
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [w, h],
+            pixels_per_point: ppp,
+        };
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("screenshot::overlay"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target.color_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            })
-            .forget_lifetime();
-        renderer.render(&mut pass, &primitives, &screen);
+            });
+        let extra =
+            renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
+        {
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("screenshot::overlay"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &target.color_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime();
+            renderer.render(&mut pass, &primitives, &screen);
+        }
+        gpu.queue
+            .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+        for id in &output.textures_delta.free {
+            renderer.free_texture(id);
+        }
+        // Every delta was applied above.
+        output.textures_delta.clear();
     }
-    gpu.queue
-        .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
 }
 
 /// Writes `image` to `path` as PNG: first to `PATH.partial` beside it, then renamed; the partial

@@ -94,6 +94,27 @@ impl LoudnessStrip {
         self.curves.is_some()
     }
 
+    /// The strip of `cloud` on its own (a video draws it under the view); `None` when the
+    /// cloud carries no loudness curves.
+    pub fn for_cloud(cloud: &PointCloud) -> Option<Self> {
+        let mut strip = Self::default();
+        strip.sync(u64::MAX, cloud);
+        strip.has_curves().then_some(strip)
+    }
+
+    /// The song's length the strip's time axis spans, seconds.
+    pub fn duration_s(&self) -> f64 {
+        self.duration_s
+    }
+
+    /// The plot area of a strip drawn in `rect` (the time axis runs across it).
+    pub fn plot_rect(rect: Rect) -> Rect {
+        Rect::from_min_max(
+            Pos2::new(rect.left() + LEFT, rect.top() + OVERS_BAND + 3.0),
+            Pos2::new(rect.right() - RIGHT, rect.bottom() - 14.0),
+        )
+    }
+
     /// Draws the strip at the full width of `ui`, the playhead at `playhead_s`; returns the
     /// time to seek to when the strip was clicked or dragged.
     pub fn show(&self, ui: &mut egui::Ui, playhead_s: f64) -> Option<f64> {
@@ -103,11 +124,51 @@ impl LoudnessStrip {
             Sense::click_and_drag(),
         );
         let painter = ui.painter_at(rect);
+        self.paint(&painter, rect, Some(playhead_s));
+        let plot = Self::plot_rect(rect);
+        let duration = self.duration_s;
+        let small = FontId::proportional(10.0);
+        if let Some(pos) = response.hover_pos() {
+            let t = time_of_x(pos.x, plot.left(), plot.right(), duration);
+            let index = ((t - curves.short_term_start_s) * curves.rate_hz).round();
+            let at = |values: &[Option<f32>]| {
+                (index >= 0.0)
+                    .then(|| values.get(index as usize).copied().flatten())
+                    .flatten()
+            };
+            let mut text = format_clock(t);
+            if let Some(v) = at(&curves.short_term_lufs) {
+                text.push_str(&format!("  short-term {v:.1} LUFS"));
+            }
+            if let Some(v) = at(&curves.psr_db) {
+                text.push_str(&format!("  PSR {v:.1} dB"));
+            }
+            painter.text(
+                Pos2::new(plot.right() - 4.0, plot.top() + 2.0),
+                Align2::RIGHT_TOP,
+                text,
+                small,
+                Color32::from_gray(220),
+            );
+        }
+        let seek = (response.clicked() || response.dragged())
+            .then(|| response.interact_pointer_pos())
+            .flatten()
+            .map(|p| time_of_x(p.x, plot.left(), plot.right(), duration));
+        if seek.is_some() {
+            ui.ctx().request_repaint();
+        }
+        seek
+    }
+
+    /// Paints the strip into `rect` with `painter`: background, axes, legend, overs, curves and
+    /// (when given) the playhead.
+    pub fn paint(&self, painter: &egui::Painter, rect: Rect, playhead_s: Option<f64>) {
+        let Some(curves) = self.curves.as_ref() else {
+            return;
+        };
         painter.rect_filled(rect, 0.0, Color32::from_gray(18));
-        let plot = Rect::from_min_max(
-            Pos2::new(rect.left() + LEFT, rect.top() + OVERS_BAND + 3.0),
-            Pos2::new(rect.right() - RIGHT, rect.bottom() - 14.0),
-        );
+        let plot = Self::plot_rect(rect);
         let duration = self.duration_s;
         let x = |t: f64| x_of_time(t, plot.left(), plot.right(), duration);
         let (low, high) = lufs_range(curves);
@@ -233,42 +294,13 @@ impl LoudnessStrip {
             &y_lufs,
             Stroke::new(2.0, SHORT_TERM),
         );
-        let head = x(playhead_s);
-        painter.line_segment(
-            [Pos2::new(head, rect.top()), Pos2::new(head, plot.bottom())],
-            Stroke::new(1.5, Color32::WHITE),
-        );
-        if let Some(pos) = response.hover_pos() {
-            let t = time_of_x(pos.x, plot.left(), plot.right(), duration);
-            let index = ((t - curves.short_term_start_s) * curves.rate_hz).round();
-            let at = |values: &[Option<f32>]| {
-                (index >= 0.0)
-                    .then(|| values.get(index as usize).copied().flatten())
-                    .flatten()
-            };
-            let mut text = format_clock(t);
-            if let Some(v) = at(&curves.short_term_lufs) {
-                text.push_str(&format!("  short-term {v:.1} LUFS"));
-            }
-            if let Some(v) = at(&curves.psr_db) {
-                text.push_str(&format!("  PSR {v:.1} dB"));
-            }
-            painter.text(
-                Pos2::new(plot.right() - 4.0, plot.top() + 2.0),
-                Align2::RIGHT_TOP,
-                text,
-                small,
-                Color32::from_gray(220),
+        if let Some(playhead_s) = playhead_s {
+            let head = x(playhead_s);
+            painter.line_segment(
+                [Pos2::new(head, rect.top()), Pos2::new(head, plot.bottom())],
+                Stroke::new(1.5, Color32::WHITE),
             );
         }
-        let seek = (response.clicked() || response.dragged())
-            .then(|| response.interact_pointer_pos())
-            .flatten()
-            .map(|p| time_of_x(p.x, plot.left(), plot.right(), duration));
-        if seek.is_some() {
-            ui.ctx().request_repaint();
-        }
-        seek
     }
 }
 

@@ -1,0 +1,765 @@
+//! `loudscape video SONG -o out.mp4`: the view `render` draws, frame after frame, with the
+//! playhead moving through the data in step with the song, the song's passage as the sound
+//! track, and the loudness strip under the view; encoded by ffmpeg (`video_encode`).
+//!
+//! Frame k shows the playhead at `start + k / fps`, exactly what `render --playhead` draws for
+//! that time (the same passes, labels and legend). A timeline sweeps across its years instead,
+//! the title of the song under the sweep on top, over a silent sound track.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use eframe::egui::{self, Color32, FontId, Pos2};
+use glam::Vec3;
+use loudscape::data::cloud::{DataMode, PointCloud};
+use loudscape::data::freq_axis::FreqAxis;
+use loudscape::render::compare::CompareScene;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::markers::MarkerBox;
+use loudscape::render::points::PointStyle;
+use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::ui::compare_shot::{CompareView, render_compare_image};
+use loudscape::ui::labels::AxisLabels;
+use loudscape::ui::legends::PictureLegend;
+use loudscape::ui::screenshot::HeadlessPainter;
+use loudscape::ui::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
+
+use super::args::{check_iso, check_output, load_cloud, parse_camera, parse_method, parse_size};
+use super::render::{ColourArgs, VolumeArgs, prepare_grid};
+use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound};
+
+/// The largest frame: 4K UHD (either way round).
+pub const MAX_PIXELS: u64 = 3840 * 2160;
+/// How fast `--camera orbit` turns: degrees a second (a turn in 40 s).
+pub const ORBIT_DEGREES_PER_S: f32 = 9.0;
+/// How close `--camera follow` comes: its distance as a share of the fitted one.
+pub const FOLLOW_DISTANCE: f32 = 0.55;
+
+#[derive(clap::Args, Debug)]
+pub struct VideoArgs {
+    /// The point cloud (.ply), or an audio file (WAV, FLAC, Ogg, MP3...), extracted by loudscape-extract and cached.
+    pub input: PathBuf,
+    /// What to draw: points, surface or volume; compare or difference with --compare; timeline
+    /// (the points of a timeline cloud; any view of a timeline sweeps across its years).
+    #[arg(long, default_value = "points")]
+    pub view: String,
+    /// Camera motion: fixed (still), orbit (a slow turn, 9 degrees a second) or follow
+    /// (travels along the time axis with the playhead).
+    #[arg(long, default_value = "fixed")]
+    pub camera: String,
+    /// The camera to start from, as AZ,EL,DIST (as `render --camera`); fitted when omitted.
+    #[arg(long, allow_hyphen_values = true)]
+    pub camera_at: Option<String>,
+    /// Frame size as WIDTHxHEIGHT: even sides, at most 3840x2160 pixels.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Frames a second (1 to 120).
+    #[arg(long, default_value_t = 30)]
+    pub fps: u32,
+    /// Start of the passage, seconds into the song (default: its start).
+    #[arg(long)]
+    pub start: Option<f64>,
+    /// End of the passage, seconds into the song (default: its end).
+    #[arg(long)]
+    pub end: Option<f64>,
+    /// A timeline's sweep: how long it takes to cross the years, seconds.
+    #[arg(long, default_value_t = 20.0)]
+    pub sweep: f64,
+    /// Level of detail: full (every point, the volume's full ray step: what `render` draws),
+    /// fast (the window's level of detail while the camera moves: at most 40,000 points, a
+    /// coarser ray step) or auto (fast on a software rasterizer such as lavapipe, else full).
+    #[arg(long, default_value = "auto")]
+    pub detail: String,
+    /// Leave out the loudness strip under the view (drawn for songs with loudness curves when
+    /// the frame is at least 360 pixels tall).
+    #[arg(long)]
+    pub no_strip: bool,
+    /// Make the sound track silent instead of the song's audio.
+    #[arg(long)]
+    pub silent: bool,
+    /// Point disc diameter in pixels (default: by the number of points).
+    #[arg(long)]
+    pub point_size: Option<f32>,
+    /// Surface extraction method: mt (marching tetrahedra) or dc (dual contouring).
+    #[arg(long, default_value = "mt")]
+    pub method: String,
+    /// Surface isovalue in [0, 1] of the normalized loudness density.
+    #[arg(long, default_value_t = 0.5)]
+    pub iso: f32,
+    /// Leave out the axis labels.
+    #[arg(long)]
+    pub no_labels: bool,
+    /// Leave out the legend (colour key and name).
+    #[arg(long)]
+    pub no_legend: bool,
+    #[command(flatten)]
+    pub colours: ColourArgs,
+    /// Frequency axis of a song cloud: linear, log or mel.
+    #[arg(long, default_value = "linear")]
+    pub freq_axis: String,
+    /// A second cloud to compare with (B); --view is then compare or difference.
+    #[arg(long)]
+    pub compare: Option<PathBuf>,
+    /// With --view compare: how each half is drawn (points, surface or volume).
+    #[arg(long, default_value = "points")]
+    pub compare_as: String,
+    /// With --view difference: density or level.
+    #[arg(long, default_value = "density")]
+    pub measure: String,
+    #[command(flatten)]
+    pub volume: VolumeArgs,
+    /// Progress report: auto (a line on a terminal), json (a JSON object a line on stdout:
+    /// frame, frames, fps, eta_s) or none.
+    #[arg(long, default_value = "auto")]
+    pub progress: String,
+    /// H.264 quality, x264's constant rate factor (0 to 51, lower is better).
+    #[arg(long, default_value_t = 18)]
+    pub crf: u32,
+    /// The MP4 file to write (.mp4; not the input).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Camera motion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraMotion {
+    Fixed,
+    Orbit,
+    Follow,
+}
+
+impl CameraMotion {
+    pub fn parse(text: &str) -> anyhow::Result<Self> {
+        match text.to_ascii_lowercase().as_str() {
+            "fixed" => Ok(Self::Fixed),
+            "orbit" => Ok(Self::Orbit),
+            "follow" => Ok(Self::Follow),
+            _ => bail!("--camera '{text}' is not one of fixed, orbit, follow"),
+        }
+    }
+
+    /// The camera at `elapsed_s` into the video whose playhead is at world x `head_x`.
+    pub fn camera(self, base: Camera, elapsed_s: f64, head_x: f32) -> Camera {
+        let mut camera = base;
+        match self {
+            Self::Fixed => {}
+            Self::Orbit => {
+                camera.azimuth = (base.azimuth
+                    + (ORBIT_DEGREES_PER_S * elapsed_s as f32).to_radians())
+                .rem_euclid(std::f32::consts::TAU);
+            }
+            Self::Follow => {
+                camera.target.x = head_x;
+                camera.distance = base.distance * FOLLOW_DISTANCE;
+            }
+        }
+        camera
+    }
+}
+
+/// Checks a video frame size: even sides (yuv420p halves the colour planes), 4K at most.
+pub fn check_video_size(size: (u32, u32)) -> anyhow::Result<()> {
+    let (w, h) = size;
+    if w % 2 != 0 || h % 2 != 0 {
+        bail!(
+            "size {w}x{h}: a video's sides must be even (H.264 in yuv420p), e.g. {}x{}",
+            w & !1,
+            h & !1
+        );
+    }
+    if u64::from(w) * u64::from(h) > MAX_PIXELS || w.max(h) > 3840 {
+        bail!("size {w}x{h} is larger than 3840x2160");
+    }
+    Ok(())
+}
+
+/// The passage of a song `duration_s` long: (start, end), checked.
+pub fn passage(
+    start: Option<f64>,
+    end: Option<f64>,
+    duration_s: f64,
+) -> anyhow::Result<(f64, f64)> {
+    let start = start.unwrap_or(0.0);
+    let end = end.unwrap_or(duration_s);
+    if !start.is_finite() || start < 0.0 {
+        bail!("--start {start} is not a time in seconds (0 or more)");
+    }
+    if !end.is_finite() || end <= start {
+        bail!("--end {end} must come after --start {start}");
+    }
+    if end > duration_s + 1e-3 {
+        bail!("--end {end} is past the end of the song ({duration_s:.3} s)");
+    }
+    Ok((start, end))
+}
+
+/// The number of frames of a passage of `seconds` at `fps` (at least one).
+pub fn frame_count(seconds: f64, fps: u32) -> u64 {
+    ((seconds * f64::from(fps)).round() as u64).max(1)
+}
+
+/// What one video draws, and how.
+struct Plan {
+    size: (u32, u32),
+    view_height: u32,
+    fps: u32,
+    frames: u64,
+    /// Song time of frame 0 (seconds), or the sweep's length for a timeline.
+    start_s: f64,
+    motion: CameraMotion,
+    fast: bool,
+    timeline: bool,
+}
+
+enum Drawn {
+    One {
+        cloud: Box<PointCloud>,
+        data: Box<SceneData>,
+        labels: Option<AxisLabels>,
+        legend: Option<PictureLegend>,
+        overlay: Box<HeadlessPainter>,
+    },
+    Compare {
+        scene: Box<CompareScene>,
+        what: CompareView,
+        labels: bool,
+    },
+}
+
+pub fn run(args: VideoArgs) -> anyhow::Result<()> {
+    let mut inputs = vec![args.input.as_path()];
+    inputs.extend(args.compare.as_deref());
+    check_output(&args.output, &["mp4"], &inputs)?;
+    super::video_encode::find_ffmpeg()?;
+    let size = parse_size(&args.size)?;
+    check_video_size(size)?;
+    if !(1..=120).contains(&args.fps) {
+        bail!("--fps {} is out of range 1 to 120", args.fps);
+    }
+    if args.crf > 51 {
+        bail!("--crf {} is out of range 0 to 51", args.crf);
+    }
+    let motion = CameraMotion::parse(&args.camera)?;
+    let progress_mode = ProgressMode::parse(&args.progress)?;
+    let base_camera = match &args.camera_at {
+        Some(text) => {
+            let (az, el, dist) = parse_camera(text)?;
+            Some(Camera::from_angles(az, el, dist))
+        }
+        None => None,
+    };
+    if let Some(size) = args.point_size
+        && !(0.5..=64.0).contains(&size)
+    {
+        bail!("point size {size} is out of range 0.5 to 64 pixels");
+    }
+    let view_name = args.view.to_ascii_lowercase();
+    let compare_view = match &args.compare {
+        Some(_) => Some(super::render_compare::parse_compare_view(
+            &view_name,
+            &args.compare_as,
+            &args.measure,
+        )?),
+        None => None,
+    };
+    let view = match view_name.as_str() {
+        "timeline" => ViewKind::Points,
+        _ if compare_view.is_some() => ViewKind::Points,
+        "compare" | "difference" => bail!("--view {view_name} needs a second cloud: --compare B"),
+        name => ViewKind::parse(name).with_context(|| {
+            format!(
+                "view '{name}' is not one of points, surface, volume, compare, difference, timeline"
+            )
+        })?,
+    };
+    let freq_axis = FreqAxis::parse(&args.freq_axis).with_context(|| {
+        format!(
+            "frequency axis '{}' is not one of linear, log, mel",
+            args.freq_axis
+        )
+    })?;
+    let detail = args.detail.to_ascii_lowercase();
+    if !["auto", "full", "fast"].contains(&detail.as_str()) {
+        bail!("--detail '{}' is not one of auto, full, fast", args.detail);
+    }
+    let mut settings = RenderSettings {
+        view,
+        ..Default::default()
+    };
+    settings.surface.method = parse_method(&args.method)?;
+    settings.surface.iso_value = check_iso(args.iso)?;
+    args.volume.apply(&mut settings)?;
+    args.colours.apply(&mut settings)?;
+
+    let cloud = load_cloud(&args.input)?;
+    let timeline = cloud.meta.mode == DataMode::Timeline;
+    if view_name == "timeline" && !timeline {
+        bail!(
+            "{}: --view timeline needs a timeline cloud",
+            args.input.display()
+        );
+    }
+    if cloud.meta.mode == DataMode::Generic {
+        bail!(
+            "{}: a video needs a song or a timeline (this cloud has no time axis)",
+            args.input.display()
+        );
+    }
+    // The passage and its sound.
+    let (start_s, seconds, sound) = if timeline {
+        if args.start.is_some() || args.end.is_some() {
+            bail!("--start/--end choose a song's passage; a timeline takes --sweep SECONDS");
+        }
+        if !(args.sweep.is_finite() && (1.0..=3600.0).contains(&args.sweep)) {
+            bail!("--sweep {} is out of range 1 to 3600 seconds", args.sweep);
+        }
+        (0.0, args.sweep, Sound::Silence)
+    } else {
+        let duration = song_duration(&cloud);
+        let (start, end) = passage(args.start, args.end, duration)?;
+        let sound = if args.silent {
+            Sound::Silence
+        } else {
+            let path = loudscape::playback::resolve_source(&cloud).map_err(|e| {
+                anyhow::anyhow!("{e}; pass --silent for a video without the song's sound")
+            })?;
+            check_output(&args.output, &["mp4"], &[path.as_path()])?;
+            Sound::Passage {
+                path,
+                start_s: start,
+                duration_s: end - start,
+            }
+        };
+        (start, end - start, sound)
+    };
+    let frames = frame_count(seconds, args.fps);
+    let strip = (!timeline && !args.no_strip && size.1 >= 360 && compare_view.is_none())
+        .then(|| LoudnessStrip::for_cloud(&cloud))
+        .flatten();
+    let strip_height = if strip.is_some() {
+        strip_height_for(size.1)
+    } else {
+        0
+    };
+    let view_height = size.1 - strip_height;
+
+    let gpu = GpuContext::new_headless()?;
+    let fast = match detail.as_str() {
+        "full" => false,
+        "fast" => true,
+        _ => gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu,
+    };
+    let renderer = Renderer::new(&gpu.device);
+    let mut drawn = match (&args.compare, compare_view) {
+        (Some(compare), Some(what)) => {
+            let cloud_b = load_cloud(compare)?;
+            settings.points.size_px = args.point_size.unwrap_or_else(|| {
+                PointStyle::size_for(cloud.points.len().max(cloud_b.points.len()))
+            });
+            let scene = CompareScene::new(&gpu.device, &renderer, &cloud, &cloud_b)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            Drawn::Compare {
+                scene: Box::new(scene),
+                what,
+                labels: !args.no_labels,
+            }
+        }
+        _ => {
+            settings.points.size_px = args
+                .point_size
+                .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
+            let mut data = SceneData::upload(&gpu.device, &gpu.queue, &renderer, &cloud);
+            data.set_freq_axis(&gpu.device, &renderer, &cloud, freq_axis)
+                .map_err(anyhow::Error::msg)?;
+            if matches!(view, ViewKind::Volume | ViewKind::Surface) {
+                prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
+            }
+            let labels =
+                (!args.no_labels).then(|| loudscape::ui::labels::axis_labels(&cloud, &data));
+            let legend = (!args.no_legend)
+                .then(|| loudscape::ui::legends::picture_legend(&cloud, &settings));
+            Drawn::One {
+                cloud: Box::new(cloud),
+                data: Box::new(data),
+                labels,
+                legend,
+                overlay: Box::new(HeadlessPainter::new(&gpu)),
+            }
+        }
+    };
+    let plan = Plan {
+        size,
+        view_height,
+        fps: args.fps,
+        frames,
+        start_s,
+        motion,
+        fast,
+        timeline,
+    };
+    let strip_image = match &strip {
+        Some(strip) => Some(render_strip(&gpu, strip, size.0, strip_height)?),
+        None => None,
+    };
+    let spec = EncodeSpec {
+        width: size.0,
+        height: size.1,
+        fps: args.fps,
+        frames,
+        sound,
+        crf: args.crf,
+    };
+    let mut encoder = Encoder::start(&spec, &args.output)?;
+    let mut progress = Progress::new(progress_mode, frames);
+    let base = base_camera;
+    let result = (|| -> anyhow::Result<()> {
+        for k in 0..frames {
+            let image = render_video_frame(&gpu, &renderer, &mut drawn, &plan, &settings, base, k)?;
+            let frame = match (&strip, &strip_image) {
+                (Some(strip), Some(strip_image)) => {
+                    let t = plan.start_s + k as f64 / f64::from(plan.fps);
+                    stack_with_strip(&image, strip_image, strip, t)
+                }
+                _ => image,
+            };
+            encoder.push(frame.as_raw())?;
+            progress.frame(k + 1);
+        }
+        Ok(())
+    })();
+    if let Err(e) = result {
+        progress.abandon();
+        return Err(e);
+    }
+    encoder.finish()?;
+    let detail_text = format!(
+        "{}x{}, {frames} frames at {} fps, {}{}",
+        size.0,
+        size.1,
+        args.fps,
+        loudscape::playback::format_clock(frames as f64 / f64::from(args.fps)),
+        if fast { ", fast detail" } else { "" }
+    );
+    super::wrote(&args.output, &detail_text);
+    Ok(())
+}
+
+/// The song's length: the source's duration as recorded, else the end of the time axis.
+fn song_duration(cloud: &PointCloud) -> f64 {
+    cloud
+        .meta
+        .source
+        .as_ref()
+        .and_then(|s| s.duration_s)
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .unwrap_or_else(|| cloud.meta.axes.x.value_at(1.0))
+}
+
+/// Frame `k` of the video, without the strip.
+fn render_video_frame(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    drawn: &mut Drawn,
+    plan: &Plan,
+    settings: &RenderSettings,
+    base_camera: Option<Camera>,
+    k: u64,
+) -> anyhow::Result<image::RgbaImage> {
+    let elapsed = k as f64 / f64::from(plan.fps);
+    let (w, h) = (plan.size.0, plan.view_height);
+    let mut settings = settings.clone();
+    match drawn {
+        Drawn::One {
+            cloud,
+            data,
+            labels,
+            legend,
+            overlay,
+        } => {
+            let (head, title) = if plan.timeline {
+                let u = if plan.frames > 1 {
+                    k as f64 / (plan.frames - 1) as f64
+                } else {
+                    0.0
+                };
+                let x = (-1.0 + 2.0 * u) as f32;
+                let song = song_at(cloud, x);
+                settings.markers = timeline_markers(cloud, x, song);
+                (x, song.map(|i| song_title(cloud, i)))
+            } else {
+                let x = loudscape::playback::time_to_x(&cloud.meta.axes.x, plan.start_s + elapsed);
+                settings.markers = vec![MarkerBox::playhead(x)];
+                (x, None)
+            };
+            let fitted = FrameView::fitted(
+                Camera::default(),
+                data.world_from_data,
+                data.world_box(),
+                w,
+                h,
+            )
+            .camera;
+            let base = base_camera.unwrap_or(fitted);
+            let head_x = data
+                .world_from_data
+                .transform_point3(Vec3::new(head, 0.0, 0.0))
+                .x;
+            let camera = plan.motion.camera(base, elapsed, head_x);
+            let mut view = FrameView::at_rest(camera, data.world_from_data, w, h);
+            view.moving = plan.fast;
+            view.frame_index = k as u32;
+            let target = loudscape::render::headless::render_frame(
+                gpu,
+                renderer,
+                Some(data),
+                &view,
+                &settings,
+            );
+            if labels.is_some() || legend.is_some() || title.is_some() {
+                let background = settings.colours.background;
+                overlay.paint(gpu, &target, |painter, rect| {
+                    if let Some(labels) = labels.as_ref() {
+                        loudscape::ui::labels::paint_on(painter, rect, &view, labels, background);
+                    }
+                    if let Some(legend) = legend.as_ref() {
+                        loudscape::ui::legends::paint_picture(painter, rect, legend);
+                    }
+                    if let Some(title) = &title {
+                        paint_title(painter, rect, title, background);
+                    }
+                });
+            }
+            Ok(target
+                .read_rgba(&gpu.device, &gpu.queue)
+                .context("reading a frame back from the GPU")?)
+        }
+        Drawn::Compare {
+            scene,
+            what,
+            labels,
+        } => {
+            let x = loudscape::playback::time_to_x(&scene.a.meta.axes.x, plan.start_s + elapsed);
+            settings.markers = vec![MarkerBox::playhead(x)];
+            // Fixed and fitted: the compare's own framing; otherwise from the fitted camera of
+            // a half (both halves share one box and one camera).
+            let camera = match (base_camera, plan.motion) {
+                (None, CameraMotion::Fixed) => None,
+                (base, motion) => {
+                    let data = &scene.data_a;
+                    let base = base.unwrap_or_else(|| {
+                        let mut view = FrameView::fitted(
+                            Camera::default(),
+                            data.world_from_data,
+                            data.world_box(),
+                            w / 2,
+                            h,
+                        );
+                        view.camera.zoom(-2.0);
+                        view.camera
+                    });
+                    let head_x = data
+                        .world_from_data
+                        .transform_point3(Vec3::new(x, 0.0, 0.0))
+                        .x;
+                    Some(motion.camera(base, elapsed, head_x))
+                }
+            };
+            render_compare_image(
+                gpu,
+                renderer,
+                scene,
+                *what,
+                camera,
+                (w, h),
+                &settings,
+                *labels,
+            )
+        }
+    }
+}
+
+/// The timeline song under `x`, or else the nearest one (songs are bands with gaps between).
+fn song_at(cloud: &PointCloud, x: f32) -> Option<usize> {
+    let x = f64::from(x);
+    let distance = |a: f64, b: f64| {
+        if x < a {
+            a - x
+        } else if x > b {
+            x - b
+        } else {
+            0.0
+        }
+    };
+    cloud
+        .meta
+        .songs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| Some((i, distance(s.x_min?, s.x_max?))))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
+}
+
+/// "Title · Artist (1994)" of timeline song `i`.
+fn song_title(cloud: &PointCloud, i: usize) -> String {
+    let song = &cloud.meta.songs[i];
+    let mut text = if song.title.trim().is_empty() {
+        song.path
+            .as_deref()
+            .and_then(|p| std::path::Path::new(p).file_stem())
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| format!("song {}", i + 1))
+    } else {
+        song.title.trim().to_string()
+    };
+    if !song.artist.trim().is_empty() {
+        text.push_str(" · ");
+        text.push_str(song.artist.trim());
+    }
+    if let Some(year) = song.year {
+        text.push_str(&format!(" ({year})"));
+    }
+    text
+}
+
+/// The sweep's plane and the span of the song under it.
+fn timeline_markers(cloud: &PointCloud, x: f32, song: Option<usize>) -> Vec<MarkerBox> {
+    let mut markers = Vec::new();
+    if let Some(song) = song.and_then(|i| cloud.meta.songs.get(i))
+        && let (Some(a), Some(b)) = (song.x_min, song.x_max)
+    {
+        markers.push(MarkerBox::x_span(
+            a as f32,
+            b as f32,
+            [1.0, 1.0, 1.0, 0.12],
+            [1.0, 1.0, 1.0, 0.6],
+        ));
+    }
+    markers.push(MarkerBox::playhead(x));
+    markers
+}
+
+fn paint_title(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    title: &str,
+    background: loudscape::render::colormap::Background,
+) {
+    let size = (rect.height() / 22.0).clamp(14.0, 64.0);
+    let ink = background.ink(true);
+    let galley = painter.layout_no_wrap(
+        title.to_string(),
+        FontId::proportional(size),
+        Color32::from_rgb(ink[0], ink[1], ink[2]),
+    );
+    let at = Pos2::new(
+        rect.center().x - galley.size().x / 2.0,
+        rect.bottom() - size * 2.2,
+    );
+    let plate = egui::Rect::from_min_size(at, galley.size()).expand(size * 0.3);
+    painter.rect_filled(
+        plate,
+        size * 0.2,
+        loudscape::ui::labels::label_plate(background),
+    );
+    painter.galley(at, galley, Color32::WHITE);
+}
+
+/// The strip's height in a frame `frame_height` pixels tall: the window's at 720 lines and
+/// below, in proportion above (so 1080p and 4K read alike); even, as the frame's sides are.
+pub fn strip_height_for(frame_height: u32) -> u32 {
+    let scale = (f64::from(frame_height) / 720.0).max(1.0);
+    2 * (f64::from(STRIP_HEIGHT) / 2.0 * scale).round() as u32
+}
+
+/// The strip of the song, without a playhead, `width` x `height` pixels.
+fn render_strip(
+    gpu: &GpuContext,
+    strip: &LoudnessStrip,
+    width: u32,
+    height: u32,
+) -> anyhow::Result<image::RgbaImage> {
+    let target = loudscape::render::gpu::target::RenderTarget::new(&gpu.device, width, height);
+    let ppp = height as f32 / STRIP_HEIGHT;
+    HeadlessPainter::new(gpu).paint_scaled(gpu, &target, ppp, |painter, rect| {
+        strip.paint(painter, rect, None)
+    });
+    target
+        .read_rgba(&gpu.device, &gpu.queue)
+        .context("reading the loudness strip back from the GPU")
+}
+
+/// The view over the strip, with the strip's playhead at `t` seconds.
+fn stack_with_strip(
+    view: &image::RgbaImage,
+    strip_image: &image::RgbaImage,
+    strip: &LoudnessStrip,
+    t: f64,
+) -> image::RgbaImage {
+    let (w, vh) = view.dimensions();
+    let sh = strip_image.height();
+    let mut frame = image::RgbaImage::new(w, vh + sh);
+    image::imageops::replace(&mut frame, view, 0, 0);
+    image::imageops::replace(&mut frame, strip_image, 0, i64::from(vh));
+    // The strip was painted in points, STRIP_HEIGHT tall; back to pixels.
+    let ppp = sh as f32 / STRIP_HEIGHT;
+    let rect = egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32 / ppp, STRIP_HEIGHT));
+    let plot = LoudnessStrip::plot_rect(rect);
+    let plot = egui::Rect::from_min_max(
+        Pos2::new(plot.left() * ppp, plot.top() * ppp),
+        Pos2::new(plot.right() * ppp, plot.bottom() * ppp),
+    );
+    let x = x_of_time(t, plot.left(), plot.right(), strip.duration_s());
+    let half_width = 0.75 * ppp;
+    let (x0, x1) = (
+        (x - half_width).floor().max(0.0) as u32,
+        (x + half_width).ceil() as u32,
+    );
+    for px in x0..x1.min(w) {
+        for py in 0..(plot.bottom().ceil() as u32).min(sh) {
+            frame.put_pixel(px, vh + py, image::Rgba([255, 255, 255, 255]));
+        }
+    }
+    frame
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_passages_and_frames() {
+        assert!(check_video_size((1280, 720)).is_ok());
+        assert!(check_video_size((3840, 2160)).is_ok());
+        assert!(check_video_size((2160, 3840)).is_ok());
+        assert!(check_video_size((1281, 720)).is_err());
+        assert!(check_video_size((7680, 4320)).is_err());
+        assert_eq!(passage(None, None, 30.0).unwrap(), (0.0, 30.0));
+        assert_eq!(passage(Some(2.0), Some(3.5), 30.0).unwrap(), (2.0, 3.5));
+        assert!(passage(Some(3.0), Some(2.0), 30.0).is_err());
+        assert!(passage(None, Some(31.0), 30.0).is_err());
+        assert!(passage(Some(-1.0), None, 30.0).is_err());
+        assert_eq!(frame_count(1.0, 30), 30);
+        assert_eq!(frame_count(2.5, 24), 60);
+        assert_eq!(frame_count(0.001, 24), 1);
+        assert_eq!(strip_height_for(360), 118);
+        assert_eq!(strip_height_for(720), 118);
+        assert_eq!(strip_height_for(1080), 178);
+        assert_eq!(strip_height_for(2160), 354);
+    }
+
+    #[test]
+    fn camera_motions() {
+        let base = Camera::from_angles(-35.0, 25.0, 4.0);
+        assert_eq!(CameraMotion::Fixed.camera(base, 10.0, 0.5), base);
+        let orbit = CameraMotion::Orbit.camera(base, 10.0, 0.5);
+        let turned = (orbit.azimuth - base.azimuth).rem_euclid(std::f32::consts::TAU);
+        assert!((turned - 90f32.to_radians()).abs() < 1e-4, "{turned}");
+        let follow = CameraMotion::Follow.camera(base, 10.0, 0.5);
+        assert_eq!(follow.target.x, 0.5);
+        assert!(follow.distance < base.distance);
+        assert!(CameraMotion::parse("spin").is_err());
+    }
+}
