@@ -197,7 +197,7 @@ fn main() -> ExitCode {
                 press: cli.press,
             })
         }),
-        Some(Command::Render(args)) => match args.compare.clone() {
+        Some(Command::Render(args)) => match args.draw.compare.clone() {
             Some(compare) => commands::render_compare::run_args(*args, &compare),
             None => commands::render::run(*args),
         },

@@ -35,6 +35,21 @@ pub struct RenderArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
+    #[command(flatten)]
+    pub draw: DrawArgs,
+    /// Draw the playhead plane at this time, in seconds into the song (a song cloud).
+    #[arg(long)]
+    pub playhead: Option<f64>,
+    /// The PNG file to write (.png; not the input).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Colour maps and background of a picture.
+/// How a cloud is drawn, shared by `render` and `video`: points, surface, annotations, colours,
+/// frequency axis, the compare cloud, the volume and the playback normalization.
+#[derive(clap::Args, Debug)]
+pub struct DrawArgs {
     /// Point disc diameter in pixels (default: by the number of points).
     #[arg(long)]
     pub point_size: Option<f32>,
@@ -72,15 +87,30 @@ pub struct RenderArgs {
     /// ebu_r128, atsc_a85; docs/DYNAMICS.md).
     #[arg(long, default_value = "none")]
     pub normalize: String,
-    /// Draw the playhead plane at this time, in seconds into the song (a song cloud).
-    #[arg(long)]
-    pub playhead: Option<f64>,
-    /// The PNG file to write (.png; not the input).
-    #[arg(short, long)]
-    pub output: PathBuf,
 }
 
-/// Colour maps and background of a picture.
+impl DrawArgs {
+    /// Refuses an unknown `--normalize` preset before anything is loaded or extracted.
+    pub fn check_normalize(&self) -> anyhow::Result<()> {
+        loudscape::ui::normalize::parse_preset(&self.normalize)
+            .map(|_| ())
+            .map_err(anyhow::Error::msg)
+    }
+
+    /// `cloud` as heard under `--normalize` (a timeline's songs shifted by their playback
+    /// gain); unchanged with `none`. An unknown preset is refused.
+    pub fn heard(&self, cloud: PointCloud) -> anyhow::Result<PointCloud> {
+        let preset =
+            loudscape::ui::normalize::parse_preset(&self.normalize).map_err(anyhow::Error::msg)?;
+        match preset {
+            Some(preset) => {
+                loudscape::ui::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)
+            }
+            None => Ok(cloud),
+        }
+    }
+}
+
 #[derive(clap::Args, Debug, Clone)]
 pub struct ColourArgs {
     /// hp colour map of points, surface and hp tint: classic, puor, cividis or viridis.
@@ -261,33 +291,29 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    if let Some(size) = args.point_size
+    if let Some(size) = args.draw.point_size
         && !(0.5..=64.0).contains(&size)
     {
         bail!("point size {size} is out of range 0.5 to 64 pixels");
     }
-    let method = parse_method(&args.method)?;
-    let iso_value = check_iso(args.iso)?;
-    let freq_axis = parse_freq_axis(&args.freq_axis)?;
+    let method = parse_method(&args.draw.method)?;
+    let iso_value = check_iso(args.draw.iso)?;
+    let freq_axis = parse_freq_axis(&args.draw.freq_axis)?;
     let mut settings = RenderSettings {
         view,
         ..Default::default()
     };
     settings.surface.method = method;
     settings.surface.iso_value = iso_value;
-    args.volume.apply(&mut settings)?;
-    args.colours.apply(&mut settings)?;
-    let preset =
-        loudscape::ui::normalize::parse_preset(&args.normalize).map_err(anyhow::Error::msg)?;
-    let mut cloud = load_cloud(&args.input)?;
-    if let Some(preset) = preset {
-        cloud =
-            loudscape::ui::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)?;
-    }
+    args.draw.volume.apply(&mut settings)?;
+    args.draw.colours.apply(&mut settings)?;
+    args.draw.check_normalize()?;
+    let mut cloud = args.draw.heard(load_cloud(&args.input)?)?;
     if let Some(seconds) = args.playhead {
         settings.markers = vec![playhead_marker(&cloud, seconds)?];
     }
     settings.points.size_px = args
+        .draw
         .point_size
         .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
     let gpu = GpuContext::new_headless()?;
@@ -314,8 +340,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         size,
         &settings,
         Overlay {
-            labels: !args.no_labels,
-            legend: !args.no_legend,
+            labels: !args.draw.no_labels,
+            legend: !args.draw.no_legend,
         },
         &args.output,
     )?;
@@ -353,15 +379,15 @@ pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Op
         }
         None => None,
     };
-    if let Some(size) = args.point_size
+    if let Some(size) = args.draw.point_size
         && !(0.5..=64.0).contains(&size)
     {
         bail!("point size {size} is out of range 0.5 to 64 pixels");
     }
     let mut settings = RenderSettings::default();
-    settings.surface.method = parse_method(&args.method)?;
-    settings.surface.iso_value = check_iso(args.iso)?;
-    args.volume.apply(&mut settings)?;
+    settings.surface.method = parse_method(&args.draw.method)?;
+    settings.surface.iso_value = check_iso(args.draw.iso)?;
+    args.draw.volume.apply(&mut settings)?;
     Ok((settings, camera))
 }
 

@@ -55,11 +55,12 @@ pub fn run(
     camera: Option<Camera>,
     size: (u32, u32),
 ) -> anyhow::Result<()> {
-    let what = parse_compare_view(&args.view, &args.compare_as, &args.measure)?;
+    let what = parse_compare_view(&args.view, &args.draw.compare_as, &args.draw.measure)?;
     let cloud_a = super::args::load_cloud(&args.input)?;
     let cloud_b = super::args::load_cloud(compare)?;
     let mut settings = settings;
     settings.points.size_px = args
+        .draw
         .point_size
         .unwrap_or_else(|| PointStyle::size_for(cloud_a.points.len().max(cloud_b.points.len())));
     let gpu = GpuContext::new_headless()?;
@@ -78,7 +79,7 @@ pub fn run(
         camera,
         size,
         &settings,
-        !args.no_labels,
+        !args.draw.no_labels,
     )?;
     super::render::save_png(&image, &args.output)?;
     let detail = match what {

@@ -27,7 +27,7 @@ use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
 use super::args::{check_iso, check_output, load_cloud, parse_camera, parse_method, parse_size};
-use super::render::{ColourArgs, VolumeArgs, prepare_grid};
+use super::render::{DrawArgs, prepare_grid};
 use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound};
 
 /// The largest frame: 4K UHD (either way round).
@@ -79,37 +79,8 @@ pub struct VideoArgs {
     /// Make the sound track silent instead of the song's audio.
     #[arg(long)]
     pub silent: bool,
-    /// Point disc diameter in pixels (default: by the number of points).
-    #[arg(long)]
-    pub point_size: Option<f32>,
-    /// Surface extraction method: mt (marching tetrahedra) or dc (dual contouring).
-    #[arg(long, default_value = "mt")]
-    pub method: String,
-    /// Surface isovalue in [0, 1] of the normalized loudness density.
-    #[arg(long, default_value_t = 0.5)]
-    pub iso: f32,
-    /// Leave out the axis labels.
-    #[arg(long)]
-    pub no_labels: bool,
-    /// Leave out the legend (colour key and name).
-    #[arg(long)]
-    pub no_legend: bool,
     #[command(flatten)]
-    pub colours: ColourArgs,
-    /// Frequency axis of a song cloud: linear, log or mel.
-    #[arg(long, default_value = "linear")]
-    pub freq_axis: String,
-    /// A second cloud to compare with (B); --view is then compare or difference.
-    #[arg(long)]
-    pub compare: Option<PathBuf>,
-    /// With --view compare: how each half is drawn (points, surface or volume).
-    #[arg(long, default_value = "points")]
-    pub compare_as: String,
-    /// With --view difference: density or level.
-    #[arg(long, default_value = "density")]
-    pub measure: String,
-    #[command(flatten)]
-    pub volume: VolumeArgs,
+    pub draw: DrawArgs,
     /// Progress report: auto (a line on a terminal), json (a JSON object a line on stdout:
     /// frame, frames, fps, eta_s) or none.
     #[arg(long, default_value = "auto")]
@@ -230,7 +201,7 @@ enum Drawn {
 
 pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let mut inputs = vec![args.input.as_path()];
-    inputs.extend(args.compare.as_deref());
+    inputs.extend(args.draw.compare.as_deref());
     check_output(&args.output, &["mp4"], &inputs)?;
     super::video_encode::find_ffmpeg()?;
     let size = parse_size(&args.size)?;
@@ -250,17 +221,17 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    if let Some(size) = args.point_size
+    if let Some(size) = args.draw.point_size
         && !(0.5..=64.0).contains(&size)
     {
         bail!("point size {size} is out of range 0.5 to 64 pixels");
     }
     let view_name = args.view.to_ascii_lowercase();
-    let compare_view = match &args.compare {
+    let compare_view = match &args.draw.compare {
         Some(_) => Some(super::render_compare::parse_compare_view(
             &view_name,
-            &args.compare_as,
-            &args.measure,
+            &args.draw.compare_as,
+            &args.draw.measure,
         )?),
         None => None,
     };
@@ -274,10 +245,10 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
             )
         })?,
     };
-    let freq_axis = FreqAxis::parse(&args.freq_axis).with_context(|| {
+    let freq_axis = FreqAxis::parse(&args.draw.freq_axis).with_context(|| {
         format!(
             "frequency axis '{}' is not one of linear, log, mel",
-            args.freq_axis
+            args.draw.freq_axis
         )
     })?;
     let detail = args.detail.to_ascii_lowercase();
@@ -288,12 +259,13 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         view,
         ..Default::default()
     };
-    settings.surface.method = parse_method(&args.method)?;
-    settings.surface.iso_value = check_iso(args.iso)?;
-    args.volume.apply(&mut settings)?;
-    args.colours.apply(&mut settings)?;
+    settings.surface.method = parse_method(&args.draw.method)?;
+    settings.surface.iso_value = check_iso(args.draw.iso)?;
+    args.draw.volume.apply(&mut settings)?;
+    args.draw.colours.apply(&mut settings)?;
 
-    let cloud = load_cloud(&args.input)?;
+    args.draw.check_normalize()?;
+    let cloud = args.draw.heard(load_cloud(&args.input)?)?;
     let timeline = cloud.meta.mode == DataMode::Timeline;
     if view_name == "timeline" && !timeline {
         bail!(
@@ -352,10 +324,10 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         _ => gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu,
     };
     let renderer = Renderer::new(&gpu.device);
-    let mut drawn = match (&args.compare, compare_view) {
+    let mut drawn = match (&args.draw.compare, compare_view) {
         (Some(compare), Some(what)) => {
             let cloud_b = load_cloud(compare)?;
-            settings.points.size_px = args.point_size.unwrap_or_else(|| {
+            settings.points.size_px = args.draw.point_size.unwrap_or_else(|| {
                 PointStyle::size_for(cloud.points.len().max(cloud_b.points.len()))
             });
             let scene = CompareScene::new(&gpu.device, &renderer, &cloud, &cloud_b)
@@ -363,11 +335,12 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
             Drawn::Compare {
                 scene: Box::new(scene),
                 what,
-                labels: !args.no_labels,
+                labels: !args.draw.no_labels,
             }
         }
         _ => {
             settings.points.size_px = args
+                .draw
                 .point_size
                 .unwrap_or_else(|| PointStyle::size_for(cloud.points.len()));
             let mut data = SceneData::upload(&gpu.device, &gpu.queue, &renderer, &cloud);
@@ -377,8 +350,8 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
                 prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
             }
             let labels =
-                (!args.no_labels).then(|| loudscape::ui::labels::axis_labels(&cloud, &data));
-            let legend = (!args.no_legend)
+                (!args.draw.no_labels).then(|| loudscape::ui::labels::axis_labels(&cloud, &data));
+            let legend = (!args.draw.no_legend)
                 .then(|| loudscape::ui::legends::picture_legend(&cloud, &settings));
             Drawn::One {
                 cloud: Box::new(cloud),
