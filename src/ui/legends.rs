@@ -114,6 +114,45 @@ pub struct PictureLegend {
     pub background: Background,
 }
 
+/// A timeline's name: its file's, or for one built in the window (a `timeline-<key>.ply` in the
+/// cloud cache, a name that says nothing) the folder its songs share ("music/"), or "songs" where
+/// they share none.
+pub fn timeline_name(cloud: &PointCloud) -> String {
+    let file = cloud
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let in_cache = cloud.path.parent().is_some_and(|folder| {
+        let cache = crate::extract::cache::dir();
+        folder == cache || std::fs::canonicalize(folder).ok() == std::fs::canonicalize(&cache).ok()
+    });
+    if !(file.starts_with("timeline-") && in_cache) {
+        return file;
+    }
+    let folders: Vec<std::path::PathBuf> = cloud
+        .meta
+        .songs
+        .iter()
+        .filter_map(|s| s.open_path()?.parent().map(|p| p.to_path_buf()))
+        .collect();
+    let Some(first) = folders.first() else {
+        return file;
+    };
+    let mut common = first.clone();
+    for folder in &folders[1..] {
+        while !folder.starts_with(&common) {
+            if !common.pop() {
+                break;
+            }
+        }
+    }
+    match common.file_name() {
+        Some(name) => format!("{}/", name.to_string_lossy()),
+        None => "songs".to_string(),
+    }
+}
+
 /// The name of what `cloud` shows: the song's file name, or the timeline's size and years.
 pub fn picture_name(cloud: &PointCloud) -> String {
     let file_name = |path: &str| {
@@ -131,7 +170,7 @@ pub fn picture_name(cloud: &PointCloud) -> String {
                 (Some(a), _) => format!(", {a}"),
                 _ => String::new(),
             };
-            let name = file_name(&cloud.path.to_string_lossy());
+            let name = timeline_name(cloud);
             format!("{name}: timeline of {} songs{span}", songs.len())
         }
         DataMode::Song | DataMode::Generic => cloud

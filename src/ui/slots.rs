@@ -77,11 +77,11 @@ impl LoudscapeApp {
                     self.install(render_state, cloud);
                 }
                 Err(message) => {
-                    log::error!("{message}");
-                    self.messages.push(format!("{}: {message}", path.display()));
                     if message.contains(&path.display().to_string()) {
-                        self.messages.pop();
-                        self.messages.push(message);
+                        self.messages.error(message);
+                    } else {
+                        self.messages
+                            .error(format!("{}: {message}", path.display()));
                     }
                 }
             }
@@ -191,10 +191,8 @@ impl LoudscapeApp {
         if loaded.cpu_grid.is_none() && ViewResources::has_grid(render_state, loaded.id) {
             loaded.cpu_grid = ViewResources::read_grid(render_state, loaded.id);
         }
-        if let Some(message) = failure
-            && !self.messages.contains(&message)
-        {
-            self.messages.push(message);
+        if let Some(message) = failure {
+            self.messages.error(message);
         }
         let (counts, error, again) = ViewResources::surface_status(render_state, loaded.id);
         self.surface_error = error;

@@ -9,7 +9,10 @@ use std::sync::atomic::Ordering;
 use eframe::egui::{self, RichText};
 
 use crate::ui::bridge::ViewResources;
-use crate::ui::state::LoudscapeApp;
+use crate::ui::compare_shot::{CompareView, render_compare_image};
+use crate::ui::compare_window::CompareResources;
+use crate::ui::state::compare_window::CompareLayout;
+use crate::ui::state::{LoudscapeApp, Slot};
 
 impl LoudscapeApp {
     pub(super) fn handle_screenshot(&mut self, ctx: &egui::Context) {
@@ -28,10 +31,10 @@ impl LoudscapeApp {
             ctx.request_repaint();
             return;
         }
-        if !has_data && self.loading.is_empty() && self.messages.is_empty() {
+        if !has_data && self.loading.is_empty() && !self.messages.has_errors() {
             // Nothing to wait for: take the empty window.
         } else if !has_data {
-            if !self.messages.is_empty() {
+            if self.messages.has_errors() {
                 // Loading failed; still take the picture so the test sees the message.
             } else {
                 ctx.request_repaint();
@@ -115,18 +118,35 @@ impl LoudscapeApp {
         let Some(loaded) = self.active() else {
             return;
         };
-        let result =
-            ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
-                .and_then(|image| crate::ui::screenshot::save_png(&image, &path));
+        let result = match self.compare_shown_as() {
+            // The compare the view shows: both halves, or the difference picture, labelled.
+            Some(what) => {
+                let mut size = (view.width, view.height);
+                if matches!(what, CompareView::SideBySide(_)) && !self.save_shot.custom_size {
+                    // The view's width is one half's.
+                    size.0 = view.width * 2 + crate::ui::compare_shot::GAP;
+                }
+                compare_screenshot(render_state, what, view.camera, size, &settings)
+                    .and_then(|image| Ok(crate::ui::screenshot::save_png(&image, &path)?))
+                    .map(|()| size)
+                    .map_err(|e| format!("{}: {e:#}", path.display()))
+            }
+            None => {
+                ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
+                    .and_then(|image| crate::ui::screenshot::save_png(&image, &path))
+                    .map(|()| (view.width, view.height))
+                    .map_err(|e| e.to_string())
+            }
+        };
         match result {
-            Ok(()) => {
+            Ok((width, height)) => {
                 // The full path: a bare name lands in the folder the window was started from.
                 let shown = std::path::absolute(&path).unwrap_or(path);
-                self.notice = Some(format!(
+                self.messages.info(format!(
                     "saved {} ({}×{}){}",
                     shown.display(),
-                    view.width,
-                    view.height,
+                    width,
+                    height,
                     if no_dialog {
                         format!("; {}", crate::ui::open::NO_DIALOG)
                     } else {
@@ -134,9 +154,55 @@ impl LoudscapeApp {
                     }
                 ));
             }
-            Err(e) => self.messages.push(e.to_string()),
+            Err(e) => self.messages.error(e),
         }
     }
+
+    /// How the view shows the compare now, if it does.
+    fn compare_shown_as(&self) -> Option<CompareView> {
+        let state = self.compare.as_ref().filter(|c| c.shown())?;
+        if self.active != Slot::Song {
+            return None;
+        }
+        match state.layout {
+            CompareLayout::SideBySide => Some(CompareView::SideBySide(self.settings.view)),
+            CompareLayout::Difference => Some(CompareView::Difference(state.measure)),
+            CompareLayout::Off => None,
+        }
+    }
+}
+
+/// The compare rendered offscreen from the window's compare scene, as `loudscape render A
+/// --compare B` draws it (titles, labels and colour keys included).
+fn compare_screenshot(
+    render_state: &eframe::egui_wgpu::RenderState,
+    what: CompareView,
+    camera: crate::view::camera::Camera,
+    size: (u32, u32),
+    settings: &crate::render::scene::RenderSettings,
+) -> anyhow::Result<image::RgbaImage> {
+    CompareResources::with(render_state, |compare, view| {
+        let scene = compare
+            .scene
+            .as_mut()
+            .ok_or_else(|| anyhow::anyhow!("the compare is not ready yet"))?;
+        let gpu = crate::render::gpu::context::GpuContext {
+            adapter: render_state.adapter.clone(),
+            device: render_state.device.clone(),
+            queue: render_state.queue.clone(),
+        };
+        render_compare_image(
+            &gpu,
+            &view.renderer,
+            scene,
+            what,
+            Some(camera),
+            size,
+            settings,
+            settings.show_box,
+        )
+    })
+    .unwrap_or_else(|| Err(anyhow::anyhow!("the compare is not ready yet")))
 }
 
 pub(super) fn save_color_image(image: &egui::ColorImage, path: &Path) -> anyhow::Result<()> {

@@ -56,7 +56,6 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) hover: Option<(glam::Vec2, Vec<Reading>)>,
     /// The compare dialog's answer.
     pub(in crate::ui) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
-    pub(in crate::ui) field: String,
 }
 
 /// The difference's CPU copy for read-outs: the shown grid, the signed values per voxel and per
@@ -72,7 +71,6 @@ pub(in crate::ui) struct DifferenceCopy {
 impl CompareState {
     pub(in crate::ui) fn new(path: PathBuf) -> Self {
         Self {
-            field: path.display().to_string(),
             path,
             receiver: None,
             clouds: None,

@@ -39,6 +39,7 @@ pub(super) mod compare_window;
 pub(super) mod extract_settings;
 pub(super) mod iso_sweep;
 pub(super) mod loading;
+pub(super) mod messages;
 pub(super) mod open;
 pub(super) mod timeline_build;
 
@@ -57,7 +58,8 @@ pub(super) struct LoudscapeApp {
     pub(super) camera: Camera,
     pub(super) fit_pending: bool,
     pub(super) loading: Vec<Loading>,
-    pub(super) messages: Vec<String>,
+    /// What the app is telling the user, shown under the 3D view (`messages.rs`).
+    pub(super) messages: messages::Messages,
     pub(super) next_id: u64,
     pub(super) last_motion: Option<Instant>,
     pub(super) frame_index: u32,
@@ -92,8 +94,6 @@ pub(super) struct LoudscapeApp {
     pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
     pub(super) iso_sweep: Option<IsoSweep>,
-    /// A line of news that is not an error (where a screenshot went), in the normal colour.
-    pub(super) notice: Option<String>,
     /// Draw again next frame (the surface is still growing its buffers).
     pub(super) needs_repaint: bool,
     /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
@@ -124,6 +124,9 @@ pub(super) struct LoudscapeApp {
     pub(super) strip: crate::ui::strip::LoudnessStrip,
     /// Key presses a scripted run (`--press`, tests) still has to make (`shortcuts.rs`).
     pub(super) scripted_presses: Vec<String>,
+    /// Input events held back for the next frame: those after a Tab, typed before the focus
+    /// moved (`shortcuts::split_after_focus_move`).
+    pub(super) deferred_events: Vec<eframe::egui::Event>,
 }
 
 /// Which of the two data slots.
