@@ -137,6 +137,7 @@ impl LoudscapeApp {
             selected_song: None,
             save_shot: SaveShot::default(),
             last_view: None,
+            view_px: (1, 1),
             audio_for: Vec::new(),
             persist,
             keep_camera_loads: 0,
@@ -249,6 +250,7 @@ impl LoudscapeApp {
         };
         let width = (view_width * ppp).round().max(1.0) as u32;
         let height = (rect.height() * ppp).round().max(1.0) as u32;
+        self.view_px = ((rect.width() * ppp).round().max(1.0) as u32, height);
         let aspect = width as f32 / height as f32;
         if (aspect - self.view_aspect).abs() > 1e-3 && self.camera_fitted {
             // The window was resized and the camera not moved by hand since it was fitted:
@@ -457,12 +459,18 @@ impl eframe::App for LoudscapeApp {
             raw_input.events = events;
         }
         // Scripted presses (tests), once the data is shown or nothing is loading.
+        // A compare's B loaded first too.
+        let compare_ready = self.compare.as_ref().is_none_or(|c| c.receiver.is_none());
         if !self.scripted_presses.is_empty()
             && (self.active().is_some() || self.loading.is_empty())
             && self.scripted_input_ready()
+            && compare_ready
         {
             for name in std::mem::take(&mut self.scripted_presses) {
-                if self.scripted_setting(&name) {
+                if self.scripted_setting(&name)
+                    || self.scripted_compare(&name)
+                    || self.scripted_shot_size(&name)
+                {
                     continue;
                 }
                 match shortcuts::key_event(&name) {

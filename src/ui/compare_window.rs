@@ -135,6 +135,12 @@ impl LoudscapeApp {
                 Err(TryRecvError::Disconnected) => state.decoding = None,
             }
         }
+        if state.error != state.error_told {
+            state.error_told = state.error.clone();
+            if let Some(error) = &state.error {
+                self.messages.error(format!("compare: {error}"));
+            }
+        }
         let Some(render_state) = frame.wgpu_render_state() else {
             return;
         };
@@ -363,6 +369,21 @@ impl LoudscapeApp {
         if let Some(side) = switch {
             self.listen(side);
         }
+    }
+
+    /// The scripted `--press compare=off|side|difference` of tests: the compare's layout.
+    pub(super) fn scripted_compare(&mut self, name: &str) -> bool {
+        let layout = match name.strip_prefix("compare=") {
+            Some("off") => CompareLayout::Off,
+            Some("side") => CompareLayout::SideBySide,
+            Some("difference") => CompareLayout::Difference,
+            _ => return false,
+        };
+        if let Some(state) = self.compare.as_mut() {
+            state.layout = layout;
+            self.fit_pending = true;
+        }
+        true
     }
 
     /// Key B: the other song, at the same position.

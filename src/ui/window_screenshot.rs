@@ -121,11 +121,12 @@ impl LoudscapeApp {
         let result = match self.compare_shown_as() {
             // The compare the view shows: both halves, or the difference picture, labelled.
             Some(what) => {
-                let mut size = (view.width, view.height);
-                if matches!(what, CompareView::SideBySide(_)) && !self.save_shot.custom_size {
-                    // The view's width is one half's.
-                    size.0 = view.width * 2 + crate::ui::compare_shot::GAP;
-                }
+                // The whole view (both halves), or the chosen size.
+                let size = if self.save_shot.custom_size {
+                    (view.width, view.height)
+                } else {
+                    self.view_px
+                };
                 compare_screenshot(render_state, what, view.camera, size, &settings)
                     .and_then(|image| Ok(crate::ui::screenshot::save_png(&image, &path)?))
                     .map(|()| size)
@@ -156,6 +157,21 @@ impl LoudscapeApp {
             }
             Err(e) => self.messages.error(e),
         }
+    }
+
+    /// The scripted `--press shot-size=WxH` of tests: Save PNG at that size.
+    pub(super) fn scripted_shot_size(&mut self, name: &str) -> bool {
+        let Some((w, h)) = name
+            .strip_prefix("shot-size=")
+            .and_then(|size| size.split_once('x'))
+        else {
+            return false;
+        };
+        if let (Ok(w), Ok(h)) = (w.parse::<u32>(), h.parse::<u32>()) {
+            self.save_shot.custom_size = true;
+            self.save_shot.size = [w.clamp(16, 8192), h.clamp(16, 8192)];
+        }
+        true
     }
 
     /// How the view shows the compare now, if it does.

@@ -52,6 +52,8 @@ pub(in crate::ui) struct CompareState {
     /// The difference's CPU copy for read-outs: the shown grid and the signed values.
     pub(in crate::ui) difference: Option<DifferenceCopy>,
     pub(in crate::ui) error: Option<String>,
+    /// The error last told in the window's messages (each new one is told once).
+    pub(in crate::ui) error_told: Option<String>,
     pub(in crate::ui) labels: Option<AxisLabels>,
     pub(in crate::ui) hover: Option<(glam::Vec2, Vec<Reading>)>,
     /// The compare dialog's answer.
@@ -83,6 +85,7 @@ impl CompareState {
             decoding: None,
             difference: None,
             error: None,
+            error_told: None,
             labels: None,
             hover: None,
             dialog: None,

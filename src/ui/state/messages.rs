@@ -70,9 +70,14 @@ impl Messages {
         if text.is_empty() {
             return;
         }
-        // The same line again moves to the end, fresh, instead of showing twice.
+        // A line already shown is not repeated; a confirmation again (a second save to the
+        // same file) moves to the end, fresh.
+        let same = |m: &Message| m.kind == kind && m.text == text;
+        if kind != Kind::Info && self.lines.iter().any(same) {
+            return;
+        }
         let before = self.lines.len();
-        self.lines.retain(|m| !(m.kind == kind && m.text == text));
+        self.lines.retain(|m| !same(m));
         let repeated = self.lines.len() != before;
         if !self.quiet && !repeated {
             match kind {
@@ -147,25 +152,27 @@ mod tests {
     fn lines_are_kept_once_in_order_and_infos_fade() {
         let mut m = Messages::quiet();
         m.error("a.ogg: not audio");
-        m.warn("a.ogg: truncated");
         m.info("saved /tmp/x.png (10×10)");
         m.warn("a.ogg: truncated");
+        m.error("a.ogg: not audio");
+        m.info("saved /tmp/x.png (10×10)");
         let now = Instant::now();
         let texts: Vec<_> = m.shown(now).map(|(_, l)| l.text.clone()).collect();
         assert_eq!(
             texts,
             [
                 "a.ogg: not audio",
+                "a.ogg: truncated",
                 "saved /tmp/x.png (10×10)",
-                "a.ogg: truncated"
             ],
-            "a repeated line is shown once, moved to the end"
+            "a repeated line is shown once; a confirmation again moves to the end"
         );
         assert!(m.has_errors());
         assert!(m.contains(Kind::Warning, "a.ogg: truncated"));
         assert!(m.next_fade(now).is_some_and(|d| d <= INFO_SHOWN_FOR));
         let later = now + INFO_SHOWN_FOR + Duration::from_secs(1);
         let kinds: Vec<_> = m.shown(later).map(|(_, l)| l.kind).collect();
+        assert!(m.has_errors());
         assert_eq!(
             kinds,
             [Kind::Error, Kind::Warning],

@@ -73,6 +73,8 @@ pub(super) struct LoudscapeApp {
     /// The "Save PNG" panel.
     pub(super) save_shot: SaveShot,
     pub(super) last_view: Option<FrameView>,
+    /// The whole 3D view's size in pixels (both halves of a side-by-side compare).
+    pub(super) view_px: (u32, u32),
     pub(super) audio_for: Vec<(PathBuf, PathBuf)>,
     /// Whether to remember state (off for scripted screenshot runs).
     pub(super) persist: bool,
