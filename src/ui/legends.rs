@@ -118,15 +118,25 @@ pub struct PictureLegend {
 /// cloud cache, a name that says nothing) the folder its songs share ("music/"), or "songs" where
 /// they share none.
 pub fn timeline_name(cloud: &PointCloud) -> String {
+    timeline_name_in(cloud, &crate::extract::cache::dir())
+}
+
+/// [`timeline_name`] with the cloud cache at `cache`.
+fn timeline_name_in(cloud: &PointCloud, cache: &std::path::Path) -> String {
     let file = cloud
         .path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let in_cache = cloud.path.parent().is_some_and(|folder| {
-        let cache = crate::extract::cache::dir();
-        folder == cache || std::fs::canonicalize(folder).ok() == std::fs::canonicalize(&cache).ok()
-    });
+    let same = |a: &std::path::Path, b: &std::path::Path| {
+        a == b
+            || std::fs::canonicalize(a)
+                .is_ok_and(|a| std::fs::canonicalize(b).is_ok_and(|b| a == b))
+    };
+    let in_cache = cloud
+        .path
+        .parent()
+        .is_some_and(|folder| same(folder, cache));
     if !(file.starts_with("timeline-") && in_cache) {
         return file;
     }
@@ -518,5 +528,26 @@ mod picture_tests {
             titled_with_reference(DataMode::Timeline, 2, "dB", "PSR (dB)".into()),
             "PSR (dB)"
         );
+    }
+
+    #[test]
+    fn a_timeline_built_in_the_window_is_named_by_its_songs_folder() {
+        let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut cloud = crate::data::cloud::load(&repo.join("data/demo_timeline.ply")).unwrap();
+        let cache = std::path::Path::new("/nonexistent/cache/loudscape/clouds");
+        for (i, song) in cloud.meta.songs.iter_mut().enumerate() {
+            song.path = Some(format!("/music/My Albums/disc {}/song{i}.flac", i % 2));
+            song.path_bytes = None;
+        }
+        cloud.path = cache.join("timeline-41b95712d880b9b1.ply");
+        assert_eq!(timeline_name_in(&cloud, cache), "My Albums/");
+        // Elsewhere, its file's own name is the one chosen by whoever saved it.
+        cloud.path = std::path::PathBuf::from("/somewhere/timeline-41b95712d880b9b1.ply");
+        assert_eq!(
+            timeline_name_in(&cloud, cache),
+            "timeline-41b95712d880b9b1.ply"
+        );
+        cloud.path = cache.join("my-years.ply");
+        assert_eq!(timeline_name_in(&cloud, cache), "my-years.ply");
     }
 }
