@@ -273,6 +273,29 @@ impl LoudscapeApp {
             return;
         };
         ui.label(RichText::new(song_title(song)).strong());
+        // Songs of one year share the year's span, each a narrow slice of it: pick them here.
+        let same_year = songs_of_year(&cloud.meta.songs, song.year);
+        if same_year.len() > 1 {
+            let at = same_year
+                .iter()
+                .position(|&i| Some(i) == index)
+                .unwrap_or(0);
+            egui::ComboBox::from_id_salt("same-year-songs")
+                .selected_text(format!(
+                    "song {} of {} in {}",
+                    at + 1,
+                    same_year.len(),
+                    song.year.unwrap_or_default()
+                ))
+                .show_ui(ui, |ui| {
+                    for &i in &same_year {
+                        let title = song_title(&cloud.meta.songs[i]);
+                        if ui.selectable_label(Some(i) == index, title).clicked() {
+                            self.selected_song = Some(i);
+                        }
+                    }
+                });
+        }
         for line in song
             .metrics
             .as_ref()
@@ -302,17 +325,34 @@ impl LoudscapeApp {
     }
 }
 
+/// The songs (indices) of `year` in a timeline, in their order; none for an unknown year.
+pub(super) fn songs_of_year(
+    songs: &[crate::data::cloud::SongInfo],
+    year: Option<i32>,
+) -> Vec<usize> {
+    songs
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| year.is_some() && s.year == year)
+        .map(|(i, _)| i)
+        .collect()
+}
+
 /// The isovalue slider's low end: at 0 the "surface" is the voxel grid's own box, a blocky grey
 /// solid that shows nothing of the music.
 pub(super) const MIN_ISOVALUE: f32 = 0.01;
 
 /// What the file says about itself: source, size and loudness metrics.
 pub(super) fn cloud_info(ui: &mut egui::Ui, cloud: &PointCloud) {
-    let name = cloud
-        .path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = match cloud.meta.mode {
+        // A timeline built in the window: its songs' folder, not the cache's file name.
+        DataMode::Timeline => legends::timeline_name(cloud),
+        DataMode::Song | DataMode::Generic => cloud
+            .path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    };
     ui.label(RichText::new(name).strong());
     ui.label(format!(
         "{} points",
@@ -402,5 +442,23 @@ mod tests {
         assert_eq!(path, dir.join("b-side.ply"), "its own Song cloud first");
         song.path = Some(dir.join("gone.wav").display().to_string());
         assert_eq!(song_open_target(&timeline, &song), None);
+    }
+
+    #[test]
+    fn songs_of_one_year_are_listed_to_pick() {
+        let song = |year: Option<i32>| crate::data::cloud::SongInfo {
+            year,
+            ..Default::default()
+        };
+        let songs = [
+            song(Some(1999)),
+            song(Some(2005)),
+            song(Some(1999)),
+            song(None),
+            song(Some(1999)),
+        ];
+        assert_eq!(songs_of_year(&songs, Some(1999)), [0, 2, 4]);
+        assert_eq!(songs_of_year(&songs, Some(2005)), [1]);
+        assert!(songs_of_year(&songs, None).is_empty(), "no year, no group");
     }
 }
