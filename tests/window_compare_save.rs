@@ -91,3 +91,55 @@ fn save_png_while_comparing_saves_what_the_view_shows() {
         share * 100.0
     );
 }
+
+/// Side by side follows the selected view: in Volume both halves draw the volume (its density
+/// colours), not the points (the song's saturated reds), and each half has its colour key.
+#[test]
+fn side_by_side_draws_the_selected_view_in_both_halves() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some(),
+        "this test needs a display: run it under xvfb-run"
+    );
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let shot = common::output_dir().join("window_side_by_side_volume.png");
+    let _ = std::fs::remove_file(&shot);
+    let run = |view: &str| {
+        let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+            .arg(repo.join("data/demo_song.ply"))
+            .arg("--compare")
+            .arg(repo.join("data/demo_song.ply"))
+            .args(["--view", view, "--screenshot"])
+            .arg(&shot)
+            .output()
+            .expect("start loudscape");
+        let err = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(output.status.success(), "loudscape failed: {err}");
+        image::open(&shot).unwrap().to_rgba8()
+    };
+    // The points' red (percussive) pixels in each half of the view, right of the side panel.
+    let reds = |image: &image::RgbaImage| {
+        let (w, h) = image.dimensions();
+        let left = 300;
+        let middle = left + (w - left) / 2;
+        let count = |x0: u32, x1: u32| {
+            (0..h * 2 / 3)
+                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                .filter(|&(x, y)| {
+                    let p = image.get_pixel(x, y);
+                    p[0] > 150 && p[1] < 90 && p[2] < 90
+                })
+                .count()
+        };
+        (count(left, middle), count(middle, w))
+    };
+    let points = reds(&run("points"));
+    assert!(
+        points.0 > 2000 && points.1 > 2000,
+        "the points view shows red points in both halves: {points:?}"
+    );
+    let volume = reds(&run("volume"));
+    assert!(
+        volume.0 < points.0 / 20 && volume.1 < points.1 / 20,
+        "in Volume the halves still draw points: {volume:?} red pixels (points: {points:?})"
+    );
+}

@@ -185,19 +185,25 @@ impl LoudscapeApp {
         let voxels = self.settings.voxels;
         if !CompareResources::grids_match(render_state, &voxels) {
             // Building blocks the window for a moment: say so first, build on the next frame.
-            if !self.busy_shown {
+            // (A flag of its own: the song's grid build, later in the same frame, cleared the
+            // shared one every frame, so in side by side the grids were never built and both
+            // halves drew points whatever the view.)
+            if !state.grids_announced {
                 self.busy = Some("building the compare grids…".into());
-                self.busy_shown = true;
+                state.grids_announced = true;
                 self.needs_repaint = true;
                 return;
             }
-            self.busy_shown = false;
+            state.grids_announced = false;
             self.busy = None;
             state.difference = None;
             if let Err(message) = CompareResources::ensure_grids(render_state, &voxels) {
                 state.error = Some(message);
                 return;
             }
+        } else if std::mem::take(&mut state.grids_announced) {
+            // Built meanwhile by another path (Save PNG renders the compare itself).
+            self.busy = None;
         }
         CompareResources::set_measure(render_state, state.measure);
         let stale = state

@@ -157,6 +157,10 @@ impl LoudscapeApp {
     /// grid settings changed), and reads it back once for hovering.
     pub(super) fn fetch_grid(&mut self, frame: &eframe::Frame) {
         if self.settings.view == ViewKind::Points {
+            // A build announced before the switch to Points is not coming.
+            if std::mem::take(&mut self.busy_shown) {
+                self.busy = None;
+            }
             return;
         }
         let Some(render_state) = frame.wgpu_render_state() else {
@@ -180,8 +184,10 @@ impl LoudscapeApp {
             self.needs_repaint = true;
             return;
         }
-        self.busy_shown = false;
-        self.busy = None;
+        // Its own notice only (the compare's may be on screen).
+        if std::mem::take(&mut self.busy_shown) {
+            self.busy = None;
+        }
         let mut failure = None;
         match ViewResources::ensure_grid(render_state, loaded.id, &loaded.cloud, &voxels) {
             Ok(true) => loaded.cpu_grid = None,

@@ -17,8 +17,12 @@ use crate::ui::state::{LoudscapeApp, Slot};
 impl LoudscapeApp {
     pub(super) fn handle_screenshot(&mut self, ctx: &egui::Context) {
         let has_data = self.active().is_some();
-        let waiting =
-            self.timeline_listing() || !self.scripted_presses.is_empty() || self.reextracting();
+        // B of a compare and work announced as blocking are waited for too.
+        let waiting = self.timeline_listing()
+            || !self.scripted_presses.is_empty()
+            || self.reextracting()
+            || self.busy.is_some()
+            || self.compare.as_ref().is_some_and(|c| c.receiver.is_some());
         let Some(state) = self.screenshot.as_mut() else {
             return;
         };

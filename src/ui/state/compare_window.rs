@@ -52,6 +52,8 @@ pub(in crate::ui) struct CompareState {
     /// The difference's CPU copy for read-outs: the shown grid and the signed values.
     pub(in crate::ui) difference: Option<DifferenceCopy>,
     pub(in crate::ui) error: Option<String>,
+    /// The "building the compare grids" notice has been on screen for a frame: build now.
+    pub(in crate::ui) grids_announced: bool,
     /// The error last told in the window's messages (each new one is told once).
     pub(in crate::ui) error_told: Option<String>,
     pub(in crate::ui) labels: Option<AxisLabels>,
@@ -86,6 +88,7 @@ impl CompareState {
             difference: None,
             error: None,
             error_told: None,
+            grids_announced: false,
             labels: None,
             hover: None,
             dialog: None,
