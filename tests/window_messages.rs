@@ -95,6 +95,7 @@ fn wait_for_window(child: &mut std::process::Child) -> Option<String> {
         let search = Command::new("xdotool")
             .args([
                 "search",
+                "--all",
                 "--pid",
                 &child.id().to_string(),
                 "--name",
@@ -157,4 +158,43 @@ fn closing_the_window_from_outside_exits_cleanly() {
         output.status
     );
     assert!(!err.contains("panicked"), "{err}");
+}
+
+/// At an isovalue above every voxel the view itself says there is no surface (the notice under
+/// the slider hid under the slider's tooltip).
+#[test]
+fn no_surface_is_said_in_the_view() {
+    assert_display();
+    let shot = common::output_dir().join("window_no_surface.png");
+    let run = |iso: &str| {
+        let _ = std::fs::remove_file(&shot);
+        let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+            .arg(repo().join("data/demo_song.ply"))
+            .args(["--view", "surface", "--screenshot"])
+            .arg(&shot)
+            .env("LOUDSCAPE_ISO_SWEEP", iso)
+            .output()
+            .expect("start loudscape");
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let image = image::open(&shot).unwrap().to_rgba8();
+        // Warning-coloured text in the middle band of the view (right of the side panel).
+        let (w, h) = image.dimensions();
+        let [r, g, b, _] = loudscape_warning();
+        (h / 4..h * 3 / 5)
+            .flat_map(|y| (300.min(w)..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let p = image.get_pixel(x, y);
+                p[0].abs_diff(r) < 14 && p[1].abs_diff(g) < 14 && p[2].abs_diff(b) < 14
+            })
+            .count()
+    };
+    let (surface, none) = (run("0.5"), run("1.0"));
+    assert!(
+        none > surface + 100,
+        "no notice in the view at isovalue 1.0: {none} warning pixels (0.5: {surface})"
+    );
 }
