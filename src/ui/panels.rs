@@ -237,6 +237,18 @@ impl LoudscapeApp {
                 "The loudness density the surface encloses (above 0: at 0 it is only the \
                  grid's box, a grey solid with no hp colour)",
             );
+        if surface.iso_value < LOW_ISOVALUE {
+            // What a low isovalue shows: the envelope of nearly every point, where percussive
+            // and harmonic average out to the neutral middle of the hp colours.
+            ui.label(
+                RichText::new(
+                    "low isovalue: the surface wraps almost every point, so its hp colour \
+                     averages to neutral grey; raise it to see the loud parts and their colour",
+                )
+                .small()
+                .weak(),
+            );
+        }
         let sweeping = self.iso_sweep.as_ref().is_some_and(|s| s.sweeping());
         self.iso_dragging = slider.dragged() || sweeping;
         ui.checkbox(&mut surface.lit, "lit from above");
@@ -341,6 +353,9 @@ pub(super) fn songs_of_year(
 /// The isovalue slider's low end: at 0 the "surface" is the voxel grid's own box, a blocky grey
 /// solid that shows nothing of the music.
 pub(super) const MIN_ISOVALUE: f32 = 0.01;
+
+/// Below this isovalue the side panel says why the surface is a grey envelope.
+pub(super) const LOW_ISOVALUE: f32 = 0.15;
 
 /// What the file says about itself: source, size and loudness metrics.
 pub(super) fn cloud_info(ui: &mut egui::Ui, cloud: &PointCloud) {

@@ -120,3 +120,27 @@ fn the_b_field_keeps_typing_before_any_compare() {
     );
     assert_eq!(app.open.compare_path, "b-side.flac", "the field keeps it");
 }
+
+#[test]
+fn a_low_isovalue_says_why_the_surface_is_grey_and_zero_is_not_offered() {
+    let mut app = app();
+    let ctx = egui::Context::default();
+    let shown = |app: &mut LoudscapeApp, iso: f32| {
+        app.settings.surface.iso_value = iso;
+        let mut output = ctx.run_ui(input(egui::vec2(800.0, 600.0), Vec::new()), |ui| {
+            egui::Panel::left("controls")
+                .exact_size(270.0)
+                .show(ui, |ui| app.surface_controls(ui));
+        });
+        output.textures_delta.clear();
+        !texts_starting(&output, "low isovalue").is_empty()
+    };
+    assert!(shown(&mut app, 0.05));
+    assert!(!shown(&mut app, 0.5));
+    shown(&mut app, 0.0);
+    assert!(
+        app.settings.surface.iso_value >= crate::ui::panels::MIN_ISOVALUE,
+        "the slider keeps the isovalue above 0: {}",
+        app.settings.surface.iso_value
+    );
+}
