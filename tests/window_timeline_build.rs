@@ -143,3 +143,44 @@ fn several_songs_become_a_timeline_asking_for_the_years_their_tags_lack() {
     assert!(!err.contains("without a year"), "{err}");
     assert!(err.contains("timeline from the cache"), "{err}");
 }
+
+/// Typing fast in the years dialog: a year, Tab, the next year and Enter arrive in one frame
+/// (the scripted presses all do), and each year lands in its own field; Enter with a song still
+/// without a year builds nothing (leaving songs out is a button's choice, never Enter's).
+#[test]
+fn the_years_dialog_keeps_fast_typing_in_its_fields_and_enter_leaves_no_song_out() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
+    );
+    let dir = common::output_dir().join("window_years_typing");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("state")).unwrap();
+    let (a, b) = (dir.join("a.wav"), dir.join("b.wav"));
+    write_song(&a, 3.0, 220.0);
+    write_song(&b, 3.0, 330.0);
+
+    // One year typed of two, then Enter: nothing is built, and the window says why.
+    let err = window(
+        &dir,
+        &[&a, &b],
+        &dir.join("half.png"),
+        &["text:1996", "Enter"],
+    );
+    assert!(err.contains("2 song(s) without a year"), "{err}");
+    assert!(err.contains("Enter: songs still without a year"), "{err}");
+    assert!(!err.contains("timeline built"), "{err}");
+
+    // Both typed with a Tab between, in one frame: each year in its own field.
+    let err = window(
+        &dir,
+        &[&a, &b],
+        &dir.join("both.png"),
+        &["text:1996", "Tab", "text:2001", "Enter"],
+    );
+    assert!(err.contains("timeline built"), "{err}");
+    let years: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("state/years.json")).unwrap()).unwrap();
+    assert_eq!(years[a.to_string_lossy().as_ref()], 1996, "{years}");
+    assert_eq!(years[b.to_string_lossy().as_ref()], 2001, "{years}");
+}

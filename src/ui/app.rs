@@ -76,34 +76,40 @@ pub fn run(options: WindowOptions) -> anyhow::Result<()> {
         },
         ..Default::default()
     };
-    eframe::run_native(
-        "loudscape",
-        native,
-        Box::new(move |cc| {
-            let render_state = cc
-                .wgpu_render_state
-                .as_ref()
-                .ok_or("no GPU render state: loudscape needs wgpu (Vulkan, Metal or DX12)")?;
-            crate::render::gpu::context::check_limits(&render_state.device.limits())
-                .map_err(|reason| format!("the GPU is too small for loudscape: {reason}"))?;
-            ViewResources::install(render_state);
-            cc.egui_ctx
-                .options_mut(|o| o.input_options.max_click_duration = MAX_CLICK_SECONDS);
-            // Scripted screenshot runs (tests) start from defaults and remember nothing.
-            let remembered = if options.screenshot.is_some() {
-                None
-            } else {
-                cc.storage
-                    .and_then(|s| eframe::get_value::<Remembered>(s, eframe::APP_KEY))
-            };
-            Ok(Box::new(LoudscapeApp::new(options, remembered)))
-        }),
-    )
-    .map_err(|e| anyhow::anyhow!("cannot open the window: {e}"))
+    // Destroyed from outside (the window manager, xdotool windowclose): a close, exit 0.
+    let run = crate::ui::window_gone::run_until_window_gone(|| {
+        eframe::run_native(
+            "loudscape",
+            native,
+            Box::new(move |cc| {
+                let render_state = cc
+                    .wgpu_render_state
+                    .as_ref()
+                    .ok_or("no GPU render state: loudscape needs wgpu (Vulkan, Metal or DX12)")?;
+                crate::render::gpu::context::check_limits(&render_state.device.limits())
+                    .map_err(|reason| format!("the GPU is too small for loudscape: {reason}"))?;
+                ViewResources::install(render_state);
+                cc.egui_ctx
+                    .options_mut(|o| o.input_options.max_click_duration = MAX_CLICK_SECONDS);
+                // Scripted screenshot runs (tests) start from defaults and remember nothing.
+                let remembered = if options.screenshot.is_some() {
+                    None
+                } else {
+                    cc.storage
+                        .and_then(|s| eframe::get_value::<Remembered>(s, eframe::APP_KEY))
+                };
+                Ok(Box::new(LoudscapeApp::new(options, remembered)))
+            }),
+        )
+    });
+    match run {
+        Some(result) => result.map_err(|e| anyhow::anyhow!("cannot open the window: {e}")),
+        None => Ok(()),
+    }
 }
 
 impl LoudscapeApp {
-    fn new(options: WindowOptions, remembered: Option<Remembered>) -> Self {
+    pub(super) fn new(options: WindowOptions, remembered: Option<Remembered>) -> Self {
         let persist = options.screenshot.is_none();
         let iso_sweep = options
             .screenshot
@@ -117,7 +123,7 @@ impl LoudscapeApp {
             camera: Camera::default(),
             fit_pending: true,
             loading: Vec::new(),
-            messages: Vec::new(),
+            messages: Default::default(),
             next_id: 1,
             last_motion: None,
             frame_index: 0,
@@ -135,6 +141,7 @@ impl LoudscapeApp {
             selected_song: None,
             save_shot: SaveShot::default(),
             last_view: None,
+            view_px: (1, 1),
             audio_for: Vec::new(),
             persist,
             keep_camera_loads: 0,
@@ -146,7 +153,6 @@ impl LoudscapeApp {
             camera_fitted: false,
             busy: None,
             busy_shown: false,
-            notice: None,
             needs_repaint: false,
             moving_divisor: [1; 3],
             moving_points: PointStyle::default().max_points_moving,
@@ -173,6 +179,7 @@ impl LoudscapeApp {
             },
             scripted_presses: options.press,
             heard: crate::ui::normalize::Heard::starting(options.normalize),
+            deferred_events: Vec::new(),
             freq_axis: Default::default(),
             compare: None,
             pending_seek: options.seek,
@@ -248,6 +255,7 @@ impl LoudscapeApp {
         };
         let width = (view_width * ppp).round().max(1.0) as u32;
         let height = (rect.height() * ppp).round().max(1.0) as u32;
+        self.view_px = ((rect.width() * ppp).round().max(1.0) as u32, height);
         let aspect = width as f32 / height as f32;
         if (aspect - self.view_aspect).abs() > 1e-3 && self.camera_fitted {
             // The window was resized and the camera not moved by hand since it was fitted:
@@ -405,6 +413,19 @@ impl LoudscapeApp {
             {
                 paint_readings(&painter, rect, pos, &hover.readings);
             }
+            if self.settings.view == ViewKind::Surface && self.surface_empty && !self.surface_busy {
+                // In the view, not only under the slider, whose tooltip covered it.
+                painter.text(
+                    rect.center(),
+                    egui::Align2::CENTER_CENTER,
+                    format!(
+                        "no surface at isovalue {:.2}: the density crosses it nowhere; lower it",
+                        self.settings.surface.iso_value
+                    ),
+                    egui::FontId::proportional(16.0),
+                    crate::ui::messages::WARNING,
+                );
+            }
             if self.surface_busy {
                 busy_badge(&painter, rect, "extracting surface…");
             } else if let Some(done) = self.refining {
@@ -435,21 +456,37 @@ impl eframe::App for LoudscapeApp {
         visuals.panel_fill.to_normalized_gamma_f32()
     }
 
-    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+    fn raw_input_hook(&mut self, ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        // Events held back after a Tab last frame come first (`shortcuts::split_after_focus_move`).
+        if !self.deferred_events.is_empty() {
+            let mut events = std::mem::take(&mut self.deferred_events);
+            events.append(&mut raw_input.events);
+            raw_input.events = events;
+        }
         // Scripted presses (tests), once the data is shown or nothing is loading.
+        // A compare's B loaded first too.
+        let compare_ready = self.compare.as_ref().is_none_or(|c| c.receiver.is_none());
         if !self.scripted_presses.is_empty()
             && (self.active().is_some() || self.loading.is_empty())
             && self.scripted_input_ready()
+            && compare_ready
         {
             for name in std::mem::take(&mut self.scripted_presses) {
-                if self.scripted_setting(&name) {
+                if self.scripted_setting(&name)
+                    || self.scripted_compare(&name)
+                    || self.scripted_shot_size(&name)
+                {
                     continue;
                 }
                 match shortcuts::key_event(&name) {
                     Some(event) => raw_input.events.push(event),
-                    None => self.messages.push(format!("--press {name}: no such key")),
+                    None => self.messages.error(format!("--press {name}: no such key")),
                 }
             }
+        }
+        self.deferred_events = shortcuts::split_after_focus_move(&mut raw_input.events);
+        if !self.deferred_events.is_empty() {
+            ctx.request_repaint();
         }
     }
 
@@ -519,12 +556,19 @@ impl eframe::App for LoudscapeApp {
             self.start_opening(dropped);
         }
 
+        let panel_width = side_panel_width(ctx.content_rect().width());
         egui::Panel::left("controls")
             .frame(panel_frame(ui.style()))
             .resizable(false)
-            .exact_size(270.0)
+            .exact_size(panel_width)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
+                // Narrower than its rows in a small window: they scroll sideways too.
+                let scroll = if panel_width < SIDE_PANEL_WIDTH {
+                    egui::ScrollArea::both()
+                } else {
+                    egui::ScrollArea::vertical()
+                };
+                scroll.show(ui, |ui| self.controls(ui));
             });
         self.audio.poll(&ctx);
         self.compare_keys(&ctx);
@@ -563,6 +607,8 @@ impl eframe::App for LoudscapeApp {
                     });
             }
         }
+        // Under the 3D view, above the transport bar: what the app is telling the user.
+        self.status_area(ui);
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.view_3d(ui));
@@ -651,6 +697,15 @@ fn busy_badge(painter: &egui::Painter, rect: egui::Rect, text: &str) {
     );
 }
 
+/// The side panel's width in a window wide enough.
+const SIDE_PANEL_WIDTH: f32 = 270.0;
+
+/// The side panel's width in a window `window_width` points wide: [`SIDE_PANEL_WIDTH`], but at
+/// most 40 % of a small window (at 500 points it took more than half), never under 180.
+pub(super) fn side_panel_width(window_width: f32) -> f32 {
+    (window_width * 0.4).clamp(180.0, SIDE_PANEL_WIDTH)
+}
+
 /// The divisor of the moving resolution after a frame that took `frame_ms` (None: the frame
 /// did not follow the last at once, so its time says nothing about the device): one step
 /// coarser when frames are slower than [`MOVING_FRAME_MS`], one finer when well under it.
@@ -700,6 +755,17 @@ mod tests {
             grown = next_moving_points(grown, Some(5.0));
         }
         assert_eq!(grown, MAX_MOVING_POINTS);
+    }
+
+    #[test]
+    fn the_side_panel_leaves_a_small_window_to_the_view() {
+        assert_eq!(side_panel_width(1280.0), SIDE_PANEL_WIDTH);
+        assert!(
+            side_panel_width(500.0) <= 200.0,
+            "{}",
+            side_panel_width(500.0)
+        );
+        assert_eq!(side_panel_width(300.0), 180.0);
     }
 
     #[test]

@@ -178,7 +178,7 @@ impl AudioPanel {
 
     /// The bar under the 3D view.
     pub fn bar(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             let loaded = self.player.loaded.as_ref().map(|l| l.duration_s);
             let playing = self.player.is_playing();
             let can_play = loaded.is_some() && self.player.no_device().is_none();
@@ -201,7 +201,7 @@ impl AudioPanel {
             );
             if loaded.is_some() {
                 let mut t = self.time_s;
-                let width = (ui.available_width() - 330.0).max(120.0);
+                let width = (ui.available_width() - 330.0).max(80.0);
                 ui.spacing_mut().slider_width = width;
                 let response =
                     ui.add(egui::Slider::new(&mut t, 0.0..=duration.max(0.001)).show_value(false));

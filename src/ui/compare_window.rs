@@ -29,13 +29,16 @@ use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::ui::bridge::ViewResources;
 use crate::ui::compare::{paint_diverging_legend, paint_title};
+use crate::ui::compare_readouts::{compare_readings, difference_readings};
 use crate::ui::compare_shot::difference_settings;
 use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::state::compare_window::{CompareLayout, CompareState, DifferenceCopy, Listening};
 use crate::ui::state::{LoudscapeApp, Slot};
 use crate::view::frame_view::FrameView;
-use crate::view::pick::{self, Reading};
+
+/// The B field's id (typed into before any compare exists).
+pub(super) const COMPARE_FIELD: &str = "compare-b-field";
 
 /// Points between the two halves of the side-by-side view.
 pub(super) const GAP: f32 = 4.0;
@@ -65,6 +68,7 @@ impl LoudscapeApp {
     /// Starts comparing the Song slot's cloud with `path` (the command line's --compare, the
     /// panel's field or dialog, a drop with Shift held).
     pub(super) fn compare_with(&mut self, path: PathBuf) {
+        self.open.compare_path = path.display().to_string();
         let mut state = CompareState::new(path.clone());
         if let Some(old) = &self.compare {
             state.layout = match old.layout {
@@ -131,6 +135,12 @@ impl LoudscapeApp {
                 Err(TryRecvError::Disconnected) => state.decoding = None,
             }
         }
+        if state.error != state.error_told {
+            state.error_told = state.error.clone();
+            if let Some(error) = &state.error {
+                self.messages.error(format!("compare: {error}"));
+            }
+        }
         let Some(render_state) = frame.wgpu_render_state() else {
             return;
         };
@@ -175,19 +185,25 @@ impl LoudscapeApp {
         let voxels = self.settings.voxels;
         if !CompareResources::grids_match(render_state, &voxels) {
             // Building blocks the window for a moment: say so first, build on the next frame.
-            if !self.busy_shown {
+            // (A flag of its own: the song's grid build, later in the same frame, cleared the
+            // shared one every frame, so in side by side the grids were never built and both
+            // halves drew points whatever the view.)
+            if !state.grids_announced {
                 self.busy = Some("building the compare grids…".into());
-                self.busy_shown = true;
+                state.grids_announced = true;
                 self.needs_repaint = true;
                 return;
             }
-            self.busy_shown = false;
+            state.grids_announced = false;
             self.busy = None;
             state.difference = None;
             if let Err(message) = CompareResources::ensure_grids(render_state, &voxels) {
                 state.error = Some(message);
                 return;
             }
+        } else if std::mem::take(&mut state.grids_announced) {
+            // Built meanwhile by another path (Save PNG renders the compare itself).
+            self.busy = None;
         }
         CompareResources::set_measure(render_state, state.measure);
         let stale = state
@@ -227,11 +243,10 @@ impl LoudscapeApp {
         ui.label(RichText::new("Compare (A/B)").strong());
         let mut start = None;
         ui.horizontal(|ui| {
-            let state_field = self.compare.as_mut().map(|c| &mut c.field);
-            let mut scratch = String::new();
-            let field = state_field.unwrap_or(&mut scratch);
+            let field = &mut self.open.compare_path;
             let edit = ui.add(
                 egui::TextEdit::singleline(field)
+                    .id(egui::Id::unique(COMPARE_FIELD))
                     .hint_text("B: song or cloud")
                     .desired_width(130.0),
             );
@@ -250,6 +265,13 @@ impl LoudscapeApp {
                 .on_hover_text("B beside the song (A); or drop a file with Shift held")
                 .clicked()
             {
+                if !crate::ui::open::dialogs_available() {
+                    self.messages.warn(format!(
+                        "{}: type B's path in the compare field and press Enter",
+                        crate::ui::open::NO_DIALOG
+                    ));
+                    return;
+                }
                 let receiver = crate::ui::open::open_dialog(false);
                 let state = self
                     .compare
@@ -273,7 +295,12 @@ impl LoudscapeApp {
             }
         }
         if let Some(path) = start {
-            self.compare_with(path);
+            if self.song.is_some() {
+                self.compare_with(path);
+            } else {
+                self.messages
+                    .warn("open a song (A) first, then compare it with B".to_string());
+            }
         }
         let Some(state) = self.compare.as_mut() else {
             return;
@@ -350,6 +377,21 @@ impl LoudscapeApp {
         }
     }
 
+    /// The scripted `--press compare=off|side|difference` of tests: the compare's layout.
+    pub(super) fn scripted_compare(&mut self, name: &str) -> bool {
+        let layout = match name.strip_prefix("compare=") {
+            Some("off") => CompareLayout::Off,
+            Some("side") => CompareLayout::SideBySide,
+            Some("difference") => CompareLayout::Difference,
+            _ => return false,
+        };
+        if let Some(state) = self.compare.as_mut() {
+            state.layout = layout;
+            self.fit_pending = true;
+        }
+        true
+    }
+
     /// Key B: the other song, at the same position.
     pub(super) fn compare_keys(&mut self, ctx: &egui::Context) {
         let Some(state) = self.compare.as_ref() else {
@@ -422,8 +464,12 @@ impl LoudscapeApp {
                     {
                         labels::paint(painter, half_rect, view, labels);
                     }
-                    let title = format!("{}: {}", ["A", "B"][side], names[side]);
-                    paint_title(painter, half_rect, &title);
+                    // Its title and the colour key of what it draws, as saved pictures carry.
+                    let cloud = if side == 0 { &clouds.0 } else { &clouds.1 };
+                    let mut legend = crate::ui::legends::picture_legend(cloud, settings);
+                    legend.name = format!("{}: {}", ["A", "B"][side], names[side]);
+                    legend.detail.clear();
+                    crate::ui::legends::paint_picture(painter, half_rect, &legend);
                 }
                 if let Some(pos) = hover
                     && !view.moving
@@ -479,91 +525,6 @@ impl LoudscapeApp {
     }
 }
 
-/// Read-outs in side by side: the point under the cursor on its side, and on the other side
-/// the point nearest the same time and frequency (the loudest of those within a voxel).
-fn compare_readings(
-    clouds: &(PointCloud, PointCloud),
-    side: usize,
-    view: &FrameView,
-    px: glam::Vec2,
-) -> Vec<Reading> {
-    let both = [&clouds.0, &clouds.1];
-    let here = both[side];
-    let there = both[1 - side];
-    let names = ["A", "B"];
-    let Some(index) = pick::pick_point(&here.points, view, px, 6.0, 0.0) else {
-        return Vec::new();
-    };
-    let point = &here.points[index];
-    let mut out = vec![Reading {
-        name: names[side].into(),
-        value: here
-            .path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-    }];
-    out.extend(pick::point_readings(&here.meta.axes, point));
-    // The other song at the same time and frequency: its loudest point within 1/128 of the box.
-    let near = there
-        .points
-        .iter()
-        .filter(|q| {
-            (q.position[0] - point.position[0]).abs() < 1.0 / 64.0
-                && (q.position[2] - point.position[2]).abs() < 1.0 / 64.0
-        })
-        .max_by(|a, b| a.scalar.total_cmp(&b.scalar));
-    let axes = &there.meta.axes;
-    match near {
-        Some(q) => {
-            out.push(Reading {
-                name: format!("{} level (loudest here)", names[1 - side]),
-                value: axes
-                    .y
-                    .format_value(axes.y.value_at(f64::from(q.position[1]))),
-            });
-            out.push(Reading {
-                name: format!("{} loudness (loudest here)", names[1 - side]),
-                value: axes
-                    .scalar
-                    .format_value(axes.scalar.value_at_unit(f64::from(q.scalar))),
-            });
-        }
-        None => out.push(Reading {
-            name: names[1 - side].into(),
-            value: "nothing at this time and frequency".into(),
-        }),
-    }
-    out
-}
-
-/// Read-outs in the difference view: the first tinted voxel along the ray, its place, and both
-/// differences there.
-fn difference_readings(
-    a: &PointCloud,
-    copy: &DifferenceCopy,
-    view: &FrameView,
-    px: glam::Vec2,
-) -> Vec<Reading> {
-    let (origin, dir) = pick::cursor_ray(view, px);
-    let Some(hit) = copy.shown.pick(origin, dir, 0.05) else {
-        return Vec::new();
-    };
-    let dims = copy.shown.dims;
-    let voxel = copy.shown.index(hit.voxel);
-    let column = (hit.voxel.x + dims.x * hit.voxel.z) as usize;
-    let mut out = pick::position_readings(&a.meta.axes, hit.position);
-    out.push(Reading {
-        name: "density B - A".into(),
-        value: crate::ui::compare::format_signed(copy.difference[voxel]),
-    });
-    out.push(Reading {
-        name: "level-weighted B - A".into(),
-        value: crate::ui::compare::format_signed(copy.columns[column]),
-    });
-    out
-}
-
 /// One half's offscreen target and what it holds.
 struct HalfTarget {
     target: Option<RenderTarget>,
@@ -581,14 +542,14 @@ struct FrameViewKey {
 
 /// The compare's GPU state, in egui_wgpu's callback resources.
 pub struct CompareResources {
-    scene: Option<CompareScene>,
+    pub(super) scene: Option<CompareScene>,
     halves: [HalfTarget; 3],
     /// Bumped when the scene or its grids change.
     revision: u64,
 }
 
 impl CompareResources {
-    fn with<T>(
+    pub(super) fn with<T>(
         render_state: &egui_wgpu::RenderState,
         f: impl FnOnce(&mut CompareResources, &ViewResources) -> T,
     ) -> Option<T> {

@@ -103,9 +103,7 @@ impl LoudscapeApp {
                 self.needs_repaint = true;
             }
             Err(message) => {
-                if !self.messages.contains(&message) {
-                    self.messages.push(message);
-                }
+                self.messages.error(message);
                 self.freq_axis = loaded.freq_axis;
             }
         }

@@ -191,10 +191,15 @@ impl LoudscapeApp {
 
 /// "Title — Artist (1984)".
 pub(super) fn song_title(song: &crate::data::cloud::SongInfo) -> String {
-    let mut text = if song.title.is_empty() {
-        "untitled".to_string()
-    } else {
+    // An untagged song reads as its file name ("untitled" only where none is recorded).
+    let file_name = || {
+        song.open_path()
+            .and_then(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+    };
+    let mut text = if !song.title.trim().is_empty() {
         song.title.clone()
+    } else {
+        file_name().unwrap_or_else(|| "untitled".to_string())
     };
     if !song.artist.is_empty() {
         text.push_str(&format!(" — {}", song.artist));
@@ -303,5 +308,22 @@ mod tests {
             }
         });
         output.textures_delta.clear();
+    }
+
+    #[test]
+    fn an_untagged_song_reads_as_its_file_name() {
+        let song: crate::data::cloud::SongInfo = serde_json::from_value(serde_json::json!({
+            "title": "", "artist": "", "year": 1999, "path": "/music/demo/b-side.flac"
+        }))
+        .unwrap();
+        assert_eq!(song_title(&song), "b-side.flac (1999)");
+        let tagged: crate::data::cloud::SongInfo = serde_json::from_value(serde_json::json!({
+            "title": "Tune", "artist": "Band", "year": 2001, "path": "/music/x.ogg"
+        }))
+        .unwrap();
+        assert_eq!(song_title(&tagged), "Tune — Band (2001)");
+        let nothing: crate::data::cloud::SongInfo =
+            serde_json::from_value(serde_json::json!({ "title": "" })).unwrap();
+        assert_eq!(song_title(&nothing), "untitled");
     }
 }

@@ -114,6 +114,55 @@ pub struct PictureLegend {
     pub background: Background,
 }
 
+/// A timeline's name: its file's, or for one built in the window (a `timeline-<key>.ply` in the
+/// cloud cache, a name that says nothing) the folder its songs share ("music/"), or "songs" where
+/// they share none.
+pub fn timeline_name(cloud: &PointCloud) -> String {
+    timeline_name_in(cloud, &crate::extract::cache::dir())
+}
+
+/// [`timeline_name`] with the cloud cache at `cache`.
+fn timeline_name_in(cloud: &PointCloud, cache: &std::path::Path) -> String {
+    let file = cloud
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let same = |a: &std::path::Path, b: &std::path::Path| {
+        a == b
+            || std::fs::canonicalize(a)
+                .is_ok_and(|a| std::fs::canonicalize(b).is_ok_and(|b| a == b))
+    };
+    let in_cache = cloud
+        .path
+        .parent()
+        .is_some_and(|folder| same(folder, cache));
+    if !(file.starts_with("timeline-") && in_cache) {
+        return file;
+    }
+    let folders: Vec<std::path::PathBuf> = cloud
+        .meta
+        .songs
+        .iter()
+        .filter_map(|s| s.open_path()?.parent().map(|p| p.to_path_buf()))
+        .collect();
+    let Some(first) = folders.first() else {
+        return file;
+    };
+    let mut common = first.clone();
+    for folder in &folders[1..] {
+        while !folder.starts_with(&common) {
+            if !common.pop() {
+                break;
+            }
+        }
+    }
+    match common.file_name() {
+        Some(name) => format!("{}/", name.to_string_lossy()),
+        None => "songs".to_string(),
+    }
+}
+
 /// The name of what `cloud` shows: the song's file name, or the timeline's size and years.
 pub fn picture_name(cloud: &PointCloud) -> String {
     let file_name = |path: &str| {
@@ -131,7 +180,7 @@ pub fn picture_name(cloud: &PointCloud) -> String {
                 (Some(a), _) => format!(", {a}"),
                 _ => String::new(),
             };
-            let name = file_name(&cloud.path.to_string_lossy());
+            let name = timeline_name(cloud);
             format!("{name}: timeline of {} songs{span}", songs.len())
         }
         DataMode::Song | DataMode::Generic => cloud
@@ -486,5 +535,26 @@ mod picture_tests {
             titled_with_reference(DataMode::Timeline, 1, "LUFS", loudness.into()),
             loudness
         );
+    }
+
+    #[test]
+    fn a_timeline_built_in_the_window_is_named_by_its_songs_folder() {
+        let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut cloud = crate::data::cloud::load(&repo.join("data/demo_timeline.ply")).unwrap();
+        let cache = std::path::Path::new("/nonexistent/cache/loudscape/clouds");
+        for (i, song) in cloud.meta.songs.iter_mut().enumerate() {
+            song.path = Some(format!("/music/My Albums/disc {}/song{i}.flac", i % 2));
+            song.path_bytes = None;
+        }
+        cloud.path = cache.join("timeline-41b95712d880b9b1.ply");
+        assert_eq!(timeline_name_in(&cloud, cache), "My Albums/");
+        // Elsewhere, its file's own name is the one chosen by whoever saved it.
+        cloud.path = std::path::PathBuf::from("/somewhere/timeline-41b95712d880b9b1.ply");
+        assert_eq!(
+            timeline_name_in(&cloud, cache),
+            "timeline-41b95712d880b9b1.ply"
+        );
+        cloud.path = cache.join("my-years.ply");
+        assert_eq!(timeline_name_in(&cloud, cache), "my-years.ply");
     }
 }

@@ -13,6 +13,7 @@ pub mod audio;
 pub mod bridge;
 mod colour_controls;
 pub mod compare;
+mod compare_readouts;
 pub mod compare_shot;
 mod compare_window;
 mod extract_settings;
@@ -22,6 +23,7 @@ mod hover;
 mod iso_sweep;
 pub mod labels;
 pub mod legends;
+mod messages;
 pub mod normalize;
 mod open;
 mod panels;
@@ -34,6 +36,9 @@ mod slots;
 mod state;
 pub mod strip;
 mod timeline_build;
+mod window_gone;
 mod window_screenshot;
+#[cfg(test)]
+mod window_state_tests;
 
 pub use app::{WindowOptions, run};

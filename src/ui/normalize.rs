@@ -274,7 +274,7 @@ impl LoudscapeApp {
             Some(i) => match normalized(&original, &PRESETS[i]) {
                 Ok(cloud) => cloud,
                 Err(message) => {
-                    self.messages.push(message);
+                    self.messages.error(message);
                     return;
                 }
             },

@@ -11,7 +11,6 @@
 //! and goes on as it did without dialogs (the path field; screenshots in the current folder).
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
 use std::sync::mpsc::{Receiver, channel};
 
 use eframe::egui::{self, RichText};
@@ -107,7 +106,7 @@ fn save_dialog(default_name: &str) -> Receiver<Option<PathBuf>> {
     receiver
 }
 
-fn file_name(path: &Path) -> String {
+pub(super) fn file_name(path: &Path) -> String {
     path.file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| path.display().to_string())
@@ -139,13 +138,6 @@ impl LoudscapeApp {
                 .clicked()
             {
                 self.open_dialog_or_say_why(true);
-            }
-            if ui
-                .small_button("?")
-                .on_hover_text("keyboard shortcuts (?)")
-                .clicked()
-            {
-                self.open.show_shortcuts = !self.open.show_shortcuts;
             }
         });
         self.poll_save_dialog(ui.ctx());
@@ -180,13 +172,14 @@ impl LoudscapeApp {
         if dialogs_available() {
             self.open.dialog = Some(open_dialog(folder));
         } else {
-            self.notice = Some(format!("{NO_DIALOG}: type a path in the field"));
+            self.messages
+                .warn(format!("{NO_DIALOG}: type a path in the Open field"));
         }
     }
 
     /// Asks where to save a screenshot with the native dialog; true when it opened (its answer
     /// saves later, through `open.save_to`). False where none can open: the caller saves as it
-    /// did before, and `notice` will say why there was no dialog.
+    /// did before, and the saved message says why there was no dialog.
     pub(super) fn ask_where_to_save(&mut self, default_name: &Path) -> bool {
         if self.open.save_dialog.is_some() {
             return true;
@@ -231,7 +224,7 @@ impl LoudscapeApp {
             .default_open(true)
             .show(ui, |ui| {
                 for (path, present) in entries {
-                    let name = file_name(&path);
+                    let name = self.recent_name(&path);
                     if present {
                         let link = ui
                             .add(egui::Button::new(RichText::new(&name).small()).frame(false))
@@ -256,52 +249,33 @@ impl LoudscapeApp {
         }
     }
 
+    /// How the recent list names `path`: its file name, or for a timeline built in the window
+    /// (a `timeline-<key>.ply` in the cloud cache) the folder its songs share when it is the
+    /// one loaded, else "timeline built here".
+    fn recent_name(&self, path: &Path) -> String {
+        let name = file_name(path);
+        let cache = crate::extract::cache::dir();
+        let cache = std::path::absolute(&cache).unwrap_or(cache);
+        if !(name.starts_with("timeline-") && path.parent() == Some(cache.as_path())) {
+            return name;
+        }
+        match &self.timeline {
+            Some(loaded) if std::path::absolute(&loaded.cloud.path).is_ok_and(|p| p == path) => {
+                format!(
+                    "{} (timeline)",
+                    crate::ui::legends::timeline_name(&loaded.cloud)
+                )
+            }
+            _ => "timeline built here".to_string(),
+        }
+    }
+
     /// A file (song, cloud) or folder opened as `path` into `cloud`: first in the recent list.
     /// A timeline of several songs is named by no one path: its cloud (in the cache) is kept.
     pub(super) fn opened(&mut self, path: &Path, cloud: &Path) {
         let kept = if path.exists() { path } else { cloud };
         if let Err(message) = self.open.recent.add(kept) {
             log::warn!("{message}");
-        }
-    }
-
-    /// One row a load: the file, the extractor's stage and share done, and Cancel.
-    pub(super) fn loading_progress(&mut self, ui: &mut egui::Ui) {
-        for loading in &self.loading {
-            let progress = loading.shared.progress.lock().ok().and_then(|p| p.clone());
-            let cancelled = loading.shared.cancel.load(Ordering::Relaxed);
-            ui.horizontal(|ui| {
-                ui.spinner();
-                ui.label(RichText::new(file_name(&loading.path)).strong());
-                if progress.is_some()
-                    && !cancelled
-                    && ui
-                        .small_button("Cancel")
-                        .on_hover_text("stop the extractor")
-                        .clicked()
-                {
-                    loading.shared.cancel.store(true, Ordering::Relaxed);
-                }
-            });
-            match (&progress, cancelled) {
-                (_, true) => {
-                    ui.label("cancelling…");
-                }
-                (Some(progress), false) => {
-                    ui.add(
-                        egui::ProgressBar::new(progress.fraction)
-                            .text(format!(
-                                "{} {:.0}%",
-                                progress.stage,
-                                progress.fraction * 100.0
-                            ))
-                            .desired_width(240.0),
-                    );
-                }
-                (None, false) => {
-                    ui.label("loading");
-                }
-            }
         }
     }
 }

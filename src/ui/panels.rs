@@ -15,7 +15,19 @@ use crate::ui::state::Slot;
 
 impl LoudscapeApp {
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
-        ui.heading("loudscape");
+        ui.horizontal(|ui| {
+            ui.heading("loudscape");
+            // On the title's line, where the Open row's buttons cannot push it past the edge.
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                if ui
+                    .small_button("?")
+                    .on_hover_text("keyboard shortcuts (?)")
+                    .clicked()
+                {
+                    self.open.show_shortcuts = !self.open.show_shortcuts;
+                }
+            });
+        });
         ui.add_space(4.0);
         self.open_controls(ui);
         self.compare_controls(ui);
@@ -136,34 +148,6 @@ impl LoudscapeApp {
             cloud_info(ui, &loaded.cloud);
         }
 
-        if let Some(busy) = &self.busy {
-            ui.horizontal(|ui| {
-                ui.spinner();
-                ui.label(busy);
-            });
-        }
-        self.loading_progress(ui);
-        if let Some(notice) = self.notice.clone() {
-            ui.separator();
-            ui.label(notice);
-            if ui.small_button("ok").clicked() {
-                self.notice = None;
-            }
-        }
-        if !self.messages.is_empty() {
-            ui.separator();
-            let mut dismiss = false;
-            for message in &self.messages {
-                ui.colored_label(Color32::from_rgb(240, 120, 100), message);
-            }
-            if ui.small_button("dismiss").clicked() {
-                dismiss = true;
-            }
-            if dismiss {
-                self.messages.clear();
-            }
-        }
-
         // At the end of the scrolling panel (a bottom-up layout inside the scroll area drew it
         // over the last lines when the window was small).
         ui.add_space(8.0);
@@ -249,8 +233,23 @@ impl LoudscapeApp {
             }
         });
         let slider = ui
-            .add(egui::Slider::new(&mut surface.iso_value, 0.0..=1.0).text("isovalue"))
-            .on_hover_text("The loudness density the surface encloses");
+            .add(egui::Slider::new(&mut surface.iso_value, MIN_ISOVALUE..=1.0).text("isovalue"))
+            .on_hover_text(
+                "The loudness density the surface encloses (above 0: at 0 it is only the \
+                 grid's box, a grey solid with no hp colour)",
+            );
+        if surface.iso_value < LOW_ISOVALUE {
+            // What a low isovalue shows: the envelope of nearly every point, where percussive
+            // and harmonic average out to the neutral middle of the hp colours.
+            ui.label(
+                RichText::new(
+                    "low isovalue: the surface wraps almost every point, so its hp colour \
+                     averages to neutral grey; raise it to see the loud parts and their colour",
+                )
+                .small()
+                .weak(),
+            );
+        }
         let sweeping = self.iso_sweep.as_ref().is_some_and(|s| s.sweeping());
         self.iso_dragging = slider.dragged() || sweeping;
         ui.checkbox(&mut surface.lit, "lit from above");
@@ -290,6 +289,29 @@ impl LoudscapeApp {
         if let Some((name, gain)) = crate::ui::normalize::gain_reading(song) {
             ui.label(RichText::new(format!("{name}: {gain}")).small());
         }
+        // Songs of one year share the year's span, each a narrow slice of it: pick them here.
+        let same_year = songs_of_year(&cloud.meta.songs, song.year);
+        if same_year.len() > 1 {
+            let at = same_year
+                .iter()
+                .position(|&i| Some(i) == index)
+                .unwrap_or(0);
+            egui::ComboBox::from_id_salt("same-year-songs")
+                .selected_text(format!(
+                    "song {} of {} in {}",
+                    at + 1,
+                    same_year.len(),
+                    song.year.unwrap_or_default()
+                ))
+                .show_ui(ui, |ui| {
+                    for &i in &same_year {
+                        let title = song_title(&cloud.meta.songs[i]);
+                        if ui.selectable_label(Some(i) == index, title).clicked() {
+                            self.selected_song = Some(i);
+                        }
+                    }
+                });
+        }
         for line in song
             .metrics
             .as_ref()
@@ -298,31 +320,58 @@ impl LoudscapeApp {
         {
             ui.label(RichText::new(line).small());
         }
-        if let Some(path) = song_cloud_path(&cloud, song) {
-            if ui
-                .button("Open in Song mode")
-                .on_hover_text(path.display().to_string())
-                .clicked()
-            {
-                self.start_loading(path);
+        match song_open_target(&cloud, song) {
+            Some((path, how)) => {
+                if ui
+                    .button("Open in Song mode")
+                    .on_hover_text(format!("{how}: {}", path.display()))
+                    .clicked()
+                {
+                    self.start_loading(path);
+                }
             }
-        } else {
-            ui.label(
-                RichText::new("No Song cloud of it next to the song or the timeline.")
-                    .small()
-                    .weak(),
-            );
+            None => {
+                ui.label(
+                    RichText::new("Its audio is not where the timeline says, and no Song cloud of it is next to the timeline.")
+                        .small()
+                        .weak(),
+                );
+            }
         }
     }
 }
 
+/// The songs (indices) of `year` in a timeline, in their order; none for an unknown year.
+pub(super) fn songs_of_year(
+    songs: &[crate::data::cloud::SongInfo],
+    year: Option<i32>,
+) -> Vec<usize> {
+    songs
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| year.is_some() && s.year == year)
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// The isovalue slider's low end: at 0 the "surface" is the voxel grid's own box, a blocky grey
+/// solid that shows nothing of the music.
+pub(super) const MIN_ISOVALUE: f32 = 0.01;
+
+/// Below this isovalue the side panel says why the surface is a grey envelope.
+pub(super) const LOW_ISOVALUE: f32 = 0.15;
+
 /// What the file says about itself: source, size and loudness metrics.
 pub(super) fn cloud_info(ui: &mut egui::Ui, cloud: &PointCloud) {
-    let name = cloud
-        .path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = match cloud.meta.mode {
+        // A timeline built in the window: its songs' folder, not the cache's file name.
+        DataMode::Timeline => legends::timeline_name(cloud),
+        DataMode::Song | DataMode::Generic => cloud
+            .path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    };
     ui.label(RichText::new(name).strong());
     ui.label(format!(
         "{} points",
@@ -358,6 +407,24 @@ pub(super) fn group_thousands(n: u64) -> String {
     out
 }
 
+/// What "Open in Song mode" opens for a timeline's song, and how to say it: its own Song cloud
+/// next to it, else its audio (which opens as any song does: from the cloud cache when it was
+/// extracted before, such as by a timeline built in the window, else extracted now).
+pub(super) fn song_open_target(
+    timeline: &PointCloud,
+    song: &crate::data::cloud::SongInfo,
+) -> Option<(PathBuf, &'static str)> {
+    if let Some(cloud) = song_cloud_path(timeline, song) {
+        return Some((cloud, "its Song cloud"));
+    }
+    let audio = song.open_path()?;
+    let folder = timeline.path.parent().unwrap_or(Path::new(""));
+    [audio.clone(), folder.join(&audio)]
+        .into_iter()
+        .find(|p| p.is_file())
+        .map(|p| (p, "its audio, from the cloud cache or extracted now"))
+}
+
 /// The song's own Song cloud: same stem .ply next to the song's audio, or next to the timeline.
 pub(super) fn song_cloud_path(
     timeline: &PointCloud,
@@ -378,4 +445,52 @@ pub(super) fn song_cloud_path(
     candidates
         .into_iter()
         .find(|p| p.is_file() && p != &timeline.path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A timeline's song with no Song cloud beside it opens through its audio (the cloud cache
+    /// then finds the cloud extracted before); with one beside it, that cloud.
+    #[test]
+    fn a_timeline_song_opens_through_its_audio_when_no_cloud_is_beside_it() {
+        let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let dir = repo.join("tests/output/panels_song_open_target");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("cache")).unwrap();
+        let mut timeline = crate::data::cloud::load(&repo.join("data/demo_timeline.ply")).unwrap();
+        timeline.path = dir.join("cache/timeline-0123456789abcdef.ply");
+        let audio = dir.join("b-side.wav");
+        std::fs::write(&audio, b"RIFF").unwrap();
+        let mut song = timeline.meta.songs[0].clone();
+        song.path = Some(audio.display().to_string());
+        song.path_bytes = None;
+        let (path, how) = song_open_target(&timeline, &song).expect("the audio opens");
+        assert_eq!(path, audio);
+        assert!(how.contains("cache"), "{how}");
+        std::fs::write(dir.join("b-side.ply"), b"ply").unwrap();
+        let (path, _) = song_open_target(&timeline, &song).unwrap();
+        assert_eq!(path, dir.join("b-side.ply"), "its own Song cloud first");
+        song.path = Some(dir.join("gone.wav").display().to_string());
+        assert_eq!(song_open_target(&timeline, &song), None);
+    }
+
+    #[test]
+    fn songs_of_one_year_are_listed_to_pick() {
+        let song = |year: Option<i32>| crate::data::cloud::SongInfo {
+            year,
+            ..Default::default()
+        };
+        let songs = [
+            song(Some(1999)),
+            song(Some(2005)),
+            song(Some(1999)),
+            song(None),
+            song(Some(1999)),
+        ];
+        assert_eq!(songs_of_year(&songs, Some(1999)), [0, 2, 4]);
+        assert_eq!(songs_of_year(&songs, Some(2005)), [1]);
+        assert!(songs_of_year(&songs, None).is_empty(), "no year, no group");
+    }
 }

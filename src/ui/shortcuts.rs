@@ -104,7 +104,7 @@ pub(super) const SHORTCUTS: &[Shortcut] = &[
         key: Key::Enter,
         modifiers: Modifiers::NONE,
         keys: "Enter",
-        what: "in the years dialog: build with the years typed",
+        what: "in the years dialog: build, once every song has a year",
     },
 ];
 
@@ -161,6 +161,39 @@ pub(super) fn key_event(name: &str) -> Option<egui::Event> {
         repeat: false,
         modifiers,
     })
+}
+
+/// Splits a frame's input events after the first Tab press: egui moves the keyboard focus at
+/// the end of a frame, so what was typed after a Tab in the same frame (a slow frame, or fast
+/// typing) went to the field that had the focus before it ("19962" in one year field, "0001"
+/// in the next). The events after the Tab wait for the next frame, when the focus has moved.
+pub(super) fn split_after_focus_move(events: &mut Vec<egui::Event>) -> Vec<egui::Event> {
+    let tab = events.iter().position(|e| {
+        matches!(
+            e,
+            egui::Event::Key {
+                key: Key::Tab,
+                pressed: true,
+                ..
+            }
+        )
+    });
+    match tab {
+        Some(i) => {
+            // The Tab's release stays with it.
+            let mut cut = i + 1;
+            while let Some(egui::Event::Key {
+                key: Key::Tab,
+                pressed: false,
+                ..
+            }) = events.get(cut)
+            {
+                cut += 1;
+            }
+            events.split_off(cut)
+        }
+        None => Vec::new(),
+    }
 }
 
 impl LoudscapeApp {
@@ -253,5 +286,28 @@ mod tests {
         output.textures_delta.clear();
         assert_eq!(seen, (true, true, false));
         assert!(key_event("NoSuchKey").is_none());
+    }
+
+    #[test]
+    fn typing_after_a_tab_waits_for_the_next_frame() {
+        let text = |t: &str| egui::Event::Text(t.into());
+        let mut events = vec![
+            text("1996"),
+            key_event("Tab").unwrap(),
+            text("2"),
+            text("001"),
+            key_event("Tab").unwrap(),
+            text("1987"),
+        ];
+        let later = split_after_focus_move(&mut events);
+        assert_eq!(events.len(), 2, "up to the first Tab: {events:?}");
+        assert_eq!(later.first(), Some(&text("2")));
+        let mut later = later;
+        let last = split_after_focus_move(&mut later);
+        assert_eq!(later, [text("2"), text("001"), key_event("Tab").unwrap()]);
+        assert_eq!(last, [text("1987")]);
+        let mut no_tab = vec![text("12")];
+        assert!(split_after_focus_move(&mut no_tab).is_empty());
+        assert_eq!(no_tab.len(), 1);
     }
 }

@@ -74,14 +74,24 @@ impl LoudscapeApp {
             match result {
                 Ok(cloud) => {
                     self.opened(&path, &cloud.path);
+                    // What the extractor found wrong in the input, in sight (also in the
+                    // side panel under the metrics).
+                    let file = path.file_name().map_or_else(
+                        || path.display().to_string(),
+                        |n| n.to_string_lossy().into(),
+                    );
+                    for warning in cloud.warnings() {
+                        let about = warning.path.as_deref().unwrap_or(&file);
+                        self.messages.warn(format!("{about}: {}", warning.message));
+                    }
                     self.install(render_state, cloud);
                 }
                 Err(message) => {
-                    log::error!("{message}");
-                    self.messages.push(format!("{}: {message}", path.display()));
                     if message.contains(&path.display().to_string()) {
-                        self.messages.pop();
-                        self.messages.push(message);
+                        self.messages.error(message);
+                    } else {
+                        self.messages
+                            .error(format!("{}: {message}", path.display()));
                     }
                 }
             }
@@ -157,6 +167,10 @@ impl LoudscapeApp {
     /// grid settings changed), and reads it back once for hovering.
     pub(super) fn fetch_grid(&mut self, frame: &eframe::Frame) {
         if self.settings.view == ViewKind::Points {
+            // A build announced before the switch to Points is not coming.
+            if std::mem::take(&mut self.busy_shown) {
+                self.busy = None;
+            }
             return;
         }
         let Some(render_state) = frame.wgpu_render_state() else {
@@ -180,8 +194,10 @@ impl LoudscapeApp {
             self.needs_repaint = true;
             return;
         }
-        self.busy_shown = false;
-        self.busy = None;
+        // Its own notice only (the compare's may be on screen).
+        if std::mem::take(&mut self.busy_shown) {
+            self.busy = None;
+        }
         let mut failure = None;
         match ViewResources::ensure_grid(render_state, loaded.id, &loaded.cloud, &voxels) {
             Ok(true) => loaded.cpu_grid = None,
@@ -191,10 +207,8 @@ impl LoudscapeApp {
         if loaded.cpu_grid.is_none() && ViewResources::has_grid(render_state, loaded.id) {
             loaded.cpu_grid = ViewResources::read_grid(render_state, loaded.id);
         }
-        if let Some(message) = failure
-            && !self.messages.contains(&message)
-        {
-            self.messages.push(message);
+        if let Some(message) = failure {
+            self.messages.error(message);
         }
         let (counts, error, again) = ViewResources::surface_status(render_state, loaded.id);
         self.surface_error = error;

@@ -22,6 +22,11 @@ use crate::ui::state::LoudscapeApp;
 use crate::ui::state::loading::{Loading, Shared};
 use crate::ui::state::timeline_build::{SongRows, TimelineBuild};
 
+/// The build list's mark of a song done and of one that failed: glyphs the window's font has
+/// (the check marks and crosses of Dingbats are not in it: they drew as empty boxes).
+pub(super) const DONE: &str = "•";
+pub(super) const FAILED: &str = "×";
+
 /// A year as typed: four digits in a plausible range.
 pub(super) fn parse_year(text: &str) -> Option<i32> {
     let year: i32 = text.trim().parse().ok()?;
@@ -201,8 +206,7 @@ impl LoudscapeApp {
             Some(Err(message)) => {
                 self.open.timeline = None;
                 if !message.ends_with("cancelled") {
-                    log::error!("{message}");
-                    self.messages.push(message);
+                    self.messages.error(message);
                 }
             }
             None => {}
@@ -224,9 +228,13 @@ impl LoudscapeApp {
             ui.label(RichText::new(format!("Timeline: {} of {total} songs", rows.len())).small());
             for (song, failed) in rows.iter().rev().take(8) {
                 match failed {
-                    None => ui.label(RichText::new(format!("✔ {song}")).small()),
+                    None => ui.label(RichText::new(format!("{DONE} {song}")).small()),
                     Some(reason) => ui
-                        .label(RichText::new(format!("✘ {song}")).small().weak())
+                        .label(
+                            RichText::new(format!("{FAILED} {song}: failed"))
+                                .small()
+                                .weak(),
+                        )
                         .on_hover_text(reason.as_str()),
                 };
             }
@@ -239,7 +247,7 @@ impl LoudscapeApp {
         songs.retain(|s| s.tag_error.is_none());
         if songs.is_empty() {
             self.open.timeline = None;
-            self.messages.push(format!(
+            self.messages.error(format!(
                 "{}: no audio file to build a timeline of",
                 describe(&inputs)
             ));
@@ -272,6 +280,7 @@ impl LoudscapeApp {
             songs,
             typed,
             focused: false,
+            enter_refused: false,
         });
     }
 
@@ -282,6 +291,7 @@ impl LoudscapeApp {
             songs,
             typed,
             focused,
+            enter_refused,
         }) = &mut self.open.timeline
         else {
             return;
@@ -323,17 +333,42 @@ impl LoudscapeApp {
                     .all(|(s, t)| s.year.is_some() || parse_year(t).is_some());
                 let some_typed = typed.iter().any(|t| parse_year(t).is_some());
                 let with_year = songs.iter().filter(|s| s.year.is_some()).count();
+                // Enter builds only when every song has a year: leaving songs out is a click on
+                // its own button, never the quiet result of Enter.
+                let enter = shortcuts::pressed(ctx, Action::Confirm);
+                if enter && !all_typed {
+                    if !*enter_refused {
+                        eprintln!(
+                            "loudscape: Enter: songs still without a year; nothing is built until \
+                             they have one or a button says otherwise"
+                        );
+                    }
+                    *enter_refused = true;
+                }
+                if *enter_refused && !all_typed {
+                    let left = songs
+                        .iter()
+                        .zip(typed.iter())
+                        .filter(|(s, t)| s.year.is_none() && parse_year(t).is_none())
+                        .count();
+                    ui.label(
+                        RichText::new(format!(
+                            "{left} song(s) still without a year: type them (Tab: next field), \
+                             or choose below to leave them out or place all in order"
+                        ))
+                        .color(crate::ui::messages::WARNING),
+                    );
+                }
                 ui.horizontal(|ui| {
                     let label = if all_typed {
                         "Build by year"
                     } else {
                         "Build by year, leaving the others out"
                     };
-                    let enter = shortcuts::pressed(ctx, Action::Confirm);
                     if ui
                         .add_enabled(some_typed || with_year > 0, egui::Button::new(label))
                         .clicked()
-                        || (enter && (some_typed || with_year > 0))
+                        || (enter && all_typed)
                     {
                         choice = Some(true);
                     }
@@ -372,7 +407,7 @@ impl LoudscapeApp {
                     }
                 }
                 if let Err(message) = self.open.years.remember(&answered) {
-                    self.messages.push(message);
+                    self.messages.error(message);
                 }
                 self.open.timeline = None;
                 self.build_timeline(&inputs, by_year(&placed));
@@ -427,6 +462,22 @@ impl LoudscapeApp {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_song_marks_are_in_the_font() {
+        let ctx = egui::Context::default();
+        let mut output = ctx.run_ui(Default::default(), |_| {});
+        output.textures_delta.clear();
+        let font = egui::FontId::proportional(11.0);
+        for mark in [DONE, FAILED] {
+            assert!(
+                ctx.fonts_mut(|f| f.has_glyphs(&font, mark)),
+                "{mark} is not in the font"
+            );
+        }
+        // The marks drawn before: not in the font, so the check can fail.
+        assert!(!ctx.fonts_mut(|f| f.has_glyphs(&font, "✔")));
+    }
 
     #[test]
     fn years_parse() {

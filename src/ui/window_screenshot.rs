@@ -9,13 +9,20 @@ use std::sync::atomic::Ordering;
 use eframe::egui::{self, RichText};
 
 use crate::ui::bridge::ViewResources;
-use crate::ui::state::LoudscapeApp;
+use crate::ui::compare_shot::{CompareView, render_compare_image};
+use crate::ui::compare_window::CompareResources;
+use crate::ui::state::compare_window::CompareLayout;
+use crate::ui::state::{LoudscapeApp, Slot};
 
 impl LoudscapeApp {
     pub(super) fn handle_screenshot(&mut self, ctx: &egui::Context) {
         let has_data = self.active().is_some();
-        let waiting =
-            self.timeline_listing() || !self.scripted_presses.is_empty() || self.reextracting();
+        // B of a compare and work announced as blocking are waited for too.
+        let waiting = self.timeline_listing()
+            || !self.scripted_presses.is_empty()
+            || self.reextracting()
+            || self.busy.is_some()
+            || self.compare.as_ref().is_some_and(|c| c.receiver.is_some());
         let Some(state) = self.screenshot.as_mut() else {
             return;
         };
@@ -28,10 +35,10 @@ impl LoudscapeApp {
             ctx.request_repaint();
             return;
         }
-        if !has_data && self.loading.is_empty() && self.messages.is_empty() {
+        if !has_data && self.loading.is_empty() && !self.messages.has_errors() {
             // Nothing to wait for: take the empty window.
         } else if !has_data {
-            if !self.messages.is_empty() {
+            if self.messages.has_errors() {
                 // Loading failed; still take the picture so the test sees the message.
             } else {
                 ctx.request_repaint();
@@ -115,18 +122,36 @@ impl LoudscapeApp {
         let Some(loaded) = self.active() else {
             return;
         };
-        let result =
-            ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
-                .and_then(|image| crate::ui::screenshot::save_png(&image, &path));
+        let result = match self.compare_shown_as() {
+            // The compare the view shows: both halves, or the difference picture, labelled.
+            Some(what) => {
+                // The whole view (both halves), or the chosen size.
+                let size = if self.save_shot.custom_size {
+                    (view.width, view.height)
+                } else {
+                    self.view_px
+                };
+                compare_screenshot(render_state, what, view.camera, size, &settings)
+                    .and_then(|image| Ok(crate::ui::screenshot::save_png(&image, &path)?))
+                    .map(|()| size)
+                    .map_err(|e| format!("{}: {e:#}", path.display()))
+            }
+            None => {
+                ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
+                    .and_then(|image| crate::ui::screenshot::save_png(&image, &path))
+                    .map(|()| (view.width, view.height))
+                    .map_err(|e| e.to_string())
+            }
+        };
         match result {
-            Ok(()) => {
+            Ok((width, height)) => {
                 // The full path: a bare name lands in the folder the window was started from.
                 let shown = std::path::absolute(&path).unwrap_or(path);
-                self.notice = Some(format!(
+                self.messages.info(format!(
                     "saved {} ({}×{}){}",
                     shown.display(),
-                    view.width,
-                    view.height,
+                    width,
+                    height,
                     if no_dialog {
                         format!("; {}", crate::ui::open::NO_DIALOG)
                     } else {
@@ -134,9 +159,70 @@ impl LoudscapeApp {
                     }
                 ));
             }
-            Err(e) => self.messages.push(e.to_string()),
+            Err(e) => self.messages.error(e),
         }
     }
+
+    /// The scripted `--press shot-size=WxH` of tests: Save PNG at that size.
+    pub(super) fn scripted_shot_size(&mut self, name: &str) -> bool {
+        let Some((w, h)) = name
+            .strip_prefix("shot-size=")
+            .and_then(|size| size.split_once('x'))
+        else {
+            return false;
+        };
+        if let (Ok(w), Ok(h)) = (w.parse::<u32>(), h.parse::<u32>()) {
+            self.save_shot.custom_size = true;
+            self.save_shot.size = [w.clamp(16, 8192), h.clamp(16, 8192)];
+        }
+        true
+    }
+
+    /// How the view shows the compare now, if it does.
+    fn compare_shown_as(&self) -> Option<CompareView> {
+        let state = self.compare.as_ref().filter(|c| c.shown())?;
+        if self.active != Slot::Song {
+            return None;
+        }
+        match state.layout {
+            CompareLayout::SideBySide => Some(CompareView::SideBySide(self.settings.view)),
+            CompareLayout::Difference => Some(CompareView::Difference(state.measure)),
+            CompareLayout::Off => None,
+        }
+    }
+}
+
+/// The compare rendered offscreen from the window's compare scene, as `loudscape render A
+/// --compare B` draws it (titles, labels and colour keys included).
+fn compare_screenshot(
+    render_state: &eframe::egui_wgpu::RenderState,
+    what: CompareView,
+    camera: crate::view::camera::Camera,
+    size: (u32, u32),
+    settings: &crate::render::scene::RenderSettings,
+) -> anyhow::Result<image::RgbaImage> {
+    CompareResources::with(render_state, |compare, view| {
+        let scene = compare
+            .scene
+            .as_mut()
+            .ok_or_else(|| anyhow::anyhow!("the compare is not ready yet"))?;
+        let gpu = crate::render::gpu::context::GpuContext {
+            adapter: render_state.adapter.clone(),
+            device: render_state.device.clone(),
+            queue: render_state.queue.clone(),
+        };
+        render_compare_image(
+            &gpu,
+            &view.renderer,
+            scene,
+            what,
+            Some(camera),
+            size,
+            settings,
+            settings.show_box,
+        )
+    })
+    .unwrap_or_else(|| Err(anyhow::anyhow!("the compare is not ready yet")))
 }
 
 pub(super) fn save_color_image(image: &egui::ColorImage, path: &Path) -> anyhow::Result<()> {

@@ -52,11 +52,14 @@ pub(in crate::ui) struct CompareState {
     /// The difference's CPU copy for read-outs: the shown grid and the signed values.
     pub(in crate::ui) difference: Option<DifferenceCopy>,
     pub(in crate::ui) error: Option<String>,
+    /// The "building the compare grids" notice has been on screen for a frame: build now.
+    pub(in crate::ui) grids_announced: bool,
+    /// The error last told in the window's messages (each new one is told once).
+    pub(in crate::ui) error_told: Option<String>,
     pub(in crate::ui) labels: Option<AxisLabels>,
     pub(in crate::ui) hover: Option<(glam::Vec2, Vec<Reading>)>,
     /// The compare dialog's answer.
     pub(in crate::ui) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
-    pub(in crate::ui) field: String,
 }
 
 /// The difference's CPU copy for read-outs: the shown grid, the signed values per voxel and per
@@ -72,7 +75,6 @@ pub(in crate::ui) struct DifferenceCopy {
 impl CompareState {
     pub(in crate::ui) fn new(path: PathBuf) -> Self {
         Self {
-            field: path.display().to_string(),
             path,
             receiver: None,
             clouds: None,
@@ -85,6 +87,8 @@ impl CompareState {
             decoding: None,
             difference: None,
             error: None,
+            error_told: None,
+            grids_announced: false,
             labels: None,
             hover: None,
             dialog: None,

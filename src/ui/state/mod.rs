@@ -39,6 +39,7 @@ pub(super) mod compare_window;
 pub(super) mod extract_settings;
 pub(super) mod iso_sweep;
 pub(super) mod loading;
+pub(super) mod messages;
 pub(super) mod open;
 pub(super) mod timeline_build;
 
@@ -57,7 +58,8 @@ pub(super) struct LoudscapeApp {
     pub(super) camera: Camera,
     pub(super) fit_pending: bool,
     pub(super) loading: Vec<Loading>,
-    pub(super) messages: Vec<String>,
+    /// What the app is telling the user, shown under the 3D view (`messages.rs`).
+    pub(super) messages: messages::Messages,
     pub(super) next_id: u64,
     pub(super) last_motion: Option<Instant>,
     pub(super) frame_index: u32,
@@ -71,6 +73,8 @@ pub(super) struct LoudscapeApp {
     /// The "Save PNG" panel.
     pub(super) save_shot: SaveShot,
     pub(super) last_view: Option<FrameView>,
+    /// The whole 3D view's size in pixels (both halves of a side-by-side compare).
+    pub(super) view_px: (u32, u32),
     pub(super) audio_for: Vec<(PathBuf, PathBuf)>,
     /// Whether to remember state (off for scripted screenshot runs).
     pub(super) persist: bool,
@@ -92,8 +96,6 @@ pub(super) struct LoudscapeApp {
     pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
     pub(super) iso_sweep: Option<IsoSweep>,
-    /// A line of news that is not an error (where a screenshot went), in the normal colour.
-    pub(super) notice: Option<String>,
     /// Draw again next frame (the surface is still growing its buffers).
     pub(super) needs_repaint: bool,
     /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
@@ -126,6 +128,9 @@ pub(super) struct LoudscapeApp {
     pub(super) scripted_presses: Vec<String>,
     /// Timeline mode's "level as heard" choice (`normalize.rs`).
     pub(super) heard: crate::ui::normalize::Heard,
+    /// Input events held back for the next frame: those after a Tab, typed before the focus
+    /// moved (`shortcuts::split_after_focus_move`).
+    pub(super) deferred_events: Vec<eframe::egui::Event>,
 }
 
 /// Which of the two data slots.

@@ -15,6 +15,8 @@ use crate::ui::state::timeline_build::{Rows, TimelineBuild, YearBook};
 #[derive(Default)]
 pub(in crate::ui) struct OpenPanel {
     pub(in crate::ui) path: String,
+    /// The compare's B field: typed into before any compare exists (`compare_window.rs`).
+    pub(in crate::ui) compare_path: String,
     /// The dialog's answer (`None`: closed without a choice).
     pub(in crate::ui) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
     /// The save dialog's answer, while it is open.

@@ -75,6 +75,9 @@ pub(in crate::ui) enum TimelineBuild {
         songs: Vec<SongTags>,
         typed: Vec<String>,
         focused: bool,
+        /// Enter was pressed with songs still without a year: the dialog says what Enter
+        /// does instead of leaving them out unasked.
+        enter_refused: bool,
     },
 }
 
