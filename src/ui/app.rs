@@ -180,6 +180,7 @@ impl LoudscapeApp {
             scripted_presses: options.press,
             heard: crate::ui::normalize::Heard::starting(options.normalize),
             deferred_events: Vec::new(),
+            video_export: Default::default(),
             freq_axis: Default::default(),
             compare: None,
             pending_seek: options.seek,
@@ -475,6 +476,7 @@ impl eframe::App for LoudscapeApp {
                 if self.scripted_setting(&name)
                     || self.scripted_compare(&name)
                     || self.scripted_shot_size(&name)
+                    || self.scripted_video_export(&name)
                 {
                     continue;
                 }
@@ -513,6 +515,7 @@ impl eframe::App for LoudscapeApp {
         self.apply_heard(frame);
         self.apply_freq_axis(frame);
         self.poll_compare(&ctx, frame);
+        self.poll_video_export(&ctx);
         self.fetch_grid(frame);
         let surface_status = frame
             .wgpu_render_state()

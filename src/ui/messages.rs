@@ -23,6 +23,7 @@ impl LoudscapeApp {
     fn status_shown(&self, now: Instant) -> bool {
         !self.loading.is_empty()
             || self.busy.is_some()
+            || self.video_export.running.is_some()
             || self.compare.as_ref().is_some_and(|c| c.receiver.is_some())
             || self.messages.shown(now).next().is_some()
     }
@@ -48,6 +49,7 @@ impl LoudscapeApp {
                     });
                 }
                 self.loading_progress(ui);
+                self.video_export_progress(ui);
                 if let Some(state) = &self.compare
                     && state.receiver.is_some()
                 {

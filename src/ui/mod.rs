@@ -36,6 +36,7 @@ mod slots;
 mod state;
 pub mod strip;
 mod timeline_build;
+mod video_export;
 mod window_gone;
 mod window_screenshot;
 #[cfg(test)]

@@ -203,6 +203,13 @@ fn turn_up_words(turn_up: TurnUp) -> String {
     }
 }
 
+impl Heard {
+    /// The preset shown, by its command-line key (`video --normalize`); None: as mastered.
+    pub(super) fn preset_key(&self) -> Option<&'static str> {
+        self.preset.map(|i| PRESETS[i].key)
+    }
+}
+
 impl LoudscapeApp {
     /// The "level as heard" combo box of Timeline mode.
     pub(super) fn heard_choice(&mut self, ui: &mut egui::Ui) {

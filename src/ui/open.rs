@@ -90,10 +90,20 @@ pub(super) fn open_dialog(folder: bool) -> Receiver<Option<Vec<PathBuf>>> {
 
 /// The native Save dialog for a PNG, suggesting `default_name` in the current folder.
 fn save_dialog(default_name: &str) -> Receiver<Option<PathBuf>> {
+    save_dialog_as("Save the view as PNG", ("PNG image", "png"), default_name)
+}
+
+/// The native Save dialog titled `title` for files of `filter` (name, extension), opening in
+/// the current folder with `default_name`; awaited on a thread as [`open_dialog`] is.
+pub(super) fn save_dialog_as(
+    title: &str,
+    filter: (&str, &str),
+    default_name: &str,
+) -> Receiver<Option<PathBuf>> {
     let (sender, receiver) = channel();
     let mut dialog = rfd::AsyncFileDialog::new()
-        .set_title("Save the view as PNG")
-        .add_filter("PNG image", &["png"])
+        .set_title(title)
+        .add_filter(filter.0, &[filter.1])
         .set_file_name(default_name);
     if let Ok(dir) = std::env::current_dir() {
         dialog = dialog.set_directory(dir);

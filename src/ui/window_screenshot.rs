@@ -22,6 +22,7 @@ impl LoudscapeApp {
             || !self.scripted_presses.is_empty()
             || self.reextracting()
             || self.busy.is_some()
+            || self.video_exporting()
             || self.compare.as_ref().is_some_and(|c| c.receiver.is_some());
         let Some(state) = self.screenshot.as_mut() else {
             return;
@@ -73,6 +74,7 @@ impl LoudscapeApp {
                 self.save_shot.requested = true;
             }
             ui.checkbox(&mut self.save_shot.custom_size, "size");
+            self.export_video_button(ui);
         });
         if self.save_shot.custom_size {
             ui.horizontal(|ui| {

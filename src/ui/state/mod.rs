@@ -42,6 +42,7 @@ pub(super) mod loading;
 pub(super) mod messages;
 pub(super) mod open;
 pub(super) mod timeline_build;
+pub(super) mod video_export;
 
 use compare_window::CompareState;
 use iso_sweep::IsoSweep;
@@ -131,6 +132,8 @@ pub(super) struct LoudscapeApp {
     /// Input events held back for the next frame: those after a Tab, typed before the focus
     /// moved (`shortcuts::split_after_focus_move`).
     pub(super) deferred_events: Vec<eframe::egui::Event>,
+    /// "Export video…" and the export under way (`video_export.rs`).
+    pub(super) video_export: video_export::VideoExport,
 }
 
 /// Which of the two data slots.

@@ -1,0 +1,120 @@
+//! An "Export video…" on its way (`ui/video_export.rs`): the `loudscape video` child the window
+//! started, the thread reading its `--progress json` lines, the last progress it sent and the
+//! tail of its stderr; and the save dialog while it is open.
+
+use std::path::PathBuf;
+use std::process::Child;
+use std::sync::mpsc::Receiver;
+use std::sync::{Arc, Mutex};
+
+/// One `--progress json` line of `loudscape video`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(in crate::ui) struct VideoProgress {
+    pub(in crate::ui) frame: u64,
+    pub(in crate::ui) frames: u64,
+    pub(in crate::ui) fps: f64,
+    pub(in crate::ui) eta_s: f64,
+}
+
+impl VideoProgress {
+    /// Reads one stdout line; `None` for anything that is not a progress object.
+    pub(in crate::ui) fn parse(line: &str) -> Option<Self> {
+        let value: serde_json::Value = serde_json::from_str(line.trim()).ok()?;
+        Some(Self {
+            frame: value.get("frame")?.as_u64()?,
+            frames: value.get("frames")?.as_u64()?,
+            fps: value.get("fps").and_then(|v| v.as_f64()).unwrap_or(0.0),
+            eta_s: value.get("eta_s").and_then(|v| v.as_f64()).unwrap_or(0.0),
+        })
+    }
+
+    /// The share of the frames done, in [0, 1].
+    pub(in crate::ui) fn fraction(&self) -> f32 {
+        if self.frames == 0 {
+            0.0
+        } else {
+            (self.frame as f64 / self.frames as f64).clamp(0.0, 1.0) as f32
+        }
+    }
+}
+
+/// A running export: the child, where it writes, and what its reader threads share.
+pub(in crate::ui) struct RunningExport {
+    pub(in crate::ui) child: Child,
+    pub(in crate::ui) output: PathBuf,
+    /// Progress lines, parsed, from the stdout reader thread (closed when stdout closes).
+    pub(in crate::ui) progress: Receiver<VideoProgress>,
+    pub(in crate::ui) latest: Option<VideoProgress>,
+    /// The child's last non-empty stderr line (its error, when it fails).
+    pub(in crate::ui) last_error: Arc<Mutex<String>>,
+    /// The thread reading stderr: done once the child and what it started closed it.
+    pub(in crate::ui) stderr_reader: Option<std::thread::JoinHandle<()>>,
+    /// Cancel was pressed: SIGTERM sent, waiting for the child to stop.
+    pub(in crate::ui) cancelled: bool,
+}
+
+impl RunningExport {
+    /// Asks the child to stop: SIGTERM on Unix (the command removes its partial file and stops
+    /// at once), a kill elsewhere.
+    pub(in crate::ui) fn stop(&mut self) {
+        #[cfg(unix)]
+        if let Ok(pid) = i32::try_from(self.child.id())
+            && pid > 0
+        {
+            // SAFETY: kill(2) on our own child's pid; no memory is shared.
+            unsafe {
+                libc::kill(pid, libc::SIGTERM);
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = self.child.kill();
+    }
+}
+
+impl Drop for RunningExport {
+    /// The window closing (or the app ending) stops an export still running and waits for it,
+    /// so its partial file is removed.
+    fn drop(&mut self) {
+        if matches!(self.child.try_wait(), Ok(None)) {
+            self.stop();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// The "Export video…" button's state.
+#[derive(Default)]
+pub(in crate::ui) struct VideoExport {
+    /// The export under way, if one is.
+    pub(in crate::ui) running: Option<RunningExport>,
+    /// The save dialog's answer, while it is open.
+    pub(in crate::ui) save_dialog: Option<Receiver<Option<PathBuf>>>,
+    /// Scripted runs (tests): the passage's end, seconds, passed as `--end` so a test's video is
+    /// short. The button always exports the whole song.
+    pub(in crate::ui) test_end: Option<f64>,
+    /// Scripted runs (tests): cancel the export as soon as it has started.
+    pub(in crate::ui) cancel_at_start: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn progress_lines_are_read_and_other_lines_ignored() {
+        let p = VideoProgress::parse(r#"{"frame":15,"frames":60,"fps":7.5,"eta_s":6.0}"#)
+            .expect("a progress line");
+        assert_eq!(
+            p,
+            VideoProgress {
+                frame: 15,
+                frames: 60,
+                fps: 7.5,
+                eta_s: 6.0
+            }
+        );
+        assert!((p.fraction() - 0.25).abs() < 1e-6);
+        assert!(VideoProgress::parse("wrote out.mp4").is_none());
+        assert!(VideoProgress::parse(r#"{"frames":3}"#).is_none());
+    }
+}
