@@ -6,7 +6,8 @@
 //! (`make test` runs it under xvfb-run), ffmpeg and ffprobe.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
 
 fn assert_display() {
     assert!(
@@ -123,4 +124,90 @@ fn a_cancelled_export_leaves_no_file() {
         .filter(|name| name.contains("cancelled"))
         .collect();
     assert!(left.is_empty(), "files left behind: {left:?}");
+}
+
+/// The window's own id, once it is shown (None if the app ended first).
+fn wait_for_window(child: &mut std::process::Child) -> Option<String> {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(90) {
+        if let Ok(Some(_)) = child.try_wait() {
+            return None;
+        }
+        let search = Command::new("xdotool")
+            .args(["search", "--all", "--pid", &child.id().to_string()])
+            .args(["--name", "^loudscape$"])
+            .output()
+            .expect("xdotool (scripts/setup-system.sh installs it)");
+        let ids = String::from_utf8_lossy(&search.stdout).into_owned();
+        if let Some(id) = ids.lines().next() {
+            return Some(id.trim().to_string());
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    None
+}
+
+/// Processes whose command line names `path`.
+fn processes_naming(path: &Path) -> usize {
+    let needle = path.to_str().unwrap().as_bytes().to_vec();
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .flatten()
+        .filter_map(|e| std::fs::read(e.path().join("cmdline")).ok())
+        .filter(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
+        .count()
+}
+
+#[test]
+fn closing_the_window_while_exporting_stops_the_export_and_leaves_no_file() {
+    assert_display();
+    let dir = fresh_dir("window_video_close");
+    let video = dir.join("closed.mp4");
+    let partial = dir.join("closed.mp4.partial.mp4");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .arg(repo().join("data/demo_song.ply"))
+        .args(["--press", &format!("export-video={}", video.display())])
+        .env("DBUS_SESSION_BUS_ADDRESS", "")
+        .env("HOME", &dir)
+        .env("XDG_DATA_HOME", &dir)
+        .env("XDG_CONFIG_HOME", &dir)
+        .env("XDG_STATE_HOME", &dir)
+        .env("XDG_CACHE_HOME", &dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start loudscape");
+    let window = wait_for_window(&mut child);
+    // Wait until frames are being encoded (the command's temporary file exists).
+    let start = Instant::now();
+    while !partial.exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let encoding = partial.exists();
+    if let Some(id) = &window {
+        let _ = Command::new("xdotool").args(["windowclose", id]).status();
+    }
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(30) && child.try_wait().ok().flatten().is_none() {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    if child.try_wait().ok().flatten().is_none() {
+        let _ = child.kill();
+    }
+    let output = child.wait_with_output().expect("wait for loudscape");
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert!(window.is_some(), "the window did not appear: {err}");
+    assert!(encoding, "the export never started: {err}");
+    assert_eq!(output.status.code(), Some(0), "closing must exit 0: {err}");
+    // The export is stopped with the window, and cleans up after itself at once.
+    let start = Instant::now();
+    while processes_naming(&partial) > 0 && start.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(processes_naming(&partial), 0, "the export still runs");
+    assert!(
+        !video.exists(),
+        "a video was written after the window closed"
+    );
+    assert!(!partial.exists(), "the partial file is left");
 }

@@ -12,7 +12,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// Whether a panic at `file` saying `message` is winit finding the window gone: an X11
 /// `BadWindow` error (`error_kind: Window`) unwrapped inside winit.
 pub(super) fn is_window_gone(file: &str, message: &str) -> bool {
-    file.contains("winit") && message.contains("X11Error") && message.contains("error_kind: Window")
+    // BadWindow, or BadDrawable from asking a destroyed window's geometry (GetGeometry takes
+    // a drawable): both say the window is gone.
+    file.contains("winit")
+        && message.contains("X11Error")
+        && (message.contains("error_kind: Window") || message.contains("error_kind: Drawable"))
 }
 
 fn message(info: &PanicHookInfo<'_>) -> String {
@@ -67,6 +71,11 @@ mod tests {
             !is_window_gone(file, "index out of bounds"),
             "another panic"
         );
+        // Seen when the window was closed while an export repainted it: GetGeometry's
+        // BadDrawable.
+        let bad_drawable = "called `Result::unwrap()` on an `Err` value: X11(X11Error { \
+                            error_kind: Drawable, error_code: 9, major_opcode: 14 })";
+        assert!(is_window_gone(file, bad_drawable));
         let other = bad_window.replace("error_kind: Window", "error_kind: Match");
         assert!(!is_window_gone(file, &other), "another X11 error");
     }
