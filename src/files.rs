@@ -108,6 +108,7 @@ impl TempDir {
             let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             let path = parent.join(format!("{prefix}-{}-{n}", std::process::id()));
             let mut list = temporaries();
+            #[cfg_attr(not(unix), allow(unused_mut))]
             let mut builder = std::fs::DirBuilder::new();
             #[cfg(unix)]
             std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
@@ -134,7 +135,9 @@ impl Drop for TempDir {
     }
 }
 
-/// Deletes a temporary file or folder (the signal handler's sweep).
+/// Deletes a temporary file or folder (the signal handler's sweep; Unix only, where signals are
+/// handled).
+#[cfg(unix)]
 fn remove_temporary(path: &Path) {
     if path.is_dir() {
         let _ = std::fs::remove_dir_all(path);
