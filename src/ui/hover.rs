@@ -157,6 +157,9 @@ impl LoudscapeApp {
                 }
             }
         }
+        if cloud.meta.mode == crate::data::cloud::DataMode::Song {
+            name_bin_level(&mut hover.readings);
+        }
         if let Some(song) = self.hovered_song.and_then(|i| cloud.meta.songs.get(i)) {
             hover.readings.insert(
                 0,
@@ -264,8 +267,34 @@ fn readout_layout(
     (min, galley)
 }
 
+/// Song mode's y is the level of one STFT bin (a spectrum, dB re a full-scale sine), not a
+/// loudness: its read-out says so, as the axis title does ("bin level").
+fn name_bin_level(readings: &mut [Reading]) {
+    for reading in readings.iter_mut().filter(|r| r.name == "level") {
+        reading.name = "bin level".into();
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_songs_level_reads_as_bin_level() {
+        let mut readings = vec![
+            super::Reading {
+                name: "time".into(),
+                value: "1.0 s".into(),
+            },
+            super::Reading {
+                name: "level".into(),
+                value: "-23.4 dB".into(),
+            },
+        ];
+        super::name_bin_level(&mut readings);
+        assert_eq!(readings[0].name, "time");
+        assert_eq!(readings[1].name, "bin level");
+        assert_eq!(readings[1].value, "-23.4 dB");
+    }
+
     use super::*;
 
     /// A read-out longer than the view (a 10,000-song timeline's long title, the cursor near the
