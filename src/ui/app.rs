@@ -178,7 +178,7 @@ impl LoudscapeApp {
                 ..Default::default()
             },
             scripted_presses: options.press,
-            heard: crate::ui::normalize::Heard::starting(options.normalize),
+            heard: crate::ui::normalize::heard_starting(options.normalize),
             deferred_events: Vec::new(),
             video_export: Default::default(),
             freq_axis: Default::default(),
@@ -424,7 +424,7 @@ impl LoudscapeApp {
                         self.settings.surface.iso_value
                     ),
                     egui::FontId::proportional(16.0),
-                    crate::ui::messages::WARNING,
+                    crate::ui::style::WARNING,
                 );
             }
             if self.surface_busy {
@@ -452,7 +452,7 @@ impl LoudscapeApp {
 
 impl eframe::App for LoudscapeApp {
     /// The frame is cleared to the panels' colour, which the panels then leave unpainted
-    /// ([`panel_frame`]).
+    /// ([`crate::ui::style::panel_frame`]).
     fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
         visuals.panel_fill.to_normalized_gamma_f32()
     }
@@ -561,7 +561,7 @@ impl eframe::App for LoudscapeApp {
 
         let panel_width = side_panel_width(ctx.content_rect().width());
         egui::Panel::left("controls")
-            .frame(panel_frame(ui.style()))
+            .frame(crate::ui::style::panel_frame(ui.style()))
             .resizable(false)
             .exact_size(panel_width)
             .show(ui, |ui| {
@@ -590,7 +590,7 @@ impl eframe::App for LoudscapeApp {
         self.shortcuts_overlay(&ctx);
         if self.active == Slot::Song && self.song.is_some() {
             egui::Panel::bottom("transport")
-                .frame(panel_frame(ui.style()))
+                .frame(crate::ui::style::panel_frame(ui.style()))
                 .show(ui, |ui| {
                     ui.add_space(3.0);
                     self.audio.bar(ui);
@@ -602,7 +602,7 @@ impl eframe::App for LoudscapeApp {
             if self.strip.has_curves() {
                 let (strip, audio) = (&self.strip, &mut self.audio);
                 egui::Panel::bottom("loudness_strip")
-                    .frame(panel_frame(ui.style()))
+                    .frame(crate::ui::style::panel_frame(ui.style()))
                     .show(ui, |ui| {
                         if let Some(t) = strip.show(ui, audio.time_s().unwrap_or(0.0)) {
                             audio.seek(t);
@@ -649,15 +649,6 @@ impl LoudscapeApp {
             self.camera,
         )
     }
-}
-
-/// The frame of the window's panels: egui's own, without its fill. The window is cleared to the
-/// panels' colour ([`eframe::App::clear_color`]), so the fill would paint every panel pixel a
-/// second time; on a software rasterizer (lavapipe, llvmpipe) egui's per-pixel shading of those
-/// rectangles was a third of every frame's cost (docs/PERFORMANCE.md), on a GPU it is nothing.
-/// The picture is the same.
-pub(super) fn panel_frame(style: &egui::Style) -> egui::Frame {
-    egui::Frame::side_top_panel(style).fill(Color32::TRANSPARENT)
 }
 
 /// A spinner and `text` in the top-left corner of the 3D view, over a dark plate.

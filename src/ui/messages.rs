@@ -7,16 +7,11 @@
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use eframe::egui::{self, Color32, RichText};
+use eframe::egui::{self, RichText};
 
 use crate::ui::open::file_name;
 use crate::ui::state::LoudscapeApp;
 use crate::ui::state::messages::Kind;
-
-/// The colour of an error line.
-pub(super) const ERROR: Color32 = Color32::from_rgb(240, 120, 100);
-/// The colour of a warning line.
-pub(super) const WARNING: Color32 = Color32::from_rgb(230, 190, 110);
 
 impl LoudscapeApp {
     /// Whether the status area has anything to show.
@@ -39,7 +34,7 @@ impl LoudscapeApp {
             return;
         }
         egui::Panel::bottom("messages")
-            .frame(crate::ui::app::panel_frame(ui.style()))
+            .frame(crate::ui::style::panel_frame(ui.style()))
             .show(ui, |ui| {
                 ui.add_space(2.0);
                 if let Some(busy) = &self.busy {
@@ -75,8 +70,8 @@ impl LoudscapeApp {
                                     dismiss = Some(index);
                                 }
                                 let (prefix, colour) = match kind {
-                                    Kind::Error => ("error: ", ERROR),
-                                    Kind::Warning => ("warning: ", WARNING),
+                                    Kind::Error => ("error: ", crate::ui::style::ERROR),
+                                    Kind::Warning => ("warning: ", crate::ui::style::WARNING),
                                     Kind::Info => ("", ui.visuals().text_color()),
                                 };
                                 ui.add(

@@ -35,6 +35,7 @@ mod shortcuts;
 mod slots;
 mod state;
 pub mod strip;
+mod style;
 mod timeline_build;
 mod video_export;
 mod window_gone;

@@ -5,13 +5,12 @@
 //! ("Streaming normalization"); the same presets as `--normalize` of the report
 //! (`preprocess/loudscape_extract/normalization.py`, `PRESETS`).
 
-use std::sync::Arc;
-
 use eframe::egui::{self, RichText};
 
 use crate::data::cloud::{Aabb, DataMode, PointCloud};
 use crate::ui::labels::{STREAMING_SERVICES, StreamingService, TurnUp, normalization_gain};
 use crate::ui::state::LoudscapeApp;
+use crate::ui::state::heard::Heard;
 
 /// A `--normalize` preset: its key (as in the report's `--normalize`) and its rule.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -170,28 +169,12 @@ pub fn gain_reading(song: &crate::data::cloud::SongInfo) -> Option<(String, Stri
     Some((format!("{name} gain"), value))
 }
 
-/// The side panel's "level as heard" choice in Timeline mode.
-#[derive(Default)]
-pub struct Heard {
-    /// The preset shown (index into [`PRESETS`]); None: the files as mastered.
-    preset: Option<usize>,
-    /// A new choice, applied where the GPU is at hand ([`LoudscapeApp::apply_heard`]).
-    pending: Option<Option<usize>>,
-    /// The timeline as loaded, the source of every shifted copy.
-    original: Option<Arc<PointCloud>>,
-    /// The id of the timeline this installed; another id means a new file was loaded.
-    shown: u64,
-}
-
-impl Heard {
-    /// The choice a window starts with: `key` (a preset's) is applied once a timeline is
-    /// shown.
-    pub fn starting(key: Option<&str>) -> Heard {
-        let index = key.and_then(|k| PRESETS.iter().position(|p| p.key == k));
-        Heard {
-            pending: index.map(Some),
-            ..Heard::default()
-        }
+/// The choice a window starts with: `key` (a preset's) is applied once a timeline is shown.
+pub(super) fn heard_starting(key: Option<&str>) -> Heard {
+    let index = key.and_then(|k| PRESETS.iter().position(|p| p.key == k));
+    Heard {
+        pending: index.map(Some),
+        ..Heard::default()
     }
 }
 

@@ -356,7 +356,7 @@ impl LoudscapeApp {
                             "{left} song(s) still without a year: type them (Tab: next field), \
                              or choose below to leave them out or place all in order"
                         ))
-                        .color(crate::ui::messages::WARNING),
+                        .color(crate::ui::style::WARNING),
                     );
                 }
                 ui.horizontal(|ui| {

@@ -37,6 +37,7 @@ use crate::view::pick::Reading;
 
 pub(super) mod compare_window;
 pub(super) mod extract_settings;
+pub(super) mod heard;
 pub(super) mod iso_sweep;
 pub(super) mod loading;
 pub(super) mod messages;
@@ -128,7 +129,7 @@ pub(super) struct LoudscapeApp {
     /// Key presses a scripted run (`--press`, tests) still has to make (`shortcuts.rs`).
     pub(super) scripted_presses: Vec<String>,
     /// Timeline mode's "level as heard" choice (`normalize.rs`).
-    pub(super) heard: crate::ui::normalize::Heard,
+    pub(super) heard: heard::Heard,
     /// Input events held back for the next frame: those after a Tab, typed before the focus
     /// moved (`shortcuts::split_after_focus_move`).
     pub(super) deferred_events: Vec<eframe::egui::Event>,
