@@ -90,6 +90,16 @@ pub struct DrawArgs {
 }
 
 impl DrawArgs {
+    /// Refuses a `--point-size` outside 0.5 to 64 pixels.
+    pub fn check_point_size(&self) -> anyhow::Result<()> {
+        if let Some(size) = self.point_size
+            && !(0.5..=64.0).contains(&size)
+        {
+            bail!("point size {size} is out of range 0.5 to 64 pixels");
+        }
+        Ok(())
+    }
+
     /// Refuses an unknown `--normalize` preset before anything is loaded or extracted.
     pub fn check_normalize(&self) -> anyhow::Result<()> {
         loudscape::ui::normalize::parse_preset(&self.normalize)
@@ -279,23 +289,22 @@ fn parse_freq_axis(name: &str) -> anyhow::Result<FreqAxis> {
         .with_context(|| format!("frequency axis '{name}' is not one of linear, log, mel"))
 }
 
+/// The camera of `--camera AZ,EL,DIST` (render) or `--camera-at` (video); None: fitted.
+pub fn camera_from(text: Option<&str>) -> anyhow::Result<Option<Camera>> {
+    text.map(|text| {
+        let (az, el, dist) = parse_camera(text)?;
+        Ok(Camera::from_angles(az, el, dist))
+    })
+    .transpose()
+}
+
 /// `loudscape render` of one cloud (with `--compare`, `render_compare::run_args` runs instead).
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     check_output(&args.output, &["png"], &[args.input.as_path()])?;
     let size = parse_size(&args.size)?;
     let view = parse_view(&args.view)?;
-    let camera = match &args.camera {
-        Some(text) => {
-            let (az, el, dist) = parse_camera(text)?;
-            Some(Camera::from_angles(az, el, dist))
-        }
-        None => None,
-    };
-    if let Some(size) = args.draw.point_size
-        && !(0.5..=64.0).contains(&size)
-    {
-        bail!("point size {size} is out of range 0.5 to 64 pixels");
-    }
+    let camera = camera_from(args.camera.as_deref())?;
+    args.draw.check_point_size()?;
     let method = parse_method(&args.draw.method)?;
     let iso_value = check_iso(args.draw.iso)?;
     let freq_axis = parse_freq_axis(&args.draw.freq_axis)?;
@@ -372,18 +381,8 @@ pub fn playhead_marker(cloud: &PointCloud, seconds: f64) -> anyhow::Result<Marke
 /// The settings and camera of a compare render: every option but --view, checked as for one
 /// cloud.
 pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Option<Camera>)> {
-    let camera = match &args.camera {
-        Some(text) => {
-            let (az, el, dist) = parse_camera(text)?;
-            Some(Camera::from_angles(az, el, dist))
-        }
-        None => None,
-    };
-    if let Some(size) = args.draw.point_size
-        && !(0.5..=64.0).contains(&size)
-    {
-        bail!("point size {size} is out of range 0.5 to 64 pixels");
-    }
+    let camera = camera_from(args.camera.as_deref())?;
+    args.draw.check_point_size()?;
     let mut settings = RenderSettings::default();
     settings.surface.method = parse_method(&args.draw.method)?;
     settings.surface.iso_value = check_iso(args.draw.iso)?;

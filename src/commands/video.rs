@@ -26,8 +26,8 @@ use loudscape::ui::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
-use super::args::{check_iso, check_output, load_cloud, parse_camera, parse_method, parse_size};
-use super::render::{DrawArgs, prepare_grid};
+use super::args::{check_iso, check_output, load_cloud, parse_method, parse_size};
+use super::render::{DrawArgs, camera_from, prepare_grid};
 use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound};
 
 /// The largest frame: 4K UHD (either way round).
@@ -214,18 +214,8 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     }
     let motion = CameraMotion::parse(&args.camera)?;
     let progress_mode = ProgressMode::parse(&args.progress)?;
-    let base_camera = match &args.camera_at {
-        Some(text) => {
-            let (az, el, dist) = parse_camera(text)?;
-            Some(Camera::from_angles(az, el, dist))
-        }
-        None => None,
-    };
-    if let Some(size) = args.draw.point_size
-        && !(0.5..=64.0).contains(&size)
-    {
-        bail!("point size {size} is out of range 0.5 to 64 pixels");
-    }
+    let base_camera = camera_from(args.camera_at.as_deref())?;
+    args.draw.check_point_size()?;
     let view_name = args.view.to_ascii_lowercase();
     let compare_view = match &args.draw.compare {
         Some(_) => Some(super::render_compare::parse_compare_view(
