@@ -11,6 +11,11 @@ window paints through the X DAMAGE extension (bench/xdriver.py):
 - hover: the pointer jumps to a spot of the data; latency = from the motion event to the first
   painted frame whose pixels next to the cursor changed (the read-out drawn), median of the
   spots (the spots where no read-out appeared are counted apart);
+- settle (Points view): a one-second drag that ends elsewhere; seconds from the release to the
+  last painted frame (the points back to full density: the window stops painting when the
+  progressive refinement is complete), median of the runs;
+- return (Points view): then `R` (the default view, the one the window opened with, whose full
+  picture was drawn before); seconds from the key to the last painted frame;
 - isovalue sweep (Surface view): a drag of the isovalue slider back and forth; updates per
   second = painted frames whose 3D view differs from the one before / time from the press to
   the last such frame.
@@ -56,6 +61,8 @@ class CaseResult:
     # Hover tries discarded because the scene itself changed in the same frame.
     hover_scene: int = 0
     iso_rate: list[float] = field(default_factory=list)
+    settle_s: list[float] = field(default_factory=list)
+    return_s: list[float] = field(default_factory=list)
     note: str = ""
 
 
@@ -130,6 +137,37 @@ def orbit(x: XDriver, seconds: float) -> float:
     skip = min(0.25, seconds / 4)
     frames = [t for t in x.frames if start + skip < t <= end]
     return len(frames) / (end - start - skip)
+
+
+def until_quiet(x: XDriver, since: float) -> float:
+    """Seconds from `since` to the last frame painted before the window went quiet (1.5 s)."""
+    x.wait_quiet(1.5, 300)
+    frames = [t for t in x.frames if t > since]
+    return frames[-1] - since if frames else 0.0
+
+
+def settle(x: XDriver, direction: int) -> float:
+    """A one-second drag that ends elsewhere; seconds from the release to full density."""
+    cx, cy = CENTER
+    x.move(cx - 60 * direction, cy)
+    x.pump_until(time.monotonic() + 0.2)
+    start = x.button(True)
+    for i in range(60):
+        x.move(int(cx - 60 * direction + 2 * direction * i), cy)
+        x.pump_until(start + (i + 1) / 60.0)
+    return until_quiet(x, x.button(False))
+
+
+def key_return(x: XDriver, display: str, wid: int) -> float:
+    """`R` (the default view, drawn in full before); seconds from the key to the last frame."""
+    x.move(*CENTER)
+    x.pump(0.1)
+    env = dict(os.environ, DISPLAY=display)
+    subprocess.run(["xdotool", "windowfocus", "--sync", str(wid)], env=env, check=False)
+    x.pump(0.2)
+    sent = time.monotonic()
+    subprocess.run(["xdotool", "key", "r"], env=env, check=False)
+    return until_quiet(x, sent)
 
 
 def region_around(px: int, py: int) -> tuple[int, int, int, int]:
@@ -336,6 +374,11 @@ def run_case(binary: Path, ply: Path, view: str, args, display: str, tag: str) -
             for _ in range(args.runs):
                 result.orbit_fps.append(orbit(x, args.orbit_seconds))
                 x.wait_quiet(1.5, 120)
+            if view == "points" and args.settle:
+                for i in range(args.runs):
+                    x.wait_quiet(1.5, 120)
+                    result.settle_s.append(settle(x, 1 if i % 2 == 0 else -1))
+                    result.return_s.append(key_return(x, display, wid))
             last = CENTER
             for dx, dy in HOVER_SPOTS[: args.hovers]:
                 spot = (CENTER[0] + dx, CENTER[1] + dy)
@@ -420,6 +463,8 @@ def case_line(r: CaseResult) -> str:
         line += f" ({r.hover_scene} tries discarded: the scene changed too)"
     if r.iso_rate:
         line += f"; iso updates/s {fmt(r.iso_rate)}"
+    if r.settle_s:
+        line += f"; settle s {fmt(r.settle_s, 2)}; return s {fmt(r.return_s, 2)}"
     return line + (f"; {r.note}" if r.note else "")
 
 
@@ -456,6 +501,9 @@ def main() -> int:
         help="X0,X1,Y: the isovalue slider's rail in the Surface view (window pixels)",
     )
     parser.add_argument("--no-iso", dest="iso", action="store_false")
+    parser.add_argument(
+        "--no-settle", dest="settle", action="store_false", help="skip settle and return"
+    )
     parser.add_argument("--shots", type=Path, help="save screenshots of each case to this folder")
     args = parser.parse_args()
     for binary in [args.loudscape] + ([args.vs] if args.vs else []):
@@ -532,6 +580,21 @@ def print_table(results, binaries, files, args) -> None:
         for n in names
     ]
     print("| isovalue sweep, demo | >= 10 updates/s | " + " | ".join(row) + " |")
+    for label, _ in files:
+        for what, attr in (
+            ("settle after an orbit", "settle_s"),
+            ("return to the view", "return_s"),
+        ):
+            row = [
+                cell(
+                    med(getattr(results.get((n, label, "points"), CaseResult()), attr)),
+                    "s",
+                    lambda v: True,
+                )
+                for n in names
+            ]
+            if any(c != "-" for c in row):
+                print(f"| {what}, points, {label} | a few s | " + " | ".join(row) + " |")
 
 
 if __name__ == "__main__":

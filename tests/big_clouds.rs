@@ -12,6 +12,8 @@ use loudscape::render::grid::voxelize::VoxelSettings;
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointsGpu, progressive_ranges};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::ui::frame_cache::RenderKey;
+use loudscape::ui::progressive::ProgressivePoints;
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -224,4 +226,156 @@ fn points_drawn_in_slices_equal_the_single_pass_frame() {
     let first = first_slice.unwrap();
     assert!(common::coverage(&first) < common::coverage(&sliced));
     assert!(common::coverage(&first) > 0.0);
+}
+
+/// One progressive frame of `key` into `target`, submitted; whether the picture is complete.
+fn progressive_frame(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    progressive: &mut ProgressivePoints,
+    target: &RenderTarget,
+    data: &SceneData,
+    view: &FrameView,
+    settings: &RenderSettings,
+) -> bool {
+    let key = RenderKey::new(view, settings, Some(1), 0);
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    let complete = progressive.frame(
+        &gpu.device,
+        &gpu.queue,
+        &mut encoder,
+        renderer,
+        target,
+        data,
+        &key,
+        view,
+        settings,
+    );
+    gpu.queue.submit([encoder.finish()]);
+    complete
+}
+
+/// While the slices refine, the points they have not reached stand in sparsely: the first
+/// frame at rest already covers most of what the whole picture covers (the first slice alone,
+/// a few seconds of the song, covers far less); the last frame is the single-pass frame.
+#[test]
+fn progressive_frames_stand_in_for_the_rest_and_end_as_the_single_pass() {
+    let gpu = common::gpu();
+    let renderer = Renderer::new(&gpu.device);
+    let data = SceneData::new(&gpu.device, &renderer, &song(80_000));
+    let view = view_of(&data, 320, 180);
+    let settings = RenderSettings {
+        view: ViewKind::Points,
+        ..Default::default()
+    };
+    let single = render_image(&gpu, &renderer, Some(&data), &view, &settings).expect("render");
+    let target = RenderTarget::new(&gpu.device, view.width, view.height);
+    let mut progressive = ProgressivePoints::default();
+    progressive.refine.budget = 8_000;
+    let complete = progressive_frame(
+        &gpu,
+        &renderer,
+        &mut progressive,
+        &target,
+        &data,
+        &view,
+        &settings,
+    );
+    assert!(!complete, "80,000 points in slices of 8,000");
+    let first = target.read_rgba(&gpu.device, &gpu.queue).expect("read");
+    let slice_only = RenderTarget::new(&gpu.device, view.width, view.height);
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    renderer.render_points_slice(
+        &gpu.queue,
+        &mut encoder,
+        &slice_only,
+        &data,
+        &view,
+        &settings,
+        0..8_000,
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let slice_only = slice_only.read_rgba(&gpu.device, &gpu.queue).expect("read");
+    let (whole, early, alone) = (
+        common::coverage(&single),
+        common::coverage(&first),
+        common::coverage(&slice_only),
+    );
+    assert!(
+        early > 0.6 * whole && early > 2.0 * alone,
+        "first frame covers {early}, the whole {whole}, its slice alone {alone}"
+    );
+    let mut frames = 1;
+    while !progressive_frame(
+        &gpu,
+        &renderer,
+        &mut progressive,
+        &target,
+        &data,
+        &view,
+        &settings,
+    ) {
+        frames += 1;
+        assert!(frames < 100, "never completes");
+    }
+    let last = target.read_rgba(&gpu.device, &gpu.queue).expect("read");
+    let (share, _) = common::difference(&single, &last, 0);
+    assert_eq!(
+        share, 0.0,
+        "the complete picture differs in {share} of pixels"
+    );
+}
+
+/// A completed picture is kept: the view coming back to it (R after an orbit) shows it whole in
+/// its first frame, equal to the single-pass frame, with no slice drawn.
+#[test]
+fn a_view_returned_to_is_complete_at_once() {
+    let gpu = common::gpu();
+    let renderer = Renderer::new(&gpu.device);
+    let data = SceneData::new(&gpu.device, &renderer, &song(60_000));
+    let home = view_of(&data, 320, 180);
+    let mut away = home;
+    away.camera.orbit(40.0, 10.0, 400.0);
+    let settings = RenderSettings {
+        view: ViewKind::Points,
+        ..Default::default()
+    };
+    let target = RenderTarget::new(&gpu.device, home.width, home.height);
+    let mut progressive = ProgressivePoints::default();
+    let refine_all = |progressive: &mut ProgressivePoints, view: &FrameView| {
+        progressive.refine.budget = 7_000;
+        let mut frames = 1;
+        while !progressive_frame(
+            &gpu,
+            &renderer,
+            progressive,
+            &target,
+            &data,
+            view,
+            &settings,
+        ) {
+            frames += 1;
+        }
+        frames
+    };
+    assert!(refine_all(&mut progressive, &home) > 1);
+    // An orbit: moving frames draw another scene, then the new view refines from point 0.
+    progressive.set_aside();
+    assert_eq!(progressive.kept(), 1, "the home picture is kept");
+    assert!(
+        refine_all(&mut progressive, &away) > 1,
+        "a new view refines"
+    );
+    // Back home (R): complete in the first frame.
+    assert_eq!(refine_all(&mut progressive, &home), 1);
+    let back = target.read_rgba(&gpu.device, &gpu.queue).expect("read");
+    let single = render_image(&gpu, &renderer, Some(&data), &home, &settings).expect("render");
+    let (share, _) = common::difference(&single, &back, 0);
+    assert_eq!(share, 0.0, "the kept picture differs in {share} of pixels");
+    // And the other way: the orbit's picture was kept when home came back.
+    assert_eq!(refine_all(&mut progressive, &away), 1);
 }

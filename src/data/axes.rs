@@ -514,9 +514,14 @@ fn clock(seconds: f64, decimals: usize) -> String {
     if seconds.abs() >= SCIENTIFIC_FROM || seconds.is_nan() {
         return format!("{} s", fixed(seconds, 0));
     }
-    let sign = if seconds < 0.0 { "-" } else { "" };
     let scale = 10f64.powi(decimals as i32);
     let total = (seconds.abs() * scale).round() / scale;
+    // A time that rounds to zero has no sign ("-0:00.0" was shown at the start of a song).
+    let sign = if seconds < 0.0 && total > 0.0 {
+        "-"
+    } else {
+        ""
+    };
     let hours = (total / 3600.0).floor();
     let minutes = ((total - hours * 3600.0) / 60.0).floor();
     let secs = total - hours * 3600.0 - minutes * 60.0;
@@ -616,6 +621,9 @@ mod tests {
             Axis::linear("t", "s", 0.0, 4000.0).format_value(3723.0),
             "1:02:03.0"
         );
+        // Just before zero (a playhead at the start, float error) reads 0, not "-0:00.0".
+        assert_eq!(axis.format_value(-0.01), "0:00.0");
+        assert_eq!(axis.format_value(-1.5), "-0:01.5");
     }
 
     #[test]

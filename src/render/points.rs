@@ -5,7 +5,10 @@
 //! Each point is an instance of three vertices (a triangle around the disc); the fragment
 //! shader cuts the disc.
 //! Clouds larger than one storage binding are split into chunks, each drawn on its own.
-//! While the camera moves, every `stride`-th point is drawn (a level-of-detail subset).
+//! While the camera moves, every `stride`-th point is drawn (a level-of-detail subset). Each
+//! chunk has a second parameter block that always holds that subset's stride, so one submission
+//! can draw full-density slices and the subset of the points not drawn yet (progressive points,
+//! src/ui/progressive.rs).
 //! The frequency axis of the view ([`PointsGpu::set_freq`], src/data/freq_axis.rs) remaps each
 //! point's z in the vertex shader; the stored points are never changed.
 
@@ -58,6 +61,9 @@ struct Chunk {
     first: u32,
     params: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
+    /// The moving subset's parameters (its stride whatever `params` says).
+    lod_params: wgpu::Buffer,
+    lod_bind_group: wgpu::BindGroup,
     points: wgpu::Buffer,
 }
 
@@ -172,19 +178,26 @@ impl PointsGpu {
         let mut chunks = Vec::new();
         for (i, slice) in points.chunks(per_chunk).enumerate() {
             let points_buffer = make_buffer(&format!("points::cloud_chunk_{i}"), slice);
-            let params = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(&format!("points::params_{i}")),
-                size: std::mem::size_of::<PointParams>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+            let params_buffer = |label: &str| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(&format!("points::{label}_{i}")),
+                    size: std::mem::size_of::<PointParams>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            let (params, lod_params) = (params_buffer("params"), params_buffer("lod_params"));
             let bind_group =
                 cloud_bind_group(device, pass, i, &points_buffer, &params, &freq_table);
+            let lod_bind_group =
+                cloud_bind_group(device, pass, i, &points_buffer, &lod_params, &freq_table);
             chunks.push(Chunk {
                 count: slice.len() as u32,
                 first: (i * per_chunk) as u32,
                 params,
                 bind_group,
+                lod_params,
+                lod_bind_group,
                 points: points_buffer,
             });
         }
@@ -216,6 +229,14 @@ impl PointsGpu {
                 i,
                 &chunk.points,
                 &chunk.params,
+                &self.freq_table,
+            );
+            chunk.lod_bind_group = cloud_bind_group(
+                device,
+                pass,
+                i,
+                &chunk.points,
+                &chunk.lod_params,
                 &self.freq_table,
             );
         }
@@ -319,15 +340,17 @@ impl PointsPass {
         moving: bool,
     ) {
         let stride = lod_stride(points.total, style, moving);
+        let lod = lod_stride(points.total, style, true);
         for chunk in &points.chunks {
-            let params = PointParams {
+            let params = |stride| PointParams {
                 stride,
                 count: chunk.count,
                 size_px: style.size_px,
                 min_scalar: style.min_scalar,
                 freq: points.freq.for_chunk(chunk.first),
             };
-            queue.write_buffer(&chunk.params, 0, bytemuck::bytes_of(&params));
+            queue.write_buffer(&chunk.params, 0, bytemuck::bytes_of(&params(stride)));
+            queue.write_buffer(&chunk.lod_params, 0, bytemuck::bytes_of(&params(lod)));
         }
     }
 
@@ -371,6 +394,41 @@ impl PointsPass {
             chunk_start = chunk_end;
         }
     }
+}
+
+impl PointsPass {
+    /// Draws the moving subset (every `lod_stride(total, style, true)`-th point, as
+    /// [`PointsPass::prepare`] wrote it) of the points from index `first` on: during a
+    /// progressive frame, a sparse stand-in for the points no slice has drawn yet.
+    pub fn draw_lod_from(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameBinding,
+        points: &PointsGpu,
+        style: &PointStyle,
+        first: u64,
+    ) {
+        let stride = u64::from(lod_stride(points.total, style, true));
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &frame.bind_group, &[]);
+        let mut chunk_start = 0u64;
+        for chunk in &points.chunks {
+            let count = u64::from(chunk.count);
+            let instances = lod_instances(first.saturating_sub(chunk_start), count, stride);
+            if !instances.is_empty() {
+                pass.set_bind_group(1, &chunk.lod_bind_group, &[]);
+                pass.draw(0..3, instances.start as u32..instances.end as u32);
+            }
+            chunk_start += count;
+        }
+    }
+}
+
+/// The instances of a chunk of `count` points drawn at `stride` (instance `i` is point
+/// `i * stride`) whose points are at local index `first` or later.
+pub fn lod_instances(first: u64, count: u64, stride: u64) -> std::ops::Range<u64> {
+    let stride = stride.max(1);
+    first.div_ceil(stride).min(count.div_ceil(stride))..count.div_ceil(stride)
 }
 
 /// Submits the queue's pending writes and waits for them, which releases their staging memory.
@@ -422,5 +480,31 @@ pub fn depth_state(write: bool) -> wgpu::DepthStencilState {
         depth_compare: Some(wgpu::CompareFunction::Less),
         stencil: Default::default(),
         bias: Default::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lod_instances_are_the_subset_points_from_first_on() {
+        // Stride 4 over 10 points: instances 0, 1, 2 draw points 0, 4, 8.
+        assert_eq!(lod_instances(0, 10, 4), 0..3);
+        assert_eq!(
+            lod_instances(1, 10, 4),
+            1..3,
+            "point 4 is the first at or after 1"
+        );
+        assert_eq!(lod_instances(4, 10, 4), 1..3);
+        assert_eq!(lod_instances(9, 10, 4), 3..3, "none left");
+        assert_eq!(lod_instances(50, 10, 4), 3..3, "past the chunk");
+        assert_eq!(lod_instances(3, 10, 1), 3..10);
+        // Every point index the instances stand for is >= first and < count.
+        for first in 0..12 {
+            for i in lod_instances(first, 10, 3) {
+                assert!(i * 3 >= first && i * 3 < 10);
+            }
+        }
     }
 }

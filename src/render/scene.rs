@@ -514,7 +514,11 @@ impl Renderer {
 
     /// The box and the markers of `settings` over what `target` holds (points drawn slice by
     /// slice, copied in): the last step of a progressive frame, redrawn alone when only the
-    /// markers (the playhead) change.
+    /// markers (the playhead) change. With `rest_from`, first the moving subset of the points
+    /// from that index on (those no slice has drawn yet), so the picture is whole, sparse where
+    /// the slices have not reached, while it refines; call it after a slice
+    /// ([`Renderer::render_points_slice`] prepared the points' parameters).
+    #[allow(clippy::too_many_arguments)]
     pub fn render_overlay(
         &self,
         queue: &wgpu::Queue,
@@ -523,10 +527,20 @@ impl Renderer {
         data: &SceneData,
         view: &FrameView,
         settings: &RenderSettings,
+        rest_from: Option<u64>,
     ) {
         self.frame.write(queue, view);
         self.markers.prepare(queue, &settings.markers);
         let mut pass = begin_main_pass(encoder, target, None);
+        if let Some(first) = rest_from {
+            self.points.draw_lod_from(
+                &mut pass,
+                &self.frame,
+                &data.points,
+                &settings.points,
+                first,
+            );
+        }
         if settings.show_box {
             self.lines.draw(&mut pass, &self.frame, &data.box_lines);
         }

@@ -655,8 +655,12 @@ impl LoudscapeApp {
 fn busy_badge(painter: &egui::Painter, rect: egui::Rect, text: &str) {
     let font = egui::FontId::proportional(14.0);
     let galley = painter.layout_no_wrap(text.into(), font, Color32::from_gray(220));
-    let origin = rect.min + egui::vec2(12.0, 10.0);
     let spinner = 14.0;
+    // Bottom left: the view's title and the colour key hold the top corners.
+    let origin = egui::pos2(
+        rect.min.x + 12.0,
+        rect.max.y - 15.0 - galley.size().y.max(spinner),
+    );
     let plate = egui::Rect::from_min_size(
         origin,
         egui::vec2(

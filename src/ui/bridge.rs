@@ -69,7 +69,7 @@ impl ViewResources {
                 cloud,
             );
             resources.scenes.insert(id, data);
-            resources.cache.invalidate();
+            resources.cache.invalidate_points();
         }
     }
 
@@ -211,7 +211,7 @@ impl ViewResources {
         let mut renderer = render_state.renderer.write();
         if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
             resources.scenes.remove(&id);
-            resources.cache.invalidate();
+            resources.cache.invalidate_points();
         }
     }
 
@@ -303,7 +303,8 @@ impl CallbackTrait for ViewCallback {
             &self.settings,
             self.cloud_id,
             res.cache.revision,
-        );
+        )
+        .with_points_revision(res.cache.points_revision);
         if !res.cache.begin(&key) {
             // The target already holds this scene: paint composites it again.
             return Vec::new();
@@ -339,7 +340,7 @@ impl CallbackTrait for ViewCallback {
         // The target shows another scene now (the volume or surface once its grid is built, a
         // moving frame): the slices drawn so far are no longer on screen, and a refinement left
         // unfinished would keep the window asking for frames at rest.
-        res.progressive.refine.reset();
+        res.progressive.set_aside();
         res.renderer
             .render(queue, encoder, target, data, &self.view, &self.settings);
         // Complete even while a surface is extracted in the background: the last mesh is what

@@ -18,6 +18,9 @@ pub struct RenderKey {
     pub cloud_id: Option<u64>,
     /// Bumped whenever a cloud's GPU data changes (upload, new grid, removal).
     pub revision: u64,
+    /// Bumped whenever a cloud's points change on the GPU (upload, frequency axis, removal);
+    /// `revision` unless the caller says ([`RenderKey::with_points_revision`]).
+    pub points_revision: u64,
 }
 
 impl RenderKey {
@@ -35,7 +38,14 @@ impl RenderKey {
             settings: settings.clone(),
             cloud_id,
             revision,
+            points_revision: revision,
         }
+    }
+
+    /// The key with the points' own revision (see [`FrameCache::points_revision`]).
+    pub fn with_points_revision(mut self, points_revision: u64) -> Self {
+        self.points_revision = points_revision;
+        self
     }
 }
 
@@ -48,6 +58,9 @@ pub struct FrameCache {
     pub renders: u64,
     /// GPU data revision: bumped by every change to a cloud's [`SceneData`].
     pub revision: u64,
+    /// Points revision: bumped by every change to a cloud's points on the GPU (not by a grid
+    /// or a surface built for another view, which leave the points as they are).
+    pub points_revision: u64,
 }
 
 impl FrameCache {
@@ -71,5 +84,11 @@ impl FrameCache {
     pub fn invalidate(&mut self) {
         self.last = None;
         self.revision += 1;
+    }
+
+    /// As [`FrameCache::invalidate`], the points changed too.
+    pub fn invalidate_points(&mut self) {
+        self.invalidate();
+        self.points_revision += 1;
     }
 }

@@ -80,7 +80,7 @@ impl LoudscapeApp {
                     let labels = labels::axis_labels(&loaded.cloud, data);
                     (labels, data.freq.clone())
                 });
-            resources.cache.invalidate();
+            resources.cache.invalidate_points();
             result
         };
         match result {

@@ -16,11 +16,14 @@ use crate::render::scene::{Renderer, SceneData};
 use crate::ui::frame_cache::RenderKey;
 use crate::view::frame_view::FrameView;
 
-/// Points drawn in the first slice before any measurement: about what lavapipe draws in 30 ms
+/// Points drawn in the first slice before any measurement: about what lavapipe draws in 55 ms
 /// at 1280x720 (5.3 M points in ~1.5 s, one submission, docs/PERFORMANCE.md).
-pub const INITIAL_BUDGET: u64 = 100_000;
-/// The frame time a slice aims at while refining (the window answers within it).
-pub const TARGET_FRAME: Duration = Duration::from_millis(30);
+pub const INITIAL_BUDGET: u64 = 200_000;
+/// The frame time a slice aims at while refining at rest (the window answers within it). At
+/// 30 ms with a 100,000-point floor a 3.5 M-point song took 4.5-6 s to fill in on lavapipe, most
+/// of each ~0.13 s frame not the points (egui, the copy, the present); the sparse stand-in for
+/// the points not drawn yet keeps the picture whole meanwhile, so the slices can be longer.
+pub const TARGET_FRAME: Duration = Duration::from_millis(60);
 /// The budget never falls below the measured one: a frame slow for other reasons (egui, the
 /// composite, a loaded machine) must not shrink the slices to nothing (with a 20,000 floor a
 /// 4.4 M-point cloud needed about 20 s to fill in on lavapipe, most of each frame not points).
@@ -56,13 +59,23 @@ impl Default for Refine {
     }
 }
 
-/// The part of `key` the points depend on: markers and the box are drawn over them.
+/// The part of `key` the points depend on: markers and the box are drawn over them, the view
+/// kind and the surface's settings do not change the points (a Surface view draws the points
+/// while its grid is built), and of the GPU data only the points' revision counts (a grid or a
+/// surface built for another view leaves them as they are).
 pub fn points_key(key: &RenderKey) -> RenderKey {
     let mut key = key.clone();
     key.settings.markers.clear();
     key.settings.show_box = false;
+    key.settings.view = crate::render::scene::ViewKind::Points;
+    key.settings.surface = Default::default();
+    key.revision = 0;
     key
 }
+
+/// How many completed points pictures are kept besides the one shown, for views the window
+/// comes back to (R after an orbit, the Points view after a look at the Surface).
+pub const KEPT: usize = 2;
 
 impl Refine {
     /// Whether a frame at rest showing `total` points goes the progressive way: the cloud is
@@ -114,6 +127,24 @@ impl Refine {
             .then(|| self.next as f32 / self.total as f32)
     }
 
+    /// Whether the points target holds (or is filling) the points of `key`.
+    fn holds(&self, key: &RenderKey, total: u64) -> bool {
+        self.key.as_ref() == Some(&points_key(key)) && self.total == total
+    }
+
+    /// The points target now holds all `total` points of `key` (a kept picture put back).
+    fn adopt(&mut self, key: &RenderKey, total: u64) {
+        self.key = Some(points_key(key));
+        self.next = total;
+        self.total = total;
+        self.last_slice = None;
+    }
+
+    /// The first point no slice has drawn yet, while a refinement is under way.
+    pub fn rest_from(&self) -> Option<u64> {
+        (self.key.is_some() && !self.complete()).then_some(self.next)
+    }
+
     /// Forgets the points target (resized, or shown something else in between).
     pub fn reset(&mut self) {
         self.key = None;
@@ -123,14 +154,83 @@ impl Refine {
     }
 }
 
-/// The GPU side: the points target and its scheduler.
+/// The GPU side: the points target, its scheduler, and up to [`KEPT`] completed pictures.
 #[derive(Default)]
 pub struct ProgressivePoints {
     target: Option<RenderTarget>,
     pub refine: Refine,
+    /// Completed points pictures, the most recent last.
+    kept: Vec<Kept>,
+    /// The last picture to leave `kept`, reused as the next fresh target of its size.
+    spare: Option<RenderTarget>,
+}
+
+/// A completed points picture: the points key and count it holds.
+struct Kept {
+    key: RenderKey,
+    total: u64,
+    target: RenderTarget,
 }
 
 impl ProgressivePoints {
+    /// The view shows something else now (a moving frame, a surface): a complete picture is
+    /// kept for a return to its view, an incomplete one forgotten.
+    pub fn set_aside(&mut self) {
+        self.keep_current();
+        self.refine.reset();
+    }
+
+    /// How many completed pictures are kept (for the tests).
+    pub fn kept(&self) -> usize {
+        self.kept.len()
+    }
+
+    /// Moves a complete current picture into `kept` (the oldest leaves past [`KEPT`]).
+    fn keep_current(&mut self) {
+        if let (Some(key), true) = (self.refine.key.clone(), self.refine.complete())
+            && self.target.is_some()
+        {
+            let total = self.refine.total;
+            self.kept.retain(|k| !(k.key == key && k.total == total));
+            if let Some(target) = self.target.take() {
+                self.kept.push(Kept { key, total, target });
+            }
+            if self.kept.len() > KEPT {
+                self.spare = Some(self.kept.remove(0).target);
+            }
+        }
+    }
+
+    /// Makes the points target the one for `key` at `w` x `h`: the current one when it holds
+    /// `key`'s points; else a kept picture of them, complete at once; else a fresh target to
+    /// refine (the current one is kept if complete).
+    fn target_for(&mut self, device: &wgpu::Device, key: &RenderKey, total: u64, w: u32, h: u32) {
+        self.kept.retain(|k| k.target.has_size(w, h));
+        if !self.target.as_ref().is_some_and(|t| t.has_size(w, h)) {
+            self.target = None;
+            self.refine.reset();
+        }
+        if self.target.is_some() && self.refine.holds(key, total) {
+            return;
+        }
+        self.keep_current();
+        let wanted = points_key(key);
+        if let Some(i) = self
+            .kept
+            .iter()
+            .position(|k| k.key == wanted && k.total == total)
+        {
+            self.target = Some(self.kept.remove(i).target);
+            self.refine.adopt(key, total);
+            return;
+        }
+        if self.target.is_none() {
+            let spare = self.spare.take().filter(|t| t.has_size(w, h));
+            self.target = Some(spare.unwrap_or_else(|| RenderTarget::new(device, w, h)));
+        }
+        self.refine.reset();
+    }
+
     /// Records one progressive frame of `key` into `target`: the next slice (if any) into the
     /// points target, then its copy and the overlay into `target`. Returns whether the picture
     /// is complete (false: draw again next frame).
@@ -148,14 +248,12 @@ impl ProgressivePoints {
         settings: &crate::render::scene::RenderSettings,
     ) -> bool {
         let (w, h) = (target.width, target.height);
-        if !self.target.as_ref().is_some_and(|t| t.has_size(w, h)) {
-            self.target = Some(RenderTarget::new(device, w, h));
-            self.refine.reset();
-        }
+        self.target_for(device, key, data.points.total, w, h);
         let Some(points) = self.target.as_ref() else {
             return true;
         };
-        if let Some(range) = self.refine.step(key, data.points.total, Instant::now()) {
+        let slice = self.refine.step(key, data.points.total, Instant::now());
+        if let Some(range) = slice.clone() {
             // Only points go into the points target; the overlay is drawn into the view's.
             let mut bare = settings.clone();
             bare.markers.clear();
@@ -173,7 +271,11 @@ impl ProgressivePoints {
         ] {
             encoder.copy_texture_to_texture(from.as_image_copy(), to.as_image_copy(), size);
         }
-        renderer.render_overlay(queue, encoder, target, data, view, settings);
+        // The points no slice has reached yet stand in sparsely (the subset drawn while moving),
+        // so the picture is whole from the first frame at rest; a frame without a slice has
+        // not prepared the points' parameters and needs none (the refinement is complete).
+        let rest = slice.and(self.refine.rest_from());
+        renderer.render_overlay(queue, encoder, target, data, view, settings, rest);
         self.refine.complete()
     }
 }
@@ -212,9 +314,10 @@ mod tests {
             !refine.wants(INITIAL_BUDGET),
             "a cloud within the budget renders at once"
         );
-        // Frames exactly on target: the budget stays, so 11 slices of 100,000 (the last 50,000).
+        // Frames exactly on target: the budget stays, so 6 slices of 200,000 (the last 50,000).
+        assert_eq!(INITIAL_BUDGET, 200_000);
         let ranges = run(&mut refine, &k, total, &mut t);
-        assert_eq!(ranges.len(), 11);
+        assert_eq!(ranges.len(), 6);
         assert_eq!(ranges[0].start, 0);
         assert!(ranges.windows(2).all(|w| w[0].end == w[1].start));
         assert_eq!(ranges.last().unwrap().end, total);
@@ -230,12 +333,13 @@ mod tests {
     fn a_camera_change_restarts_and_a_playhead_change_does_not() {
         let mut refine = Refine::default();
         let mut t = Instant::now();
-        let total = 1_000_000;
+        let b = INITIAL_BUDGET;
+        let total = 10 * b;
         let mut settings = RenderSettings::default();
         let k = key(&settings);
-        assert_eq!(refine.step(&k, total, t), Some(0..100_000));
+        assert_eq!(refine.step(&k, total, t), Some(0..b));
         t += TARGET_FRAME;
-        assert_eq!(refine.step(&k, total, t), Some(100_000..200_000));
+        assert_eq!(refine.step(&k, total, t), Some(b..2 * b));
         assert!((refine.progress().unwrap() - 0.2).abs() < 1e-6);
 
         // Playback: the playhead moves every frame; the slices go on where they were.
@@ -243,24 +347,27 @@ mod tests {
             settings.markers = vec![MarkerBox::playhead(0.1 * i as f32)];
             t += TARGET_FRAME;
             let r = refine.step(&key(&settings), total, t).expect("a slice");
-            assert_eq!(r.start, 200_000 + i * 100_000, "playhead frame {i}");
+            assert_eq!(r.start, (2 + i) * b, "playhead frame {i}");
         }
         // The box toggled: drawn by the overlay, the points stay.
         settings.show_box = false;
         t += TARGET_FRAME;
-        assert_eq!(
-            refine.step(&key(&settings), total, t).unwrap().start,
-            500_000
-        );
+        assert_eq!(refine.step(&key(&settings), total, t).unwrap().start, 5 * b);
 
         // The camera moved (an orbit ended elsewhere): back to point 0.
         let mut moved = key(&settings);
         moved.camera.orbit(5.0, 0.0, 400.0);
         t += TARGET_FRAME;
-        assert_eq!(refine.step(&moved, total, t), Some(0..100_000));
-        // New GPU data (revision) or another point style: back to 0 too.
-        let mut revised = moved.clone();
-        revised.revision += 1;
+        assert_eq!(refine.step(&moved, total, t), Some(0..b));
+        // A grid or a surface built (revision), the Surface view's settings: the points stay.
+        let mut gridded = moved.clone();
+        gridded.revision += 1;
+        gridded.settings.surface.iso_value += 0.1;
+        t += TARGET_FRAME;
+        assert_eq!(refine.step(&gridded, total, t).unwrap().start, b);
+        // New points on the GPU (points revision) or another point style: back to 0.
+        let mut revised = gridded.clone();
+        revised.points_revision += 1;
         t += TARGET_FRAME;
         assert_eq!(refine.step(&revised, total, t).unwrap().start, 0);
         let mut styled = revised.clone();
@@ -283,9 +390,9 @@ mod tests {
         let k = key(&RenderSettings::default());
         let total = 100_000_000;
         refine.step(&k, total, t);
-        // A slow device: 120 ms frames halve the budget each frame, down to the floor.
+        // A slow device: frames of four times the target halve the budget, down to the floor.
         for _ in 0..10 {
-            t += Duration::from_millis(120);
+            t += 4 * TARGET_FRAME;
             refine.step(&k, total, t);
         }
         assert_eq!(refine.budget, MIN_BUDGET);
@@ -294,9 +401,9 @@ mod tests {
         t += Duration::from_millis(5);
         refine.step(&k, total, t);
         assert_eq!(refine.budget, before * 2);
-        // 60 ms: halved towards 30 ms.
+        // Twice the target: halved.
         let before = refine.budget;
-        t += Duration::from_millis(60);
+        t += 2 * TARGET_FRAME;
         refine.step(&k, total, t);
         assert_eq!(refine.budget, before / 2);
         // A long gap (window hidden) is not a frame time.
