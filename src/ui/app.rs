@@ -250,7 +250,7 @@ impl LoudscapeApp {
         // Side by side, each half is a view of its own (one camera for both).
         let view_width = match &self.compare {
             Some(c) if c.side_by_side() && self.active == Slot::Song => {
-                (rect.width() - crate::ui::compare_window::GAP) / 2.0
+                (rect.width() - crate::ui::compare_view::GAP) / 2.0
             }
             _ => rect.width(),
         };

@@ -1,8 +1,10 @@
-//! The bridge between egui and the render passes: an `egui_wgpu` paint callback.
+//! The bridge between egui and the render passes: `egui_wgpu` paint callbacks, the 3D view's
+//! [`ViewCallback`] here and the A/B compare's [`CompareCallback`] in `bridge/compare.rs`.
 //!
-//! `prepare` renders the scene into an offscreen [`RenderTarget`] sized to the 3D view, `paint`
-//! composites it into egui's frame. GPU state lives in egui_wgpu's callback resources as one
-//! [`ViewResources`], created once when the window opens.
+//! `prepare` renders the scene into an [`Offscreen`] target sized to the view, `paint`
+//! composites it into egui's frame. GPU state lives in egui_wgpu's callback resources: one
+//! [`ViewResources`], created once when the window opens, and the compare's
+//! [`CompareResources`] beside it, made when a compare first needs them.
 //!
 //! The scene is rendered only when what it shows changed ([`FrameCache`]): the camera, the size,
 //! the settings (markers and playhead included), the cloud or its GPU data. Frames that change
@@ -21,11 +23,53 @@ use crate::render::scene::{RenderSettings, Renderer, SceneData};
 pub use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::view::frame_view::FrameView;
 
+mod compare;
+pub use compare::{CompareCallback, CompareResources};
+
+/// An offscreen render target sized to a view and the pass that composites it into egui's
+/// frame (the 3D view's, and each half of the compare's).
+pub(crate) struct Offscreen {
+    target: Option<RenderTarget>,
+    composite: CompositePass,
+}
+
+impl Offscreen {
+    fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
+        Self {
+            target: None,
+            composite: CompositePass::new(device, format),
+        }
+    }
+
+    /// Makes the target `width` x `height`; true when it was made anew (what it held is gone).
+    fn ensure_size(&mut self, device: &wgpu::Device, width: u32, height: u32) -> bool {
+        if self
+            .target
+            .as_ref()
+            .is_some_and(|t| t.has_size(width, height))
+        {
+            return false;
+        }
+        let target = RenderTarget::new(device, width, height);
+        self.composite.set_source(device, &target);
+        self.target = Some(target);
+        true
+    }
+
+    fn target(&self) -> Option<&RenderTarget> {
+        self.target.as_ref()
+    }
+
+    /// Composites the target into the callback's viewport.
+    fn draw(&self, render_pass: &mut wgpu::RenderPass<'static>) {
+        self.composite.draw(render_pass);
+    }
+}
+
 /// GPU state owned by the window, kept in egui_wgpu's callback resources.
 pub struct ViewResources {
     pub renderer: Renderer,
-    composite: CompositePass,
-    target: Option<RenderTarget>,
+    offscreen: Offscreen,
     /// Uploaded clouds by the app's cloud id.
     pub scenes: HashMap<u64, SceneData>,
     /// What the target holds, to skip frames that would render the same scene again.
@@ -42,8 +86,7 @@ impl ViewResources {
         device.on_uncaptured_error(Arc::new(on_device_error));
         let resources = ViewResources {
             renderer: Renderer::new(device),
-            composite: CompositePass::new(device, render_state.target_format),
-            target: None,
+            offscreen: Offscreen::new(device, render_state.target_format),
             scenes: HashMap::new(),
             cache: FrameCache::default(),
             progressive: Default::default(),
@@ -285,11 +328,10 @@ impl CallbackTrait for ViewCallback {
         let Some(res) = resources.get_mut::<ViewResources>() else {
             return Vec::new();
         };
-        let (w, h) = (self.view.width, self.view.height);
-        if !res.target.as_ref().is_some_and(|t| t.has_size(w, h)) {
-            let target = RenderTarget::new(device, w, h);
-            res.composite.set_source(device, &target);
-            res.target = Some(target);
+        if res
+            .offscreen
+            .ensure_size(device, self.view.width, self.view.height)
+        {
             res.cache.invalidate();
         }
         // A surface finished in the background: the scene shows it from this frame on.
@@ -308,7 +350,7 @@ impl CallbackTrait for ViewCallback {
             // The target already holds this scene: paint composites it again.
             return Vec::new();
         }
-        let Some(target) = res.target.as_ref() else {
+        let Some(target) = res.offscreen.target() else {
             return Vec::new();
         };
         let data = self.cloud_id.and_then(|id| res.scenes.get(&id));
@@ -355,7 +397,7 @@ impl CallbackTrait for ViewCallback {
         resources: &CallbackResources,
     ) {
         if let Some(res) = resources.get::<ViewResources>() {
-            res.composite.draw(render_pass);
+            res.offscreen.draw(render_pass);
         }
     }
 }
