@@ -93,7 +93,7 @@ impl LoudscapeApp {
                     state.layout = layout;
                     // The view changes: draw it now (a build is announced first).
                     ui.ctx().request_repaint();
-                    self.fit_pending = true;
+                    self.motion.request_fit();
                 }
             }
         });

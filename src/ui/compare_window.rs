@@ -112,7 +112,7 @@ impl LoudscapeApp {
                     CompareResources::clear(render_state);
                 }
             }
-            self.fit_pending = true;
+            self.motion.request_fit();
         }
         if !state.needs_grids(self.settings.view) {
             return;
@@ -174,7 +174,7 @@ impl LoudscapeApp {
         };
         if let Some(state) = self.compare.as_mut() {
             state.layout = layout;
-            self.fit_pending = true;
+            self.motion.request_fit();
         }
         true
     }
@@ -261,13 +261,21 @@ mod tests {
         );
         assert!(app.compare.is_none());
         app.compare = Some(CompareState::new(PathBuf::from("b.ply")));
-        app.fit_pending = false;
+        app.motion.size_view(
+            1.6,
+            Some(crate::ui::state::view_motion::FitBox {
+                min: glam::Vec3::splat(-1.0),
+                max: glam::Vec3::splat(1.0),
+                half: false,
+            }),
+        );
+        assert!(!app.motion.fit_pending());
         assert!(app.scripted_compare("compare=difference"));
         assert_eq!(
             app.compare.as_ref().map(|c| c.layout),
             Some(CompareLayout::Difference)
         );
-        assert!(app.fit_pending, "the new layout is fitted");
+        assert!(app.motion.fit_pending(), "the new layout is fitted");
         assert!(!app.scripted_compare("compare=sideways"));
         assert!(!app.scripted_compare("Ctrl+S"));
     }

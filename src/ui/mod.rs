@@ -40,6 +40,7 @@ pub mod strip;
 mod style;
 mod timeline_build;
 mod video_export;
+mod view_3d;
 mod window_gone;
 mod window_screenshot;
 #[cfg(test)]
