@@ -1,7 +1,8 @@
-//! The bridge between egui and the render passes: `egui_wgpu` paint callbacks, the 3D view's
-//! [`ViewCallback`] here and the A/B compare's [`CompareCallback`] in `bridge/compare.rs`.
+//! The bridge between egui and the render passes: one `egui_wgpu` paint callback
+//! ([`paint_callback`]) for two jobs ([`OffscreenJob`]), the 3D view's [`ViewCallback`] here and
+//! the A/B compare's [`CompareCallback`] in `bridge/compare.rs`.
 //!
-//! `prepare` renders the scene into an [`Offscreen`] target sized to the view, `paint`
+//! `prepare` renders the job into an [`Offscreen`] target sized to its view, `paint`
 //! composites it into egui's frame. GPU state lives in egui_wgpu's callback resources: one
 //! [`ViewResources`], created once when the window opens, and the compare's
 //! [`CompareResources`] beside it, made when a compare first needs them.
@@ -316,7 +317,33 @@ pub struct ViewCallback {
     pub cloud_id: Option<u64>,
 }
 
-impl CallbackTrait for ViewCallback {
+/// What a bridge callback renders: the 3D view ([`ViewCallback`]) or a part of the compare
+/// ([`CompareCallback`]). One `egui_wgpu` callback serves both ([`paint_callback`]): `prepare`
+/// renders the job into its offscreen target when what it shows changed, `paint` composites
+/// that target into the callback's viewport.
+pub(crate) trait OffscreenJob: Send + Sync + 'static {
+    /// Renders into the job's target, only when what it shows changed.
+    fn render(&self, gpu: Prepare<'_>, resources: &mut CallbackResources);
+    /// The target that `paint` composites.
+    fn offscreen<'a>(&self, resources: &'a CallbackResources) -> Option<&'a Offscreen>;
+}
+
+/// The device, queue and frame encoder a job renders with.
+pub(crate) struct Prepare<'a> {
+    pub(crate) device: &'a wgpu::Device,
+    pub(crate) queue: &'a wgpu::Queue,
+    pub(crate) encoder: &'a mut wgpu::CommandEncoder,
+}
+
+/// The paint callback that draws `job` into `rect`.
+pub(crate) fn paint_callback(rect: egui::Rect, job: impl OffscreenJob) -> egui::PaintCallback {
+    egui_wgpu::Callback::new_paint_callback(rect, Painted(job))
+}
+
+/// A job as egui_wgpu's callback.
+struct Painted<J>(J);
+
+impl<J: OffscreenJob> CallbackTrait for Painted<J> {
     fn prepare(
         &self,
         device: &wgpu::Device,
@@ -325,8 +352,36 @@ impl CallbackTrait for ViewCallback {
         encoder: &mut wgpu::CommandEncoder,
         resources: &mut CallbackResources,
     ) -> Vec<wgpu::CommandBuffer> {
+        let gpu = Prepare {
+            device,
+            queue,
+            encoder,
+        };
+        self.0.render(gpu, resources);
+        Vec::new()
+    }
+
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        render_pass: &mut wgpu::RenderPass<'static>,
+        resources: &CallbackResources,
+    ) {
+        if let Some(offscreen) = self.0.offscreen(resources) {
+            offscreen.draw(render_pass);
+        }
+    }
+}
+
+impl OffscreenJob for ViewCallback {
+    fn render(&self, gpu: Prepare<'_>, resources: &mut CallbackResources) {
+        let Prepare {
+            device,
+            queue,
+            encoder,
+        } = gpu;
         let Some(res) = resources.get_mut::<ViewResources>() else {
-            return Vec::new();
+            return;
         };
         if res
             .offscreen
@@ -348,10 +403,10 @@ impl CallbackTrait for ViewCallback {
         );
         if !res.cache.begin(&key) {
             // The target already holds this scene: paint composites it again.
-            return Vec::new();
+            return;
         }
         let Some(target) = res.offscreen.target() else {
-            return Vec::new();
+            return;
         };
         let data = self.cloud_id.and_then(|id| res.scenes.get(&id));
         // At rest, a cloud larger than a frame's budget is drawn a slice a frame; the window
@@ -376,7 +431,7 @@ impl CallbackTrait for ViewCallback {
             if !complete && let Some(ctx) = &res.repaint {
                 ctx.request_repaint();
             }
-            return Vec::new();
+            return;
         }
         // The target shows another scene now (the volume or surface once its grid is built, a
         // moving frame): the slices drawn so far are no longer on screen, and a refinement left
@@ -387,18 +442,10 @@ impl CallbackTrait for ViewCallback {
         // Complete even while a surface is extracted in the background: the last mesh is what
         // the view shows until the new one is installed (above).
         res.cache.finish(key, true);
-        Vec::new()
     }
 
-    fn paint(
-        &self,
-        _info: egui::PaintCallbackInfo,
-        render_pass: &mut wgpu::RenderPass<'static>,
-        resources: &CallbackResources,
-    ) {
-        if let Some(res) = resources.get::<ViewResources>() {
-            res.offscreen.draw(render_pass);
-        }
+    fn offscreen<'a>(&self, resources: &'a CallbackResources) -> Option<&'a Offscreen> {
+        resources.get::<ViewResources>().map(|res| &res.offscreen)
     }
 }
 

@@ -3,10 +3,9 @@
 //! labels, titles and colour keys, and the hover read-outs of A and B (`compare_readouts.rs`).
 
 use eframe::egui;
-use eframe::egui_wgpu;
 
 use crate::render::scene::RenderSettings;
-use crate::ui::bridge::CompareCallback;
+use crate::ui::bridge::{CompareCallback, paint_callback};
 use crate::ui::compare::{paint_diverging_legend, paint_title};
 use crate::ui::compare_readouts::{compare_readings, difference_readings};
 use crate::ui::compare_shot::difference_settings;
@@ -62,7 +61,7 @@ impl LoudscapeApp {
                     ),
                 ];
                 for (side, half_rect) in rects.into_iter().enumerate() {
-                    painter.add(egui_wgpu::Callback::new_paint_callback(
+                    painter.add(paint_callback(
                         half_rect,
                         CompareCallback {
                             side,
@@ -94,7 +93,7 @@ impl LoudscapeApp {
                 }
             }
             CompareLayout::Difference => {
-                painter.add(egui_wgpu::Callback::new_paint_callback(
+                painter.add(paint_callback(
                     rect,
                     CompareCallback {
                         side: 2,

@@ -8,11 +8,10 @@
 use std::time::Instant;
 
 use eframe::egui::{self, Color32};
-use eframe::egui_wgpu;
 
 use crate::render::scene::ViewKind;
 use crate::ui::app::last_frame_ms;
-use crate::ui::bridge::ViewCallback;
+use crate::ui::bridge::{ViewCallback, paint_callback};
 use crate::ui::compare_view::GAP;
 use crate::ui::hover::paint_readings;
 use crate::ui::labels;
@@ -184,7 +183,7 @@ impl LoudscapeApp {
             settings,
             cloud_id: self.active().map(|l| l.id),
         };
-        painter.add(egui_wgpu::Callback::new_paint_callback(rect, callback));
+        painter.add(paint_callback(rect, callback));
         true
     }
 

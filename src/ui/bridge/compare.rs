@@ -1,13 +1,13 @@
 //! The A/B compare's side of the bridge: [`CompareResources`] sits in egui_wgpu's callback
 //! resources beside the window's [`ViewResources`] (whose renderer it borrows) and holds the
 //! [`CompareScene`] and one offscreen target per half; [`CompareCallback`] renders a half into
-//! its target only when what it shows changed and composites it into its viewport, as the main
-//! view's callback does (the same [`Offscreen`] target and [`FrameCache`]).
+//! its target only when what it shows changed and composites it into its viewport: a job of the
+//! bridge's one paint callback, as the 3D view's is (the same [`Offscreen`] target and
+//! [`FrameCache`]).
 
-use eframe::egui;
-use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor};
+use eframe::egui_wgpu::{self, CallbackResources};
 
-use super::{Offscreen, ViewResources};
+use super::{Offscreen, OffscreenJob, Prepare, ViewResources};
 use crate::data::cloud::PointCloud;
 use crate::data::field::Field;
 use crate::render::compare::CompareScene;
@@ -175,17 +175,10 @@ pub struct CompareCallback {
     pub settings: RenderSettings,
 }
 
-impl CallbackTrait for CompareCallback {
-    fn prepare(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        _screen: &ScreenDescriptor,
-        encoder: &mut wgpu::CommandEncoder,
-        resources: &mut CallbackResources,
-    ) -> Vec<wgpu::CommandBuffer> {
+impl OffscreenJob for CompareCallback {
+    fn render(&self, gpu: Prepare<'_>, resources: &mut CallbackResources) {
         let Some(mut compare) = resources.remove::<CompareResources>() else {
-            return Vec::new();
+            return;
         };
         if let Some(view_resources) = resources.get::<ViewResources>() {
             let CompareResources {
@@ -196,7 +189,7 @@ impl CallbackTrait for CompareCallback {
             let half = &mut halves[self.side];
             if half
                 .offscreen
-                .ensure_size(device, self.view.width, self.view.height)
+                .ensure_size(gpu.device, self.view.width, self.view.height)
             {
                 half.cache.invalidate();
             }
@@ -215,8 +208,8 @@ impl CallbackTrait for CompareCallback {
                 && half.cache.begin(&key)
             {
                 view_resources.renderer.render(
-                    queue,
-                    encoder,
+                    gpu.queue,
+                    gpu.encoder,
                     target,
                     data,
                     &self.view,
@@ -229,17 +222,11 @@ impl CallbackTrait for CompareCallback {
             }
         }
         resources.insert(compare);
-        Vec::new()
     }
 
-    fn paint(
-        &self,
-        _info: egui::PaintCallbackInfo,
-        render_pass: &mut wgpu::RenderPass<'static>,
-        resources: &CallbackResources,
-    ) {
-        if let Some(compare) = resources.get::<CompareResources>() {
-            compare.halves[self.side].offscreen.draw(render_pass);
-        }
+    fn offscreen<'a>(&self, resources: &'a CallbackResources) -> Option<&'a Offscreen> {
+        resources
+            .get::<CompareResources>()
+            .map(|compare| &compare.halves[self.side].offscreen)
     }
 }

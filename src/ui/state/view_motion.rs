@@ -296,6 +296,13 @@ mod tests {
         half: false,
     };
 
+    fn dragged(drag: Drag) -> CameraInput {
+        CameraInput {
+            drag: Some(drag),
+            ..Default::default()
+        }
+    }
+
     fn fitted() -> ViewMotion {
         let mut motion = ViewMotion::default();
         motion.size_view(1.6, Some(BOX));
@@ -323,10 +330,7 @@ mod tests {
         assert_ne!(motion.camera(), wide, "fitted again to the narrower view");
 
         let now = Instant::now();
-        let orbit = CameraInput {
-            drag: Some(Drag::Orbit(30.0, 0.0)),
-            ..Default::default()
-        };
+        let orbit = dragged(Drag::Orbit(30.0, 0.0));
         assert!(motion.input(&orbit, 600.0, Some(BOX), now));
         let by_hand = motion.camera();
         motion.size_view(1.6, Some(BOX));
@@ -367,10 +371,7 @@ mod tests {
         assert!(!motion.input(&CameraInput::default(), 600.0, Some(BOX), later));
         assert!(motion.wants_frame(false), "one more frame at full quality");
         assert!(!motion.wants_frame(false), "then none");
-        let pan = CameraInput {
-            drag: Some(Drag::Pan(10.0, 5.0)),
-            ..Default::default()
-        };
+        let pan = dragged(Drag::Pan(10.0, 5.0));
         assert!(motion.input(&pan, 600.0, Some(BOX), later));
         assert_ne!(
             motion.camera().target,
@@ -384,10 +385,7 @@ mod tests {
         let mut motion = fitted();
         let whole = motion.camera();
         motion.input(
-            &CameraInput {
-                drag: Some(Drag::Orbit(80.0, 20.0)),
-                ..Default::default()
-            },
+            &dragged(Drag::Orbit(80.0, 20.0)),
             600.0,
             Some(BOX),
             Instant::now(),
@@ -413,10 +411,7 @@ mod tests {
     fn each_slot_keeps_its_camera_and_a_new_cloud_is_fitted_unless_kept() {
         let mut motion = fitted();
         motion.input(
-            &CameraInput {
-                drag: Some(Drag::Orbit(40.0, 0.0)),
-                ..Default::default()
-            },
+            &dragged(Drag::Orbit(40.0, 0.0)),
             600.0,
             Some(BOX),
             Instant::now(),
