@@ -1,7 +1,7 @@
 //! What the window keeps between frames: [`LoudscapeApp`] and the types of its fields. This
 //! folder is the floor under the window's behaviour, which lives in `ui/`, one file a concern,
-//! each adding its methods to `LoudscapeApp`: `app.rs` (opening the window, one frame, camera
-//! input), `slots.rs` (loading and installing clouds), `panels.rs` (the side panel), `hover.rs`
+//! each adding its methods to `LoudscapeApp`: `app.rs` (opening the window, one frame),
+//! `view_3d.rs` (the 3D view's steps), `slots.rs` (loading and installing clouds), `panels.rs` (the side panel), `hover.rs`
 //! (picking and markers), `persistence.rs` (what is remembered between runs),
 //! `window_screenshot.rs` (the two screenshot paths) and more. A concern with state of its own
 //! keeps it here under the same name: `open.rs` (the Open row, [`open::OpenPanel`]),
