@@ -1,42 +1,23 @@
-//! The loudscape window's wiring: `LoudscapeApp`'s state, opening the window, one frame (side
-//! panel, transport bar, 3D view) and the camera input of the 3D view. The panels, hover
-//! read-outs, data slots, persistence and screenshots each have their own file in `ui/`.
+//! The loudscape window's wiring: opening the window, `LoudscapeApp`'s start, and one frame
+//! (side panel, transport bar, status area, then the 3D view of `view_3d.rs`). The panels,
+//! hover read-outs, data slots, persistence and screenshots each have their own file in `ui/`.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use eframe::egui::{self, Color32};
+use eframe::egui;
 use eframe::egui_wgpu;
 
-use crate::render::points::PointStyle;
 use crate::render::scene::{RenderSettings, ViewKind};
-use crate::render::surface::lod::{SurfaceDetail, detail_for};
 use crate::ui::audio::AudioPanel;
-use crate::ui::bridge::{ViewCallback, ViewResources};
-use crate::ui::hover::paint_readings;
-use crate::ui::labels;
+use crate::ui::bridge::ViewResources;
 use crate::ui::persistence::Remembered;
 use crate::ui::shortcuts::{self, Action};
 use crate::ui::state::{LoudscapeApp, SaveShot, ScreenshotState, Slot};
 use crate::view::camera::Camera;
-use crate::view::frame_view::FrameView;
 
-/// How long after the last input the view still counts as moving (drawn at reduced quality).
-const SETTLE: Duration = Duration::from_millis(180);
-/// While the camera moves, the Volume and Surface views render at a reduced resolution, chosen
-/// so a frame takes about this long (the device's pace measured while moving).
-const MOVING_FRAME_MS: f32 = 45.0;
-/// How far (in wheel notches) the window's fit steps back from a tight fit of the box, so the
-/// labels outside the box stay in view: 0.9^-1 = 11 % farther.
-const LABEL_MARGIN_STEPS: f32 = 1.0;
-/// The fewest points the Points view draws while moving (fewer no longer show the music's shape).
-const MIN_MOVING_POINTS: u32 = 5_000;
-/// The most it draws while moving, whatever the device's pace.
-const MAX_MOVING_POINTS: u32 = 1 << 30;
-/// The coarsest reduction while moving: one pixel in `MAX_MOVING_DIVISOR` per side.
-const MAX_MOVING_DIVISOR: u32 = 4;
 /// A press shorter than this still counts as a click. egui measures it in frame times, so on a
 /// device where one frame takes over a second its default (0.8 s) lost clicks.
 const MAX_CLICK_SECONDS: f64 = 4.0;
@@ -120,15 +101,11 @@ impl LoudscapeApp {
             timeline: None,
             active: Slot::Song,
             settings: RenderSettings::default(),
-            camera: Camera::default(),
-            fit_pending: true,
+            motion: Default::default(),
             loading: Vec::new(),
             messages: Default::default(),
             next_id: 1,
-            last_motion: None,
-            frame_index: 0,
-            frame_ms: 0.0,
-            view_aspect: 1.6,
+            clock: Default::default(),
             screenshot: options.screenshot.map(|path| ScreenshotState {
                 path,
                 frames_shown: 0,
@@ -144,24 +121,12 @@ impl LoudscapeApp {
             view_px: (1, 1),
             audio_for: Vec::new(),
             persist,
-            keep_camera_loads: 0,
-            surface_error: None,
-            surface_empty: false,
-            surface_busy: false,
+            surface: Default::default(),
             refining: None,
             iso_sweep,
-            camera_fitted: false,
             busy: None,
             busy_shown: false,
             needs_repaint: false,
-            moving_divisor: [1; 3],
-            moving_points: PointStyle::default().max_points_moving,
-            iso_dragging: false,
-            surface_pace: Default::default(),
-            surface_detail: Default::default(),
-            surface_triangles: 0,
-            slot_cameras: [None, None],
-            renders_seen: (0, 0),
             open: crate::ui::state::open::OpenPanel {
                 // A scripted run keeps a recent list only where it is told to.
                 recent: crate::ui::recent::RecentFiles::load(
@@ -198,27 +163,10 @@ impl LoudscapeApp {
         app
     }
 
-    /// Frames the active cloud, keeping the viewing direction (F, "Fit").
-    fn fit(&mut self) {
-        if let Some(loaded) = self.active() {
-            let (min, max) = loaded.world_box;
-            let aspect = self.view_aspect;
-            self.camera.fit(min, max, aspect);
-            // Room around the box for the tick labels and axis titles drawn outside it (in a
-            // small window a tight fit put them under the side panel).
-            self.camera.zoom(-LABEL_MARGIN_STEPS);
-            if self.compare.as_ref().is_some_and(|c| c.side_by_side()) {
-                // Each half is narrow: one step more for the level axis's title.
-                self.camera.zoom(-1.0);
-            }
-        }
-    }
-
     /// The default viewing direction, fitted to the active cloud (R, "Reset view").
     pub(super) fn reset_view(&mut self) {
-        self.camera = Camera::default();
-        self.fit();
-        self.camera_fitted = true;
+        let target = self.fit_target();
+        self.motion.reset(target);
     }
 
     /// Makes `slot` the active one. Each data mode keeps its own camera: the one left behind is
@@ -227,226 +175,9 @@ impl LoudscapeApp {
         if self.active == slot {
             return;
         }
-        // A camera still waiting for its first fit is not worth keeping.
-        self.slot_cameras[self.active as usize] = (!self.fit_pending).then_some(self.camera);
+        self.motion.switch_slot(self.active, slot);
         self.active = slot;
         self.hover = None;
-        match self.slot_cameras[slot as usize] {
-            Some(camera) => {
-                self.camera = camera;
-                self.fit_pending = false;
-            }
-            None => {
-                self.camera = Camera::default();
-                self.fit_pending = true;
-            }
-        }
-    }
-
-    fn view_3d(&mut self, ui: &mut egui::Ui) {
-        let rect = ui.available_rect_before_wrap();
-        let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
-        let ppp = ui.ctx().pixels_per_point();
-        // Side by side, each half is a view of its own (one camera for both).
-        let view_width = match &self.compare {
-            Some(c) if c.side_by_side() && self.active == Slot::Song => {
-                (rect.width() - crate::ui::compare_window::GAP) / 2.0
-            }
-            _ => rect.width(),
-        };
-        let width = (view_width * ppp).round().max(1.0) as u32;
-        let height = (rect.height() * ppp).round().max(1.0) as u32;
-        self.view_px = ((rect.width() * ppp).round().max(1.0) as u32, height);
-        let aspect = width as f32 / height as f32;
-        if (aspect - self.view_aspect).abs() > 1e-3 && self.camera_fitted {
-            // The window was resized and the camera not moved by hand since it was fitted:
-            // fit again so the data stays in view (an 800x600 window cut the labels off).
-            self.fit_pending = true;
-        }
-        self.view_aspect = aspect;
-        if self.fit_pending && self.active().is_some() {
-            self.fit();
-            self.fit_pending = false;
-            self.camera_fitted = true;
-        }
-
-        // Camera input.
-        let mut moved = false;
-        let delta = response.drag_delta() * ppp;
-        if response.dragged_by(egui::PointerButton::Primary) {
-            self.camera.orbit(delta.x, delta.y, height as f32);
-            moved = true;
-        } else if response.dragged_by(egui::PointerButton::Secondary)
-            || response.dragged_by(egui::PointerButton::Middle)
-        {
-            self.camera.pan(delta.x, delta.y, height as f32);
-            moved = true;
-        }
-        if response.hovered() {
-            let scroll = ui.ctx().input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
-                self.camera.zoom(scroll / 50.0);
-                moved = true;
-            }
-        }
-        let mut fitted_now = false;
-        if shortcuts::pressed(ui.ctx(), Action::Fit) {
-            self.fit();
-            (moved, fitted_now) = (true, true);
-        }
-        if shortcuts::pressed(ui.ctx(), Action::ResetView) {
-            self.reset_view();
-            (moved, fitted_now) = (true, true);
-        }
-        let now = Instant::now();
-        if moved {
-            self.last_motion = Some(now);
-            self.camera_fitted = fitted_now;
-        }
-        let moving = self.last_motion.is_some_and(|t| now - t < SETTLE);
-        // The volume and the surface are drawn while moving too, at a resolution the device can
-        // keep up with: the divisor follows the pace of the frames while moving.
-        let kind = self.settings.view as usize;
-        // The points view draws a subset while moving, as many points as the pace allows.
-        if moving {
-            let busy = ui.ctx().requested_repaint_last_pass();
-            let dt = ui.ctx().input(|i| i.unstable_dt) * 1000.0;
-            if self.settings.view == ViewKind::Points {
-                self.moving_points = next_moving_points(self.moving_points, busy.then_some(dt));
-            } else {
-                self.moving_divisor[kind] =
-                    next_moving_divisor(self.moving_divisor[kind], busy.then_some(dt));
-            }
-        }
-        // Level of detail: the coarse surface stands in while moving or dragging the isovalue
-        // when frames of the full one are too slow (render::surface::lod).
-        if self.settings.view == ViewKind::Surface {
-            if moving || self.iso_dragging {
-                let busy = ui.ctx().requested_repaint_last_pass();
-                let dt = ui.ctx().input(|i| i.unstable_dt) * 1000.0;
-                self.surface_pace.observe(
-                    busy.then_some(dt),
-                    self.surface_detail == SurfaceDetail::Full,
-                    self.surface_triangles,
-                );
-            }
-            self.surface_detail = detail_for(
-                self.surface_pace.full_too_slow(),
-                moving,
-                self.iso_dragging,
-                self.surface_busy,
-            );
-        }
-        if moving {
-            ui.ctx().request_repaint();
-        } else if self.last_motion.take().is_some() {
-            // One more frame at full quality once the camera settles.
-            ui.ctx().request_repaint();
-        }
-
-        let frame_index = self.frame_index;
-        self.frame_index = self.frame_index.wrapping_add(1);
-        let active = self.active();
-        let world_from_data = active.map_or(glam::Mat4::IDENTITY, |l| l.world_from_data);
-        let view = FrameView {
-            camera: self.camera,
-            world_from_data,
-            width,
-            height,
-            frame_index,
-            moving,
-        };
-        self.last_view = Some(view);
-        let hover_px = response
-            .hover_pos()
-            .map(|p| glam::Vec2::new((p.x - rect.min.x) * ppp, (p.y - rect.min.y) * ppp));
-        let song_before = self.hovered_song;
-        self.update_hover(hover_px, &view, moving);
-        if self.hovered_song != song_before {
-            // The side panel, drawn before the view, shows the new song next frame.
-            ui.ctx().request_repaint();
-        }
-        let compare_shown = self.compare.as_ref().is_some_and(|c| c.shown());
-        if response.clicked() && !compare_shown {
-            self.click();
-        }
-        if response.clicked() || response.secondary_clicked() {
-            // What the click changed (the seek position, the selected song) shows at once.
-            ui.ctx().request_repaint();
-        }
-        let mut settings = self.settings.clone();
-        settings.markers = self.markers();
-        if self.settings.view == ViewKind::Points {
-            settings.points.max_points_moving = self.moving_points;
-        }
-        if self.settings.view == ViewKind::Surface {
-            settings.surface_detail = self.surface_detail;
-        }
-        let mut render_view = view;
-        if moving && self.settings.view != ViewKind::Points {
-            let divisor = self.moving_divisor[kind].max(1);
-            render_view.width = width.div_ceil(divisor).max(1);
-            render_view.height = height.div_ceil(divisor).max(1);
-        }
-        let painter = ui.painter_at(rect);
-        let hover_pos = response.hover_pos();
-        if self.paint_compare(&painter, rect, &view, &render_view, &settings, hover_pos) {
-            return;
-        }
-        let active = self.active();
-        let callback = ViewCallback {
-            view: render_view,
-            settings,
-            cloud_id: active.map(|l| l.id),
-        };
-        painter.add(egui_wgpu::Callback::new_paint_callback(rect, callback));
-        if let Some(loaded) = active {
-            if self.settings.show_box {
-                let background = self.settings.colours.background;
-                labels::paint_on(&painter, rect, &view, &loaded.labels, background);
-            }
-            // The same legend as saved pictures carry (name, colour key).
-            let legend = crate::ui::legends::picture_legend(&loaded.cloud, &self.settings);
-            crate::ui::legends::paint_picture(&painter, rect, &legend);
-            // While the camera moves the read-out would describe where the cursor was.
-            if let (Some((_, hover)), Some(pos), false) =
-                (&self.hover, response.hover_pos(), moving)
-            {
-                paint_readings(&painter, rect, pos, &hover.readings);
-            }
-            if self.settings.view == ViewKind::Surface && self.surface_empty && !self.surface_busy {
-                // In the view, not only under the slider, whose tooltip covered it.
-                painter.text(
-                    rect.center(),
-                    egui::Align2::CENTER_CENTER,
-                    format!(
-                        "no surface at isovalue {:.2}: the density crosses it nowhere; lower it",
-                        self.settings.surface.iso_value
-                    ),
-                    egui::FontId::proportional(16.0),
-                    crate::ui::style::WARNING,
-                );
-            }
-            if self.surface_busy {
-                busy_badge(&painter, rect, "extracting surface…");
-            } else if let Some(done) = self.refining {
-                let percent = (done * 100.0).floor();
-                busy_badge(&painter, rect, &format!("refining points… {percent:.0} %"));
-            }
-        } else {
-            let text = if self.loading.is_empty() {
-                "Drop a song or a loudscape .ply file here, or run: loudscape song.ogg [timeline.ply]"
-            } else {
-                "Loading…"
-            };
-            painter.text(
-                rect.center(),
-                egui::Align2::CENTER_CENTER,
-                text,
-                egui::FontId::proportional(18.0),
-                Color32::from_gray(170),
-            );
-        }
     }
 }
 
@@ -500,16 +231,7 @@ impl eframe::App for LoudscapeApp {
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
-        // A frame's time counts only when it followed the last one at once (a repaint was asked
-        // for), so time spent waiting for input is not shown as frame time.
-        if ctx.requested_repaint_last_pass() {
-            let dt = ctx.input(|i| i.unstable_dt) * 1000.0;
-            self.frame_ms = if self.frame_ms == 0.0 {
-                dt
-            } else {
-                self.frame_ms * 0.8 + dt * 0.2
-            };
-        }
+        self.clock.observe(last_frame_ms(&ctx));
         let before = self.shown_state();
         self.poll_loading(&ctx, frame);
         self.apply_heard(frame);
@@ -521,14 +243,12 @@ impl eframe::App for LoudscapeApp {
             .wgpu_render_state()
             .zip(self.active().map(|l| l.id))
             .map(|(render_state, id)| ViewResources::surface_status(render_state, id));
-        self.surface_busy = self.settings.view == ViewKind::Surface
-            && surface_status.as_ref().is_some_and(|status| status.2);
-        self.surface_triangles = surface_status
-            .and_then(|status| status.0)
-            .map_or(0, |counts| counts.triangles());
-        // Set again by the isovalue slider (or a scripted sweep) while it is dragged.
-        self.iso_dragging = false;
-        if self.surface_busy {
+        self.surface.frame(
+            self.settings.view == ViewKind::Surface
+                && surface_status.as_ref().is_some_and(|status| status.2),
+            surface_status.and_then(|status| status.0),
+        );
+        if self.surface.busy {
             // Come back for the finished surface; the frames in between only composite.
             ctx.request_repaint_after(Duration::from_millis(30));
         }
@@ -630,10 +350,7 @@ impl eframe::App for LoudscapeApp {
             ctx.request_repaint();
         }
         if let Some(render_state) = frame.wgpu_render_state() {
-            let renders = ViewResources::renders(render_state);
-            if renders != self.renders_seen.0 {
-                self.renders_seen = (renders, self.frame_index);
-            }
+            self.clock.renders = ViewResources::renders(render_state);
         }
     }
 }
@@ -645,54 +362,17 @@ impl LoudscapeApp {
             self.settings.clone(),
             self.active,
             self.selected_song,
-            self.fit_pending,
-            self.camera,
+            self.motion.fit_pending(),
+            self.motion.camera(),
         )
     }
 }
 
-/// A spinner and `text` in the top-left corner of the 3D view, over a dark plate.
-fn busy_badge(painter: &egui::Painter, rect: egui::Rect, text: &str) {
-    let font = egui::FontId::proportional(14.0);
-    let galley = painter.layout_no_wrap(text.into(), font, Color32::from_gray(220));
-    let spinner = 14.0;
-    // Bottom left: the view's title and the colour key hold the top corners.
-    let origin = egui::pos2(
-        rect.min.x + 12.0,
-        rect.max.y - 15.0 - galley.size().y.max(spinner),
-    );
-    let plate = egui::Rect::from_min_size(
-        origin,
-        egui::vec2(
-            spinner + 8.0 + galley.size().x,
-            galley.size().y.max(spinner),
-        ),
-    )
-    .expand(5.0);
-    painter.rect_filled(plate, 4.0, labels::LABEL_PLATE);
-    // The spinner: an arc turning with time (egui's Spinner needs a Ui of its own).
-    let time = painter.ctx().input(|i| i.time);
-    let centre = origin + egui::vec2(spinner * 0.5, plate.height() * 0.5 - 5.0);
-    let start = time * 4.0;
-    let points: Vec<egui::Pos2> = (0..=20)
-        .map(|i| {
-            let angle = start + f64::from(i) / 20.0 * std::f64::consts::PI * 1.5;
-            centre + spinner * 0.45 * egui::vec2(angle.cos() as f32, angle.sin() as f32)
-        })
-        .collect();
-    painter.add(egui::Shape::line(
-        points,
-        egui::Stroke::new(2.0, Color32::from_rgb(230, 190, 110)),
-    ));
-    painter.galley(
-        origin
-            + egui::vec2(
-                spinner + 8.0,
-                (plate.height() - 10.0 - galley.size().y) * 0.5,
-            ),
-        galley,
-        Color32::from_gray(220),
-    );
+/// The last frame's time in ms when it followed the one before at once (a repaint was asked
+/// for); None when it waited for input, so its time says nothing about the device.
+pub(super) fn last_frame_ms(ctx: &egui::Context) -> Option<f32> {
+    ctx.requested_repaint_last_pass()
+        .then(|| ctx.input(|i| i.unstable_dt) * 1000.0)
 }
 
 /// The side panel's width in a window wide enough.
@@ -704,56 +384,9 @@ pub(super) fn side_panel_width(window_width: f32) -> f32 {
     (window_width * 0.4).clamp(180.0, SIDE_PANEL_WIDTH)
 }
 
-/// The divisor of the moving resolution after a frame that took `frame_ms` (None: the frame
-/// did not follow the last at once, so its time says nothing about the device): one step
-/// coarser when frames are slower than [`MOVING_FRAME_MS`], one finer when well under it.
-pub(super) fn next_moving_divisor(divisor: u32, frame_ms: Option<f32>) -> u32 {
-    match frame_ms {
-        Some(ms) if ms > MOVING_FRAME_MS => (divisor + 1).min(MAX_MOVING_DIVISOR),
-        Some(ms) if ms < MOVING_FRAME_MS * 0.4 => divisor.saturating_sub(1).max(1),
-        _ => divisor.max(1),
-    }
-}
-
-/// The points drawn while moving after a frame that took `frame_ms` (None: says nothing about
-/// the device): fewer when frames are slower than [`MOVING_FRAME_MS`], more when well under it,
-/// never below [`MIN_MOVING_POINTS`]. On a fast device it grows past any cloud's size, so every
-/// point is drawn while moving too.
-pub(super) fn next_moving_points(points: u32, frame_ms: Option<f32>) -> u32 {
-    let next = match frame_ms {
-        Some(ms) if ms > MOVING_FRAME_MS => points as f32 * 0.75,
-        Some(ms) if ms < MOVING_FRAME_MS * 0.6 => points as f32 * 1.25,
-        _ => points as f32,
-    };
-    (next as u32).clamp(MIN_MOVING_POINTS, MAX_MOVING_POINTS)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn moving_points_follow_the_pace_and_stay_in_range() {
-        let mut n = PointStyle::default().max_points_moving;
-        for _ in 0..40 {
-            n = next_moving_points(n, Some(400.0));
-        }
-        assert_eq!(
-            n, MIN_MOVING_POINTS,
-            "slow frames shrink the subset to the floor"
-        );
-        assert_eq!(next_moving_points(n, None), n, "idle frames say nothing");
-        assert_eq!(next_moving_points(n, Some(MOVING_FRAME_MS * 0.8)), n);
-        let mut grown = n;
-        for _ in 0..5 {
-            grown = next_moving_points(grown, Some(5.0));
-        }
-        assert!(grown > 2 * n, "fast frames grow it: {n} -> {grown}");
-        for _ in 0..200 {
-            grown = next_moving_points(grown, Some(5.0));
-        }
-        assert_eq!(grown, MAX_MOVING_POINTS);
-    }
 
     #[test]
     fn the_side_panel_leaves_a_small_window_to_the_view() {
@@ -764,20 +397,5 @@ mod tests {
             side_panel_width(500.0)
         );
         assert_eq!(side_panel_width(300.0), 180.0);
-    }
-
-    #[test]
-    fn moving_divisor_follows_the_pace_and_stays_in_range() {
-        let mut d = 1;
-        for _ in 0..10 {
-            d = next_moving_divisor(d, Some(400.0));
-        }
-        assert_eq!(d, MAX_MOVING_DIVISOR);
-        assert_eq!(next_moving_divisor(d, None), d, "idle frames say nothing");
-        assert_eq!(next_moving_divisor(d, Some(MOVING_FRAME_MS * 0.8)), d);
-        for _ in 0..10 {
-            d = next_moving_divisor(d, Some(5.0));
-        }
-        assert_eq!(d, 1);
     }
 }

@@ -1,8 +1,11 @@
-//! The bridge between egui and the render passes: an `egui_wgpu` paint callback.
+//! The bridge between egui and the render passes: one `egui_wgpu` paint callback
+//! ([`paint_callback`]) for two jobs ([`OffscreenJob`]), the 3D view's [`ViewCallback`] here and
+//! the A/B compare's [`CompareCallback`] in `bridge/compare.rs`.
 //!
-//! `prepare` renders the scene into an offscreen [`RenderTarget`] sized to the 3D view, `paint`
-//! composites it into egui's frame. GPU state lives in egui_wgpu's callback resources as one
-//! [`ViewResources`], created once when the window opens.
+//! `prepare` renders the job into an [`Offscreen`] target sized to its view, `paint`
+//! composites it into egui's frame. GPU state lives in egui_wgpu's callback resources: one
+//! [`ViewResources`], created once when the window opens, and the compare's
+//! [`CompareResources`] beside it, made when a compare first needs them.
 //!
 //! The scene is rendered only when what it shows changed ([`FrameCache`]): the camera, the size,
 //! the settings (markers and playhead included), the cloud or its GPU data. Frames that change
@@ -21,11 +24,53 @@ use crate::render::scene::{RenderSettings, Renderer, SceneData};
 pub use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::view::frame_view::FrameView;
 
+mod compare;
+pub use compare::{CompareCallback, CompareResources};
+
+/// An offscreen render target sized to a view and the pass that composites it into egui's
+/// frame (the 3D view's, and each half of the compare's).
+pub(crate) struct Offscreen {
+    target: Option<RenderTarget>,
+    composite: CompositePass,
+}
+
+impl Offscreen {
+    fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
+        Self {
+            target: None,
+            composite: CompositePass::new(device, format),
+        }
+    }
+
+    /// Makes the target `width` x `height`; true when it was made anew (what it held is gone).
+    fn ensure_size(&mut self, device: &wgpu::Device, width: u32, height: u32) -> bool {
+        if self
+            .target
+            .as_ref()
+            .is_some_and(|t| t.has_size(width, height))
+        {
+            return false;
+        }
+        let target = RenderTarget::new(device, width, height);
+        self.composite.set_source(device, &target);
+        self.target = Some(target);
+        true
+    }
+
+    fn target(&self) -> Option<&RenderTarget> {
+        self.target.as_ref()
+    }
+
+    /// Composites the target into the callback's viewport.
+    fn draw(&self, render_pass: &mut wgpu::RenderPass<'static>) {
+        self.composite.draw(render_pass);
+    }
+}
+
 /// GPU state owned by the window, kept in egui_wgpu's callback resources.
 pub struct ViewResources {
     pub renderer: Renderer,
-    composite: CompositePass,
-    target: Option<RenderTarget>,
+    offscreen: Offscreen,
     /// Uploaded clouds by the app's cloud id.
     pub scenes: HashMap<u64, SceneData>,
     /// What the target holds, to skip frames that would render the same scene again.
@@ -42,8 +87,7 @@ impl ViewResources {
         device.on_uncaptured_error(Arc::new(on_device_error));
         let resources = ViewResources {
             renderer: Renderer::new(device),
-            composite: CompositePass::new(device, render_state.target_format),
-            target: None,
+            offscreen: Offscreen::new(device, render_state.target_format),
             scenes: HashMap::new(),
             cache: FrameCache::default(),
             progressive: Default::default(),
@@ -273,7 +317,33 @@ pub struct ViewCallback {
     pub cloud_id: Option<u64>,
 }
 
-impl CallbackTrait for ViewCallback {
+/// What a bridge callback renders: the 3D view ([`ViewCallback`]) or a part of the compare
+/// ([`CompareCallback`]). One `egui_wgpu` callback serves both ([`paint_callback`]): `prepare`
+/// renders the job into its offscreen target when what it shows changed, `paint` composites
+/// that target into the callback's viewport.
+pub(crate) trait OffscreenJob: Send + Sync + 'static {
+    /// Renders into the job's target, only when what it shows changed.
+    fn render(&self, gpu: Prepare<'_>, resources: &mut CallbackResources);
+    /// The target that `paint` composites.
+    fn offscreen<'a>(&self, resources: &'a CallbackResources) -> Option<&'a Offscreen>;
+}
+
+/// The device, queue and frame encoder a job renders with.
+pub(crate) struct Prepare<'a> {
+    pub(crate) device: &'a wgpu::Device,
+    pub(crate) queue: &'a wgpu::Queue,
+    pub(crate) encoder: &'a mut wgpu::CommandEncoder,
+}
+
+/// The paint callback that draws `job` into `rect`.
+pub(crate) fn paint_callback(rect: egui::Rect, job: impl OffscreenJob) -> egui::PaintCallback {
+    egui_wgpu::Callback::new_paint_callback(rect, Painted(job))
+}
+
+/// A job as egui_wgpu's callback.
+struct Painted<J>(J);
+
+impl<J: OffscreenJob> CallbackTrait for Painted<J> {
     fn prepare(
         &self,
         device: &wgpu::Device,
@@ -282,14 +352,41 @@ impl CallbackTrait for ViewCallback {
         encoder: &mut wgpu::CommandEncoder,
         resources: &mut CallbackResources,
     ) -> Vec<wgpu::CommandBuffer> {
-        let Some(res) = resources.get_mut::<ViewResources>() else {
-            return Vec::new();
+        let gpu = Prepare {
+            device,
+            queue,
+            encoder,
         };
-        let (w, h) = (self.view.width, self.view.height);
-        if !res.target.as_ref().is_some_and(|t| t.has_size(w, h)) {
-            let target = RenderTarget::new(device, w, h);
-            res.composite.set_source(device, &target);
-            res.target = Some(target);
+        self.0.render(gpu, resources);
+        Vec::new()
+    }
+
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        render_pass: &mut wgpu::RenderPass<'static>,
+        resources: &CallbackResources,
+    ) {
+        if let Some(offscreen) = self.0.offscreen(resources) {
+            offscreen.draw(render_pass);
+        }
+    }
+}
+
+impl OffscreenJob for ViewCallback {
+    fn render(&self, gpu: Prepare<'_>, resources: &mut CallbackResources) {
+        let Prepare {
+            device,
+            queue,
+            encoder,
+        } = gpu;
+        let Some(res) = resources.get_mut::<ViewResources>() else {
+            return;
+        };
+        if res
+            .offscreen
+            .ensure_size(device, self.view.width, self.view.height)
+        {
             res.cache.invalidate();
         }
         // A surface finished in the background: the scene shows it from this frame on.
@@ -307,10 +404,10 @@ impl CallbackTrait for ViewCallback {
         .with_points_revision(res.cache.points_revision);
         if !res.cache.begin(&key) {
             // The target already holds this scene: paint composites it again.
-            return Vec::new();
+            return;
         }
-        let Some(target) = res.target.as_ref() else {
-            return Vec::new();
+        let Some(target) = res.offscreen.target() else {
+            return;
         };
         let data = self.cloud_id.and_then(|id| res.scenes.get(&id));
         // At rest, a cloud larger than a frame's budget is drawn a slice a frame; the window
@@ -335,7 +432,7 @@ impl CallbackTrait for ViewCallback {
             if !complete && let Some(ctx) = &res.repaint {
                 ctx.request_repaint();
             }
-            return Vec::new();
+            return;
         }
         // The target shows another scene now (the volume or surface once its grid is built, a
         // moving frame): the slices drawn so far are no longer on screen, and a refinement left
@@ -346,18 +443,10 @@ impl CallbackTrait for ViewCallback {
         // Complete even while a surface is extracted in the background: the last mesh is what
         // the view shows until the new one is installed (above).
         res.cache.finish(key, true);
-        Vec::new()
     }
 
-    fn paint(
-        &self,
-        _info: egui::PaintCallbackInfo,
-        render_pass: &mut wgpu::RenderPass<'static>,
-        resources: &CallbackResources,
-    ) {
-        if let Some(res) = resources.get::<ViewResources>() {
-            res.composite.draw(render_pass);
-        }
+    fn offscreen<'a>(&self, resources: &'a CallbackResources) -> Option<&'a Offscreen> {
+        resources.get::<ViewResources>().map(|res| &res.offscreen)
     }
 }
 

@@ -1,47 +1,27 @@
 //! The window's A/B compare: B loaded beside the Song slot's cloud (A), both moved onto the
-//! union of their axes, drawn side by side (two viewports, one camera: the same camera input
-//! moves both) or as their difference grid, hover read-outs of A and B, and the A/B audio
-//! switch (key B, or the panel's buttons) that keeps the playback position. What it keeps
-//! between frames ([`CompareState`]) is `state/compare_window.rs`; here are its methods on
-//! `LoudscapeApp`.
-//!
-//! GPU side: [`CompareResources`] sits in egui_wgpu's callback resources beside the bridge's
-//! `ViewResources` (whose renderer it borrows) and holds the [`CompareScene`] and one offscreen
-//! target per half; [`CompareCallback`] renders a half into its target only when what it shows
-//! changed and composites it into its viewport.
+//! union of their axes and built into the compare's GPU scene, its grids when the view needs
+//! them, and the A/B audio switch (key B, or the panel's buttons) that keeps the playback
+//! position. What it keeps between frames ([`CompareState`]) and decides by itself is
+//! `state/compare_window.rs`; the side panel's section is `compare_panel.rs`, the two viewports
+//! and read-outs `compare_view.rs`, and the GPU side the bridge's `bridge/compare.rs`.
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::mpsc::{Receiver, channel};
 use std::time::Duration;
 
-use eframe::egui::{self, Color32, RichText};
-use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor};
+use eframe::egui;
 
 use crate::data::cloud::PointCloud;
 use crate::data::compare::on_union_axes;
-use crate::data::field::Field;
 use crate::playback::{self, PlaybackError, Track};
-use crate::render::compare::CompareScene;
-use crate::render::composite::CompositePass;
-use crate::render::gpu::target::RenderTarget;
-use crate::render::grid::difference::DifferenceMeasure;
-use crate::render::scene::{RenderSettings, ViewKind};
-use crate::ui::bridge::ViewResources;
-use crate::ui::compare::{paint_diverging_legend, paint_title};
-use crate::ui::compare_readouts::{compare_readings, difference_readings};
-use crate::ui::compare_shot::difference_settings;
-use crate::ui::hover::paint_readings;
+use crate::ui::bridge::CompareResources;
 use crate::ui::labels;
-use crate::ui::state::compare_window::{CompareLayout, CompareState, DifferenceCopy, Listening};
-use crate::ui::state::{LoudscapeApp, Slot};
-use crate::view::frame_view::FrameView;
+use crate::ui::state::LoudscapeApp;
+use crate::ui::state::compare_window::{CompareLayout, CompareState, Listening};
 
 /// The B field's id (typed into before any compare exists).
 pub(super) const COMPARE_FIELD: &str = "compare-b-field";
-
-/// Points between the two halves of the side-by-side view.
-pub(super) const GAP: f32 = 4.0;
 
 /// Loads B on a thread, as the Open row loads any file.
 fn load_b(path: PathBuf) -> Receiver<Result<PointCloud, String>> {
@@ -69,14 +49,7 @@ impl LoudscapeApp {
     /// panel's field or dialog, a drop with Shift held).
     pub(super) fn compare_with(&mut self, path: PathBuf) {
         self.open.compare_path = path.display().to_string();
-        let mut state = CompareState::new(path.clone());
-        if let Some(old) = &self.compare {
-            state.layout = match old.layout {
-                CompareLayout::Off => CompareLayout::SideBySide,
-                other => other,
-            };
-            state.measure = old.measure;
-        }
+        let mut state = CompareState::after(self.compare.as_ref(), path.clone());
         state.receiver = Some(load_b(path));
         if self.listening_b() {
             // B's track is the one playing: bring A back first (position kept).
@@ -103,43 +76,14 @@ impl LoudscapeApp {
         let Some(state) = self.compare.as_mut() else {
             return;
         };
-        if let Some(receiver) = &state.receiver {
-            match receiver.try_recv() {
-                Ok(Ok(cloud)) => {
-                    state.receiver = None;
-                    state.b_loaded = Some(Arc::new(cloud));
-                    state.built_for = None;
-                }
-                Ok(Err(message)) => {
-                    state.receiver = None;
-                    state.error = Some(message);
-                }
-                Err(TryRecvError::Empty) => ctx.request_repaint_after(Duration::from_millis(50)),
-                Err(TryRecvError::Disconnected) => {
-                    state.receiver = None;
-                    state.error = Some(format!("{}: the loader stopped", state.path.display()));
-                }
-            }
+        // Either still on its way: come back for it.
+        let loading = state.poll_load();
+        let decoding = state.poll_decoding();
+        if loading || decoding {
+            ctx.request_repaint_after(Duration::from_millis(50));
         }
-        if let Some(receiver) = &state.decoding {
-            match receiver.try_recv() {
-                Ok(Ok(track)) => {
-                    state.decoding = None;
-                    state.other_track = Some(track);
-                }
-                Ok(Err(e)) => {
-                    state.decoding = None;
-                    state.error = Some(format!("B's audio: {e}"));
-                }
-                Err(TryRecvError::Empty) => ctx.request_repaint_after(Duration::from_millis(50)),
-                Err(TryRecvError::Disconnected) => state.decoding = None,
-            }
-        }
-        if state.error != state.error_told {
-            state.error_told = state.error.clone();
-            if let Some(error) = &state.error {
-                self.messages.error(format!("compare: {error}"));
-            }
+        if let Some(error) = state.error_to_tell() {
+            self.messages.error(format!("compare: {error}"));
         }
         let Some(render_state) = frame.wgpu_render_state() else {
             return;
@@ -147,10 +91,7 @@ impl LoudscapeApp {
         let (Some(song), Some(b)) = (self.song.as_ref(), state.b_loaded.clone()) else {
             return;
         };
-        if state.built_for != Some(song.id) {
-            state.built_for = Some(song.id);
-            state.difference = None;
-            state.hover = None;
+        if state.rebuild_for(song.id) {
             match on_union_axes(&song.cloud, &b) {
                 Ok((a, b_moved)) => {
                     state.labels = Some(labels::axis_labels_for_box(
@@ -171,15 +112,9 @@ impl LoudscapeApp {
                     CompareResources::clear(render_state);
                 }
             }
-            self.fit_pending = true;
+            self.motion.request_fit();
         }
-        let needs_grids = state.clouds.is_some()
-            && match state.layout {
-                CompareLayout::Off => false,
-                CompareLayout::SideBySide => self.settings.view != ViewKind::Points,
-                CompareLayout::Difference => true,
-            };
-        if !needs_grids {
+        if !state.needs_grids(self.settings.view) {
             return;
         }
         let voxels = self.settings.voxels;
@@ -206,13 +141,8 @@ impl LoudscapeApp {
             self.busy = None;
         }
         CompareResources::set_measure(render_state, state.measure);
-        let stale = state
-            .difference
-            .as_ref()
-            .is_none_or(|d| d.measure != state.measure);
-        if stale {
+        if state.difference_stale() {
             state.difference = CompareResources::read_difference(render_state);
-            state.hover = None;
         }
     }
 
@@ -237,157 +167,14 @@ impl LoudscapeApp {
         );
     }
 
-    /// The compare section of the side panel.
-    pub(super) fn compare_controls(&mut self, ui: &mut egui::Ui) {
-        ui.add_space(6.0);
-        ui.label(RichText::new("Compare (A/B)").strong());
-        let mut start = None;
-        ui.horizontal(|ui| {
-            let field = &mut self.open.compare_path;
-            let edit = ui.add(
-                egui::TextEdit::singleline(field)
-                    .id(egui::Id::unique(COMPARE_FIELD))
-                    .hint_text("B: song or cloud")
-                    .desired_width(130.0),
-            );
-            if edit.lost_focus()
-                && ui.input(|i| i.key_pressed(egui::Key::Enter))
-                && !field.trim().is_empty()
-            {
-                start = Some(PathBuf::from(field.trim()));
-            }
-            let open = self.compare.as_ref().is_none_or(|c| c.dialog.is_none());
-            if ui
-                .add_enabled(
-                    open && self.song.is_some(),
-                    egui::Button::new("Compare with…"),
-                )
-                .on_hover_text("B beside the song (A); or drop a file with Shift held")
-                .clicked()
-            {
-                if !crate::ui::open::dialogs_available() {
-                    self.messages.warn(format!(
-                        "{}: type B's path in the compare field and press Enter",
-                        crate::ui::open::NO_DIALOG
-                    ));
-                    return;
-                }
-                let receiver = crate::ui::open::open_dialog(false);
-                let state = self
-                    .compare
-                    .get_or_insert_with(|| CompareState::new(PathBuf::new()));
-                state.layout = CompareLayout::Off;
-                state.dialog = Some(receiver);
-            }
-        });
-        if let Some(state) = self.compare.as_mut()
-            && let Some(receiver) = &state.dialog
-        {
-            match receiver.try_recv() {
-                Ok(picked) => {
-                    state.dialog = None;
-                    start = start.or(picked.and_then(|paths| paths.into_iter().next()));
-                }
-                Err(TryRecvError::Disconnected) => state.dialog = None,
-                Err(TryRecvError::Empty) => {
-                    ui.ctx().request_repaint_after(Duration::from_millis(100));
-                }
-            }
-        }
-        if let Some(path) = start {
-            if self.song.is_some() {
-                self.compare_with(path);
-            } else {
-                self.messages
-                    .warn("open a song (A) first, then compare it with B".to_string());
-            }
-        }
-        let Some(state) = self.compare.as_mut() else {
-            return;
-        };
-        if state.receiver.is_some() {
-            ui.horizontal(|ui| {
-                ui.spinner();
-                ui.label(format!("loading B: {}", state.path.display()));
-            });
-        }
-        if let Some(error) = &state.error {
-            ui.colored_label(Color32::from_rgb(240, 120, 100), error);
-        }
-        if state.clouds.is_none() {
-            return;
-        }
-        ui.horizontal(|ui| {
-            for (layout, name) in [
-                (CompareLayout::Off, "A only"),
-                (CompareLayout::SideBySide, "Side by side"),
-                (CompareLayout::Difference, "Difference"),
-            ] {
-                if ui
-                    .add(egui::Button::selectable(state.layout == layout, name))
-                    .clicked()
-                {
-                    state.layout = layout;
-                    state.hover = None;
-                    // The view changes: draw it now (a build is announced first).
-                    ui.ctx().request_repaint();
-                    self.fit_pending = true;
-                }
-            }
-        });
-        if state.layout == CompareLayout::Difference {
-            ui.horizontal(|ui| {
-                ui.label("measure");
-                for measure in DifferenceMeasure::ALL {
-                    if ui
-                        .add(egui::Button::selectable(
-                            state.measure == measure,
-                            measure.name(),
-                        ))
-                        .on_hover_text(measure.describe())
-                        .clicked()
-                    {
-                        state.measure = measure;
-                        ui.ctx().request_repaint();
-                    }
-                }
-            });
-        }
-        let mut switch = None;
-        ui.horizontal(|ui| {
-            ui.label("listen");
-            let ready = state.other_track.is_some();
-            for (side, name) in [(Listening::A, "A"), (Listening::B, "B")] {
-                let response = ui
-                    .add_enabled(
-                        ready || state.listening == side,
-                        egui::Button::selectable(state.listening == side, name),
-                    )
-                    .on_hover_text("key B switches, at the same position");
-                if response.clicked() {
-                    switch = Some(side);
-                }
-            }
-            if state.decoding.is_some() {
-                ui.spinner();
-            }
-        });
-        if let Some(side) = switch {
-            self.listen(side);
-        }
-    }
-
     /// The scripted `--press compare=off|side|difference` of tests: the compare's layout.
     pub(super) fn scripted_compare(&mut self, name: &str) -> bool {
-        let layout = match name.strip_prefix("compare=") {
-            Some("off") => CompareLayout::Off,
-            Some("side") => CompareLayout::SideBySide,
-            Some("difference") => CompareLayout::Difference,
-            _ => return false,
+        let Some(layout) = name.strip_prefix("compare=").and_then(CompareLayout::named) else {
+            return false;
         };
         if let Some(state) = self.compare.as_mut() {
             state.layout = layout;
-            self.fit_pending = true;
+            self.motion.request_fit();
         }
         true
     }
@@ -401,350 +188,95 @@ impl LoudscapeApp {
             return;
         }
         if crate::ui::shortcuts::pressed(ctx, crate::ui::shortcuts::Action::SwapAb) {
-            let to = match state.listening {
-                Listening::A => Listening::B,
-                Listening::B => Listening::A,
-            };
-            self.listen(to);
+            self.listen(state.listening.other());
         }
-    }
-
-    /// Draws the compare into `rect` when it is shown (then the normal view is not drawn) and
-    /// its hover read-outs. `view` is one half's view in side by side, the whole in difference.
-    pub(super) fn paint_compare(
-        &mut self,
-        painter: &egui::Painter,
-        rect: egui::Rect,
-        view: &FrameView,
-        render_view: &FrameView,
-        settings: &RenderSettings,
-        hover: Option<egui::Pos2>,
-    ) -> bool {
-        if self.active != Slot::Song {
-            return false;
-        }
-        let Some(state) = self.compare.as_mut() else {
-            return false;
-        };
-        if !state.shown() {
-            return false;
-        }
-        let Some(clouds) = state.clouds.clone() else {
-            return false;
-        };
-        let names = [&clouds.0, &clouds.1].map(|c| {
-            c.path
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        });
-        let ppp = painter.ctx().pixels_per_point();
-        let mut readings = None;
-        match state.layout {
-            CompareLayout::SideBySide => {
-                let half = (rect.width() - GAP) / 2.0;
-                let rects = [
-                    egui::Rect::from_min_size(rect.min, egui::vec2(half, rect.height())),
-                    egui::Rect::from_min_size(
-                        rect.min + egui::vec2(half + GAP, 0.0),
-                        egui::vec2(half, rect.height()),
-                    ),
-                ];
-                for (side, half_rect) in rects.into_iter().enumerate() {
-                    painter.add(egui_wgpu::Callback::new_paint_callback(
-                        half_rect,
-                        CompareCallback {
-                            side,
-                            view: *render_view,
-                            settings: settings.clone(),
-                        },
-                    ));
-                    if let Some(labels) = &state.labels
-                        && self.settings.show_box
-                    {
-                        labels::paint(painter, half_rect, view, labels);
-                    }
-                    // Its title and the colour key of what it draws, as saved pictures carry.
-                    let cloud = if side == 0 { &clouds.0 } else { &clouds.1 };
-                    let mut legend = crate::ui::legends::picture_legend(cloud, settings);
-                    legend.name = format!("{}: {}", ["A", "B"][side], names[side]);
-                    legend.detail.clear();
-                    crate::ui::legends::paint_picture(painter, half_rect, &legend);
-                }
-                if let Some(pos) = hover
-                    && !view.moving
-                {
-                    let side = usize::from(pos.x >= rects[1].min.x);
-                    let px = glam::Vec2::new(
-                        (pos.x - rects[side].min.x) * ppp,
-                        (pos.y - rects[side].min.y) * ppp,
-                    );
-                    readings = Some((pos, compare_readings(&clouds, side, view, px)));
-                }
-            }
-            CompareLayout::Difference => {
-                painter.add(egui_wgpu::Callback::new_paint_callback(
-                    rect,
-                    CompareCallback {
-                        side: 2,
-                        view: *render_view,
-                        settings: difference_settings(settings),
-                    },
-                ));
-                if let Some(labels) = &state.labels
-                    && self.settings.show_box
-                {
-                    labels::paint(painter, rect, view, labels);
-                }
-                paint_title(
-                    painter,
-                    rect,
-                    &format!("B - A: {} against {}", names[1], names[0]),
-                );
-                if let Some(copy) = &state.difference {
-                    let legend = egui::Rect::from_min_size(
-                        rect.right_top() + egui::vec2(-180.0, 40.0),
-                        egui::vec2(170.0, 180.0),
-                    );
-                    paint_diverging_legend(painter, legend, copy.measure, copy.range);
-                    if let Some(pos) = hover
-                        && !view.moving
-                    {
-                        let px =
-                            glam::Vec2::new((pos.x - rect.min.x) * ppp, (pos.y - rect.min.y) * ppp);
-                        readings = Some((pos, difference_readings(&clouds.0, copy, view, px)));
-                    }
-                }
-            }
-            CompareLayout::Off => {}
-        }
-        if let Some((pos, lines)) = readings {
-            paint_readings(painter, rect, pos, &lines);
-        }
-        true
     }
 }
 
-/// One half's offscreen target and what it holds.
-struct HalfTarget {
-    target: Option<RenderTarget>,
-    composite: CompositePass,
-    last: Option<(FrameViewKey, RenderSettings, u64)>,
-}
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+    use std::time::Instant;
 
-/// The parts of a view that change its picture (the frame counter does not).
-#[derive(Clone, Debug, PartialEq)]
-struct FrameViewKey {
-    camera: crate::view::camera::Camera,
-    size: (u32, u32),
-    moving: bool,
-}
+    use super::*;
+    use crate::ui::app::WindowOptions;
 
-/// The compare's GPU state, in egui_wgpu's callback resources.
-pub struct CompareResources {
-    pub(super) scene: Option<CompareScene>,
-    halves: [HalfTarget; 3],
-    /// Bumped when the scene or its grids change.
-    revision: u64,
-}
-
-impl CompareResources {
-    pub(super) fn with<T>(
-        render_state: &egui_wgpu::RenderState,
-        f: impl FnOnce(&mut CompareResources, &ViewResources) -> T,
-    ) -> Option<T> {
-        let mut renderer = render_state.renderer.write();
-        let resources = &mut renderer.callback_resources;
-        if resources.get::<CompareResources>().is_none() {
-            let device = &render_state.device;
-            let half = || HalfTarget {
-                target: None,
-                composite: CompositePass::new(device, render_state.target_format),
-                last: None,
-            };
-            resources.insert(CompareResources {
-                scene: None,
-                halves: [half(), half(), half()],
-                revision: 0,
-            });
+    /// Polls `state` until B's load has finished (a minute at most).
+    fn loaded(mut state: CompareState) -> CompareState {
+        let start = Instant::now();
+        while state.poll_load() {
+            assert!(start.elapsed().as_secs() < 60, "B never finished loading");
+            std::thread::sleep(Duration::from_millis(5));
         }
-        let mut compare = resources.remove::<CompareResources>()?;
-        let result = resources
-            .get::<ViewResources>()
-            .map(|view| f(&mut compare, view));
-        resources.insert(compare);
-        result
+        state
     }
 
-    fn build(render_state: &egui_wgpu::RenderState, a: PointCloud, b: PointCloud) {
-        Self::with(render_state, |compare, view| {
-            compare.scene = Some(CompareScene::from_union(
-                &render_state.device,
-                &view.renderer,
-                a,
-                b,
-            ));
-            compare.revision += 1;
-        });
+    fn load(path: &Path) -> CompareState {
+        let mut state = CompareState::new(path.to_path_buf());
+        state.receiver = Some(load_b(path.to_path_buf()));
+        loaded(state)
     }
 
-    fn clear(render_state: &egui_wgpu::RenderState) {
-        Self::with(render_state, |compare, _| {
-            compare.scene = None;
-            compare.revision += 1;
-        });
+    #[test]
+    fn b_is_the_cloud_its_file_holds() {
+        let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/format");
+        let expected: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(fixtures.join("song_v2.expected.json")).unwrap(),
+        )
+        .unwrap();
+        let state = load(&fixtures.join("song_v2.ply"));
+        assert_eq!(state.error, None);
+        let b = state.b_loaded.expect("B loaded");
+        assert_eq!(Some(b.len() as u64), expected["point_count"].as_u64());
+        assert_eq!(b.path, fixtures.join("song_v2.ply"));
+        assert_eq!(state.built_for, None, "the scene is still to be built");
     }
 
-    fn grids_match(
-        render_state: &egui_wgpu::RenderState,
-        voxels: &crate::render::grid::voxelize::VoxelSettings,
-    ) -> bool {
-        Self::with(render_state, |compare, _| {
-            compare.scene.as_ref().is_none_or(|scene| {
-                scene.grids.is_some() && scene.data_a.grid_matches(&scene.a, voxels)
-            })
-        })
-        .unwrap_or(true)
+    #[test]
+    fn a_b_that_does_not_load_says_which_file_and_shows_nothing() {
+        let path = std::env::temp_dir().join(format!(
+            "loudscape-compare-b-not-a-cloud-{}.ply",
+            std::process::id()
+        ));
+        std::fs::write(&path, b"this is not a point cloud\n").unwrap();
+        let state = load(&path);
+        std::fs::remove_file(&path).unwrap();
+        let error = state.error.clone().expect("an error");
+        assert!(error.contains(&path.display().to_string()), "{error}");
+        assert!(state.b_loaded.is_none() && !state.shown());
     }
 
-    fn ensure_grids(
-        render_state: &egui_wgpu::RenderState,
-        voxels: &crate::render::grid::voxelize::VoxelSettings,
-    ) -> Result<(), String> {
-        Self::with(render_state, |compare, view| {
-            let Some(scene) = compare.scene.as_mut() else {
-                return Ok(());
-            };
-            let built = scene
-                .ensure_grids(
-                    &render_state.device,
-                    &render_state.queue,
-                    &view.renderer,
-                    voxels,
-                )
-                .map_err(|e| e.to_string())?;
-            if built {
-                compare.revision += 1;
-            }
-            Ok(())
-        })
-        .unwrap_or(Ok(()))
-    }
-
-    fn set_measure(render_state: &egui_wgpu::RenderState, measure: DifferenceMeasure) {
-        Self::with(render_state, |compare, view| {
-            if let Some(scene) = compare.scene.as_mut()
-                && scene.grids.as_ref().is_some_and(|g| g.measure != measure)
-            {
-                scene.set_measure(
-                    &render_state.device,
-                    &render_state.queue,
-                    &view.renderer,
-                    measure,
-                );
-                compare.revision += 1;
-            }
-        });
-    }
-
-    fn read_difference(render_state: &egui_wgpu::RenderState) -> Option<DifferenceCopy> {
-        Self::with(render_state, |compare, _| {
-            let grids = compare.scene.as_ref()?.grids.as_ref()?;
-            let (device, queue) = (&render_state.device, &render_state.queue);
-            let shown = &grids.grids.shown;
-            let density = shown.read_field(device, queue, &shown.density).ok()?;
-            let hp_mean = shown.read_field(device, queue, &shown.hp_mean).ok()?;
-            Some(DifferenceCopy {
-                shown: Field {
-                    dims: shown.dims,
-                    box_min: shown.box_min,
-                    box_max: shown.box_max,
-                    density,
-                    hp_mean,
-                },
-                difference: grids.difference_cpu.clone(),
-                columns: grids.columns_cpu.clone(),
-                measure: grids.measure,
-                range: grids.range(),
-            })
-        })
-        .flatten()
-    }
-}
-
-/// One half of the compare (0 A, 1 B) or the difference (2).
-struct CompareCallback {
-    side: usize,
-    view: FrameView,
-    settings: RenderSettings,
-}
-
-impl CallbackTrait for CompareCallback {
-    fn prepare(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        _screen: &ScreenDescriptor,
-        encoder: &mut wgpu::CommandEncoder,
-        resources: &mut CallbackResources,
-    ) -> Vec<wgpu::CommandBuffer> {
-        let Some(mut compare) = resources.remove::<CompareResources>() else {
-            return Vec::new();
-        };
-        if let Some(view_resources) = resources.get::<ViewResources>() {
-            let revision = compare.revision;
-            let CompareResources { scene, halves, .. } = &mut compare;
-            let half = &mut halves[self.side];
-            let (w, h) = (self.view.width, self.view.height);
-            if !half.target.as_ref().is_some_and(|t| t.has_size(w, h)) {
-                let target = RenderTarget::new(device, w, h);
-                half.composite.set_source(device, &target);
-                half.target = Some(target);
-                half.last = None;
-            }
-            let key = (
-                FrameViewKey {
-                    camera: self.view.camera,
-                    size: (w, h),
-                    moving: self.view.moving,
-                },
-                self.settings.clone(),
-                revision,
-            );
-            let data = scene.as_ref().and_then(|s| match self.side {
-                0 => Some(&s.data_a),
-                1 => Some(&s.data_b),
-                _ => s.grids.as_ref().map(|g| &g.data),
-            });
-            if half.last.as_ref() != Some(&key)
-                && let Some(target) = half.target.as_ref()
-            {
-                view_resources.renderer.render(
-                    queue,
-                    encoder,
-                    target,
-                    data,
-                    &self.view,
-                    &self.settings,
-                );
-                let pending = data.is_some_and(|d| {
-                    self.settings.view == ViewKind::Surface && d.surface.needs_another_frame()
-                });
-                half.last = (!pending).then_some(key);
-            }
-        }
-        resources.insert(compare);
-        Vec::new()
-    }
-
-    fn paint(
-        &self,
-        _info: egui::PaintCallbackInfo,
-        render_pass: &mut wgpu::RenderPass<'static>,
-        resources: &CallbackResources,
-    ) {
-        if let Some(compare) = resources.get::<CompareResources>() {
-            compare.halves[self.side].composite.draw(render_pass);
-        }
+    #[test]
+    fn a_scripted_layout_refits_the_compare_and_other_presses_pass_through() {
+        let mut app = LoudscapeApp::new(
+            WindowOptions {
+                screenshot: Some(std::env::temp_dir().join("loudscape-unit-never-written.png")),
+                ..Default::default()
+            },
+            None,
+        );
+        assert!(
+            app.scripted_compare("compare=side"),
+            "no compare: taken, nothing to do"
+        );
+        assert!(app.compare.is_none());
+        app.compare = Some(CompareState::new(PathBuf::from("b.ply")));
+        app.motion.size_view(
+            1.6,
+            Some(crate::ui::state::view_motion::FitBox {
+                min: glam::Vec3::splat(-1.0),
+                max: glam::Vec3::splat(1.0),
+                half: false,
+            }),
+        );
+        assert!(!app.motion.fit_pending());
+        assert!(app.scripted_compare("compare=difference"));
+        assert_eq!(
+            app.compare.as_ref().map(|c| c.layout),
+            Some(CompareLayout::Difference)
+        );
+        assert!(app.motion.fit_pending(), "the new layout is fitted");
+        assert!(!app.scripted_compare("compare=sideways"));
+        assert!(!app.scripted_compare("Ctrl+S"));
     }
 }

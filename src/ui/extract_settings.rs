@@ -161,7 +161,7 @@ impl LoudscapeApp {
             self.open.extract.next.arguments().join(" ")
         );
         // The new cloud keeps the camera: the same song, seen the same way.
-        self.keep_camera_loads += 1;
+        self.motion.keep_camera_for_next_load();
         self.start_loading(audio);
     }
 }

@@ -2,10 +2,10 @@
 //! window and draws a frame over the state in `state/` (the floor under the behaviour files),
 //! whose behaviour is split by concern (`slots.rs`, `panels.rs`, `legends.rs`, `hover.rs`,
 //! `persistence.rs`, `window_screenshot.rs`, `open.rs`, `compare_window.rs`, ...). egui meets
-//! the render passes in two places: [`bridge`] (the window's egui_wgpu paint callback: prepare
-//! renders offscreen, paint composites) and [`labels`] (axis labels, also drawn headless into a
-//! render target); [`screenshot`] renders a view offscreen and saves PNGs, [`audio`] is the
-//! transport bar.
+//! the render passes in two places: [`bridge`] (the window's egui_wgpu paint callbacks, the 3D
+//! view's and the compare's: prepare renders offscreen, paint composites) and [`labels`] (axis
+//! labels, also drawn headless into a render target); [`screenshot`] renders a view offscreen
+//! and saves PNGs, [`audio`] is the transport bar.
 
 mod alsa_quiet;
 pub mod app;
@@ -13,8 +13,10 @@ pub mod audio;
 pub mod bridge;
 mod colour_controls;
 pub mod compare;
+mod compare_panel;
 mod compare_readouts;
 pub mod compare_shot;
+mod compare_view;
 mod compare_window;
 mod extract_settings;
 pub mod frame_cache;
@@ -38,6 +40,7 @@ pub mod strip;
 mod style;
 mod timeline_build;
 mod video_export;
+mod view_3d;
 mod window_gone;
 mod window_screenshot;
 #[cfg(test)]

@@ -270,7 +270,7 @@ impl LoudscapeApp {
             },
         };
         let selected = self.selected_song;
-        self.keep_camera_loads += 1;
+        self.motion.keep_camera_for_next_load();
         // the same file shifted, not a re-extraction: drop the shown copy first
         if let Some(old) = self.timeline.take() {
             crate::ui::bridge::ViewResources::remove(render_state, old.id);

@@ -115,7 +115,7 @@ impl LoudscapeApp {
                 .on_hover_text("Frame the data, keeping the viewing direction")
                 .clicked()
             {
-                self.fit_pending = true;
+                self.motion.request_fit();
             }
             if ui
                 .button("Reset (R)")
@@ -154,7 +154,8 @@ impl LoudscapeApp {
         ui.label(
             RichText::new(format!(
                 "{:.1} ms/frame · {} scene renders",
-                self.frame_ms, self.renders_seen.0
+                self.clock.ms(),
+                self.clock.renders
             ))
             .small()
             .weak(),
@@ -251,16 +252,18 @@ impl LoudscapeApp {
             );
         }
         let sweeping = self.iso_sweep.as_ref().is_some_and(|s| s.sweeping());
-        self.iso_dragging = slider.dragged() || sweeping;
+        if slider.dragged() || sweeping {
+            self.surface.isovalue_dragged();
+        }
         ui.checkbox(&mut surface.lit, "lit from above");
-        if self.surface_busy {
+        if self.surface.busy {
             ui.horizontal(|ui| {
                 ui.spinner();
                 ui.label("extracting surface…");
             });
-        } else if let Some(error) = &self.surface_error {
+        } else if let Some(error) = &self.surface.error {
             ui.colored_label(Color32::from_rgb(240, 120, 100), error);
-        } else if self.surface_empty {
+        } else if self.surface.empty {
             ui.label(
                 RichText::new("no surface at this isovalue: the density crosses it nowhere")
                     .color(Color32::from_rgb(230, 190, 110)),

@@ -42,7 +42,7 @@ impl LoudscapeApp {
         Remembered {
             files,
             view: Some(self.settings.view),
-            camera: Some(self.camera),
+            camera: Some(self.motion.camera()),
             iso_value: Some(self.settings.surface.iso_value),
             show_box: Some(self.settings.show_box),
             transfer: Some(self.settings.volume.preset.name().to_string()),
@@ -97,9 +97,7 @@ impl LoudscapeApp {
                 if let Some(camera) = r.camera
                     && !files.is_empty()
                 {
-                    self.camera = camera;
-                    self.fit_pending = false;
-                    self.keep_camera_loads = files.len();
+                    self.motion.restore(camera, files.len());
                 }
             }
         }

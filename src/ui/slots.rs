@@ -149,18 +149,9 @@ impl LoudscapeApp {
             Slot::Song => self.song = Some(loaded),
             Slot::Timeline => self.timeline = Some(loaded),
         }
-        if self.active != slot && !self.fit_pending {
-            self.slot_cameras[self.active as usize] = Some(self.camera);
-        }
         // A new cloud in this slot starts from its own fitted camera, not another slot's.
-        self.slot_cameras[slot as usize] = None;
+        self.motion.cloud_installed(self.active, slot);
         self.active = slot;
-        if self.keep_camera_loads > 0 {
-            self.keep_camera_loads -= 1;
-        } else {
-            self.camera = crate::view::camera::Camera::default();
-            self.fit_pending = true;
-        }
     }
 
     /// Builds the active cloud's voxel grid when the view needs one (only when the cloud or the
@@ -211,8 +202,7 @@ impl LoudscapeApp {
             self.messages.error(message);
         }
         let (counts, error, again) = ViewResources::surface_status(render_state, loaded.id);
-        self.surface_error = error;
-        self.surface_empty = counts.is_some_and(|c| c.fits() && c.triangles() == 0);
+        self.surface.extracted(counts, error);
         if again {
             self.needs_repaint = true;
         }

@@ -205,7 +205,7 @@ impl LoudscapeApp {
             output,
             timeline: loaded.cloud.meta.mode == DataMode::Timeline,
             settings: self.settings.clone(),
-            camera: (!self.fit_pending).then_some(self.camera),
+            camera: self.motion.settled_camera(),
             view_px: self.view_px,
             freq_axis: self.freq_axis,
             normalize: self.heard.preset_key(),

@@ -8,9 +8,9 @@ use std::sync::atomic::Ordering;
 
 use eframe::egui::{self, RichText};
 
+use crate::ui::bridge::CompareResources;
 use crate::ui::bridge::ViewResources;
 use crate::ui::compare_shot::{CompareView, render_compare_image};
-use crate::ui::compare_window::CompareResources;
 use crate::ui::state::compare_window::CompareLayout;
 use crate::ui::state::{LoudscapeApp, Slot};
 

@@ -1,21 +1,24 @@
 //! What the window keeps between frames: [`LoudscapeApp`] and the types of its fields. This
 //! folder is the floor under the window's behaviour, which lives in `ui/`, one file a concern,
-//! each adding its methods to `LoudscapeApp`: `app.rs` (opening the window, one frame, camera
-//! input), `slots.rs` (loading and installing clouds), `panels.rs` (the side panel), `hover.rs`
+//! each adding its methods to `LoudscapeApp`: `app.rs` (opening the window, one frame),
+//! `view_3d.rs` (the 3D view's steps), `slots.rs` (loading and installing clouds), `panels.rs` (the side panel), `hover.rs`
 //! (picking and markers), `persistence.rs` (what is remembered between runs),
 //! `window_screenshot.rs` (the two screenshot paths) and more. A concern with state of its own
 //! keeps it here under the same name: `open.rs` (the Open row, [`open::OpenPanel`]),
 //! `extract_settings.rs` (the extraction settings it holds), `timeline_build.rs` (a timeline
 //! on its way, the years typed), `compare_window.rs` (the A/B compare) and `iso_sweep.rs` (the
 //! scripted isovalue sweep); `loading.rs` is a load on its way and what its thread shares.
-//! This file holds `LoudscapeApp` and the small types of its other fields (which slot, a loaded
-//! cloud, the hover, the screenshot, the "Save PNG" panel).
+//! State that owns its updates has a file of its own: `view_motion.rs` (the camera, its fit and
+//! motion), `surface_status.rs` (the surface's status and level of detail), `frame_clock.rs`
+//! (frame number, pace, renders) and `slot.rs` (which data slot).
+//! This file holds `LoudscapeApp` and the small types of its other fields (a loaded cloud, the
+//! hover, the screenshot, the "Save PNG" panel).
 //!
 //! Nothing here imports a behaviour file: only the floors below (`audio.rs`, `labels.rs`,
 //! `recent.rs`, `strip.rs`, and the crate's data, view and render types), and within the
 //! folder only downward (this file imports its children; `open.rs` imports
-//! `extract_settings.rs` and `timeline_build.rs`, which imports `loading.rs`; none imports this
-//! file). So each behaviour file sees the whole state without importing another for a type, and
+//! `extract_settings.rs` and `timeline_build.rs`, which imports `loading.rs`; `view_motion.rs`
+//! imports `slot.rs`; none imports this file). So each behaviour file sees the whole state without importing another for a type, and
 //! no import runs back up. A type's own plain methods (those that need no `LoudscapeApp`) and
 //! their tests sit with it here; its fields are open to `ui/` (`pub(in crate::ui)`), because
 //! the behaviour files read and write them.
@@ -24,9 +27,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::Receiver;
-use std::time::Instant;
 
-use crate::data::cloud::{DataMode, PointCloud};
+use crate::data::cloud::PointCloud;
 use crate::data::field::Field;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::ui::audio::AudioPanel;
@@ -37,18 +39,23 @@ use crate::view::pick::Reading;
 
 pub(super) mod compare_window;
 pub(super) mod extract_settings;
+pub(super) mod frame_clock;
 pub(super) mod heard;
 pub(super) mod iso_sweep;
 pub(super) mod loading;
 pub(super) mod messages;
 pub(super) mod open;
+mod slot;
+pub(super) mod surface_status;
 pub(super) mod timeline_build;
 pub(super) mod video_export;
+pub(super) mod view_motion;
 
 use compare_window::CompareState;
 use iso_sweep::IsoSweep;
 use loading::Loading;
 use open::OpenPanel;
+pub(super) use slot::Slot;
 
 /// The window's state: the two data slots, the render settings, the camera and what each
 /// panel keeps between frames.
@@ -57,16 +64,14 @@ pub(super) struct LoudscapeApp {
     pub(super) timeline: Option<Loaded>,
     pub(super) active: Slot,
     pub(super) settings: RenderSettings,
-    pub(super) camera: Camera,
-    pub(super) fit_pending: bool,
+    /// The camera, its fit and its motion (`view_motion.rs`).
+    pub(super) motion: view_motion::ViewMotion,
     pub(super) loading: Vec<Loading>,
     /// What the app is telling the user, shown under the 3D view (`messages.rs`).
     pub(super) messages: messages::Messages,
     pub(super) next_id: u64,
-    pub(super) last_motion: Option<Instant>,
-    pub(super) frame_index: u32,
-    pub(super) frame_ms: f32,
-    pub(super) view_aspect: f32,
+    /// The frame number, the frames' pace and the scene renders (`frame_clock.rs`).
+    pub(super) clock: frame_clock::FrameClock,
     pub(super) screenshot: Option<ScreenshotState>,
     pub(super) audio: AudioPanel,
     pub(super) hover: Option<(HoverKey, Hover)>,
@@ -80,42 +85,18 @@ pub(super) struct LoudscapeApp {
     pub(super) audio_for: Vec<(PathBuf, PathBuf)>,
     /// Whether to remember state (off for scripted screenshot runs).
     pub(super) persist: bool,
-    /// Loads that keep the remembered camera instead of fitting.
-    pub(super) keep_camera_loads: usize,
-    /// Why the surface could not be extracted, if it could not.
-    pub(super) surface_error: Option<String>,
+    /// The active cloud's surface: its status and level of detail (`surface_status.rs`).
+    pub(super) surface: surface_status::SurfaceStatus,
     /// Work that blocks the window, announced a frame before it runs (shown with a spinner).
     pub(super) busy: Option<String>,
     /// The busy notice has been on screen for a frame: the work may start.
     pub(super) busy_shown: bool,
-    /// The camera is as the last fit left it (not moved by hand since): refit on resize.
-    pub(super) camera_fitted: bool,
-    /// The last extraction found no surface (the isovalue is above every voxel).
-    pub(super) surface_empty: bool,
-    /// A surface is being extracted in the background (the last one is shown meanwhile).
-    pub(super) surface_busy: bool,
     /// Progressive points: the fraction drawn while the view fills in (`ui/progressive.rs`).
     pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
     pub(super) iso_sweep: Option<IsoSweep>,
-    /// Draw again next frame (the surface is still growing its buffers).
+    /// Draw again next frame (work announced, a load or a surface that needs another frame).
     pub(super) needs_repaint: bool,
-    /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
-    pub(super) moving_divisor: [u32; 3],
-    /// Points the Points view draws while moving, following the device's pace.
-    pub(super) moving_points: u32,
-    /// The isovalue slider is being dragged (or a scripted sweep sets a value a frame).
-    pub(super) iso_dragging: bool,
-    /// The pace of the full surface's moving frames: whether the coarse one stands in.
-    pub(super) surface_pace: crate::render::surface::lod::DetailPace,
-    /// The surface mesh the last frame asked for (level of detail).
-    pub(super) surface_detail: crate::render::surface::lod::SurfaceDetail,
-    /// Triangles of the active cloud's full surface.
-    pub(super) surface_triangles: u32,
-    /// The camera each data slot (Song, Timeline) was left with.
-    pub(super) slot_cameras: [Option<Camera>; 2],
-    /// Scene renders counted by the view and the frame they were last seen to change.
-    pub(super) renders_seen: (u64, u32),
     /// The Open row (`open.rs`).
     pub(super) open: OpenPanel,
     /// The frequency axis chosen for songs (`freq_axis.rs`).
@@ -135,28 +116,6 @@ pub(super) struct LoudscapeApp {
     pub(super) deferred_events: Vec<eframe::egui::Event>,
     /// "Export video…" and the export under way (`video_export.rs`).
     pub(super) video_export: video_export::VideoExport,
-}
-
-/// Which of the two data slots.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Slot {
-    Song,
-    Timeline,
-}
-
-impl Slot {
-    pub(super) fn for_mode(mode: DataMode) -> Self {
-        match mode {
-            DataMode::Timeline => Slot::Timeline,
-            DataMode::Song | DataMode::Generic => Slot::Song,
-        }
-    }
-    pub(super) fn name(self) -> &'static str {
-        match self {
-            Slot::Song => "Song",
-            Slot::Timeline => "Timeline",
-        }
-    }
 }
 
 pub(super) struct Loaded {

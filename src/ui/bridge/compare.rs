@@ -1,0 +1,232 @@
+//! The A/B compare's side of the bridge: [`CompareResources`] sits in egui_wgpu's callback
+//! resources beside the window's [`ViewResources`] (whose renderer it borrows) and holds the
+//! [`CompareScene`] and one offscreen target per half; [`CompareCallback`] renders a half into
+//! its target only when what it shows changed and composites it into its viewport: a job of the
+//! bridge's one paint callback, as the 3D view's is (the same [`Offscreen`] target and
+//! [`FrameCache`]).
+
+use eframe::egui_wgpu::{self, CallbackResources};
+
+use super::{Offscreen, OffscreenJob, Prepare, ViewResources};
+use crate::data::cloud::PointCloud;
+use crate::data::field::Field;
+use crate::render::compare::CompareScene;
+use crate::render::grid::difference::DifferenceMeasure;
+use crate::render::grid::voxelize::VoxelSettings;
+use crate::render::scene::{RenderSettings, ViewKind};
+use crate::ui::frame_cache::{FrameCache, RenderKey};
+use crate::ui::state::compare_window::DifferenceCopy;
+use crate::view::frame_view::FrameView;
+
+/// One half's offscreen target and what it holds.
+struct Half {
+    offscreen: Offscreen,
+    cache: FrameCache,
+}
+
+/// The compare's GPU state, in egui_wgpu's callback resources.
+pub struct CompareResources {
+    pub(in crate::ui) scene: Option<CompareScene>,
+    /// A, B and the difference.
+    halves: [Half; 3],
+    /// Bumped when the scene or its grids change.
+    revision: u64,
+}
+
+impl CompareResources {
+    /// Runs `f` with the compare's resources (made on first use) and the window's.
+    pub(in crate::ui) fn with<T>(
+        render_state: &egui_wgpu::RenderState,
+        f: impl FnOnce(&mut CompareResources, &ViewResources) -> T,
+    ) -> Option<T> {
+        let mut renderer = render_state.renderer.write();
+        let resources = &mut renderer.callback_resources;
+        if resources.get::<CompareResources>().is_none() {
+            let half = || Half {
+                offscreen: Offscreen::new(&render_state.device, render_state.target_format),
+                cache: FrameCache::default(),
+            };
+            resources.insert(CompareResources {
+                scene: None,
+                halves: [half(), half(), half()],
+                revision: 0,
+            });
+        }
+        let mut compare = resources.remove::<CompareResources>()?;
+        let result = resources
+            .get::<ViewResources>()
+            .map(|view| f(&mut compare, view));
+        resources.insert(compare);
+        result
+    }
+
+    /// Uploads A and B (already on their union axes) as the compare's scene.
+    pub(in crate::ui) fn build(
+        render_state: &egui_wgpu::RenderState,
+        a: PointCloud,
+        b: PointCloud,
+    ) {
+        Self::with(render_state, |compare, view| {
+            compare.scene = Some(CompareScene::from_union(
+                &render_state.device,
+                &view.renderer,
+                a,
+                b,
+            ));
+            compare.revision += 1;
+        });
+    }
+
+    pub(in crate::ui) fn clear(render_state: &egui_wgpu::RenderState) {
+        Self::with(render_state, |compare, _| {
+            compare.scene = None;
+            compare.revision += 1;
+        });
+    }
+
+    /// Whether the scene's grids are built with `voxels` (or there is no scene to build for).
+    pub(in crate::ui) fn grids_match(
+        render_state: &egui_wgpu::RenderState,
+        voxels: &VoxelSettings,
+    ) -> bool {
+        Self::with(render_state, |compare, _| {
+            compare.scene.as_ref().is_none_or(|scene| {
+                scene.grids.is_some() && scene.data_a.grid_matches(&scene.a, voxels)
+            })
+        })
+        .unwrap_or(true)
+    }
+
+    pub(in crate::ui) fn ensure_grids(
+        render_state: &egui_wgpu::RenderState,
+        voxels: &VoxelSettings,
+    ) -> Result<(), String> {
+        Self::with(render_state, |compare, view| {
+            let Some(scene) = compare.scene.as_mut() else {
+                return Ok(());
+            };
+            let built = scene
+                .ensure_grids(
+                    &render_state.device,
+                    &render_state.queue,
+                    &view.renderer,
+                    voxels,
+                )
+                .map_err(|e| e.to_string())?;
+            if built {
+                compare.revision += 1;
+            }
+            Ok(())
+        })
+        .unwrap_or(Ok(()))
+    }
+
+    pub(in crate::ui) fn set_measure(
+        render_state: &egui_wgpu::RenderState,
+        measure: DifferenceMeasure,
+    ) {
+        Self::with(render_state, |compare, view| {
+            if let Some(scene) = compare.scene.as_mut()
+                && scene.grids.as_ref().is_some_and(|g| g.measure != measure)
+            {
+                scene.set_measure(
+                    &render_state.device,
+                    &render_state.queue,
+                    &view.renderer,
+                    measure,
+                );
+                compare.revision += 1;
+            }
+        });
+    }
+
+    /// The difference grid read back for the read-outs.
+    pub(in crate::ui) fn read_difference(
+        render_state: &egui_wgpu::RenderState,
+    ) -> Option<DifferenceCopy> {
+        Self::with(render_state, |compare, _| {
+            let grids = compare.scene.as_ref()?.grids.as_ref()?;
+            let (device, queue) = (&render_state.device, &render_state.queue);
+            let shown = &grids.grids.shown;
+            let density = shown.read_field(device, queue, &shown.density).ok()?;
+            let hp_mean = shown.read_field(device, queue, &shown.hp_mean).ok()?;
+            Some(DifferenceCopy {
+                shown: Field {
+                    dims: shown.dims,
+                    box_min: shown.box_min,
+                    box_max: shown.box_max,
+                    density,
+                    hp_mean,
+                },
+                difference: grids.difference_cpu.clone(),
+                columns: grids.columns_cpu.clone(),
+                measure: grids.measure,
+                range: grids.range(),
+            })
+        })
+        .flatten()
+    }
+}
+
+/// One half of the compare (0 A, 1 B) or the difference (2).
+pub struct CompareCallback {
+    pub side: usize,
+    pub view: FrameView,
+    pub settings: RenderSettings,
+}
+
+impl OffscreenJob for CompareCallback {
+    fn render(&self, gpu: Prepare<'_>, resources: &mut CallbackResources) {
+        let Some(mut compare) = resources.remove::<CompareResources>() else {
+            return;
+        };
+        if let Some(view_resources) = resources.get::<ViewResources>() {
+            let CompareResources {
+                scene,
+                halves,
+                revision,
+            } = &mut compare;
+            let half = &mut halves[self.side];
+            if half
+                .offscreen
+                .ensure_size(gpu.device, self.view.width, self.view.height)
+            {
+                half.cache.invalidate();
+            }
+            let key = RenderKey::new(
+                &self.view,
+                &self.settings,
+                Some(self.side as u64),
+                *revision,
+            );
+            let data = scene.as_ref().and_then(|s| match self.side {
+                0 => Some(&s.data_a),
+                1 => Some(&s.data_b),
+                _ => s.grids.as_ref().map(|g| &g.data),
+            });
+            if let Some(target) = half.offscreen.target()
+                && half.cache.begin(&key)
+            {
+                view_resources.renderer.render(
+                    gpu.queue,
+                    gpu.encoder,
+                    target,
+                    data,
+                    &self.view,
+                    &self.settings,
+                );
+                let pending = data.is_some_and(|d| {
+                    self.settings.view == ViewKind::Surface && d.surface.needs_another_frame()
+                });
+                half.cache.finish(key, !pending);
+            }
+        }
+        resources.insert(compare);
+    }
+
+    fn offscreen<'a>(&self, resources: &'a CallbackResources) -> Option<&'a Offscreen> {
+        resources
+            .get::<CompareResources>()
+            .map(|compare| &compare.halves[self.side].offscreen)
+    }
+}

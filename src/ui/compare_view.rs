@@ -1,0 +1,136 @@
+//! The A/B compare in the 3D view: side by side (two viewports, one camera) or the difference
+//! grid, each drawn by the bridge's compare callback (`bridge/compare.rs`), with its axis
+//! labels, titles and colour keys, and the hover read-outs of A and B (`compare_readouts.rs`).
+
+use eframe::egui;
+
+use crate::render::scene::RenderSettings;
+use crate::ui::bridge::{CompareCallback, paint_callback};
+use crate::ui::compare::{paint_diverging_legend, paint_title};
+use crate::ui::compare_readouts::{compare_readings, difference_readings};
+use crate::ui::compare_shot::difference_settings;
+use crate::ui::hover::paint_readings;
+use crate::ui::labels;
+use crate::ui::state::compare_window::CompareLayout;
+use crate::ui::state::{LoudscapeApp, Slot};
+use crate::view::frame_view::FrameView;
+
+/// Points between the two halves of the side-by-side view.
+pub(super) const GAP: f32 = 4.0;
+
+impl LoudscapeApp {
+    /// Draws the compare into `rect` when it is shown (then the normal view is not drawn) and
+    /// its hover read-outs. `view` is one half's view in side by side, the whole in difference.
+    pub(super) fn paint_compare(
+        &mut self,
+        painter: &egui::Painter,
+        rect: egui::Rect,
+        view: &FrameView,
+        render_view: &FrameView,
+        settings: &RenderSettings,
+        hover: Option<egui::Pos2>,
+    ) -> bool {
+        if self.active != Slot::Song {
+            return false;
+        }
+        let Some(state) = self.compare.as_mut() else {
+            return false;
+        };
+        if !state.shown() {
+            return false;
+        }
+        let Some(clouds) = state.clouds.clone() else {
+            return false;
+        };
+        let names = [&clouds.0, &clouds.1].map(|c| {
+            c.path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+        let ppp = painter.ctx().pixels_per_point();
+        let mut readings = None;
+        match state.layout {
+            CompareLayout::SideBySide => {
+                let half = (rect.width() - GAP) / 2.0;
+                let rects = [
+                    egui::Rect::from_min_size(rect.min, egui::vec2(half, rect.height())),
+                    egui::Rect::from_min_size(
+                        rect.min + egui::vec2(half + GAP, 0.0),
+                        egui::vec2(half, rect.height()),
+                    ),
+                ];
+                for (side, half_rect) in rects.into_iter().enumerate() {
+                    painter.add(paint_callback(
+                        half_rect,
+                        CompareCallback {
+                            side,
+                            view: *render_view,
+                            settings: settings.clone(),
+                        },
+                    ));
+                    if let Some(labels) = &state.labels
+                        && self.settings.show_box
+                    {
+                        labels::paint(painter, half_rect, view, labels);
+                    }
+                    // Its title and the colour key of what it draws, as saved pictures carry.
+                    let cloud = if side == 0 { &clouds.0 } else { &clouds.1 };
+                    let mut legend = crate::ui::legends::picture_legend(cloud, settings);
+                    legend.name = format!("{}: {}", ["A", "B"][side], names[side]);
+                    legend.detail.clear();
+                    crate::ui::legends::paint_picture(painter, half_rect, &legend);
+                }
+                if let Some(pos) = hover
+                    && !view.moving
+                {
+                    let side = usize::from(pos.x >= rects[1].min.x);
+                    let px = glam::Vec2::new(
+                        (pos.x - rects[side].min.x) * ppp,
+                        (pos.y - rects[side].min.y) * ppp,
+                    );
+                    readings = Some((pos, compare_readings(&clouds, side, view, px)));
+                }
+            }
+            CompareLayout::Difference => {
+                painter.add(paint_callback(
+                    rect,
+                    CompareCallback {
+                        side: 2,
+                        view: *render_view,
+                        settings: difference_settings(settings),
+                    },
+                ));
+                if let Some(labels) = &state.labels
+                    && self.settings.show_box
+                {
+                    labels::paint(painter, rect, view, labels);
+                }
+                paint_title(
+                    painter,
+                    rect,
+                    &format!("B - A: {} against {}", names[1], names[0]),
+                );
+                if let Some(copy) = &state.difference {
+                    let legend = egui::Rect::from_min_size(
+                        rect.right_top() + egui::vec2(-180.0, 40.0),
+                        egui::vec2(170.0, 180.0),
+                    );
+                    paint_diverging_legend(painter, legend, copy.measure, copy.range);
+                    if let Some(pos) = hover
+                        && !view.moving
+                    {
+                        let px =
+                            glam::Vec2::new((pos.x - rect.min.x) * ppp, (pos.y - rect.min.y) * ppp);
+                        readings = Some((pos, difference_readings(&clouds.0, copy, view, px)));
+                    }
+                }
+            }
+            CompareLayout::Off => {}
+        }
+        if let Some((pos, lines)) = readings {
+            paint_readings(painter, rect, pos, &lines);
+        }
+        true
+    }
+}
