@@ -303,6 +303,7 @@ def run_song(args: argparse.Namespace, progress: Progress) -> int:
         highpass_hz=HIGHPASS_HZ if args.highpass else None,
         progress=progress,
         warn=lambda text: _say(f"warning: {text}"),
+        points=getattr(progress, "points", None),  # --progress json: the points line
     )
     if hasattr(progress, "done"):
         progress.done(output)
