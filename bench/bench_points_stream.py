@@ -27,7 +27,7 @@ REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 def one_run(track: str, code: str, out: str) -> tuple[float, float]:
     """(seconds to the first points line or the done line, seconds to done) of one child."""
     env = dict(os.environ, PYTHONPATH=code)
-    command = [sys.executable, "-m", "loudscape_extract.cli", "song", track, "-o", out]
+    command = [sys.executable, "-m", "loudscape_extract.cli", "song", track, "-o", out, "-q"]
     start = time.perf_counter()
     child = subprocess.Popen(
         [*command, "--progress", "json"], stdout=subprocess.PIPE, text=True, env=env
