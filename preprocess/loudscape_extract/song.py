@@ -16,15 +16,10 @@ from loudscape_extract.format import rounded
 from loudscape_extract.notices import track_warnings
 from loudscape_extract.paths import check_output_path, write_failure
 from loudscape_extract.ply import encode_header, write_atomically
-from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata
 from loudscape_extract.progress import PointsSoFar
-from loudscape_extract.stream import (
-    DEFAULT_BLOCK_FRAMES,
-    SIGNAL_MESSAGE,
-    finish_track,
-    spectral_level_pass,
-)
-from loudscape_extract.stream_decode import DEFAULT_BLOCK_SAMPLES, decode_track, signal_pass
+from loudscape_extract.song_cloud import DEFAULT_FLOOR_DB, song_metadata
+from loudscape_extract.stream import DEFAULT_BLOCK_FRAMES, SpectralLevels, stream_track
+from loudscape_extract.stream_decode import DEFAULT_BLOCK_SAMPLES, DecodedMono
 from loudscape_extract.stream_points import SongPlan, plan_song, song_point_blocks
 from loudscape_extract.version import GENERATOR
 
@@ -111,20 +106,16 @@ def extract_song(
     check_output_path(output, inputs=[source])
     body = body_file_path(output)
     try:
-        try:
-            say(f"decoding {source}")
-            decoded = decode_track(source, n_fft=n_fft, block_samples=block_samples, strict=strict)
+        made = {}
+
+        def make_points(decoded: DecodedMono, levels: SpectralLevels) -> None:
             info = decoded.info
             say(
                 f"{decoded.n_samples / info.sample_rate:.1f} s, {info.sample_rate} Hz, "
                 f"{info.n_channels} channel(s)"
             )
-            say("spectrogram")
-            levels = spectral_level_pass(
-                decoded, n_fft=n_fft, hop_length=hop_length, block_frames=block_frames
-            )
             say("building points: the axes from the level range")
-            plan = plan_song(
+            made["plan"] = plan = plan_song(
                 levels,
                 sample_rate=info.sample_rate,
                 hop_length=hop_length,
@@ -139,24 +130,21 @@ def extract_song(
                 hop_length=hop_length,
                 block_frames=min(block_frames, POINTS_BLOCK_FRAMES),
             )
-            rows = _write_body(body, blocks, plan=plan, output=output, points=points)
-            say(SIGNAL_MESSAGE)
-            stats = signal_pass(
-                decoded,
+            made["rows"] = _write_body(body, blocks, plan=plan, output=output, points=points)
+
+        try:
+            say(f"decoding {source}")
+            track = stream_track(
+                source,
                 n_fft=n_fft,
                 hop_length=hop_length,
                 highpass_hz=highpass_hz,
-                block=block_samples,
-            )
-            say("frame features")
-            track = finish_track(
-                decoded,
-                levels,
-                stats,
-                n_fft=n_fft,
-                hop_length=hop_length,
-                highpass_hz=highpass_hz,
+                frame_hp=False,
+                block_samples=block_samples,
                 block_frames=block_frames,
+                strict=strict,
+                progress=say,
+                after_levels=make_points,
             )
         except ExtractError as exc:
             if exc.path is None:
@@ -167,6 +155,7 @@ def extract_song(
         )
         for item in found:
             _warn(warn, f"{source}: {item['message']}")
+        plan, rows = made["plan"], made["rows"]
         metadata = song_metadata(
             track, plan.cloud(rows), generator=GENERATOR, source_format=track.source_format
         )
@@ -204,7 +193,9 @@ def _write_body(
     def report() -> None:
         nonlocal reported, last
         points(
-            PointsSoFar(path=body, rows=rows, axes=axes, freq_scale=plan.freq_scale, share=share)
+            PointsSoFar(
+                path=body, rows=rows, axes=axes, freq_scale=plan.mapping.freq_scale, share=share
+            )
         )
         reported, last = rows, time.monotonic()
 

@@ -29,22 +29,25 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from loudscape_extract.curves import loudness_curves
 from loudscape_extract.dsp import hann_window
-from loudscape_extract.dynamics import (
-    dr_from_blocks,
-    dynamics_from_segments,
-    frame_windows,
-    song_dynamics_metrics,
-)
+from loudscape_extract.dynamics import dr_from_blocks, dynamics_from_segments
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.features import (
+from loudscape_extract.hpss import (
     HPSS_KERNEL,
     HPSS_MARGIN,
     HPSS_POWER,
-    FrameFeatures,
-    crest_statistics,
+    hp_ratio,
+    masks_from_medians,
+    median_filter_axis,
 )
-from loudscape_extract.hpss import hp_ratio, masks_from_medians, median_filter_axis
-from loudscape_extract.loudness import loudness_from_energy, momentary_per_frame
+from loudscape_extract.measures import (
+    FrameFeatures,
+    TrackDescription,
+    a_power_gain,
+    dynamics_series,
+    level_series,
+    spectral_series,
+    track_metrics,
+)
 from loudscape_extract.spectrogram import a_weighting_db, frame_count, frame_times, level_db
 from loudscape_extract.stream_decode import (
     DEFAULT_BLOCK_SAMPLES,
@@ -155,7 +158,7 @@ def spectral_blocks(
 
 
 @dataclass(frozen=True)
-class StreamedTrack:
+class StreamedTrack(TrackDescription):
     """:class:`TrackFeatures` without the per-bin arrays: what a streamed pass keeps.
 
     Attributes
@@ -184,12 +187,6 @@ class StreamedTrack:
         Warnings about the signal found while decoding (:attr:`DecodedMono.signal`).
     """
 
-    path: str
-    sample_rate: int
-    n_channels: int
-    n_samples: int
-    n_fft: int
-    hop_length: int
     source_format: str
     mono: np.ndarray
     frequencies_hz: np.ndarray
@@ -204,10 +201,6 @@ class StreamedTrack:
     warning: str = ""
     curves: dict | None = None
     signal: tuple = ()
-
-    @property
-    def duration_s(self) -> float:
-        return self.n_samples / self.sample_rate
 
 
 @dataclass(frozen=True)
@@ -238,6 +231,79 @@ class SpectralLevels:
     level_min_db: dict
 
 
+def stream_track(
+    path: str,
+    *,
+    n_fft: int = 2048,
+    hop_length: int = 1024,
+    highpass_hz: float | None = None,
+    frame_hp: bool = True,
+    kernel_size: int = HPSS_KERNEL,
+    block_samples: int = DEFAULT_BLOCK_SAMPLES,
+    block_frames: int = DEFAULT_BLOCK_FRAMES,
+    strict: bool = False,
+    progress: Callable[[str], None] | None = None,
+    after_levels: Callable[[DecodedMono, SpectralLevels], None] | None = None,
+) -> StreamedTrack:
+    """:func:`track_features` in bounded memory: per-frame series, metrics and level range.
+
+    The passes in order: :func:`~loudscape_extract.stream_decode.decode_track`,
+    :func:`spectral_level_pass`, ``after_levels`` (Song mode makes its points there, the axes
+    being fixed by the level pass), :func:`~loudscape_extract.stream_decode.signal_pass`, then
+    :func:`finish_track`.
+
+    Parameters
+    ----------
+    path : str
+        Audio file.
+    n_fft, hop_length, kernel_size, highpass_hz
+        As :func:`track_features`.
+    frame_hp : bool
+        Compute the per-frame hp mean (runs HPSS; the timeline needs it, Song mode does not).
+    block_samples, block_frames : int
+        Block sizes of the decoding and spectral passes (results do not depend on them).
+    strict : bool
+        Refuse a truncated or corrupt file; otherwise it is used as far as it decodes and
+        ``track.warning`` says how far.
+    progress : callable, optional
+    after_levels : callable, optional
+        Called with the decoded track and the level pass's results before the signal pass.
+
+    Raises
+    ------
+    ExtractError
+        As :func:`decode_audio` and :func:`track_features`.
+    """
+    say = progress or (lambda _message: None)
+    decoded = decode_track(path, n_fft=n_fft, block_samples=block_samples, strict=strict)
+    say("spectrogram" + (" and harmonic-percussive separation" if frame_hp else ""))
+    levels = spectral_level_pass(
+        decoded,
+        n_fft=n_fft,
+        hop_length=hop_length,
+        block_frames=block_frames,
+        hpss=frame_hp,
+        kernel_size=kernel_size,
+    )
+    if after_levels is not None:
+        after_levels(decoded, levels)
+    say(SIGNAL_MESSAGE)
+    stats = signal_pass(
+        decoded, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, block=block_samples
+    )
+    say("frame features")
+    return finish_track(
+        decoded,
+        levels,
+        stats,
+        n_fft=n_fft,
+        hop_length=hop_length,
+        highpass_hz=highpass_hz,
+        kernel_size=kernel_size,
+        block_frames=block_frames,
+    )
+
+
 def spectral_level_pass(
     decoded: DecodedMono,
     *,
@@ -252,7 +318,7 @@ def spectral_level_pass(
     rate = decoded.info.sample_rate
     frequencies = np.arange(n_fft // 2 + 1) * (rate / n_fft)
     a_gain = a_weighting_db(frequencies)
-    a_power_gain = (10.0 ** (a_gain / 10.0)).astype(np.float32)
+    power_gain = a_power_gain(a_gain)
     n_frames = frame_count(decoded.n_samples, n_fft=n_fft, hop_length=hop_length)
     silent = np.zeros(n_frames, dtype=bool)
     loudness_a = np.empty(n_frames)
@@ -270,14 +336,11 @@ def spectral_level_pass(
         span = slice(block.start, block.stop)
         block_silent = block.decoded_peak == 0
         silent[span] = block_silent
-        with np.errstate(divide="ignore", invalid="ignore"):
-            power = np.square(block.magnitude, dtype=np.float32)
-            a_power = a_power_gain @ power
-            loudness_a[span] = np.where(block_silent, np.nan, 10.0 * np.log10(a_power / 1.5))
-            if block.hp is not None:
-                total = np.ones(power.shape[0], dtype=np.float32) @ power
-                hp_power = np.einsum("ij,ij->j", block.hp, power, dtype=np.float64)
-                hp_mean[span] = np.where(block_silent | (total == 0), np.nan, hp_power / total)
+        loudness_a[span], block_hp = spectral_series(
+            block.magnitude, power_gain=power_gain, silent=block_silent, hp=block.hp
+        )
+        if block_hp is not None:
+            hp_mean[span] = block_hp
         kept = ~block_silent
         if kept.any():
             levels = level_db(block.magnitude[:, kept])
@@ -297,72 +360,6 @@ def spectral_level_pass(
     )
 
 
-def stream_track(
-    path: str,
-    *,
-    n_fft: int = 2048,
-    hop_length: int = 1024,
-    kernel_size: int = HPSS_KERNEL,
-    highpass_hz: float | None = None,
-    frame_hp: bool = True,
-    block_samples: int = DEFAULT_BLOCK_SAMPLES,
-    block_frames: int = DEFAULT_BLOCK_FRAMES,
-    strict: bool = False,
-    progress: Callable[[str], None] | None = None,
-) -> StreamedTrack:
-    """:func:`track_features` in bounded memory: per-frame series, metrics and level range.
-
-    The passes in order: :func:`decode_track`, :func:`spectral_level_pass`,
-    :func:`signal_pass`, then :func:`finish_track`.
-
-    Parameters
-    ----------
-    path : str
-        Audio file.
-    n_fft, hop_length, kernel_size, highpass_hz
-        As :func:`track_features`.
-    frame_hp : bool
-        Compute the per-frame hp mean (runs HPSS; the timeline needs it, Song mode does not).
-    block_samples, block_frames : int
-        Block sizes of the decoding and spectral passes (results do not depend on them).
-    strict : bool
-        Refuse a truncated or corrupt file; otherwise it is used as far as it decodes and
-        ``track.warning`` says how far.
-    progress : callable, optional
-
-    Raises
-    ------
-    ExtractError
-        As :func:`decode_audio` and :func:`track_features`.
-    """
-    say = progress or (lambda _message: None)
-    decoded = decode_track(path, n_fft=n_fft, block_samples=block_samples, strict=strict)
-    say("spectrogram" + (" and harmonic-percussive separation" if frame_hp else ""))
-    levels = spectral_level_pass(
-        decoded,
-        n_fft=n_fft,
-        hop_length=hop_length,
-        block_frames=block_frames,
-        hpss=frame_hp,
-        kernel_size=kernel_size,
-    )
-    say(SIGNAL_MESSAGE)
-    stats = signal_pass(
-        decoded, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, block=block_samples
-    )
-    say("frame features")
-    return finish_track(
-        decoded,
-        levels,
-        stats,
-        n_fft=n_fft,
-        hop_length=hop_length,
-        highpass_hz=highpass_hz,
-        kernel_size=kernel_size,
-        block_frames=block_frames,
-    )
-
-
 def finish_track(
     decoded: DecodedMono,
     levels: SpectralLevels,
@@ -378,18 +375,13 @@ def finish_track(
     info = decoded.info
     rate = info.sample_rate
     silent = levels.silent
-    loudness_a = levels.loudness_a_db
-    hp_mean = levels.hp_mean
     n_frames = silent.shape[0]
     if stats.frame_rms.shape[0] != n_frames:
         raise ExtractError(
             f"the signal pass framed {stats.frame_rms.shape[0]} frames, the spectrogram {n_frames}",
             path=info.path,
         )
-    rms, peak = stats.frame_rms, stats.frame_peak
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rms_dbfs = np.where(silent, -np.inf, 20.0 * np.log10(rms))
-        crest_db = np.where(silent, np.nan, 20.0 * np.log10(peak / rms))
+    rms_dbfs, crest_db = level_series(stats.frame_rms, stats.frame_peak, silent)
     dynamics = dynamics_from_segments(
         stats.energy,
         stats.boundaries,
@@ -399,47 +391,28 @@ def finish_track(
         mono_peaks=stats.mono_peaks,
         sample_rate=rate,
     )
-    times = levels.times_s
-    window = frame_windows(times, dynamics)
-    has_windows = dynamics.start_s.shape[0] > 0
-
-    def per_frame(series):
-        values = series[window] if has_windows else np.full(window.shape, np.nan)
-        return np.where(silent, np.nan, values)
-
     frames = FrameFeatures(
-        times_s=times,
+        times_s=levels.times_s,
         rms_dbfs=rms_dbfs,
-        peak=peak,
+        peak=stats.frame_peak,
         crest_db=crest_db,
-        loudness_a_db=loudness_a,
-        hp_mean=hp_mean,
+        loudness_a_db=levels.loudness_a_db,
+        hp_mean=levels.hp_mean,
         silent=silent,
-        psr_db=per_frame(dynamics.psr_db),
-        crest_3s_db=per_frame(dynamics.crest_3s_db),
-        short_term_lufs=per_frame(dynamics.short_term_lufs),
-        momentary_lufs=np.where(
-            silent, np.nan, momentary_per_frame(times, stats.energy, stats.boundaries)
-        ),
+        **dynamics_series(levels.times_s, silent, dynamics, stats.energy, stats.boundaries),
     )
-    integrated, lra = loudness_from_energy(stats.energy, stats.boundaries)
-    clean_peak = 20.0 * math.log10(dynamics.true_peak) if dynamics.true_peak > 0 else None
     sample_peak = decoded.sample_peak
     true_peak = max(stats.true_peak_decoded, sample_peak)
-    metrics = {
-        "integrated_lufs": integrated,
-        "lra_lu": lra,
-        "sample_peak_dbfs": 20.0 * math.log10(sample_peak) if sample_peak > 0 else None,
-        "true_peak_dbtp": 20.0 * math.log10(true_peak) if true_peak > 0 else None,
-        "plr_db": None if integrated is None or clean_peak is None else clean_peak - integrated,
-    }
-    metrics.update(crest_statistics(crest_db))
-    metrics["dc_offset"] = float(np.max(np.abs(decoded.dc)))
-    metrics["dr_db"] = dr_from_blocks(stats.dr_squares, stats.dr_peaks, stats.dr_lengths)
-    metrics.update(song_dynamics_metrics(dynamics))
-    metrics = {
-        key: (None if v is None or not math.isfinite(v) else v) for key, v in metrics.items()
-    }
+    metrics = track_metrics(
+        energy=stats.energy,
+        boundaries=stats.boundaries,
+        dynamics=dynamics,
+        sample_peak_dbfs=20.0 * math.log10(sample_peak) if sample_peak > 0 else None,
+        true_peak_dbtp=20.0 * math.log10(true_peak) if true_peak > 0 else None,
+        crest_db=crest_db,
+        dc=decoded.dc,
+        dr_db=dr_from_blocks(stats.dr_squares, stats.dr_peaks, stats.dr_lengths),
+    )
     return StreamedTrack(
         path=info.path,
         sample_rate=rate,

@@ -23,6 +23,7 @@ from loudscape_extract.audio import (
     AudioInfo,
     BlockReport,
     audio_info,
+    check_analysable,
     check_decoded,
     mix_to_mono,
     read_blocks,
@@ -446,16 +447,12 @@ def decode_track(
         As :func:`decode_audio`; audio shorter than one STFT frame, or entirely silent.
     """
     decoded = decode_pass(audio_info(path), block=block_samples, strict=strict)
-    n = decoded.n_samples
-    rate = decoded.info.sample_rate
-    if n < n_fft:
-        raise ExtractError(
-            f"audio of {n} samples ({n / rate * 1000:.1f} ms) is shorter "
-            f"than one STFT frame (n_fft={n_fft})",
-            path=path,
-        )
-    if not decoded.any_nonzero:
-        raise ExtractError("audio is entirely silent (every sample is 0)", path=path)
-    if not np.any(decoded.mono):
-        raise ExtractError("the mono mix is entirely silent (channels cancel)", path=path)
+    check_analysable(
+        n_samples=decoded.n_samples,
+        sample_rate=decoded.info.sample_rate,
+        n_fft=n_fft,
+        any_sample=decoded.any_nonzero,
+        mono=decoded.mono,
+        path=path,
+    )
     return decoded

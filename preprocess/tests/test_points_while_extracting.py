@@ -13,6 +13,7 @@ import pytest
 import soundfile
 
 import loudscape_extract.song as song_module
+import loudscape_extract.stream as stream_module
 from loudscape_extract import decode_audio, read_ply, song_metadata, song_points, track_features
 from loudscape_extract.cli import main
 from loudscape_extract.errors import ExtractError
@@ -207,7 +208,7 @@ def test_body_file_removed_after_a_failure_in_the_signal_pass(long_wav, tmp_path
     def failing(*_args, **_kwargs):
         raise ExtractError("the file changed while it was read (fewer samples)")
 
-    monkeypatch.setattr(song_module, "signal_pass", failing)
+    monkeypatch.setattr(stream_module, "signal_pass", failing)
     with pytest.raises(ExtractError, match="changed while it was read") as caught:
         extract_song(long_wav, str(tmp_path / "song.ply"), n_fft=N_FFT, hop_length=HOP)
     assert caught.value.path == long_wav
@@ -221,3 +222,27 @@ def test_unwritable_body_file_is_one_clear_error(long_wav, tmp_path):
         extract_song(long_wav, str(output), n_fft=N_FFT, hop_length=HOP)
     assert "cannot write file" in str(caught.value) and str(output) in str(caught.value)
     assert not output.exists()
+
+
+def test_song_metadata_reads_streamed_and_whole_track_through_its_protocols(long_wav):
+    from loudscape_extract.song_cloud import SongCloudFacts, SongSource
+    from loudscape_extract.stream_points import StreamedCloud
+
+    track = stream_track(long_wav, n_fft=N_FFT, hop_length=HOP, frame_hp=False)
+    whole = track_features(decode_audio(long_wav), n_fft=N_FFT, hop_length=HOP)
+    cloud = song_points(whole)
+    streamed = StreamedCloud(
+        point_count=cloud.point_count,
+        axes=cloud.axes,
+        frames_total=cloud.frames_total,
+        frames_kept=cloud.frames_kept,
+        peak_level_db=cloud.peak_level_db,
+        floor_db=cloud.floor_db,
+        freq_scale=cloud.freq_scale,
+    )
+    assert isinstance(track, SongSource) and isinstance(whole, SongSource)
+    assert isinstance(cloud, SongCloudFacts) and isinstance(streamed, SongCloudFacts)
+    assert not isinstance(object(), SongSource)
+    a = song_metadata(track, streamed, generator=GENERATOR)
+    b = song_metadata(whole, cloud, generator=GENERATOR)
+    assert a.keys() == b.keys() and a["stft"] == b["stft"] and a["axes"] == b["axes"]
