@@ -246,3 +246,35 @@ def test_song_metadata_reads_streamed_and_whole_track_through_its_protocols(long
     a = song_metadata(track, streamed, generator=GENERATOR)
     b = song_metadata(whole, cloud, generator=GENERATOR)
     assert a.keys() == b.keys() and a["stft"] == b["stft"] and a["axes"] == b["axes"]
+
+
+def test_sigterm_mid_points_removes_the_body_file(tmp_path):
+    import signal
+    import subprocess as sp
+    import sys
+
+    source = tmp_path / "long.wav"
+    soundfile.write(source, musical_signal(sample_rate=SR, duration_s=600.0) * 0.4, SR)
+    output = tmp_path / "long.ply"
+    env = dict(os.environ, PYTHONPATH=str(REPO / "preprocess"))
+    process = sp.Popen(
+        [sys.executable, "-m", "loudscape_extract.cli", "song", str(source), "-o", str(output),
+         "--n-fft", str(N_FFT), "--hop", str(HOP), "--progress", "json"],
+        stdout=sp.PIPE, stderr=sp.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        body = None
+        for line in process.stdout:  # the first points line: the body file is there
+            record = json.loads(line)
+            if "points" in record:
+                body = record["points"]["path"]
+                break
+        assert body is not None and os.path.exists(body)
+        assert process.poll() is None, "finished before the signal: make the song longer"
+        process.send_signal(signal.SIGTERM)
+        process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 143
+    assert sorted(os.listdir(tmp_path)) == ["long.wav"]
