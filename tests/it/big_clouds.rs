@@ -2,7 +2,7 @@
 //! device's copy (the host's may be gone), and a points frame can be drawn in slices that add up
 //! to the single-pass frame. Headless, on lavapipe where there is no GPU.
 
-mod common;
+use crate::common::{self, view_of};
 
 use loudscape::data::cloud::{DataMode, POINT_BYTES, PointCloud};
 use loudscape::data::synthetic::synthetic_song;
@@ -12,21 +12,9 @@ use loudscape::render::grid::voxelize::VoxelSettings;
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointsGpu, progressive_ranges};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
-use loudscape::view::camera::Camera;
-use loudscape::view::frame_view::FrameView;
 
 fn song(count: usize) -> PointCloud {
     PointCloud::synthetic(synthetic_song(count, 7), DataMode::Song)
-}
-
-fn view_of(data: &SceneData, width: u32, height: u32) -> FrameView {
-    FrameView::fitted(
-        Camera::default(),
-        data.world_from_data,
-        data.world_box(),
-        width,
-        height,
-    )
 }
 
 fn fields(gpu: &GpuContext, data: &SceneData) -> (Vec<f32>, Vec<f32>) {

@@ -1,26 +1,10 @@
 //! The command line: bad input gets one clear line naming the file, a non-zero exit, no panic
 //! and no output file; good input writes the PNG.
 
-mod common;
+use crate::common::{self, assert_success, loudscape};
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn loudscape(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .output()
-        .expect("start loudscape")
-}
-
-/// Fails with the command's error output unless it succeeded.
-fn assert_success(output: &Output) {
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-}
+use std::process::Output;
 
 fn stderr_lines(output: &Output) -> Vec<String> {
     String::from_utf8_lossy(&output.stderr)

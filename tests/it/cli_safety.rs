@@ -3,20 +3,13 @@
 //! temporary files vanish on SIGTERM; degenerate clouds (one point, equal axis ends) load and
 //! render; messages are one short line; `-q` silences the summaries.
 
-mod common;
+use crate::common::{self, loudscape};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use loudscape::data::cloud::{self, Point};
-
-fn loudscape(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .output()
-        .expect("start loudscape")
-}
 
 fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()

@@ -1,5 +1,5 @@
 //! The PLY loader against valid and generic files, damaged bytes, and the extractor's fixture;
-//! malformed headers, one test per case, are in tests/cloud_loader_malformed.rs.
+//! malformed headers, one test per case, are in tests/it/cloud_loader_malformed.rs.
 //! [`check_against_expected`] compares a loaded file with an expected-values JSON written by the
 //! Python side (point count, first and last records, per-column sums).
 
@@ -8,9 +8,7 @@ use std::path::Path;
 use loudscape::data::cloud::{self, DataMode, Point};
 use serde_json::{Value, json};
 
-mod loader_files;
-
-use loader_files::*;
+use crate::loader_files::*;
 
 // ---------------------------------------------------------------------------------------------
 // Valid files

@@ -6,9 +6,7 @@ use std::path::Path;
 use loudscape::data::cloud;
 use serde_json::{Value, json};
 
-mod loader_files;
-
-use loader_files::*;
+use crate::loader_files::*;
 
 // ---------------------------------------------------------------------------------------------
 // Malformed files: one test per case

@@ -2,12 +2,9 @@
 //! colours against the CPU maps (`render::colormap`), golden images of a non-default map and of
 //! the light background, the legend's pixels against the map it keys, and the CLI flags.
 
-mod common;
+use crate::common::{self, demo_song, loudscape, repo};
 
-use std::path::PathBuf;
-use std::process::Command;
-
-use loudscape::data::cloud::{self, DataMode, Point, PointCloud};
+use loudscape::data::cloud::{DataMode, Point, PointCloud};
 use loudscape::data::synthetic::synthetic_song;
 use loudscape::render::colormap::{Background, Colours, DensityColourMap, HpColourMap, Ramp};
 use loudscape::render::gpu::context::GpuContext;
@@ -20,10 +17,6 @@ use loudscape::ui::screenshot;
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn fitted(data: &SceneData, w: u32, h: u32) -> FrameView {
     FrameView::fitted(
         Camera::from_angles(-30.0, 28.0, 4.0),
@@ -32,10 +25,6 @@ fn fitted(data: &SceneData, w: u32, h: u32) -> FrameView {
         w,
         h,
     )
-}
-
-fn demo_song() -> PointCloud {
-    cloud::load(&repo().join("data/demo_song.ply")).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn light() -> Colours {
@@ -294,13 +283,6 @@ fn the_diverging_legend_centres_zero() {
     assert_near(at(0.0), ramp.sample_u8(0.5), 10, "zero");
     assert_near(at(6.0), ramp.sample_u8(1.0), 14, "+6");
     assert_near(at(-2.0), ramp.sample_u8(1.0 / 3.0), 14, "-2");
-}
-
-fn loudscape(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .output()
-        .expect("run loudscape")
 }
 
 /// `render --background light --colormap puor` writes a white picture with the legend; bad

@@ -2,7 +2,7 @@
 //! against itself and against a copy 6 dB louder, golden images of the compare and difference
 //! views, and the command line.
 
-mod common;
+use crate::common::{self, demo_song, loudscape, repo};
 
 use std::path::PathBuf;
 
@@ -16,14 +16,6 @@ use loudscape::render::grid::voxelize::VoxelSettings;
 use loudscape::render::scene::{RenderSettings, Renderer, ViewKind};
 use loudscape::ui::compare_shot::{CompareView, render_compare_image};
 use loudscape::view::camera::Camera;
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn demo_song() -> PointCloud {
-    loudscape::data::cloud::load(&repo().join("data/demo_song.ply")).expect("demo song")
-}
 
 /// The demo song made 6 dB louder exactly as the extractor makes it from the audio gained by
 /// +6 dB (checked against the extractor's output of the demo audio gained in a float WAV): every
@@ -247,13 +239,6 @@ fn golden_difference_views() {
         }
     }
     assert!(warm > 20 * cool.max(1), "warm {warm}, cool {cool}");
-}
-
-fn loudscape(args: &[&std::ffi::OsStr]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .output()
-        .expect("run loudscape")
 }
 
 #[test]

@@ -2,13 +2,13 @@
 //! reference of the mapping on each axis, no empty sheets in log mode, golden images of the log
 //! and mel views, and hover read-outs that invert the mapping.
 
-mod common;
+use crate::common::{self, demo_song, loudscape};
 
 use std::path::PathBuf;
 
 use glam::Vec3;
 use loudscape::data::axes::Axis;
-use loudscape::data::cloud::{self, Point, PointCloud};
+use loudscape::data::cloud::{Point, PointCloud};
 use loudscape::data::field::Field;
 use loudscape::data::freq_axis::{FreqAxis, FreqMapping, empty_sheets};
 use loudscape::render::gpu::context::GpuContext;
@@ -19,11 +19,6 @@ use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 use loudscape::view::pick;
-
-fn demo_song() -> PointCloud {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply");
-    cloud::load(&path).unwrap_or_else(|e| panic!("{e}"))
-}
 
 /// The demo song as `--freq-scale log` writes it: z linear in log10 f from bin 1 to Nyquist,
 /// the 0 Hz bin dropped (docs/FORMAT.md, Song mode).
@@ -100,7 +95,7 @@ fn gpu_grid_follows_the_cpu_mapping_on_every_axis_and_stored_scale() {
             assert_eq!(field.box_min, reference.box_min, "{what}");
             assert_eq!(field.box_max, reference.box_max, "{what}");
             // The same voxels hold points, and the densities are the reference's sums over the
-            // GPU's reference sum (its 99th percentile; tests/voxelize.rs checks that one).
+            // GPU's reference sum (its 99th percentile; tests/it/voxelize.rs checks that one).
             let gpu_nonempty: Vec<bool> = field.density.iter().map(|&d| d > 0.0).collect();
             let cpu_nonempty: Vec<bool> = reference.sums.iter().map(|&s| s > 0.0).collect();
             let differing = gpu_nonempty
@@ -351,13 +346,6 @@ fn hover_reads_a_1_khz_sine_as_1_khz_on_every_axis() {
         );
         assert!((hz - 1000.0).abs() < 40.0, "{axis:?} voxel reads {hz}");
     }
-}
-
-fn loudscape(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .output()
-        .expect("start loudscape")
 }
 
 #[test]

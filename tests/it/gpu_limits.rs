@@ -6,7 +6,7 @@
 //! optional feature (timestamp queries, mappable primary buffers); with one fewer the
 //! device is refused with its reason, and the marching-tetrahedra passes do fail there.
 
-mod common;
+use crate::common;
 
 use glam::{UVec3, Vec3};
 use loudscape::data::cloud;

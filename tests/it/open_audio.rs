@@ -3,7 +3,7 @@
 //! of the same song reads the cache without running Python. Cancelling kills the extractor and
 //! leaves nothing behind.
 
-mod common;
+use crate::common::{fresh_dir, repo};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -11,10 +11,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use loudscape::extract::{self, ExtractError, Extractor, Progress, Settings};
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn extractor() -> PathBuf {
     let program = repo().join(".venv/bin/loudscape-extract");
@@ -31,14 +27,6 @@ fn found() -> Extractor {
     let path = extractor();
     let version = extract::version::of(&path).expect("the extractor's version");
     Extractor { path, version }
-}
-
-/// A fresh folder under tests/output for one test.
-fn fresh_dir(name: &str) -> PathBuf {
-    let dir = common::output_dir().join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// `seconds` of a chord with a click every half second, 22,050 Hz mono 16-bit WAV.

@@ -4,19 +4,12 @@
 //! written does not stop `render`. A fake extractor (a shell script that copies a prepared cloud
 //! and prints what the real one prints) keeps these fast and independent of Python.
 
-mod common;
+use crate::common::fresh_dir;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use loudscape::data::cloud::{Point, write};
-
-fn fresh_dir(name: &str) -> PathBuf {
-    let dir = common::output_dir().join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 const TRUNCATED: &str = "decoded 1.49 s of the 4.00 s the file promises";
 const CANCEL: &str = "the channels cancel in the mono mix";

@@ -8,9 +8,7 @@ use std::path::Path;
 use loudscape::data::cloud;
 use serde_json::json;
 
-mod loader_files;
-
-use loader_files::*;
+use crate::loader_files::*;
 
 const GENERIC_ASCII: &str = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n\
                              property float y\nproperty float z\nend_header\n";

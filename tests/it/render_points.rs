@@ -1,30 +1,13 @@
 //! The points view, rendered headless (lavapipe where there is no GPU) and read back.
 
-mod common;
+use crate::common::{self, demo_song, view_of};
 
-use std::path::PathBuf;
-
-use loudscape::data::cloud::{self, DataMode, Point, PointCloud};
+use loudscape::data::cloud::{DataMode, Point, PointCloud};
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointStyle, lod_stride};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
-
-fn demo_song() -> PointCloud {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply");
-    cloud::load(&path).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn view_of(data: &SceneData, width: u32, height: u32) -> FrameView {
-    FrameView::fitted(
-        Camera::default(),
-        data.world_from_data,
-        data.world_box(),
-        width,
-        height,
-    )
-}
 
 #[test]
 fn demo_song_points_match_golden() {

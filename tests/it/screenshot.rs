@@ -1,7 +1,7 @@
 //! A saved screenshot is what the headless renderer draws for the same view, playhead, labels
 //! and legend included.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -3,7 +3,7 @@
 //! inside their cells, outward normals, degenerate isovalues, buffer growth, golden images; and
 //! the CPU engine (used where the device is the CPU) held to the GPU passes' surface.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 

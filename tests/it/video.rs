@@ -4,21 +4,17 @@
 //! sample; a 1-second golden video of the demo; bad requests fail cleanly; SIGTERM and SIGINT leave no
 //! file and no encoder behind. Needs ffmpeg and ffprobe (scripts/setup-system.sh installs them).
 
-mod common;
+use crate::common::{self, assert_success, ffprobe, loudscape, repo};
 
 #[cfg(unix)]
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
+use std::process::Command;
 #[cfg(unix)]
 use std::process::Stdio;
-use std::process::{Command, Output};
 use std::sync::OnceLock;
 #[cfg(unix)]
 use std::time::{Duration, Instant};
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn demo() -> String {
     repo().join("data/demo_song.ply").display().to_string()
@@ -30,21 +26,6 @@ fn out(name: &str) -> PathBuf {
     let path = dir.join(name);
     let _ = std::fs::remove_file(&path);
     path
-}
-
-fn loudscape(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .output()
-        .expect("start loudscape")
-}
-
-fn assert_success(output: &Output) {
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
 }
 
 /// The passage of the shared test video.
@@ -85,23 +66,6 @@ fn shared_video() -> &'static (PathBuf, Vec<String>) {
             .collect();
         (path, lines)
     })
-}
-
-fn ffprobe(path: &Path) -> serde_json::Value {
-    let output = Command::new("ffprobe")
-        .args([
-            "-v",
-            "error",
-            "-show_streams",
-            "-show_format",
-            "-of",
-            "json",
-        ])
-        .arg(path)
-        .output()
-        .expect("ffprobe (install ffmpeg)");
-    assert_success(&output);
-    serde_json::from_slice(&output.stdout).expect("ffprobe json")
 }
 
 /// `image` at half the size, each pixel the mean of four: the resolution yuv420p keeps colour
@@ -449,15 +413,7 @@ fn stops_on(signal: &str, code: i32) {
     let first = lines.next().expect("a progress line").unwrap();
     assert!(first.contains("\"frame\""), "{first}");
     assert!(partial.exists(), "no temporary file while encoding");
-    let encoders = || -> usize {
-        let needle = partial.to_str().unwrap().as_bytes().to_vec();
-        std::fs::read_dir("/proc")
-            .unwrap()
-            .flatten()
-            .filter_map(|e| std::fs::read(e.path().join("cmdline")).ok())
-            .filter(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
-            .count()
-    };
+    let encoders = || common::processes_naming(&partial);
     assert_eq!(encoders(), 1, "ffmpeg is not running");
     let sent = Instant::now();
     Command::new("kill")

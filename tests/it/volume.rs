@@ -1,7 +1,7 @@
 //! The volume view rendered headless: golden images of the presets and the hp tint, and checks
 //! that the controls change the image and degenerate clouds draw.
 
-mod common;
+use crate::common;
 
 use loudscape::data::cloud::{DataMode, Point, PointCloud};
 use loudscape::data::synthetic::synthetic_song;

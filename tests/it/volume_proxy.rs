@@ -1,7 +1,7 @@
 //! On slow devices the window asks for the points in place of the volume while the camera moves;
 //! at rest, and when not asked, the volume is drawn.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

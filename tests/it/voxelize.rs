@@ -1,6 +1,6 @@
 //! GPU voxelization against a CPU reference (f64), normalization, degenerate clouds and limits.
 
-mod common;
+use crate::common;
 
 use loudscape::data::cloud::Point;
 use loudscape::render::gpu::context::GpuContext;

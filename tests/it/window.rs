@@ -1,35 +1,16 @@
 //! The window opens on the demo under a display (Xvfb in CI: `make test` runs the tests under
 //! xvfb-run), draws the song, saves a screenshot of itself and closes.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
-use std::process::Command;
 
 #[test]
 fn window_opens_and_shows_the_demo() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (which uses xvfb-run) or xvfb-run -a cargo test"
-    );
+    common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let shot = common::output_dir().join("window_demo.png");
-    let _ = std::fs::remove_file(&shot);
-    let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .arg(repo.join("data/demo_song.ply"))
-        .arg("--screenshot")
-        .arg(&shot)
-        .output()
-        .expect("start loudscape");
-    assert!(
-        output.status.success(),
-        "loudscape exited with {}: {}",
-        output.status,
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let image = image::open(&shot)
-        .unwrap_or_else(|e| panic!("no screenshot at {}: {e}", shot.display()))
-        .to_rgba8();
+    let image = common::window_screenshot(&repo.join("data/demo_song.ply"), &shot);
     assert!(
         image.width() >= 640 && image.height() >= 400,
         "window too small: {:?}",

@@ -2,7 +2,7 @@
 //! opens side by side, and key B switches the heard song without moving the playback
 //! position (read from the new song's transport, which the window reports on stderr).
 
-mod common;
+use crate::common;
 
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;

@@ -2,7 +2,7 @@
 //! gap, B), in the difference view the difference picture, not A alone. Needs a display
 //! (`make test` runs it under xvfb-run).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! The window's "level as heard" (Timeline mode): `--normalize` (the side panel's choice at
 //! start) shows the demo timeline as Spotify plays it, and the picture changes.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -26,10 +26,7 @@ fn shot(preset: &str) -> (image::RgbaImage, String) {
 
 #[test]
 fn the_timeline_as_heard_moves_the_songs() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (which uses xvfb-run) or xvfb-run -a cargo test"
-    );
+    common::assert_display();
     let (plain, _) = shot("none");
     let (heard, stderr) = shot("spotify");
     assert!(

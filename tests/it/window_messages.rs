@@ -4,22 +4,11 @@
 //! cleanly, as the close button does. Needs a display (`make test` runs them under xvfb-run) and
 //! xdotool.
 
-mod common;
+use crate::common::{self, assert_display, repo, wait_for_window};
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn assert_display() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
-}
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// A PATH without zenity and no session bus: no file dialog can open.
 fn no_dialog(command: &mut Command) -> &mut Command {
@@ -89,47 +78,14 @@ fn the_no_dialog_warning_shows_under_the_view_at_once() {
     );
 }
 
-/// Waits for the window named `loudscape`; returns its id.
-fn wait_for_window(child: &mut std::process::Child) -> Option<String> {
-    let start = Instant::now();
-    while start.elapsed() < Duration::from_secs(90) {
-        if let Ok(Some(_)) = child.try_wait() {
-            return None;
-        }
-        // Its own window (the other tests' windows are named alike).
-        let search = Command::new("xdotool")
-            .args([
-                "search",
-                "--all",
-                "--pid",
-                &child.id().to_string(),
-                "--name",
-                "^loudscape$",
-            ])
-            .output()
-            .expect("xdotool (scripts/setup-system.sh installs it)");
-        let ids = String::from_utf8_lossy(&search.stdout).into_owned();
-        if let Some(id) = ids.lines().next() {
-            return Some(id.trim().to_string());
-        }
-        std::thread::sleep(Duration::from_millis(200));
-    }
-    None
-}
-
 #[test]
 fn closing_the_window_from_outside_exits_cleanly() {
     assert_display();
     let home = common::output_dir().join("window_close_home");
     let _ = std::fs::remove_dir_all(&home);
     std::fs::create_dir_all(&home).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+    let mut child = common::home_in(&mut Command::new(env!("CARGO_BIN_EXE_loudscape")), &home)
         .arg(repo().join("data/demo_song.ply"))
-        .env("HOME", &home)
-        .env("XDG_DATA_HOME", &home)
-        .env("XDG_CONFIG_HOME", &home)
-        .env("XDG_STATE_HOME", &home)
-        .env("XDG_CACHE_HOME", &home)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()

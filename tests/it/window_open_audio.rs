@@ -3,7 +3,7 @@
 //! them, the cloud is drawn, and a second open of the song comes from the cache. Needs a display
 //! (`make test` runs under xvfb-run) and the extractor (`make venv`).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -33,10 +33,7 @@ fn drawn_share(shot: &Path) -> f64 {
 
 #[test]
 fn window_opens_a_song_and_reopens_it_from_the_cache() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
+    common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let extractor = repo.join(".venv/bin/loudscape-extract");
     assert!(
@@ -90,10 +87,7 @@ fn window_opens_a_song_and_reopens_it_from_the_cache() {
 
 #[test]
 fn a_new_floor_re_extracts_keeping_the_old_cloud_until_the_new_one_is_ready() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
+    common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let extractor = repo.join(".venv/bin/loudscape-extract");
     assert!(

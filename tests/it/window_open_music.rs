@@ -3,28 +3,10 @@
 //! saves in the current folder and says why, and the recent-files list survives a restart with a
 //! deleted file shown as missing. Needs a display (`make test` runs under xvfb-run).
 
-mod common;
+use crate::common::{self, fresh_dir, repo};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn fresh_dir(name: &str) -> PathBuf {
-    let dir = common::output_dir().join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn needs_display() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
-}
 
 /// Runs the window on `files` until its screenshot is saved, with no file dialog possible
 /// (no D-Bus session bus, no zenity on PATH), the state folder `state`, in the folder `cwd`.
@@ -72,7 +54,7 @@ fn middle_difference(a: &Path, b: &Path) -> f64 {
 
 #[test]
 fn question_mark_shows_the_shortcuts_overlay() {
-    needs_display();
+    common::assert_display();
     let dir = fresh_dir("window_shortcuts");
     let song = repo().join("data/demo_song.ply");
     let (plain, overlay) = (dir.join("plain.png"), dir.join("overlay.png"));
@@ -88,7 +70,7 @@ fn question_mark_shows_the_shortcuts_overlay() {
 
 #[test]
 fn ctrl_s_without_a_dialog_saves_in_the_current_folder() {
-    needs_display();
+    common::assert_display();
     let dir = fresh_dir("window_save_fallback");
     let song = repo().join("data/demo_song.ply");
     window(
@@ -111,7 +93,7 @@ fn ctrl_s_without_a_dialog_saves_in_the_current_folder() {
 
 #[test]
 fn the_recent_list_survives_a_restart_and_shows_missing_files() {
-    needs_display();
+    common::assert_display();
     let dir = fresh_dir("window_recent");
     let state = dir.join("state");
     let (a, b) = (dir.join("a.ply"), dir.join("b.ply"));

@@ -4,18 +4,11 @@
 //! one of the last value; and opening the window prints nothing on stderr (ALSA's probe of the
 //! audio device printed eight lines on every launch).
 
-mod common;
+use crate::common::{self, assert_display};
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn assert_display() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
-}
 
 /// The value of `key=value` in `line`.
 fn value(line: &str, key: &str) -> f64 {

@@ -3,10 +3,9 @@
 //! written into its metadata, a screenshot of the window, the strip's colours found under the
 //! view.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
-use std::process::Command;
 
 use loudscape::data::cloud;
 
@@ -32,10 +31,7 @@ fn count_colour(
 
 #[test]
 fn song_mode_shows_the_loudness_strip_under_the_view() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (which uses xvfb-run) or xvfb-run -a cargo test"
-    );
+    common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let demo = cloud::load(&repo.join("data/demo_song.ply")).expect("demo song");
     let duration = demo
@@ -65,22 +61,7 @@ fn song_mode_shows_the_loudness_strip_under_the_view() {
     cloud::write(&mut file, &demo.points, Some(&meta)).expect("write ply");
     drop(file);
     let shot = out.join("window_strip.png");
-    let _ = std::fs::remove_file(&shot);
-    let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .arg(&ply)
-        .arg("--screenshot")
-        .arg(&shot)
-        .output()
-        .expect("start loudscape");
-    assert!(
-        output.status.success(),
-        "loudscape exited with {}: {}",
-        output.status,
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let image = image::open(&shot)
-        .unwrap_or_else(|e| panic!("no screenshot at {}: {e}", shot.display()))
-        .to_rgba8();
+    let image = common::window_screenshot(&ply, &shot);
     let (w, h) = image.dimensions();
     assert!(w >= 640 && h >= 400, "window too small: {w}x{h}");
     // The strip sits under the view, above the transport bar: the bottom 200 rows, right of the

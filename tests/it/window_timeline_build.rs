@@ -5,14 +5,10 @@
 //! timeline is shown; opening the same songs again comes from the cache. Needs a display and
 //! the extractor (`make venv`).
 
-mod common;
+use crate::common::{self, repo};
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// `seconds` of a chord at `root` Hz with a click every half second, 22,050 Hz mono WAV (no
 /// tags: no year).
@@ -81,10 +77,7 @@ fn window(dir: &Path, songs: &[&Path], shot: &Path, press: &[&str]) -> String {
 
 #[test]
 fn several_songs_become_a_timeline_asking_for_the_years_their_tags_lack() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
+    common::assert_display();
     let dir = common::output_dir().join("window_timeline_build");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("state")).unwrap();
@@ -149,10 +142,7 @@ fn several_songs_become_a_timeline_asking_for_the_years_their_tags_lack() {
 /// without a year builds nothing (leaving songs out is a button's choice, never Enter's).
 #[test]
 fn the_years_dialog_keeps_fast_typing_in_its_fields_and_enter_leaves_no_song_out() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
+    common::assert_display();
     let dir = common::output_dir().join("window_years_typing");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("state")).unwrap();

@@ -5,28 +5,13 @@
 //! screenshot run waits for the export to end before it closes the window. Needs a display
 //! (`make test` runs it under xvfb-run), ffmpeg and ffprobe.
 
-use std::path::{Path, PathBuf};
+use crate::common::{
+    self, assert_display, ffprobe, fresh_dir, processes_naming, repo, wait_for_window,
+};
+
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn assert_display() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
-    );
-}
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// A fresh folder of its own under tests/output.
-fn fresh_dir(name: &str) -> PathBuf {
-    let dir = repo().join("tests").join("output").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create the test folder");
-    dir
-}
 
 /// Runs the window on the demo song, pressing `press`, until its screenshot is saved (after
 /// the export ended); returns its stderr.
@@ -44,20 +29,6 @@ fn run_window(dir: &Path, press: &[String]) -> String {
     let err = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "loudscape failed: {err}");
     err
-}
-
-fn ffprobe(path: &Path) -> serde_json::Value {
-    let output = Command::new("ffprobe")
-        .args(["-v", "error", "-show_streams", "-of", "json"])
-        .arg(path)
-        .output()
-        .expect("ffprobe (install ffmpeg)");
-    assert!(
-        output.status.success(),
-        "ffprobe failed on {}",
-        path.display()
-    );
-    serde_json::from_slice(&output.stdout).expect("ffprobe json")
 }
 
 #[test]
@@ -126,53 +97,16 @@ fn a_cancelled_export_leaves_no_file() {
     assert!(left.is_empty(), "files left behind: {left:?}");
 }
 
-/// The window's own id, once it is shown (None if the app ended first).
-fn wait_for_window(child: &mut std::process::Child) -> Option<String> {
-    let start = Instant::now();
-    while start.elapsed() < Duration::from_secs(90) {
-        if let Ok(Some(_)) = child.try_wait() {
-            return None;
-        }
-        let search = Command::new("xdotool")
-            .args(["search", "--all", "--pid", &child.id().to_string()])
-            .args(["--name", "^loudscape$"])
-            .output()
-            .expect("xdotool (scripts/setup-system.sh installs it)");
-        let ids = String::from_utf8_lossy(&search.stdout).into_owned();
-        if let Some(id) = ids.lines().next() {
-            return Some(id.trim().to_string());
-        }
-        std::thread::sleep(Duration::from_millis(200));
-    }
-    None
-}
-
-/// Processes whose command line names `path`.
-fn processes_naming(path: &Path) -> usize {
-    let needle = path.to_str().unwrap().as_bytes().to_vec();
-    std::fs::read_dir("/proc")
-        .unwrap()
-        .flatten()
-        .filter_map(|e| std::fs::read(e.path().join("cmdline")).ok())
-        .filter(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
-        .count()
-}
-
 #[test]
 fn closing_the_window_while_exporting_stops_the_export_and_leaves_no_file() {
     assert_display();
     let dir = fresh_dir("window_video_close");
     let video = dir.join("closed.mp4");
     let partial = dir.join("closed.mp4.partial.mp4");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+    let mut child = common::home_in(&mut Command::new(env!("CARGO_BIN_EXE_loudscape")), &dir)
         .arg(repo().join("data/demo_song.ply"))
         .args(["--press", &format!("export-video={}", video.display())])
         .env("DBUS_SESSION_BUS_ADDRESS", "")
-        .env("HOME", &dir)
-        .env("XDG_DATA_HOME", &dir)
-        .env("XDG_CONFIG_HOME", &dir)
-        .env("XDG_STATE_HOME", &dir)
-        .env("XDG_CACHE_HOME", &dir)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()

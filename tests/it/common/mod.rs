@@ -1,10 +1,18 @@
-//! Helpers shared by the GPU integration tests: a device on whatever adapter exists (lavapipe on
-//! machines without a GPU) and golden-image comparison with a tolerance.
+//! Helpers shared by the integration tests: a device on whatever adapter exists (lavapipe on
+//! machines without a GPU), golden-image comparison with a tolerance, the demo song, running the
+//! `loudscape` binary, and the window tests' display, window and process look-ups.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output};
+use std::time::{Duration, Instant};
 
+use loudscape::data::cloud::{self, PointCloud};
 use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::scene::SceneData;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
 
 /// A headless device; the tests need one (install mesa-vulkan-drivers for lavapipe).
 pub fn gpu() -> GpuContext {
@@ -14,8 +22,25 @@ pub fn gpu() -> GpuContext {
     }
 }
 
-fn repo() -> PathBuf {
+/// The repository's root (the package's folder).
+pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// data/demo_song.ply, loaded.
+pub fn demo_song() -> PointCloud {
+    cloud::load(&repo().join("data/demo_song.ply")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The default camera's view of `data`, fitted to a `width` x `height` picture.
+pub fn view_of(data: &SceneData, width: u32, height: u32) -> FrameView {
+    FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
+        width,
+        height,
+    )
 }
 
 /// Where failing tests leave their actual and difference images.
@@ -44,6 +69,130 @@ pub fn difference(a: &image::RgbaImage, b: &image::RgbaImage, threshold: u8) -> 
     }
     let n = (a.width() * a.height()) as f64;
     (over as f64 / n, sum as f64 / (n * 3.0))
+}
+
+/// A fresh (emptied) folder under tests/output for one test.
+pub fn fresh_dir(name: &str) -> PathBuf {
+    let dir = output_dir().join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create the test folder");
+    dir
+}
+
+/// Runs the `loudscape` binary with `args` and waits for it.
+pub fn loudscape<S: AsRef<OsStr>>(args: &[S]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .args(args)
+        .output()
+        .expect("start loudscape")
+}
+
+/// Fails with the command's error output unless it succeeded.
+pub fn assert_success(output: &Output) {
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// ffprobe's streams and format of `path`, as JSON.
+pub fn ffprobe(path: &Path) -> serde_json::Value {
+    let output = Command::new("ffprobe")
+        .args([
+            "-v",
+            "error",
+            "-show_streams",
+            "-show_format",
+            "-of",
+            "json",
+        ])
+        .arg(path)
+        .output()
+        .expect("ffprobe (install ffmpeg)");
+    assert!(
+        output.status.success(),
+        "ffprobe failed on {}: {}",
+        path.display(),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("ffprobe json")
+}
+
+/// The window tests need a display (`make test` runs them under xvfb-run).
+pub fn assert_display() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
+    );
+}
+
+/// The X window id of `child`'s own window (the other tests' windows are named alike), once it
+/// is mapped; `None` if the process ends or no window appears within 90 s.
+pub fn wait_for_window(child: &mut Child) -> Option<String> {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(90) {
+        if let Ok(Some(_)) = child.try_wait() {
+            return None;
+        }
+        let search = Command::new("xdotool")
+            .args(["search", "--all", "--pid", &child.id().to_string()])
+            .args(["--name", "^loudscape$"])
+            .output()
+            .expect("xdotool (scripts/setup-system.sh installs it)");
+        let ids = String::from_utf8_lossy(&search.stdout).into_owned();
+        if let Some(id) = ids.lines().next() {
+            return Some(id.trim().to_string());
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    None
+}
+
+/// Runs the window on `file` until it saves its screenshot to `shot`; returns the screenshot.
+pub fn window_screenshot(file: &Path, shot: &Path) -> image::RgbaImage {
+    let _ = std::fs::remove_file(shot);
+    let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .arg(file)
+        .arg("--screenshot")
+        .arg(shot)
+        .output()
+        .expect("start loudscape");
+    assert!(
+        output.status.success(),
+        "loudscape exited with {}: {}",
+        output.status,
+        String::from_utf8_lossy(&output.stderr)
+    );
+    image::open(shot)
+        .unwrap_or_else(|e| panic!("no screenshot at {}: {e}", shot.display()))
+        .to_rgba8()
+}
+
+/// Gives `command` the folder `home` as its home and XDG data, config, state and cache folders,
+/// so that the window's saved state and files stay in the test's folder.
+pub fn home_in<'a>(command: &'a mut Command, home: &Path) -> &'a mut Command {
+    for var in [
+        "HOME",
+        "XDG_DATA_HOME",
+        "XDG_CONFIG_HOME",
+        "XDG_STATE_HOME",
+        "XDG_CACHE_HOME",
+    ] {
+        command.env(var, home);
+    }
+    command
+}
+
+/// How many processes have `path` in their command line (Linux: reads /proc).
+pub fn processes_naming(path: &Path) -> usize {
+    let needle = path.to_str().expect("a UTF-8 path").as_bytes().to_vec();
+    std::fs::read_dir("/proc")
+        .expect("/proc")
+        .flatten()
+        .filter_map(|e| std::fs::read(e.path().join("cmdline")).ok())
+        .filter(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
+        .count()
 }
 
 /// Compares `actual` with tests/golden/NAME.png. Differences allowed: at most `max_share` of the

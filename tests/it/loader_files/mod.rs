@@ -1,4 +1,4 @@
-//! Helpers of the PLY loader's tests (tests/cloud_loader.rs, tests/cloud_loader_malformed.rs):
+//! Helpers of the PLY loader's tests (tests/it/cloud_loader.rs, tests/it/cloud_loader_malformed.rs):
 //! files written at run time into a scratch folder, a standard header to vary line by line, the
 //! one-line error check, and [`check_against_expected`] for the extractor's expected-values JSON.
 #![allow(dead_code)]
@@ -8,8 +8,16 @@ use std::path::{Path, PathBuf};
 use loudscape::data::cloud::{self, CloudError, Point, PointCloud};
 use serde_json::{Value, json};
 
+/// A scratch folder of the calling test's own: the test modules share one process, and two of
+/// them may write files of the same name (libtest names each test's thread after the test).
 pub fn scratch_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loudscape-cloud-tests-{}", std::process::id()));
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("main")
+        .replace("::", "-");
+    let dir = std::env::temp_dir()
+        .join(format!("loudscape-cloud-tests-{}", std::process::id()))
+        .join(test);
     std::fs::create_dir_all(&dir).expect("create scratch folder");
     dir
 }
