@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use loudscape::data::cloud::{self, DataMode, Point};
+use loudscape::data::cloud::{self, DataMode};
 use serde_json::{Value, json};
 
 use crate::loader_files::*;
@@ -280,33 +280,6 @@ fn random_mutations_never_panic() {
 
 // ---------------------------------------------------------------------------------------------
 // Fixture written by the Python extractor
-
-#[test]
-fn expected_values_helper_accepts_a_matching_file() {
-    let points = sample_points(10);
-    let ply = write_file("expected_self.ply", &file_bytes(&points, &song_meta()));
-    let record = |p: &Point| json!([p.position[0], p.position[1], p.position[2], p.scalar, p.hp]);
-    let mut sums = [0f64; 5];
-    for p in &points {
-        for (s, v) in
-            sums.iter_mut()
-                .zip([p.position[0], p.position[1], p.position[2], p.scalar, p.hp])
-        {
-            *s += f64::from(v);
-        }
-    }
-    let expected = json!({
-        "point_count": 10,
-        "first": points[..3].iter().map(record).collect::<Vec<_>>(),
-        "last": points[7..].iter().map(record).collect::<Vec<_>>(),
-        "sums": {"x": sums[0], "y": sums[1], "z": sums[2], "scalar": sums[3], "hp": sums[4]},
-    });
-    let expected_path = write_file(
-        "expected_self.expected.json",
-        expected.to_string().as_bytes(),
-    );
-    check_against_expected(&ply, &expected_path);
-}
 
 #[test]
 fn fixture_song_matches_expected() {

@@ -3,10 +3,9 @@
 //! of the same song reads the cache without running Python. Cancelling kills the extractor and
 //! leaves nothing behind.
 
-use crate::common::{fresh_dir, repo};
+use crate::common::{self, fresh_dir, repo};
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -68,15 +67,6 @@ fn write_song(path: &Path, seconds: f32) {
     std::fs::write(path, bytes).unwrap();
 }
 
-fn loudscape(args: &[&std::ffi::OsStr], cache: &Path, extractor: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .env("LOUDSCAPE_CACHE_DIR", cache)
-        .env("LOUDSCAPE_EXTRACT", extractor)
-        .output()
-        .expect("start loudscape")
-}
-
 fn files_in(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .map(|entries| {
@@ -116,7 +106,7 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
         "-o".as_ref(),
         png.as_os_str(),
     ];
-    let first = loudscape(&args, &cache, &extractor());
+    let first = common::loudscape_extracting(&args, &cache, &extractor());
     let err = String::from_utf8_lossy(&first.stderr);
     assert!(first.status.success(), "render of a song failed: {err}");
     // stderr is not a terminal: no progress lines, as the extractor does (the window tells);
@@ -146,7 +136,8 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
 
     // Again, with an extractor that cannot run: the cache answers, the file is not rewritten.
     let start = Instant::now();
-    let second = loudscape(&args, &cache, Path::new("/nonexistent/loudscape-extract"));
+    let second =
+        common::loudscape_extracting(&args, &cache, Path::new("/nonexistent/loudscape-extract"));
     let err = String::from_utf8_lossy(&second.stderr);
     assert!(second.status.success(), "cached render failed: {err}");
     assert_only_the_summary(&err, &png);
@@ -163,7 +154,7 @@ fn a_missing_extractor_names_the_file_and_the_install_command() {
     let song = dir.join("song.wav");
     write_song(&song, 0.5);
     let out = dir.join("grid.npy");
-    let output = loudscape(
+    let output = common::loudscape_extracting(
         &[
             "voxelize".as_ref(),
             song.as_os_str(),
@@ -190,7 +181,7 @@ fn bad_audio_is_one_line_naming_the_file_and_leaves_no_partial_cloud() {
     std::fs::write(&song, b"OggS but not really an ogg file at all").unwrap();
     let cache = dir.join("cache");
     let out = dir.join("mesh.obj");
-    let output = loudscape(
+    let output = common::loudscape_extracting(
         &[
             "mesh".as_ref(),
             song.as_os_str(),
@@ -326,7 +317,7 @@ fn render_of_a_truncated_song_says_so_fresh_and_cached() {
         png.as_os_str(),
     ];
     for run in ["fresh", "cached"] {
-        let output = loudscape(&args, &cache, &extractor());
+        let output = common::loudscape_extracting(&args, &cache, &extractor());
         let err = String::from_utf8_lossy(&output.stderr);
         assert!(output.status.success(), "{run}: {err}");
         let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning: ")).collect();

@@ -4,7 +4,7 @@
 //! written does not stop `render`. A fake extractor (a shell script that copies a prepared cloud
 //! and prints what the real one prints) keeps these fast and independent of Python.
 
-use crate::common::fresh_dir;
+use crate::common::{self, fresh_dir};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -79,17 +79,8 @@ fn runs(dir: &Path) -> usize {
         .unwrap_or(0)
 }
 
-fn loudscape(args: &[&std::ffi::OsStr], cache: &Path, extractor: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loudscape"))
-        .args(args)
-        .env("LOUDSCAPE_CACHE_DIR", cache)
-        .env("LOUDSCAPE_EXTRACT", extractor)
-        .output()
-        .expect("start loudscape")
-}
-
 fn render(song: &Path, png: &Path, cache: &Path, extractor: &Path) -> (Output, String) {
-    let output = loudscape(
+    let output = common::loudscape_extracting(
         &[
             "render".as_ref(),
             song.as_os_str(),
@@ -164,7 +155,7 @@ fn warnings_travel_with_the_cloud_and_a_damaged_entry_is_extracted_again() {
 
     // voxelize says them as well.
     let npy = dir.join("grid.npy");
-    let output = loudscape(
+    let output = common::loudscape_extracting(
         &[
             "voxelize".as_ref(),
             song.as_os_str(),

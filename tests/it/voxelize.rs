@@ -369,23 +369,3 @@ fn grids_beyond_the_limits_are_refused_with_a_clear_message() {
         "{err}"
     );
 }
-
-#[test]
-fn voxelize_and_volume_shaders_translate_to_msl() {
-    use loudscape::render::shaders;
-    for (name, source) in [
-        ("voxelize", shaders::voxelize()),
-        ("volume", shaders::volume()),
-    ] {
-        let module = naga::front::wgsl::parse_str(&source)
-            .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::empty(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{name}: {e:?}"));
-        naga::back::msl::write_string(&module, &info, &Default::default(), &Default::default())
-            .unwrap_or_else(|e| panic!("{name} to MSL: {e:?}"));
-    }
-}

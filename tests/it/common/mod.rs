@@ -87,6 +87,17 @@ pub fn loudscape<S: AsRef<OsStr>>(args: &[S]) -> Output {
         .expect("start loudscape")
 }
 
+/// Runs the `loudscape` binary with `args`, the song cache in `cache` and `extractor` as the
+/// extractor it runs, and waits for it.
+pub fn loudscape_extracting(args: &[&OsStr], cache: &Path, extractor: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .args(args)
+        .env("LOUDSCAPE_CACHE_DIR", cache)
+        .env("LOUDSCAPE_EXTRACT", extractor)
+        .output()
+        .expect("start loudscape")
+}
+
 /// Fails with the command's error output unless it succeeded.
 pub fn assert_success(output: &Output) {
     assert!(
