@@ -25,12 +25,7 @@ fn save(dir: &Path, press: &[&str]) -> image::RgbaImage {
         .arg(repo.join("data/demo_song.ply"))
         .arg("--screenshot")
         .arg(dir.join("window.png"));
-    for key in press {
-        command.arg("--press").arg(key);
-    }
-    let output = command.output().expect("start loudscape");
-    let err = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(output.status.success(), "loudscape failed: {err}");
+    let err = common::run_pressing(&mut command, press);
     let saved: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .flatten()

@@ -8,7 +8,7 @@ use crate::common::{self, assert_display, repo, wait_for_window};
 
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// A PATH without zenity and no session bus: no file dialog can open.
 fn no_dialog(command: &mut Command) -> &mut Command {
@@ -99,17 +99,7 @@ fn closing_the_window_from_outside_exits_cleanly() {
             .status()
             .expect("xdotool");
     }
-    let start = Instant::now();
-    while start.elapsed() < Duration::from_secs(30) {
-        if let Ok(Some(_)) = child.try_wait() {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    if child.try_wait().ok().flatten().is_none() {
-        let _ = child.kill();
-    }
-    let output = child.wait_with_output().expect("wait for loudscape");
+    let output = common::exit_within_30_s(child);
     let err = String::from_utf8_lossy(&output.stderr);
     assert!(window.is_some(), "the window did not appear: {err}");
     assert_eq!(

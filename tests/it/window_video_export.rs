@@ -22,13 +22,7 @@ fn run_window(dir: &Path, press: &[String]) -> String {
         .arg(repo().join("data/demo_song.ply"))
         .arg("--screenshot")
         .arg(dir.join("window.png"));
-    for key in press {
-        command.arg("--press").arg(key);
-    }
-    let output = command.output().expect("start loudscape");
-    let err = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(output.status.success(), "loudscape failed: {err}");
-    err
+    common::run_pressing(&mut command, press)
 }
 
 #[test]
@@ -121,14 +115,7 @@ fn closing_the_window_while_exporting_stops_the_export_and_leaves_no_file() {
     if let Some(id) = &window {
         let _ = Command::new("xdotool").args(["windowclose", id]).status();
     }
-    let start = Instant::now();
-    while start.elapsed() < Duration::from_secs(30) && child.try_wait().ok().flatten().is_none() {
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    if child.try_wait().ok().flatten().is_none() {
-        let _ = child.kill();
-    }
-    let output = child.wait_with_output().expect("wait for loudscape");
+    let output = common::exit_within_30_s(child);
     let err = String::from_utf8_lossy(&output.stderr);
     assert!(window.is_some(), "the window did not appear: {err}");
     assert!(encoding, "the export never started: {err}");

@@ -195,6 +195,30 @@ pub fn home_in<'a>(command: &'a mut Command, home: &Path) -> &'a mut Command {
     command
 }
 
+/// Runs `command` (the window) with a `--press` for each of `press`, waits for it, and returns
+/// its stderr; fails with it unless the window exited successfully.
+pub fn run_pressing<S: AsRef<OsStr>>(command: &mut Command, press: &[S]) -> String {
+    for key in press {
+        command.arg("--press").arg(key);
+    }
+    let output = command.output().expect("start loudscape");
+    let err = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "loudscape failed: {err}");
+    err
+}
+
+/// Waits up to 30 s for `child` to exit, kills it if it has not, and returns its output.
+pub fn exit_within_30_s(mut child: Child) -> Output {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(30) && child.try_wait().ok().flatten().is_none() {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    if child.try_wait().ok().flatten().is_none() {
+        let _ = child.kill();
+    }
+    child.wait_with_output().expect("wait for loudscape")
+}
+
 /// How many processes have `path` in their command line (Linux: reads /proc).
 pub fn processes_naming(path: &Path) -> usize {
     let needle = path.to_str().expect("a UTF-8 path").as_bytes().to_vec();
