@@ -24,7 +24,7 @@
 
 use std::io::Read;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use glam::UVec3;
@@ -62,18 +62,7 @@ struct Seed {
 }
 
 fn seeds() -> Vec<Seed> {
-    let mut paths: Vec<PathBuf> = Vec::new();
-    for dir in ["tests/fixtures/format", "data"] {
-        if let Ok(entries) = std::fs::read_dir(dir) {
-            paths.extend(
-                entries
-                    .flatten()
-                    .map(|e| e.path())
-                    .filter(|p| p.extension().is_some_and(|e| e == "ply")),
-            );
-        }
-    }
-    paths.sort();
+    let paths = fuzz_common::seed_files();
     let mut seeds = Vec::new();
     for path in paths {
         let Ok(bytes) = std::fs::read(&path) else {

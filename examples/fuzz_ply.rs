@@ -23,7 +23,7 @@
 //! overflow checks). Exit status 1 when anything crashed.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -43,7 +43,6 @@ use fuzz_common::{Counting, Limits, Rng, header_end};
 /// Every allocation counted: an input's peak memory is checked against [`Limits`].
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
-
 
 /// A file cut to its first `keep` points, the vertex count (and the meta's point_count) updated.
 fn shortened(bytes: &[u8], keep: usize) -> Option<Vec<u8>> {
@@ -76,18 +75,7 @@ fn shortened(bytes: &[u8], keep: usize) -> Option<Vec<u8>> {
 }
 
 fn seeds() -> Vec<Vec<u8>> {
-    let mut paths: Vec<PathBuf> = Vec::new();
-    for dir in ["tests/fixtures/format", "data"] {
-        if let Ok(entries) = std::fs::read_dir(dir) {
-            paths.extend(
-                entries
-                    .flatten()
-                    .map(|e| e.path())
-                    .filter(|p| p.extension().is_some_and(|e| e == "ply")),
-            );
-        }
-    }
-    paths.sort();
+    let paths = fuzz_common::seed_files();
     let mut seeds: Vec<Vec<u8>> = paths
         .iter()
         .filter_map(|p| std::fs::read(p).ok())

@@ -174,6 +174,23 @@ pub fn options(name: &str, seed: u64, targets: &[&str]) -> Options {
     options
 }
 
+/// The seed files: the PLY files of tests/fixtures/format and data/, in name order.
+pub fn seed_files() -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = Vec::new();
+    for dir in ["tests/fixtures/format", "data"] {
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            paths.extend(
+                entries
+                    .flatten()
+                    .map(|e| e.path())
+                    .filter(|p| p.extension().is_some_and(|e| e == "ply")),
+            );
+        }
+    }
+    paths.sort();
+    paths
+}
+
 /// Where a PLY header ends (just past `end_header\n`), if it does.
 pub fn header_end(bytes: &[u8]) -> Option<usize> {
     const END: &[u8] = b"end_header\n";
