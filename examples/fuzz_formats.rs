@@ -24,7 +24,7 @@
 
 use std::io::Read;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use glam::UVec3;
@@ -34,7 +34,7 @@ use serde_json::Value;
 
 #[path = "fuzz_common/mod.rs"]
 mod fuzz_common;
-use fuzz_common::{Counting, Limits, Rng};
+use fuzz_common::{Counting, Limits, Rng, header_end};
 
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
@@ -49,46 +49,6 @@ fn accepted(target: usize) {
     ACCEPTED[target].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
 }
 
-struct Options {
-    inputs: Option<u64>,
-    seconds: Option<f64>,
-    seed: u64,
-    only: Option<String>,
-    crashes: PathBuf,
-}
-
-fn options() -> Options {
-    let mut options = Options {
-        inputs: None,
-        seconds: None,
-        seed: 0x5eed_f0a7_0000_0001,
-        only: None,
-        crashes: PathBuf::from("fuzz-crashes"),
-    };
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let mut i = 0;
-    while i < args.len() {
-        let value = args.get(i + 1).cloned().unwrap_or_default();
-        match args[i].as_str() {
-            "--inputs" => options.inputs = value.parse().ok(),
-            "--seconds" => options.seconds = value.parse().ok(),
-            "--seed" => options.seed = value.parse().unwrap_or(options.seed),
-            "--only" if TARGETS.contains(&value.as_str()) => options.only = Some(value),
-            "--crashes" => options.crashes = PathBuf::from(value),
-            other => {
-                eprintln!("fuzz_formats: unknown option {other}; see examples/fuzz_formats.rs");
-                std::process::exit(2);
-            }
-        }
-        i += 2;
-    }
-    if options.inputs.is_none() && options.seconds.is_none() {
-        options.inputs = Some(100_000);
-    }
-    options.seed |= 1;
-    options
-}
-
 /// The loudscape seeds: files and their metadata JSON (format fixtures and data/, cut to 64
 /// points).
 struct Seed {
@@ -101,27 +61,8 @@ struct Seed {
     body: Vec<u8>,
 }
 
-fn header_end(bytes: &[u8]) -> Option<usize> {
-    const END: &[u8] = b"end_header\n";
-    bytes
-        .windows(END.len())
-        .position(|w| w == END)
-        .map(|p| p + END.len())
-}
-
 fn seeds() -> Vec<Seed> {
-    let mut paths: Vec<PathBuf> = Vec::new();
-    for dir in ["tests/fixtures/format", "data"] {
-        if let Ok(entries) = std::fs::read_dir(dir) {
-            paths.extend(
-                entries
-                    .flatten()
-                    .map(|e| e.path())
-                    .filter(|p| p.extension().is_some_and(|e| e == "ply")),
-            );
-        }
-    }
-    paths.sort();
+    let paths = fuzz_common::seed_files();
     let mut seeds = Vec::new();
     for path in paths {
         let Ok(bytes) = std::fs::read(&path) else {
@@ -608,7 +549,7 @@ fn save(dir: &Path, target: &str, input: &[u8], why: &str, findings: u64) {
 }
 
 fn main() {
-    let options = options();
+    let options = fuzz_common::options("fuzz_formats", 0x5eed_f0a7_0000_0001, &TARGETS);
     let seeds = seeds();
     let with_meta: Vec<&Seed> = seeds.iter().filter(|s| s.meta.is_some()).collect();
     if with_meta.is_empty() {

@@ -23,7 +23,7 @@
 //! overflow checks). Exit status 1 when anything crashed.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -38,57 +38,11 @@ static IN_LOAD: AtomicBool = AtomicBool::new(false);
 
 #[path = "fuzz_common/mod.rs"]
 mod fuzz_common;
-use fuzz_common::{Counting, Limits, Rng};
+use fuzz_common::{Counting, Limits, Rng, header_end};
 
 /// Every allocation counted: an input's peak memory is checked against [`Limits`].
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
-
-struct Options {
-    inputs: Option<u64>,
-    seconds: Option<f64>,
-    seed: u64,
-    crashes: PathBuf,
-}
-
-fn options() -> Options {
-    let mut options = Options {
-        inputs: None,
-        seconds: None,
-        seed: 0x5eed_1234_abcd_0001,
-        crashes: PathBuf::from("fuzz-crashes"),
-    };
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let mut i = 0;
-    while i < args.len() {
-        let value = args.get(i + 1).cloned().unwrap_or_default();
-        match args[i].as_str() {
-            "--inputs" => options.inputs = value.parse().ok(),
-            "--seconds" => options.seconds = value.parse().ok(),
-            "--seed" => options.seed = value.parse().unwrap_or(options.seed),
-            "--crashes" => options.crashes = PathBuf::from(value),
-            other => {
-                eprintln!("fuzz_ply: unknown option {other}; see examples/fuzz_ply.rs");
-                std::process::exit(2);
-            }
-        }
-        i += 2;
-    }
-    if options.inputs.is_none() && options.seconds.is_none() {
-        options.inputs = Some(100_000);
-    }
-    options.seed |= 1;
-    options
-}
-
-/// Where the header ends (just past `end_header\n`), if it does.
-fn header_end(bytes: &[u8]) -> Option<usize> {
-    const END: &[u8] = b"end_header\n";
-    bytes
-        .windows(END.len())
-        .position(|w| w == END)
-        .map(|p| p + END.len())
-}
 
 /// A file cut to its first `keep` points, the vertex count (and the meta's point_count) updated.
 fn shortened(bytes: &[u8], keep: usize) -> Option<Vec<u8>> {
@@ -121,18 +75,7 @@ fn shortened(bytes: &[u8], keep: usize) -> Option<Vec<u8>> {
 }
 
 fn seeds() -> Vec<Vec<u8>> {
-    let mut paths: Vec<PathBuf> = Vec::new();
-    for dir in ["tests/fixtures/format", "data"] {
-        if let Ok(entries) = std::fs::read_dir(dir) {
-            paths.extend(
-                entries
-                    .flatten()
-                    .map(|e| e.path())
-                    .filter(|p| p.extension().is_some_and(|e| e == "ply")),
-            );
-        }
-    }
-    paths.sort();
+    let paths = fuzz_common::seed_files();
     let mut seeds: Vec<Vec<u8>> = paths
         .iter()
         .filter_map(|p| std::fs::read(p).ok())
@@ -510,7 +453,7 @@ fn save_crash(dir: &Path, input: &[u8], why: &str, tally: &Tally) {
 }
 
 fn main() {
-    let options = options();
+    let options = fuzz_common::options("fuzz_ply", 0x5eed_1234_abcd_0001, &[]);
     let seeds = seeds();
     if seeds.is_empty() {
         eprintln!("fuzz_ply: no seeds found (run from the repository root)");

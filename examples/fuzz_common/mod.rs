@@ -1,9 +1,11 @@
 //! What the fuzzers share (examples/fuzz_ply.rs, examples/fuzz_formats.rs): a counting
 //! allocator, so that each input's peak memory is known, and the per-input limits that make an
-//! amplification (a small input that takes much memory or time) a finding like a crash.
+//! amplification (a small input that takes much memory or time) a finding like a crash; their
+//! command-line options and where a PLY header ends.
 #![allow(dead_code)]
 
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -125,4 +127,75 @@ impl Rng {
     pub fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
         &items[self.below(items.len())]
     }
+}
+
+/// A fuzzer's command line: `--inputs N` and/or `--seconds S` (100,000 inputs when neither is
+/// given), `--seed N`, `--crashes DIR` (fuzz-crashes/), and `--only TARGET` where the fuzzer has
+/// targets.
+pub struct Options {
+    pub inputs: Option<u64>,
+    pub seconds: Option<f64>,
+    pub seed: u64,
+    pub only: Option<String>,
+    pub crashes: PathBuf,
+}
+
+/// The options of the fuzzer `name` (examples/NAME.rs) from its command line; `targets` are the
+/// values `--only` takes (none: no `--only`). An unknown option ends the process with status 2.
+pub fn options(name: &str, seed: u64, targets: &[&str]) -> Options {
+    let mut options = Options {
+        inputs: None,
+        seconds: None,
+        seed,
+        only: None,
+        crashes: PathBuf::from("fuzz-crashes"),
+    };
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut i = 0;
+    while i < args.len() {
+        let value = args.get(i + 1).cloned().unwrap_or_default();
+        match args[i].as_str() {
+            "--inputs" => options.inputs = value.parse().ok(),
+            "--seconds" => options.seconds = value.parse().ok(),
+            "--seed" => options.seed = value.parse().unwrap_or(options.seed),
+            "--only" if targets.contains(&value.as_str()) => options.only = Some(value),
+            "--crashes" => options.crashes = PathBuf::from(value),
+            other => {
+                eprintln!("{name}: unknown option {other}; see examples/{name}.rs");
+                std::process::exit(2);
+            }
+        }
+        i += 2;
+    }
+    if options.inputs.is_none() && options.seconds.is_none() {
+        options.inputs = Some(100_000);
+    }
+    options.seed |= 1;
+    options
+}
+
+/// The seed files: the PLY files of tests/fixtures/format and data/, in name order.
+pub fn seed_files() -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = Vec::new();
+    for dir in ["tests/fixtures/format", "data"] {
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            paths.extend(
+                entries
+                    .flatten()
+                    .map(|e| e.path())
+                    .filter(|p| p.extension().is_some_and(|e| e == "ply")),
+            );
+        }
+    }
+    paths.sort();
+    paths
+}
+
+/// Where a PLY header ends (just past `end_header\n`), if it does.
+pub fn header_end(bytes: &[u8]) -> Option<usize> {
+    const END: &[u8] = b"end_header\n";
+    bytes
+        .windows(END.len())
+        .position(|w| w == END)
+        .map(|p| p + END.len())
 }

@@ -16,6 +16,7 @@ import numpy as np
 
 __all__ = [
     "FORMAT_VERSION",
+    "METRIC_KEYS",
     "MODE_SONG",
     "MODE_TIMELINE",
     "axis",
@@ -30,6 +31,25 @@ __all__ = [
 FORMAT_VERSION = 2
 MODE_SONG = "song"
 MODE_TIMELINE = "timeline"
+#: The metrics of a timeline's song entries (docs/FORMAT.md), in the order they are written; the
+#: song report's per-song columns are these, in this order.
+METRIC_KEYS = (
+    "integrated_lufs",
+    "lra_lu",
+    "sample_peak_dbfs",
+    "true_peak_dbtp",
+    "plr_db",
+    "crest_median_db",
+    "crest_p95_db",
+    "dc_offset",
+    "dr_db",
+    "psr_median_db",
+    "psr_p10_db",
+    "psr_p90_db",
+    "psr_spread_db",
+    "crest_3s_median_db",
+    "hp_mean",
+)
 _TICK_FREQUENCIES = (20, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000)
 
 

@@ -26,6 +26,7 @@ import os
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.format import METRIC_KEYS
 from loudscape_extract.messages import shorten
 from loudscape_extract.normalization import (
     NORMALIZE_CHOICES,
@@ -84,34 +85,15 @@ REPORT_COLUMNS = (
     "heard_integrated_lufs_median",
 ) + tuple(f"{key}_penalty_db_median" for key in PRESETS)
 SONG_COLUMNS = (
-    (
-        "year",
-        "artist",
-        "title",
-        "path",
-        "integrated_lufs",
-        "lra_lu",
-        "sample_peak_dbfs",
-        "true_peak_dbtp",
-        "plr_db",
-        "dr_db",
-        "psr_median_db",
-        "psr_p10_db",
-        "psr_p90_db",
-        "psr_spread_db",
-        "crest_3s_median_db",
-        "crest_median_db",
-        "crest_p95_db",
-        "dc_offset",
-        "hp_mean",
-    )
+    ("year", "artist", "title", "path")
+    + METRIC_KEYS
     + tuple(f"{service.key}_gain_db" for service in SERVICES)
     + ("normalize", "heard_integrated_lufs")
 )
 
 
-#: The per-song columns read from the song's metrics as they are.
-METRIC_COLUMNS = SONG_COLUMNS[4 : SONG_COLUMNS.index("hp_mean") + 1]
+#: The per-song columns read from the song's metrics as they are (the timeline's metric keys).
+METRIC_COLUMNS = METRIC_KEYS
 
 
 def _values(songs, key):

@@ -10,7 +10,7 @@ import numpy as np
 
 from loudscape_extract.contract import spread_range
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.format import axis, hp_axis, scalar_axis
+from loudscape_extract.format import METRIC_KEYS, axis, hp_axis, scalar_axis
 from loudscape_extract.notices import track_warnings
 from loudscape_extract.timeline.frames import SongFrames
 from loudscape_extract.timeline.inputs import SongEntry
@@ -74,23 +74,6 @@ Y_LABELS = {
     "rms": ("RMS level (frame)", "dBFS"),
     "a-weighted": ("A-weighted level (frame, re full-scale sine)", "dB"),
 }
-METRIC_KEYS = (
-    "integrated_lufs",
-    "lra_lu",
-    "sample_peak_dbfs",
-    "true_peak_dbtp",
-    "plr_db",
-    "crest_median_db",
-    "crest_p95_db",
-    "dc_offset",
-    "dr_db",
-    "psr_median_db",
-    "psr_p10_db",
-    "psr_p90_db",
-    "psr_spread_db",
-    "crest_3s_median_db",
-    "hp_mean",
-)
 
 
 #: Default cap on a timeline's points (``--max-points``): see :func:`frames_per_song_for`.

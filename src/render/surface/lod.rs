@@ -13,7 +13,7 @@
 /// How many times the grid is halved for the coarse surface: 128^3 -> 64^3 -> 32^3. Measured in
 /// the window on lavapipe (docs/PERFORMANCE.md): one level orbited the demo at 12.9 fps and swept
 /// the isovalue at 4.7 updates/s, two at 15.9 fps and 7.0 updates/s; a sphere's coarse area stays
-/// within half a percent of the full one at two levels (tests/surface.rs).
+/// within half a percent of the full one at two levels (tests/it/surface/lod.rs).
 pub const COARSE_LEVELS: u32 = 2;
 
 /// While the camera moves, a frame of the full mesh should take at most this long (the moving

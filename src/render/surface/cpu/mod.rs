@@ -7,8 +7,8 @@
 //! than VTK's flying edges there (docs/PERFORMANCE.md). So on such a device the surface is
 //! extracted here instead ([`SurfaceEngine::preferred`]), on all cores, into the same buffers
 //! and with the same surface: the same cells, vertices, normals, hp and winding as
-//! shaders/surface/marching_tets.wgsl and dual_contour.wgsl (tests/surface.rs compares the two
-//! engines triangle for triangle). On a real GPU the GPU passes run.
+//! shaders/surface/marching_tets.wgsl and dual_contour.wgsl (tests/it/surface/cpu_engine.rs
+//! compares the two engines triangle for triangle). On a real GPU the GPU passes run.
 //!
 //! Reads: a [`VoxelGrid`], read back once per grid into a padded [`CpuGrid`] (kept for the next
 //! isovalue). Writes: the mesh into [`MeshBuffers`] (vertices, indices, counters and the indexed

@@ -1,0 +1,288 @@
+//! Helpers shared by the integration tests: a device on whatever adapter exists (lavapipe on
+//! machines without a GPU), golden-image comparison with a tolerance, the demo song, running the
+//! `loudscape` binary, and the window tests' display, window and process look-ups.
+#![allow(dead_code)]
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output};
+use std::time::{Duration, Instant};
+
+use loudscape::data::cloud::{self, PointCloud};
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::scene::SceneData;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
+
+/// A headless device; the tests need one (install mesa-vulkan-drivers for lavapipe).
+pub fn gpu() -> GpuContext {
+    match GpuContext::new_headless() {
+        Ok(gpu) => gpu,
+        Err(e) => panic!("GPU tests need an adapter (lavapipe will do): {e}"),
+    }
+}
+
+/// The repository's root (the package's folder).
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// data/demo_song.ply, loaded.
+pub fn demo_song() -> PointCloud {
+    cloud::load(&repo().join("data/demo_song.ply")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The default camera's view of `data`, fitted to a `width` x `height` picture.
+pub fn view_of(data: &SceneData, width: u32, height: u32) -> FrameView {
+    FrameView::fitted(
+        Camera::default(),
+        data.world_from_data,
+        data.world_box(),
+        width,
+        height,
+    )
+}
+
+/// Where failing tests leave their actual and difference images.
+pub fn output_dir() -> PathBuf {
+    let dir = repo().join("tests").join("output");
+    std::fs::create_dir_all(&dir).expect("create tests/output");
+    dir
+}
+
+/// How two images differ: the share of pixels whose largest channel difference exceeds
+/// `threshold`, and the mean absolute channel difference.
+pub fn difference(a: &image::RgbaImage, b: &image::RgbaImage, threshold: u8) -> (f64, f64) {
+    assert_eq!(a.dimensions(), b.dimensions(), "image sizes differ");
+    let mut over = 0usize;
+    let mut sum = 0u64;
+    for (pa, pb) in a.pixels().zip(b.pixels()) {
+        let mut worst = 0u8;
+        for c in 0..3 {
+            let d = pa[c].abs_diff(pb[c]);
+            worst = worst.max(d);
+            sum += u64::from(d);
+        }
+        if worst > threshold {
+            over += 1;
+        }
+    }
+    let n = (a.width() * a.height()) as f64;
+    (over as f64 / n, sum as f64 / (n * 3.0))
+}
+
+/// A fresh (emptied) folder under tests/output for one test.
+pub fn fresh_dir(name: &str) -> PathBuf {
+    let dir = output_dir().join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create the test folder");
+    dir
+}
+
+/// Runs the `loudscape` binary with `args` and waits for it.
+pub fn loudscape<S: AsRef<OsStr>>(args: &[S]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .args(args)
+        .output()
+        .expect("start loudscape")
+}
+
+/// Runs the `loudscape` binary with `args`, the song cache in `cache` and `extractor` as the
+/// extractor it runs, and waits for it.
+pub fn loudscape_extracting(args: &[&OsStr], cache: &Path, extractor: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .args(args)
+        .env("LOUDSCAPE_CACHE_DIR", cache)
+        .env("LOUDSCAPE_EXTRACT", extractor)
+        .output()
+        .expect("start loudscape")
+}
+
+/// Fails with the command's error output unless it succeeded.
+pub fn assert_success(output: &Output) {
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// ffprobe's streams and format of `path`, as JSON.
+pub fn ffprobe(path: &Path) -> serde_json::Value {
+    let output = Command::new("ffprobe")
+        .args([
+            "-v",
+            "error",
+            "-show_streams",
+            "-show_format",
+            "-of",
+            "json",
+        ])
+        .arg(path)
+        .output()
+        .expect("ffprobe (install ffmpeg)");
+    assert!(
+        output.status.success(),
+        "ffprobe failed on {}: {}",
+        path.display(),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("ffprobe json")
+}
+
+/// The window tests need a display (`make test` runs them under xvfb-run).
+pub fn assert_display() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "this test needs a display: run it through `make test` (xvfb-run) or xvfb-run -a cargo test"
+    );
+}
+
+/// The X window id of `child`'s own window (the other tests' windows are named alike), once it
+/// is mapped; `None` if the process ends or no window appears within 90 s.
+pub fn wait_for_window(child: &mut Child) -> Option<String> {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(90) {
+        if let Ok(Some(_)) = child.try_wait() {
+            return None;
+        }
+        let search = Command::new("xdotool")
+            .args(["search", "--all", "--pid", &child.id().to_string()])
+            .args(["--name", "^loudscape$"])
+            .output()
+            .expect("xdotool (scripts/setup-system.sh installs it)");
+        let ids = String::from_utf8_lossy(&search.stdout).into_owned();
+        if let Some(id) = ids.lines().next() {
+            return Some(id.trim().to_string());
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    None
+}
+
+/// Runs the window on `file` until it saves its screenshot to `shot`; returns the screenshot.
+pub fn window_screenshot(file: &Path, shot: &Path) -> image::RgbaImage {
+    let _ = std::fs::remove_file(shot);
+    let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .arg(file)
+        .arg("--screenshot")
+        .arg(shot)
+        .output()
+        .expect("start loudscape");
+    assert!(
+        output.status.success(),
+        "loudscape exited with {}: {}",
+        output.status,
+        String::from_utf8_lossy(&output.stderr)
+    );
+    image::open(shot)
+        .unwrap_or_else(|e| panic!("no screenshot at {}: {e}", shot.display()))
+        .to_rgba8()
+}
+
+/// Gives `command` the folder `home` as its home and XDG data, config, state and cache folders,
+/// so that the window's saved state and files stay in the test's folder.
+pub fn home_in<'a>(command: &'a mut Command, home: &Path) -> &'a mut Command {
+    for var in [
+        "HOME",
+        "XDG_DATA_HOME",
+        "XDG_CONFIG_HOME",
+        "XDG_STATE_HOME",
+        "XDG_CACHE_HOME",
+    ] {
+        command.env(var, home);
+    }
+    command
+}
+
+/// Runs `command` (the window) with a `--press` for each of `press`, waits for it, and returns
+/// its stderr; fails with it unless the window exited successfully.
+pub fn run_pressing<S: AsRef<OsStr>>(command: &mut Command, press: &[S]) -> String {
+    for key in press {
+        command.arg("--press").arg(key);
+    }
+    let output = command.output().expect("start loudscape");
+    let err = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "loudscape failed: {err}");
+    err
+}
+
+/// Waits up to 30 s for `child` to exit, kills it if it has not, and returns its output.
+pub fn exit_within_30_s(mut child: Child) -> Output {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(30) && child.try_wait().ok().flatten().is_none() {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    if child.try_wait().ok().flatten().is_none() {
+        let _ = child.kill();
+    }
+    child.wait_with_output().expect("wait for loudscape")
+}
+
+/// How many processes have `path` in their command line (Linux: reads /proc).
+pub fn processes_naming(path: &Path) -> usize {
+    let needle = path.to_str().expect("a UTF-8 path").as_bytes().to_vec();
+    std::fs::read_dir("/proc")
+        .expect("/proc")
+        .flatten()
+        .filter_map(|e| std::fs::read(e.path().join("cmdline")).ok())
+        .filter(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
+        .count()
+}
+
+/// Compares `actual` with tests/golden/NAME.png. Differences allowed: at most `max_share` of the
+/// pixels may differ by more than 32 in some channel (rasterizers differ at edges).
+/// Run with `UPDATE_GOLDEN=1` to write the golden after looking at the actual image.
+/// On failure the actual image and a difference image are written to tests/output/.
+pub fn assert_golden(name: &str, actual: &image::RgbaImage, max_share: f64) {
+    let golden_path = repo()
+        .join("tests")
+        .join("golden")
+        .join(format!("{name}.png"));
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        actual.save(&golden_path).expect("write golden");
+        return;
+    }
+    let actual_path = output_dir().join(format!("{name}.actual.png"));
+    actual.save(&actual_path).expect("write actual");
+    let golden = match image::open(&golden_path) {
+        Ok(img) => img.to_rgba8(),
+        Err(e) => panic!(
+            "no golden image {} ({e}); look at {} and run with UPDATE_GOLDEN=1 to accept it",
+            golden_path.display(),
+            actual_path.display()
+        ),
+    };
+    assert_eq!(
+        golden.dimensions(),
+        actual.dimensions(),
+        "{name}: size differs"
+    );
+    let (share, mean) = difference(&golden, actual, 32);
+    if share > max_share {
+        let diff = image::RgbaImage::from_fn(actual.width(), actual.height(), |x, y| {
+            let (a, b) = (actual.get_pixel(x, y), golden.get_pixel(x, y));
+            let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
+            image::Rgba([d.saturating_mul(4), 0, 0, 255])
+        });
+        let diff_path = output_dir().join(format!("{name}.diff.png"));
+        diff.save(&diff_path).expect("write diff");
+        panic!(
+            "{name}: {:.3}% of pixels differ (allowed {:.3}%), mean difference {mean:.2}; see {} and {}",
+            share * 100.0,
+            max_share * 100.0,
+            actual_path.display(),
+            diff_path.display()
+        );
+    }
+}
+
+/// The share of pixels that are not the background, to check an image is not blank.
+pub fn coverage(image: &image::RgbaImage) -> f64 {
+    let bg = image.get_pixel(0, 0);
+    let covered = image
+        .pixels()
+        .filter(|p| (0..3).any(|c| p[c].abs_diff(bg[c]) > 16))
+        .count();
+    covered as f64 / (image.width() * image.height()) as f64
+}

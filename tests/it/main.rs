@@ -1,0 +1,45 @@
+//! The integration tests, one crate: each former `tests/NAME.rs` is the module `NAME`, so
+//! `cargo test --test it NAME::` runs one file's tests (`cargo test --test it surface::` for
+//! tests/it/surface*). One binary links wgpu, eframe and the app's library once instead of once
+//! per file (docs/ARCHITECTURE.md, "Tests"). The tests share one process: files they write go
+//! to folders of their own (`common::fresh_dir`, `loader_files::scratch_dir`), and nothing here
+//! sets environment variables or the working folder of the test process (children get theirs).
+
+mod common;
+mod loader_files;
+
+mod big_clouds;
+mod cli;
+mod cli_bench;
+mod cli_safety;
+mod cloud_loader;
+mod cloud_loader_malformed;
+mod colours;
+mod compare;
+mod format_fixtures;
+mod freq_axis;
+mod gpu_limits;
+mod open_audio;
+mod pick;
+mod playback;
+mod reliability_cache;
+mod reliability_loader;
+mod render_points;
+mod screenshot;
+mod shaders_msl;
+mod surface;
+mod video;
+mod volume;
+mod volume_proxy;
+mod voxelize;
+mod window;
+mod window_compare;
+mod window_compare_save;
+mod window_heard;
+mod window_messages;
+mod window_open_audio;
+mod window_open_music;
+mod window_responsive;
+mod window_strip;
+mod window_timeline_build;
+mod window_video_export;

@@ -1,0 +1,202 @@
+//! The volume view rendered headless: golden images of the presets and the hp tint, and checks
+//! that the controls change the image and degenerate clouds draw.
+
+use crate::common;
+
+use loudscape::data::cloud::{DataMode, Point, PointCloud};
+use loudscape::data::synthetic::synthetic_song;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::headless::render_image;
+use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::volume::TransferPreset;
+use loudscape::view::camera::Camera;
+use loudscape::view::frame_view::FrameView;
+
+const SIZE: (u32, u32) = (320, 200);
+
+struct Scene {
+    gpu: GpuContext,
+    renderer: Renderer,
+    cloud: PointCloud,
+    data: SceneData,
+}
+
+fn scene(points: Vec<Point>) -> Scene {
+    let gpu = common::gpu();
+    let renderer = Renderer::new(&gpu.device);
+    let cloud = PointCloud::synthetic(points, DataMode::Song);
+    let data = SceneData::new(&gpu.device, &renderer, &cloud);
+    Scene {
+        gpu,
+        renderer,
+        cloud,
+        data,
+    }
+}
+
+fn song_scene() -> Scene {
+    scene(synthetic_song(300_000, 7))
+}
+
+fn view(data: &SceneData, moving: bool) -> FrameView {
+    FrameView {
+        moving,
+        ..FrameView::fitted(
+            Camera::from_angles(-30.0, 28.0, 4.0),
+            data.world_from_data,
+            data.world_box(),
+            SIZE.0,
+            SIZE.1,
+        )
+    }
+}
+
+fn render(scene: &mut Scene, settings: &RenderSettings, moving: bool) -> image::RgbaImage {
+    scene
+        .data
+        .ensure_grid(
+            &scene.gpu.device,
+            &scene.gpu.queue,
+            &scene.renderer,
+            &scene.cloud,
+            &settings.voxels,
+        )
+        .expect("voxelize");
+    render_image(
+        &scene.gpu,
+        &scene.renderer,
+        Some(&scene.data),
+        &view(&scene.data, moving),
+        settings,
+    )
+    .expect("render")
+}
+
+fn volume_settings(preset: TransferPreset) -> RenderSettings {
+    let mut settings = RenderSettings {
+        view: ViewKind::Volume,
+        ..Default::default()
+    };
+    settings.volume.preset = preset;
+    settings
+}
+
+#[test]
+fn volume_presets_match_golden_images_and_differ_from_each_other() {
+    let mut scene = song_scene();
+    let mut images = Vec::new();
+    for preset in TransferPreset::ALL {
+        let image = render(&mut scene, &volume_settings(preset), false);
+        common::assert_golden(
+            &format!("volume_{}", preset.name().to_lowercase()),
+            &image,
+            0.01,
+        );
+        assert!(common::coverage(&image) > 0.1, "{preset:?} is nearly blank");
+        images.push(image);
+    }
+    for i in 0..3 {
+        for j in i + 1..3 {
+            let (share, mean) = common::difference(&images[i], &images[j], 24);
+            assert!(
+                share > 0.1 && mean > 6.0,
+                "presets {i} and {j} look alike: {:.1}% differ, mean {mean:.1}",
+                share * 100.0
+            );
+        }
+    }
+}
+
+#[test]
+fn hp_tint_matches_golden_image() {
+    let mut scene = song_scene();
+    let mut settings = volume_settings(TransferPreset::Classic);
+    settings.volume.hp_tint = true;
+    let tinted = render(&mut scene, &settings, false);
+    common::assert_golden("volume_hp_tint", &tinted, 0.01);
+    settings.volume.hp_tint = false;
+    let plain = render(&mut scene, &settings, false);
+    let (share, _) = common::difference(&tinted, &plain, 24);
+    assert!(share > 0.1, "hp tint changed only {:.1}%", share * 100.0);
+}
+
+#[test]
+fn density_and_opacity_scales_change_the_image() {
+    let mut scene = song_scene();
+    let base_settings = volume_settings(TransferPreset::Ember);
+    let base = render(&mut scene, &base_settings, false);
+    for (density, opacity) in [(3.0, 1.0), (0.3, 1.0), (1.0, 4.0), (1.0, 0.2)] {
+        let mut settings = base_settings.clone();
+        settings.volume.density_scale = density;
+        settings.volume.opacity_scale = opacity;
+        let image = render(&mut scene, &settings, false);
+        let (share, _) = common::difference(&base, &image, 16);
+        assert!(
+            share > 0.05,
+            "density {density} opacity {opacity} changed only {:.1}%",
+            share * 100.0
+        );
+        // More density lights more of the field; less lights less.
+        if density != 1.0 {
+            let (more, base_coverage) = (common::coverage(&image), common::coverage(&base));
+            assert_eq!(
+                more > base_coverage,
+                density > 1.0,
+                "{more} vs {base_coverage}"
+            );
+        }
+    }
+}
+
+#[test]
+fn moving_camera_uses_coarser_steps_but_keeps_the_picture() {
+    let mut scene = song_scene();
+    let settings = volume_settings(TransferPreset::Classic);
+    let rest = render(&mut scene, &settings, false);
+    let moving = render(&mut scene, &settings, true);
+    let (_, mean) = common::difference(&rest, &moving, 32);
+    assert!(
+        mean < 12.0,
+        "the moving image strays from the still one: {mean:.1}"
+    );
+    assert!(common::coverage(&moving) > 0.15);
+}
+
+#[test]
+fn grid_is_built_once_and_rebuilt_only_when_its_settings_change() {
+    let mut scene = song_scene();
+    let (gpu, renderer, cloud) = (&scene.gpu, &scene.renderer, &scene.cloud);
+    let mut settings = volume_settings(TransferPreset::Classic);
+    let data = &mut scene.data;
+    assert!(data.grid.is_none());
+    let ensure = |data: &mut SceneData, settings: &RenderSettings| {
+        data.ensure_grid(&gpu.device, &gpu.queue, renderer, cloud, &settings.voxels)
+            .expect("voxelize")
+    };
+    assert!(ensure(data, &settings));
+    assert_eq!(data.grid.as_ref().map(|g| g.dims.x), Some(128));
+    assert!(!ensure(data, &settings));
+    settings.volume.opacity_scale = 2.0;
+    assert!(
+        !ensure(data, &settings),
+        "opacity must not rebuild the grid"
+    );
+    settings.voxels.resolution = Some(64);
+    assert!(ensure(data, &settings));
+    assert_eq!(data.grid.as_ref().map(|g| g.dims.x), Some(64));
+}
+
+#[test]
+fn degenerate_clouds_render_without_failing() {
+    let one = Point {
+        position: [0.2, 0.1, -0.3],
+        scalar: 0.8,
+        hp: 0.1,
+    };
+    for points in [vec![], vec![one], vec![one; 1000]] {
+        let n = points.len();
+        let mut scene = scene(points);
+        let image = render(&mut scene, &volume_settings(TransferPreset::Glacial), false);
+        assert_eq!(image.dimensions(), SIZE, "{n} points");
+    }
+}

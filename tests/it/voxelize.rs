@@ -1,0 +1,371 @@
+//! GPU voxelization against a CPU reference (f64), normalization, degenerate clouds and limits.
+
+use crate::common;
+
+use loudscape::data::cloud::Point;
+use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::frame::FrameBinding;
+use loudscape::render::grid::reference::ReferenceGrid;
+use loudscape::render::grid::voxelize::{
+    FIXED_POINT_SCALE, HISTOGRAM_BINS_PER_OCTAVE, HP_FIXED_POINT_SCALE, VoxelStats, VoxelizeError,
+    VoxelizePass, grid_box, reference_sum, voxel_of, voxels_per_unit,
+};
+
+struct Built {
+    density: Vec<f32>,
+    hp_mean: Vec<f32>,
+    stats: VoxelStats,
+}
+
+fn build(gpu: &GpuContext, points: &[Point], resolution: u32, sigma: f32) -> Built {
+    let frame = FrameBinding::new(&gpu.device);
+    let pass = VoxelizePass::new(&gpu.device, &frame);
+    let (grid, stats) = pass
+        .voxelize(&gpu.device, &gpu.queue, points, resolution, sigma)
+        .expect("voxelize");
+    Built {
+        density: grid
+            .read_field(&gpu.device, &gpu.queue, &grid.density)
+            .expect("read density"),
+        hp_mean: grid
+            .read_field(&gpu.device, &gpu.queue, &grid.hp_mean)
+            .expect("read hp"),
+        stats,
+    }
+}
+
+/// A small deterministic generator (xorshift) so the clouds are the same on every run.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+fn random_cloud(seed: u64, count: usize) -> Vec<Point> {
+    let mut rng = Rng(seed.wrapping_mul(0x2545_f491_4f6c_dd1d) | 1);
+    let mut points: Vec<Point> = (0..count)
+        .map(|_| {
+            // Clustered so that voxels hold many points (and sums carry).
+            let c = (rng.next() * 4.0).floor() * 0.4 - 0.6;
+            Point {
+                position: [
+                    c + (rng.next() - 0.5) * 0.5,
+                    (rng.next() * 2.0 - 1.0) * 0.7,
+                    rng.next() * 2.0 - 1.0,
+                ],
+                scalar: rng.next(),
+                hp: rng.next(),
+            }
+        })
+        .collect();
+    // The cloud's own extremes: points exactly on its bounding box faces and corners.
+    for corner in [
+        [-1.0, -1.0, -1.0],
+        [1.0, 1.0, 1.0],
+        [1.0, -1.0, 0.0],
+        [-1.0, 0.0, 1.0],
+    ] {
+        points.push(Point {
+            position: corner,
+            scalar: 1.0,
+            hp: 0.0,
+        });
+    }
+    points
+}
+
+/// Points exactly on voxel faces of the grid `points` will get (the box depends only on the
+/// extremes, which these points do not move).
+fn on_voxel_faces(points: &[Point], resolution: u32) -> Vec<Point> {
+    let (min, max) = grid_box(points);
+    let size = (max - min) / resolution as f32;
+    (0..resolution)
+        .step_by(7)
+        .map(|k| {
+            let p = min + size * k as f32;
+            Point {
+                position: [p.x.max(-1.0), p.y.max(-1.0), p.z.max(-1.0)],
+                scalar: 0.5,
+                hp: 1.0,
+            }
+        })
+        .collect()
+}
+
+/// GPU and CPU agree: same voxels, sums within the fixed-point rounding, and the GPU's
+/// reference sum is the CPU's histogram percentile.
+fn assert_matches_reference(points: &[Point], resolution: u32, sigma: f32) {
+    let gpu = common::gpu();
+    let built = build(&gpu, points, resolution, sigma);
+    let mut reference = ReferenceGrid::build(points, resolution);
+    reference.smooth(sigma);
+    let cpu_reference = reference_sum(reference.sums.iter().map(|&s| s as f32));
+    let gpu_reference = built.stats.reference_sum;
+    let bins_apart = (gpu_reference / cpu_reference).log2().abs() * HISTOGRAM_BINS_PER_OCTAVE;
+    assert!(
+        bins_apart < 1.01,
+        "reference sums differ: GPU {gpu_reference}, CPU {cpu_reference}"
+    );
+    let nonempty = reference.sums.iter().filter(|&&s| s > 0.0).count() as u32;
+    assert_eq!(built.stats.nonempty, nonempty, "non-empty voxels");
+    let quantum = 0.5 / f64::from(FIXED_POINT_SCALE);
+    let mut worst = 0.0f64;
+    for (i, (&gpu_density, &sum)) in built.density.iter().zip(&reference.sums).enumerate() {
+        let expected = (sum / f64::from(gpu_reference)).min(1.0);
+        // Fixed-point rounding (half a unit per point) plus f32 arithmetic.
+        let count = f64::from(reference.counts[i].max(1));
+        let tolerance = (count * quantum) / f64::from(gpu_reference) + 2e-6 + expected * 2e-6;
+        let error = (f64::from(gpu_density) - expected).abs();
+        worst = worst.max(error / tolerance);
+        assert!(
+            error <= tolerance,
+            "voxel {i}: GPU density {gpu_density}, CPU {expected} (sum {sum})"
+        );
+        let hp_error = (f64::from(built.hp_mean[i]) - reference.hp_mean[i]).abs();
+        assert!(
+            hp_error <= 0.5 / f64::from(HP_FIXED_POINT_SCALE) + 2e-6,
+            "voxel {i}: GPU hp {}, CPU {}",
+            built.hp_mean[i],
+            reference.hp_mean[i]
+        );
+    }
+    eprintln!("worst error / tolerance: {worst:.3}");
+}
+
+#[test]
+fn gpu_voxelization_matches_cpu_reference_on_random_clouds() {
+    for (seed, count, resolution) in [(1, 5_000, 64), (2, 60_000, 64), (3, 200_000, 96)] {
+        let mut points = random_cloud(seed, count);
+        points.extend(on_voxel_faces(&points, resolution));
+        assert_matches_reference(&points, resolution, 0.0);
+    }
+}
+
+#[test]
+fn gpu_smoothing_matches_cpu_reference() {
+    let points = random_cloud(4, 30_000);
+    assert_matches_reference(&points, 64, 1.2);
+}
+
+#[test]
+fn normalization_uses_a_high_percentile_so_one_hot_voxel_does_not_flatten_the_field() {
+    let gpu = common::gpu();
+    let mut points = random_cloud(5, 50_000);
+    // One voxel with a thousand times the loudness of any other.
+    points.extend((0..20_000).map(|_| Point {
+        position: [0.1, 0.1, 0.1],
+        scalar: 1.0,
+        hp: 0.5,
+    }));
+    let built = build(&gpu, &points, 64, 0.0);
+    let reference = ReferenceGrid::build(&points, 64);
+    let mut sums: Vec<f64> = reference
+        .sums
+        .iter()
+        .copied()
+        .filter(|&s| s > 0.0)
+        .collect();
+    sums.sort_by(f64::total_cmp);
+    let rank = ((0.99 * sums.len() as f64).ceil() as usize).max(1);
+    let exact = sums[rank - 1] as f32;
+    let r = built.stats.reference_sum;
+    // The reference is the exact 99th percentile rounded up to its histogram bin's edge.
+    assert!(r >= exact && r <= exact * 2f32.powf(1.0 / HISTOGRAM_BINS_PER_OCTAVE) * 1.0001);
+    // The hot voxel saturates; the rest keeps its spread; at most 1 % clamp.
+    assert_eq!(built.density.iter().cloned().fold(0.0, f32::max), 1.0);
+    let mut nonempty: Vec<f32> = built.density.iter().copied().filter(|&d| d > 0.0).collect();
+    nonempty.sort_by(f32::total_cmp);
+    let median = nonempty[nonempty.len() / 2];
+    assert!(
+        median > 0.2,
+        "median non-empty density {median} is flattened"
+    );
+    assert!(built.stats.clamped as usize <= nonempty.len() / 100 + 1);
+}
+
+#[test]
+fn degenerate_clouds_give_sensible_grids() {
+    let gpu = common::gpu();
+    // Empty: all zero, hp 0.5.
+    let empty = build(&gpu, &[], 64, 0.7);
+    assert!(empty.density.iter().all(|&d| d == 0.0));
+    assert!(empty.hp_mean.iter().all(|&h| h == 0.5));
+    assert_eq!(empty.stats.nonempty, 0);
+
+    // One point: one voxel at density 1, in the middle of a small box.
+    let one = [Point {
+        position: [0.25, -0.5, 1.0],
+        scalar: 0.3,
+        hp: 0.9,
+    }];
+    let (min, max) = grid_box(&one);
+    assert!((max - min).min_element() > 0.0);
+    let built = build(&gpu, &one, 64, 0.0);
+    let lit: Vec<usize> = (0..built.density.len())
+        .filter(|&i| built.density[i] > 0.0)
+        .collect();
+    assert_eq!(lit.len(), 1);
+    assert_eq!(built.density[lit[0]], 1.0);
+    assert!((built.hp_mean[lit[0]] - 0.9).abs() < 1e-5);
+
+    // All points identical: the same, with the mean hp. Enough points that both fixed-point
+    // sums carry into their high words many times.
+    let same: Vec<Point> = (0..300_000)
+        .map(|i| Point {
+            position: [-1.0, 1.0, 0.0],
+            scalar: 1.0,
+            hp: if i % 2 == 0 { 0.0 } else { 1.0 },
+        })
+        .collect();
+    let built = build(&gpu, &same, 64, 0.0);
+    let lit: Vec<usize> = (0..built.density.len())
+        .filter(|&i| built.density[i] > 0.0)
+        .collect();
+    assert_eq!(lit.len(), 1);
+    assert!((built.hp_mean[lit[0]] - 0.5).abs() < 1e-5);
+
+    // A flat cloud (all at one level): the box still has depth and the points sit mid-box.
+    let flat: Vec<Point> = (0..4096)
+        .map(|i| Point {
+            position: [
+                (i % 64) as f32 / 31.5 - 1.0,
+                0.3,
+                (i / 64) as f32 / 31.5 - 1.0,
+            ],
+            scalar: ((i % 7) as f32) / 6.0,
+            hp: 0.2,
+        })
+        .collect();
+    let (min, max) = grid_box(&flat);
+    assert!(max.y - min.y > 0.05 && (min.y + max.y) * 0.5 - 0.3 < 1e-6);
+    let built = build(&gpu, &flat, 64, 0.0);
+    assert!(built.density.iter().all(|d| (0.0..=1.0).contains(d)));
+    assert!(built.density.iter().any(|&d| d > 0.5));
+
+    // Values at and past the range edges: clamped into [0, 1], nothing lost.
+    let edges = [
+        Point {
+            position: [-1.0, -1.0, -1.0],
+            scalar: 0.0,
+            hp: 0.0,
+        },
+        Point {
+            position: [1.0, 1.0, 1.0],
+            scalar: 1.0,
+            hp: 1.0,
+        },
+        Point {
+            position: [1.0, -1.0, 1.0],
+            scalar: 1.5,
+            hp: -0.2,
+        },
+    ];
+    let built = build(&gpu, &edges, 64, 0.0);
+    let reference = ReferenceGrid::build(&edges, 64);
+    assert_eq!(reference.counts.iter().sum::<u32>(), 3);
+    assert!(built.density.iter().all(|d| (0.0..=1.0).contains(d)));
+    assert!(built.hp_mean.iter().all(|h| (0.0..=1.0).contains(h)));
+    assert_eq!(
+        built.stats.nonempty, 2,
+        "the scalar-0 point adds no loudness"
+    );
+}
+
+/// More than 2^24 points, most of them in one voxel (the old 24-bit count wrapped there): the
+/// count, the hp mean and the loudness sum stay exact, and the CPU reference agrees.
+#[test]
+fn clouds_over_2_pow_24_points_voxelize_exactly() {
+    // 17 * 2^20 = 17,825,792 points in one voxel, hp alternating 0.25 and 0.5: the mean is 0.375
+    // and every sum is exact in the fixed point and in f32.
+    let crowded = 17usize << 20;
+    assert!(crowded > 1 << 24);
+    let mut points: Vec<Point> = (0..crowded)
+        .map(|i| Point {
+            position: [-0.5, -0.5, -0.5],
+            scalar: 0.5,
+            hp: if i % 2 == 0 { 0.25 } else { 0.5 },
+        })
+        .collect();
+    points.extend(std::iter::repeat_n(
+        Point {
+            position: [0.5, 0.5, 0.5],
+            scalar: 1.0,
+            hp: 1.0,
+        },
+        1000,
+    ));
+    for corner in [[-1.0; 3], [1.0; 3]] {
+        points.push(Point {
+            position: corner,
+            scalar: 1.0,
+            hp: 0.0,
+        });
+    }
+    let resolution = 64;
+    let gpu = common::gpu();
+    let built = build(&gpu, &points, resolution, 0.0);
+    let (min, max) = grid_box(&points);
+    let dims = glam::UVec3::splat(resolution);
+    let per_unit = voxels_per_unit(dims, min, max);
+    let index = |p: [f32; 3]| {
+        let v = voxel_of(glam::Vec3::from_array(p), min, per_unit, dims);
+        (v.x + dims.x * (v.y + dims.y * v.z)) as usize
+    };
+    let (a, b) = (index([-0.5; 3]), index([0.5; 3]));
+    assert_eq!(built.stats.nonempty, 4);
+    assert_eq!(built.hp_mean[a], 0.375, "hp mean of the crowded voxel");
+    assert_eq!(built.hp_mean[b], 1.0);
+    assert_eq!(built.hp_mean[index([-1.0; 3])], 0.0);
+    // The crowded voxel holds the largest sum (8,912,896), beyond the histogram's top bin
+    // (2^22.6): the reference is that bin's upper edge, as on the CPU, and the voxel clamps to 1.
+    let reference = ReferenceGrid::build(&points, resolution);
+    assert_eq!(reference.counts[a] as usize, crowded);
+    assert_eq!(reference.sums[a], (crowded / 2) as f64);
+    let cpu_reference = reference_sum(reference.sums.iter().map(|&s| s as f32));
+    assert_eq!(built.stats.reference_sum, cpu_reference);
+    assert_eq!(built.density[a], 1.0);
+    assert_eq!(built.density[b], 1000.0 / cpu_reference);
+    assert_matches_reference(&points, resolution, 0.0);
+}
+
+#[test]
+fn grids_beyond_the_limits_are_refused_with_a_clear_message() {
+    let gpu = common::gpu();
+    for bad in [0, 63, 385, 4096] {
+        let err = VoxelizePass::check_resolution(&gpu.device, bad).expect_err("out of range");
+        assert!(err.to_string().contains("64 to 384"), "{err}");
+    }
+    // A device that allows 64 MiB per buffer cannot hold 256^3 64-bit sums (128 MiB).
+    let limits = wgpu::Limits {
+        max_storage_buffer_binding_size: 64 << 20,
+        max_buffer_size: 64 << 20,
+        ..gpu.adapter.limits()
+    };
+    let (device, _queue) =
+        pollster::block_on(gpu.adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("test::small_device"),
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .expect("device with small limits");
+    match VoxelizePass::check_resolution(&device, 256) {
+        Err(VoxelizeError::TooLarge { largest, .. }) => assert_eq!(largest, 203),
+        other => panic!("expected TooLarge, got {other:?}"),
+    }
+    assert!(VoxelizePass::check_resolution(&device, 200).is_ok());
+    let frame = FrameBinding::new(&device);
+    let pass = VoxelizePass::new(&device, &frame);
+    let err = pass
+        .prepare(&device, &[], 300, 0.0)
+        .err()
+        .expect("too large");
+    assert!(
+        err.to_string()
+            .contains("choose a resolution of 203 or less"),
+        "{err}"
+    );
+}

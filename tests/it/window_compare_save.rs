@@ -1,0 +1,140 @@
+//! Save PNG while comparing saves what the view shows: in side by side both halves (A, the
+//! gap, B), in the difference view the difference picture, not A alone. Needs a display
+//! (`make test` runs it under xvfb-run).
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Runs the window on the demo song compared with itself, presses `press`, and
+/// returns the one PNG Ctrl+S saved (no dialog can open: it lands in the current folder).
+fn save(dir: &Path, press: &[&str]) -> image::RgbaImage {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let _ = std::fs::remove_dir_all(dir);
+    std::fs::create_dir_all(dir).unwrap();
+    let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
+    command
+        .current_dir(dir)
+        .env("DBUS_SESSION_BUS_ADDRESS", "")
+        .env("PATH", "/usr/bin/false-folder-without-zenity")
+        .arg(repo.join("data/demo_song.ply"))
+        .arg("--compare")
+        // B is A again: its audio is found, so no message changes the view's size between
+        // runs, and the difference picture is still unlike A's points.
+        .arg(repo.join("data/demo_song.ply"))
+        .arg("--screenshot")
+        .arg(dir.join("window.png"));
+    let err = common::run_pressing(&mut command, press);
+    let saved: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("loudscape-"))
+        })
+        .collect();
+    assert_eq!(saved.len(), 1, "one PNG saved: {saved:?}\n{err}");
+    assert!(
+        err.contains(&format!("saved {}", saved[0].display())),
+        "the window says where: {err}"
+    );
+    image::open(&saved[0]).unwrap().to_rgba8()
+}
+
+#[test]
+fn save_png_while_comparing_saves_what_the_view_shows() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some(),
+        "this test needs a display: run it under xvfb-run"
+    );
+    let out = common::output_dir();
+    let side = save(
+        &out.join("compare_save_side"),
+        &["shot-size=900x500", "compare=side", "Ctrl+S"],
+    );
+    let (w, h) = side.dimensions();
+    assert_eq!((w, h), (900, 500), "the chosen size");
+    // The gap between the halves, in the compare picture's gap colour, runs down the middle.
+    let gap = loudscape::ui::compare_shot::GAP;
+    let half = (w - gap) / 2;
+    let gap_rows = (0..h)
+        .filter(|&y| {
+            let p = side.get_pixel(half + gap / 2, y);
+            (p[0], p[1], p[2]) == (90, 96, 110)
+        })
+        .count();
+    assert!(
+        gap_rows as f64 > 0.95 * f64::from(h),
+        "no gap between two halves in the {w}x{h} picture ({gap_rows} rows)"
+    );
+
+    let difference = save(
+        &out.join("compare_save_difference"),
+        &["shot-size=900x500", "compare=difference", "Ctrl+S"],
+    );
+    let only_a = save(
+        &out.join("compare_save_off"),
+        &["shot-size=900x500", "compare=off", "Ctrl+S"],
+    );
+    assert_eq!(difference.dimensions(), only_a.dimensions());
+    let (share, _) = common::difference(&difference, &only_a, 40);
+    assert!(
+        share > 0.05,
+        "the difference picture looks like A alone ({:.1}% of pixels differ)",
+        share * 100.0
+    );
+}
+
+/// Side by side follows the selected view: in Volume both halves draw the volume (its density
+/// colours), not the points (the song's saturated reds), and each half has its colour key.
+#[test]
+fn side_by_side_draws_the_selected_view_in_both_halves() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some(),
+        "this test needs a display: run it under xvfb-run"
+    );
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let shot = common::output_dir().join("window_side_by_side_volume.png");
+    let _ = std::fs::remove_file(&shot);
+    let run = |view: &str| {
+        let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+            .arg(repo.join("data/demo_song.ply"))
+            .arg("--compare")
+            .arg(repo.join("data/demo_song.ply"))
+            .args(["--view", view, "--screenshot"])
+            .arg(&shot)
+            .output()
+            .expect("start loudscape");
+        let err = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(output.status.success(), "loudscape failed: {err}");
+        image::open(&shot).unwrap().to_rgba8()
+    };
+    // The points' red (percussive) pixels in each half of the view, right of the side panel.
+    let reds = |image: &image::RgbaImage| {
+        let (w, h) = image.dimensions();
+        let left = 300;
+        let middle = left + (w - left) / 2;
+        let count = |x0: u32, x1: u32| {
+            (0..h * 2 / 3)
+                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                .filter(|&(x, y)| {
+                    let p = image.get_pixel(x, y);
+                    p[0] > 150 && p[1] < 90 && p[2] < 90
+                })
+                .count()
+        };
+        (count(left, middle), count(middle, w))
+    };
+    let points = reds(&run("points"));
+    assert!(
+        points.0 > 2000 && points.1 > 2000,
+        "the points view shows red points in both halves: {points:?}"
+    );
+    let volume = reds(&run("volume"));
+    assert!(
+        volume.0 < points.0 / 20 && volume.1 < points.1 / 20,
+        "in Volume the halves still draw points: {volume:?} red pixels (points: {points:?})"
+    );
+}
