@@ -7,8 +7,11 @@ use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::reference::ReferenceGrid;
 use loudscape::render::grid::voxelize::{
-    FIXED_POINT_SCALE, HISTOGRAM_BINS_PER_OCTAVE, HP_FIXED_POINT_SCALE, VoxelStats, VoxelizeError,
-    VoxelizePass, grid_box, reference_sum, voxel_of, voxels_per_unit,
+    FIXED_POINT_SCALE, HP_FIXED_POINT_SCALE, VoxelStats, VoxelizeError, VoxelizePass,
+    VoxelizeRequest,
+};
+use loudscape::render::grid::voxelize_cpu::{
+    HISTOGRAM_BINS_PER_OCTAVE, grid_box, reference_sum, voxel_of, voxels_per_unit,
 };
 
 struct Built {
@@ -21,7 +24,11 @@ fn build(gpu: &GpuContext, points: &[Point], resolution: u32, sigma: f32) -> Bui
     let frame = FrameBinding::new(&gpu.device);
     let pass = VoxelizePass::new(&gpu.device, &frame);
     let (grid, stats) = pass
-        .voxelize(&gpu.device, &gpu.queue, points, resolution, sigma)
+        .voxelize(
+            &gpu.device,
+            &gpu.queue,
+            &VoxelizeRequest::new(points, resolution, sigma),
+        )
         .expect("voxelize");
     Built {
         density: grid
@@ -360,7 +367,7 @@ fn grids_beyond_the_limits_are_refused_with_a_clear_message() {
     let frame = FrameBinding::new(&device);
     let pass = VoxelizePass::new(&device, &frame);
     let err = pass
-        .prepare(&device, &[], 300, 0.0)
+        .prepare(&device, &VoxelizeRequest::new(&[], 300, 0.0))
         .err()
         .expect("too large");
     assert!(

@@ -11,7 +11,7 @@ use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
 use loudscape::render::grid::voxelize::{
-    MAX_RESOLUTION, VoxelSettings, VoxelizePass, default_resolution,
+    MAX_RESOLUTION, VoxelSettings, VoxelizePass, VoxelizeRequest, default_resolution,
 };
 use loudscape::render::surface::cpu_mesh::CpuMesh;
 use loudscape::render::surface::draw::warm_cool;
@@ -55,9 +55,7 @@ pub fn voxel_grid(
         .voxelize(
             &gpu.device,
             &gpu.queue,
-            &cloud.points,
-            res,
-            VoxelSettings::default().smoothing_sigma,
+            &VoxelizeRequest::new(&cloud.points, res, VoxelSettings::default().smoothing_sigma),
         )
         .with_context(|| format!("{}: voxelizing", cloud.path.display()))?;
     Ok(grid)

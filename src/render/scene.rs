@@ -23,8 +23,9 @@ use crate::view::frame_view::FrameView;
 use crate::render::grid::VoxelGrid;
 use crate::render::grid::difference::DifferencePass;
 use crate::render::grid::voxelize::{
-    VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass, grid_box_mapped,
+    VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass, VoxelizeRequest,
 };
+use crate::render::grid::voxelize_cpu::grid_box_mapped;
 use crate::render::volume::{VolumeGpu, VolumePass, VolumeSettings};
 
 /// Staging per piece when [`SceneData::upload`] sends a cloud's points.
@@ -267,25 +268,16 @@ impl SceneData {
         // From the points already on the device: no second upload. On the stored axis the
         // host's copy of the points is not read (a caller may have dropped it); a remapped
         // axis reads it for the remapped box.
-        let (grid, stats) = match self.freq.as_ref() {
-            None => renderer.voxelize.voxelize_buffers(
-                device,
-                queue,
-                self.points.chunk_buffers(),
-                (cloud.bounds.min, cloud.bounds.max),
-                resolution,
-                settings.smoothing_sigma,
-            )?,
-            Some(mapping) => renderer.voxelize.voxelize_buffers_in_box(
-                device,
-                queue,
-                self.points.chunk_buffers(),
-                grid_box_mapped(&cloud.points, Some(mapping)),
-                resolution,
-                settings.smoothing_sigma,
-                Some(mapping),
-            )?,
-        };
+        let mapping = self.freq.as_ref();
+        let request = VoxelizeRequest::on_device(
+            self.points.chunk_buffers(),
+            (cloud.bounds.min, cloud.bounds.max),
+            resolution,
+            settings.smoothing_sigma,
+        )
+        .mapped(mapping)
+        .in_box(mapping.map(|m| grid_box_mapped(&cloud.points, Some(m))));
+        let (grid, stats) = renderer.voxelize.voxelize(device, queue, &request)?;
         self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
         self.grid = Some(grid);
         self.grid_stats = Some(stats);
