@@ -405,13 +405,8 @@ impl Renderer {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
             if settings.view == ViewKind::Surface {
-                self.surface.prepare(
-                    queue,
-                    encoder,
-                    &data.surface,
-                    data.grid.as_ref(),
-                    &settings.surface,
-                );
+                self.surface
+                    .prepare(queue, &data.surface, data.grid.as_ref(), &settings.surface);
             }
             if let (ViewKind::Volume, Some(volume)) = (settings.view, &data.volume) {
                 self.volume

@@ -517,15 +517,18 @@ impl eframe::App for LoudscapeApp {
         self.poll_compare(&ctx, frame);
         self.poll_video_export(&ctx);
         self.fetch_grid(frame);
-        let surface_status = frame
+        // The surface's status, read once a frame.
+        let surface = frame
             .wgpu_render_state()
             .zip(self.active().map(|l| l.id))
-            .map(|(render_state, id)| ViewResources::surface_status(render_state, id));
-        self.surface_busy = self.settings.view == ViewKind::Surface
-            && surface_status.as_ref().is_some_and(|status| status.2);
-        self.surface_triangles = surface_status
-            .and_then(|status| status.0)
-            .map_or(0, |counts| counts.triangles());
+            .map(|(render_state, id)| ViewResources::surface_status(render_state, id))
+            .unwrap_or_default();
+        self.surface_busy = self.settings.view == ViewKind::Surface && surface.extracting;
+        self.surface_triangles = surface.triangles();
+        self.surface_empty = surface.found_nothing();
+        // The Volume and Surface views come back for a surface on the worker.
+        self.needs_repaint |= surface.extracting && self.settings.view != ViewKind::Points;
+        self.surface_error = surface.error;
         // Set again by the isovalue slider (or a scripted sweep) while it is dragged.
         self.iso_dragging = false;
         if self.surface_busy {

@@ -210,11 +210,5 @@ impl LoudscapeApp {
         if let Some(message) = failure {
             self.messages.error(message);
         }
-        let (counts, error, again) = ViewResources::surface_status(render_state, loaded.id);
-        self.surface_error = error;
-        self.surface_empty = counts.is_some_and(|c| c.fits() && c.triangles() == 0);
-        if again {
-            self.needs_repaint = true;
-        }
     }
 }

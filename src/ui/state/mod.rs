@@ -98,7 +98,7 @@ pub(super) struct LoudscapeApp {
     pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
     pub(super) iso_sweep: Option<IsoSweep>,
-    /// Draw again next frame (the surface is still growing its buffers).
+    /// Draw again next frame (what it shows is under way: a grid build, a surface on the worker).
     pub(super) needs_repaint: bool,
     /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
     pub(super) moving_divisor: [u32; 3],

@@ -1,4 +1,4 @@
-//! The extraction itself, shared by the blocking path ([`SurfacePass`]) and the window's
+//! The extraction driver, shared by the blocking path ([`SurfacePass`]) and the window's
 //! worker thread ([`background`]): both methods' pipelines ([`Methods`]) and
 //! [`extract_until_fits`], which extracts, reads the counters back and grows the buffers until
 //! the surface fits. On the worker the extraction goes to the GPU in slices, one submission per
