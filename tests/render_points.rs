@@ -5,6 +5,7 @@ mod common;
 use std::path::PathBuf;
 
 use loudscape::data::cloud::{self, DataMode, Point, PointCloud};
+use loudscape::render::colormap::HpColourMap;
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointStyle, lod_stride};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
@@ -98,7 +99,7 @@ fn a_point_lands_where_it_projects_in_its_palette_colour() {
             .project(point.position.into())
             .expect("in front of the camera");
         let got = image.get_pixel(pixel.x as u32, pixel.y as u32);
-        let want = loudscape::render::palette::hp_color_u8(point.hp);
+        let want = HpColourMap::Classic.points().sample_u8(point.hp);
         for c in 0..3 {
             // The centre of the disc is unshaded; allow for rounding.
             assert!(

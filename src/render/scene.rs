@@ -71,9 +71,6 @@ pub struct RenderSettings {
     pub volume: VolumeSettings,
     /// How the surface view extracts and lights the isosurface.
     pub surface: SurfaceSettings,
-    /// Draw the points (level of detail) instead of the volume while the camera moves: for
-    /// devices where a volume frame takes too long to orbit smoothly (software rasterizers).
-    pub points_while_moving: bool,
     /// Colour maps (hp, density) and the background (`render::colormap`).
     pub colours: Colours,
     /// Which of the surface's meshes the Surface view draws (level of detail: the window asks
@@ -91,7 +88,6 @@ impl Default for RenderSettings {
             voxels: VoxelSettings::default(),
             volume: VolumeSettings::default(),
             surface: SurfaceSettings::default(),
-            points_while_moving: false,
             colours: Colours::default(),
             surface_detail: SurfaceDetail::Full,
         }
@@ -190,7 +186,7 @@ impl SceneData {
     }
 
     fn with_points(device: &wgpu::Device, cloud: &PointCloud, points: PointsGpu) -> Self {
-        let (box_min, box_max) = data_box(cloud);
+        let (box_min, box_max) = data_box();
         let axes = cloud.meta.axes.clone();
         Self {
             points,
@@ -347,7 +343,7 @@ pub fn world_box(world_from_data: Mat4, min: Vec3, max: Vec3) -> (Vec3, Vec3) {
 }
 
 /// The box the axes are drawn on: the full normalized cube, where tick positions live.
-pub fn data_box(_cloud: &PointCloud) -> (Vec3, Vec3) {
+pub fn data_box() -> (Vec3, Vec3) {
     (Vec3::splat(-1.0), Vec3::splat(1.0))
 }
 
@@ -431,8 +427,7 @@ impl Renderer {
                     settings.surface_detail,
                 );
             }
-            // A slow device may ask for the points as a stand-in while the camera moves.
-            (ViewKind::Volume, Some(volume)) if !(view.moving && settings.points_while_moving) => {
+            (ViewKind::Volume, Some(volume)) => {
                 self.volume.draw(&mut pass, &self.frame, volume);
             }
             // Until a grid is built (ensure_grid), the points stand in.

@@ -115,7 +115,7 @@ impl LoudscapeApp {
             ViewResources::remove(render_state, old.id);
         }
         ViewResources::upload(render_state, id, &cloud);
-        let (box_min, box_max) = crate::render::scene::data_box(&cloud);
+        let (box_min, box_max) = crate::render::scene::data_box();
         let world_from_data = world_from_data(cloud.meta.mode);
         let labels = labels::axis_labels_for_box(&cloud, box_min, box_max);
         let loaded = Loaded {
