@@ -186,11 +186,6 @@ impl ExtractedSurface {
         self.lock().counts
     }
 
-    /// Why the surface is incomplete, when it is (it needs more room than the GPU has).
-    pub fn error(&self) -> Option<String> {
-        self.lock().error.clone()
-    }
-
     /// True while an extraction runs in the background or its result waits to be installed:
     /// the window should come back (and show that it is busy).
     pub fn needs_another_frame(&self) -> bool {
