@@ -11,7 +11,7 @@ use loudscape::data::synthetic::synthetic_song;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::gpu::timing::Timestamps;
-use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob};
+use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob, VoxelizeRequest};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
@@ -178,10 +178,10 @@ pub fn run(
     ];
     for (name, cloud, resolution, sigma) in stages {
         let start = Instant::now();
-        let job: VoxelizeJob =
-            renderer
-                .voxelize
-                .prepare(&gpu.device, &cloud.points, resolution, sigma)?;
+        let job: VoxelizeJob = renderer.voxelize.prepare(
+            &gpu.device,
+            &VoxelizeRequest::new(&cloud.points, resolution, sigma),
+        )?;
         let upload = start.elapsed().as_secs_f64() * 1e3;
         let mut times = Vec::new();
         let mut pass_times: Vec<Vec<f64>> = Vec::new();

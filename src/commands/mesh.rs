@@ -7,14 +7,14 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use loudscape::data::cloud::PointCloud;
 use loudscape::data::field::Field;
+use loudscape::render::colormap::HpColourMap;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
 use loudscape::render::grid::voxelize::{
-    MAX_RESOLUTION, VoxelSettings, VoxelizePass, default_resolution,
+    MAX_RESOLUTION, VoxelSettings, VoxelizePass, VoxelizeRequest, default_resolution,
 };
 use loudscape::render::surface::cpu_mesh::CpuMesh;
-use loudscape::render::surface::draw::warm_cool;
 use loudscape::render::surface::pass::SurfacePass;
 use loudscape::render::surface::state::ExtractedSurface;
 use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
@@ -55,9 +55,7 @@ pub fn voxel_grid(
         .voxelize(
             &gpu.device,
             &gpu.queue,
-            &cloud.points,
-            res,
-            VoxelSettings::default().smoothing_sigma,
+            &VoxelizeRequest::new(&cloud.points, res, VoxelSettings::default().smoothing_sigma),
         )
         .with_context(|| format!("{}: voxelizing", cloud.path.display()))?;
     Ok(grid)
@@ -228,7 +226,7 @@ pub fn write_mesh(
 }
 
 fn rgb8(hp: f32) -> [u8; 3] {
-    warm_cool(hp).map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8)
+    HpColourMap::Classic.surface().sample_u8(hp)
 }
 
 fn write_ply(w: &mut impl Write, mesh: &CpuMesh, comment: &str) -> std::io::Result<()> {
@@ -265,7 +263,7 @@ fn write_obj(w: &mut impl Write, mesh: &CpuMesh, comment: &str) -> std::io::Resu
         "# v x y z r g b (warm-to-cool hp colour), vn: unit normals"
     )?;
     for (p, &hp) in mesh.positions.iter().zip(&mesh.hp) {
-        let c = warm_cool(hp);
+        let c = HpColourMap::Classic.surface().sample(hp);
         writeln!(
             w,
             "v {} {} {} {:.4} {:.4} {:.4}",

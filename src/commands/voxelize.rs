@@ -15,7 +15,8 @@ use anyhow::{Context, bail};
 use glam::{UVec3, Vec3};
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
-use loudscape::render::grid::voxelize::{PERCENTILE, VoxelizePass, default_resolution};
+use loudscape::render::grid::voxelize::{VoxelizePass, VoxelizeRequest, default_resolution};
+use loudscape::render::grid::voxelize_cpu::PERCENTILE;
 
 use crate::commands::args::{
     check_not_input, check_output_folder, check_resolution, check_smoothing, load_cloud,
@@ -77,9 +78,7 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
         .voxelize(
             &gpu.device,
             &gpu.queue,
-            &cloud.points,
-            resolution,
-            args.smooth,
+            &VoxelizeRequest::new(&cloud.points, resolution, args.smooth),
         )
         .with_context(|| format!("{}", args.input.display()))?;
     let density = grid.read_field(&gpu.device, &gpu.queue, &grid.density)?;

@@ -27,12 +27,28 @@
 //! out. Box lines, ticks, labels and legends switch to dark ink.
 
 use crate::render::colormap_data::{CIVIDIS, INFERNO, MAGMA, PUOR, VIRIDIS};
-use crate::render::palette::HP_PALETTE;
-use crate::render::surface::draw::{WARM_COOL, warm_cool};
 use crate::render::transfer::TransferPreset;
 
 /// Stops in one map of the palette uniform: matplotlib's listed maps have 256.
 pub const MAX_STOPS: usize = 256;
+
+/// The points' Classic map, the five-stop harmonic-percussive palette (paper 3.4): red, orange,
+/// white, light blue, deep blue, from percussive (hp = 0) to harmonic (hp = 1), gamma-encoded.
+pub const HP_PALETTE: [[f32; 3]; 5] = [
+    [0.843, 0.188, 0.153],
+    [0.992, 0.553, 0.235],
+    [0.969, 0.969, 0.969],
+    [0.569, 0.749, 0.859],
+    [0.129, 0.400, 0.675],
+];
+
+/// The surface's Classic map: warm (hp = 0, percussive), a light neutral (0.5), cool (hp = 1,
+/// harmonic), gamma-encoded.
+pub const WARM_COOL: [[f32; 3]; 3] = [
+    [0.851, 0.325, 0.192],
+    [0.914, 0.882, 0.827],
+    [0.231, 0.443, 0.780],
+];
 
 /// A colour map: stops evenly spaced on [0, 1] (gamma-encoded RGB), optionally read backwards.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -371,11 +387,6 @@ impl PaletteUniforms {
     }
 }
 
-/// The surface's Classic map sampled like the shader, for callers that want one colour.
-pub fn classic_surface(hp: f32) -> [f32; 3] {
-    warm_cool(hp)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -483,19 +494,40 @@ mod tests {
         }
     }
 
+    /// The Classic hp maps are the paper's palettes: through each stop, evenly spaced, and
+    /// straight between neighbours; the transfer function colours the preset's shape with the
+    /// preset's own stops.
     #[test]
     fn classic_maps_are_the_old_palettes() {
-        for i in 0..=40 {
-            let t = i as f32 / 40.0;
-            assert_eq!(
-                HpColourMap::Classic.points().sample(t),
-                crate::render::palette::hp_color(t)
-            );
-            assert_eq!(HpColourMap::Classic.surface().sample(t), warm_cool(t));
-            let colours = Colours::default();
-            for preset in TransferPreset::ALL {
-                assert_eq!(colours.transfer(preset, t), preset.sample(t));
+        let maps = [
+            (HpColourMap::Classic.points(), &HP_PALETTE[..]),
+            (HpColourMap::Classic.surface(), &WARM_COOL[..]),
+        ];
+        for (ramp, stops) in maps {
+            let last = (stops.len() - 1) as f32;
+            for (k, pair) in stops.windows(2).enumerate() {
+                let (a, b) = (pair[0], pair[1]);
+                assert_eq!(ramp.sample(k as f32 / last), a, "stop {k}");
+                let middle = [0, 1, 2].map(|c| (a[c] + b[c]) / 2.0);
+                let got = ramp.sample((k as f32 + 0.5) / last);
+                assert!(
+                    close(got, middle, 1e-6),
+                    "between {k} and {}: {got:?}",
+                    k + 1
+                );
             }
+            assert!(close(ramp.sample(1.0), stops[stops.len() - 1], 1e-6));
+        }
+        let colours = Colours::default();
+        for preset in TransferPreset::ALL {
+            for i in 0..=40 {
+                let s = i as f32 / 40.0;
+                let (t, alpha) = preset.shape(s);
+                let [r, g, b] = Ramp::new(preset.stops()).sample(t);
+                assert_eq!(colours.transfer(preset, s), [r, g, b, alpha]);
+            }
+            let [r, g, b, _] = colours.transfer(preset, 1.0);
+            assert!(close([r, g, b], preset.stops()[3], 1e-6), "{preset:?} at 1");
         }
     }
 

@@ -15,7 +15,8 @@ use crate::data::compare::{CompareError, on_union_axes};
 use crate::render::grid::difference::{
     DifferenceError, DifferenceGrids, DifferenceMeasure, signed_range,
 };
-use crate::render::grid::voxelize::{VoxelSettings, VoxelizeError, grid_box};
+use crate::render::grid::voxelize::{VoxelSettings, VoxelizeError, VoxelizeRequest};
+use crate::render::grid::voxelize_cpu::grid_box;
 use crate::render::scene::{Renderer, SceneData};
 
 #[derive(Debug, Error)]
@@ -116,13 +117,11 @@ impl CompareScene {
         let voxelize = |cloud: &PointCloud| {
             renderer
                 .voxelize
-                .voxelize_in_box(
+                .voxelize(
                     device,
                     queue,
-                    &cloud.points,
-                    resolution,
-                    settings.smoothing_sigma,
-                    Some(shared_box),
+                    &VoxelizeRequest::new(&cloud.points, resolution, settings.smoothing_sigma)
+                        .in_box(Some(shared_box)),
                 )
                 .map_err(|source| CompareBuildError::Voxelize {
                     file: cloud.path.display().to_string(),

@@ -15,7 +15,6 @@ pub mod grid;
 pub mod headless;
 pub mod lines;
 pub mod markers;
-pub mod palette;
 pub mod points;
 pub mod scene;
 pub mod shaders;

@@ -23,8 +23,9 @@ use crate::view::frame_view::FrameView;
 use crate::render::grid::VoxelGrid;
 use crate::render::grid::difference::DifferencePass;
 use crate::render::grid::voxelize::{
-    VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass, grid_box_mapped,
+    VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass, VoxelizeRequest,
 };
+use crate::render::grid::voxelize_cpu::grid_box_mapped;
 use crate::render::volume::{VolumeGpu, VolumePass, VolumeSettings};
 
 /// Staging per piece when [`SceneData::upload`] sends a cloud's points.
@@ -70,9 +71,6 @@ pub struct RenderSettings {
     pub volume: VolumeSettings,
     /// How the surface view extracts and lights the isosurface.
     pub surface: SurfaceSettings,
-    /// Draw the points (level of detail) instead of the volume while the camera moves: for
-    /// devices where a volume frame takes too long to orbit smoothly (software rasterizers).
-    pub points_while_moving: bool,
     /// Colour maps (hp, density) and the background (`render::colormap`).
     pub colours: Colours,
     /// Which of the surface's meshes the Surface view draws (level of detail: the window asks
@@ -90,7 +88,6 @@ impl Default for RenderSettings {
             voxels: VoxelSettings::default(),
             volume: VolumeSettings::default(),
             surface: SurfaceSettings::default(),
-            points_while_moving: false,
             colours: Colours::default(),
             surface_detail: SurfaceDetail::Full,
         }
@@ -189,7 +186,7 @@ impl SceneData {
     }
 
     fn with_points(device: &wgpu::Device, cloud: &PointCloud, points: PointsGpu) -> Self {
-        let (box_min, box_max) = data_box(cloud);
+        let (box_min, box_max) = data_box();
         let axes = cloud.meta.axes.clone();
         Self {
             points,
@@ -267,25 +264,16 @@ impl SceneData {
         // From the points already on the device: no second upload. On the stored axis the
         // host's copy of the points is not read (a caller may have dropped it); a remapped
         // axis reads it for the remapped box.
-        let (grid, stats) = match self.freq.as_ref() {
-            None => renderer.voxelize.voxelize_buffers(
-                device,
-                queue,
-                self.points.chunk_buffers(),
-                (cloud.bounds.min, cloud.bounds.max),
-                resolution,
-                settings.smoothing_sigma,
-            )?,
-            Some(mapping) => renderer.voxelize.voxelize_buffers_in_box(
-                device,
-                queue,
-                self.points.chunk_buffers(),
-                grid_box_mapped(&cloud.points, Some(mapping)),
-                resolution,
-                settings.smoothing_sigma,
-                Some(mapping),
-            )?,
-        };
+        let mapping = self.freq.as_ref();
+        let request = VoxelizeRequest::on_device(
+            self.points.chunk_buffers(),
+            (cloud.bounds.min, cloud.bounds.max),
+            resolution,
+            settings.smoothing_sigma,
+        )
+        .mapped(mapping)
+        .in_box(mapping.map(|m| grid_box_mapped(&cloud.points, Some(m))));
+        let (grid, stats) = renderer.voxelize.voxelize(device, queue, &request)?;
         self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
         self.grid = Some(grid);
         self.grid_stats = Some(stats);
@@ -355,7 +343,7 @@ pub fn world_box(world_from_data: Mat4, min: Vec3, max: Vec3) -> (Vec3, Vec3) {
 }
 
 /// The box the axes are drawn on: the full normalized cube, where tick positions live.
-pub fn data_box(_cloud: &PointCloud) -> (Vec3, Vec3) {
+pub fn data_box() -> (Vec3, Vec3) {
     (Vec3::splat(-1.0), Vec3::splat(1.0))
 }
 
@@ -413,13 +401,8 @@ impl Renderer {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
             if settings.view == ViewKind::Surface {
-                self.surface.prepare(
-                    queue,
-                    encoder,
-                    &data.surface,
-                    data.grid.as_ref(),
-                    &settings.surface,
-                );
+                self.surface
+                    .prepare(queue, &data.surface, data.grid.as_ref(), &settings.surface);
             }
             if let (ViewKind::Volume, Some(volume)) = (settings.view, &data.volume) {
                 self.volume
@@ -444,8 +427,7 @@ impl Renderer {
                     settings.surface_detail,
                 );
             }
-            // A slow device may ask for the points as a stand-in while the camera moves.
-            (ViewKind::Volume, Some(volume)) if !(view.moving && settings.points_while_moving) => {
+            (ViewKind::Volume, Some(volume)) => {
                 self.volume.draw(&mut pass, &self.frame, volume);
             }
             // Until a grid is built (ensure_grid), the points stand in.

@@ -1,5 +1,6 @@
 //! Transfer functions of the volume view (paper sections 3.3 and 5): density -> colour and
-//! opacity. This is the CPU mirror of `transfer` in shaders/volume.wgsl, for legends and tests;
+//! opacity. This is the CPU mirror of `transfer` in shaders/volume.wgsl, for legends and tests
+//! (the colour through [`Colours::transfer`](crate::render::colormap::Colours::transfer));
 //! keep the two in sync (a test compares them through rendered images).
 //!
 //! Each preset reshapes the density `s` in [0, 1] to a ramp position `t`, looks the colour up on
@@ -97,26 +98,6 @@ impl TransferPreset {
             }
         }
     }
-
-    /// Colour (gamma-encoded RGB) and opacity of density `s`.
-    pub fn sample(self, s: f32) -> [f32; 4] {
-        let (t, alpha) = self.shape(s);
-        let [r, g, b] = ramp(self.stops(), t);
-        [r, g, b, alpha]
-    }
-}
-
-/// Piecewise-linear ramp through four stops at t = 0, 1/3, 2/3, 1.
-fn ramp(stops: &[[f32; 3]; 4], t: f32) -> [f32; 3] {
-    let x = t.clamp(0.0, 1.0) * 3.0;
-    let i = (x.floor() as usize).min(2);
-    let f = x - i as f32;
-    let (a, b) = (stops[i], stops[i + 1]);
-    [
-        a[0] + (b[0] - a[0]) * f,
-        a[1] + (b[1] - a[1]) * f,
-        a[2] + (b[2] - a[2]) * f,
-    ]
 }
 
 #[cfg(test)]

@@ -239,15 +239,19 @@ impl eframe::App for LoudscapeApp {
         self.poll_compare(&ctx, frame);
         self.poll_video_export(&ctx);
         self.fetch_grid(frame);
-        let surface_status = frame
+        // The surface's status, read once a frame.
+        let surface = frame
             .wgpu_render_state()
             .zip(self.active().map(|l| l.id))
-            .map(|(render_state, id)| ViewResources::surface_status(render_state, id));
+            .map(|(render_state, id)| ViewResources::surface_status(render_state, id))
+            .unwrap_or_default();
+        self.surface.extracted(surface.counts, surface.error.clone());
         self.surface.frame(
-            self.settings.view == ViewKind::Surface
-                && surface_status.as_ref().is_some_and(|status| status.2),
-            surface_status.and_then(|status| status.0),
+            self.settings.view == ViewKind::Surface && surface.extracting,
+            surface.counts,
         );
+        // The Volume and Surface views come back for a surface on the worker.
+        self.needs_repaint |= surface.extracting && self.settings.view != ViewKind::Points;
         if self.surface.busy {
             // Come back for the finished surface; the frames in between only composite.
             ctx.request_repaint_after(Duration::from_millis(30));

@@ -21,6 +21,7 @@ use crate::data::cloud::PointCloud;
 use crate::render::composite::CompositePass;
 use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::render::surface::state::ExtractionStatus;
 pub use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::view::frame_view::FrameView;
 
@@ -201,29 +202,17 @@ impl ViewResources {
         Ok(rebuilt)
     }
 
-    /// The surface of cloud `id`: triangle counts of the last extraction, an error to show, and
-    /// whether it needs another frame to finish (buffers growing).
-    pub fn surface_status(
-        render_state: &egui_wgpu::RenderState,
-        id: u64,
-    ) -> (
-        Option<crate::render::surface::SurfaceCounts>,
-        Option<String>,
-        bool,
-    ) {
+    /// Where the surface of cloud `id` stands: the counts of its last extraction, an error to
+    /// show, and whether an extraction is under way on the worker (the window comes back for
+    /// it). Nothing extracted for an unknown cloud.
+    pub fn surface_status(render_state: &egui_wgpu::RenderState, id: u64) -> ExtractionStatus {
         let renderer = render_state.renderer.read();
-        match renderer
+        renderer
             .callback_resources
             .get::<ViewResources>()
             .and_then(|r| r.scenes.get(&id))
-        {
-            Some(scene) => (
-                scene.surface.counts(),
-                scene.surface.error(),
-                scene.surface.needs_another_frame(),
-            ),
-            None => (None, None, false),
-        }
+            .map(|scene| scene.surface.status())
+            .unwrap_or_default()
     }
 
     /// Whether cloud `id` has a voxel grid built with these settings (no build needed).
@@ -540,7 +529,7 @@ mod tests {
         assert!(frame(&mut cache, &resized, &changed), "new GPU data");
         assert_eq!(cache.renders, 6);
 
-        // An unfinished render (a surface still growing its buffers) is not kept.
+        // An unfinished render (one slice of progressive points) is not kept.
         let key = RenderKey::new(&resized, &changed, Some(1), cache.revision);
         cache.finish(key.clone(), false);
         assert!(cache.begin(&key));

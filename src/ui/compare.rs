@@ -8,8 +8,8 @@
 
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect, Stroke};
 
+use crate::render::colormap::HpColourMap;
 use crate::render::grid::difference::DifferenceMeasure;
-use crate::render::palette::hp_color_u8;
 
 /// Swatches in the diverging strip.
 const STEPS: usize = 64;
@@ -18,7 +18,9 @@ const SMALL: Color32 = Color32::from_rgb(170, 178, 192);
 
 /// The diverging map's colour at `t` in [-1, 1] (B - A over the range).
 pub fn diverging_color(t: f32) -> Color32 {
-    let [r, g, b] = hp_color_u8(0.5 - 0.5 * t.clamp(-1.0, 1.0));
+    let [r, g, b] = HpColourMap::Classic
+        .points()
+        .sample_u8(0.5 - 0.5 * t.clamp(-1.0, 1.0));
     Color32::from_rgb(r, g, b)
 }
 

@@ -75,7 +75,7 @@ impl FrameCache {
     }
 
     /// Records what the target now holds; `complete` false when the render was one step of
-    /// several (a surface still growing its buffers), so the next frame renders again.
+    /// several (a slice of progressive points), so the next frame renders again.
     pub fn finish(&mut self, key: RenderKey, complete: bool) {
         self.last = complete.then_some(key);
     }

@@ -115,7 +115,7 @@ impl LoudscapeApp {
             ViewResources::remove(render_state, old.id);
         }
         ViewResources::upload(render_state, id, &cloud);
-        let (box_min, box_max) = crate::render::scene::data_box(&cloud);
+        let (box_min, box_max) = crate::render::scene::data_box();
         let world_from_data = world_from_data(cloud.meta.mode);
         let labels = labels::axis_labels_for_box(&cloud, box_min, box_max);
         let loaded = Loaded {
@@ -200,11 +200,6 @@ impl LoudscapeApp {
         }
         if let Some(message) = failure {
             self.messages.error(message);
-        }
-        let (counts, error, again) = ViewResources::surface_status(render_state, loaded.id);
-        self.surface.extracted(counts, error);
-        if again {
-            self.needs_repaint = true;
         }
     }
 }

@@ -8,7 +8,7 @@ use loudscape::data::cloud::{DataMode, POINT_BYTES, PointCloud};
 use loudscape::data::synthetic::synthetic_song;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::target::RenderTarget;
-use loudscape::render::grid::voxelize::VoxelSettings;
+use loudscape::render::grid::voxelize::{VoxelSettings, VoxelizeRequest};
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointsGpu, progressive_ranges};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
@@ -100,9 +100,7 @@ fn grid_from_the_device_copy_equals_the_grid_from_the_host() {
         .voxelize(
             &gpu.device,
             &gpu.queue,
-            &cloud.points,
-            resolution,
-            voxels.smoothing_sigma,
+            &VoxelizeRequest::new(&cloud.points, resolution, voxels.smoothing_sigma),
         )
         .expect("voxelize from the host");
     from_host.grid = Some(grid);

@@ -12,7 +12,7 @@ use loudscape::render::compare::CompareScene;
 use loudscape::render::grid::difference::{
     DifferenceMeasure, reference_columns, reference_difference, shared_scales,
 };
-use loudscape::render::grid::voxelize::VoxelSettings;
+use loudscape::render::grid::voxelize::{VoxelSettings, VoxelizeRequest};
 use loudscape::render::scene::{RenderSettings, Renderer, ViewKind};
 use loudscape::ui::compare_shot::{CompareView, render_compare_image};
 use loudscape::view::camera::Camera;
@@ -46,13 +46,11 @@ fn a_song_against_itself_differs_by_exactly_zero() {
     let voxelize = |cloud: &PointCloud| {
         renderer
             .voxelize
-            .voxelize_in_box(
+            .voxelize(
                 &gpu.device,
                 &gpu.queue,
-                &cloud.points,
-                128,
-                settings.smoothing_sigma,
-                Some(shared_box),
+                &VoxelizeRequest::new(&cloud.points, 128, settings.smoothing_sigma)
+                    .in_box(Some(shared_box)),
             )
             .expect("voxelize")
     };

@@ -30,7 +30,6 @@ mod shaders_msl;
 mod surface;
 mod video;
 mod volume;
-mod volume_proxy;
 mod voxelize;
 mod window;
 mod window_compare;

@@ -3,6 +3,7 @@
 use crate::common::{self, demo_song, view_of};
 
 use loudscape::data::cloud::{DataMode, Point, PointCloud};
+use loudscape::render::colormap::HpColourMap;
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointStyle, lod_stride};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData};
@@ -81,7 +82,7 @@ fn a_point_lands_where_it_projects_in_its_palette_colour() {
             .project(point.position.into())
             .expect("in front of the camera");
         let got = image.get_pixel(pixel.x as u32, pixel.y as u32);
-        let want = loudscape::render::palette::hp_color_u8(point.hp);
+        let want = HpColourMap::Classic.points().sample_u8(point.hp);
         for c in 0..3 {
             // The centre of the disc is unshaded; allow for rounding.
             assert!(

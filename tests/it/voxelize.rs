@@ -7,8 +7,11 @@ use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::reference::ReferenceGrid;
 use loudscape::render::grid::voxelize::{
-    FIXED_POINT_SCALE, HISTOGRAM_BINS_PER_OCTAVE, HP_FIXED_POINT_SCALE, VoxelStats, VoxelizeError,
-    VoxelizePass, grid_box, reference_sum, voxel_of, voxels_per_unit,
+    FIXED_POINT_SCALE, HP_FIXED_POINT_SCALE, VoxelStats, VoxelizeError, VoxelizePass,
+    VoxelizeRequest,
+};
+use loudscape::render::grid::voxelize_cpu::{
+    HISTOGRAM_BINS_PER_OCTAVE, grid_box, reference_sum, voxel_of, voxels_per_unit,
 };
 
 struct Built {
@@ -21,7 +24,11 @@ fn build(gpu: &GpuContext, points: &[Point], resolution: u32, sigma: f32) -> Bui
     let frame = FrameBinding::new(&gpu.device);
     let pass = VoxelizePass::new(&gpu.device, &frame);
     let (grid, stats) = pass
-        .voxelize(&gpu.device, &gpu.queue, points, resolution, sigma)
+        .voxelize(
+            &gpu.device,
+            &gpu.queue,
+            &VoxelizeRequest::new(points, resolution, sigma),
+        )
         .expect("voxelize");
     Built {
         density: grid
@@ -360,7 +367,7 @@ fn grids_beyond_the_limits_are_refused_with_a_clear_message() {
     let frame = FrameBinding::new(&device);
     let pass = VoxelizePass::new(&device, &frame);
     let err = pass
-        .prepare(&device, &[], 300, 0.0)
+        .prepare(&device, &VoxelizeRequest::new(&[], 300, 0.0))
         .err()
         .expect("too large");
     assert!(
@@ -368,4 +375,60 @@ fn grids_beyond_the_limits_are_refused_with_a_clear_message() {
             .contains("choose a resolution of 203 or less"),
         "{err}"
     );
+}
+
+/// One check for every source: the smoothing and the point count are refused before anything
+/// is uploaded or bound, from the host as from the device (where the counts are the chunks').
+#[test]
+fn requests_are_checked_once_whatever_their_source() {
+    let gpu = common::gpu();
+    let frame = FrameBinding::new(&gpu.device);
+    let pass = VoxelizePass::new(&gpu.device, &frame);
+    let err = pass
+        .prepare(&gpu.device, &VoxelizeRequest::new(&[], 64, 10.5))
+        .err()
+        .expect("sigma out of range");
+    assert!(matches!(err, VoxelizeError::Smoothing(_)), "{err}");
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test::one_point"),
+        size: 20,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let bounds = (glam::Vec3::ZERO, glam::Vec3::ONE);
+    let claimed = VoxelizeRequest::on_device([(&buffer, u32::MAX), (&buffer, 1)], bounds, 64, 0.0);
+    match pass.prepare(&gpu.device, &claimed) {
+        Err(VoxelizeError::TooManyPoints(n)) => assert_eq!(n, u32::MAX as usize + 1),
+        Err(other) => panic!("expected TooManyPoints, got {other}"),
+        Ok(_) => panic!("expected TooManyPoints, got a job"),
+    }
+}
+
+/// The grid box: the one given, else the points' own (host points: their padded bounding box;
+/// device points: their padded bounds; no points: the data cube).
+#[test]
+fn a_request_builds_in_the_given_box_or_the_points_own() {
+    use glam::Vec3;
+    let points = [[0.0, 0.1, 0.2], [0.5, -0.3, 0.9]].map(|position| Point {
+        position,
+        scalar: 0.5,
+        hp: 0.5,
+    });
+    let own = grid_box(&points);
+    assert_eq!(VoxelizeRequest::new(&points, 64, 0.0).resolved_box(), own);
+    let given = (Vec3::splat(-2.0), Vec3::splat(2.0));
+    let request = VoxelizeRequest::new(&points, 64, 0.0).in_box(Some(given));
+    assert_eq!(request.resolved_box(), given);
+    let bounds = (Vec3::new(0.0, -0.3, 0.2), Vec3::new(0.5, 0.1, 0.9));
+    let gpu = common::gpu();
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test::two_points"),
+        size: 40,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let on_device = VoxelizeRequest::on_device([(&buffer, 2)], bounds, 64, 0.0);
+    assert_eq!(on_device.resolved_box(), own);
+    let none = VoxelizeRequest::on_device([(&buffer, 0)], bounds, 64, 0.0);
+    assert_eq!(none.resolved_box(), (Vec3::splat(-1.0), Vec3::splat(1.0)));
 }

@@ -1,7 +1,7 @@
 //! The difference of two density grids built in one box: where B is louder or denser than A
 //! (issue 17).
 //!
-//! Reads: the density grids of A and B (same dims and box, see `VoxelizePass::voxelize_in_box`)
+//! Reads: the density grids of A and B (same dims and box, see `VoxelizeRequest::grid_box`)
 //! and their normalization statistics. Writes: both grids on one scale, their signed
 //! difference per voxel, a level-weighted difference per time-frequency column, and a grid the
 //! volume view draws with the diverging palette. How: shaders/grid/difference.wgsl, one

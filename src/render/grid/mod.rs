@@ -11,6 +11,7 @@ pub mod difference;
 pub mod downsample;
 pub mod reference;
 pub mod voxelize;
+pub mod voxelize_cpu;
 
 use glam::{UVec3, Vec3};
 use wgpu::util::DeviceExt;

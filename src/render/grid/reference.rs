@@ -1,11 +1,11 @@
 //! [`ReferenceGrid`]: the whole voxelization in f64 on the CPU, built with the pass's own box
-//! and voxel arithmetic (`voxelize.rs`, which mirrors voxelize.wgsl), that the tests and the
+//! and voxel arithmetic (`voxelize_cpu.rs`, which mirrors voxelize.wgsl), that the tests and the
 //! benchmarks compare the GPU grid with.
 
 use glam::{UVec3, Vec3};
 
 use crate::data::cloud::Point;
-use crate::render::grid::voxelize::{gaussian_weights, grid_box, voxel_of, voxels_per_unit};
+use crate::render::grid::voxelize_cpu::{gaussian_weights, grid_box, voxel_of, voxels_per_unit};
 
 /// A CPU reference of the whole build in f64, for tests: loudness sums, mean hp and counts per
 /// voxel, in the grid's layout.

@@ -1,9 +1,9 @@
 //! Voxelization: turns a cloud's points into the [`VoxelGrid`] that the volume and surface views
 //! read (paper sections 3.1 and 3.4).
 //!
-//! Reads: the points (uploaded here in chunks, or the points view's buffers through
-//! [`VoxelizePass::prepare_from_buffers`]; five f32 per point, the PLY record). Writes: a
-//! `VoxelGrid` with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
+//! Reads: the points of a [`VoxelizeRequest`] (uploaded here in chunks, or the points view's
+//! buffers, [`PointSource::Device`]; five f32 per point, the PLY record). Writes: a `VoxelGrid`
+//! with a normalized loudness density in [0, 1] and the mean hp per voxel. How:
 //! shaders/grid/voxelize.wgsl, one compute pass per stage. `accumulate` adds each point's scalar
 //! and hp to its voxel as 64-bit fixed-point sums (u32 atomics with a manual carry; scale
 //! [`FIXED_POINT_SCALE`] for loudness, [`HP_FIXED_POINT_SCALE`] for hp) and counts it in a u32 of
@@ -14,8 +14,11 @@
 //! that reference sum and clamps to 1, so one hot voxel cannot flatten the rest of the field. The
 //! grid box is the cloud's bounding box, padded ([`grid_box`]); the grid is rebuilt only when the
 //! cloud or the settings change (see `SceneData::ensure_grid`). With a frequency axis
-//! ([`VoxelizePass::voxelize_with`], src/data/freq_axis.rs) `accumulate` first remaps each
-//! point's z as the points shader does, and the box is that of the remapped points.
+//! ([`VoxelizeRequest::mapping`], src/data/freq_axis.rs) `accumulate` first remaps each point's z
+//! as the points shader does, and the box is that of the remapped points. The CPU side of the
+//! shader's arithmetic (box, voxel, histogram, weights) is in [`voxelize_cpu`].
+//!
+//! [`voxelize_cpu`]: crate::render::grid::voxelize_cpu
 
 use glam::{UVec3, Vec3};
 use thiserror::Error;
@@ -28,6 +31,10 @@ use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry, whole_buffer_entries};
 use crate::render::gpu::readback::{ReadbackError, read_buffer};
 use crate::render::grid::VoxelGrid;
+use crate::render::grid::voxelize_cpu::{
+    HISTOGRAM_BINS, HISTOGRAM_BINS_PER_OCTAVE, HISTOGRAM_LOG2_MIN, PERCENTILE, gaussian_weights,
+    grid_box, grid_box_mapped, grid_box_of_bounds, voxels_per_unit,
+};
 use crate::render::shaders;
 
 /// Default grid resolution (voxels per side) for a song (paper 3.1).
@@ -44,16 +51,8 @@ pub const HP_FIXED_POINT_SCALE: u32 = 1 << 16;
 /// Most points per voxelization: the per-voxel count is a u32. A cloud this large would take
 /// 86 GB at 20 bytes a point, so no cloud a machine holds reaches it.
 pub const MAX_POINTS: usize = u32::MAX as usize;
-/// The density is normalized by this percentile of the voxels with a positive loudness sum.
-pub const PERCENTILE: f64 = 0.99;
-pub const HISTOGRAM_BINS: u32 = 1024;
-/// log2 of the lowest histogram bin edge: one point of scalar 2^-20 (one fixed-point unit).
-pub const HISTOGRAM_LOG2_MIN: f32 = -20.0;
-/// Bins per doubling of the sum: bins are 2.9 % wide; 1024 bins reach sums of 2^22.6.
-pub const HISTOGRAM_BINS_PER_OCTAVE: f32 = 24.0;
 /// Largest Gaussian sigma, in voxels.
 pub const MAX_SMOOTHING_SIGMA: f32 = 10.0;
-const MAX_KERNEL_RADIUS: usize = 31;
 const STATS_HISTOGRAM: usize = 4;
 const STATS_WORDS: usize = STATS_HISTOGRAM + HISTOGRAM_BINS as usize;
 const WORKGROUP: u32 = 256;
@@ -159,142 +158,116 @@ pub struct VoxelStats {
     pub clamped: u32,
 }
 
-/// The grid box for a cloud: its bounding box, each side grown by 1 % so that no point lies on
-/// the box's faces, and at least 5 % of the largest side (or 0.02 data units) thick, so a flat
-/// cloud or a single point still gets a box with volume. An empty cloud gets the data cube.
-pub fn grid_box(points: &[Point]) -> (Vec3, Vec3) {
-    let mut min = Vec3::splat(f32::INFINITY);
-    let mut max = Vec3::splat(f32::NEG_INFINITY);
-    for p in points {
-        let q = Vec3::from(p.position);
-        if q.is_finite() {
-            min = min.min(q);
-            max = max.max(q);
+/// Where a build's points come from.
+pub enum PointSource<'a> {
+    /// On the host: uploaded in chunks of at most one storage binding.
+    Host(&'a [Point]),
+    /// Already on the device, so nothing is uploaded and the cloud is on the device once (the
+    /// points view's `PointsGpu::chunk_buffers`): storage buffers of five f32 a point (the PLY
+    /// record; each at most one storage binding and fewer than `u32::MAX / 5` points) with their
+    /// point counts, and `bounds`, the points' bounding box (`PointCloud::bounds`). On a
+    /// remapped frequency axis `bounds` would not be the box the grid sees: give the request a
+    /// `grid_box` ([`grid_box_mapped`] of the host's points).
+    Device {
+        chunks: Vec<(&'a wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+    },
+}
+
+impl PointSource<'_> {
+    /// How many points the source holds.
+    pub fn len(&self) -> usize {
+        match self {
+            PointSource::Host(points) => points.len(),
+            PointSource::Device { chunks, .. } => chunks.iter().map(|(_, c)| *c as usize).sum(),
         }
     }
-    grid_box_of_bounds(min, max)
-}
 
-/// The chunks of points already on the device, owned (a buffer handle is a reference count),
-/// empty ones left out.
-fn owned_chunks<'a>(
-    chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
-) -> Vec<(wgpu::Buffer, u32)> {
-    chunks
-        .into_iter()
-        .filter(|(_, count)| *count > 0)
-        .map(|(b, count)| (b.clone(), count))
-        .collect()
-}
-
-/// [`grid_box`] from the points' bounding box `[min, max]` (not finite: no points).
-pub fn grid_box_of_bounds(min: Vec3, max: Vec3) -> (Vec3, Vec3) {
-    if !min.is_finite() || !max.is_finite() {
-        return (Vec3::splat(-1.0), Vec3::splat(1.0));
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
     }
-    let centre = (min + max) * 0.5;
-    let extent = max - min;
-    let thinnest = (extent.max_element() * 0.05).max(0.02);
-    let extent = extent.max(Vec3::splat(thinnest)) * 1.02;
-    (centre - extent * 0.5, centre + extent * 0.5)
 }
 
-/// The grid box of the points as the frequency axis `mapping` shows them (z remapped, points it
-/// leaves out ignored): [`grid_box`] of [`FreqMapping::view_points`], without the copy.
-pub fn grid_box_mapped(points: &[Point], mapping: Option<&FreqMapping>) -> (Vec3, Vec3) {
-    let Some(mapping) = mapping.filter(|m| !m.is_identity()) else {
-        return grid_box(points);
-    };
-    let mut min = Vec3::splat(f32::INFINITY);
-    let mut max = Vec3::splat(f32::NEG_INFINITY);
-    for (i, p) in points.iter().enumerate() {
-        let Some(z) = mapping.view_z(p.position[2], i as u32) else {
-            continue;
-        };
-        let q = Vec3::new(p.position[0], p.position[1], z);
-        if q.is_finite() {
-            min = min.min(q);
-            max = max.max(q);
+/// One voxelization: the points, the grid's resolution and smoothing, the frequency axis and
+/// the box. [`VoxelizePass::prepare`] allocates its buffers (the benchmark records them many
+/// times); [`VoxelizePass::voxelize`] builds it and waits.
+pub struct VoxelizeRequest<'a> {
+    pub points: PointSource<'a>,
+    /// Voxels per side ([`MIN_RESOLUTION`] to [`MAX_RESOLUTION`]).
+    pub resolution: u32,
+    /// Gaussian smoothing of the loudness sums, sigma in voxels (0: off).
+    pub smoothing_sigma: f32,
+    /// The frequency axis the points are shown on (src/data/freq_axis.rs): `accumulate` remaps
+    /// each point's z as the points shader does. `None`: the axis as stored.
+    pub mapping: Option<&'a FreqMapping>,
+    /// The grid's box. `None`: the points' own ([`grid_box_mapped`] of host points, the padded
+    /// `bounds` of device points). An A/B compare builds both grids in one box; points outside
+    /// it count in the nearest border voxel.
+    pub grid_box: Option<(Vec3, Vec3)>,
+}
+
+impl<'a> VoxelizeRequest<'a> {
+    /// The host's `points` at `resolution`^3, on the stored axis, in their own box.
+    pub fn new(points: &'a [Point], resolution: u32, smoothing_sigma: f32) -> Self {
+        Self {
+            points: PointSource::Host(points),
+            resolution,
+            smoothing_sigma,
+            mapping: None,
+            grid_box: None,
         }
     }
-    if !min.is_finite() || !max.is_finite() {
-        return grid_box(&[]);
-    }
-    // The box of the two corners is the box of the points.
-    let corner = |q: Vec3| Point {
-        position: q.into(),
-        scalar: 0.0,
-        hp: 0.0,
-    };
-    grid_box(&[corner(min), corner(max)])
-}
 
-/// Voxel coordinates per data unit along each axis.
-pub fn voxels_per_unit(dims: UVec3, box_min: Vec3, box_max: Vec3) -> Vec3 {
-    dims.as_vec3() / (box_max - box_min)
-}
-
-/// The voxel (i, j, k) holding `p`. Keep in sync with `voxel_of` in shaders/grid/voxelize.wgsl: the
-/// same f32 operations, so the CPU reference puts points on voxel faces where the GPU does.
-pub fn voxel_of(p: Vec3, box_min: Vec3, per_unit: Vec3, dims: UVec3) -> UVec3 {
-    let u = ((p - box_min) * per_unit).floor();
-    let top = dims.as_vec3() - Vec3::ONE;
-    u.clamp(Vec3::ZERO, top).as_uvec3()
-}
-
-/// The histogram bin of a positive sum. Keep in sync with `histogram_bin` in voxelize.wgsl.
-pub fn histogram_bin(sum: f32) -> u32 {
-    if sum <= 0.0 {
-        return 0;
-    }
-    let t = (sum.log2() - HISTOGRAM_LOG2_MIN) * HISTOGRAM_BINS_PER_OCTAVE;
-    t.floor().clamp(0.0, (HISTOGRAM_BINS - 1) as f32) as u32
-}
-
-/// The upper edge of a histogram bin.
-pub fn bin_upper_edge(bin: u32) -> f32 {
-    (HISTOGRAM_LOG2_MIN + (bin + 1) as f32 / HISTOGRAM_BINS_PER_OCTAVE).exp2()
-}
-
-/// The reference sum for normalization, as the GPU computes it: the upper edge of the histogram
-/// bin holding rank ceil(0.99 n) of the n positive sums, capped at the largest sum (1 when there
-/// are none).
-/// Keep in sync with `percentile` in voxelize.wgsl.
-pub fn reference_sum(sums: impl IntoIterator<Item = f32>) -> f32 {
-    let mut histogram = vec![0u32; HISTOGRAM_BINS as usize];
-    let mut n = 0u32;
-    let mut largest = 0.0f32;
-    for s in sums {
-        if s > 0.0 {
-            histogram[histogram_bin(s) as usize] += 1;
-            n += 1;
-            largest = largest.max(s);
+    /// Points already on the device (see [`PointSource::Device`]).
+    pub fn on_device(
+        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+        smoothing_sigma: f32,
+    ) -> Self {
+        Self {
+            points: PointSource::Device {
+                chunks: chunks.into_iter().collect(),
+                bounds,
+            },
+            ..Self::new(&[], resolution, smoothing_sigma)
         }
     }
-    if n == 0 {
-        return 1.0;
+
+    /// The same request in the box `grid_box` (`None`: the points' own).
+    pub fn in_box(self, grid_box: Option<(Vec3, Vec3)>) -> Self {
+        Self { grid_box, ..self }
     }
-    let p = (PERCENTILE * 1e6).round() as f32 / 1e6;
-    let rank = ((p * n as f32).ceil() as u32).max(1);
-    let mut seen = 0;
-    for (bin, count) in histogram.iter().enumerate() {
-        seen += count;
-        if seen >= rank {
-            return bin_upper_edge(bin as u32).min(largest);
+
+    /// The same request on the frequency axis `mapping`.
+    pub fn mapped(self, mapping: Option<&'a FreqMapping>) -> Self {
+        Self { mapping, ..self }
+    }
+
+    /// Checks the resolution (against this device too), the smoothing and the point count.
+    pub fn check(&self, device: &wgpu::Device) -> Result<(), VoxelizeError> {
+        VoxelizePass::check_resolution(device, self.resolution)?;
+        if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&self.smoothing_sigma) {
+            return Err(VoxelizeError::Smoothing(self.smoothing_sigma));
+        }
+        let count = self.points.len();
+        if count > MAX_POINTS {
+            return Err(VoxelizeError::TooManyPoints(count));
+        }
+        Ok(())
+    }
+
+    /// The box the grid covers (see [`VoxelizeRequest::grid_box`]).
+    pub fn resolved_box(&self) -> (Vec3, Vec3) {
+        if let Some(grid_box) = self.grid_box {
+            return grid_box;
+        }
+        match &self.points {
+            PointSource::Host(points) => grid_box_mapped(points, self.mapping),
+            PointSource::Device { .. } if self.points.is_empty() => grid_box(&[]),
+            PointSource::Device { bounds, .. } => grid_box_of_bounds(bounds.0, bounds.1),
         }
     }
-    largest
-}
-
-/// Normalized Gaussian weights for offsets 0..=radius (radius = ceil(3 sigma), at most 31).
-pub fn gaussian_weights(sigma: f32) -> Vec<f32> {
-    if sigma <= 0.0 {
-        return vec![1.0];
-    }
-    let radius = ((3.0 * sigma).ceil() as usize).clamp(1, MAX_KERNEL_RADIUS);
-    (0..=radius)
-        .map(|o| (-(o as f32).powi(2) / (2.0 * sigma * sigma)).exp())
-        .collect()
 }
 
 /// Workgroups for `invocations` threads of a 256-wide workgroup, split over x and y so no
@@ -320,13 +293,7 @@ pub struct VoxelizeJob {
     pub box_max: Vec3,
     pub point_count: usize,
     chunks: Vec<Chunk>,
-    loudness_sums: wgpu::Buffer,
-    hp_sums: wgpu::Buffer,
-    point_counts: wgpu::Buffer,
-    stats: wgpu::Buffer,
-    density: wgpu::Buffer,
-    hp_mean: wgpu::Buffer,
-    _reference: wgpu::Buffer,
+    fields: Fields,
     smoothing: Option<(wgpu::Buffer, [wgpu::BindGroup; 3])>,
     resolve_group: wgpu::BindGroup,
 }
@@ -335,6 +302,85 @@ impl VoxelizeJob {
     pub fn voxel_count(&self) -> u32 {
         self.dims.x * self.dims.y * self.dims.z
     }
+}
+
+/// A build's storage buffer (STORAGE, COPY_SRC, COPY_DST).
+fn storage_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A build's sums, statistics and fields.
+struct Fields {
+    loudness_sums: wgpu::Buffer,
+    hp_sums: wgpu::Buffer,
+    point_counts: wgpu::Buffer,
+    stats: wgpu::Buffer,
+    reference: wgpu::Buffer,
+    density: wgpu::Buffer,
+    hp_mean: wgpu::Buffer,
+}
+
+impl Fields {
+    /// Every per-voxel buffer is padded to whole groups of four voxels (16 bytes of f32, 32 of
+    /// sums): the per-voxel passes read and write four voxels at a time. The padding stays zero
+    /// (an empty voxel) and is never part of the grid.
+    fn new(device: &wgpu::Device, voxels: u64) -> Self {
+        let group4_count = voxels.div_ceil(4);
+        Self {
+            loudness_sums: storage_buffer(device, "voxelize::loudness_sums", group4_count * 32),
+            hp_sums: storage_buffer(device, "voxelize::hp_sums", group4_count * 32),
+            point_counts: storage_buffer(device, "voxelize::point_counts", group4_count * 16),
+            stats: storage_buffer(device, "voxelize::stats", STATS_WORDS as u64 * 4),
+            reference: storage_buffer(device, "voxelize::reference_sum", 16),
+            density: storage_buffer(device, "voxelize::density_grid", group4_count * 16),
+            hp_mean: storage_buffer(device, "voxelize::hp_mean_grid", group4_count * 16),
+        }
+    }
+}
+
+/// The source's points as device buffers with their counts, empty chunks left out: uploaded in
+/// chunks of at most one storage binding, or the device's own (a buffer handle is a reference
+/// count). An empty cloud still binds one (zero) point, with a count of 0.
+fn point_buffers(device: &wgpu::Device, source: &PointSource) -> Vec<(wgpu::Buffer, u32)> {
+    let mut buffers: Vec<(wgpu::Buffer, u32)> = match source {
+        PointSource::Host(points) => {
+            let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
+                .clamp(1, u64::from(u32::MAX / 5)) as usize;
+            points
+                .chunks(per_chunk)
+                .enumerate()
+                .map(|(i, slice)| {
+                    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(&format!("voxelize::points_{i}")),
+                        contents: bytemuck::cast_slice(slice),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    });
+                    (buffer, slice.len() as u32)
+                })
+                .collect()
+        }
+        PointSource::Device { chunks, .. } => chunks
+            .iter()
+            .filter(|(_, count)| *count > 0)
+            .map(|(buffer, count)| ((*buffer).clone(), *count))
+            .collect(),
+    };
+    if buffers.is_empty() {
+        let zero = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("voxelize::points_empty"),
+            contents: &[0u8; std::mem::size_of::<Point>()],
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        buffers.push((zero, 0));
+    }
+    buffers
 }
 
 /// The voxelization pipelines, built once per device.
@@ -451,127 +497,19 @@ impl VoxelizePass {
         Ok(())
     }
 
-    /// Uploads `points` and allocates a build's buffers for a `resolution`^3 grid.
+    /// Uploads the request's points (unless they are on the device) and allocates its build's
+    /// buffers; nothing is recorded or submitted (see [`VoxelizePass::encode`]).
     pub fn prepare(
         &self,
         device: &wgpu::Device,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
+        request: &VoxelizeRequest,
     ) -> Result<VoxelizeJob, VoxelizeError> {
-        self.prepare_with(device, points, resolution, smoothing_sigma, None, None)
-    }
-
-    /// The general form of [`VoxelizePass::prepare`]: the frequency axis `mapping` and a grid
-    /// box (`None`: the mapped cloud's own).
-    pub fn prepare_with(
-        &self,
-        device: &wgpu::Device,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
-        mapping: Option<&FreqMapping>,
-        grid_box_override: Option<(Vec3, Vec3)>,
-    ) -> Result<VoxelizeJob, VoxelizeError> {
-        Self::check_resolution(device, resolution)?;
-        if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
-            return Err(VoxelizeError::Smoothing(smoothing_sigma));
-        }
-        if points.len() > MAX_POINTS {
-            return Err(VoxelizeError::TooManyPoints(points.len()));
-        }
-        let (box_min, box_max) =
-            grid_box_override.unwrap_or_else(|| grid_box_mapped(points, mapping));
-        let per_chunk = (storage_binding_limit(device) / std::mem::size_of::<Point>() as u64)
-            .clamp(1, u64::from(u32::MAX / 5)) as usize;
-        let buffers: Vec<(wgpu::Buffer, u32)> = points
-            .chunks(per_chunk)
-            .enumerate()
-            .map(|(i, slice)| {
-                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(&format!("voxelize::points_{i}")),
-                    contents: bytemuck::cast_slice(slice),
-                    usage: wgpu::BufferUsages::STORAGE,
-                });
-                (buffer, slice.len() as u32)
-            })
-            .collect();
-        self.prepare_job(
-            device,
-            buffers,
-            (box_min, box_max),
-            resolution,
-            smoothing_sigma,
-            mapping,
-        )
-    }
-
-    /// As [`VoxelizePass::prepare`], reading points already on the GPU: `chunks` are storage
-    /// buffers of five f32 a point (the PLY record; each at most one storage binding and fewer
-    /// than `u32::MAX / 5` points) with their point counts, and `bounds` is the points' bounding
-    /// box (`PointCloud::bounds`). Nothing is uploaded: the points view's buffers
-    /// (`PointsGpu::chunk_buffers`) serve, so the cloud is on the device once.
-    pub fn prepare_from_buffers<'a>(
-        &self,
-        device: &wgpu::Device,
-        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
-        bounds: (Vec3, Vec3),
-        resolution: u32,
-        smoothing_sigma: f32,
-    ) -> Result<VoxelizeJob, VoxelizeError> {
-        let buffers = owned_chunks(chunks);
-        let total: usize = buffers.iter().map(|(_, c)| *c as usize).sum();
-        let (min, max) = if total == 0 {
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY))
-        } else {
-            bounds
-        };
-        let box_ = grid_box_of_bounds(min, max);
-        self.prepare_job(device, buffers, box_, resolution, smoothing_sigma, None)
-    }
-
-    /// As [`VoxelizePass::prepare_from_buffers`], on the frequency axis `mapping` and in the
-    /// grid box `grid_box` (for a remapped axis, [`grid_box_mapped`] of the host's points).
-    pub fn prepare_from_buffers_in_box<'a>(
-        &self,
-        device: &wgpu::Device,
-        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
-        grid_box: (Vec3, Vec3),
-        resolution: u32,
-        smoothing_sigma: f32,
-        mapping: Option<&FreqMapping>,
-    ) -> Result<VoxelizeJob, VoxelizeError> {
-        let buffers = owned_chunks(chunks);
-        self.prepare_job(
-            device,
-            buffers,
-            grid_box,
-            resolution,
-            smoothing_sigma,
-            mapping,
-        )
-    }
-
-    fn prepare_job(
-        &self,
-        device: &wgpu::Device,
-        mut buffers: Vec<(wgpu::Buffer, u32)>,
-        (box_min, box_max): (Vec3, Vec3),
-        resolution: u32,
-        smoothing_sigma: f32,
-        mapping: Option<&FreqMapping>,
-    ) -> Result<VoxelizeJob, VoxelizeError> {
-        Self::check_resolution(device, resolution)?;
-        if !(0.0..=MAX_SMOOTHING_SIGMA).contains(&smoothing_sigma) {
-            return Err(VoxelizeError::Smoothing(smoothing_sigma));
-        }
-        let point_count: usize = buffers.iter().map(|(_, c)| *c as usize).sum();
-        if point_count > MAX_POINTS {
-            return Err(VoxelizeError::TooManyPoints(point_count));
-        }
-        let dims = UVec3::splat(resolution);
+        request.check(device)?;
+        let (box_min, box_max) = request.resolved_box();
+        let dims = UVec3::splat(request.resolution);
         let per_unit = voxels_per_unit(dims, box_min, box_max);
-        let voxels = u64::from(dims.x * dims.y * dims.z);
+        let fields = Fields::new(device, u64::from(dims.x * dims.y * dims.z));
+        let mapping = request.mapping;
         let freq = mapping.map_or(FreqParams::IDENTITY, FreqMapping::params);
         let freq_table = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("voxelize::freq_table"),
@@ -580,40 +518,13 @@ impl VoxelizePass {
             ),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE | extra,
-                mapped_at_creation: false,
-            })
-        };
-        let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        // Every per-voxel buffer is padded to whole groups of four voxels (16 bytes of f32, 32 of
-        // sums): the per-voxel passes read and write four voxels at a time. The padding stays
-        // zero (an empty voxel) and is never part of the grid.
-        let group4_count = voxels.div_ceil(4);
-        let loudness_sums = storage("voxelize::loudness_sums", group4_count * 32, copy);
-        let hp_sums = storage("voxelize::hp_sums", group4_count * 32, copy);
-        let point_counts = storage("voxelize::point_counts", group4_count * 16, copy);
-        let stats = storage("voxelize::stats", STATS_WORDS as u64 * 4, copy);
-        let reference = storage("voxelize::reference_sum", 16, copy);
-        let density = storage("voxelize::density_grid", group4_count * 16, copy);
-        let hp_mean = storage("voxelize::hp_mean_grid", group4_count * 16, copy);
-
-        // An empty cloud still binds one (zero) point, with a count of 0.
-        if buffers.is_empty() {
-            let zero = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("voxelize::points_empty"),
-                contents: &[0u8; std::mem::size_of::<Point>()],
-                usage: wgpu::BufferUsages::STORAGE,
-            });
-            buffers.push((zero, 0));
-        }
         let mut chunks = Vec::new();
         // Each chunk's first point's index in the cloud: the frequency jitter's seed.
         let mut first = 0u32;
-        for (i, (points_buffer, count)) in buffers.into_iter().enumerate() {
+        for (i, (points, count)) in point_buffers(device, &request.points)
+            .into_iter()
+            .enumerate()
+        {
             let params = VoxelParams {
                 dims: [dims.x, dims.y, dims.z, 0],
                 box_min: box_min.extend(0.0).into(),
@@ -627,115 +538,117 @@ impl VoxelizePass {
                 ],
                 freq: freq.for_chunk(first),
             };
-            let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(&format!("voxelize::params_{i}")),
-                contents: bytemuck::bytes_of(&params),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let buffers = [
-                &params_buffer,
-                &points_buffer,
-                &loudness_sums,
-                &hp_sums,
-                &stats,
-                &density,
-                &hp_mean,
-                &reference,
-                &point_counts,
-                &freq_table,
-            ];
-            let entries = whole_buffer_entries(&buffers);
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&format!("voxelize::bind_group_{i}")),
-                layout: &self.main_layout,
-                entries: &entries,
-            });
+            chunks.push(self.chunk(device, i, points, count, &params, &fields, &freq_table));
             first += count;
-            chunks.push(Chunk {
-                count,
-                bind_group,
-                _points: points_buffer,
-                _params: params_buffer,
-            });
         }
-
-        let resolve_buffers = [
+        let resolve_entries = whole_buffer_entries(&[
             &chunks[0]._params,
-            &loudness_sums,
-            &hp_sums,
-            &density,
-            &hp_mean,
-            &point_counts,
-        ];
-        let resolve_entries = whole_buffer_entries(&resolve_buffers);
+            &fields.loudness_sums,
+            &fields.hp_sums,
+            &fields.density,
+            &fields.hp_mean,
+            &fields.point_counts,
+        ]);
         let resolve_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("voxelize::resolve_bind_group"),
             layout: &self.resolve_layout,
             entries: &resolve_entries,
         });
-
-        let smoothing = (smoothing_sigma > 0.0).then(|| {
-            let scratch = storage("voxelize::smooth_scratch", voxels * 4, copy);
-            let weights = gaussian_weights(smoothing_sigma);
-            let mut packed = [[0.0f32; 4]; 8];
-            for (o, w) in weights.iter().enumerate() {
-                packed[o / 4][o % 4] = *w;
-            }
-            // x: density -> scratch, y: scratch -> density, z: density -> scratch.
-            let bind_group = |axis: u32, input: &wgpu::Buffer, output: &wgpu::Buffer| {
-                let params = SmoothParams {
-                    dims: [dims.x, dims.y, dims.z, 0],
-                    axis: [axis, weights.len() as u32 - 1, 0, 0],
-                    weights: packed,
-                };
-                let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(&format!("voxelize::smooth_params_{axis}")),
-                    contents: bytemuck::bytes_of(&params),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(&format!("voxelize::smooth_bind_group_{axis}")),
-                    layout: &self.smooth_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: params.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: input.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: output.as_entire_binding(),
-                        },
-                    ],
-                })
-            };
-            let groups = [
-                bind_group(0, &density, &scratch),
-                bind_group(1, &scratch, &density),
-                bind_group(2, &density, &scratch),
-            ];
-            (scratch, groups)
-        });
-
+        let smoothing = (request.smoothing_sigma > 0.0)
+            .then(|| self.smoothing(device, dims, request.smoothing_sigma, &fields.density));
         Ok(VoxelizeJob {
             dims,
             box_min,
             box_max,
-            point_count,
+            point_count: chunks.iter().map(|c| c.count as usize).sum(),
             chunks,
-            loudness_sums,
-            hp_sums,
-            point_counts,
-            stats,
-            density,
-            hp_mean,
-            _reference: reference,
+            fields,
             smoothing,
             resolve_group,
         })
+    }
+
+    /// One chunk of points: its uniform and its bind group over the build's buffers.
+    #[allow(clippy::too_many_arguments)]
+    fn chunk(
+        &self,
+        device: &wgpu::Device,
+        index: usize,
+        points: wgpu::Buffer,
+        count: u32,
+        params: &VoxelParams,
+        fields: &Fields,
+        freq_table: &wgpu::Buffer,
+    ) -> Chunk {
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&format!("voxelize::params_{index}")),
+            contents: bytemuck::bytes_of(params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let entries = whole_buffer_entries(&[
+            &params,
+            &points,
+            &fields.loudness_sums,
+            &fields.hp_sums,
+            &fields.stats,
+            &fields.density,
+            &fields.hp_mean,
+            &fields.reference,
+            &fields.point_counts,
+            freq_table,
+        ]);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&format!("voxelize::bind_group_{index}")),
+            layout: &self.main_layout,
+            entries: &entries,
+        });
+        Chunk {
+            count,
+            bind_group,
+            _points: points,
+            _params: params,
+        }
+    }
+
+    /// The separable Gaussian's scratch buffer and its three passes' bind groups: x density ->
+    /// scratch, y scratch -> density, z density -> scratch.
+    fn smoothing(
+        &self,
+        device: &wgpu::Device,
+        dims: UVec3,
+        sigma: f32,
+        density: &wgpu::Buffer,
+    ) -> (wgpu::Buffer, [wgpu::BindGroup; 3]) {
+        let voxels = u64::from(dims.x * dims.y * dims.z);
+        let scratch = storage_buffer(device, "voxelize::smooth_scratch", voxels * 4);
+        let weights = gaussian_weights(sigma);
+        let mut packed = [[0.0f32; 4]; 8];
+        for (o, w) in weights.iter().enumerate() {
+            packed[o / 4][o % 4] = *w;
+        }
+        let bind_group = |axis: u32, input: &wgpu::Buffer, output: &wgpu::Buffer| {
+            let params = SmoothParams {
+                dims: [dims.x, dims.y, dims.z, 0],
+                axis: [axis, weights.len() as u32 - 1, 0, 0],
+                weights: packed,
+            };
+            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&format!("voxelize::smooth_params_{axis}")),
+                contents: bytemuck::bytes_of(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&format!("voxelize::smooth_bind_group_{axis}")),
+                layout: &self.smooth_layout,
+                entries: &whole_buffer_entries(&[&params, input, output]),
+            })
+        };
+        let groups = [
+            bind_group(0, density, &scratch),
+            bind_group(1, &scratch, density),
+            bind_group(2, density, &scratch),
+        ];
+        (scratch, groups)
     }
 
     /// Records the whole build and returns the names of its compute passes, in order. With
@@ -748,10 +661,10 @@ impl VoxelizePass {
         timestamps: Option<&wgpu::QuerySet>,
     ) -> Vec<&'static str> {
         for buffer in [
-            &job.loudness_sums,
-            &job.hp_sums,
-            &job.point_counts,
-            &job.stats,
+            &job.fields.loudness_sums,
+            &job.fields.hp_sums,
+            &job.fields.point_counts,
+            &job.fields.stats,
         ] {
             encoder.clear_buffer(buffer, 0, None);
         }
@@ -806,7 +719,7 @@ impl VoxelizePass {
                 pass.set_bind_group(2, group, &[]);
                 pass.dispatch_workgroups(voxels.0, voxels.1, 1);
             }
-            encoder.copy_buffer_to_buffer(scratch, 0, &job.density, 0, None);
+            encoder.copy_buffer_to_buffer(scratch, 0, &job.fields.density, 0, None);
         }
         let stages = [
             (
@@ -834,7 +747,13 @@ impl VoxelizePass {
         queue: &wgpu::Queue,
         job: &VoxelizeJob,
     ) -> Result<VoxelStats, VoxelizeError> {
-        let bytes = read_buffer(device, queue, "voxelize::stats_readback", &job.stats, 16)?;
+        let bytes = read_buffer(
+            device,
+            queue,
+            "voxelize::stats_readback",
+            &job.fields.stats,
+            16,
+        )?;
         let words: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(VoxelStats {
             nonempty: words[0],
@@ -849,121 +768,19 @@ impl VoxelizePass {
             dims: job.dims,
             box_min: job.box_min,
             box_max: job.box_max,
-            density: job.density,
-            hp_mean: job.hp_mean,
+            density: job.fields.density,
+            hp_mean: job.fields.hp_mean,
         }
     }
 
-    /// Builds the grid of `points` at `resolution`^3: upload, all passes, wait, statistics.
+    /// Builds the request's grid: upload, all passes, wait, statistics.
     pub fn voxelize(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
+        request: &VoxelizeRequest,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        self.voxelize_with(
-            device,
-            queue,
-            points,
-            resolution,
-            smoothing_sigma,
-            None,
-            None,
-        )
-    }
-
-    /// As [`VoxelizePass::voxelize`], in a given grid box (`None`: the cloud's own, [`grid_box`]; an A/B compare builds both grids in one box, and
-    /// points outside it count in the nearest border voxel).
-    pub fn voxelize_in_box(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
-        grid_box_override: Option<(Vec3, Vec3)>,
-    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        self.voxelize_with(
-            device,
-            queue,
-            points,
-            resolution,
-            smoothing_sigma,
-            None,
-            grid_box_override,
-        )
-    }
-
-    /// The general form of [`VoxelizePass::voxelize`] (see [`VoxelizePass::prepare_with`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn voxelize_with(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        points: &[Point],
-        resolution: u32,
-        smoothing_sigma: f32,
-        mapping: Option<&FreqMapping>,
-        grid_box_override: Option<(Vec3, Vec3)>,
-    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        let job = self.prepare_with(
-            device,
-            points,
-            resolution,
-            smoothing_sigma,
-            mapping,
-            grid_box_override,
-        )?;
-        self.build(device, queue, job)
-    }
-
-    /// As [`VoxelizePass::voxelize`], from points already on the GPU (see
-    /// [`VoxelizePass::prepare_from_buffers`]).
-    pub fn voxelize_buffers<'a>(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
-        bounds: (Vec3, Vec3),
-        resolution: u32,
-        smoothing_sigma: f32,
-    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        let job = self.prepare_from_buffers(device, chunks, bounds, resolution, smoothing_sigma)?;
-        self.build(device, queue, job)
-    }
-
-    /// As [`VoxelizePass::voxelize_buffers`], on the frequency axis `mapping` in `grid_box`
-    /// (see [`VoxelizePass::prepare_from_buffers_in_box`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn voxelize_buffers_in_box<'a>(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        chunks: impl IntoIterator<Item = (&'a wgpu::Buffer, u32)>,
-        grid_box: (Vec3, Vec3),
-        resolution: u32,
-        smoothing_sigma: f32,
-        mapping: Option<&FreqMapping>,
-    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
-        let job = self.prepare_from_buffers_in_box(
-            device,
-            chunks,
-            grid_box,
-            resolution,
-            smoothing_sigma,
-            mapping,
-        )?;
-        self.build(device, queue, job)
-    }
-
-    fn build(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        job: VoxelizeJob,
-    ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        let job = self.prepare(device, request)?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("voxelize::build"),
         });

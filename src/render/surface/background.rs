@@ -24,8 +24,8 @@ use crate::render::grid::VoxelGrid;
 use crate::render::grid::downsample::DownsamplePass;
 use crate::render::surface::buffers::MeshBuffers;
 use crate::render::surface::cpu::SurfaceEngine;
+use crate::render::surface::driver::{Methods, Submit, extract_until_fits};
 use crate::render::surface::lod::COARSE_LEVELS;
-use crate::render::surface::methods::{Methods, Submit, extract_until_fits};
 use crate::render::surface::state::{CacheKey, Finished, Mailbox, SurfaceState};
 use crate::render::surface::{SurfaceError, SurfaceSettings};
 

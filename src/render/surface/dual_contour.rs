@@ -17,11 +17,12 @@
 //! density; `finalize` writes the vertex count and the draw.
 //! Crossing normals and vertex normals come from the density's central-difference gradient
 //! (trilinearly interpolated at the vertex), negated so they point toward lower density.
+//!
+//! [`VoxelGrid`]: crate::render::grid::VoxelGrid
+//! [`MeshBuffers`]: crate::render::surface::buffers::MeshBuffers
 
-use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
-use crate::render::surface::buffers::MeshBuffers;
-use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines, Slicer};
+use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines};
 
 /// The dual contouring pipelines, built once.
 pub struct DualContourPass {
@@ -46,31 +47,9 @@ impl DualContourPass {
         self.pipelines.pass_names()
     }
 
-    /// Records the extraction of the surface at `iso_value` into `buffers`; with `timestamps`,
-    /// each pass writes its start and end; with `slice`, each pass is a submission of its own (see
-    /// [`ExtractionPipelines::record`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        grid: &VoxelGrid,
-        buffers: &mut MeshBuffers,
-        iso_value: f32,
-        timestamps: Option<&wgpu::QuerySet>,
-        slice: Option<&mut Slicer<'_>>,
-    ) {
-        self.pipelines.record(
-            device,
-            queue,
-            encoder,
-            &[],
-            grid,
-            buffers,
-            iso_value,
-            timestamps,
-            slice,
-        );
+    /// The pipelines that record the extraction, which takes no bind-group entries of its own
+    /// (see [`ExtractionPipelines::record`]).
+    pub(crate) fn extraction(&self) -> (&ExtractionPipelines, Vec<wgpu::BindGroupEntry<'_>>) {
+        (&self.pipelines, Vec::new())
     }
 }

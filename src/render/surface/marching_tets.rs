@@ -19,11 +19,12 @@
 //! cell); `finalize` writes the draw. Vertex normals: the central-difference gradient of the
 //! density interpolated along the edge, negated (toward lower density); a vanishing gradient falls
 //! back to the edge's direction from inside to outside.
+//!
+//! [`VoxelGrid`]: crate::render::grid::VoxelGrid
+//! [`MeshBuffers`]: crate::render::surface::buffers::MeshBuffers
 
-use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
-use crate::render::surface::buffers::MeshBuffers;
-use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines, Slicer};
+use crate::render::surface::extraction::{EXTRACTION_PASSES, ExtractionPipelines};
 use wgpu::util::DeviceExt;
 
 /// The six tetrahedra of a cell as cube-corner indices (bit 0: x, bit 1: y, bit 2: z), each a
@@ -149,27 +150,13 @@ impl MarchingTetsPass {
         self.pipelines.pass_names()
     }
 
-    /// Records the extraction of the surface at `iso_value` into `buffers`; with `timestamps`,
-    /// each pass writes its start and end; with `slice`, each pass is a submission of its own (see
-    /// [`ExtractionPipelines::record`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        grid: &VoxelGrid,
-        buffers: &mut MeshBuffers,
-        iso_value: f32,
-        timestamps: Option<&wgpu::QuerySet>,
-        slice: Option<&mut Slicer<'_>>,
-    ) {
-        let cases = [wgpu::BindGroupEntry {
+    /// The pipelines that record the extraction and the bind-group entries of its own (the case
+    /// table, binding 10) that they take (see [`ExtractionPipelines::record`]).
+    pub(crate) fn extraction(&self) -> (&ExtractionPipelines, Vec<wgpu::BindGroupEntry<'_>>) {
+        let cases = wgpu::BindGroupEntry {
             binding: 10,
             resource: self.cases.as_entire_binding(),
-        }];
-        self.pipelines.record(
-            device, queue, encoder, &cases, grid, buffers, iso_value, timestamps, slice,
-        );
+        };
+        (&self.pipelines, vec![cases])
     }
 }

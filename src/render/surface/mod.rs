@@ -9,9 +9,11 @@
 //! counters and indirect dispatch and draw arguments), then colour and depth of the render target.
 //! Files, each beside its shader in shaders/surface/: [`extraction`] (the skeleton both methods
 //! share, extraction.wgsl), [`marching_tets`] and [`dual_contour`] (the methods), [`draw`]
-//! (draw.wgsl's CPU side), [`pass`] (the per-device [`pass::SurfacePass`]: pipelines, growth,
-//! read-back, draw) and [`state`] (one cloud's [`state::ExtractedSurface`], owned by its
-//! `SceneData`). Both methods first classify every cell and append only the cells that straddle the
+//! (draw.wgsl's CPU side), [`pass`] (the per-device [`pass::SurfacePass`]: requests, read-back,
+//! draw), [`driver`] (the extraction driver: extract, read the counters back, grow the buffers
+//! until the surface fits, on the GPU or the [`cpu`] engine), [`background`] (the window's worker
+//! thread that runs the driver) and [`state`] (one cloud's [`state::ExtractedSurface`], owned by
+//! its `SceneData`). Both methods first classify every cell and append only the cells that straddle the
 //! isovalue to an active list, then run their expensive passes over those cells alone through
 //! indirect dispatches; output is reserved in preallocated buffers with atomics and a one-thread
 //! pass turns the counters into indirect draw arguments. The surface is re-extracted only when the
@@ -29,11 +31,11 @@ pub mod buffers;
 pub mod cpu;
 pub mod cpu_mesh;
 pub mod draw;
+pub mod driver;
 pub mod dual_contour;
 pub mod extraction;
 pub mod lod;
 pub mod marching_tets;
-pub mod methods;
 pub mod pass;
 pub mod state;
 

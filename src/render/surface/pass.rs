@@ -17,8 +17,8 @@ use crate::render::surface::buffers::{INDEXED_ARGS_OFFSET, MeshVertex};
 use crate::render::surface::cpu::{Phases, SurfaceEngine};
 use crate::render::surface::cpu_mesh::CpuMesh;
 use crate::render::surface::draw::SurfaceStyle;
+use crate::render::surface::driver::{Methods, Submit, TIMESTAMPS, extract_until_fits};
 use crate::render::surface::lod::{Level, SurfaceDetail};
-use crate::render::surface::methods::{Methods, Submit, TIMESTAMPS, extract_until_fits};
 use crate::render::surface::state::{CacheKey, ExtractedSurface};
 use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, SurfaceSettings};
 
@@ -194,7 +194,6 @@ impl SurfacePass {
     pub fn prepare(
         &self,
         queue: &wgpu::Queue,
-        _encoder: &mut wgpu::CommandEncoder,
         surface: &ExtractedSurface,
         grid: Option<&VoxelGrid>,
         settings: &SurfaceSettings,

@@ -14,6 +14,31 @@ use crate::render::surface::buffers::MeshBuffers;
 use crate::render::surface::lod::{Level, SurfaceDetail, choose_mesh};
 use crate::render::surface::{SurfaceCounts, SurfaceMethod, SurfaceSettings};
 
+/// Where a cloud's surface stands, read once a frame by the window
+/// ([`ExtractedSurface::status`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExtractionStatus {
+    /// The counts of the last extraction whose read-back arrived (None before the first).
+    pub counts: Option<SurfaceCounts>,
+    /// Why the surface is incomplete, when it is (it needs more room than the GPU has).
+    pub error: Option<String>,
+    /// An extraction runs in the background or its result waits to be installed: the window
+    /// comes back for it (and shows that it is busy).
+    pub extracting: bool,
+}
+
+impl ExtractionStatus {
+    /// Triangles in the last complete extraction (0 before the first).
+    pub fn triangles(&self) -> u32 {
+        self.counts.map_or(0, |c| c.triangles())
+    }
+
+    /// The last extraction fitted and found no surface (the isovalue is above every voxel).
+    pub fn found_nothing(&self) -> bool {
+        self.counts.is_some_and(|c| c.fits() && c.triangles() == 0)
+    }
+}
+
 /// Identifies the extracted surface: a change re-extracts it.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct CacheKey {
@@ -161,15 +186,20 @@ impl ExtractedSurface {
         self.lock().counts
     }
 
-    /// Why the surface is incomplete, when it is (it needs more room than the GPU has).
-    pub fn error(&self) -> Option<String> {
-        self.lock().error.clone()
-    }
-
     /// True while an extraction runs in the background or its result waits to be installed:
     /// the window should come back (and show that it is busy).
     pub fn needs_another_frame(&self) -> bool {
         self.lock().requested.is_some() || self.mailbox.is_full()
+    }
+
+    /// The counts, the error and whether an extraction is under way, under one lock.
+    pub fn status(&self) -> ExtractionStatus {
+        let state = self.lock();
+        ExtractionStatus {
+            counts: state.counts,
+            error: state.error.clone(),
+            extracting: state.requested.is_some() || self.mailbox.is_full(),
+        }
     }
 
     /// True while the surface on screen is not yet the one asked for (an extraction runs).

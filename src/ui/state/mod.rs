@@ -95,7 +95,7 @@ pub(super) struct LoudscapeApp {
     pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
     pub(super) iso_sweep: Option<IsoSweep>,
-    /// Draw again next frame (work announced, a load or a surface that needs another frame).
+    /// Draw again next frame (what it shows is under way: a grid build, a surface on the worker).
     pub(super) needs_repaint: bool,
     /// The Open row (`open.rs`).
     pub(super) open: OpenPanel,

@@ -328,11 +328,9 @@ fn buffers_grow_until_the_surface_fits() {
         let surface = ExtractedSurface::new();
         let mut frames = 0;
         loop {
-            let mut encoder = gpu
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            small.prepare(&gpu.queue, &mut encoder, &surface, Some(&grid), &settings);
-            gpu.queue.submit([encoder.finish()]);
+            small.prepare(&gpu.queue, &surface, Some(&grid), &settings);
+            // The frame's submission (its style write; the worker extracts).
+            gpu.queue.submit([]);
             frames += 1;
             if !surface.needs_another_frame() {
                 break;
@@ -437,11 +435,9 @@ fn interactive_isovalue_sweep_ends_on_the_last_value() {
                 iso_value,
                 lit: true,
             };
-            let mut encoder = gpu
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            pass.prepare(&gpu.queue, &mut encoder, &surface, Some(&grid), &settings);
-            gpu.queue.submit([encoder.finish()]);
+            pass.prepare(&gpu.queue, &surface, Some(&grid), &settings);
+            // The frame's submission (its style write; the worker extracts).
+            gpu.queue.submit([]);
         };
         let sweep: Vec<f32> = (0..=16).map(|i| 0.3 + 0.02 * i as f32).collect();
         let last = *sweep.last().unwrap();

@@ -1,4 +1,4 @@
-//! The extraction itself, shared by the blocking path ([`SurfacePass`]) and the window's
+//! The extraction driver, shared by the blocking path ([`SurfacePass`]) and the window's
 //! worker thread ([`background`]): both methods' pipelines ([`Methods`]) and
 //! [`extract_until_fits`], which extracts, reads the counters back and grows the buffers until
 //! the surface fits. On the worker the extraction goes to the GPU in slices, one submission per
@@ -282,28 +282,23 @@ pub(crate) fn extract_until_fits(
             Submit::Worker { sliced: true, .. } => Some(&mut submit_slice),
             _ => None,
         };
-        match settings.method {
-            SurfaceMethod::MarchingTetrahedra => methods.marching_tets.record(
-                device,
-                queue,
-                &mut encoder,
-                grid,
-                buffers,
-                settings.iso_value,
-                timestamps,
-                slicer,
-            ),
-            SurfaceMethod::DualContouring => methods.dual_contour.record(
-                device,
-                queue,
-                &mut encoder,
-                grid,
-                buffers,
-                settings.iso_value,
-                timestamps,
-                slicer,
-            ),
-        }
+        // With `timestamps` each pass writes its start and end; with a slicer each pass is a
+        // submission of its own.
+        let (pipelines, extra) = match settings.method {
+            SurfaceMethod::MarchingTetrahedra => methods.marching_tets.extraction(),
+            SurfaceMethod::DualContouring => methods.dual_contour.extraction(),
+        };
+        pipelines.record(
+            device,
+            queue,
+            &mut encoder,
+            &extra,
+            grid,
+            buffers,
+            settings.iso_value,
+            timestamps,
+            slicer,
+        );
         state.key = Some(CacheKey::new(grid, settings));
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("surface::counters_readback"),
