@@ -28,7 +28,7 @@ use crate::render::gpu::target::RenderTarget;
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::ui::bridge::ViewResources;
-use crate::ui::compare::{paint_diverging_legend, paint_title};
+use crate::ui::compare::paint_difference;
 use crate::ui::compare_readouts::{compare_readings, difference_readings};
 use crate::ui::compare_shot::difference_settings;
 use crate::ui::hover::paint_readings;
@@ -496,17 +496,13 @@ impl LoudscapeApp {
                 {
                     labels::paint(painter, rect, view, labels);
                 }
-                paint_title(
+                paint_difference(
                     painter,
                     rect,
                     &format!("B - A: {} against {}", names[1], names[0]),
+                    state.difference.as_ref().map(|c| (c.measure, c.range)),
                 );
                 if let Some(copy) = &state.difference {
-                    let legend = egui::Rect::from_min_size(
-                        rect.right_top() + egui::vec2(-180.0, 40.0),
-                        egui::vec2(170.0, 180.0),
-                    );
-                    paint_diverging_legend(painter, legend, copy.measure, copy.range);
                     if let Some(pos) = hover
                         && !view.moving
                     {
