@@ -172,6 +172,19 @@ fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3
 /// end; a title moves in from the picture's edge rather than being cut off; titles are placed
 /// first and a tick label that would overlap a label already placed is left out.
 pub fn layout(rect: Rect, view: &FrameView, labels: &AxisLabels, background: Background) -> Annotation {
+    layout_avoiding(rect, view, labels, background, &[])
+}
+
+/// As [`layout`], keeping clear of `occupied` (the boxes of what is drawn over the picture
+/// first: its legend): a title takes a place clear of them, a tick label that meets one is left
+/// out.
+pub fn layout_avoiding(
+    rect: Rect,
+    view: &FrameView,
+    labels: &AxisLabels,
+    background: Background,
+    occupied: &[Rect],
+) -> Annotation {
     let scale = rect.width() / view.width.max(1) as f32;
     let edges: Vec<Option<Vec3>> = (0..3).map(|axis| label_edge(labels, view, axis)).collect();
     // Where a label's anchor lands in `rect`, for the normalized position `at` on its axis.
@@ -202,13 +215,20 @@ pub fn layout(rect: Rect, view: &FrameView, labels: &AxisLabels, background: Bac
             continue;
         };
         let top_end = project(axis, 1.0);
-        let title = place_title(&label.text, axis, pos, top_end, &ticks[axis], rect, ink(true));
-        if !overlaps_any(&title.rect, &placed) {
+        let title = place_title(
+            &label.text,
+            (axis, pos, top_end),
+            &ticks[axis],
+            rect,
+            occupied,
+            ink(true),
+        );
+        if !overlaps_any(&title.rect, &placed) && !meets(&title.rect, occupied) {
             placed.push(title);
         }
     }
     for tick in ticks.into_iter().flatten() {
-        if !overlaps_any(&tick.rect, &placed) {
+        if !overlaps_any(&tick.rect, &placed) && !meets(&tick.rect, occupied) {
             placed.push(tick);
         }
     }
@@ -234,6 +254,10 @@ fn tick_offset(axis: usize) -> ([f32; 2], Anchor) {
     } else {
         ([0.0, 8.0], Anchor::CENTER_TOP)
     }
+}
+
+fn meets(rect: &Rect, occupied: &[Rect]) -> bool {
+    occupied.iter().any(|o| o.expand(2.0).intersects(rect))
 }
 
 fn overlaps_any(rect: &Rect, placed: &[Text]) -> bool {
@@ -272,14 +296,14 @@ fn within_width(text: Text, rect: Rect) -> Text {
 }
 
 /// The title of `axis`, its anchor at `pos` (the middle of the axis) and the axis's top end at
-/// `top_end`, placed beyond the axis's tick labels `ticks` (see [`layout`]).
+/// `top_end`, placed beyond the axis's tick labels `ticks`, clear of `occupied` where it can be
+/// (see [`layout`]).
 fn place_title(
     title: &str,
-    axis: usize,
-    pos: [f32; 2],
-    top_end: Option<[f32; 2]>,
+    (axis, pos, top_end): (usize, [f32; 2], Option<[f32; 2]>),
     ticks: &[Text],
     rect: Rect,
+    occupied: &[Rect],
     colour: Rgba,
 ) -> Text {
     let (offset, anchor) = tick_offset(axis);
@@ -289,18 +313,22 @@ fn place_title(
         return clear_of(within_width(text, rect), ticks, 0.0, 1.0);
     }
     let beside = clear_of(text, ticks, -1.0, 0.0);
-    if beside.rect.left() >= rect.left() + 2.0 {
+    if beside.rect.left() >= rect.left() + 2.0 && !meets(&beside.rect, occupied) {
         return beside;
     }
     // No room left of the ticks: above the axis's top end, clear of its top tick.
     if let Some(end) = top_end {
         let above = Text::new(title, [end[0], end[1] - 10.0], Anchor::CENTER_BOTTOM, TITLE_SIZE, colour);
         let above = clear_of(within_width(above, rect), ticks, 0.0, -1.0);
-        if above.rect.top() >= rect.top() + 2.0 {
+        if above.rect.top() >= rect.top() + 2.0 && !meets(&above.rect, occupied) {
             return above;
         }
     }
-    within_width(beside, rect)
+    let inside = within_width(beside.clone(), rect);
+    if meets(&inside.rect, occupied) && beside.rect.left() >= rect.left() + 2.0 {
+        return beside;
+    }
+    inside
 }
 
 #[cfg(test)]

@@ -16,6 +16,9 @@ pub mod legend;
 pub mod raster;
 pub mod strip;
 
+#[cfg(test)]
+mod layout_tests;
+
 /// A colour, straight (not premultiplied) RGBA, sRGB-encoded as the render target holds it.
 pub type Rgba = [u8; 4];
 
@@ -228,6 +231,19 @@ impl Annotation {
         rect
     }
 
+    /// The boxes of what is drawn (texts, filled rectangles, frames), for laying out more
+    /// clear of them.
+    pub fn boxes(&self) -> Vec<Rect> {
+        self.shapes
+            .iter()
+            .filter_map(|s| match s {
+                Shape::Text(t) => Some(t.rect),
+                Shape::Fill { rect, .. } | Shape::Frame { rect, .. } => Some(*rect),
+                Shape::Line { .. } => None,
+            })
+            .collect()
+    }
+
     /// The texts, in order.
     pub fn texts(&self) -> impl Iterator<Item = &Text> {
         self.shapes.iter().filter_map(|s| match s {
@@ -235,4 +251,21 @@ impl Annotation {
             _ => None,
         })
     }
+}
+
+/// A view's axis labels laid out clear of `legend` (what else is drawn over the picture: its
+/// name and colour key, titles), then `legend` over them.
+pub fn labels_and_legend(
+    rect: Rect,
+    view: &crate::view::frame_view::FrameView,
+    labels: Option<&axes::AxisLabels>,
+    background: crate::render::colormap::Background,
+    legend: Annotation,
+) -> Annotation {
+    let mut out = match labels {
+        Some(labels) => axes::layout_avoiding(rect, view, labels, background, &legend.boxes()),
+        None => Annotation::default(),
+    };
+    out.extend(legend);
+    out
 }

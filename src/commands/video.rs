@@ -481,18 +481,20 @@ fn render_video_frame(
                 .context("reading a frame back from the GPU")?;
             let background = settings.colours.background;
             let rect = loudscape::picture::whole(w, h);
-            let mut overlay = Annotation::default();
-            if let Some(labels) = labels.as_ref() {
-                overlay.extend(loudscape::annotate::axes::layout(
-                    rect, &view, labels, background,
-                ));
-            }
+            let mut over = Annotation::default();
             if let Some(legend) = legend.as_ref() {
-                overlay.extend(loudscape::annotate::legend::layout(rect, legend));
+                over.extend(loudscape::annotate::legend::layout(rect, legend));
             }
             if let Some(title) = &title {
-                overlay.extend(loudscape::annotate::legend::caption(rect, title, background));
+                over.extend(loudscape::annotate::legend::caption(rect, title, background));
             }
+            let overlay = loudscape::annotate::labels_and_legend(
+                rect,
+                &view,
+                labels.as_ref(),
+                background,
+                over,
+            );
             raster::draw(&mut image, &overlay.shapes, 1.0);
             Ok(image)
         }

@@ -113,21 +113,18 @@ pub fn half_overlay(
     legend: Option<(DifferenceMeasure, f32)>,
 ) -> Annotation {
     let rect = super::whole(view.width, view.height);
-    let mut out = Annotation::default();
-    if labels_on {
-        let labels = axes::axis_labels(cloud, data);
-        out.extend(axes::layout(
-            rect,
-            view,
-            &labels,
-            crate::render::colormap::Background::Dark,
-        ));
-    }
-    match legend {
-        Some(legend) => out.extend(compare::difference_overlay(rect, title, Some(legend))),
-        None => out.extend(legend::layout(rect, &half_legend(cloud, settings, title))),
-    }
-    out
+    let over = match legend {
+        Some(legend) => compare::difference_overlay(rect, title, Some(legend)),
+        None => legend::layout(rect, &half_legend(cloud, settings, title)),
+    };
+    let labels = labels_on.then(|| axes::axis_labels(cloud, data));
+    crate::annotate::labels_and_legend(
+        rect,
+        view,
+        labels.as_ref(),
+        crate::render::colormap::Background::Dark,
+        over,
+    )
 }
 
 /// A half of the side-by-side picture: its title ("A: name") and the colour key of what it

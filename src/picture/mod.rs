@@ -73,21 +73,22 @@ pub fn overlay(
     overlay: Overlay,
 ) -> Annotation {
     let rect = whole(view.width, view.height);
-    let mut out = Annotation::default();
-    if overlay.labels {
-        let labels = crate::annotate::axes::axis_labels(cloud, data);
-        out.extend(crate::annotate::axes::layout(
-            rect,
-            view,
-            &labels,
-            settings.colours.background,
-        ));
-    }
-    if overlay.legend {
+    let legend = if overlay.legend {
         let legend = crate::annotate::legend::picture_legend(cloud, settings);
-        out.extend(crate::annotate::legend::layout(rect, &legend));
-    }
-    out
+        crate::annotate::legend::layout(rect, &legend)
+    } else {
+        Annotation::default()
+    };
+    let labels = overlay
+        .labels
+        .then(|| crate::annotate::axes::axis_labels(cloud, data));
+    crate::annotate::labels_and_legend(
+        rect,
+        view,
+        labels.as_ref(),
+        settings.colours.background,
+        legend,
+    )
 }
 
 /// Draws [`overlay`] over `image`, a picture of `view`.

@@ -459,17 +459,12 @@ impl LoudscapeApp {
                             settings: settings.clone(),
                         },
                     ));
-                    if let Some(labels) = &state.labels
-                        && self.settings.show_box
-                    {
-                        labels::paint(painter, half_rect, view, labels);
-                    }
                     // Its title and the colour key of what it draws, as saved pictures carry.
                     let cloud = if side == 0 { &clouds.0 } else { &clouds.1 };
-                    let mut legend = crate::ui::legends::picture_legend(cloud, settings);
-                    legend.name = format!("{}: {}", ["A", "B"][side], names[side]);
-                    legend.detail.clear();
-                    crate::ui::legends::paint_picture(painter, half_rect, &legend);
+                    let title = format!("{}: {}", ["A", "B"][side], names[side]);
+                    let legend = crate::picture::compare::half_legend(cloud, settings, &title);
+                    let labels = state.labels.as_ref().filter(|_| self.settings.show_box);
+                    crate::ui::legends::paint_with_labels(painter, half_rect, view, labels, &legend);
                 }
                 if let Some(pos) = hover
                     && !view.moving

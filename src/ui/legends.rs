@@ -110,3 +110,23 @@ pub fn paint_diverging(
     );
     annotation::paint(painter, &shapes);
 }
+
+/// Paints a view's legend over `rect` and, when given, its axis labels laid out clear of it
+/// (as pictures draw them: `annotate::labels_and_legend`).
+pub fn paint_with_labels(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    view: &crate::view::frame_view::FrameView,
+    labels: Option<&crate::annotate::axes::AxisLabels>,
+    legend: &PictureLegend,
+) {
+    let area = annotation::rect(rect);
+    let shapes = crate::annotate::labels_and_legend(
+        area,
+        view,
+        labels,
+        legend.background,
+        crate::annotate::legend::layout(area, legend),
+    );
+    annotation::paint(painter, &shapes);
+}
