@@ -162,7 +162,6 @@ fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3
     best.map(|(_, p)| p)
 }
 
-
 /// The labels of `labels` laid out over a view occupying `rect` (points), projected through
 /// `view`, in the ink of `background`, each on a plate of the background's colour.
 ///
@@ -171,7 +170,12 @@ fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3
 /// where the level axis's title has no room left of its ticks it goes above the axis's top
 /// end; a title moves in from the picture's edge rather than being cut off; titles are placed
 /// first and a tick label that would overlap a label already placed is left out.
-pub fn layout(rect: Rect, view: &FrameView, labels: &AxisLabels, background: Background) -> Annotation {
+pub fn layout(
+    rect: Rect,
+    view: &FrameView,
+    labels: &AxisLabels,
+    background: Background,
+) -> Annotation {
     layout_avoiding(rect, view, labels, background, &[])
 }
 
@@ -206,7 +210,13 @@ pub fn layout_avoiding(
         };
         let (offset, anchor) = tick_offset(axis);
         let pos = [pos[0] + offset[0], pos[1] + offset[1]];
-        ticks[axis].push(Text::new(label.text.clone(), pos, anchor, TICK_SIZE, ink(false)));
+        ticks[axis].push(Text::new(
+            label.text.clone(),
+            pos,
+            anchor,
+            TICK_SIZE,
+            ink(false),
+        ));
     }
     let mut placed: Vec<Text> = Vec::new();
     for label in labels.labels.iter().filter(|l| l.title) {
@@ -318,7 +328,13 @@ fn place_title(
     }
     // No room left of the ticks: above the axis's top end, clear of its top tick.
     if let Some(end) = top_end {
-        let above = Text::new(title, [end[0], end[1] - 10.0], Anchor::CENTER_BOTTOM, TITLE_SIZE, colour);
+        let above = Text::new(
+            title,
+            [end[0], end[1] - 10.0],
+            Anchor::CENTER_BOTTOM,
+            TITLE_SIZE,
+            colour,
+        );
         let above = clear_of(within_width(above, rect), ticks, 0.0, -1.0);
         if above.rect.top() >= rect.top() + 2.0 && !meets(&above.rect, occupied) {
             return above;

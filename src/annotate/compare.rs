@@ -149,9 +149,16 @@ mod tests {
             let out = difference_overlay(rect, title_text, Some((DifferenceMeasure::Density, 6.0)));
             let texts: Vec<&Text> = out.texts().collect();
             for t in &texts[1..] {
-                assert!(!t.rect.intersects(&plate), "{width}: '{}' over the title", t.text);
+                assert!(
+                    !t.rect.intersects(&plate),
+                    "{width}: '{}' over the title",
+                    t.text
+                );
             }
-            assert!(texts[0].rect.right() <= width, "{width}: the title runs off");
+            assert!(
+                texts[0].rect.right() <= width,
+                "{width}: the title runs off"
+            );
         }
     }
 }

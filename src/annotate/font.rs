@@ -198,7 +198,15 @@ mod tests {
         let shaped = shape("a b", 14.0);
         assert_eq!(shaped.glyphs.len(), 3);
         let outliner = Outliner::new(14.0);
-        assert!(outliner.outline(shaped.glyphs[0].glyph, 0.0, 12.0).is_some());
-        assert!(outliner.outline(shaped.glyphs[1].glyph, 0.0, 12.0).is_none());
+        assert!(
+            outliner
+                .outline(shaped.glyphs[0].glyph, 0.0, 12.0)
+                .is_some()
+        );
+        assert!(
+            outliner
+                .outline(shaped.glyphs[1].glyph, 0.0, 12.0)
+                .is_none()
+        );
     }
 }

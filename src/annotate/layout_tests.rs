@@ -42,7 +42,10 @@ fn the_level_title_never_covers_its_tick_labels() {
         let ticks = cloud.meta.axes.y.ticks(8);
         let n = ticks.len();
         assert!(n >= 4, "{n} level ticks");
-        ticks[n / 2 - 1..=n / 2].iter().map(|t| t.label.clone()).collect()
+        ticks[n / 2 - 1..=n / 2]
+            .iter()
+            .map(|t| t.label.clone())
+            .collect()
     };
     let transform = world_from_data(cloud.meta.mode);
     let bounds = world_box(transform, Vec3::splat(-1.0), Vec3::splat(1.0));

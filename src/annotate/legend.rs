@@ -253,10 +253,7 @@ pub fn layout(rect: Rect, legend: &PictureLegend) -> Annotation {
         ));
         text_block = Rect::from_min_max(
             text_block.min,
-            [
-                text_block.right().max(detail.right()),
-                detail.bottom(),
-            ],
+            [text_block.right().max(detail.right()), detail.bottom()],
         );
     }
     let beside = key_layout(key_strip_rect(rect), rect, legend);

@@ -153,7 +153,13 @@ pub struct Text {
 
 impl Text {
     /// `text` at `size` points with `anchor` at `pos`.
-    pub fn new(text: impl Into<String>, pos: [f32; 2], anchor: Anchor, size: f32, colour: Rgba) -> Self {
+    pub fn new(
+        text: impl Into<String>,
+        pos: [f32; 2],
+        anchor: Anchor,
+        size: f32,
+        colour: Rgba,
+    ) -> Self {
         let text = text.into();
         let measured = font::measure(&text, size);
         let rect = anchor.rect(pos, measured);
@@ -183,7 +189,11 @@ pub enum Shape {
         colour: Rgba,
     },
     /// A rectangle's outline, `width` wide, just outside `rect`.
-    Frame { rect: Rect, width: f32, colour: Rgba },
+    Frame {
+        rect: Rect,
+        width: f32,
+        colour: Rgba,
+    },
     /// A line through `points` (two for a segment).
     Line {
         points: Vec<[f32; 2]>,

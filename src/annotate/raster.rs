@@ -11,10 +11,7 @@ use super::{Rect, Rgba, Shape, Text};
 /// Draws `shapes` (in points) over `image`, `pixels_per_point` pixels a point, clipped to it.
 /// Images wider or taller than 65535 pixels are left as they are.
 pub fn draw(image: &mut image::RgbaImage, shapes: &[Shape], pixels_per_point: f32) {
-    let (Ok(w), Ok(h)) = (
-        u16::try_from(image.width()),
-        u16::try_from(image.height()),
-    ) else {
+    let (Ok(w), Ok(h)) = (u16::try_from(image.width()), u16::try_from(image.height())) else {
         return;
     };
     if shapes.is_empty() || w == 0 || h == 0 {
@@ -126,18 +123,31 @@ mod tests {
     fn shapes_land_where_they_are_laid_out_and_blend_over_the_picture() {
         let mut image = image::RgbaImage::from_pixel(80, 40, image::Rgba([0, 0, 80, 255]));
         let mut a = Annotation::default();
-        a.fill(Rect::from_min_size([10.0, 10.0], [10.0, 10.0]), 0.0, [255, 0, 0, 255]);
-        a.fill(Rect::from_min_size([30.0, 10.0], [10.0, 10.0]), 0.0, [255, 255, 255, 128]);
-        let label = a.text(Text::new("Hg", [50.0, 5.0], Anchor::LEFT_TOP, 14.0, [255; 4]));
+        a.fill(
+            Rect::from_min_size([10.0, 10.0], [10.0, 10.0]),
+            0.0,
+            [255, 0, 0, 255],
+        );
+        a.fill(
+            Rect::from_min_size([30.0, 10.0], [10.0, 10.0]),
+            0.0,
+            [255, 255, 255, 128],
+        );
+        let label = a.text(Text::new(
+            "Hg",
+            [50.0, 5.0],
+            Anchor::LEFT_TOP,
+            14.0,
+            [255; 4],
+        ));
         draw(&mut image, &a.shapes, 1.0);
         assert_eq!(image.get_pixel(15, 15).0, [255, 0, 0, 255]);
         let half = image.get_pixel(35, 15).0;
         assert!((120..=136).contains(&half[0]) && half[2] > 150, "{half:?}");
         assert_eq!(image.get_pixel(5, 5).0, [0, 0, 80, 255]);
         // Ink inside the text's box, none right of it.
-        let inked = |x0: u32, x1: u32| {
-            (x0..x1).any(|x| (0..40).any(|y| image.get_pixel(x, y)[0] > 128))
-        };
+        let inked =
+            |x0: u32, x1: u32| (x0..x1).any(|x| (0..40).any(|y| image.get_pixel(x, y)[0] > 128));
         assert!(inked(label.left() as u32, label.right().ceil() as u32));
         assert!(!inked(label.right().ceil() as u32 + 2, 80));
         // Twice the pixels a point: the box is drawn twice as large.

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
+use loudscape::picture::{Overlay, draw_overlay};
 use loudscape::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::voxelize::VoxelSettings;
@@ -13,7 +14,6 @@ use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::{TransferPreset, VolumeSettings};
-use loudscape::picture::{Overlay, draw_overlay};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -110,8 +110,8 @@ impl DrawArgs {
     /// `cloud` as heard under `--normalize` (a timeline's songs shifted by their playback
     /// gain); unchanged with `none`. An unknown preset is refused.
     pub fn heard(&self, cloud: PointCloud) -> anyhow::Result<PointCloud> {
-        let preset =
-            loudscape::data::normalize::parse_preset(&self.normalize).map_err(anyhow::Error::msg)?;
+        let preset = loudscape::data::normalize::parse_preset(&self.normalize)
+            .map_err(anyhow::Error::msg)?;
         match preset {
             Some(preset) => {
                 loudscape::data::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)

@@ -7,12 +7,12 @@
 //! `picture::compare`.
 
 use anyhow::{Context, bail};
+use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::difference::DifferenceMeasure;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, ViewKind};
-use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::view::camera::Camera;
 
 /// Parses `--view` with `--compare`: `compare` (side by side, as `--compare-as`) or

@@ -10,18 +10,18 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use glam::Vec3;
+use loudscape::annotate::axes::AxisLabels;
+use loudscape::annotate::legend::PictureLegend;
+use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
+use loudscape::annotate::{Annotation, Rect, raster};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
+use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
-use loudscape::annotate::axes::AxisLabels;
-use loudscape::annotate::legend::PictureLegend;
-use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
-use loudscape::annotate::{Annotation, Rect, raster};
-use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -337,8 +337,8 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
             if matches!(view, ViewKind::Volume | ViewKind::Surface) {
                 prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
             }
-            let labels =
-                (!args.draw.no_labels).then(|| loudscape::annotate::axes::axis_labels(&cloud, &data));
+            let labels = (!args.draw.no_labels)
+                .then(|| loudscape::annotate::axes::axis_labels(&cloud, &data));
             let legend = (!args.draw.no_legend)
                 .then(|| loudscape::annotate::legend::picture_legend(&cloud, &settings));
             Drawn::One {
@@ -486,7 +486,9 @@ fn render_video_frame(
                 over.extend(loudscape::annotate::legend::layout(rect, legend));
             }
             if let Some(title) = &title {
-                over.extend(loudscape::annotate::legend::caption(rect, title, background));
+                over.extend(loudscape::annotate::legend::caption(
+                    rect, title, background,
+                ));
             }
             let overlay = loudscape::annotate::labels_and_legend(
                 rect,

@@ -5,6 +5,7 @@
 
 use anyhow::{Context, bail};
 
+use crate::annotate::{Annotation, axes, compare, legend};
 use crate::data::cloud::PointCloud;
 use crate::render::compare::CompareScene;
 use crate::render::gpu::context::GpuContext;
@@ -12,7 +13,6 @@ use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::headless::render_frame;
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use crate::render::volume::{TransferPreset, VolumeSettings};
-use crate::annotate::{Annotation, axes, compare, legend};
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
 

@@ -12,7 +12,10 @@ pub fn rect(r: egui::Rect) -> Rect {
 
 /// An annotation rectangle as egui's.
 pub fn egui_rect(r: Rect) -> egui::Rect {
-    egui::Rect::from_min_max(egui::pos2(r.min[0], r.min[1]), egui::pos2(r.max[0], r.max[1]))
+    egui::Rect::from_min_max(
+        egui::pos2(r.min[0], r.min[1]),
+        egui::pos2(r.max[0], r.max[1]),
+    )
 }
 
 pub fn colour(c: Rgba) -> Color32 {

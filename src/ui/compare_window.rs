@@ -464,7 +464,9 @@ impl LoudscapeApp {
                     let title = format!("{}: {}", ["A", "B"][side], names[side]);
                     let legend = crate::picture::compare::half_legend(cloud, settings, &title);
                     let labels = state.labels.as_ref().filter(|_| self.settings.show_box);
-                    crate::ui::legends::paint_with_labels(painter, half_rect, view, labels, &legend);
+                    crate::ui::legends::paint_with_labels(
+                        painter, half_rect, view, labels, &legend,
+                    );
                 }
                 if let Some(pos) = hover
                     && !view.moving

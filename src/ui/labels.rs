@@ -8,7 +8,9 @@ pub use crate::annotate::axes::{
     AxisLabels, Label, axis_labels, axis_labels_for_axes, axis_labels_for_box, axis_title,
 };
 use crate::data::cloud::PointCloud;
-pub use crate::data::normalize::{STREAMING_SERVICES, StreamingService, TurnUp, normalization_gain};
+pub use crate::data::normalize::{
+    STREAMING_SERVICES, StreamingService, TurnUp, normalization_gain,
+};
 use crate::render::colormap::Background;
 use crate::view::frame_view::FrameView;
 
@@ -28,12 +30,8 @@ pub fn paint_on(
     labels: &AxisLabels,
     background: Background,
 ) {
-    let shapes = crate::annotate::axes::layout(
-        crate::ui::annotation::rect(rect),
-        view,
-        labels,
-        background,
-    );
+    let shapes =
+        crate::annotate::axes::layout(crate::ui::annotation::rect(rect), view, labels, background);
     crate::ui::annotation::paint(painter, &shapes);
 }
 
@@ -175,4 +173,3 @@ mod metrics_tests {
         assert!(lines.contains(&"Spotify (loud): turned up 3.0 dB".to_string()));
     }
 }
-

@@ -6,8 +6,8 @@
 use eframe::egui::{self, Color32, RichText};
 
 pub use crate::annotate::legend::{
-    Key, MARGIN, PictureLegend, diverging_position, picture_legend, picture_name,
-    timeline_name, titled_with_reference,
+    Key, MARGIN, PictureLegend, diverging_position, picture_legend, picture_name, timeline_name,
+    titled_with_reference,
 };
 use crate::render::colormap::{Background, Colours, HpColourMap, Ramp};
 use crate::render::transfer::TransferPreset;
@@ -81,7 +81,9 @@ pub(super) fn transfer(ui: &mut egui::Ui, preset: TransferPreset, colours: &Colo
 
 /// Where the colour strip of a picture of `rect` lies (`annotate::legend::key_strip_rect`).
 pub fn key_strip_rect(rect: egui::Rect) -> egui::Rect {
-    annotation::egui_rect(crate::annotate::legend::key_strip_rect(annotation::rect(rect)))
+    annotation::egui_rect(crate::annotate::legend::key_strip_rect(annotation::rect(
+        rect,
+    )))
 }
 
 /// Paints `legend` over a picture occupying `rect`: the name top left, the key top right (or
@@ -101,13 +103,8 @@ pub fn paint_diverging(
     title: &str,
     background: Background,
 ) {
-    let shapes = crate::annotate::legend::diverging(
-        annotation::rect(strip),
-        ramp,
-        range,
-        title,
-        background,
-    );
+    let shapes =
+        crate::annotate::legend::diverging(annotation::rect(strip), ramp, range, title, background);
     annotation::paint(painter, &shapes);
 }
 
