@@ -188,7 +188,7 @@ mod tests {
         assert!(w1 > 10.0 && w1 < 30.0, "{w1}");
         assert!(w2 > w1 + 10.0);
         assert!((w3 - 2.0 * w1).abs() < 1.0, "{w3} vs {w1}");
-        assert!(h1 >= 12.0 && h1 <= 18.0, "{h1}");
+        assert!((12.0..=18.0).contains(&h1), "{h1}");
         assert!(h3 > 1.8 * h1);
         assert_eq!(measure("", 12.0)[0], 0.0);
     }

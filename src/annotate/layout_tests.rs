@@ -51,8 +51,10 @@ fn the_level_title_never_covers_its_tick_labels() {
     let bounds = world_box(transform, Vec3::splat(-1.0), Vec3::splat(1.0));
     for (w, h) in [(1280, 720), (640, 400), (500, 400), (320, 200)] {
         for azimuth in [-35.0f32, -60.0, 20.0] {
-            let mut camera = Camera::default();
-            camera.azimuth = azimuth.to_radians();
+            let camera = Camera {
+                azimuth: azimuth.to_radians(),
+                ..Camera::default()
+            };
             let view = FrameView::fitted(camera, transform, bounds, w, h);
             let rect = Rect::from_min_size([0.0, 0.0], [w as f32, h as f32]);
             let out = axes::layout(rect, &view, &labels, Background::Dark);

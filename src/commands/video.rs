@@ -359,10 +359,9 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         fast,
         timeline,
     };
-    let strip_image = match &strip {
-        Some(strip) => Some(render_strip(strip, size.0, strip_height)),
-        None => None,
-    };
+    let strip_image = strip
+        .as_ref()
+        .map(|strip| render_strip(strip, size.0, strip_height));
     let spec = EncodeSpec {
         width: size.0,
         height: size.1,

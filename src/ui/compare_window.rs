@@ -499,14 +499,13 @@ impl LoudscapeApp {
                     &format!("B - A: {} against {}", names[1], names[0]),
                     state.difference.as_ref().map(|c| (c.measure, c.range)),
                 );
-                if let Some(copy) = &state.difference {
-                    if let Some(pos) = hover
-                        && !view.moving
-                    {
-                        let px =
-                            glam::Vec2::new((pos.x - rect.min.x) * ppp, (pos.y - rect.min.y) * ppp);
-                        readings = Some((pos, difference_readings(&clouds.0, copy, view, px)));
-                    }
+                if let Some(copy) = &state.difference
+                    && let Some(pos) = hover
+                    && !view.moving
+                {
+                    let px =
+                        glam::Vec2::new((pos.x - rect.min.x) * ppp, (pos.y - rect.min.y) * ppp);
+                    readings = Some((pos, difference_readings(&clouds.0, copy, view, px)));
                 }
             }
             CompareLayout::Off => {}
