@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::{Anchor, Annotation, Rect, Rgba, Shape, Text};
 use crate::data::axes::Axis;
-use crate::data::cloud::PointCloud;
+use crate::data::cloud::{DataMode, PointCloud};
 use crate::render::colormap::Background;
 use crate::render::scene::SceneData;
 use crate::view::frame_view::FrameView;
@@ -87,7 +87,7 @@ pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabe
 }
 
 /// The titles of `labels` with the level axis's reference for `cloud`'s mode
-/// (`legend::titled_with_reference`).
+/// ([`titled_with_reference`]).
 fn with_references(
     mut labels: AxisLabels,
     cloud: &PointCloud,
@@ -96,12 +96,8 @@ fn with_references(
     let units = [&axes.x.unit, &axes.y.unit, &axes.z.unit];
     for label in labels.labels.iter_mut().filter(|l| l.title) {
         let text = std::mem::take(&mut label.text);
-        label.text = super::legend::titled_with_reference(
-            cloud.meta.mode,
-            label.axis,
-            units[label.axis.min(2)],
-            text,
-        );
+        label.text =
+            titled_with_reference(cloud.meta.mode, label.axis, units[label.axis.min(2)], text);
     }
     labels
 }
@@ -345,6 +341,28 @@ fn place_title(
         return beside;
     }
     inside
+}
+
+/// How the y axis of `mode` is titled in pictures, with its reference: an older timeline's
+/// "level" in dB is the frame's RMS level in dBFS (newer ones name their measure and unit,
+/// e.g. LUFS, and pass through); a song's is each STFT bin's level in dB re a full-scale sine
+/// (see docs/FORMAT.md). Other titles pass through.
+pub fn titled_with_reference(mode: DataMode, axis: usize, unit: &str, title: String) -> String {
+    if axis != 1 || unit != "dB" {
+        return title;
+    }
+    let reference = match mode {
+        DataMode::Timeline => "dBFS RMS",
+        DataMode::Song => "dB re FS sine",
+        DataMode::Generic => return title,
+    };
+    match title.strip_suffix(" (dB)") {
+        Some("level") if mode == DataMode::Song => {
+            format!("bin level ({reference})")
+        }
+        Some(name) => format!("{name} ({reference})"),
+        None => title,
+    }
 }
 
 #[cfg(test)]

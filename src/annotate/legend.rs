@@ -3,6 +3,7 @@
 //! data; and the diverging key of difference views. The window's side panel keeps its own small
 //! strips (`ui::legends`).
 
+pub use super::axes::titled_with_reference;
 use super::{Anchor, Annotation, Rect, Shape, Text, rgb};
 use crate::data::cloud::{DataMode, PointCloud};
 use crate::render::colormap::{Background, Colours, DensityColourMap, Ramp};
@@ -523,26 +524,6 @@ fn diverging_in(
     }
     key_text(&mut out, strip, rect, title, &ticks, background);
     out
-}
-
-/// How the y axis of `mode` is titled in pictures, with its reference: an older timeline's
-/// "level" in dB is the frame's RMS level in dBFS (newer ones name their measure and unit,
-/// e.g. LUFS, and pass through); a song's is each STFT bin's level in dB re a full-scale sine
-/// (see docs/FORMAT.md). Other titles pass through.
-pub fn titled_with_reference(mode: DataMode, axis: usize, unit: &str, title: String) -> String {
-    if axis != 1 || unit != "dB" {
-        return title;
-    }
-    let reference = match mode {
-        DataMode::Timeline => "dBFS RMS",
-        DataMode::Song => "dB re FS sine",
-        DataMode::Generic => return title,
-    };
-    match title.strip_suffix(" (dB)") {
-        Some("level") if mode == DataMode::Song => format!("bin level ({reference})"),
-        Some(name) => format!("{name} ({reference})"),
-        None => title,
-    }
 }
 
 #[cfg(test)]

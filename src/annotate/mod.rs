@@ -13,6 +13,7 @@ pub mod axes;
 pub mod compare;
 pub mod font;
 pub mod legend;
+pub mod overlay;
 pub mod raster;
 pub mod strip;
 
@@ -261,21 +262,4 @@ impl Annotation {
             _ => None,
         })
     }
-}
-
-/// A view's axis labels laid out clear of `legend` (what else is drawn over the picture: its
-/// name and colour key, titles), then `legend` over them.
-pub fn labels_and_legend(
-    rect: Rect,
-    view: &crate::view::frame_view::FrameView,
-    labels: Option<&axes::AxisLabels>,
-    background: crate::render::colormap::Background,
-    legend: Annotation,
-) -> Annotation {
-    let mut out = match labels {
-        Some(labels) => axes::layout_avoiding(rect, view, labels, background, &legend.boxes()),
-        None => Annotation::default(),
-    };
-    out.extend(legend);
-    out
 }

@@ -489,7 +489,7 @@ fn render_video_frame(
                     rect, title, background,
                 ));
             }
-            let overlay = loudscape::annotate::labels_and_legend(
+            let overlay = loudscape::annotate::overlay::labels_and_legend(
                 rect,
                 &view,
                 labels.as_ref(),

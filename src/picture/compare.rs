@@ -118,7 +118,7 @@ pub fn half_overlay(
         None => legend::layout(rect, &half_legend(cloud, settings, title)),
     };
     let labels = labels_on.then(|| axes::axis_labels(cloud, data));
-    crate::annotate::labels_and_legend(
+    crate::annotate::overlay::labels_and_legend(
         rect,
         view,
         labels.as_ref(),

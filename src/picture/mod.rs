@@ -82,7 +82,7 @@ pub fn overlay(
     let labels = overlay
         .labels
         .then(|| crate::annotate::axes::axis_labels(cloud, data));
-    crate::annotate::labels_and_legend(
+    crate::annotate::overlay::labels_and_legend(
         rect,
         view,
         labels.as_ref(),

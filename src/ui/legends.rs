@@ -118,7 +118,7 @@ pub fn paint_with_labels(
     legend: &PictureLegend,
 ) {
     let area = annotation::rect(rect);
-    let shapes = crate::annotate::labels_and_legend(
+    let shapes = crate::annotate::overlay::labels_and_legend(
         area,
         view,
         labels,
