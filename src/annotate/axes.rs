@@ -162,10 +162,11 @@ fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3
 /// `view`, in the ink of `background`, each on a plate of the background's colour.
 ///
 /// Rules: a label whose anchor projects far outside the picture is left out; each title goes
-/// beyond its own axis's tick labels (left of the level axis's ticks, below the others'), and
-/// where the level axis's title has no room left of its ticks it goes above the axis's top
-/// end; a title moves in from the picture's edge rather than being cut off; titles are placed
-/// first and a tick label that would overlap a label already placed is left out.
+/// beyond its own axis's tick labels (left of the level axis's ticks, below the others') where
+/// that stays in the picture, and where the level axis's title has no room left of its ticks
+/// it goes above the axis's top end; a title moves in from the picture's edge rather than being
+/// cut off; titles are placed first and a tick label that would overlap a label already placed
+/// is left out.
 pub fn layout(
     rect: Rect,
     view: &FrameView,
@@ -316,7 +317,15 @@ fn place_title(
     let at = [pos[0] + offset[0] * 3.0, pos[1] + offset[1] * 3.0];
     let text = Text::new(title, at, anchor, TITLE_SIZE, colour);
     if axis != 1 {
-        return clear_of(within_width(text, rect), ticks, 0.0, 1.0);
+        // Below its ticks where that stays in the picture; else where it was (the ticks it
+        // covers make way).
+        let text = within_width(text, rect);
+        let below = clear_of(text.clone(), ticks, 0.0, 1.0);
+        if below.rect.bottom() <= rect.bottom() - 2.0 && !meets(&below.rect, occupied) {
+            return below;
+        }
+        let dy = (rect.bottom() - 2.0 - text.rect.bottom()).min(0.0);
+        return text.moved(0.0, dy);
     }
     let beside = clear_of(text, ticks, -1.0, 0.0);
     if beside.rect.left() >= rect.left() + 2.0 && !meets(&beside.rect, occupied) {

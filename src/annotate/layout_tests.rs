@@ -49,7 +49,7 @@ fn the_level_title_never_covers_its_tick_labels() {
     };
     let transform = world_from_data(cloud.meta.mode);
     let bounds = world_box(transform, Vec3::splat(-1.0), Vec3::splat(1.0));
-    for (w, h) in [(1280, 720), (640, 400), (500, 400), (320, 200)] {
+    for (w, h) in [(1280, 720), (640, 400), (640, 242), (500, 400), (320, 200)] {
         for azimuth in [-35.0f32, -60.0, 20.0] {
             let camera = Camera {
                 azimuth: azimuth.to_radians(),
@@ -68,6 +68,13 @@ fn the_level_title_never_covers_its_tick_labels() {
                 title.rect.left() >= 0.0 && title.rect.right() <= w as f32,
                 "{w}x{h}: the level title runs off the picture"
             );
+            for t in texts.iter().filter(|t| t.size == axes::TITLE_SIZE) {
+                assert!(
+                    t.rect.bottom() <= h as f32 && t.rect.top() >= 0.0,
+                    "{w}x{h} at {azimuth}: '{}' runs off the picture",
+                    t.text
+                );
+            }
             if (w, h) == (1280, 720) || (w, h) == (640, 400) {
                 for tick in &middle {
                     assert!(
