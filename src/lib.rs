@@ -11,15 +11,23 @@
 //! - [`render`]: the GPU passes, which know nothing of the window: `gpu/` plumbing, `grid/`
 //!   (voxelize), `surface/` (marching tetrahedra, dual contouring, draw), points, lines,
 //!   markers, volume, composite; `scene` owns them (once per device) and each cloud's data.
+//! - [`annotate`]: picture annotation as plain data (axis labels, legends, titles, the loudness
+//!   strip: text boxes, rectangles, lines, measured in the window's font) and its drawing on
+//!   the CPU; no egui, no GPU.
+//! - [`picture`]: pictures without a window: a view rendered offscreen, read back, annotated,
+//!   saved as PNG; A/B compare pictures. What `render` and `video` draw.
 //! - [`files`]: writing files safely: temporary files removed on errors and signals, outputs
 //!   that are not inputs.
-//! - [`ui`]: everything egui: the window, its panels, hover, persistence, labels, screenshots.
+//! - [`ui`]: everything egui: the window, its panels, hover, persistence; it paints the
+//!   annotation laid out by [`annotate`].
 //!
 //! The binary (`src/main.rs`) adds the command line (`src/commands/`).
 
+pub mod annotate;
 pub mod data;
 pub mod extract;
 pub mod files;
+pub mod picture;
 pub mod playback;
 pub mod render;
 pub mod ui;

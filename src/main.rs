@@ -185,7 +185,7 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         None => check_screenshot(&cli).and_then(|()| {
-            let normalize = loudscape::ui::normalize::parse_preset(&cli.normalize)
+            let normalize = loudscape::data::normalize::parse_preset(&cli.normalize)
                 .map_err(anyhow::Error::msg)?;
             loudscape::ui::run(loudscape::ui::WindowOptions {
                 normalize: normalize.map(|p| p.key),

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
+use loudscape::picture::{Overlay, draw_overlay};
 use loudscape::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::voxelize::VoxelSettings;
@@ -13,7 +14,6 @@ use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::{TransferPreset, VolumeSettings};
-use loudscape::ui::screenshot::{Overlay, draw_overlay};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -102,7 +102,7 @@ impl DrawArgs {
 
     /// Refuses an unknown `--normalize` preset before anything is loaded or extracted.
     pub fn check_normalize(&self) -> anyhow::Result<()> {
-        loudscape::ui::normalize::parse_preset(&self.normalize)
+        loudscape::data::normalize::parse_preset(&self.normalize)
             .map(|_| ())
             .map_err(anyhow::Error::msg)
     }
@@ -110,11 +110,11 @@ impl DrawArgs {
     /// `cloud` as heard under `--normalize` (a timeline's songs shifted by their playback
     /// gain); unchanged with `none`. An unknown preset is refused.
     pub fn heard(&self, cloud: PointCloud) -> anyhow::Result<PointCloud> {
-        let preset =
-            loudscape::ui::normalize::parse_preset(&self.normalize).map_err(anyhow::Error::msg)?;
+        let preset = loudscape::data::normalize::parse_preset(&self.normalize)
+            .map_err(anyhow::Error::msg)?;
         match preset {
             Some(preset) => {
-                loudscape::ui::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)
+                loudscape::data::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)
             }
             None => Ok(cloud),
         }
@@ -265,18 +265,18 @@ fn render_to_file(
     };
     let target =
         loudscape::render::headless::render_frame(gpu, renderer, Some(data), &view, settings);
-    draw_overlay(gpu, &target, &view, cloud, data, settings, overlay);
-    let image = target
+    let mut image = target
         .read_rgba(&gpu.device, &gpu.queue)
         .with_context(|| format!("rendering {}", output.display()))?;
+    draw_overlay(&mut image, &view, cloud, data, settings, overlay);
     save_png(&image, output)
 }
 
-/// Writes a PNG (through a temporary file, see [`loudscape::ui::screenshot::save_png`]), first
+/// Writes a PNG (through a temporary file, see [`loudscape::picture::save_png`]), first
 /// saying plainly when the folder is missing.
 pub fn save_png(image: &image::RgbaImage, output: &Path) -> anyhow::Result<()> {
     check_output_folder(output)?;
-    Ok(loudscape::ui::screenshot::save_png(image, output)?)
+    Ok(loudscape::picture::save_png(image, output)?)
 }
 
 fn parse_view(name: &str) -> anyhow::Result<ViewKind> {

@@ -4,15 +4,15 @@
 //! side, A left and B right, from one camera, as points, surfaces or volumes (`--compare-as`;
 //! grids in one box and on one scale); `difference` draws the difference grid as a volume in
 //! the diverging map with its legend (`--measure density|level`). The pictures are made by
-//! `ui::compare_shot`.
+//! `picture::compare`.
 
 use anyhow::{Context, bail};
+use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::difference::DifferenceMeasure;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, ViewKind};
-use loudscape::ui::compare_shot::{CompareView, render_compare_image};
 use loudscape::view::camera::Camera;
 
 /// Parses `--view` with `--compare`: `compare` (side by side, as `--compare-as`) or

@@ -9,20 +9,19 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
-use eframe::egui::{self, Color32, FontId, Pos2};
 use glam::Vec3;
+use loudscape::annotate::axes::AxisLabels;
+use loudscape::annotate::legend::PictureLegend;
+use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
+use loudscape::annotate::{Annotation, Rect, raster};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
+use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
-use loudscape::ui::compare_shot::{CompareView, render_compare_image};
-use loudscape::ui::labels::AxisLabels;
-use loudscape::ui::legends::PictureLegend;
-use loudscape::ui::screenshot::HeadlessPainter;
-use loudscape::ui::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -190,7 +189,6 @@ enum Drawn {
         data: Box<SceneData>,
         labels: Option<AxisLabels>,
         legend: Option<PictureLegend>,
-        overlay: Box<HeadlessPainter>,
     },
     Compare {
         scene: Box<CompareScene>,
@@ -339,16 +337,15 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
             if matches!(view, ViewKind::Volume | ViewKind::Surface) {
                 prepare_grid(&gpu, &renderer, &cloud, &mut data, &settings)?;
             }
-            let labels =
-                (!args.draw.no_labels).then(|| loudscape::ui::labels::axis_labels(&cloud, &data));
+            let labels = (!args.draw.no_labels)
+                .then(|| loudscape::annotate::axes::axis_labels(&cloud, &data));
             let legend = (!args.draw.no_legend)
-                .then(|| loudscape::ui::legends::picture_legend(&cloud, &settings));
+                .then(|| loudscape::annotate::legend::picture_legend(&cloud, &settings));
             Drawn::One {
                 cloud: Box::new(cloud),
                 data: Box::new(data),
                 labels,
                 legend,
-                overlay: Box::new(HeadlessPainter::new(&gpu)),
             }
         }
     };
@@ -362,10 +359,9 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         fast,
         timeline,
     };
-    let strip_image = match &strip {
-        Some(strip) => Some(render_strip(&gpu, strip, size.0, strip_height)?),
-        None => None,
-    };
+    let strip_image = strip
+        .as_ref()
+        .map(|strip| render_strip(strip, size.0, strip_height));
     let spec = EncodeSpec {
         width: size.0,
         height: size.1,
@@ -439,7 +435,6 @@ fn render_video_frame(
             data,
             labels,
             legend,
-            overlay,
         } => {
             let (head, title) = if plan.timeline {
                 let u = if plan.frames > 1 {
@@ -480,23 +475,29 @@ fn render_video_frame(
                 &view,
                 &settings,
             );
-            if labels.is_some() || legend.is_some() || title.is_some() {
-                let background = settings.colours.background;
-                overlay.paint(gpu, &target, |painter, rect| {
-                    if let Some(labels) = labels.as_ref() {
-                        loudscape::ui::labels::paint_on(painter, rect, &view, labels, background);
-                    }
-                    if let Some(legend) = legend.as_ref() {
-                        loudscape::ui::legends::paint_picture(painter, rect, legend);
-                    }
-                    if let Some(title) = &title {
-                        paint_title(painter, rect, title, background);
-                    }
-                });
-            }
-            Ok(target
+            let mut image = target
                 .read_rgba(&gpu.device, &gpu.queue)
-                .context("reading a frame back from the GPU")?)
+                .context("reading a frame back from the GPU")?;
+            let background = settings.colours.background;
+            let rect = loudscape::picture::whole(w, h);
+            let mut over = Annotation::default();
+            if let Some(legend) = legend.as_ref() {
+                over.extend(loudscape::annotate::legend::layout(rect, legend));
+            }
+            if let Some(title) = &title {
+                over.extend(loudscape::annotate::legend::caption(
+                    rect, title, background,
+                ));
+            }
+            let overlay = loudscape::annotate::overlay::labels_and_legend(
+                rect,
+                &view,
+                labels.as_ref(),
+                background,
+                over,
+            );
+            raster::draw(&mut image, &overlay.shapes, 1.0);
+            Ok(image)
         }
         Drawn::Compare {
             scene,
@@ -604,32 +605,6 @@ fn timeline_markers(cloud: &PointCloud, x: f32, song: Option<usize>) -> Vec<Mark
     markers
 }
 
-fn paint_title(
-    painter: &egui::Painter,
-    rect: egui::Rect,
-    title: &str,
-    background: loudscape::render::colormap::Background,
-) {
-    let size = (rect.height() / 22.0).clamp(14.0, 64.0);
-    let ink = background.ink(true);
-    let galley = painter.layout_no_wrap(
-        title.to_string(),
-        FontId::proportional(size),
-        Color32::from_rgb(ink[0], ink[1], ink[2]),
-    );
-    let at = Pos2::new(
-        rect.center().x - galley.size().x / 2.0,
-        rect.bottom() - size * 2.2,
-    );
-    let plate = egui::Rect::from_min_size(at, galley.size()).expand(size * 0.3);
-    painter.rect_filled(
-        plate,
-        size * 0.2,
-        loudscape::ui::labels::label_plate(background),
-    );
-    painter.galley(at, galley, Color32::WHITE);
-}
-
 /// The strip's height in a frame `frame_height` pixels tall: the window's at 720 lines and
 /// below, in proportion above (so 1080p and 4K read alike); even, as the frame's sides are.
 pub fn strip_height_for(frame_height: u32) -> u32 {
@@ -638,20 +613,12 @@ pub fn strip_height_for(frame_height: u32) -> u32 {
 }
 
 /// The strip of the song, without a playhead, `width` x `height` pixels.
-fn render_strip(
-    gpu: &GpuContext,
-    strip: &LoudnessStrip,
-    width: u32,
-    height: u32,
-) -> anyhow::Result<image::RgbaImage> {
-    let target = loudscape::render::gpu::target::RenderTarget::new(&gpu.device, width, height);
+fn render_strip(strip: &LoudnessStrip, width: u32, height: u32) -> image::RgbaImage {
     let ppp = height as f32 / STRIP_HEIGHT;
-    HeadlessPainter::new(gpu).paint_scaled(gpu, &target, ppp, |painter, rect| {
-        strip.paint(painter, rect, None)
-    });
-    target
-        .read_rgba(&gpu.device, &gpu.queue)
-        .context("reading the loudness strip back from the GPU")
+    let rect = Rect::from_min_size([0.0, 0.0], [width as f32 / ppp, STRIP_HEIGHT]);
+    let mut image = image::RgbaImage::new(width, height);
+    raster::draw(&mut image, &strip.layout(rect, None).shapes, ppp);
+    image
 }
 
 /// The view over the strip, with the strip's playhead at `t` seconds.
@@ -668,11 +635,11 @@ fn stack_with_strip(
     image::imageops::replace(&mut frame, strip_image, 0, i64::from(vh));
     // The strip was painted in points, STRIP_HEIGHT tall; back to pixels.
     let ppp = sh as f32 / STRIP_HEIGHT;
-    let rect = egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(w as f32 / ppp, STRIP_HEIGHT));
+    let rect = Rect::from_min_size([0.0, 0.0], [w as f32 / ppp, STRIP_HEIGHT]);
     let plot = LoudnessStrip::plot_rect(rect);
-    let plot = egui::Rect::from_min_max(
-        Pos2::new(plot.left() * ppp, plot.top() * ppp),
-        Pos2::new(plot.right() * ppp, plot.bottom() * ppp),
+    let plot = Rect::from_min_max(
+        [plot.left() * ppp, plot.top() * ppp],
+        [plot.right() * ppp, plot.bottom() * ppp],
     );
     let x = x_of_time(t, plot.left(), plot.right(), strip.duration_s());
     let half_width = 0.75 * ppp;

@@ -5,5 +5,6 @@ pub mod cloud;
 pub mod compare;
 pub mod field;
 pub mod freq_axis;
+pub mod normalize;
 pub mod npy;
 pub mod synthetic;

@@ -245,7 +245,8 @@ impl eframe::App for LoudscapeApp {
             .zip(self.active().map(|l| l.id))
             .map(|(render_state, id)| ViewResources::surface_status(render_state, id))
             .unwrap_or_default();
-        self.surface.extracted(surface.counts, surface.error.clone());
+        self.surface
+            .extracted(surface.counts, surface.error.clone());
         self.surface.frame(
             self.settings.view == ViewKind::Surface && surface.extracting,
             surface.counts,

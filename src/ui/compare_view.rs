@@ -6,7 +6,7 @@ use eframe::egui;
 
 use crate::render::scene::RenderSettings;
 use crate::ui::bridge::{CompareCallback, paint_callback};
-use crate::ui::compare::{paint_diverging_legend, paint_title};
+use crate::ui::compare::paint_difference;
 use crate::ui::compare_readouts::{compare_readings, difference_readings};
 use crate::ui::compare_shot::difference_settings;
 use crate::ui::hover::paint_readings;
@@ -69,17 +69,14 @@ impl LoudscapeApp {
                             settings: settings.clone(),
                         },
                     ));
-                    if let Some(labels) = &state.labels
-                        && self.settings.show_box
-                    {
-                        labels::paint(painter, half_rect, view, labels);
-                    }
                     // Its title and the colour key of what it draws, as saved pictures carry.
                     let cloud = if side == 0 { &clouds.0 } else { &clouds.1 };
-                    let mut legend = crate::ui::legends::picture_legend(cloud, settings);
-                    legend.name = format!("{}: {}", ["A", "B"][side], names[side]);
-                    legend.detail.clear();
-                    crate::ui::legends::paint_picture(painter, half_rect, &legend);
+                    let title = format!("{}: {}", ["A", "B"][side], names[side]);
+                    let legend = crate::picture::compare::half_legend(cloud, settings, &title);
+                    let labels = state.labels.as_ref().filter(|_| self.settings.show_box);
+                    crate::ui::legends::paint_with_labels(
+                        painter, half_rect, view, labels, &legend,
+                    );
                 }
                 if let Some(pos) = hover
                     && !view.moving
@@ -106,24 +103,19 @@ impl LoudscapeApp {
                 {
                     labels::paint(painter, rect, view, labels);
                 }
-                paint_title(
+                paint_difference(
                     painter,
                     rect,
                     &format!("B - A: {} against {}", names[1], names[0]),
+                    state.difference.as_ref().map(|c| (c.measure, c.range)),
                 );
-                if let Some(copy) = &state.difference {
-                    let legend = egui::Rect::from_min_size(
-                        rect.right_top() + egui::vec2(-180.0, 40.0),
-                        egui::vec2(170.0, 180.0),
-                    );
-                    paint_diverging_legend(painter, legend, copy.measure, copy.range);
-                    if let Some(pos) = hover
-                        && !view.moving
-                    {
-                        let px =
-                            glam::Vec2::new((pos.x - rect.min.x) * ppp, (pos.y - rect.min.y) * ppp);
-                        readings = Some((pos, difference_readings(&clouds.0, copy, view, px)));
-                    }
+                if let Some(copy) = &state.difference
+                    && let Some(pos) = hover
+                    && !view.moving
+                {
+                    let px =
+                        glam::Vec2::new((pos.x - rect.min.x) * ppp, (pos.y - rect.min.y) * ppp);
+                    readings = Some((pos, difference_readings(&clouds.0, copy, view, px)));
                 }
             }
             CompareLayout::Off => {}

@@ -1,234 +1,38 @@
-//! Text over the 3D view: axis tick labels and axis titles in physical units.
-//!
-//! The window paints these with its egui painter each frame; the headless renderer runs egui
-//! once offscreen and draws the same shapes into the render target, so PNGs carry the same labels.
+//! Text about the cloud for the side panel (where it came from, its loudness metrics and what
+//! streaming services do with it), and the axis labels painted over the window's 3D view: laid
+//! out by `annotate::axes` (the same layout pictures draw), painted with egui's painter.
 
-use eframe::egui::{self, Align2, Color32, FontId, Rect};
-use glam::Vec3;
+use eframe::egui::{self, Color32};
 
-use crate::data::axes::Axis;
+pub use crate::annotate::axes::{
+    AxisLabels, Label, axis_labels, axis_labels_for_axes, axis_labels_for_box, axis_title,
+};
 use crate::data::cloud::PointCloud;
+pub use crate::data::normalize::{
+    STREAMING_SERVICES, StreamingService, TurnUp, normalization_gain,
+};
 use crate::render::colormap::Background;
-use crate::render::scene::SceneData;
 use crate::view::frame_view::FrameView;
 
-/// The translucent plate under each label on the dark background: its colour, mostly opaque.
+/// The translucent plate under the window's badges and labels on the dark background.
 pub const LABEL_PLATE: Color32 = Color32::from_rgba_premultiplied(10, 11, 15, 190);
 
-/// The plate under a label on `background`: the paper's colour, mostly opaque, so the ink of
-/// [`Background::ink`] stays readable over the cloud on either background.
-pub fn label_plate(background: Background) -> Color32 {
-    if background.is_light() {
-        Color32::from_rgba_unmultiplied(255, 255, 255, 190)
-    } else {
-        LABEL_PLATE
-    }
-}
-
-/// A tick label or an axis title, placed along one axis of the box.
-#[derive(Clone, Debug)]
-pub struct Label {
-    /// 0, 1, 2 for x, y, z.
-    pub axis: usize,
-    /// Normalized position along the axis, -1 to 1.
-    pub at: f32,
-    pub text: String,
-    pub title: bool,
-}
-
-/// The labels of a box: which edge carries them is chosen per frame, facing the camera.
-#[derive(Clone, Debug, Default)]
-pub struct AxisLabels {
-    pub box_min: Vec3,
-    pub box_max: Vec3,
-    pub labels: Vec<Label>,
-}
-
-/// "time (s)", or just "hp" for a unitless axis.
-pub fn axis_title(axis: &Axis, fallback: &str) -> String {
-    let name = if axis.label.is_empty() {
-        fallback
-    } else {
-        &axis.label
-    };
-    if axis.unit.is_empty() || axis.unit.eq_ignore_ascii_case(name) {
-        name.to_string()
-    } else if axis.unit == "s" && axis.ticks(8).iter().any(|t| t.label.contains(':')) {
-        // The ticks read as a clock: "(s)" over "2:30" would say seconds where minutes are.
-        format!("{name} (m:ss)")
-    } else {
-        format!("{name} ({})", axis.unit)
-    }
-}
-
-/// Tick labels and axis titles for the box drawn by the scene.
-/// (The axes as the view shows them: `data.axes`, z on the frequency axis shown.)
-/// The level axis's title names its reference (dBFS RMS, or dB re FS sine) by the cloud's mode.
-pub fn axis_labels(cloud: &PointCloud, data: &SceneData) -> AxisLabels {
-    with_references(
-        axis_labels_for_axes(&data.axes, data.box_min, data.box_max),
-        cloud,
-        &data.axes,
-    )
-}
-
-/// Tick labels and axis titles for a box `[min, max]` in data space.
-pub fn axis_labels_for_box(cloud: &PointCloud, min: Vec3, max: Vec3) -> AxisLabels {
-    with_references(
-        axis_labels_for_axes(&cloud.meta.axes, min, max),
-        cloud,
-        &cloud.meta.axes,
-    )
-}
-
-/// The titles of `labels` with the level axis's reference for `cloud`'s mode
-/// (`ui::legends::titled_with_reference`).
-fn with_references(
-    mut labels: AxisLabels,
-    cloud: &PointCloud,
-    axes: &crate::data::axes::Axes,
-) -> AxisLabels {
-    let units = [&axes.x.unit, &axes.y.unit, &axes.z.unit];
-    for label in labels.labels.iter_mut().filter(|l| l.title) {
-        let text = std::mem::take(&mut label.text);
-        label.text = crate::ui::legends::titled_with_reference(
-            cloud.meta.mode,
-            label.axis,
-            units[label.axis.min(2)],
-            text,
-        );
-    }
-    labels
-}
-
-/// Tick labels and axis titles of `axes` for a box `[min, max]` in data space.
-pub fn axis_labels_for_axes(axes: &crate::data::axes::Axes, min: Vec3, max: Vec3) -> AxisLabels {
-    let mut labels = Vec::new();
-    for (index, (axis, fallback)) in [(&axes.x, "x"), (&axes.y, "y"), (&axes.z, "z")]
-        .into_iter()
-        .enumerate()
-    {
-        for tick in axis.ticks(8) {
-            labels.push(Label {
-                axis: index,
-                at: tick.at,
-                text: tick.label,
-                title: false,
-            });
-        }
-        labels.push(Label {
-            axis: index,
-            at: 0.0,
-            text: axis_title(axis, fallback),
-            title: true,
-        });
-    }
-    AxisLabels {
-        box_min: min,
-        box_max: max,
-        labels,
-    }
-}
-
-/// The box edge an axis is labelled on, as the two fixed coordinates of the other axes:
-/// x and z along the lowest edge on screen, y along the leftmost vertical edge.
-fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3> {
-    let (min, max) = (labels.box_min, labels.box_max);
-    let mid = (min + max) * 0.5;
-    let mut best: Option<(f32, Vec3)> = None;
-    for corner in 0..4u32 {
-        let mut point = mid;
-        let (a, b) = match axis {
-            0 => (1, 2),
-            1 => (0, 2),
-            _ => (0, 1),
-        };
-        point[a] = if corner & 1 == 0 { min[a] } else { max[a] };
-        point[b] = if corner & 2 == 0 { min[b] } else { max[b] };
-        let Some(pixel) = view.project(point) else {
-            continue;
-        };
-        // Lowest on screen for x and z, leftmost for y.
-        let score = if axis == 1 { -pixel.x } else { pixel.y };
-        if best.is_none_or(|(s, _)| score > s) {
-            best = Some((score, point));
-        }
-    }
-    best.map(|(_, p)| p)
-}
-
 /// Paints labels projected through `view` into `rect` (the 3D view's place on screen, points).
-pub fn paint(painter: &egui::Painter, rect: Rect, view: &FrameView, labels: &AxisLabels) {
+pub fn paint(painter: &egui::Painter, rect: egui::Rect, view: &FrameView, labels: &AxisLabels) {
     paint_on(painter, rect, view, labels, Background::Dark);
 }
 
 /// As [`paint`], in the ink of `background` (dark ink on the light background).
 pub fn paint_on(
     painter: &egui::Painter,
-    rect: Rect,
+    rect: egui::Rect,
     view: &FrameView,
     labels: &AxisLabels,
     background: Background,
 ) {
-    let scale = rect.width() / view.width.max(1) as f32;
-    let edges: Vec<Option<Vec3>> = (0..3).map(|axis| label_edge(labels, view, axis)).collect();
-    let mut placed: Vec<Rect> = Vec::new();
-    // Titles first, so ticks make way for them.
-    let ordered = labels
-        .labels
-        .iter()
-        .filter(|l| l.title)
-        .chain(labels.labels.iter().filter(|l| !l.title));
-    for label in ordered {
-        let Some(mut anchor) = edges[label.axis] else {
-            continue;
-        };
-        let (lo, hi) = (labels.box_min[label.axis], labels.box_max[label.axis]);
-        anchor[label.axis] = lo + (label.at + 1.0) * 0.5 * (hi - lo);
-        let Some(pixel) = view.project(anchor) else {
-            continue;
-        };
-        let (offset, align) = if label.axis == 1 {
-            (egui::vec2(-10.0, 0.0), Align2::RIGHT_CENTER)
-        } else {
-            (egui::vec2(0.0, 8.0), Align2::CENTER_TOP)
-        };
-        let offset = if label.title { offset * 3.0 } else { offset };
-        let pos = rect.min + egui::vec2(pixel.x, pixel.y) * scale + offset;
-        if !rect.expand(40.0).contains(pos) {
-            continue;
-        }
-        let [r, g, b] = background.ink(label.title);
-        let (size, color) = (
-            if label.title { 14.0 } else { 12.0 },
-            Color32::from_rgb(r, g, b),
-        );
-        // Skip a label that would overlap one already placed (crowded ticks at some angles).
-        let galley = painter.layout_no_wrap(label.text.clone(), FontId::proportional(size), color);
-        let mut text_rect = align.anchor_size(pos, galley.size());
-        if label.title {
-            // A long title beside the picture's edge moves in rather than being cut off.
-            let dx = (rect.left() + 2.0 - text_rect.left()).max(0.0)
-                + (rect.right() - 2.0 - text_rect.right()).min(0.0);
-            text_rect = text_rect.translate(egui::vec2(dx, 0.0));
-        }
-        if placed
-            .iter()
-            .any(|r: &Rect| r.expand(2.0).intersects(text_rect))
-        {
-            continue;
-        }
-        placed.push(text_rect);
-        // A plate of the background's colour under the text keeps it readable over bright
-        // points, surfaces and the volume (tick labels sat on the cloud at some angles and
-        // vanished in it).
-        painter.rect_filled(
-            text_rect.expand2(egui::vec2(3.0, 1.0)),
-            3.0,
-            label_plate(background),
-        );
-        painter.galley(text_rect.min, galley, color);
-    }
+    let shapes =
+        crate::annotate::axes::layout(crate::ui::annotation::rect(rect), view, labels, background);
+    crate::ui::annotation::paint(painter, &shapes);
 }
 
 /// Lines describing a cloud for the side panel: where it came from and its loudness metrics.
@@ -301,77 +105,6 @@ pub fn describe_metrics(m: &crate::data::cloud::Metrics) -> Vec<String> {
     lines
 }
 
-/// How a streaming service turns a song up when it is quieter than the target.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TurnUp {
-    /// Only as far as the true peak stays at or below this ceiling (dBTP).
-    PeakCeiling(f64),
-    /// To the target whatever the peak (the service limits the peaks).
-    Free,
-    /// Never: the service only turns down.
-    Never,
-}
-
-/// A playback normalization rule: `gain = target - integrated loudness`, positive gain
-/// limited by [`TurnUp`]. Keep in sync with `preprocess/loudscape_extract/normalization.py`
-/// (sources in docs/DYNAMICS.md, "Streaming normalization").
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StreamingService {
-    pub name: &'static str,
-    pub target_lufs: f64,
-    pub turn_up: TurnUp,
-}
-
-pub const STREAMING_SERVICES: [StreamingService; 5] = [
-    StreamingService {
-        name: "Spotify (normal)",
-        target_lufs: -14.0,
-        turn_up: TurnUp::PeakCeiling(-1.0),
-    },
-    StreamingService {
-        name: "Spotify (loud)",
-        target_lufs: -11.0,
-        turn_up: TurnUp::Free,
-    },
-    StreamingService {
-        name: "Spotify (quiet)",
-        target_lufs: -19.0,
-        turn_up: TurnUp::PeakCeiling(-1.0),
-    },
-    StreamingService {
-        name: "YouTube",
-        target_lufs: -14.0,
-        turn_up: TurnUp::Never,
-    },
-    StreamingService {
-        name: "AES TD1008 (track)",
-        target_lufs: -16.0,
-        turn_up: TurnUp::PeakCeiling(-1.0),
-    },
-];
-
-/// The playback gain in dB (negative: turned down) `service` applies to a song; None without
-/// an integrated loudness, or when turning up needs a true peak the file does not give.
-pub fn normalization_gain(
-    service: &StreamingService,
-    integrated_lufs: Option<f64>,
-    true_peak_dbtp: Option<f64>,
-) -> Option<f64> {
-    let integrated = integrated_lufs.filter(|v| v.is_finite())?;
-    let gain = service.target_lufs - integrated;
-    if gain <= 0.0 {
-        return Some(gain);
-    }
-    match service.turn_up {
-        TurnUp::Free => Some(gain),
-        TurnUp::Never => Some(0.0),
-        TurnUp::PeakCeiling(ceiling) => {
-            let peak = true_peak_dbtp.filter(|v| v.is_finite())?;
-            Some(gain.min(ceiling - peak).max(0.0))
-        }
-    }
-}
-
 fn describe_gain(gain: f64) -> String {
     if gain <= -0.05 {
         format!("turned down {:.1} dB", -gain)
@@ -438,21 +171,5 @@ mod metrics_tests {
         let lines = describe_metrics(&m);
         assert!(lines.contains(&"Spotify (normal): plays as mastered".to_string()));
         assert!(lines.contains(&"Spotify (loud): turned up 3.0 dB".to_string()));
-    }
-}
-
-#[cfg(test)]
-mod title_tests {
-    use super::*;
-    use crate::data::axes::Axis;
-
-    #[test]
-    fn a_clock_axis_is_titled_in_minutes_and_seconds() {
-        let long = Axis::linear("time", "s", 0.0, 168.0);
-        assert!(long.ticks(8).iter().any(|t| t.label.contains(':')));
-        assert_eq!(axis_title(&long, "x"), "time (m:ss)");
-        let short = Axis::linear("time", "s", 0.0, 30.0);
-        assert_eq!(axis_title(&short, "x"), "time (s)");
-        assert_eq!(axis_title(&Axis::linear("hp", "", 0.0, 1.0), "x"), "hp");
     }
 }

@@ -8,6 +8,7 @@
 //! and saves PNGs, [`audio`] is the transport bar.
 
 mod alsa_quiet;
+pub mod annotation;
 pub mod app;
 pub mod audio;
 pub mod bridge;

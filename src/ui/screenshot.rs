@@ -1,69 +1,20 @@
-//! Screenshots of the 3D view: the same passes as the window, rendered offscreen at any size with
-//! the axis labels and the legend (colour key, the song's or timeline's name; `ui::legends`)
-//! drawn over them, saved as PNG through a temporary file and a rename (so a reader never sees
-//! half a file). [`paint_headless`] runs egui once offscreen and draws its shapes into a render
-//! target, for every overlay of a headless picture.
-
-use std::path::{Path, PathBuf};
-use std::time::{SystemTime, UNIX_EPOCH};
+//! Screenshots of the 3D view: `picture` renders them offscreen with their labels and legend
+//! (drawn on the CPU, no egui) and saves them; this keeps the window's names for them, and
+//! [`paint_headless`]: egui run once offscreen, its shapes drawn into a render target (for
+//! checking what the window's painter draws).
 
 use eframe::egui::{self, Pos2, Rect};
 use eframe::egui_wgpu;
-use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
-use crate::files::TempFile;
+pub use crate::picture::{Overlay, ScreenshotError, render_view, save_png, timestamped_name};
 use crate::render::gpu::context::GpuContext;
 use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
-use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::render::scene::{RenderSettings, SceneData};
 use crate::view::frame_view::FrameView;
 
-#[derive(Debug, Error)]
-pub enum ScreenshotError {
-    #[error("cannot read the screenshot back from the GPU: {0}")]
-    Readback(#[from] crate::render::gpu::readback::ReadbackError),
-    #[error("{path}: cannot write the screenshot: {reason}")]
-    Write { path: PathBuf, reason: String },
-}
-
-/// Renders the view (labels included when the settings show the box) and reads it back.
-pub fn render_view(
-    gpu: &GpuContext,
-    renderer: &Renderer,
-    scene: Option<(&PointCloud, &SceneData)>,
-    view: &FrameView,
-    settings: &RenderSettings,
-) -> Result<image::RgbaImage, ScreenshotError> {
-    let mut view = *view;
-    view.moving = false;
-    let target = crate::render::headless::render_frame(
-        gpu,
-        renderer,
-        scene.map(|(_, data)| data),
-        &view,
-        settings,
-    );
-    if let Some((cloud, data)) = scene {
-        let overlay = Overlay {
-            labels: settings.show_box,
-            legend: true,
-        };
-        draw_overlay(gpu, &target, &view, cloud, data, settings, overlay);
-    }
-    Ok(target.read_rgba(&gpu.device, &gpu.queue)?)
-}
-
-/// What is drawn over a headless picture.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Overlay {
-    /// Axis tick labels and titles.
-    pub labels: bool,
-    /// The colour key and the name (`ui::legends::paint_picture`).
-    pub legend: bool,
-}
-
-/// Draws the axis labels and the legend of `cloud`, as `settings` show it, over what `target`
-/// holds, in the ink of the settings' background.
+/// Draws the axis labels and the legend of `cloud` over what `target` holds (read back, drawn
+/// on the CPU as `picture::draw_overlay` does, written back).
 pub fn draw_overlay(
     gpu: &GpuContext,
     target: &RenderTarget,
@@ -73,20 +24,33 @@ pub fn draw_overlay(
     settings: &RenderSettings,
     overlay: Overlay,
 ) {
-    if !overlay.labels && !overlay.legend {
-        return;
-    }
-    let labels = crate::ui::labels::axis_labels(cloud, data);
-    let legend = crate::ui::legends::picture_legend(cloud, settings);
-    let background = settings.colours.background;
-    paint_headless(gpu, target, |painter, rect| {
-        if overlay.labels {
-            crate::ui::labels::paint_on(painter, rect, view, &labels, background);
+    let mut image = match target.read_rgba(&gpu.device, &gpu.queue) {
+        Ok(image) => image,
+        Err(e) => {
+            log::warn!("the picture's overlay is left out: {e}");
+            return;
         }
-        if overlay.legend {
-            crate::ui::legends::paint_picture(painter, rect, &legend);
-        }
-    });
+    };
+    crate::picture::draw_overlay(&mut image, view, cloud, data, settings, overlay);
+    gpu.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &target.color,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        image.as_raw(),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * target.width),
+            rows_per_image: Some(target.height),
+        },
+        wgpu::Extent3d {
+            width: target.width,
+            height: target.height,
+            depth_or_array_layers: 1,
+        },
+    );
 }
 
 /// Runs egui once offscreen over the whole of `target` (one point a pixel), lets `paint` draw
@@ -204,74 +168,5 @@ impl HeadlessPainter {
         }
         // Every delta was applied above.
         output.textures_delta.clear();
-    }
-}
-
-/// Writes `image` to `path` as PNG: first to `PATH.partial` beside it, then renamed; the partial
-/// file is removed on every error path and on SIGTERM/SIGINT (see [`crate::files::TempFile`]).
-pub fn save_png(image: &image::RgbaImage, path: &Path) -> Result<(), ScreenshotError> {
-    let write_error = |reason: String| ScreenshotError::Write {
-        path: path.to_path_buf(),
-        reason,
-    };
-    // A full disk reads as such, however the encoder put it.
-    let io_error = |e: std::io::Error| write_error(crate::files::write_reason(&e));
-    let mut tmp = TempFile::create(path, ".partial").map_err(io_error)?;
-    {
-        let mut out = std::io::BufWriter::new(tmp.file());
-        image
-            .write_to(&mut out, image::ImageFormat::Png)
-            .map_err(|e| match e {
-                image::ImageError::IoError(e) => io_error(e),
-                e => write_error(e.to_string()),
-            })?;
-        std::io::Write::flush(&mut out).map_err(io_error)?;
-    }
-    tmp.persist(path).map_err(io_error)
-}
-
-/// `loudscape-20260123-142501.png` (UTC) for the given moment.
-pub fn timestamped_name(now: SystemTime) -> PathBuf {
-    let secs = now.duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
-    let (days, rem) = (secs / 86_400, secs % 86_400);
-    let (year, month, day) = civil_from_days(days as i64);
-    PathBuf::from(format!(
-        "loudscape-{year:04}{month:02}{day:02}-{:02}{:02}{:02}.png",
-        rem / 3600,
-        (rem / 60) % 60,
-        rem % 60
-    ))
-}
-
-/// Days since 1970-01-01 to (year, month, day), proleptic Gregorian (Howard Hinnant's algorithm).
-fn civil_from_days(days: i64) -> (i64, u32, u32) {
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    (year, month, day)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use std::time::Duration;
-
-    #[test]
-    fn names_carry_the_utc_time() {
-        let t = UNIX_EPOCH + Duration::from_secs(1_700_000_000);
-        assert_eq!(
-            timestamped_name(t),
-            PathBuf::from("loudscape-20231114-221320.png")
-        );
-        assert_eq!(
-            timestamped_name(UNIX_EPOCH),
-            PathBuf::from("loudscape-19700101-000000.png")
-        );
     }
 }

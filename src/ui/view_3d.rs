@@ -211,13 +211,10 @@ impl LoudscapeApp {
             );
             return;
         };
-        if self.settings.show_box {
-            let background = self.settings.colours.background;
-            labels::paint_on(painter, rect, view, &loaded.labels, background);
-        }
-        // The same legend as saved pictures carry (name, colour key).
+        // The same labels and legend as saved pictures carry (name, colour key).
         let legend = crate::ui::legends::picture_legend(&loaded.cloud, &self.settings);
-        crate::ui::legends::paint_picture(painter, rect, &legend);
+        let labels = self.settings.show_box.then_some(&loaded.labels);
+        crate::ui::legends::paint_with_labels(painter, rect, view, labels, &legend);
         // While the camera moves the read-out would describe where the cursor was.
         if let (Some((_, hover)), Some(pos), false) = (&self.hover, hover, view.moving) {
             paint_readings(painter, rect, pos, &hover.readings);

@@ -77,16 +77,8 @@ fn switching_a_and_b_keeps_the_playback_position() {
         }
     });
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let start = Instant::now();
-        let window = loop {
-            if let Some(id) = xdotool(&["search", "--name", "^loudscape$"])
-                && let Some(first) = id.lines().next()
-            {
-                break first.to_string();
-            }
-            assert!(start.elapsed() < Duration::from_secs(120), "no window");
-            std::thread::sleep(Duration::from_millis(500));
-        };
+        // Its own window: the other window tests' run in the same process, on the same display.
+        let window = common::wait_for_window(&mut child).expect("no window");
         let (side, at_b) =
             switch(&window, &lines, Duration::from_secs(120)).expect("B never played");
         assert_eq!(side, "B");

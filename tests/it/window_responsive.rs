@@ -8,7 +8,7 @@ use crate::common::{self, assert_display};
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The value of `key=value` in `line`.
 fn value(line: &str, key: &str) -> f64 {
@@ -87,7 +87,7 @@ fn opening_the_window_prints_nothing_on_stderr() {
     let home = common::output_dir().join("window_quiet_home");
     let _ = std::fs::remove_dir_all(&home);
     std::fs::create_dir_all(&home).unwrap();
-    let child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+    let mut child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
         .arg(repo.join("data/demo_song.ply"))
         .env("HOME", &home)
         .env("XDG_DATA_HOME", &home)
@@ -97,19 +97,8 @@ fn opening_the_window_prints_nothing_on_stderr() {
         .spawn()
         .expect("start loudscape");
     // Wait for the window, then let it draw the song and open the audio device.
-    let start = Instant::now();
-    let mut found = false;
-    while start.elapsed() < Duration::from_secs(60) {
-        let search = Command::new("xdotool")
-            .args(["search", "--name", "^loudscape$"])
-            .output()
-            .expect("xdotool (scripts/setup-system.sh installs it)");
-        if !search.stdout.is_empty() {
-            found = true;
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(200));
-    }
+    // Its own window: the other window tests' run in the same process, on the same display.
+    let found = common::wait_for_window(&mut child).is_some();
     std::thread::sleep(Duration::from_secs(4));
     // SIGTERM: the app's handler removes temporaries and exits.
     let _ = Command::new("kill")

@@ -85,7 +85,11 @@ fn clock(seconds: f64, decimals: usize) -> String {
     let scale = 10f64.powi(decimals as i32);
     let total = (seconds.abs() * scale).round() / scale;
     // A time that rounds to zero has no sign ("-0:00.0" was shown at the start of a song).
-    let sign = if seconds < 0.0 && total > 0.0 { "-" } else { "" };
+    let sign = if seconds < 0.0 && total > 0.0 {
+        "-"
+    } else {
+        ""
+    };
     let hours = (total / 3600.0).floor();
     let minutes = ((total - hours * 3600.0) / 60.0).floor();
     let secs = total - hours * 3600.0 - minutes * 60.0;

@@ -1,0 +1,122 @@
+//! The layout rules of picture annotation, checked on the data: what overlaps what at the sizes
+//! and angles pictures and the window use.
+
+use glam::Vec3;
+
+use super::{Rect, Text, axes, legend};
+use crate::render::colormap::Background;
+use crate::render::scene::{RenderSettings, ViewKind, world_box, world_from_data};
+use crate::view::camera::Camera;
+use crate::view::frame_view::FrameView;
+
+fn demo_song() -> crate::data::cloud::PointCloud {
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    crate::data::cloud::load(&repo.join("data/demo_song.ply")).expect("the demo song loads")
+}
+
+fn overlapping<'a>(texts: &[&'a Text]) -> Option<(&'a Text, &'a Text)> {
+    for (i, a) in texts.iter().enumerate() {
+        for b in &texts[i + 1..] {
+            if a.rect.intersects(&b.rect) {
+                return Some((a, b));
+            }
+        }
+    }
+    None
+}
+
+/// The level axis's title ("bin level (dB re FS sine)") sat 30 points left of the axis, over
+/// the middle tick labels (-30/-40 dB), which were then left out: the title now goes beyond its
+/// ticks (or above the axis where there is no room beside them), and no text overlaps another.
+#[test]
+fn the_level_title_never_covers_its_tick_labels() {
+    let cloud = demo_song();
+    let labels = axes::axis_labels_for_box(&cloud, Vec3::splat(-1.0), Vec3::splat(1.0));
+    let level_title = labels
+        .labels
+        .iter()
+        .find(|l| l.title && l.axis == 1)
+        .map(|l| l.text.clone())
+        .expect("a level title");
+    let middle: Vec<String> = {
+        let ticks = cloud.meta.axes.y.ticks(8);
+        let n = ticks.len();
+        assert!(n >= 4, "{n} level ticks");
+        ticks[n / 2 - 1..=n / 2]
+            .iter()
+            .map(|t| t.label.clone())
+            .collect()
+    };
+    let transform = world_from_data(cloud.meta.mode);
+    let bounds = world_box(transform, Vec3::splat(-1.0), Vec3::splat(1.0));
+    for (w, h) in [(1280, 720), (640, 400), (640, 242), (500, 400), (320, 200)] {
+        for azimuth in [-35.0f32, -60.0, 20.0] {
+            let camera = Camera {
+                azimuth: azimuth.to_radians(),
+                ..Camera::default()
+            };
+            let view = FrameView::fitted(camera, transform, bounds, w, h);
+            let rect = Rect::from_min_size([0.0, 0.0], [w as f32, h as f32]);
+            let out = axes::layout(rect, &view, &labels, Background::Dark);
+            let texts: Vec<&Text> = out.texts().collect();
+            if let Some((a, b)) = overlapping(&texts) {
+                panic!("{w}x{h} at {azimuth}: '{}' overlaps '{}'", a.text, b.text);
+            }
+            let title = texts.iter().find(|t| t.text == level_title);
+            let title = title.unwrap_or_else(|| panic!("{w}x{h} at {azimuth}: no level title"));
+            assert!(
+                title.rect.left() >= 0.0 && title.rect.right() <= w as f32,
+                "{w}x{h}: the level title runs off the picture"
+            );
+            for t in texts.iter().filter(|t| t.size == axes::TITLE_SIZE) {
+                assert!(
+                    t.rect.bottom() <= h as f32 && t.rect.top() >= 0.0,
+                    "{w}x{h} at {azimuth}: '{}' runs off the picture",
+                    t.text
+                );
+            }
+            if (w, h) == (1280, 720) || (w, h) == (640, 400) {
+                for tick in &middle {
+                    assert!(
+                        texts.iter().any(|t| &t.text == tick),
+                        "{w}x{h} at {azimuth}: the {tick} dB tick is missing"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Side by side in a small window (500x400, the side panel taking half the width), each half's
+/// legend overlapped its title ("A: name"): now the key goes under the name where they would
+/// meet, long text is cut to the half's width, and crowded key ticks drop their words.
+#[test]
+fn a_half_views_legend_never_covers_its_title() {
+    let cloud = demo_song();
+    for view in [ViewKind::Points, ViewKind::Surface, ViewKind::Volume] {
+        let settings = RenderSettings {
+            view,
+            ..Default::default()
+        };
+        let mut picture = legend::picture_legend(&cloud, &settings);
+        picture.name = "A: demo_song_with_a_long_name.ply".into();
+        picture.detail.clear();
+        for width in (100..=700).step_by(10) {
+            let rect = Rect::from_min_size([0.0, 0.0], [width as f32, 400.0]);
+            let out = legend::layout(rect, &picture);
+            let texts: Vec<&Text> = out.texts().collect();
+            if let Some((a, b)) = overlapping(&texts) {
+                panic!("{view:?} at {width}: '{}' overlaps '{}'", a.text, b.text);
+            }
+            for t in &texts {
+                assert!(
+                    t.rect.left() >= -0.5 && t.rect.right() <= width as f32 + 0.5,
+                    "{view:?} at {width}: '{}' runs off ({:?})",
+                    t.text,
+                    t.rect
+                );
+            }
+            assert!(texts[0].text.starts_with("A: "), "the title comes first");
+        }
+    }
+}

@@ -1,0 +1,159 @@
+//! Shapes drawn onto an image on the CPU (vello_cpu, anti-aliased, blended in the image's
+//! sRGB-encoded values as the window's egui blends in its gamma-encoded target).
+
+use vello_cpu::color::{AlphaColor, Srgb};
+use vello_cpu::kurbo::{self, Affine, BezPath, Shape as _};
+use vello_cpu::{CompositeMode, PixmapMut, RasterizerSettings, RenderContext, Resources};
+
+use super::font::{Outliner, shape};
+use super::{Rect, Rgba, Shape, Text};
+
+/// Draws `shapes` (in points) over `image`, `pixels_per_point` pixels a point, clipped to it.
+/// Images wider or taller than 65535 pixels are left as they are.
+pub fn draw(image: &mut image::RgbaImage, shapes: &[Shape], pixels_per_point: f32) {
+    let (Ok(w), Ok(h)) = (u16::try_from(image.width()), u16::try_from(image.height())) else {
+        return;
+    };
+    if shapes.is_empty() || w == 0 || h == 0 {
+        return;
+    }
+    let ppp = f64::from(pixels_per_point.max(0.01));
+    let mut ctx = RenderContext::new(w, h);
+    for shape in shapes {
+        match shape {
+            Shape::Fill {
+                rect,
+                radius,
+                colour,
+            } => {
+                ctx.set_transform(Affine::scale(ppp));
+                ctx.set_paint(paint(*colour));
+                if *radius > 0.0 {
+                    let rounded = kurbo::RoundedRect::from_rect(k_rect(rect), f64::from(*radius));
+                    ctx.fill_path(&rounded.to_path(0.05));
+                } else {
+                    ctx.fill_rect(&k_rect(rect));
+                }
+            }
+            Shape::Frame {
+                rect,
+                width,
+                colour,
+            } => {
+                ctx.set_transform(Affine::scale(ppp));
+                ctx.set_paint(paint(*colour));
+                ctx.set_stroke(kurbo::Stroke::new(f64::from(*width)));
+                let half = width * 0.5;
+                ctx.stroke_rect(&k_rect(&rect.expand(half)));
+            }
+            Shape::Line {
+                points,
+                width,
+                colour,
+            } => {
+                let Some((first, rest)) = points.split_first() else {
+                    continue;
+                };
+                ctx.set_transform(Affine::scale(ppp));
+                ctx.set_paint(paint(*colour));
+                ctx.set_stroke(kurbo::Stroke::new(f64::from(*width)));
+                let mut path = BezPath::new();
+                path.move_to(point(*first));
+                for p in rest {
+                    path.line_to(point(*p));
+                }
+                ctx.stroke_path(&path);
+            }
+            Shape::Text(text) => draw_text(&mut ctx, text, ppp),
+        }
+    }
+    ctx.flush();
+    // The image is opaque (a rendered picture), so its straight RGBA is also premultiplied.
+    let Some(target) = PixmapMut::new(w, h, image.as_mut()) else {
+        return;
+    };
+    let settings = RasterizerSettings {
+        composite_mode: CompositeMode::SrcOver,
+        ..RasterizerSettings::default()
+    };
+    ctx.render_with(target, &mut Resources::new(), settings);
+}
+
+fn draw_text(ctx: &mut RenderContext, text: &Text, ppp: f64) {
+    let px = text.size * ppp as f32;
+    let shaped = shape(&text.text, px);
+    let outliner = Outliner::new(px);
+    // egui puts the box's top left and each glyph's baseline on whole pixels, and its glyphs on
+    // quarter pixels across.
+    let left = (f64::from(text.rect.left()) * ppp).round();
+    let baseline = (f64::from(text.rect.top()) * ppp).round() + f64::from(shaped.baseline);
+    ctx.set_transform(Affine::IDENTITY);
+    ctx.set_paint(paint(text.colour));
+    for glyph in &shaped.glyphs {
+        let x = left + (f64::from(glyph.x) * 4.0).round() / 4.0;
+        if let Some(path) = outliner.outline(glyph.glyph, x, baseline) {
+            ctx.fill_path(&path);
+        }
+    }
+}
+
+fn paint(c: Rgba) -> AlphaColor<Srgb> {
+    AlphaColor::from_rgba8(c[0], c[1], c[2], c[3])
+}
+
+fn point(p: [f32; 2]) -> kurbo::Point {
+    kurbo::Point::new(f64::from(p[0]), f64::from(p[1]))
+}
+
+fn k_rect(r: &Rect) -> kurbo::Rect {
+    kurbo::Rect::new(
+        f64::from(r.min[0]),
+        f64::from(r.min[1]),
+        f64::from(r.max[0]),
+        f64::from(r.max[1]),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::annotate::{Anchor, Annotation};
+
+    #[test]
+    fn shapes_land_where_they_are_laid_out_and_blend_over_the_picture() {
+        let mut image = image::RgbaImage::from_pixel(80, 40, image::Rgba([0, 0, 80, 255]));
+        let mut a = Annotation::default();
+        a.fill(
+            Rect::from_min_size([10.0, 10.0], [10.0, 10.0]),
+            0.0,
+            [255, 0, 0, 255],
+        );
+        a.fill(
+            Rect::from_min_size([30.0, 10.0], [10.0, 10.0]),
+            0.0,
+            [255, 255, 255, 128],
+        );
+        let label = a.text(Text::new(
+            "Hg",
+            [50.0, 5.0],
+            Anchor::LEFT_TOP,
+            14.0,
+            [255; 4],
+        ));
+        draw(&mut image, &a.shapes, 1.0);
+        assert_eq!(image.get_pixel(15, 15).0, [255, 0, 0, 255]);
+        let half = image.get_pixel(35, 15).0;
+        assert!((120..=136).contains(&half[0]) && half[2] > 150, "{half:?}");
+        assert_eq!(image.get_pixel(5, 5).0, [0, 0, 80, 255]);
+        // Ink inside the text's box, none right of it.
+        let inked =
+            |x0: u32, x1: u32| (x0..x1).any(|x| (0..40).any(|y| image.get_pixel(x, y)[0] > 128));
+        assert!(inked(label.left() as u32, label.right().ceil() as u32));
+        assert!(!inked(label.right().ceil() as u32 + 2, 80));
+        // Twice the pixels a point: the box is drawn twice as large.
+        let mut big = image::RgbaImage::from_pixel(160, 80, image::Rgba([0, 0, 80, 255]));
+        draw(&mut big, &a.shapes, 2.0);
+        assert_eq!(big.get_pixel(30, 30).0, [255, 0, 0, 255]);
+        assert_eq!(big.get_pixel(19, 30).0, [0, 0, 80, 255]);
+    }
+}

@@ -1,0 +1,237 @@
+//! A/B compare pictures without a window: two clouds side by side from one camera, or their
+//! difference grid in the diverging map with its legend. `loudscape render A --compare B`,
+//! `loudscape video --compare`, the window's Save PNG while comparing and the golden-image tests
+//! draw through here.
+
+use anyhow::{Context, bail};
+
+use crate::annotate::{Annotation, axes, compare, legend};
+use crate::data::cloud::PointCloud;
+use crate::render::compare::CompareScene;
+use crate::render::gpu::context::GpuContext;
+use crate::render::grid::difference::DifferenceMeasure;
+use crate::render::headless::render_frame;
+use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use crate::render::volume::{TransferPreset, VolumeSettings};
+use crate::view::camera::Camera;
+use crate::view::frame_view::FrameView;
+
+/// Pixels between the two halves of a compare picture.
+pub const GAP: u32 = 4;
+
+/// What a compare render draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CompareView {
+    SideBySide(ViewKind),
+    Difference(DifferenceMeasure),
+}
+
+/// The Difference view's volume settings: the shown grid's hp is the diverging position, so
+/// the hp map is the Classic red-white-blue one the legend draws, whatever map the views use
+/// (Cividis or Viridis are not diverging).
+pub fn difference_settings(base: &RenderSettings) -> RenderSettings {
+    RenderSettings {
+        view: ViewKind::Volume,
+        colours: crate::render::colormap::Colours {
+            hp: crate::render::colormap::HpColourMap::Classic,
+            ..base.colours
+        },
+        volume: VolumeSettings {
+            preset: TransferPreset::Classic,
+            hp_tint: true,
+            shading: false,
+            ..base.volume
+        },
+        ..base.clone()
+    }
+}
+
+/// A file's name for a title.
+fn file_name(cloud: &PointCloud) -> String {
+    cloud
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| cloud.path.display().to_string())
+}
+
+fn view_for(
+    camera: Option<Camera>,
+    data: &SceneData,
+    width: u32,
+    height: u32,
+    margin_steps: f32,
+) -> FrameView {
+    match camera {
+        Some(camera) => FrameView::at_rest(camera, data.world_from_data, width, height),
+        None => {
+            let mut view = FrameView::fitted(
+                Camera::default(),
+                data.world_from_data,
+                data.world_box(),
+                width,
+                height,
+            );
+            // Room for the axis titles outside the box, as the window's fit leaves (one step
+            // more in a narrow half).
+            view.camera.zoom(-margin_steps);
+            view
+        }
+    }
+}
+
+/// One half (or the whole) of a compare picture: the scene, then labels and a title.
+#[allow(clippy::too_many_arguments)]
+fn render_one(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    cloud: &PointCloud,
+    data: &SceneData,
+    view: &FrameView,
+    settings: &RenderSettings,
+    labels_on: bool,
+    title: &str,
+    legend: Option<(DifferenceMeasure, f32)>,
+) -> anyhow::Result<image::RgbaImage> {
+    let target = render_frame(gpu, renderer, Some(data), view, settings);
+    let mut image = target.read_rgba(&gpu.device, &gpu.queue)?;
+    let shapes = half_overlay(cloud, data, view, settings, labels_on, title, legend);
+    crate::annotate::raster::draw(&mut image, &shapes.shapes, 1.0);
+    Ok(image)
+}
+
+/// What is drawn over one half (or the whole) of a compare picture of `view`: the axis labels
+/// (in the dark background's ink, as the compare draws), then the difference view's title and
+/// diverging legend, or a half's title ("A: name") and the colour key of what it draws.
+pub fn half_overlay(
+    cloud: &PointCloud,
+    data: &SceneData,
+    view: &FrameView,
+    settings: &RenderSettings,
+    labels_on: bool,
+    title: &str,
+    legend: Option<(DifferenceMeasure, f32)>,
+) -> Annotation {
+    let rect = super::whole(view.width, view.height);
+    let over = match legend {
+        Some(legend) => compare::difference_overlay(rect, title, Some(legend)),
+        None => legend::layout(rect, &half_legend(cloud, settings, title)),
+    };
+    let labels = labels_on.then(|| axes::axis_labels(cloud, data));
+    crate::annotate::overlay::labels_and_legend(
+        rect,
+        view,
+        labels.as_ref(),
+        crate::render::colormap::Background::Dark,
+        over,
+    )
+}
+
+/// A half of the side-by-side picture: its title ("A: name") and the colour key of what it
+/// draws, as every picture carries. The view and its settings are the same in both halves and
+/// say more than a half has room for beside its key, so there is no detail line.
+pub fn half_legend(
+    cloud: &PointCloud,
+    settings: &RenderSettings,
+    title: &str,
+) -> legend::PictureLegend {
+    let mut picture = legend::picture_legend(cloud, settings);
+    picture.name = title.to_string();
+    picture.detail.clear();
+    picture
+}
+
+/// Renders the compare of `a` and `b` into one image of `size`.
+#[allow(clippy::too_many_arguments)]
+pub fn render_compare_image(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    scene: &mut CompareScene,
+    what: CompareView,
+    camera: Option<Camera>,
+    size: (u32, u32),
+    base: &RenderSettings,
+    labels_on: bool,
+) -> anyhow::Result<image::RgbaImage> {
+    let needs_grids = match what {
+        CompareView::SideBySide(view) => view != ViewKind::Points,
+        CompareView::Difference(_) => true,
+    };
+    if needs_grids {
+        scene
+            .ensure_grids(&gpu.device, &gpu.queue, renderer, &base.voxels)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+    }
+    let (name_a, name_b) = (file_name(&scene.a), file_name(&scene.b));
+    match what {
+        CompareView::SideBySide(view) => {
+            if size.0 < 2 * 16 + GAP {
+                bail!("size {}x{} is too narrow for two views", size.0, size.1);
+            }
+            let half = (size.0 - GAP) / 2;
+            let settings = RenderSettings {
+                view,
+                ..base.clone()
+            };
+            if view == ViewKind::Surface {
+                for data in [&scene.data_a, &scene.data_b] {
+                    if let Some(grid) = data.grid.as_ref() {
+                        renderer
+                            .surface
+                            .extract_blocking(&gpu.queue, &data.surface, grid, &settings.surface)
+                            .context("extracting the surface")?;
+                    }
+                }
+            }
+            // One camera for both: the boxes are the same, so A's fitted view is B's.
+            let frame = view_for(camera, &scene.data_a, half, size.1, 2.0);
+            let left = render_one(
+                gpu,
+                renderer,
+                &scene.a,
+                &scene.data_a,
+                &frame,
+                &settings,
+                labels_on,
+                &format!("A: {name_a}"),
+                None,
+            )?;
+            let right = render_one(
+                gpu,
+                renderer,
+                &scene.b,
+                &scene.data_b,
+                &frame,
+                &settings,
+                labels_on,
+                &format!("B: {name_b}"),
+                None,
+            )?;
+            let mut image =
+                image::RgbaImage::from_pixel(size.0, size.1, image::Rgba([90, 96, 110, 255]));
+            image::imageops::replace(&mut image, &left, 0, 0);
+            image::imageops::replace(&mut image, &right, i64::from(half + GAP), 0);
+            Ok(image)
+        }
+        CompareView::Difference(measure) => {
+            scene.set_measure(&gpu.device, &gpu.queue, renderer, measure);
+            let grids = scene
+                .grids
+                .as_ref()
+                .context("the difference grid was not built")?;
+            let settings = difference_settings(base);
+            let frame = view_for(camera, &grids.data, size.0, size.1, 1.0);
+            render_one(
+                gpu,
+                renderer,
+                &scene.a,
+                &grids.data,
+                &frame,
+                &settings,
+                labels_on,
+                &format!("B - A: {name_b} against {name_a}"),
+                Some((measure, grids.range())),
+            )
+        }
+    }
+}
