@@ -1,11 +1,23 @@
 """loudscape-extract: audio -> loudscape point clouds (PLY) with loudness metrics.
 
-The pipeline is a chain of small pure functions that other commands reuse::
+Production runs one streamed pipeline (memory does not grow with the per-bin data)::
 
-    decode_audio -> mix_to_mono -> stft_magnitude -> hpss_masks / a_weighting_db
-        -> track_features (per-bin and per-frame features + whole-track metrics)
-        -> song_points -> write_ply                                        (song.py)
-    many files -> track_features (cached per song) -> timeline_points -> write_ply  (timeline)
+    song:     decode_track -> spectral_level_pass (silent frames, level range)
+                 -> plan_song (the final axes) -> song_point_blocks (STFT + HPSS block by
+                 block, appended to a body file, --progress json "points" lines)
+                 -> signal_pass (loudness, dynamics, true peak) -> finish_track
+                 -> song_metadata -> header + body written atomically          (song.py)
+    timeline: per song stream_track (the same passes, no points; cached)
+                 -> timeline_points -> write                       (timeline/)
+
+``stream_track`` (stream.py) runs the passes in that order for both. The whole-track
+functions are the reference the tests hold the streamed results equal to, and the API for
+short audio in a notebook::
+
+    decode_audio -> track_features (every per-bin array) -> song_points -> write_ply
+
+Both share their rules: measures.py (frame series, metrics), song_cloud.py (the keep rule,
+the row mapping, the axes, ``song_metadata``).
 """
 
 from loudscape_extract.audio import Audio, decode_audio, mix_to_mono

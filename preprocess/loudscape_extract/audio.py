@@ -28,6 +28,7 @@ __all__ = [
     "AudioInfo",
     "BlockReport",
     "audio_info",
+    "check_analysable",
     "check_decoded",
     "decode_audio",
     "mix_to_mono",
@@ -545,6 +546,29 @@ def read_blocks(
                 )
             yield start, samples
             start += samples.shape[0]
+
+
+def check_analysable(
+    *, n_samples: int, sample_rate: int, n_fft: int, any_sample: bool, mono: np.ndarray, path: str
+) -> None:
+    """Refuse decoded audio that gives no STFT frame or no sound (the streamed pipeline and the
+    whole-track reference say the same).
+
+    Raises
+    ------
+    ExtractError
+        Shorter than one STFT frame, every sample 0, or a mono mix that is 0 (channels cancel).
+    """
+    if n_samples < n_fft:
+        raise ExtractError(
+            f"audio of {n_samples} samples ({n_samples / sample_rate * 1000:.1f} ms) is shorter "
+            f"than one STFT frame (n_fft={n_fft})",
+            path=path,
+        )
+    if not any_sample:
+        raise ExtractError("audio is entirely silent (every sample is 0)", path=path)
+    if not np.any(mono):
+        raise ExtractError("the mono mix is entirely silent (channels cancel)", path=path)
 
 
 def check_decoded(

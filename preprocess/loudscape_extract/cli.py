@@ -21,10 +21,10 @@ from loudscape_extract.messages import one_line
 from loudscape_extract.normalization import NORMALIZE_CHOICES
 from loudscape_extract.notices import warning_lines
 from loudscape_extract.ply import read_ply_metadata
-from loudscape_extract.points import DEFAULT_FLOOR_DB, FREQ_SCALES, MAX_FLOOR_DB
 from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
+from loudscape_extract.song_cloud import DEFAULT_FLOOR_DB, FREQ_SCALES, MAX_FLOOR_DB
 from loudscape_extract.timeline import (
     DEFAULT_MAX_POINTS,
     DEFAULT_Y_MEASURE,
@@ -303,6 +303,7 @@ def run_song(args: argparse.Namespace, progress: Progress) -> int:
         highpass_hz=HIGHPASS_HZ if args.highpass else None,
         progress=progress,
         warn=lambda text: _say(f"warning: {text}"),
+        points=getattr(progress, "points", None),  # --progress json: the points line
     )
     if hasattr(progress, "done"):
         progress.done(output)

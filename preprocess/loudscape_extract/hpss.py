@@ -18,6 +18,9 @@ import scipy.ndimage
 from loudscape_extract.errors import ExtractError
 
 __all__ = [
+    "HPSS_KERNEL",
+    "HPSS_MARGIN",
+    "HPSS_POWER",
     "HP_EPSILON",
     "hp_ratio",
     "hpss_masks",
@@ -25,6 +28,10 @@ __all__ = [
     "median_filter_axis",
 ]
 
+#: Song mode's HPSS settings (librosa's ``kernel_size``, ``power`` and ``margin``).
+HPSS_KERNEL = 31
+HPSS_POWER = 2.0
+HPSS_MARGIN = 1.0
 #: The epsilon of ``hp = |H| / (|H| + |P| + eps)``, in full-scale magnitude units (-200 dB).
 HP_EPSILON = 1e-10
 

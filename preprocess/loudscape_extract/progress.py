@@ -5,11 +5,25 @@
 object a line::
 
     {"stage": "decode", "fraction": 0.0, "message": "decoding IN"}
-    {"stage": "spectrogram", "fraction": 0.77, "message": "spectrogram"}
+    {"stage": "spectrogram", "fraction": 0.15, "message": "spectrogram"}
+    ...
+    {"stage": "hpss", "fraction": 0.31, "message": "161020 points so far",
+     "points": {"path": "/abs/dir/.OUT.points-4242", "rows": 161020,
+                "axes": {...}, "mode": "song", "freq_scale": "linear"}}
     ...
     {"done": "OUT"}
 
 and on failure ``{"error": "..."}`` as its last line (the usual error line still goes to stderr).
+
+Points while extracting: the points are made before the loudness pass, and each block's rows
+(5 little-endian float32 a row: x y z scalar hp, exactly the PLY body's rows in its order) are
+appended to a hidden body file beside the output, ``.<output name>.points-<pid>``. After a
+block is in (flushed), a line with ``points`` says where the file is and how many complete
+rows it holds (``rows``, which only grows, the last line's equal to the file's
+``point_count``); ``axes`` is the final file's ``axes`` metadata object, so a reader can draw
+the rows at once in their final place. The lines come at most every 0.2 s, and always after
+the last block. The body file is removed when the extractor ends (a reader that cannot open
+it any more ignores the line); the PLY itself is written as before.
 
 ``loudscape-extract timeline ... --progress json`` (``JsonTimelineProgress``) prints one object
 a song as each finishes (in the order they finish), then the songs left out for want of a year
@@ -24,8 +38,9 @@ and those that failed, then ``done``::
 A song's line carries ``failed`` only when it failed. The keys ``done`` and ``error`` appear
 only in the last line, as for a song.
 The fractions are the share of a typical song's extraction time spent before each stage starts
-(the streamed pipeline of stream.py, measured on a 3-minute 44.1 kHz stereo song: the second
-decoding pass, with the loudness and true-peak filters, takes most of it); they only grow.
+(song.py's order, measured on a 3-minute 44.1 kHz stereo song: the second decoding pass, with
+the loudness and true-peak filters, takes most of it); they only grow. A ``points`` line's
+fraction moves through the ``hpss`` stage as the frames are done.
 """
 
 from __future__ import annotations
@@ -33,11 +48,12 @@ from __future__ import annotations
 import json
 import sys
 import time
+from dataclasses import dataclass
 from typing import TextIO
 
 from loudscape_extract.version import PROG
 
-__all__ = ["STAGES", "JsonProgress", "JsonTimelineProgress", "Progress"]
+__all__ = ["STAGES", "JsonProgress", "JsonTimelineProgress", "PointsSoFar", "Progress"]
 
 
 class Progress:
@@ -56,14 +72,38 @@ class Progress:
 #: (message prefix, stage name, fraction of the work done when the stage starts), in order.
 STAGES: tuple[tuple[str, str, float], ...] = (
     ("decoding", "decode", 0.0),
-    ("dynamics and loudness", "loudness", 0.08),
-    ("spectrogram", "spectrogram", 0.77),
-    ("frame features", "frame features", 0.79),
-    ("building points", "points", 0.80),
-    ("harmonic-percussive", "hpss", 0.82),
-    ("writing", "write", 0.99),
+    ("spectrogram", "spectrogram", 0.15),
+    ("building points", "points", 0.2),
+    ("harmonic-percussive", "hpss", 0.2),
+    ("dynamics and loudness", "loudness", 0.7),
+    ("frame features", "frame features", 0.98),
+    ("writing", "write", 0.98),
     ("done", "done", 1.0),
 )
+
+
+@dataclass(frozen=True)
+class PointsSoFar:
+    """Song-mode points written so far to the body file (see the module's description).
+
+    Attributes
+    ----------
+    path : str
+        Absolute path of the body file.
+    rows : int
+        Complete rows in it.
+    axes : dict
+        The final cloud's ``axes`` metadata object.
+    freq_scale : str
+    share : float
+        Share of the track's frames done, in [0, 1].
+    """
+
+    path: str
+    rows: int
+    axes: dict
+    freq_scale: str
+    share: float
 
 
 class JsonProgress:
@@ -94,6 +134,28 @@ class JsonProgress:
         if self.stage == "done":
             return
         self.emit({"stage": self.stage, "fraction": self.fraction, "message": message})
+
+    def points(self, update: PointsSoFar) -> None:
+        """A ``points`` line: stage ``hpss``, the fraction moving through that stage."""
+        names = [stage for _, stage, _ in STAGES]
+        at = names.index("hpss")
+        low, high = STAGES[at][2], STAGES[at + 1][2]
+        self.stage = "hpss"
+        self.fraction = max(self.fraction, round(low + (high - low) * update.share, 4))
+        self.emit(
+            {
+                "stage": self.stage,
+                "fraction": self.fraction,
+                "message": f"{update.rows} points so far",
+                "points": {
+                    "path": update.path,
+                    "rows": update.rows,
+                    "axes": update.axes,
+                    "mode": "song",
+                    "freq_scale": update.freq_scale,
+                },
+            }
+        )
 
     def done(self, output: str) -> None:
         """The last line of a successful run: the file written."""

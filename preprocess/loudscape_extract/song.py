@@ -1,21 +1,45 @@
-"""Song mode end to end: decode, features, points, atomic PLY write."""
+"""Song mode end to end: decode, level pass, points (streamed to a body file), signal pass,
+atomic PLY write."""
 
 from __future__ import annotations
 
+import contextlib
+import itertools
+import os
+import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
-from loudscape_extract.contract import checked_blocks
+from loudscape_extract.contract import check_metadata, check_points
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.format import rounded
 from loudscape_extract.notices import track_warnings
-from loudscape_extract.paths import check_output_path
-from loudscape_extract.ply import write_ply_blocks
-from loudscape_extract.points import DEFAULT_FLOOR_DB, song_metadata
-from loudscape_extract.stream import DEFAULT_BLOCK_FRAMES, DEFAULT_BLOCK_SAMPLES, stream_track
-from loudscape_extract.stream_points import song_point_blocks
+from loudscape_extract.paths import check_output_path, write_failure
+from loudscape_extract.ply import encode_header, write_atomically
+from loudscape_extract.progress import PointsSoFar
+from loudscape_extract.song_cloud import DEFAULT_FLOOR_DB, song_metadata
+from loudscape_extract.stream import DEFAULT_BLOCK_FRAMES, SpectralLevels, stream_track
+from loudscape_extract.stream_decode import DEFAULT_BLOCK_SAMPLES, DecodedMono
+from loudscape_extract.stream_points import SongPlan, plan_song, song_point_blocks
 from loudscape_extract.version import GENERATOR
 
-__all__ = ["extract_song"]
+__all__ = ["POINTS_BLOCK_FRAMES", "POINTS_EVERY_S", "ROW_BYTES", "body_file_path", "extract_song"]
+
+#: Bytes of one point in the PLY body and the body file: 5 little-endian float32.
+ROW_BYTES = 20
+#: The least time between two ``points`` progress reports (the last block always reports).
+POINTS_EVERY_S = 0.2
+#: STFT frames per block of the points pass at most (about 6 s at 44.1 kHz, hop 1024): the
+#: first points reach a reader soon; the points do not depend on it.
+POINTS_BLOCK_FRAMES = 256
+_COPY_BYTES = 1 << 22
+
+
+def body_file_path(output: str) -> str:
+    """The hidden file beside ``output`` that holds the points while they are made:
+    ``.<output name>.points-<pid>`` (docs/FORMAT.md, "Points while extracting")."""
+    folder, name = os.path.split(os.path.abspath(output))
+    return os.path.join(folder, f".{name}.points-{os.getpid()}")
 
 
 def extract_song(
@@ -30,10 +54,18 @@ def extract_song(
     highpass_hz: float | None = None,
     progress: Callable[[str], None] | None = None,
     warn: Callable[[str], None] | None = None,
+    points: Callable[[PointsSoFar], None] | None = None,
     block_samples: int = DEFAULT_BLOCK_SAMPLES,
     block_frames: int = DEFAULT_BLOCK_FRAMES,
 ) -> dict:
-    """Song mode end to end: decode, features, points, atomic PLY write, streamed in blocks.
+    """Song mode end to end, streamed in blocks.
+
+    The passes in order: decode (the mono mix); the spectrogram level pass, which fixes the
+    cloud's axes; the points (STFT and HPSS block by block), each block appended to the body
+    file (:func:`body_file_path`) as it is made; the signal pass (loudness, dynamics, true
+    peak: a second decode); then the PLY, header and the body file's bytes, written atomically.
+    The body file is removed on every exit path that Python sees (errors, Ctrl+C, SIGTERM
+    under :func:`~loudscape_extract.interrupts.sigterm_raises`).
 
     Parameters
     ----------
@@ -56,6 +88,9 @@ def extract_song(
         Called with a one-line warning about the input, ``"<source>: <message>"`` (a truncated
         or corrupt file, a large DC offset, cancelling channels, clipping); default
         :func:`warnings.warn`. The same warnings go into the metadata's ``warnings``.
+    points : callable, optional
+        Called with a :class:`~loudscape_extract.progress.PointsSoFar` after a block of points
+        is in the body file (at most every :data:`POINTS_EVERY_S`, and after the last block).
     block_samples, block_frames : int
         Decoding and STFT block sizes (:mod:`loudscape_extract.stream`): memory is bounded by
         them and by the decoded mono mix, whatever the track's length; the output does not
@@ -69,53 +104,135 @@ def extract_song(
     say = progress or (lambda _message: None)
     floor = DEFAULT_FLOOR_DB if floor_db is None else floor_db
     check_output_path(output, inputs=[source])
-    say(f"decoding {source}")
+    body = body_file_path(output)
     try:
-        track = stream_track(
-            source,
-            n_fft=n_fft,
-            hop_length=hop_length,
-            highpass_hz=highpass_hz,
-            frame_hp=False,
-            block_samples=block_samples,
-            block_frames=block_frames,
-            strict=strict,
-            progress=say,
-        )
-        say(f"{track.duration_s:.1f} s, {track.sample_rate} Hz, {track.n_channels} channel(s)")
-        say("building points: counting those above the floor")
-        cloud, blocks = song_point_blocks(track, floor_db=floor, freq_scale=freq_scale)
-    except ExtractError as exc:
-        if exc.path is None:
-            exc.path = source
-        raise
-    found = track_warnings(decode_warning=track.warning, metrics=track.metrics, signal=track.signal)
-    for item in found:
-        _warn(warn, f"{source}: {item['message']}")
-    metadata = song_metadata(track, cloud, generator=GENERATOR, source_format=track.source_format)
-    if found:  # absent: nothing to say (docs/FORMAT.md, "Warnings")
-        metadata["warnings"] = found
-    say("harmonic-percussive separation and the points, block by block")
+        made = {}
 
-    def produced():
-        yield from checked_blocks(blocks(), metadata, n_points=cloud.point_count, path=output)
-        say(f"writing {cloud.point_count} points to {output}")  # the last block is in
+        def make_points(decoded: DecodedMono, levels: SpectralLevels) -> None:
+            info = decoded.info
+            say(
+                f"{decoded.n_samples / info.sample_rate:.1f} s, {info.sample_rate} Hz, "
+                f"{info.n_channels} channel(s)"
+            )
+            say("building points: the axes from the level range")
+            made["plan"] = plan = plan_song(
+                levels,
+                sample_rate=info.sample_rate,
+                hop_length=hop_length,
+                floor_db=floor,
+                freq_scale=freq_scale,
+            )
+            say("harmonic-percussive separation and the points, block by block")
+            blocks = song_point_blocks(
+                decoded.mono,
+                plan,
+                n_fft=n_fft,
+                hop_length=hop_length,
+                block_frames=min(block_frames, POINTS_BLOCK_FRAMES),
+            )
+            made["rows"] = _write_body(body, blocks, plan=plan, output=output, points=points)
 
-    try:
-        # The contract (check_cloud's rules) runs on the metadata first and on each block
-        # before it is written; the file is put in place only after the last block.
-        write_ply_blocks(
-            output,
-            n_points=cloud.point_count,
-            metadata=metadata,
-            blocks=produced(),
+        try:
+            say(f"decoding {source}")
+            track = stream_track(
+                source,
+                n_fft=n_fft,
+                hop_length=hop_length,
+                highpass_hz=highpass_hz,
+                frame_hp=False,
+                block_samples=block_samples,
+                block_frames=block_frames,
+                strict=strict,
+                progress=say,
+                after_levels=make_points,
+            )
+        except ExtractError as exc:
+            if exc.path is None:
+                exc.path = source
+            raise
+        found = track_warnings(
+            decode_warning=track.warning, metrics=track.metrics, signal=track.signal
         )
-    except ExtractError as exc:
-        if exc.path is None:
-            exc.path = source
-        raise
+        for item in found:
+            _warn(warn, f"{source}: {item['message']}")
+        plan, rows = made["plan"], made["rows"]
+        metadata = song_metadata(
+            track, plan.cloud(rows), generator=GENERATOR, source_format=track.source_format
+        )
+        if found:  # absent: nothing to say (docs/FORMAT.md, "Warnings")
+            metadata["warnings"] = found
+        # The contract (check_cloud's rules): each block was checked as it went into the body
+        # file, the metadata is checked now; the file is put in place only after both.
+        check_metadata(metadata, n_points=rows, path=output)
+        say(f"writing {rows} points to {output}")
+        header = encode_header(n_points=rows, metadata=metadata)
+        write_atomically(
+            output, itertools.chain([header], _body_chunks(body, rows=rows, output=output))
+        )
+    finally:
+        with contextlib.suppress(OSError):  # already gone, or not ours (a folder)
+            os.unlink(body)
     say("done")
     return metadata
+
+
+def _write_body(
+    body: str,
+    blocks: Iterator[tuple[int, object]],
+    *,
+    plan: SongPlan,
+    output: str,
+    points: Callable[[PointsSoFar], None] | None,
+) -> int:
+    """Append each block's rows to ``body`` (created or emptied); the number of rows."""
+    axes = rounded(plan.axes, 6)  # as the metadata will hold them
+    rows = reported = 0
+    last = -float("inf")
+    share = 0.0
+
+    def report() -> None:
+        nonlocal reported, last
+        points(
+            PointsSoFar(
+                path=body, rows=rows, axes=axes, freq_scale=plan.mapping.freq_scale, share=share
+            )
+        )
+        reported, last = rows, time.monotonic()
+
+    directory = os.path.dirname(body)
+    try:
+        with open(body, "wb") as handle:
+            for frames_done, block in blocks:
+                check_points(block, path=output)
+                handle.write(block.astype("<f4", copy=False).tobytes())
+                handle.flush()
+                rows += block.shape[0]
+                share = frames_done / plan.frames_total
+                if points is not None and time.monotonic() - last >= POINTS_EVERY_S:
+                    report()
+    except OSError as exc:
+        raise ExtractError(write_failure(exc, directory=directory), path=output) from exc
+    if points is not None and reported != rows:
+        share = 1.0
+        report()
+    return rows
+
+
+def _body_chunks(body: str, *, rows: int, output: str) -> Iterator[bytes]:
+    """The body file's bytes, a few MB at a time, after checking its length."""
+    try:
+        handle = open(body, "rb")  # noqa: SIM115 - closed below, after the last chunk
+    except OSError as exc:
+        raise ExtractError(f"cannot read the points back ({exc.strerror})", path=output) from exc
+    with handle:
+        size = os.fstat(handle.fileno()).st_size
+        if size != rows * ROW_BYTES:
+            raise ExtractError(
+                f"the points file holds {size} bytes, not {rows} rows of {ROW_BYTES}",
+                path=output,
+            )
+        while chunk := handle.read(_COPY_BYTES):
+            yield chunk
 
 
 def _warn(warn: Callable[[str], None] | None, text: str) -> None:

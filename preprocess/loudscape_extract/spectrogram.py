@@ -15,6 +15,7 @@ __all__ = [
     "frame_count",
     "frame_signal",
     "frame_times",
+    "level_a_db",
     "level_db",
     "stft_magnitude",
 ]
@@ -129,6 +130,14 @@ def level_db(magnitude: np.ndarray) -> np.ndarray:
     np.log10(out, out=out)
     out *= np.float32(20.0)
     return out
+
+
+def level_a_db(levels: np.ndarray, a_gain_db: np.ndarray) -> np.ndarray:
+    """A-weighted bin levels: ``levels`` (bins x frames, dB, float32) plus each bin's
+    A-weighting gain, clipped at :data:`LEVEL_FLOOR_DB`."""
+    levels_a = levels + a_gain_db[:, None].astype(np.float32)
+    np.maximum(levels_a, np.float32(LEVEL_FLOOR_DB), out=levels_a)
+    return levels_a
 
 
 def a_weighting_db(frequencies: np.ndarray, *, min_db: float = LEVEL_FLOOR_DB) -> np.ndarray:

@@ -4,12 +4,9 @@
 minutes). This module computes the same features and metrics with memory that does not grow
 with the per-bin data:
 
-1. **decode** (:func:`decode_pass`): the file block by block; keeps only the decoded mono mix
-   (float32, 635 MB for 60 minutes at 44.1 kHz) and each channel's sum (the DC offset);
-2. **signal** (:func:`signal_pass`): the file decoded again, block by block: DC removal, the
-   optional high-pass and the K-weighting as FFT convolutions carrying their last ``taps - 1``
-   input samples from block to block, the true-peak interpolator likewise, and per 100 ms
-   segment, 3 s DR block and STFT frame the sums and peaks the metrics need;
+1. **decode** and 2. **signal** (:mod:`loudscape_extract.stream_decode`): the mono mix kept
+   from a first decode; the sums and peaks the loudness and dynamics metrics need from a
+   second;
 3. **spectral passes** over blocks of STFT frames of the mono mix. HPSS's harmonic median runs
    along time, so each block is filtered with half a kernel of neighbouring frames on each
    side (real frames inside the track, the same symmetric padding as the unblocked filter at
@@ -22,7 +19,6 @@ up to float rounding (sums in a different order, FFT convolutions of different l
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -31,450 +27,55 @@ import numpy as np
 import scipy.fft
 from numpy.lib.stride_tricks import sliding_window_view
 
-from loudscape_extract.audio import (
-    AudioInfo,
-    BlockReport,
-    audio_info,
-    check_decoded,
-    mix_to_mono,
-    read_blocks,
-)
 from loudscape_extract.curves import loudness_curves
-from loudscape_extract.dsp import (
-    fft_convolve,
-    hann_window,
-    sos_impulse_response,
-)
-from loudscape_extract.dynamics import (
-    dr_block_length,
-    dr_from_blocks,
-    dynamics_from_segments,
-    frame_windows,
-    highpass_sos,
-    song_dynamics_metrics,
-)
+from loudscape_extract.dsp import hann_window
+from loudscape_extract.dynamics import dr_from_blocks, dynamics_from_segments
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.features import (
+from loudscape_extract.hpss import (
     HPSS_KERNEL,
     HPSS_MARGIN,
     HPSS_POWER,
+    hp_ratio,
+    masks_from_medians,
+    median_filter_axis,
+)
+from loudscape_extract.measures import (
     FrameFeatures,
-    crest_statistics,
+    TrackDescription,
+    a_power_gain,
+    dynamics_series,
+    level_series,
+    spectral_series,
+    track_metrics,
 )
-from loudscape_extract.hpss import hp_ratio, masks_from_medians, median_filter_axis
-from loudscape_extract.loudness import (
-    TRUE_PEAK_OVERSAMPLING,
-    channel_gains,
-    interpolator_taps,
-    k_weighting_sos,
-    loudness_from_energy,
-    momentary_per_frame,
-)
-from loudscape_extract.notices import ClipRuns, cancel_notice, clip_notice
-from loudscape_extract.spectrogram import (
-    a_weighting_db,
-    frame_count,
-    frame_times,
-    level_db,
+from loudscape_extract.spectrogram import a_weighting_db, frame_count, frame_times, level_db
+from loudscape_extract.stream_decode import (
+    DEFAULT_BLOCK_SAMPLES,
+    DecodedMono,
+    SignalStats,
+    decode_track,
+    signal_pass,
 )
 
 __all__ = [
     "DEFAULT_BLOCK_FRAMES",
-    "DEFAULT_BLOCK_SAMPLES",
-    "DecodedMono",
-    "SignalStats",
+    "SIGNAL_MESSAGE",
     "SpectralBlock",
+    "SpectralLevels",
     "StreamedTrack",
-    "decode_pass",
-    "signal_pass",
+    "finish_track",
     "spectral_blocks",
+    "spectral_level_pass",
     "stream_track",
 ]
 
-#: Samples decoded at a time (about 24 s at 44.1 kHz).
-DEFAULT_BLOCK_SAMPLES = 1 << 20
 #: STFT frames per spectral block (about 48 s at 44.1 kHz with hop 1024).
 DEFAULT_BLOCK_FRAMES = 2048
+#: The progress message said before :func:`signal_pass`.
+SIGNAL_MESSAGE = (
+    "dynamics and loudness (short-term loudness, PSR, DR, integrated, range, true peak)"
+)
 _FFT_CHUNK_FRAMES = 512
-_FRAME_CHUNK = 1024
-_SHORT_PEAK = 1 << 15
-
-
-@functools.lru_cache(maxsize=16)
-def _impulse_response(flat_sos: tuple) -> np.ndarray:
-    return sos_impulse_response(np.array(flat_sos).reshape(-1, 6))
-
-
-@dataclass(frozen=True)
-class DecodedMono:
-    """What the first decoding pass keeps.
-
-    Attributes
-    ----------
-    info : AudioInfo
-    mono : np.ndarray [shape=(n_samples,), dtype=float32]
-        The decoded mono mix (:func:`mix_to_mono` of the decoded channels).
-    dc : np.ndarray [shape=(n_channels,)]
-        Each channel's mean.
-    sample_peak : float
-        Largest absolute decoded sample.
-    any_nonzero : bool
-        Whether any decoded sample is non-zero.
-    warning : str
-        Non-empty when the file is truncated or corrupt (:attr:`Audio.warning`).
-    signal : tuple of dict
-        Warnings about the signal found while decoding (:func:`notices.cancel_notice`,
-        :func:`notices.clip_notice`).
-    """
-
-    info: AudioInfo
-    mono: np.ndarray
-    dc: np.ndarray
-    sample_peak: float
-    any_nonzero: bool
-    warning: str = ""
-    signal: tuple = ()
-
-    @property
-    def n_samples(self) -> int:
-        return int(self.mono.shape[0])
-
-
-def decode_pass(
-    info: AudioInfo, *, block: int = DEFAULT_BLOCK_SAMPLES, strict: bool = False
-) -> DecodedMono:
-    """Decode once: the mono mix, channel means and the sample peak (see the module docs).
-
-    A truncated or corrupt file is decoded as far as it goes, with a warning, as by
-    :func:`decode_audio` (``strict``: an :class:`ExtractError`).
-    """
-    report = BlockReport()
-    capacity = max(info.n_samples, 1)
-    mono = np.empty(capacity, dtype=np.float32)
-    sums = np.zeros(info.n_channels)
-    peak = 0.0
-    any_nonzero = False
-    n = 0
-    channel_squares = mono_squares = 0.0
-    clips = ClipRuns(info.n_channels)
-    for start, samples in read_blocks(info, block=block, report=report):
-        count = samples.shape[0]
-        if start + count > mono.shape[0]:  # the header understated the length
-            grown = np.empty(max(2 * mono.shape[0], start + count), dtype=np.float32)
-            grown[:start] = mono[:start]
-            mono = grown
-        mono[start : start + count] = mix_to_mono(samples)
-        sums += samples.sum(axis=0, dtype=np.float64)
-        block_mono = mono[start : start + count]
-        mono_squares += float(np.dot(block_mono, block_mono.astype(np.float64)))
-        channel_squares += float(np.einsum("ij,ij->", samples, samples, dtype=np.float64))
-        clips.feed(start, samples)
-        block_peak = float(np.abs(samples).max())
-        peak = max(peak, block_peak)
-        any_nonzero = any_nonzero or block_peak > 0
-        n = start + count
-    warning = check_decoded(info, decoded=n, report=report, strict=strict)
-    signal = [
-        cancel_notice(mono_squares, channel_squares / info.n_channels)
-        if info.n_channels > 1
-        else None,
-        clip_notice(clips.runs, clips.samples, clips.first_s(info.sample_rate)),
-    ]
-    return DecodedMono(
-        info=info,
-        mono=mono[:n],
-        dc=sums / n,
-        sample_peak=peak,
-        any_nonzero=any_nonzero,
-        warning=warning,
-        signal=tuple(item for item in signal if item),
-    )
-
-
-def _reduce_into(out, values, start, boundaries, ufunc) -> None:
-    """Combine per-sample ``values`` (absolute samples ``[start, start + n)``, last axis) into
-    ``out[..., i]``, the interval ``[boundaries[i], boundaries[i + 1])``, with ``ufunc``."""
-    end = min(start + values.shape[-1], int(boundaries[-1]))
-    if end <= start:
-        return
-    first = int(np.searchsorted(boundaries, start, side="right")) - 1
-    last = int(np.searchsorted(boundaries, end, side="left"))
-    cuts = np.maximum(boundaries[first:last], start) - start
-    part = ufunc.reduceat(values[..., : end - start], cuts.astype(np.int64), axis=-1)
-    out[..., first:last] = ufunc(out[..., first:last], part)
-
-
-class _StreamFir:
-    """Causal FIR filter from rest along the last axis, fed consecutive blocks."""
-
-    def __init__(self, taps: np.ndarray, rows: int, dtype) -> None:
-        self.taps = taps
-        self.dtype = dtype
-        self.carry = np.zeros((rows, taps.shape[0] - 1), dtype=dtype)
-
-    def __call__(self, block: np.ndarray) -> np.ndarray:
-        keep = self.carry.shape[1]
-        x = np.concatenate([self.carry, block.astype(self.dtype, copy=False)], axis=1)
-        y = fft_convolve(x, self.taps, dtype=self.dtype)[:, keep:]
-        if keep:
-            self.carry = x[:, x.shape[1] - keep :].copy()
-        return y
-
-
-def _phase_convolve(x: np.ndarray, phases: list[np.ndarray]) -> Iterator[np.ndarray]:
-    """``fft_convolve(x, h, dtype=np.float32)`` for each ``h`` of ``phases`` (equal lengths),
-    by overlap-save with one forward transform of each segment shared by all filters."""
-    rows, n = x.shape
-    m = phases[0].shape[0]
-    size = 1 << max(16, math.ceil(math.log2(4 * m)))
-    step = size - m + 1
-    n_blocks = -(-n // step)
-    spectra = [scipy.fft.rfft(np.asarray(h, dtype=np.float32), size) for h in phases]
-    padded = np.zeros((rows, m - 1 + n_blocks * step + size), dtype=np.float32)
-    padded[:, m - 1 : m - 1 + n] = x
-    outputs = [np.empty((rows, n_blocks * step), dtype=np.float32) for _ in phases]
-    batch = 8
-    for first in range(0, n_blocks, batch):
-        count = min(batch, n_blocks - first)
-        starts = (first + np.arange(count)) * step
-        segments = padded[:, starts[:, None] + np.arange(size)[None, :]]  # (rows, count, size)
-        spectrum = scipy.fft.rfft(segments, axis=-1)
-        for out, h_spectrum in zip(outputs, spectra, strict=True):
-            y = scipy.fft.irfft(spectrum * h_spectrum, size, axis=-1)
-            out[:, first * step : (first + count) * step] = y[:, :, m - 1 :].reshape(rows, -1)
-    for out in outputs:
-        yield out[:, :n]
-
-
-class _StreamTruePeak:
-    """The 4x-oversampled absolute maximum over channels around each sample, as
-    :func:`segment_true_peak` computes it (the same interpolator in float32: FFT convolutions,
-    or shifted sums for short blocks), fed consecutive blocks;
-    only positions whose interpolation window lies inside the signal are produced.
-
-    With ``offsets`` it also gives the peak of ``signal + offsets`` (the decoded signal, when
-    the fed one is its DC-free version) from the same interpolation: the interpolator is
-    linear, so each phase's output moves by ``offset * sum(phase taps)`` wherever its window
-    lies inside the signal (near the start, by the partial sum over the samples already
-    there). One oversampled pass serves both peaks."""
-
-    def __init__(self, rows: int, oversampling: int = TRUE_PEAK_OVERSAMPLING, offsets=None) -> None:
-        self.taps = interpolator_taps(oversampling).astype(np.float32)
-        self.factor = oversampling
-        self.per_phase = -(-self.taps.shape[0] // oversampling)
-        self.half = (self.per_phase - 1) // 2
-        padded = np.zeros(self.per_phase * oversampling)
-        padded[: self.taps.shape[0]] = self.taps
-        self.phases = [padded[p::oversampling] for p in range(oversampling)]
-        self.buffer = np.zeros((rows, self.half), dtype=np.float32)
-        self.buffer_start = -self.half
-        self.offsets = None if offsets is None else np.asarray(offsets, np.float32)[:, None]
-
-    def _offset_response(self, phase: int, count: int) -> np.ndarray:
-        """``sum_k h_p[k]`` over the window samples inside the signal, per output (1, count)."""
-        h = self.taps[phase :: self.factor].astype(np.float32)
-        p = self.per_phase
-        # output j reads samples j - half .. (relative to buffer_start); tap k reads x[j+p-1-k]
-        j = np.arange(count)
-        first_inside = -self.buffer_start  # x index of sample 0
-        k_max = np.minimum(p - 1, j + p - 1 - first_inside)
-        partial = np.concatenate([[0.0], np.cumsum(h, dtype=np.float64)]).astype(np.float32)
-        return partial[np.clip(k_max + 1, 0, h.shape[0])][None, :]
-
-    def feed(self, block: np.ndarray) -> tuple[int, np.ndarray, np.ndarray | None]:
-        """``(s0, peak, offset_peak)``: the interpolated peak of samples ``s0 .. s0 +
-        len(peak) - 1``, and that of the signal plus the offsets (None without them)."""
-        x = np.concatenate([self.buffer, block.astype(np.float32, copy=False)], axis=1)
-        p = self.per_phase
-        s0 = self.buffer_start + self.half
-        count = x.shape[1] - (p - 1)
-        peak = np.zeros(max(count, 0), dtype=np.float32)
-        offset_peak = None if self.offsets is None else np.zeros_like(peak)
-        if count > 0:
-            if count < _SHORT_PEAK:
-                # Short blocks (short songs): the phases as shifted sums, cheaper than FFTs.
-                def outputs():
-                    for phase in range(self.factor):
-                        y = np.zeros((x.shape[0], count), dtype=np.float32)
-                        for k, tap in enumerate(self.taps[phase :: self.factor]):
-                            y += tap * x[:, p - 1 - k : p - 1 - k + count]
-                        yield y
-
-                produced = outputs()
-            else:
-                produced = (y[:, p - 1 :] for y in _phase_convolve(x, self.phases))
-            for phase, y in enumerate(produced):
-                np.maximum(peak, np.abs(y).max(axis=0), out=peak)
-                if offset_peak is not None:
-                    if self.buffer_start < 0:
-                        shift = self.offsets * self._offset_response(phase, count)
-                    else:
-                        shift = self.offsets * self._offset_response(phase, 1)
-                    np.maximum(offset_peak, np.abs(y + shift).max(axis=0), out=offset_peak)
-            self.buffer = x[:, count:].copy()
-            self.buffer_start += count
-        else:
-            self.buffer = x
-        return s0, peak, offset_peak
-
-
-class _StreamFrames:
-    """RMS and peak of the centred, zero-padded frames of a mono signal fed in blocks (what
-    ``features._frame_rms_peak`` gives for the whole signal)."""
-
-    def __init__(self, n_samples: int, *, n_fft: int, hop_length: int) -> None:
-        self.n_fft, self.hop = n_fft, hop_length
-        self.pad = n_fft // 2
-        self.n_frames = frame_count(n_samples, n_fft=n_fft, hop_length=hop_length)
-        self.rms = np.empty(self.n_frames)
-        self.peak = np.empty(self.n_frames)
-        self.buffer = np.zeros(self.pad, dtype=np.float32)
-        self.buffer_start = -self.pad
-        self.next = 0
-
-    def feed(self, block: np.ndarray) -> None:
-        self.buffer = np.concatenate([self.buffer, block.astype(np.float32, copy=False)])
-        self._emit()
-
-    def finish(self) -> None:
-        self.buffer = np.concatenate([self.buffer, np.zeros(self.pad, dtype=np.float32)])
-        self._emit()
-        if self.next != self.n_frames:
-            raise ExtractError(f"framing ended at frame {self.next} of {self.n_frames}")
-
-    def _emit(self) -> None:
-        length = self.buffer.shape[0]
-        offset = self.next * self.hop - self.pad - self.buffer_start
-        available = (length - self.n_fft - offset) // self.hop + 1 if length >= offset else 0
-        count = min(max(available, 0), self.n_frames - self.next)
-        if count > 0:
-            frames = sliding_window_view(self.buffer[offset:], self.n_fft)[:: self.hop][:count]
-            for first in range(0, count, _FRAME_CHUNK):
-                chunk = frames[first : first + _FRAME_CHUNK].astype(np.float64)
-                at = self.next + first
-                stop = at + chunk.shape[0]
-                self.rms[at:stop] = np.sqrt(np.einsum("ij,ij->i", chunk, chunk) / self.n_fft)
-                self.peak[at:stop] = np.abs(chunk).max(axis=1)
-            self.next += count
-        drop = self.next * self.hop - self.pad - self.buffer_start
-        if drop > 0:
-            self.buffer = self.buffer[drop:].copy()
-            self.buffer_start += drop
-
-
-@dataclass(frozen=True)
-class SignalStats:
-    """What the second decoding pass measures (see :func:`signal_pass`)."""
-
-    frame_rms: np.ndarray
-    frame_peak: np.ndarray
-    energy: np.ndarray
-    boundaries: np.ndarray
-    segment_peak: np.ndarray
-    true_peak_clean: float
-    mono_squares: np.ndarray
-    mono_peaks: np.ndarray
-    dr_squares: np.ndarray
-    dr_peaks: np.ndarray
-    dr_lengths: np.ndarray
-    true_peak_decoded: float
-
-
-def signal_pass(
-    decoded: DecodedMono,
-    *,
-    n_fft: int,
-    hop_length: int,
-    highpass_hz: float | None = None,
-    block: int = DEFAULT_BLOCK_SAMPLES,
-) -> SignalStats:
-    """Decode again and measure, per block, what the loudness and dynamics metrics need.
-
-    The signal is the DC-free (and optionally high-passed) channels, as in
-    :func:`track_features`; the true peak of the decoded signal is measured too.
-    """
-    info = decoded.info
-    rate = info.sample_rate
-    n = decoded.n_samples
-    nc = info.n_channels
-    dc32 = decoded.dc.astype(np.float32)[None, :]
-    highpass = None
-    if highpass_hz is not None:
-        sos = highpass_sos(highpass_hz, sample_rate=rate)
-        highpass = _StreamFir(_impulse_response(tuple(sos.ravel())), nc, np.float32)
-    gains = channel_gains(nc)
-    used = np.flatnonzero(gains)
-    k_sos = k_weighting_sos(sample_rate=rate)
-    k_weighting = _StreamFir(_impulse_response(tuple(k_sos.ravel())), used.shape[0], np.float32)
-    n_segments = int(math.floor(n / (0.1 * rate) + 1e-9))
-    boundaries = np.round(np.arange(n_segments + 1) * 0.1 * rate).astype(np.int64)
-    boundaries = np.minimum(boundaries, n)
-    energy = np.zeros((used.shape[0], n_segments))
-    segment_peak = np.zeros(n_segments, dtype=np.float32)
-    mono_squares = np.zeros(n_segments)
-    mono_peaks = np.zeros(n_segments)
-    dr_block = dr_block_length(rate)
-    dr_bounds = np.append(np.arange(0, n, dr_block), n).astype(np.int64)
-    dr_squares = np.zeros((nc, dr_bounds.shape[0] - 1))
-    dr_peaks = np.zeros((nc, dr_bounds.shape[0] - 1))
-    # Without the high-pass the decoded signal is the DC-free one plus the channel means: one
-    # oversampled pass gives both true peaks. With it they differ by more; two passes.
-    peak_clean = _StreamTruePeak(nc, offsets=None if highpass is not None else decoded.dc)
-    peak_decoded = _StreamTruePeak(nc) if highpass is not None else None
-    frames = _StreamFrames(n, n_fft=n_fft, hop_length=hop_length)
-    overall_clean = 0.0
-    overall_decoded = decoded.sample_peak
-    seen = 0
-    for start, samples in read_blocks(info, block=block):
-        if start + samples.shape[0] > n:
-            raise ExtractError("the file changed while it was read (more samples)", path=info.path)
-        clean = samples - dc32
-        if highpass is not None:
-            clean = np.ascontiguousarray(highpass(clean.T).T)
-        mono_clean = mix_to_mono(clean)
-        filtered = k_weighting(clean[:, used].T)
-        for row in range(used.shape[0]):
-            squared = np.square(filtered[row], dtype=np.float64)
-            _reduce_into(energy[row], squared, start, boundaries, np.add)
-        sample_abs = np.abs(clean).max(axis=1).astype(np.float32)
-        _reduce_into(segment_peak, sample_abs, start, boundaries, np.maximum)
-        overall_clean = max(overall_clean, float(sample_abs.max()))
-        s0, interpolated, decoded_peak = peak_clean.feed(clean.T)
-        if interpolated.size:
-            _reduce_into(segment_peak, interpolated, s0, boundaries, np.maximum)
-            overall_clean = max(overall_clean, float(interpolated.max()))
-        if peak_decoded is not None:
-            _, decoded_peak, _ = peak_decoded.feed(samples.T)
-        if decoded_peak is not None and decoded_peak.size:
-            overall_decoded = max(overall_decoded, float(decoded_peak.max()))
-        m = mono_clean.astype(np.float64)
-        _reduce_into(mono_squares, m * m, start, boundaries, np.add)
-        _reduce_into(mono_peaks, np.abs(m), start, boundaries, np.maximum)
-        x = clean.T.astype(np.float64)
-        _reduce_into(dr_squares, x * x, start, dr_bounds, np.add)
-        _reduce_into(dr_peaks, np.abs(x), start, dr_bounds, np.maximum)
-        frames.feed(mono_clean)
-        seen = start + samples.shape[0]
-    if seen != n:
-        raise ExtractError("the file changed while it was read (fewer samples)", path=info.path)
-    frames.finish()
-    total_energy = np.zeros(n_segments)
-    for row, channel in enumerate(used):
-        total_energy += gains[channel] * energy[row]
-    return SignalStats(
-        frame_rms=frames.rms,
-        frame_peak=frames.peak,
-        energy=total_energy,
-        boundaries=boundaries,
-        segment_peak=segment_peak,
-        true_peak_clean=overall_clean,
-        mono_squares=mono_squares,
-        mono_peaks=mono_peaks,
-        dr_squares=dr_squares.T.copy(),
-        dr_peaks=dr_peaks.T.copy(),
-        dr_lengths=np.diff(dr_bounds),
-        true_peak_decoded=overall_decoded,
-    )
 
 
 def _frames_of(mono: np.ndarray, first: int, stop: int, *, n_fft: int, hop_length: int):
@@ -557,7 +158,7 @@ def spectral_blocks(
 
 
 @dataclass(frozen=True)
-class StreamedTrack:
+class StreamedTrack(TrackDescription):
     """:class:`TrackFeatures` without the per-bin arrays: what a streamed pass keeps.
 
     Attributes
@@ -586,12 +187,6 @@ class StreamedTrack:
         Warnings about the signal found while decoding (:attr:`DecodedMono.signal`).
     """
 
-    path: str
-    sample_rate: int
-    n_channels: int
-    n_samples: int
-    n_fft: int
-    hop_length: int
     source_format: str
     mono: np.ndarray
     frequencies_hz: np.ndarray
@@ -607,9 +202,33 @@ class StreamedTrack:
     curves: dict | None = None
     signal: tuple = ()
 
-    @property
-    def duration_s(self) -> float:
-        return self.n_samples / self.sample_rate
+
+@dataclass(frozen=True)
+class SpectralLevels:
+    """What the spectrogram level pass (:func:`spectral_level_pass`) finds, per frame and
+    over the track: enough to fix a Song-mode cloud's axes before any point is made.
+
+    Attributes
+    ----------
+    frequencies_hz, a_gain_db : np.ndarray [shape=(n_bins,)]
+    times_s : np.ndarray [shape=(n_frames,)]
+    silent : np.ndarray [shape=(n_frames,), dtype=bool]
+        Frames whose every decoded sample is 0.
+    loudness_a_db, hp_mean : np.ndarray [shape=(n_frames,)]
+        As :class:`FrameFeatures`' (``hp_mean`` NaN unless the pass ran HPSS).
+    level_max_db, level_min_db : dict
+        Loudest and quietest bin level over the non-silent frames, keyed by the first drawn
+        bin (0: all bins, 1: without the 0 Hz bin).
+    """
+
+    frequencies_hz: np.ndarray
+    a_gain_db: np.ndarray
+    times_s: np.ndarray
+    silent: np.ndarray
+    loudness_a_db: np.ndarray
+    hp_mean: np.ndarray
+    level_max_db: dict
+    level_min_db: dict
 
 
 def stream_track(
@@ -617,15 +236,21 @@ def stream_track(
     *,
     n_fft: int = 2048,
     hop_length: int = 1024,
-    kernel_size: int = HPSS_KERNEL,
     highpass_hz: float | None = None,
     frame_hp: bool = True,
+    kernel_size: int = HPSS_KERNEL,
     block_samples: int = DEFAULT_BLOCK_SAMPLES,
     block_frames: int = DEFAULT_BLOCK_FRAMES,
     strict: bool = False,
     progress: Callable[[str], None] | None = None,
+    after_levels: Callable[[DecodedMono, SpectralLevels], None] | None = None,
 ) -> StreamedTrack:
     """:func:`track_features` in bounded memory: per-frame series, metrics and level range.
+
+    The passes in order: :func:`~loudscape_extract.stream_decode.decode_track`,
+    :func:`spectral_level_pass`, ``after_levels`` (Song mode makes its points there, the axes
+    being fixed by the level pass), :func:`~loudscape_extract.stream_decode.signal_pass`, then
+    :func:`finish_track`.
 
     Parameters
     ----------
@@ -641,6 +266,8 @@ def stream_track(
         Refuse a truncated or corrupt file; otherwise it is used as far as it decodes and
         ``track.warning`` says how far.
     progress : callable, optional
+    after_levels : callable, optional
+        Called with the decoded track and the level pass's results before the signal pass.
 
     Raises
     ------
@@ -648,29 +275,51 @@ def stream_track(
         As :func:`decode_audio` and :func:`track_features`.
     """
     say = progress or (lambda _message: None)
-    info = audio_info(path)
-    decoded = decode_pass(info, block=block_samples, strict=strict)
-    n = decoded.n_samples
-    rate = info.sample_rate
-    if n < n_fft:
-        raise ExtractError(
-            f"audio of {n} samples ({n / rate * 1000:.1f} ms) is shorter "
-            f"than one STFT frame (n_fft={n_fft})",
-            path=path,
-        )
-    if not decoded.any_nonzero:
-        raise ExtractError("audio is entirely silent (every sample is 0)", path=path)
-    if not np.any(decoded.mono):
-        raise ExtractError("the mono mix is entirely silent (channels cancel)", path=path)
-    say("dynamics and loudness (short-term loudness, PSR, DR, integrated, range, true peak)")
+    decoded = decode_track(path, n_fft=n_fft, block_samples=block_samples, strict=strict)
+    say("spectrogram" + (" and harmonic-percussive separation" if frame_hp else ""))
+    levels = spectral_level_pass(
+        decoded,
+        n_fft=n_fft,
+        hop_length=hop_length,
+        block_frames=block_frames,
+        hpss=frame_hp,
+        kernel_size=kernel_size,
+    )
+    if after_levels is not None:
+        after_levels(decoded, levels)
+    say(SIGNAL_MESSAGE)
     stats = signal_pass(
         decoded, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, block=block_samples
     )
-    say("spectrogram" + (" and harmonic-percussive separation" if frame_hp else ""))
+    say("frame features")
+    return finish_track(
+        decoded,
+        levels,
+        stats,
+        n_fft=n_fft,
+        hop_length=hop_length,
+        highpass_hz=highpass_hz,
+        kernel_size=kernel_size,
+        block_frames=block_frames,
+    )
+
+
+def spectral_level_pass(
+    decoded: DecodedMono,
+    *,
+    n_fft: int,
+    hop_length: int,
+    block_frames: int = DEFAULT_BLOCK_FRAMES,
+    hpss: bool = False,
+    kernel_size: int = HPSS_KERNEL,
+) -> SpectralLevels:
+    """One pass over the mono mix's spectrogram: silent frames, A-weighted frame level, the
+    level range (and with ``hpss`` the per-frame hp mean)."""
+    rate = decoded.info.sample_rate
     frequencies = np.arange(n_fft // 2 + 1) * (rate / n_fft)
     a_gain = a_weighting_db(frequencies)
-    a_power_gain = (10.0 ** (a_gain / 10.0)).astype(np.float32)
-    n_frames = stats.frame_rms.shape[0]
+    power_gain = a_power_gain(a_gain)
+    n_frames = frame_count(decoded.n_samples, n_fft=n_fft, hop_length=hop_length)
     silent = np.zeros(n_frames, dtype=bool)
     loudness_a = np.empty(n_frames)
     hp_mean = np.full(n_frames, np.nan)
@@ -681,20 +330,17 @@ def stream_track(
         n_fft=n_fft,
         hop_length=hop_length,
         block_frames=block_frames,
-        hpss=frame_hp,
+        hpss=hpss,
         kernel_size=kernel_size,
     ):
         span = slice(block.start, block.stop)
         block_silent = block.decoded_peak == 0
         silent[span] = block_silent
-        with np.errstate(divide="ignore", invalid="ignore"):
-            power = np.square(block.magnitude, dtype=np.float32)
-            a_power = a_power_gain @ power
-            loudness_a[span] = np.where(block_silent, np.nan, 10.0 * np.log10(a_power / 1.5))
-            if block.hp is not None:
-                total = np.ones(power.shape[0], dtype=np.float32) @ power
-                hp_power = np.einsum("ij,ij->j", block.hp, power, dtype=np.float64)
-                hp_mean[span] = np.where(block_silent | (total == 0), np.nan, hp_power / total)
+        loudness_a[span], block_hp = spectral_series(
+            block.magnitude, power_gain=power_gain, silent=block_silent, hp=block.hp
+        )
+        if block_hp is not None:
+            hp_mean[span] = block_hp
         kept = ~block_silent
         if kept.any():
             levels = level_db(block.magnitude[:, kept])
@@ -702,11 +348,40 @@ def stream_track(
                 part = levels[first_bin:]
                 level_max[first_bin] = max(level_max[first_bin], float(part.max()))
                 level_min[first_bin] = min(level_min[first_bin], float(part.min()))
-    say("frame features")
-    rms, peak = stats.frame_rms, stats.frame_peak
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rms_dbfs = np.where(silent, -np.inf, 20.0 * np.log10(rms))
-        crest_db = np.where(silent, np.nan, 20.0 * np.log10(peak / rms))
+    return SpectralLevels(
+        frequencies_hz=frequencies,
+        a_gain_db=a_gain,
+        times_s=frame_times(n_frames, sample_rate=rate, hop_length=hop_length),
+        silent=silent,
+        loudness_a_db=loudness_a,
+        hp_mean=hp_mean,
+        level_max_db=level_max,
+        level_min_db=level_min,
+    )
+
+
+def finish_track(
+    decoded: DecodedMono,
+    levels: SpectralLevels,
+    stats: SignalStats,
+    *,
+    n_fft: int,
+    hop_length: int,
+    highpass_hz: float | None,
+    kernel_size: int = HPSS_KERNEL,
+    block_frames: int = DEFAULT_BLOCK_FRAMES,
+) -> StreamedTrack:
+    """The per-frame series and whole-track metrics from the passes' results."""
+    info = decoded.info
+    rate = info.sample_rate
+    silent = levels.silent
+    n_frames = silent.shape[0]
+    if stats.frame_rms.shape[0] != n_frames:
+        raise ExtractError(
+            f"the signal pass framed {stats.frame_rms.shape[0]} frames, the spectrogram {n_frames}",
+            path=info.path,
+        )
+    rms_dbfs, crest_db = level_series(stats.frame_rms, stats.frame_peak, silent)
     dynamics = dynamics_from_segments(
         stats.energy,
         stats.boundaries,
@@ -716,62 +391,43 @@ def stream_track(
         mono_peaks=stats.mono_peaks,
         sample_rate=rate,
     )
-    times = frame_times(n_frames, sample_rate=rate, hop_length=hop_length)
-    window = frame_windows(times, dynamics)
-    has_windows = dynamics.start_s.shape[0] > 0
-
-    def per_frame(series):
-        values = series[window] if has_windows else np.full(window.shape, np.nan)
-        return np.where(silent, np.nan, values)
-
     frames = FrameFeatures(
-        times_s=times,
+        times_s=levels.times_s,
         rms_dbfs=rms_dbfs,
-        peak=peak,
+        peak=stats.frame_peak,
         crest_db=crest_db,
-        loudness_a_db=loudness_a,
-        hp_mean=hp_mean,
+        loudness_a_db=levels.loudness_a_db,
+        hp_mean=levels.hp_mean,
         silent=silent,
-        psr_db=per_frame(dynamics.psr_db),
-        crest_3s_db=per_frame(dynamics.crest_3s_db),
-        short_term_lufs=per_frame(dynamics.short_term_lufs),
-        momentary_lufs=np.where(
-            silent, np.nan, momentary_per_frame(times, stats.energy, stats.boundaries)
-        ),
+        **dynamics_series(levels.times_s, silent, dynamics, stats.energy, stats.boundaries),
     )
-    integrated, lra = loudness_from_energy(stats.energy, stats.boundaries)
-    clean_peak = 20.0 * math.log10(dynamics.true_peak) if dynamics.true_peak > 0 else None
     sample_peak = decoded.sample_peak
     true_peak = max(stats.true_peak_decoded, sample_peak)
-    metrics = {
-        "integrated_lufs": integrated,
-        "lra_lu": lra,
-        "sample_peak_dbfs": 20.0 * math.log10(sample_peak) if sample_peak > 0 else None,
-        "true_peak_dbtp": 20.0 * math.log10(true_peak) if true_peak > 0 else None,
-        "plr_db": None if integrated is None or clean_peak is None else clean_peak - integrated,
-    }
-    metrics.update(crest_statistics(crest_db))
-    metrics["dc_offset"] = float(np.max(np.abs(decoded.dc)))
-    metrics["dr_db"] = dr_from_blocks(stats.dr_squares, stats.dr_peaks, stats.dr_lengths)
-    metrics.update(song_dynamics_metrics(dynamics))
-    metrics = {
-        key: (None if v is None or not math.isfinite(v) else v) for key, v in metrics.items()
-    }
+    metrics = track_metrics(
+        energy=stats.energy,
+        boundaries=stats.boundaries,
+        dynamics=dynamics,
+        sample_peak_dbfs=20.0 * math.log10(sample_peak) if sample_peak > 0 else None,
+        true_peak_dbtp=20.0 * math.log10(true_peak) if true_peak > 0 else None,
+        crest_db=crest_db,
+        dc=decoded.dc,
+        dr_db=dr_from_blocks(stats.dr_squares, stats.dr_peaks, stats.dr_lengths),
+    )
     return StreamedTrack(
-        path=path,
+        path=info.path,
         sample_rate=rate,
         n_channels=info.n_channels,
-        n_samples=n,
+        n_samples=decoded.n_samples,
         n_fft=n_fft,
         hop_length=hop_length,
         source_format=f"{info.format}/{info.subtype}",
         mono=decoded.mono,
-        frequencies_hz=frequencies,
-        a_gain_db=a_gain,
+        frequencies_hz=levels.frequencies_hz,
+        a_gain_db=levels.a_gain_db,
         frames=frames,
         metrics=metrics,
-        level_max_db=level_max,
-        level_min_db=level_min,
+        level_max_db=levels.level_max_db,
+        level_min_db=levels.level_min_db,
         highpass_hz=highpass_hz,
         kernel_size=kernel_size,
         block_frames=block_frames,

@@ -56,7 +56,9 @@ def test_fractions_only_grow_and_unknown_messages_keep_the_stage(capsys):
     progress("spectrogram")  # out of order: the fraction does not go back
     records = lines_of(capsys.readouterr().out)
     assert [r["stage"] for r in records] == ["decode", "decode", "hpss", "spectrogram"]
-    assert [r["fraction"] for r in records] == [0.0, 0.0, 0.82, 0.82]
+    hpss = {stage: fraction for _, stage, fraction in STAGES}["hpss"]
+    assert hpss > 0.0
+    assert [r["fraction"] for r in records] == [0.0, 0.0, hpss, hpss]
     assert [f for _, _, f in STAGES] == sorted(f for _, _, f in STAGES)
 
 

@@ -217,7 +217,7 @@ def test_streamed_decode_of_a_truncated_file_warns_or_fails_with_strict(tmp_path
 
 @pytest.mark.parametrize("block", [700, 40000, 100000])
 def test_one_true_peak_pass_gives_the_decoded_signals_peak_too(block):
-    from loudscape_extract.stream import _StreamTruePeak
+    from loudscape_extract.stream_decode import _StreamTruePeak
 
     rng = np.random.default_rng(5)
     clean = (0.3 * rng.standard_normal((2, 150000))).astype(np.float32)
