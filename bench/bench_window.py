@@ -435,8 +435,8 @@ def coloured(image: bytes | None) -> int:
 def open_case(binary: Path, audio: Path, args, display: str) -> tuple[float, float, str]:
     """Opens `audio` (never extracted before: a fresh cache) in the window; returns the
     seconds from the start of the process to the first frame that shows points, and to the
-    log line that the whole cloud was extracted, with the window's own line about the first
-    points (none before points while extracting)."""
+    log line that the whole cloud was extracted, with the window's own lines about the first
+    points and the whole cloud that replaced them (none before points while extracting)."""
     with tempfile.TemporaryDirectory(prefix="bench-open-") as home:
         runtime = Path(home) / "runtime"
         runtime.mkdir(mode=0o700)
@@ -475,6 +475,8 @@ def open_case(binary: Path, audio: Path, args, display: str) -> tuple[float, flo
                     if coloured(x.grab(vx, vy, vw, vh * 6 // 10)) > 300:
                         first = time.monotonic() - start
                     time.sleep(0.02)
+            # The window's line about the whole cloud comes with the frame that shows it.
+            time.sleep(1.0)
         finally:
             proc.terminate()
             try:
@@ -483,9 +485,10 @@ def open_case(binary: Path, audio: Path, args, display: str) -> tuple[float, flo
                 proc.kill()
                 proc.wait()
             log.close()
-        said = next(
-            (line for line in log_path.read_text().splitlines() if "first points shown" in line),
-            "",
+        said = " / ".join(
+            line.split(": ", 2)[-1]
+            for line in log_path.read_text().splitlines()
+            if "first points shown" in line or "the whole cloud (" in line
         )
     return (first or math.nan, full or math.nan, said)
 

@@ -20,8 +20,9 @@ impl LoudscapeApp {
     pub(super) fn start_loading(&mut self, path: PathBuf) {
         let (sender, receiver) = channel();
         let thread_path = path.clone();
+        // A song extracted again keeps its old cloud on screen: no points while extracting.
         let shared = crate::ui::state::loading::Shared {
-            preview: true,
+            preview: !self.song.as_ref().is_some_and(|l| l.cloud.path == path),
             ..Default::default()
         };
         let thread_shared = shared.clone();
