@@ -22,7 +22,7 @@ impl LoudscapeApp {
         let thread_path = path.clone();
         // A song extracted again keeps its old cloud on screen: no points while extracting.
         let shared = crate::ui::state::loading::Shared {
-            preview: !self.song.as_ref().is_some_and(|l| l.cloud.path == path),
+            preview: self.song.as_ref().is_none_or(|l| l.cloud.path != path),
             ..Default::default()
         };
         let thread_shared = shared.clone();
