@@ -4,7 +4,7 @@
 //! block for a file the test writes, so what the window shows then is surely shown before the
 //! extraction ends. The first points are drawn, with the progress and Cancel still under the
 //! view; the camera moved meanwhile stays when the whole cloud replaces them; a failed
-//! extraction takes them off the screen. Needs a display (`make test` runs the window tests
+//! extraction takes them off the screen and brings back the cloud they replaced. Needs a display (`make test` runs the window tests
 //! under xvfb-run), xdotool and ImageMagick's `import`.
 
 mod common;
@@ -17,6 +17,16 @@ use std::time::{Duration, Instant};
 
 /// Rows in the first block (of the demo's 147,750).
 const FIRST: usize = 30_000;
+
+/// One window on the screen at a time: the tests look at the whole screen and move the pointer.
+static SCREEN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// The screen, for one test (a test that failed holding it leaves it usable).
+fn screen() -> std::sync::MutexGuard<'static, ()> {
+    SCREEN
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 fn assert_display() {
     assert!(
@@ -50,6 +60,11 @@ struct Run {
 
 impl Run {
     fn start(name: &str, fail: bool) -> Run {
+        Run::start_with(name, fail, false)
+    }
+
+    /// `first_the_demo`: the window opens the demo's cloud first, the song is typed later.
+    fn start_with(name: &str, fail: bool, first_the_demo: bool) -> Run {
         let dir = common::output_dir().join(name);
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(dir.join("home")).unwrap();
@@ -62,8 +77,8 @@ impl Run {
         let go = dir.join("go");
         let home = dir.join("home");
         let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
+        command.arg(if first_the_demo { &demo } else { &song });
         command
-            .arg(&song)
             .env("HOME", &home)
             .env("XDG_DATA_HOME", home.join("data"))
             .env("XDG_CONFIG_HOME", home.join("config"))
@@ -129,11 +144,11 @@ impl Run {
     }
 }
 
-/// The window's id, once it is mapped.
-fn window() -> String {
+/// The id of the window of process `pid`, once it is mapped.
+fn window(pid: u32) -> String {
     let start = Instant::now();
     loop {
-        if let Some(id) = xdotool(&["search", "--name", "^loudscape$"])
+        if let Some(id) = xdotool(&["search", "--pid", &pid.to_string(), "--name", "^loudscape$"])
             && let Some(first) = id.lines().next()
         {
             return first.to_string();
@@ -245,6 +260,7 @@ fn the_first_points_show_while_extracting_and_the_whole_cloud_replaces_them() {
         xdotool(&["version"]).is_some(),
         "this test needs xdotool (apt-get install xdotool)"
     );
+    let _screen = screen();
     let mut run = Run::start("window_stream", false);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let first = run.wait_for(
@@ -262,7 +278,7 @@ fn the_first_points_show_while_extracting_and_the_whole_cloud_replaces_them() {
             "{:#?}",
             run.seen
         );
-        let id = window();
+        let id = window(run.child.id());
         let size = window_size(&id);
         xdotool(&["mousemove", "--window", &id, "5", "5"]);
         std::thread::sleep(Duration::from_millis(1500));
@@ -328,6 +344,7 @@ fn the_first_points_show_while_extracting_and_the_whole_cloud_replaces_them() {
 #[test]
 fn a_failed_extraction_takes_its_first_points_off_the_screen() {
     assert_display();
+    let _screen = screen();
     let mut run = Run::start("window_stream_failed", true);
     let shot = run.dir.join("failed.png");
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -335,7 +352,7 @@ fn a_failed_extraction_takes_its_first_points_off_the_screen() {
             "first points shown while extracting",
             Duration::from_secs(120),
         );
-        let id = window();
+        let id = window(run.child.id());
         let size = window_size(&id);
         std::thread::sleep(Duration::from_millis(1500));
         let shown = coloured_share(&shoot(&run.dir.join("shown.png")), size);
@@ -358,6 +375,75 @@ fn a_failed_extraction_takes_its_first_points_off_the_screen() {
             })
             .unwrap_or(0);
         assert_eq!(clouds, 0, "a failed extraction caches nothing");
+    }));
+    run.stop();
+    if let Err(panic) = result {
+        std::panic::resume_unwind(panic);
+    }
+}
+
+#[test]
+fn a_failed_extraction_brings_back_the_cloud_its_points_replaced() {
+    assert_display();
+    let _screen = screen();
+    let mut run = Run::start_with("window_stream_restore", true, true);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let id = window(run.child.id());
+        let size = window_size(&id);
+        // The demo's cloud, whole, as it opened.
+        let start = Instant::now();
+        let before = loop {
+            std::thread::sleep(Duration::from_millis(1000));
+            let shot = shoot(&run.dir.join("before.png"));
+            if coloured_share(&shot, size) > 0.02 {
+                std::thread::sleep(Duration::from_millis(1500));
+                break shoot(&run.dir.join("before.png"));
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "the demo never showed"
+            );
+        };
+        // The song typed in the Open row's path field (no dialog here), Enter.
+        let song = run.dir.join("song.flac");
+        xdotool(&["windowfocus", "--sync", &id]);
+        xdotool(&["mousemove", "--window", &id, "50", "38"]);
+        xdotool(&["click", "1"]);
+        std::thread::sleep(Duration::from_millis(300));
+        xdotool(&["type", "--delay", "30", &song.display().to_string()]);
+        std::thread::sleep(Duration::from_millis(300));
+        shoot(&run.dir.join("typed.png"));
+        xdotool(&["key", "Return"]);
+        xdotool(&["mousemove", "--window", &id, "5", "5"]);
+        run.wait_for(
+            "first points shown while extracting",
+            Duration::from_secs(120),
+        );
+        std::thread::sleep(Duration::from_millis(1500));
+        let shown = shoot(&run.dir.join("shown.png"));
+        run.go();
+        std::thread::sleep(Duration::from_millis(4000));
+        let after = shoot(&run.dir.join("after.png"));
+        let (before_share, shown_share, after_share) = (
+            coloured_share(&before, size),
+            coloured_share(&shown, size),
+            coloured_share(&after, size),
+        );
+        eprintln!(
+            "coloured: before {before_share:.4}, first points {shown_share:.4}, after the \
+             failure {after_share:.4}"
+        );
+        assert!(
+            shown_share < before_share * 0.8,
+            "the first points did not replace the demo's cloud"
+        );
+        // The demo's cloud is back, from the camera it had.
+        assert!(
+            after_share > shown_share * 1.3,
+            "the cloud the points replaced is not back"
+        );
+        let back = covered_by(&before, &after, size);
+        assert!(back > 0.9, "not the same picture as before: {back:.3}");
     }));
     run.stop();
     if let Err(panic) = result {
