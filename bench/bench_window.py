@@ -457,17 +457,24 @@ def open_case(binary: Path, audio: Path, args, display: str) -> tuple[float, flo
         start = time.monotonic()
         proc = subprocess.Popen([str(binary), str(audio)], env=env, stdout=log, stderr=log)
         first = full = None
+        said_fps: list[float] = []
         try:
             wid = find_window(display, proc, 60)
             size_window(wid, env)
             x = XDriver(display)
             end = start + args.load_timeout
             vx, vy, vw, vh = VIEW
+            if args.open_orbit:
+                x.watch(wid)
             while time.monotonic() < end and full is None:
                 if first is None and coloured(x.grab(vx, vy, vw, vh * 6 // 10)) > 300:
                     first = time.monotonic() - start
                 if "cloud extracted in" in log_path.read_text():
                     full = time.monotonic() - start
+                elif first is not None and args.open_orbit:
+                    # Orbiting while the points come in: frames painted a second.
+                    fps = orbit(x, 2.0)
+                    said_fps.append(fps)
                 time.sleep(0.02)
             if first is None and full is not None:
                 # Drawn in the frame after the cloud came.
@@ -490,6 +497,8 @@ def open_case(binary: Path, audio: Path, args, display: str) -> tuple[float, flo
             for line in log_path.read_text().splitlines()
             if "first points shown" in line or "the whole cloud (" in line
         )
+    if said_fps:
+        said += f" / orbit while the points come in: {', '.join(f'{v:.1f}' for v in said_fps)} fps"
     return (first or math.nan, full or math.nan, said)
 
 
@@ -574,6 +583,12 @@ def main() -> int:
         "in the window (made from data/real-music when missing)",
     )
     parser.add_argument("--open-seconds", type=float, default=180.0, help="length of that song")
+    parser.add_argument(
+        "--open-orbit",
+        action="store_true",
+        help="with --open: orbit the camera from the first points on, 2 s drags, and print the "
+        "frames painted a second (the whole cloud's time is then late by up to 2 s)",
+    )
     parser.add_argument(
         "--extractor", type=Path, default=Path(".venv/bin/loudscape-extract"), help="for --open"
     )
