@@ -60,11 +60,12 @@ struct Run {
 
 impl Run {
     fn start(name: &str, fail: bool) -> Run {
-        Run::start_with(name, fail, false)
+        Run::start_with(name, fail, false, &[])
     }
 
     /// `first_the_demo`: the window opens the demo's cloud first, the song is typed later.
-    fn start_with(name: &str, fail: bool, first_the_demo: bool) -> Run {
+    /// `env`: more of the stand-in's settings (`FAKE_BAD`).
+    fn start_with(name: &str, fail: bool, first_the_demo: bool, env: &[(&str, &str)]) -> Run {
         let dir = common::output_dir().join(name);
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(dir.join("home")).unwrap();
@@ -98,6 +99,7 @@ impl Run {
         if fail {
             command.env("FAKE_FAIL", "1");
         }
+        command.envs(env.iter().copied());
         let mut child = command.spawn().expect("start loudscape");
         let (sender, lines) = channel();
         let stderr = child.stderr.take().unwrap();
@@ -386,7 +388,7 @@ fn a_failed_extraction_takes_its_first_points_off_the_screen() {
 fn a_failed_extraction_brings_back_the_cloud_its_points_replaced() {
     assert_display();
     let _screen = screen();
-    let mut run = Run::start_with("window_stream_restore", true, true);
+    let mut run = Run::start_with("window_stream_restore", true, true, &[]);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let id = window(run.child.id());
         let size = window_size(&id);
@@ -444,6 +446,36 @@ fn a_failed_extraction_brings_back_the_cloud_its_points_replaced() {
         );
         let back = covered_by(&before, &after, size);
         assert!(back > 0.9, "not the same picture as before: {back:.3}");
+    }));
+    run.stop();
+    if let Err(panic) = result {
+        std::panic::resume_unwind(panic);
+    }
+}
+
+#[test]
+fn points_that_cannot_be_read_lose_only_the_preview() {
+    assert_display();
+    let _screen = screen();
+    let mut run = Run::start_with("window_stream_bad", false, false, &[("FAKE_BAD", "1")]);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let said = run.wait_for(
+            "the points cannot be shown while extracting",
+            Duration::from_secs(120),
+        );
+        assert!(said.contains("row 0"), "{said}");
+        run.go();
+        run.wait_for("cloud extracted in", Duration::from_secs(120));
+        let id = window(run.child.id());
+        let size = window_size(&id);
+        std::thread::sleep(Duration::from_millis(2000));
+        let whole = coloured_share(&shoot(&run.dir.join("whole.png")), size);
+        assert!(whole > 0.02, "the whole cloud is not drawn: {whole:.4}");
+        assert!(
+            !run.seen.iter().any(|l| l.contains("first points shown")),
+            "{:#?}",
+            run.seen
+        );
     }));
     run.stop();
     if let Err(panic) = result {
