@@ -22,6 +22,11 @@ window paints through the X DAMAGE extension (bench/xdriver.py):
 
 Usage: python bench/bench_window.py [--loudscape target/release/loudscape] [--vs OTHER_BINARY]
 With --vs, the other binary runs each case right after ours (same load), and both columns print.
+
+With --open SONG (made from data/real-music when missing, --open-seconds long): the time from
+starting `loudscape SONG` (fresh cache) to the first frame whose 3D view shows points, and to
+the log line that the whole cloud was extracted, --runs times (PYTHONPATH reaches the
+extractor: point it at the package to measure).
 The ~5 M-point song is extracted once from data/real-music (see --big) with loudscape-extract.
 """
 
@@ -423,6 +428,17 @@ def run_case(binary: Path, ply: Path, view: str, args, display: str, tag: str) -
 def make_big_song(out: Path, venv_bin: Path, seconds: float) -> None:
     """A ~5 M-point song: the real tracks of data/real-music, resampled to 44.1 kHz stereo and
     laid end to end until `seconds`, extracted with loudscape-extract (hop 256)."""
+    wav = out.with_suffix(".wav")
+    real_music_song(wav, seconds)
+    # The game tracks keep few high bins above the floor: a hop of 256 (four frames for each
+    # default one) brings 170 s to about 5 M points, a 3-minute pop song's size at defaults.
+    command = [str(venv_bin / "loudscape-extract"), "song", str(wav), "-o", str(out)]
+    subprocess.run(command + ["--hop", "256", "--quiet"], check=True)
+
+
+def real_music_song(out: Path, seconds: float) -> None:
+    """The real tracks of data/real-music, resampled to 44.1 kHz stereo and laid end to end
+    until `seconds`, written to `out` (WAV or FLAC, by its suffix)."""
     import numpy as np
     import soundfile as sf
     from scipy.signal import resample_poly
@@ -447,12 +463,115 @@ def make_big_song(out: Path, venv_bin: Path, seconds: float) -> None:
             break
     song = np.concatenate(parts)[: int(seconds * 44100)]
     out.parent.mkdir(parents=True, exist_ok=True)
-    wav = out.with_suffix(".wav")
-    sf.write(wav, song, 44100, subtype="PCM_16")
-    # The game tracks keep few high bins above the floor: a hop of 256 (four frames for each
-    # default one) brings 170 s to about 5 M points, a 3-minute pop song's size at defaults.
-    command = [str(venv_bin / "loudscape-extract"), "song", str(wav), "-o", str(out)]
-    subprocess.run(command + ["--hop", "256", "--quiet"], check=True)
+    sf.write(out, song, 44100, subtype="PCM_16")
+
+
+def coloured(image: bytes | None) -> int:
+    """Pixels of a grab (BGRX) strongly red or blue: the points (coloured by hp), where the
+    panels, the axes, the labels and the "Loading…" line are grey."""
+    if image is None:
+        return 0
+    pixels = memoryview(image)
+    return sum(1 for i in range(0, len(pixels), 16) if abs(pixels[i] - pixels[i + 2]) > 60)
+
+
+def open_case(binary: Path, audio: Path, args, display: str) -> tuple[float, float, str]:
+    """Opens `audio` (never extracted before: a fresh cache) in the window; returns the
+    seconds from the start of the process to the first frame that shows points, and to the
+    log line that the whole cloud was extracted, with the window's own lines about the first
+    points and the whole cloud that replaced them (none before points while extracting)."""
+    with tempfile.TemporaryDirectory(prefix="bench-open-") as home:
+        runtime = Path(home) / "runtime"
+        runtime.mkdir(mode=0o700)
+        env = dict(
+            os.environ,
+            DISPLAY=display,
+            HOME=home,
+            XDG_DATA_HOME=f"{home}/data",
+            XDG_CONFIG_HOME=f"{home}/config",
+            XDG_CACHE_HOME=f"{home}/cache",
+            XDG_RUNTIME_DIR=str(runtime),
+            LOUDSCAPE_CACHE_DIR=f"{home}/clouds",
+            LOUDSCAPE_EXTRACT=str(args.extractor.resolve()),
+        )
+        env.pop("WAYLAND_DISPLAY", None)
+        log_path = Path(home) / "log.txt"
+        log = open(log_path, "w")
+        start = time.monotonic()
+        proc = subprocess.Popen([str(binary), str(audio)], env=env, stdout=log, stderr=log)
+        first = full = None
+        said_fps: list[float] = []
+        try:
+            wid = find_window(display, proc, 60)
+            size_window(wid, env)
+            x = XDriver(display)
+            end = start + args.load_timeout
+            vx, vy, vw, vh = VIEW
+            if args.open_orbit:
+                x.watch(wid)
+            while time.monotonic() < end and full is None:
+                if first is None and coloured(x.grab(vx, vy, vw, vh * 6 // 10)) > 300:
+                    first = time.monotonic() - start
+                if "cloud extracted in" in log_path.read_text():
+                    full = time.monotonic() - start
+                elif first is not None and args.open_orbit:
+                    # Orbiting while the points come in: frames painted a second.
+                    fps = orbit(x, 2.0)
+                    said_fps.append(fps)
+                time.sleep(0.02)
+            if first is None and full is not None:
+                # Drawn in the frame after the cloud came.
+                while time.monotonic() < full + start + 10 and first is None:
+                    if coloured(x.grab(vx, vy, vw, vh * 6 // 10)) > 300:
+                        first = time.monotonic() - start
+                    time.sleep(0.02)
+            # The window's line about the whole cloud comes with the frame that shows it.
+            time.sleep(1.0)
+        finally:
+            proc.terminate()
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+            log.close()
+        said = " / ".join(
+            line.split(": ", 2)[-1]
+            for line in log_path.read_text().splitlines()
+            if "first points shown" in line or "the whole cloud (" in line
+        )
+    if said_fps:
+        said += f" / orbit while the points come in: {', '.join(f'{v:.1f}' for v in said_fps)} fps"
+    return (first or math.nan, full or math.nan, said)
+
+
+def open_song(args) -> int:
+    """The --open case: time to the first points and to the whole cloud, --runs times for each
+    binary, one after the other."""
+    audio = args.open
+    if not audio.is_file():
+        print(f"making {audio}: {args.open_seconds:.0f} s of data/real-music ...", flush=True)
+        real_music_song(audio, args.open_seconds)
+    binaries = [("ours", args.loudscape)] + ([("vs", args.vs)] if args.vs else [])
+    print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs", flush=True)
+    xvfb, display = start_xvfb()
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name, _ in binaries}
+    try:
+        for _ in range(args.runs):
+            for name, binary in binaries:
+                first, full, said = open_case(binary, audio, args, display)
+                times[name].append((first, full))
+                print(f"{name}: first points {first:.2f} s, whole cloud {full:.2f} s {said}")
+    finally:
+        xvfb.terminate()
+        xvfb.wait()
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+    print("\n| open a song | " + " | ".join(f"{n}: {b}" for n, b in binaries) + " |")
+    print("|---|" + "---|" * len(binaries))
+    for i, what in enumerate(["first points", "whole cloud"]):
+        row = [fmt([t[i] for t in times[n]], 2) + " s" for n, _ in binaries]
+        print(f"| {what} | " + " | ".join(row) + " |")
+    return 0
 
 
 def case_line(r: CaseResult) -> str:
@@ -505,11 +624,29 @@ def main() -> int:
         "--no-settle", dest="settle", action="store_false", help="skip settle and return"
     )
     parser.add_argument("--shots", type=Path, help="save screenshots of each case to this folder")
+    parser.add_argument(
+        "--open",
+        type=Path,
+        help="instead: time to the first points and to the whole cloud of this song, opened "
+        "in the window (made from data/real-music when missing)",
+    )
+    parser.add_argument("--open-seconds", type=float, default=180.0, help="length of that song")
+    parser.add_argument(
+        "--open-orbit",
+        action="store_true",
+        help="with --open: orbit the camera from the first points on, 2 s drags, and print the "
+        "frames painted a second (the whole cloud's time is then late by up to 2 s)",
+    )
+    parser.add_argument(
+        "--extractor", type=Path, default=Path(".venv/bin/loudscape-extract"), help="for --open"
+    )
     args = parser.parse_args()
     for binary in [args.loudscape] + ([args.vs] if args.vs else []):
         if not binary.is_file():
             print(f"{binary}: no such binary (cargo build --release)", file=sys.stderr)
             return 1
+    if args.open:
+        return open_song(args)
     files = [] if args.skip_demo else [("demo", args.demo)]
     if not args.no_big:
         if not args.big.is_file():

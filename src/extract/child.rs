@@ -1,6 +1,6 @@
 //! Running the extractor: `loudscape-extract song AUDIO -o OUT --progress json` as a child
-//! process. Its stdout carries one JSON object a line (`{"stage", "fraction"}`, then `{"done"}`
-//! or `{"error"}`); stderr is read as it comes, its tail kept for the reason when it fails
+//! process. Its stdout carries one JSON object a line (`{"stage", "fraction"}`, some with the
+//! `points` written so far (see [`super::preview`]), then `{"done"}` or `{"error"}`); stderr is read as it comes, its tail kept for the reason when it fails
 //! without a JSON error and its `warning:` lines passed on (an extractor that only prints its
 //! warnings is still heard). It writes into a private folder the caller removes, so a cancelled,
 //! failed or interrupted run (the child killed, with its process group) leaves nothing.
@@ -12,12 +12,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use super::lines::{LinedChild, Next, last_words};
+use super::preview::PointsSoFar;
 use super::{ExtractError, Progress, Settings};
 
 /// One line of the extractor's `--progress json` output.
 #[derive(Debug, PartialEq)]
 pub enum Line {
     Progress(Progress),
+    /// A progress line with the `points` member: the rows in the body file so far.
+    Points(Progress, PointsSoFar),
     Done,
     Error(String),
     /// Not a line of the protocol (ignored).
@@ -39,10 +42,17 @@ pub fn parse_line(text: &str) -> Line {
         value.get("stage").and_then(|v| v.as_str()),
         value.get("fraction").and_then(|v| v.as_f64()),
     ) {
-        (Some(stage), Some(fraction)) => Line::Progress(Progress {
-            stage: stage.to_string(),
-            fraction: (fraction as f32).clamp(0.0, 1.0),
-        }),
+        (Some(stage), Some(fraction)) => {
+            let progress = Progress {
+                stage: stage.to_string(),
+                fraction: (fraction as f32).clamp(0.0, 1.0),
+            };
+            // A `points` member the window cannot use leaves a plain progress line.
+            match PointsSoFar::parse(&value) {
+                Some(points) => Line::Points(progress, points),
+                None => Line::Progress(progress),
+            }
+        }
         _ => Line::Other,
     }
 }
@@ -83,7 +93,9 @@ fn said(warning: &str, audio: &Path) -> String {
 
 /// Runs `extractor` on `audio`, writing its cloud into `scratch` (a private folder: whatever the
 /// run leaves there goes with it); errors name the audio as `name`. Returns the cloud's path and
-/// the warnings the extractor printed on stderr (without the audio's path).
+/// the warnings the extractor printed on stderr (without the audio's path). `on_points` hears
+/// each line's points so far (the caller reads them: see [`super::preview::Preview`]).
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     extractor: &Path,
     audio: &Path,
@@ -92,6 +104,7 @@ pub fn run(
     settings: &Settings,
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
+    on_points: &mut dyn FnMut(&PointsSoFar),
 ) -> Result<(PathBuf, Vec<String>), ExtractError> {
     let partial = scratch.join("cloud.ply");
     let failed = |reason: String| ExtractError::Failed {
@@ -120,6 +133,10 @@ pub fn run(
         match child.next_line() {
             Next::Line(line) => match parse_line(&line) {
                 Line::Progress(progress) => on_progress(&progress),
+                Line::Points(progress, points) => {
+                    on_progress(&progress);
+                    on_points(&points);
+                }
                 Line::Done => done = true,
                 Line::Error(message) => error = Some(message),
                 Line::Other => {}
@@ -157,7 +174,60 @@ mod tests {
             Line::Error("x.wav: silent".into())
         );
         assert_eq!(parse_line("not json"), Line::Other);
+        assert_eq!(parse_line(r#"{"points": {"rows": 3}}"#), Line::Other);
         assert_eq!(parse_line(r#"{"stage": "x"}"#), Line::Other);
+    }
+
+    fn axes() -> serde_json::Value {
+        serde_json::json!({
+            "x": {"label": "time", "unit": "s", "min": 0.0, "max": 180.0},
+            "y": {"label": "level", "unit": "dB", "min": -80.0, "max": 0.0},
+            "z": {"label": "frequency", "unit": "Hz", "min": 0.0, "max": 22050.0, "scale": "linear"},
+            "scalar": {"label": "A-weighted level", "unit": "dB", "min": -90.0, "max": 0.0},
+            "hp": {"label": "harmonic-percussive ratio", "unit": "", "min": 0.0, "max": 1.0}
+        })
+    }
+
+    #[test]
+    fn a_points_line_parses_with_its_progress() {
+        let line = serde_json::json!({
+            "stage": "hpss", "fraction": 0.4, "message": "points",
+            "points": {"path": "/cache/.extract-1-0/.cloud.ply.points-77", "rows": 12345,
+                       "axes": axes(), "mode": "song", "freq_scale": "log"}
+        });
+        assert_eq!(
+            parse_line(&line.to_string()),
+            Line::Points(
+                Progress {
+                    stage: "hpss".into(),
+                    fraction: 0.4
+                },
+                PointsSoFar {
+                    path: "/cache/.extract-1-0/.cloud.ply.points-77".into(),
+                    rows: 12345,
+                    axes: axes(),
+                    freq_scale: "log".into(),
+                }
+            )
+        );
+    }
+
+    #[test]
+    fn a_points_member_the_window_cannot_use_leaves_the_progress() {
+        let progress = Line::Progress(Progress {
+            stage: "hpss".into(),
+            fraction: 0.5,
+        });
+        for points in [
+            serde_json::json!({"path": "/p", "rows": 1, "axes": axes(), "mode": "timeline"}),
+            serde_json::json!({"path": "/p", "rows": -1, "axes": axes(), "mode": "song"}),
+            serde_json::json!({"path": "/p", "rows": 1, "axes": [], "mode": "song"}),
+            serde_json::json!({"rows": 1, "axes": axes(), "mode": "song"}),
+            serde_json::json!("nothing"),
+        ] {
+            let line = serde_json::json!({"stage": "hpss", "fraction": 0.5, "points": points});
+            assert_eq!(parse_line(&line.to_string()), progress, "{points}");
+        }
     }
 
     #[test]

@@ -12,6 +12,7 @@ pub mod cache;
 pub mod child;
 pub mod lines;
 pub mod locate;
+pub mod preview;
 pub mod timeline;
 pub mod version;
 
@@ -23,6 +24,7 @@ use std::sync::atomic::AtomicBool;
 use thiserror::Error;
 
 use crate::data::cloud::{CloudError, PointCloud};
+pub use preview::PointsSoFar;
 pub use version::Extractor;
 
 /// The extraction settings that change the cloud; part of the cache key.
@@ -127,6 +129,18 @@ pub fn open_any(
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> Result<Opened, ExtractError> {
+    open_any_watching(path, settings, cancel, on_progress, &mut |_| {})
+}
+
+/// [`open_any`], with `on_points` hearing the points written so far while a song is
+/// extracted (see [`preview`]).
+pub fn open_any_watching(
+    path: &Path,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    on_progress: &mut dyn FnMut(&Progress),
+    on_points: &mut dyn FnMut(&PointsSoFar),
+) -> Result<Opened, ExtractError> {
     // Before anything opens it: a FIFO or a device would block or never end.
     crate::files::check_regular(path).map_err(|reason| ExtractError::Refused { reason })?;
     if !is_audio(path) {
@@ -135,7 +149,15 @@ pub fn open_any(
             extracted: None,
         });
     }
-    let song = cloud_for_audio(path, settings, cancel, on_progress)?;
+    let song = cloud_for_audio_watching(
+        path,
+        settings,
+        &cache::dir(),
+        || find_extractor(path),
+        cancel,
+        on_progress,
+        on_points,
+    )?;
     let mut cloud = song.cloud;
     // The song names the cloud (panel, messages, what the window remembers: reopened through
     // the cache), not the cache file's hash.
@@ -231,6 +253,20 @@ pub fn cloud_for_audio_with(
     cancel: &AtomicBool,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> Result<SongCloud, ExtractError> {
+    cloud_for_audio_watching(audio, settings, dir, find, cancel, on_progress, &mut |_| {})
+}
+
+/// [`cloud_for_audio_with`], with `on_points` hearing the points written so far while the song
+/// is extracted (see [`preview`]; a cached cloud has none).
+pub fn cloud_for_audio_watching(
+    audio: &Path,
+    settings: &Settings,
+    dir: &Path,
+    find: impl FnOnce() -> Result<Extractor, ExtractError>,
+    cancel: &AtomicBool,
+    on_progress: &mut dyn FnMut(&Progress),
+    on_points: &mut dyn FnMut(&PointsSoFar),
+) -> Result<SongCloud, ExtractError> {
     // The extractor gets the absolute path: it is recorded in the cloud for playback.
     let absolute = std::path::absolute(audio).unwrap_or_else(|_| audio.to_owned());
     on_progress(&Progress {
@@ -293,6 +329,7 @@ pub fn cloud_for_audio_with(
         settings,
         cancel,
         on_progress,
+        on_points,
     )?;
     let (cloud, sha256, bytes) =
         cache::load_fresh(&partial, &said).map_err(|reason| ExtractError::Failed {
@@ -337,6 +374,19 @@ pub fn open_reporting(
     verbose: bool,
     also: &mut dyn FnMut(&Progress),
 ) -> Result<PointCloud, ExtractError> {
+    open_reporting_watching(path, settings, cancel, verbose, also, &mut |_| {})
+}
+
+/// [`open_reporting`], with `on_points` hearing the points written so far while a song is
+/// extracted (the window shows them: see [`preview`]).
+pub fn open_reporting_watching(
+    path: &Path,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    verbose: bool,
+    also: &mut dyn FnMut(&Progress),
+    on_points: &mut dyn FnMut(&PointsSoFar),
+) -> Result<PointCloud, ExtractError> {
     let name = path.display().to_string();
     let start = std::time::Instant::now();
     let mut last_stage = String::new();
@@ -352,7 +402,7 @@ pub fn open_reporting(
             last_stage.clone_from(&progress.stage);
         }
     };
-    let opened = open_any(path, settings, cancel, &mut report)?;
+    let opened = open_any_watching(path, settings, cancel, &mut report, on_points)?;
     if let Some((ply, hit)) = opened.extracted.as_ref().filter(|_| verbose) {
         let how = if *hit { "from the cache" } else { "extracted" };
         let seconds = start.elapsed().as_secs_f32();

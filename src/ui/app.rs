@@ -195,11 +195,11 @@ impl eframe::App for LoudscapeApp {
             events.append(&mut raw_input.events);
             raw_input.events = events;
         }
-        // Scripted presses (tests), once the data is shown or nothing is loading.
-        // A compare's B loaded first too.
+        // Scripted presses (tests), once the data is shown (whole, not the points so far of a
+        // song being extracted) or nothing is loading. A compare's B loaded first too.
         let compare_ready = self.compare.as_ref().is_none_or(|c| c.receiver.is_none());
         if !self.scripted_presses.is_empty()
-            && (self.active().is_some() || self.loading.is_empty())
+            && ((self.active().is_some() && !self.previewing()) || self.loading.is_empty())
             && self.scripted_input_ready()
             && compare_ready
         {

@@ -92,7 +92,12 @@ impl LoudscapeApp {
         };
         let (origin, dir) = pick::cursor_ray(view, px);
         let mut hover = Hover::default();
-        match self.settings.view {
+        // The points of a song being extracted stand in for its surface and volume.
+        let shown_view = match self.active == Slot::Song && self.previewing() {
+            true => ViewKind::Points,
+            false => self.settings.view,
+        };
+        match shown_view {
             ViewKind::Points => {
                 let ppp_radius = 5.0;
                 if let Some(i) = shown_points.and_then(|points| {

@@ -127,7 +127,34 @@ impl LoudscapeApp {
                         ui.label("loading…");
                     }
                 }
+                if let Some(preview) = &loading.preview {
+                    // The song's points so far are on screen (`slots.rs`).
+                    let mut text = format!("{} points so far", points_text(preview.points));
+                    if self.settings.view != crate::render::scene::ViewKind::Points {
+                        text.push_str(", drawn as points until the whole cloud is in");
+                    }
+                    ui.label(RichText::new(text).small().weak());
+                }
             });
         }
+    }
+}
+
+/// A count of points as the status area says it: `950`, `12.3 k`, `4.56 M`.
+fn points_text(points: usize) -> String {
+    match points {
+        0..1_000 => points.to_string(),
+        1_000..1_000_000 => format!("{:.1} k", points as f64 / 1e3),
+        _ => format!("{:.2} M", points as f64 / 1e6),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn point_counts_read_short() {
+        assert_eq!(super::points_text(950), "950");
+        assert_eq!(super::points_text(12_345), "12.3 k");
+        assert_eq!(super::points_text(4_560_000), "4.56 M");
     }
 }

@@ -12,11 +12,13 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, channel};
+use std::time::Instant;
 
 use eframe::egui::{self, RichText};
 
 use crate::data::cloud::PointCloud;
-use crate::extract::{self, Progress, Settings};
+use crate::extract::preview::Preview;
+use crate::extract::{self, PointsSoFar, Progress, Settings};
 use crate::ui::state::LoudscapeApp;
 use crate::ui::state::loading::Shared;
 
@@ -43,16 +45,48 @@ pub(super) const AUDIO_EXTENSIONS: [&str; 9] = [
 ];
 
 /// Opens `path` as the window does: a cloud file, or audio extracted (or found in the cache).
-/// Progress goes to `shared` and, one line a stage, to stderr; errors name the file.
+/// Progress goes to `shared` and, one line a stage, to stderr; errors name the file. While a
+/// song is extracted its points so far go to `shared` too (`extract::preview`: read here, off
+/// the window's thread, handed on a few times a second); a failure to read them loses only
+/// them, said in one line.
 pub fn open_path(path: &Path, settings: &Settings, shared: &Shared) -> Result<PointCloud, String> {
     let mut report = |progress: &Progress| {
         if let Ok(mut slot) = shared.progress.lock() {
             *slot = Some(progress.clone());
         }
     };
+    // The path the extractor records, which the growing cloud names as its source too.
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+    let mut preview = Preview::new(&absolute, settings);
+    let mut on_points = |points: &PointsSoFar| {
+        if !shared.preview {
+            return;
+        }
+        match preview.hear(points, Instant::now()) {
+            Ok(Some(cloud)) => {
+                if let Ok(mut slot) = shared.partial.lock() {
+                    *slot = Some(cloud);
+                }
+            }
+            Ok(None) => {}
+            Err(reason) => eprintln!(
+                "loudscape: {}: the points cannot be shown while extracting ({}); the cloud \
+                 shows when the extraction ends",
+                path.display(),
+                crate::data::cloud::one_line(&reason)
+            ),
+        }
+    };
     // The window always tells stderr: there it is a log, not a script's input.
-    extract::open_reporting(path, settings, &shared.cancel, true, &mut report)
-        .map_err(|e| e.to_string())
+    extract::open_reporting_watching(
+        path,
+        settings,
+        &shared.cancel,
+        true,
+        &mut report,
+        &mut on_points,
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// The native Open dialog, built here (macOS wants dialogs made on the main thread) and awaited

@@ -13,14 +13,18 @@ use crate::data::cloud::PointCloud;
 use crate::render::scene::{ViewKind, world_from_data};
 use crate::ui::bridge::ViewResources;
 use crate::ui::labels;
-use crate::ui::state::loading::Loading;
+use crate::ui::state::loading::{Loading, PreviewShown};
 use crate::ui::state::{Loaded, LoudscapeApp, Slot};
 
 impl LoudscapeApp {
     pub(super) fn start_loading(&mut self, path: PathBuf) {
         let (sender, receiver) = channel();
         let thread_path = path.clone();
-        let shared = crate::ui::state::loading::Shared::default();
+        // A song extracted again keeps its old cloud on screen: no points while extracting.
+        let shared = crate::ui::state::loading::Shared {
+            preview: self.song.as_ref().is_none_or(|l| l.cloud.path != path),
+            ..Default::default()
+        };
         let thread_shared = shared.clone();
         // Audio is extracted with the side panel's settings (`extract_settings.rs`).
         let settings = self.open.extract.next.clone();
@@ -31,11 +35,7 @@ impl LoudscapeApp {
             let result = crate::ui::open::open_path(&thread_path, &settings, &thread_shared);
             let _ = sender.send(result);
         });
-        self.loading.push(Loading {
-            path,
-            receiver,
-            shared,
-        });
+        self.loading.push(Loading::new(path, receiver, shared));
     }
 
     pub(super) fn slot(&self, slot: Slot) -> Option<&Loaded> {
@@ -49,18 +49,20 @@ impl LoudscapeApp {
         self.slot(self.active)
     }
 
-    /// Moves finished loads into their slots and uploads them.
+    /// Moves finished loads into their slots and uploads them; shows the points so far of the
+    /// songs still being extracted.
     pub(super) fn poll_loading(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
         let mut finished = Vec::new();
         self.loading
-            .retain(|loading| match loading.receiver.try_recv() {
+            .retain_mut(|loading| match loading.receiver.try_recv() {
                 Ok(result) => {
-                    finished.push((loading.path.clone(), result));
+                    finished.push((loading.path.clone(), result, loading.preview.take()));
                     false
                 }
                 Err(std::sync::mpsc::TryRecvError::Empty) => true,
                 Err(std::sync::mpsc::TryRecvError::Disconnected) => {
-                    finished.push((loading.path.clone(), Err("the loader stopped".into())));
+                    let result = Err("the loader stopped".into());
+                    finished.push((loading.path.clone(), result, loading.preview.take()));
                     false
                 }
             });
@@ -70,7 +72,9 @@ impl LoudscapeApp {
         let Some(render_state) = frame.wgpu_render_state() else {
             return;
         };
-        for (path, result) in finished {
+        for (path, result, preview) in finished {
+            // The growing cloud of this song, if it is still the one in its slot.
+            let preview = preview.filter(|p| self.song.as_ref().is_some_and(|l| l.id == p.id));
             match result {
                 Ok(cloud) => {
                     self.opened(&path, &cloud.path);
@@ -84,9 +88,24 @@ impl LoudscapeApp {
                         let about = warning.path.as_deref().unwrap_or(&file);
                         self.messages.warn(format!("{about}: {}", warning.message));
                     }
-                    self.install(render_state, cloud);
+                    match preview {
+                        Some(shown) => {
+                            eprintln!(
+                                "loudscape: {}: the whole cloud ({} points) replaces the {} \
+                                 points shown while extracting",
+                                path.display(),
+                                cloud.points.len(),
+                                shown.points
+                            );
+                            self.install_as(render_state, cloud, Install::Grown);
+                        }
+                        None => self.install(render_state, cloud),
+                    }
                 }
                 Err(message) => {
+                    if let Some(shown) = preview {
+                        self.drop_preview(render_state, shown);
+                    }
                     if message.contains(&path.display().to_string()) {
                         self.messages.error(message);
                     } else {
@@ -96,14 +115,122 @@ impl LoudscapeApp {
                 }
             }
         }
+        self.show_previews(render_state);
+    }
+
+    /// The newest points so far of each song being extracted, in the Song slot: the first
+    /// ones replace what the slot showed (fitting the camera as any new cloud does: the axes
+    /// are the final cloud's), later ones only grow it. A song extracted again with new
+    /// settings keeps its old cloud on screen until the new one is whole.
+    fn show_previews(&mut self, render_state: &egui_wgpu::RenderState) {
+        for index in 0..self.loading.len() {
+            let loading = &self.loading[index];
+            let Some(cloud) = loading
+                .shared
+                .partial
+                .lock()
+                .ok()
+                .and_then(|mut p| p.take())
+            else {
+                continue;
+            };
+            let grown = loading.preview.as_ref().map(|p| p.id);
+            let shown = self.song.as_ref();
+            if let Some(id) = grown {
+                if shown.is_none_or(|l| l.id != id) {
+                    // Something else was opened over it: the whole cloud comes as any other.
+                    self.loading[index].preview = None;
+                    continue;
+                }
+            } else if shown.is_some_and(|l| l.cloud.path == cloud.path) {
+                continue;
+            }
+            let points = cloud.points.len();
+            let replaced = match grown {
+                Some(_) => None,
+                None => self
+                    .song
+                    .as_ref()
+                    .map(|l| (l.cloud.clone(), self.motion.camera())),
+            };
+            let how = if grown.is_some() {
+                Install::Grown
+            } else {
+                Install::New
+            };
+            self.install_as(render_state, cloud, how);
+            let id = self.next_id - 1;
+            let loading = &mut self.loading[index];
+            match &mut loading.preview {
+                Some(preview) => {
+                    preview.id = id;
+                    preview.points = points;
+                }
+                None => {
+                    eprintln!(
+                        "loudscape: {}: first points shown while extracting: {points} points, \
+                         {:.2} s after opening",
+                        loading.path.display(),
+                        loading.started.elapsed().as_secs_f32()
+                    );
+                    loading.preview = Some(PreviewShown {
+                        id,
+                        points,
+                        replaced,
+                    });
+                }
+            }
+        }
+    }
+
+    /// Takes the points of a failed or cancelled extraction off the screen, and shows again
+    /// what they replaced, with its camera.
+    fn drop_preview(&mut self, render_state: &egui_wgpu::RenderState, shown: PreviewShown) {
+        if let Some(old) = self.song.take() {
+            ViewResources::remove(render_state, old.id);
+        }
+        self.hover = None;
+        match shown.replaced {
+            Some((cloud, camera)) => {
+                self.install(render_state, Arc::unwrap_or_clone(cloud));
+                self.motion.restore(camera, 0);
+            }
+            None => {
+                if self.timeline.is_some() {
+                    self.motion.switch_slot(self.active, Slot::Timeline);
+                    self.active = Slot::Timeline;
+                }
+            }
+        }
+    }
+
+    /// Whether the Song slot shows the points of a song still being extracted.
+    pub(super) fn previewing(&self) -> bool {
+        self.song.as_ref().is_some_and(|l| {
+            self.loading
+                .iter()
+                .any(|loading| loading.preview.as_ref().is_some_and(|p| p.id == l.id))
+        })
     }
 
     pub(super) fn install(&mut self, render_state: &egui_wgpu::RenderState, cloud: PointCloud) {
+        self.install_as(render_state, cloud, Install::New);
+    }
+
+    /// Shows `cloud` in its slot. [`Install::Grown`] replaces the growing cloud of the same
+    /// song: the camera, the active slot and the audio stay as they are.
+    fn install_as(
+        &mut self,
+        render_state: &egui_wgpu::RenderState,
+        cloud: PointCloud,
+        how: Install,
+    ) {
         let slot = Slot::for_mode(cloud.meta.mode);
         let id = self.next_id;
         self.next_id += 1;
+        let mut same_audio = false;
         if let Some(old) = self.slot(slot) {
-            if old.cloud.path == cloud.path {
+            if how == Install::New && old.cloud.path == cloud.path {
                 // A re-extraction: the old cloud was shown until now.
                 eprintln!(
                     "loudscape: {}: the new cloud ({} points) replaces the one shown ({} points)",
@@ -112,6 +239,8 @@ impl LoudscapeApp {
                     old.cloud.points.len()
                 );
             }
+            let source = |c: &PointCloud| c.meta.source.as_ref().and_then(|s| s.open_path());
+            same_audio = source(&old.cloud).is_some() && source(&old.cloud) == source(&cloud);
             ViewResources::remove(render_state, old.id);
         }
         ViewResources::upload(render_state, id, &cloud);
@@ -132,14 +261,17 @@ impl LoudscapeApp {
             view_points_pending: None,
         };
         if slot == Slot::Song {
-            let remembered = self
-                .audio_for
-                .iter()
-                .find(|(cloud, _)| {
-                    std::path::absolute(&loaded.cloud.path).is_ok_and(|p| &p == cloud)
-                })
-                .map(|(_, audio)| audio.clone());
-            self.audio.load_for(&loaded.cloud, remembered);
+            // The growing cloud of a song already loaded its audio (the same source).
+            if !(how == Install::Grown && same_audio) {
+                let remembered = self
+                    .audio_for
+                    .iter()
+                    .find(|(cloud, _)| {
+                        std::path::absolute(&loaded.cloud.path).is_ok_and(|p| &p == cloud)
+                    })
+                    .map(|(_, audio)| audio.clone());
+                self.audio.load_for(&loaded.cloud, remembered);
+            }
         } else {
             self.selected_song = None;
             self.hovered_song = None;
@@ -148,6 +280,10 @@ impl LoudscapeApp {
         match slot {
             Slot::Song => self.song = Some(loaded),
             Slot::Timeline => self.timeline = Some(loaded),
+        }
+        if how == Install::Grown {
+            // Fitted once, to the axes the growing cloud already had.
+            return;
         }
         // A new cloud in this slot starts from its own fitted camera, not another slot's.
         self.motion.cloud_installed(self.active, slot);
@@ -168,6 +304,7 @@ impl LoudscapeApp {
             return;
         };
         let voxels = self.settings.voxels;
+        let previewing = self.active == Slot::Song && self.previewing();
         let slot = match self.active {
             Slot::Song => self.song.as_mut(),
             Slot::Timeline => self.timeline.as_mut(),
@@ -175,6 +312,15 @@ impl LoudscapeApp {
         let Some(loaded) = slot else {
             return;
         };
+        if previewing {
+            // The points so far stand in (the scene draws points until a grid is built): a
+            // grid blocks the window while it is built, and one of part of the song would
+            // change with every new block; the whole cloud's comes once it is in.
+            if std::mem::take(&mut self.busy_shown) {
+                self.busy = None;
+            }
+            return;
+        }
         // Building a grid blocks the window for a while on slow devices: say so first, and
         // build on the next frame, once the notice is on screen.
         let needs_build =
@@ -202,4 +348,15 @@ impl LoudscapeApp {
             self.messages.error(message);
         }
     }
+}
+
+/// How [`LoudscapeApp::install_as`] shows a cloud.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Install {
+    /// A cloud new to its slot: the camera is fitted (or the remembered one kept), its audio
+    /// loaded.
+    New,
+    /// More of the song the slot shows while it is extracted, or its whole cloud at the end:
+    /// the camera and the audio stay.
+    Grown,
 }

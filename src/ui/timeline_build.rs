@@ -164,11 +164,7 @@ impl LoudscapeApp {
                 });
             let _ = sender.send(result);
         });
-        self.loading.push(Loading {
-            path: label,
-            receiver,
-            shared,
-        });
+        self.loading.push(Loading::new(label, receiver, shared));
     }
 
     /// The timeline build's rows and dialog; called every frame from the Open row.

@@ -21,6 +21,7 @@ impl LoudscapeApp {
         let waiting = self.timeline_listing()
             || !self.scripted_presses.is_empty()
             || self.reextracting()
+            || self.previewing()
             || self.busy.is_some()
             || self.video_exporting()
             || self.compare.as_ref().is_some_and(|c| c.receiver.is_some());

@@ -39,6 +39,7 @@ mod window_messages;
 mod window_open_audio;
 mod window_open_music;
 mod window_responsive;
+mod window_stream;
 mod window_strip;
 mod window_timeline_build;
 mod window_video_export;

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 #[test]
 fn window_opens_and_shows_the_demo() {
+    let _screen = common::screen();
     common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let shot = common::output_dir().join("window_demo.png");

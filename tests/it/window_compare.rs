@@ -43,6 +43,7 @@ fn switch(window: &str, lines: &Receiver<String>, timeout: Duration) -> Option<(
 
 #[test]
 fn switching_a_and_b_keeps_the_playback_position() {
+    let _screen = common::screen();
     assert!(
         std::env::var_os("DISPLAY").is_some(),
         "this test needs a display: run it under xvfb-run"

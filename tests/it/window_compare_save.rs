@@ -45,6 +45,7 @@ fn save(dir: &Path, press: &[&str]) -> image::RgbaImage {
 
 #[test]
 fn save_png_while_comparing_saves_what_the_view_shows() {
+    let _screen = common::screen();
     assert!(
         std::env::var_os("DISPLAY").is_some(),
         "this test needs a display: run it under xvfb-run"
@@ -91,6 +92,7 @@ fn save_png_while_comparing_saves_what_the_view_shows() {
 /// colours), not the points (the song's saturated reds), and each half has its colour key.
 #[test]
 fn side_by_side_draws_the_selected_view_in_both_halves() {
+    let _screen = common::screen();
     assert!(
         std::env::var_os("DISPLAY").is_some(),
         "this test needs a display: run it under xvfb-run"

@@ -26,6 +26,7 @@ fn shot(preset: &str) -> (image::RgbaImage, String) {
 
 #[test]
 fn the_timeline_as_heard_moves_the_songs() {
+    let _screen = common::screen();
     common::assert_display();
     let (plain, _) = shot("none");
     let (heard, stderr) = shot("spotify");
@@ -45,6 +46,7 @@ fn the_timeline_as_heard_moves_the_songs() {
 
 #[test]
 fn an_unknown_preset_is_one_clear_line() {
+    let _screen = common::screen();
     let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
         .args(["--normalize", "tidal", "data/demo_timeline.ply"])
         .output()

@@ -63,6 +63,7 @@ fn loudscape_warning() -> [u8; 4] {
 
 #[test]
 fn the_no_dialog_warning_shows_under_the_view_at_once() {
+    let _screen = common::screen();
     assert_display();
     let dir = common::output_dir();
     let (quiet, _) = screenshot(&dir.join("window_messages_none.png"), &[]);
@@ -80,6 +81,7 @@ fn the_no_dialog_warning_shows_under_the_view_at_once() {
 
 #[test]
 fn closing_the_window_from_outside_exits_cleanly() {
+    let _screen = common::screen();
     assert_display();
     let home = common::output_dir().join("window_close_home");
     let _ = std::fs::remove_dir_all(&home);
@@ -115,6 +117,7 @@ fn closing_the_window_from_outside_exits_cleanly() {
 /// the slider hid under the slider's tooltip).
 #[test]
 fn no_surface_is_said_in_the_view() {
+    let _screen = common::screen();
     assert_display();
     let shot = common::output_dir().join("window_no_surface.png");
     let run = |iso: &str| {
@@ -154,6 +157,7 @@ fn no_surface_is_said_in_the_view() {
 /// offset) are in the status area under the view as soon as the cloud is shown.
 #[test]
 fn a_clouds_warnings_show_under_the_view() {
+    let _screen = common::screen();
     assert_display();
     let dir = common::output_dir();
     let (quiet, _) = screenshot(&dir.join("window_messages_clean_cloud.png"), &[]);

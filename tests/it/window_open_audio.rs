@@ -33,6 +33,7 @@ fn drawn_share(shot: &Path) -> f64 {
 
 #[test]
 fn window_opens_a_song_and_reopens_it_from_the_cache() {
+    let _screen = common::screen();
     common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let extractor = repo.join(".venv/bin/loudscape-extract");
@@ -87,6 +88,7 @@ fn window_opens_a_song_and_reopens_it_from_the_cache() {
 
 #[test]
 fn a_new_floor_re_extracts_keeping_the_old_cloud_until_the_new_one_is_ready() {
+    let _screen = common::screen();
     common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let extractor = repo.join(".venv/bin/loudscape-extract");

@@ -54,6 +54,7 @@ fn middle_difference(a: &Path, b: &Path) -> f64 {
 
 #[test]
 fn question_mark_shows_the_shortcuts_overlay() {
+    let _screen = common::screen();
     common::assert_display();
     let dir = fresh_dir("window_shortcuts");
     let song = repo().join("data/demo_song.ply");
@@ -70,6 +71,7 @@ fn question_mark_shows_the_shortcuts_overlay() {
 
 #[test]
 fn ctrl_s_without_a_dialog_saves_in_the_current_folder() {
+    let _screen = common::screen();
     common::assert_display();
     let dir = fresh_dir("window_save_fallback");
     let song = repo().join("data/demo_song.ply");
@@ -93,6 +95,7 @@ fn ctrl_s_without_a_dialog_saves_in_the_current_folder() {
 
 #[test]
 fn the_recent_list_survives_a_restart_and_shows_missing_files() {
+    let _screen = common::screen();
     common::assert_display();
     let dir = fresh_dir("window_recent");
     let state = dir.join("state");

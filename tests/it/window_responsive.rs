@@ -20,6 +20,7 @@ fn value(line: &str, key: &str) -> f64 {
 
 #[test]
 fn isovalue_sweep_keeps_the_window_drawing_and_ends_on_the_last_value() {
+    let _screen = common::screen();
     assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let shot = common::output_dir().join("window_iso_sweep.png");
@@ -80,6 +81,7 @@ fn isovalue_sweep_keeps_the_window_drawing_and_ends_on_the_last_value() {
 
 #[test]
 fn opening_the_window_prints_nothing_on_stderr() {
+    let _screen = common::screen();
     assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     // A normal launch (not a scripted screenshot run, which opens no audio device), with its

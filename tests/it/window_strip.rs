@@ -31,6 +31,7 @@ fn count_colour(
 
 #[test]
 fn song_mode_shows_the_loudness_strip_under_the_view() {
+    let _screen = common::screen();
     common::assert_display();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let demo = cloud::load(&repo.join("data/demo_song.ply")).expect("demo song");

@@ -77,6 +77,7 @@ fn window(dir: &Path, songs: &[&Path], shot: &Path, press: &[&str]) -> String {
 
 #[test]
 fn several_songs_become_a_timeline_asking_for_the_years_their_tags_lack() {
+    let _screen = common::screen();
     common::assert_display();
     let dir = common::output_dir().join("window_timeline_build");
     let _ = std::fs::remove_dir_all(&dir);
@@ -142,6 +143,7 @@ fn several_songs_become_a_timeline_asking_for_the_years_their_tags_lack() {
 /// without a year builds nothing (leaving songs out is a button's choice, never Enter's).
 #[test]
 fn the_years_dialog_keeps_fast_typing_in_its_fields_and_enter_leaves_no_song_out() {
+    let _screen = common::screen();
     common::assert_display();
     let dir = common::output_dir().join("window_years_typing");
     let _ = std::fs::remove_dir_all(&dir);

@@ -27,6 +27,7 @@ fn run_window(dir: &Path, press: &[String]) -> String {
 
 #[test]
 fn export_video_writes_h264_and_aac_of_the_view_s_size() {
+    let _screen = common::screen();
     assert_display();
     let dir = fresh_dir("window_video_export");
     let video = dir.join("demo export.mp4");
@@ -73,6 +74,7 @@ fn export_video_writes_h264_and_aac_of_the_view_s_size() {
 
 #[test]
 fn a_cancelled_export_leaves_no_file() {
+    let _screen = common::screen();
     assert_display();
     let dir = fresh_dir("window_video_cancel");
     let video = dir.join("cancelled.mp4");
@@ -93,6 +95,7 @@ fn a_cancelled_export_leaves_no_file() {
 
 #[test]
 fn closing_the_window_while_exporting_stops_the_export_and_leaves_no_file() {
+    let _screen = common::screen();
     assert_display();
     let dir = fresh_dir("window_video_close");
     let video = dir.join("closed.mp4");

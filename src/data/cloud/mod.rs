@@ -408,6 +408,13 @@ pub fn load(path: &Path) -> Result<PointCloud, CloudError> {
     load_from_reader(file, path, len)
 }
 
+/// The metadata object `value` read as a file's `loudscape-meta` would be (the same checks);
+/// `path` names it in errors. For clouds made in memory, such as the points of a song shown
+/// while it is extracted (`crate::extract::preview`).
+pub fn meta_from_value(value: &Value, path: &Path) -> Result<CloudMeta, CloudError> {
+    parse_meta(&value.to_string(), 0, path)
+}
+
 /// Loads from bytes in memory; `path` is only used in messages and [`PointCloud::path`].
 pub fn load_from_bytes(bytes: &[u8], path: &Path) -> Result<PointCloud, CloudError> {
     load_from_reader(bytes, path, Some(bytes.len() as u64))

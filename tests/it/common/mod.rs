@@ -138,6 +138,18 @@ pub fn assert_display() {
     );
 }
 
+/// One window test on the screen at a time: the window tests share one process and one
+/// display, look at the screen and move the pointer and the keyboard focus, and windows opened
+/// together overlap (there is no window manager). Every window test holds this while its
+/// window is open; the GPU and command tests run beside them. A test that failed holding it
+/// leaves it usable.
+pub fn screen() -> std::sync::MutexGuard<'static, ()> {
+    static SCREEN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    SCREEN
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 /// The X window id of `child`'s own window (the other tests' windows are named alike), once it
 /// is mapped; `None` if the process ends or no window appears within 90 s.
 pub fn wait_for_window(child: &mut Child) -> Option<String> {
