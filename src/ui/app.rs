@@ -324,7 +324,7 @@ impl eframe::App for LoudscapeApp {
             if let Some(song) = &self.song {
                 self.strip.sync(song.id, &song.cloud);
             }
-            if self.strip.has_curves() {
+            if self.strip.has_curves() && shows_strip(ctx.content_rect().height()) {
                 let (strip, audio) = (&self.strip, &mut self.audio);
                 egui::Panel::bottom("loudness_strip")
                     .frame(crate::ui::style::panel_frame(ui.style()))
@@ -389,9 +389,34 @@ pub(super) fn side_panel_width(window_width: f32) -> f32 {
     (window_width * 0.4).clamp(180.0, SIDE_PANEL_WIDTH)
 }
 
+/// Windows shorter than this leave the loudness strip out: at 500x400 the strip, the transport
+/// bar and the status area took all but 30 points of the height and the 3D view showed nothing.
+const STRIP_MIN_WINDOW_HEIGHT: f32 = 560.0;
+
+/// Whether a window `window_height` points high shows the loudness strip under the view.
+pub(super) fn shows_strip(window_height: f32) -> bool {
+    window_height >= STRIP_MIN_WINDOW_HEIGHT
+}
+
+/// The status area's most height in a window `window_height` points high (it scrolls past it):
+/// 110 points, a fifth of a short window.
+pub(super) fn status_max_height(window_height: f32) -> f32 {
+    (window_height * 0.2).clamp(40.0, 110.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_short_window_keeps_most_of_its_height_for_the_view() {
+        assert!(shows_strip(800.0) && shows_strip(600.0));
+        assert!(!shows_strip(400.0), "no strip at 500x400");
+        assert_eq!(status_max_height(1000.0), 110.0);
+        assert!(status_max_height(400.0) <= 80.0);
+        // What is left at 500x400 (transport ~45, status at most 80): over half the height.
+        assert!(400.0 - 45.0 - status_max_height(400.0) > 200.0);
+    }
 
     #[test]
     fn the_side_panel_leaves_a_small_window_to_the_view() {

@@ -60,8 +60,9 @@ impl LoudscapeApp {
                     .map(|(i, m)| (i, m.kind, m.text.clone()))
                     .collect();
                 let several = shown.len() > 1;
+                let window_height = ui.ctx().content_rect().height();
                 egui::ScrollArea::vertical()
-                    .max_height(110.0)
+                    .max_height(crate::ui::app::status_max_height(window_height))
                     .stick_to_bottom(true)
                     .show(ui, |ui| {
                         for (index, kind, text) in shown {
