@@ -77,6 +77,11 @@ pub fn draw(image: &mut image::RgbaImage, shapes: &[Shape], pixels_per_point: f3
         ..RasterizerSettings::default()
     };
     ctx.render_with(target, &mut Resources::new(), settings);
+    // Source-over onto an opaque pixel is opaque, but the rasterizer's 8-bit arithmetic can
+    // round an edge pixel's alpha to 254 (a notebook's picture had translucent text edges).
+    for pixel in image.pixels_mut() {
+        pixel[3] = 255;
+    }
 }
 
 fn draw_text(ctx: &mut RenderContext, text: &Text, ppp: f64) {
@@ -155,5 +160,17 @@ mod tests {
         draw(&mut big, &a.shapes, 2.0);
         assert_eq!(big.get_pixel(30, 30).0, [255, 0, 0, 255]);
         assert_eq!(big.get_pixel(19, 30).0, [0, 0, 80, 255]);
+        // The picture stays opaque, text edges and translucent fills included (a label's plate
+        // over the dark background left alpha 254 where the rasterizer rounded).
+        let mut plated = image::RgbaImage::from_pixel(40, 20, image::Rgba([14, 16, 20, 255]));
+        let mut plate = Annotation::default();
+        plate.fill(
+            Rect::from_min_size([2.3, 2.7], [30.0, 12.0]),
+            3.0,
+            crate::annotate::axes::LABEL_PLATE,
+        );
+        draw(&mut plated, &plate.shapes, 1.0);
+        let mut all = image.pixels().chain(big.pixels()).chain(plated.pixels());
+        assert!(all.all(|p| p[3] == 255));
     }
 }
