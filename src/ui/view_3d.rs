@@ -211,8 +211,9 @@ impl LoudscapeApp {
             );
             return;
         };
-        // The same labels and legend as saved pictures carry (name, colour key).
-        let legend = crate::ui::legends::picture_legend(&loaded.cloud, &self.settings);
+        // The same labels and legend as saved pictures carry (name, colour key): those of the
+        // points while they stand in for a surface or a volume (a song still extracted).
+        let legend = shown_legend(&loaded.cloud, &self.settings, self.previewing());
         let labels = self.settings.show_box.then_some(&loaded.labels);
         crate::ui::legends::paint_with_labels(painter, rect, view, labels, &legend);
         // While the camera moves the read-out would describe where the cursor was.
@@ -240,6 +241,23 @@ impl LoudscapeApp {
             busy_badge(painter, rect, &format!("refining points… {percent:.0} %"));
         }
     }
+}
+
+/// The legend of what the view draws: the points' while a song's points stand in for its
+/// surface or volume (`previewing`: it is still extracted, no grid is built meanwhile).
+fn shown_legend(
+    cloud: &crate::data::cloud::PointCloud,
+    settings: &crate::render::scene::RenderSettings,
+    previewing: bool,
+) -> crate::annotate::legend::PictureLegend {
+    if settings.view == ViewKind::Points || !previewing {
+        return crate::ui::legends::picture_legend(cloud, settings);
+    }
+    let mut points = settings.clone();
+    points.view = ViewKind::Points;
+    let mut legend = crate::ui::legends::picture_legend(cloud, &points);
+    legend.detail = "points until the whole song is in".into();
+    legend
 }
 
 /// A spinner and `text` in the bottom-left corner of the 3D view, over a dark plate.
@@ -284,4 +302,32 @@ fn busy_badge(painter: &egui::Painter, rect: egui::Rect, text: &str) {
         galley,
         Color32::from_gray(220),
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::cloud::{DataMode, PointCloud};
+    use crate::render::scene::RenderSettings;
+
+    #[test]
+    fn points_standing_in_for_a_surface_are_named_as_points() {
+        let cloud = PointCloud::synthetic(
+            crate::data::synthetic::synthetic_song(1_000, 3),
+            DataMode::Song,
+        );
+        let surface = RenderSettings {
+            view: ViewKind::Surface,
+            ..Default::default()
+        };
+        let standing_in = shown_legend(&cloud, &surface, true);
+        let points = shown_legend(&cloud, &RenderSettings::default(), true);
+        assert_eq!(standing_in.key, points.key, "the points' colour key");
+        assert_eq!(standing_in.detail, "points until the whole song is in");
+        let built = shown_legend(&cloud, &surface, false);
+        assert_ne!(
+            built.key, points.key,
+            "the surface's own key once it is built"
+        );
+    }
 }
