@@ -342,21 +342,28 @@ def shoot(args, display: str, name: str) -> None:
         )
 
 
+def private_env(home: str, display: str, **extra: str) -> dict:
+    """The environment of a window run in its own home (no remembered state) on `display`."""
+    runtime = Path(home) / "runtime"
+    runtime.mkdir(mode=0o700)
+    env = dict(
+        os.environ,
+        DISPLAY=display,
+        HOME=home,
+        XDG_DATA_HOME=f"{home}/data",
+        XDG_CONFIG_HOME=f"{home}/config",
+        XDG_CACHE_HOME=f"{home}/cache",
+        XDG_RUNTIME_DIR=str(runtime),
+        **extra,
+    )
+    env.pop("WAYLAND_DISPLAY", None)
+    return env
+
+
 def run_case(binary: Path, ply: Path, view: str, args, display: str, tag: str) -> CaseResult:
     result = CaseResult()
     with tempfile.TemporaryDirectory(prefix="bench-window-") as home:
-        runtime = Path(home) / "runtime"
-        runtime.mkdir(mode=0o700)
-        env = dict(
-            os.environ,
-            DISPLAY=display,
-            HOME=home,
-            XDG_DATA_HOME=f"{home}/data",
-            XDG_CONFIG_HOME=f"{home}/config",
-            XDG_CACHE_HOME=f"{home}/cache",
-            XDG_RUNTIME_DIR=str(runtime),
-        )
-        env.pop("WAYLAND_DISPLAY", None)
+        env = private_env(home, display)
         log = open(Path(home) / "log.txt", "w")
         proc = subprocess.Popen(
             [str(binary), str(ply), "--view", view], env=env, stdout=log, stderr=log
@@ -481,20 +488,12 @@ def open_case(binary: Path, audio: Path, args, display: str) -> tuple[float, flo
     log line that the whole cloud was extracted, with the window's own lines about the first
     points and the whole cloud that replaced them (none before points while extracting)."""
     with tempfile.TemporaryDirectory(prefix="bench-open-") as home:
-        runtime = Path(home) / "runtime"
-        runtime.mkdir(mode=0o700)
-        env = dict(
-            os.environ,
-            DISPLAY=display,
-            HOME=home,
-            XDG_DATA_HOME=f"{home}/data",
-            XDG_CONFIG_HOME=f"{home}/config",
-            XDG_CACHE_HOME=f"{home}/cache",
-            XDG_RUNTIME_DIR=str(runtime),
+        env = private_env(
+            home,
+            display,
             LOUDSCAPE_CACHE_DIR=f"{home}/clouds",
             LOUDSCAPE_EXTRACT=str(args.extractor.resolve()),
         )
-        env.pop("WAYLAND_DISPLAY", None)
         log_path = Path(home) / "log.txt"
         log = open(log_path, "w")
         start = time.monotonic()

@@ -398,12 +398,6 @@ pub(super) fn shows_strip(window_height: f32) -> bool {
     window_height >= STRIP_MIN_WINDOW_HEIGHT
 }
 
-/// The status area's most height in a window `window_height` points high (it scrolls past it):
-/// 110 points, a fifth of a short window.
-pub(super) fn status_max_height(window_height: f32) -> f32 {
-    (window_height * 0.2).clamp(40.0, 110.0)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -412,6 +406,7 @@ mod tests {
     fn a_short_window_keeps_most_of_its_height_for_the_view() {
         assert!(shows_strip(800.0) && shows_strip(600.0));
         assert!(!shows_strip(400.0), "no strip at 500x400");
+        use crate::ui::messages::status_max_height;
         assert_eq!(status_max_height(1000.0), 110.0);
         assert!(status_max_height(400.0) <= 80.0);
         // What is left at 500x400 (transport ~45, status at most 80): over half the height.

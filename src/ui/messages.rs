@@ -62,7 +62,7 @@ impl LoudscapeApp {
                 let several = shown.len() > 1;
                 let window_height = ui.ctx().content_rect().height();
                 egui::ScrollArea::vertical()
-                    .max_height(crate::ui::app::status_max_height(window_height))
+                    .max_height(status_max_height(window_height))
                     .stick_to_bottom(true)
                     .show(ui, |ui| {
                         for (index, kind, text) in shown {
@@ -148,6 +148,12 @@ fn points_text(points: usize) -> String {
         1_000..1_000_000 => format!("{:.1} k", points as f64 / 1e3),
         _ => format!("{:.2} M", points as f64 / 1e6),
     }
+}
+
+/// The status area's most height in a window `window_height` points high (it scrolls past it):
+/// 110 points, a fifth of a short window.
+pub(super) fn status_max_height(window_height: f32) -> f32 {
+    (window_height * 0.2).clamp(40.0, 110.0)
 }
 
 #[cfg(test)]

@@ -127,14 +127,16 @@ impl Refine {
             .then(|| self.next as f32 / self.total as f32)
     }
 
-    /// Whether the points target holds (or is filling) the points of `key`.
-    fn holds(&self, key: &RenderKey, total: u64) -> bool {
-        self.key.as_ref() == Some(&points_key(key)) && self.total == total
+    /// Whether the points target holds (or is filling) the points of `points` (a
+    /// [`points_key`]).
+    fn holds(&self, points: &RenderKey, total: u64) -> bool {
+        self.key.as_ref() == Some(points) && self.total == total
     }
 
-    /// The points target now holds all `total` points of `key` (a kept picture put back).
-    fn adopt(&mut self, key: &RenderKey, total: u64) {
-        self.key = Some(points_key(key));
+    /// The points target now holds all `total` points of `points` (a [`points_key`]: a kept
+    /// picture put back).
+    fn adopt(&mut self, points: RenderKey, total: u64) {
+        self.key = Some(points);
         self.next = total;
         self.total = total;
         self.last_slice = None;
@@ -210,18 +212,18 @@ impl ProgressivePoints {
             self.target = None;
             self.refine.reset();
         }
-        if self.target.is_some() && self.refine.holds(key, total) {
+        let wanted = points_key(key);
+        if self.target.is_some() && self.refine.holds(&wanted, total) {
             return;
         }
         self.keep_current();
-        let wanted = points_key(key);
         if let Some(i) = self
             .kept
             .iter()
             .position(|k| k.key == wanted && k.total == total)
         {
             self.target = Some(self.kept.remove(i).target);
-            self.refine.adopt(key, total);
+            self.refine.adopt(wanted, total);
             return;
         }
         if self.target.is_none() {
