@@ -20,11 +20,11 @@ beside it (``<name>-songs.csv``) has one row per song.
 
 from __future__ import annotations
 
-import csv
 import os
 
 import numpy as np
 
+from loudscape_extract.csv_table import write_csv
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.format import METRIC_KEYS
 from loudscape_extract.messages import shorten
@@ -213,23 +213,6 @@ def songs_csv_path(csv_path: str) -> str:
     return f"{stem}-songs{extension or '.csv'}"
 
 
-def _write_csv(path, columns, rows):
-    """One CSV table, written atomically."""
-    with (
-        atomic_output(path) as temporary,
-        open(temporary, "w", newline="", encoding="utf-8") as handle,
-    ):
-        writer = csv.DictWriter(handle, fieldnames=columns)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow(
-                {
-                    k: "" if v is None else (round(v, 4) if isinstance(v, float) else v)
-                    for k, v in row.items()
-                }
-            )
-
-
 def write_report(
     path: str, output: str, *, csv_path: str | None = None, normalize: str = "none"
 ) -> list[dict]:
@@ -268,8 +251,8 @@ def write_report(
     with atomic_output(output) as temporary:
         _plot(rows, dated, temporary, title=os.path.basename(path), normalize=normalize)
     if csv_path:
-        _write_csv(csv_path, REPORT_COLUMNS, rows)
-        _write_csv(
+        write_csv(csv_path, REPORT_COLUMNS, rows)
+        write_csv(
             songs_csv_path(csv_path),
             SONG_COLUMNS,
             per_song({"songs": songs}, normalize=normalize),
