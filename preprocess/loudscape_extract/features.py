@@ -26,7 +26,12 @@ from loudscape_extract.dynamics import (
 )
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.hpss import HPSS_KERNEL, HPSS_MARGIN, HPSS_POWER, hp_ratio, hpss_masks
-from loudscape_extract.loudness import sample_peak_dbfs, segment_energy, true_peak_dbtp
+from loudscape_extract.loudness import (
+    sample_peak_dbfs,
+    segment_energy,
+    true_peak_dbtp,
+    window_maxima,
+)
 from loudscape_extract.measures import (
     FrameFeatures,
     TrackDescription,
@@ -265,6 +270,7 @@ def track_features(
         crest_db=frames.crest_db,
         dc=dc,
         dr_db=dr_meter(clean, sample_rate=audio.sample_rate),
+        window_maxima=window_maxima(clean, sample_rate=audio.sample_rate),
     )
     return TrackFeatures(
         path=audio.path,

@@ -1,5 +1,6 @@
 """Whole-track loudness metrics: BS.1770-4 integrated loudness, EBU Tech 3342 loudness range,
-sample peak and 4x-oversampled true peak (BS.1770-4 Annex 2).
+the maximum momentary and short-term loudness at any window position (EBU Tech 3341), sample
+peak and 4x-oversampled true peak (BS.1770-4 Annex 2).
 
 All functions take the original channels at the original sample rate.
 """
@@ -16,7 +17,10 @@ from loudscape_extract.errors import ExtractError
 
 __all__ = [
     "ABSOLUTE_GATE_LUFS",
+    "MOMENTARY_S",
+    "SHORT_TERM_S",
     "TRUE_PEAK_OVERSAMPLING",
+    "WindowMaxima",
     "block_loudness",
     "channel_gains",
     "integrated_loudness",
@@ -31,10 +35,15 @@ __all__ = [
     "short_term_loudness",
     "valid_interpolated_samples",
     "true_peak_dbtp",
+    "weighted_power",
+    "window_maxima",
 ]
 
 ABSOLUTE_GATE_LUFS = -70.0
 TRUE_PEAK_OVERSAMPLING = 4
+#: Window lengths of momentary and short-term loudness, seconds (BS.1770-4, EBU Tech 3341).
+MOMENTARY_S = 0.4
+SHORT_TERM_S = 3.0
 _SEGMENT_S = 0.1  # blocks are whole numbers of 100 ms segments (75 % overlap, 10 Hz rate)
 _TRUE_PEAK_TAPS_PER_PHASE = 24
 _TRUE_PEAK_BLOCK = 2048
@@ -337,6 +346,124 @@ def true_peak_dbtp(
     return 20.0 * math.log10(best) if best > 0 else None
 
 
+def weighted_power(filtered: np.ndarray, gains: np.ndarray) -> np.ndarray:
+    """Channel-weighted sum of squares per sample, ``sum_i G_i y_i[n]^2`` (float64).
+
+    Parameters
+    ----------
+    filtered : np.ndarray [shape=(n_used, n_samples)]
+        K-weighted channels with a non-zero weight, in the order of ``gains``.
+    gains : np.ndarray [shape=(n_used,)]
+
+    Returns
+    -------
+    power : np.ndarray [shape=(n_samples,)]
+    """
+    power = np.zeros(filtered.shape[-1])
+    for row, gain in enumerate(gains):
+        power += gain * np.square(filtered[row], dtype=np.float64)
+    return power
+
+
+class WindowMaxima:
+    """The loudest momentary (400 ms) and short-term (3 s) window at any sample position.
+
+    A meter that reads the windows every 100 ms misses a short burst's maximum by up to
+    0.5 LU (EBU Tech 3341 case 13: a 400 ms tone after ``i * 20`` ms of silence); here every
+    window of ``round(0.4 fs)`` (and ``round(3 fs)``) consecutive samples counts, one sample
+    apart, from a running sum of :func:`weighted_power`. Fed block by block (any block
+    sizes), it keeps only the last window's samples; the result does not depend on the blocks.
+
+    Parameters
+    ----------
+    sample_rate : float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rate = 8000
+    >>> power = np.zeros(rate * 4)
+    >>> power[12345 : 12345 + 3200] = 1e-3  # 400 ms at -30.7 LUFS, off the 100 ms grid
+    >>> maxima = WindowMaxima(sample_rate=rate)
+    >>> for block in np.array_split(power, 7):
+    ...     maxima.feed(block)
+    >>> result = maxima.result()
+    >>> round(result["max_momentary_lufs"], 3), result["max_momentary_s"]
+    (-30.691, 1.943)
+    """
+
+    def __init__(self, *, sample_rate: float) -> None:
+        _check_rate(sample_rate)
+        self.sample_rate = float(sample_rate)
+        self.lengths = (
+            int(round(MOMENTARY_S * sample_rate)),
+            int(round(SHORT_TERM_S * sample_rate)),
+        )
+        self._tail = np.zeros(0)
+        self._tail_start = 0
+        self._best = [-math.inf, -math.inf]
+        self._best_start = [-1, -1]
+
+    def feed(self, power: np.ndarray) -> None:
+        """Add the next samples of :func:`weighted_power` (shape ``(n,)``)."""
+        x = np.concatenate([self._tail, np.asarray(power, dtype=np.float64)])
+        offset = self._tail_start
+        # Cumulative sums start afresh in every block: their rounding stays that of one window.
+        cumulative = np.concatenate([[0.0], np.cumsum(x)])
+        for which, length in enumerate(self.lengths):
+            if x.shape[0] < length:
+                continue
+            sums = cumulative[length:] - cumulative[:-length]
+            first = int(np.argmax(sums))
+            if sums[first] > self._best[which]:
+                self._best[which] = float(sums[first])
+                self._best_start[which] = offset + first
+        keep = min(x.shape[0], max(self.lengths) - 1)
+        self._tail = x[x.shape[0] - keep :].copy()
+        self._tail_start = offset + x.shape[0] - keep
+
+    def result(self) -> dict[str, float | None]:
+        """``max_momentary_lufs``, ``max_momentary_s``, ``max_short_term_lufs``,
+        ``max_short_term_s``: the largest loudness and the time an EBU Mode meter shows it
+        (the end of the window, seconds from the start; the first such window where several
+        are equal). None where the signal is shorter than the window or the window is silent."""
+        out: dict[str, float | None] = {}
+        for which, name in enumerate(("momentary", "short_term")):
+            best, length = self._best[which], self.lengths[which]
+            lufs = -0.691 + 10.0 * math.log10(best / length) if best > 0 else None
+            end = (self._best_start[which] + length) / self.sample_rate
+            out[f"max_{name}_lufs"] = lufs
+            out[f"max_{name}_s"] = round(end, 3) if lufs is not None else None
+        return out
+
+
+def window_maxima(samples: np.ndarray, *, sample_rate: float) -> dict[str, float | None]:
+    """Maximum momentary and short-term loudness at any window position (see
+    :class:`WindowMaxima`), with the times an EBU Mode meter shows them.
+
+    Parameters
+    ----------
+    samples : np.ndarray [shape=(n_samples, n_channels) or (n_samples,)]
+    sample_rate : float
+
+    Returns
+    -------
+    maxima : dict
+        ``max_momentary_lufs``, ``max_momentary_s``, ``max_short_term_lufs``,
+        ``max_short_term_s`` (None where not measurable).
+    """
+    samples = _as_channels(samples)
+    _check_rate(sample_rate)
+    gains = channel_gains(samples.shape[1])
+    used = np.flatnonzero(gains)
+    filtered = sos_filter(
+        k_weighting_sos(sample_rate=sample_rate), samples[:, used].T, dtype=np.float32
+    )
+    maxima = WindowMaxima(sample_rate=sample_rate)
+    maxima.feed(weighted_power(filtered, gains[used]))
+    return maxima.result()
+
+
 def momentary_per_frame(
     times_s: np.ndarray, energy: np.ndarray, boundaries: np.ndarray
 ) -> np.ndarray:
@@ -388,7 +515,8 @@ def loudness_metrics(samples: np.ndarray, *, sample_rate: float) -> dict[str, fl
     -------
     metrics : dict
         ``integrated_lufs``, ``lra_lu``, ``sample_peak_dbfs``, ``true_peak_dbtp``, ``plr_db``
-        (true peak minus integrated loudness); None where not measurable.
+        (true peak minus integrated loudness) and :func:`window_maxima`'s four; None where not
+        measurable.
     """
     samples = _as_channels(samples)
     _check_rate(sample_rate)
@@ -403,4 +531,5 @@ def loudness_metrics(samples: np.ndarray, *, sample_rate: float) -> dict[str, fl
         "sample_peak_dbfs": sample_peak_dbfs(samples),
         "true_peak_dbtp": true_peak,
         "plr_db": plr,
+        **window_maxima(samples, sample_rate=sample_rate),
     }

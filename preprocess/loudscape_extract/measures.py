@@ -14,9 +14,18 @@ import numpy as np
 from loudscape_extract.dynamics import Dynamics, frame_windows, song_dynamics_metrics
 from loudscape_extract.loudness import loudness_from_energy, momentary_per_frame
 
+#: The maxima of :func:`~loudscape_extract.loudness.window_maxima`, in the metrics' order.
+WINDOW_MAXIMA_KEYS = (
+    "max_momentary_lufs",
+    "max_momentary_s",
+    "max_short_term_lufs",
+    "max_short_term_s",
+)
+
 __all__ = [
     "FrameFeatures",
     "TrackDescription",
+    "WINDOW_MAXIMA_KEYS",
     "a_power_gain",
     "crest_statistics",
     "dynamics_series",
@@ -189,12 +198,15 @@ def track_metrics(
     crest_db: np.ndarray,
     dc: np.ndarray,
     dr_db: float | None,
+    window_maxima: dict | None = None,
 ) -> dict:
     """The whole-track metrics (:attr:`TrackFeatures.metrics`), in the file's key order.
 
     Loudness, LRA and PLR of the DC-free (and high-passed) signal from its 100 ms segment
-    energies; the peaks of the file as decoded, as any meter reads them. Values that are not
-    finite become None.
+    energies, and its maximum momentary and short-term loudness at any window position with
+    their times (``window_maxima``, :func:`~loudscape_extract.loudness.window_maxima`'s keys;
+    None without it); the peaks of the file as decoded, as any meter reads them. Values that
+    are not finite become None.
     """
     integrated, lra = loudness_from_energy(energy, boundaries)
     clean_peak = 20.0 * math.log10(dynamics.true_peak) if dynamics.true_peak > 0 else None
@@ -205,6 +217,9 @@ def track_metrics(
         "true_peak_dbtp": true_peak_dbtp,
         "plr_db": None if integrated is None or clean_peak is None else clean_peak - integrated,
     }
+    maxima = window_maxima or {}
+    for key in WINDOW_MAXIMA_KEYS:
+        metrics[key] = maxima.get(key)
     metrics.update(crest_statistics(crest_db))
     metrics["dc_offset"] = float(np.max(np.abs(dc)))
     metrics["dr_db"] = dr_db

@@ -412,6 +412,7 @@ def finish_track(
         crest_db=crest_db,
         dc=decoded.dc,
         dr_db=dr_from_blocks(stats.dr_squares, stats.dr_peaks, stats.dr_lengths),
+        window_maxima=stats.window_maxima,
     )
     return StreamedTrack(
         path=info.path,

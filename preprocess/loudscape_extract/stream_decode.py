@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.fft
@@ -33,9 +33,11 @@ from loudscape_extract.dynamics import dr_block_length, highpass_sos
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.loudness import (
     TRUE_PEAK_OVERSAMPLING,
+    WindowMaxima,
     channel_gains,
     interpolator_taps,
     k_weighting_sos,
+    weighted_power,
 )
 from loudscape_extract.notices import ClipRuns, cancel_notice, clip_notice
 from loudscape_extract.spectrogram import frame_count
@@ -333,6 +335,7 @@ class SignalStats:
     dr_peaks: np.ndarray
     dr_lengths: np.ndarray
     true_peak_decoded: float
+    window_maxima: dict = field(default_factory=dict)
 
 
 def signal_pass(
@@ -377,6 +380,7 @@ def signal_pass(
     peak_clean = _StreamTruePeak(nc, offsets=None if highpass is not None else decoded.dc)
     peak_decoded = _StreamTruePeak(nc) if highpass is not None else None
     frames = _StreamFrames(n, n_fft=n_fft, hop_length=hop_length)
+    maxima = WindowMaxima(sample_rate=rate)
     overall_clean = 0.0
     overall_decoded = decoded.sample_peak
     seen = 0
@@ -391,6 +395,7 @@ def signal_pass(
         for row in range(used.shape[0]):
             squared = np.square(filtered[row], dtype=np.float64)
             _reduce_into(energy[row], squared, start, boundaries, np.add)
+        maxima.feed(weighted_power(filtered, gains[used]))
         sample_abs = np.abs(clean).max(axis=1).astype(np.float32)
         _reduce_into(segment_peak, sample_abs, start, boundaries, np.maximum)
         overall_clean = max(overall_clean, float(sample_abs.max()))
@@ -429,6 +434,7 @@ def signal_pass(
         dr_peaks=dr_peaks.T.copy(),
         dr_lengths=np.diff(dr_bounds),
         true_peak_decoded=overall_decoded,
+        window_maxima=maxima.result(),
     )
 
 

@@ -10,7 +10,7 @@ from loudscape_extract import (
     sample_peak_dbfs,
     true_peak_dbtp,
 )
-from loudscape_extract.loudness import loudness_metrics
+from loudscape_extract.loudness import WindowMaxima, loudness_metrics, window_maxima
 
 RATE = 48000
 
@@ -124,3 +124,34 @@ def test_plr_is_true_peak_minus_integrated():
     )
     assert metrics["integrated_lufs"] == pytest.approx(-20, abs=0.1)
     assert metrics["lra_lu"] == pytest.approx(0, abs=0.1)
+
+
+def test_window_maxima_do_not_depend_on_the_blocks(rng):
+    """Fed in blocks shorter and longer than either window, the maxima and their times are
+    those of one whole feed."""
+    power = rng.uniform(0.0, 1e-3, 8000 * 9) * np.repeat(rng.uniform(0, 1, 90), 800)
+    whole = WindowMaxima(sample_rate=8000)
+    whole.feed(power)
+    for sizes in ([1000] * 72, [7, 30000, 3, 12345, 29990, 645]):
+        pieces = WindowMaxima(sample_rate=8000)
+        for piece in np.split(power, np.cumsum(sizes)[:-1]):
+            pieces.feed(piece)
+        assert pieces.result() == pytest.approx(whole.result(), rel=1e-9)
+
+
+def test_metrics_carry_the_maxima_at_any_position():
+    """A 400 ms burst 30 ms off the 100 ms grid: the metrics' maximum is the burst's loudness
+    (the 10 Hz blocks read it lower), at the time its window ends."""
+    samples = stereo_sine_sequence([-90, -20, -90], [1.03, 0.4, 3.0])
+    samples[: int(1.03 * RATE)] = 0.0
+    samples[int(1.43 * RATE) :] = 0.0
+    metrics = loudness_metrics(samples, sample_rate=RATE)
+    assert metrics["max_momentary_lufs"] == pytest.approx(-20.0, abs=0.02)
+    assert metrics["max_momentary_s"] == pytest.approx(1.43, abs=0.002)
+    assert metrics["max_short_term_lufs"] == pytest.approx(-20 + 10 * np.log10(0.4 / 3), abs=0.02)
+    assert (
+        metrics["max_momentary_lufs"]
+        == window_maxima(samples, sample_rate=RATE)["max_momentary_lufs"]
+    )
+    too_short = loudness_metrics(samples[: RATE // 4], sample_rate=RATE)
+    assert too_short["max_momentary_lufs"] is None and too_short["max_short_term_s"] is None

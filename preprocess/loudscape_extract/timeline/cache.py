@@ -34,7 +34,7 @@ __all__ = [
 ]
 
 #: Bump when what is cached (or how it is computed) changes: old entries are then ignored.
-CACHE_VERSION = 6
+CACHE_VERSION = 7
 #: Temporaries are named ``ENTRY.HOST.UNIQUE.PID`` + this; see :func:`remove_temporaries`.
 TEMPORARY_SUFFIX = ".tmp"
 
