@@ -17,6 +17,8 @@ from loudscape_extract import export
 from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
+from loudscape_extract.loudness_csv import add_parser as add_loudness_parser
+from loudscape_extract.loudness_csv import run as run_loudness
 from loudscape_extract.messages import one_line
 from loudscape_extract.normalization import NORMALIZE_CHOICES
 from loudscape_extract.notices import warning_lines
@@ -275,6 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
             help="no progress or 'wrote' summaries on stderr (warnings and errors still show)",
         )
         sub.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    add_loudness_parser(commands)
     return parser
 
 
@@ -483,6 +486,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 )
             if args.command == "export":
                 return run_export(args)
+            if args.command == "loudness":
+                return run_loudness(args, say=_say)
             return run_report(args)
     except ExtractError as exc:
         if args.debug:
