@@ -27,6 +27,14 @@ from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progr
 from loudscape_extract.report import write_report
 from loudscape_extract.song import extract_song
 from loudscape_extract.song_cloud import DEFAULT_FLOOR_DB, FREQ_SCALES, MAX_FLOOR_DB
+from loudscape_extract.song_report import (
+    TARGET_CHOICES,
+    Target,
+    input_kind,
+    preset_target,
+    write_folder_report,
+    write_song_report,
+)
 from loudscape_extract.timeline import (
     DEFAULT_MAX_POINTS,
     DEFAULT_Y_MEASURE,
@@ -95,6 +103,68 @@ def _non_negative_db(text: str) -> float:
             f"must be a number of dB from 0 to {MAX_FLOOR_DB:g} (0 keeps every bin), got {text}"
         )
     return value
+
+
+def _loudness_flag(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not -70.0 <= value <= 10.0:  # NaN fails too
+        raise argparse.ArgumentTypeError(f"must be from -70 to 10, got {text}")
+    return value
+
+
+def _tolerance(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of LU, got {text!r}") from None
+    if not 0.0 <= value <= 20.0:
+        raise argparse.ArgumentTypeError(f"must be from 0 to 20 LU, got {text}")
+    return value
+
+
+def _add_song_report_arguments(report: argparse.ArgumentParser) -> None:
+    """The song and folder report's flags (``report``)."""
+    target = report.add_mutually_exclusive_group()
+    target.add_argument(
+        "--target",
+        choices=TARGET_CHOICES,
+        help="delivery target: a normalization preset's loudness and true-peak ceiling "
+        "(pass/fail line on the page and in the CSV)",
+    )
+    target.add_argument(
+        "--target-lufs", type=_loudness_flag, help="delivery target's integrated loudness"
+    )
+    report.add_argument(
+        "--max-true-peak",
+        type=_loudness_flag,
+        help="delivery target's true-peak ceiling in dBTP (default -1 with --target-lufs)",
+    )
+    report.add_argument(
+        "--tolerance-lu",
+        type=_tolerance,
+        default=1.0,
+        help="how far the integrated loudness may be from the target (1.0 LU)",
+    )
+    report.add_argument(
+        "--format",
+        choices=("pdf", "png"),
+        default="pdf",
+        help="a folder's pages: PDF (default) or PNG",
+    )
+    report.add_argument(
+        "--jobs",
+        "-j",
+        type=_jobs,
+        default=os.cpu_count() or 1,
+        help="a folder: songs in parallel worker processes (default: number of cores)",
+    )
+    report.add_argument(
+        "--cache-dir", help="measured songs' cache (default: the timeline's cache folder)"
+    )
+    report.add_argument("--no-cache", action="store_true", help="neither read nor write it")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -247,21 +317,37 @@ def build_parser() -> argparse.ArgumentParser:
 
     report = commands.add_parser(
         "report",
-        help="plot a timeline's per-year loudness metrics (PNG, optional CSV)",
-        description="Per year, from a timeline PLY: integrated loudness with streaming "
-        "targets, PLR, DR, PSR (the songs, their median, a 5th-95th percentile band where a "
-        "year has 5 songs or more), loudness range, hp mean and songs per year.",
+        help="a song's loudness report (PDF or PNG), a folder's, or a timeline's per year",
+        description="A song (audio file or song cloud): one page with the EBU Mode readings, "
+        "PLR, PSR, DR, the loudness and PSR curves, the short-term histogram with the LRA "
+        "band, each streaming service's gain and level as heard, and a verdict against "
+        "--target. A folder: a page per song and summary.csv in the -o folder. A timeline "
+        "PLY: per year, integrated loudness with streaming targets, PLR, DR, PSR (the songs, "
+        "their median, a 5th-95th percentile band where a year has 5 songs or more), loudness "
+        "range, hp mean and songs per year (PNG).",
     )
-    report.add_argument("input", help="timeline PLY written by the timeline command")
-    report.add_argument("-o", "--output", default="report.png", help="PNG file to write (.png)")
-    report.add_argument("--csv", help="also write the per-year table as CSV (.csv)")
+    report.add_argument(
+        "input", help="audio file, song cloud (.ply), folder of audio, or timeline PLY"
+    )
+    report.add_argument(
+        "-o",
+        "--output",
+        help="page to write (.pdf or .png; default: the input's name with -report.pdf; a "
+        "timeline: report.png); a folder: the folder for the pages and summary.csv",
+    )
+    report.add_argument(
+        "--csv",
+        help="also write the numbers as CSV (.csv): a song's one row, or a timeline's "
+        "per-year table (and per-song beside it)",
+    )
     report.add_argument(
         "--normalize",
         choices=NORMALIZE_CHOICES,
         default="none",
-        help="also draw each song and year as heard after this playback normalization "
-        "(streaming services, broadcast; docs/DYNAMICS.md)",
+        help="timeline: also draw each song and year as heard after this playback "
+        "normalization (streaming services, broadcast; docs/DYNAMICS.md)",
     )
+    _add_song_report_arguments(report)
 
     for sub in (song, timeline):
         sub.add_argument(
@@ -447,8 +533,81 @@ def _say_cloud_warnings(path: str) -> None:
         _say(f"warning: {line}")
 
 
+def _report_target(args: argparse.Namespace):
+    if args.target:
+        preset = preset_target(args.target, tolerance_lu=args.tolerance_lu)
+        if args.max_true_peak is None:
+            return preset
+        return Target(preset.name, preset.lufs, args.max_true_peak, args.tolerance_lu)
+    if args.target_lufs is not None or args.max_true_peak is not None:
+        peak = -1.0 if args.max_true_peak is None else args.max_true_peak
+        lufs = args.target_lufs
+        name = f"{lufs:g} LUFS, {peak:g} dBTP" if lufs is not None else f"{peak:g} dBTP"
+        return Target(name, lufs, peak, args.tolerance_lu)
+    return None
+
+
+def run_song_report(args: argparse.Namespace, kind: str) -> int:
+    """``report`` of a song or a folder: pages (and CSV), the verdict and ``wrote`` lines; 1
+    when a song of a folder failed (a FAIL verdict is a result, not an error: 0)."""
+    target = _report_target(args)
+    cache_dir = None if args.no_cache else (args.cache_dir or default_cache_dir())
+    notes: list[str] = []
+    if kind == "folder":
+        if not args.output:
+            raise ExtractError("give the folder for the pages with -o", path=args.input)
+        if args.csv:
+            raise ExtractError("--csv is for one song; a folder's numbers are in summary.csv")
+        result = write_folder_report(
+            args.input,
+            args.output,
+            extension="." + args.format,
+            target=target,
+            jobs=args.jobs,
+            cache_dir=cache_dir,
+        )
+        for line in result.notes:
+            _say(line)
+        for path, reason in sorted(result.failed.items()):
+            _say(f"skipped: {path}: {reason}")
+        fails = sum(row.get("verdict") == "fail" for row in result.rows)
+        if not args.quiet:
+            _say(
+                f"wrote {len(result.pages)} page(s) and {result.summary} "
+                f"({len(result.rows)} song(s), {result.cached} from cache"
+                + (f", {fails} FAIL against {target.name}" if target else "")
+                + ")"
+            )
+        return 1 if result.failed else 0
+    output = args.output or os.path.splitext(args.input)[0] + "-report.pdf"
+    song, verdict = write_song_report(
+        args.input, output, csv_path=args.csv, target=target, cache_dir=cache_dir, notes=notes
+    )
+    for line in notes + [f"warning: {song.path}: {w}" for w in song.warnings]:
+        _say(line)
+    if verdict is not None:
+        _say(verdict.text)
+    if not args.quiet:
+        _say(f"wrote {output}")
+        if args.csv:
+            _say(f"wrote {args.csv} (1 row)")
+    return 0
+
+
 def run_report(args: argparse.Namespace) -> int:
-    """The report subcommand: PNG (and CSV), then ``wrote ...`` summaries."""
+    """The report subcommand: a song's or a folder's (:func:`run_song_report`), or a
+    timeline's PNG (and CSV), then ``wrote ...`` summaries."""
+    kind = input_kind(args.input)
+    if kind != "timeline":
+        if args.normalize != "none":
+            raise ExtractError("--normalize is for a timeline; a song's page shows every preset")
+        return run_song_report(args, kind)
+    song_flags = ("target", "target_lufs", "max_true_peak")
+    given = [name for name in song_flags if getattr(args, name) is not None]
+    if given:
+        flag = "--" + given[0].replace("_", "-")
+        raise ExtractError(f"{flag} is for a song or a folder, not a timeline", path=args.input)
+    args.output = args.output or "report.png"
     rows = write_report(args.input, args.output, csv_path=args.csv, normalize=args.normalize)
     _say_cloud_warnings(args.input)
     if not args.quiet:

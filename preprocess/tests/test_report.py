@@ -109,9 +109,12 @@ def test_report_as_heard_after_normalization(tmp_path, capsys):
 def test_report_bad_inputs(tmp_path, capsys):
     song_mode = tmp_path / "song.ply"
     write_ply(song_mode, points=np.zeros((1, 5)), metadata={"mode": "song"})
+    other_mode = tmp_path / "other.ply"
+    write_ply(other_mode, points=np.zeros((1, 5)), metadata={"mode": "galaxy"})
     for source, needle in [
         (tmp_path / "missing.ply", "no such file"),
-        (song_mode, "not a timeline"),
+        (song_mode, "no metrics object: not a song cloud"),
+        (other_mode, "not a song cloud (mode 'galaxy')"),
     ]:
         out = tmp_path / "r.png"
         assert main(["report", str(source), "-o", str(out)]) == 1
