@@ -5,6 +5,8 @@
   hard link: ``os.stat`` device and inode compared), so no command writes over its input.
 - :func:`check_regular_input`: an input is an existing regular file (a FIFO or a device would
   block a decoder forever).
+- :func:`open_regular_input`: the same check made on the opened file (no window between the
+  check and the open), without ever blocking on a FIFO.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ __all__ = [
     "check_regular_input",
     "fsync_directory",
     "fsync_path",
+    "open_regular_input",
     "same_file",
     "write_failure",
 ]
@@ -57,6 +60,40 @@ def check_regular_input(path: str, *, what: str = "file") -> os.stat_result:
     if not os.access(path, os.R_OK):
         raise ExtractError("permission denied", path=path)
     return info
+
+
+def open_regular_input(path: str, *, what: str = "file"):
+    """``path`` opened for reading in binary, refused unless it is a regular file.
+
+    The file is opened without blocking (``O_NONBLOCK``: a FIFO with no writer opens at once)
+    and checked with ``fstat`` on the open descriptor, so a FIFO, a device (a link to
+    ``/dev/zero``), a socket or a directory is one clear :class:`ExtractError` at once, and
+    nothing is read from it.
+
+    Returns
+    -------
+    io.BufferedReader
+        The open file; the caller closes it.
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        descriptor = os.open(path, flags)
+    except FileNotFoundError:
+        raise ExtractError(f"no such {what}", path=path) from None
+    except IsADirectoryError:
+        raise ExtractError(f"is a directory, not a regular {what}", path=path) from None
+    except OSError as exc:
+        raise ExtractError(f"cannot open {what} ({exc.strerror or exc})", path=path) from None
+    try:
+        mode = os.fstat(descriptor).st_mode
+        if not stat.S_ISREG(mode):
+            raise ExtractError(f"is {_kind(mode)}, not a regular {what}", path=path)
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(descriptor, True)
+        return os.fdopen(descriptor, "rb")
+    except BaseException:
+        os.close(descriptor)
+        raise
 
 
 def same_file(a: str, b: str) -> bool:

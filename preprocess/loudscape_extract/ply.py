@@ -25,7 +25,7 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from loudscape_extract.errors import ExtractError
-from loudscape_extract.paths import fsync_directory, write_failure
+from loudscape_extract.paths import fsync_directory, open_regular_input, write_failure
 
 __all__ = [
     "MAX_LINE_BYTES",
@@ -392,74 +392,102 @@ def _umask() -> int:
 # --- reading -----------------------------------------------------------------------------------
 
 
-def _header_lines(data: bytes, name: str) -> tuple[list[str], int]:
-    """The header's lines (without ``\\n`` and a trailing ``\\r``) and the body's offset."""
-    end = data.find(b"\nend_header\n")
-    if not data.startswith(b"ply\n") or end < 0:
-        raise ExtractError("not a PLY file (no 'ply' / 'end_header')", path=name)
-    try:
-        text = data[:end].decode("ascii")
-    except UnicodeDecodeError as exc:
-        raise ExtractError(f"header is not ASCII (byte {exc.start})", path=name) from exc
-    lines = [line.removesuffix("\r") for line in text.split("\n")]
-    return lines, end + len(b"\nend_header\n")
-
-
 def read_ply(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
     """Read a loudscape PLY file, version 1 or 2.
+
+    Only a regular file is read (a FIFO, a device or a directory is refused at once, without
+    blocking); the header is read line by line up to :data:`MAX_HEADER_BYTES`, and the body
+    only when the file's size is exactly what the header promises, so the memory used is the
+    points' own, whatever else a file holds.
 
     Returns
     -------
     points : np.ndarray [shape=(n_points, 5), dtype=float32]
     metadata : dict
         The metadata object ({} when absent), with ``_bytes_b64`` strings decoded.
+
+    Raises
+    ------
+    ExtractError
+        Not a regular file, unreadable, not a loudscape PLY, or bad metadata.
     """
     name = os.fspath(path)
     try:
-        with open(name, "rb") as handle:
-            data = handle.read()
+        with open_regular_input(name) as handle:
+            n_points, metadata, offset, size = _read_header(handle, name)
+            points = np.empty((n_points, len(PROPERTIES)), dtype="<f4")
+            got = handle.readinto(memoryview(points).cast("B")) if n_points else 0
     except OSError as exc:
         raise ExtractError(f"cannot read file ({exc.strerror or exc})", path=name) from exc
-    lines, body_offset = _header_lines(data, name)
-    if "format binary_little_endian 1.0" not in lines:
+    if got != points.nbytes:
+        raise ExtractError(
+            f"body has {got} bytes, expected {points.nbytes} (the file changed while read)",
+            path=name,
+        )
+    return points.astype(np.float32, copy=False), metadata
+
+
+#: Bytes of the first line a reader reads: ``ply`` and its line end, with room to spare; a
+#: file that is not a PLY is refused after reading no more.
+_FIRST_LINE_BYTES = 16
+
+
+def _first_line(handle, name: str) -> None:
+    if handle.readline(_FIRST_LINE_BYTES) not in (b"ply\n", b"ply\r\n"):
+        raise ExtractError("not a PLY file (no 'ply' line)", path=name)
+
+
+def _read_header(handle, name: str) -> tuple[int, dict, int, int]:
+    """Read the header of the open file ``handle`` (at its start): ``(n_points, metadata,
+    body offset, file size)``, after checking the body's size against the vertex count.
+    The rules :func:`read_ply` and :func:`map_ply` share."""
+    _first_line(handle, name)
+    lines = list(_header_line_iter(handle, name, MAX_HEADER_BYTES))
+    offset = handle.tell()
+    size = os.fstat(handle.fileno()).st_size
+    texts = [text for _, text in lines]
+    if "format binary_little_endian 1.0" not in texts:
         raise ExtractError("not a binary little-endian PLY", path=name)
-    metadata = _meta_from_lines(enumerate(lines, 1), name)
-    n_points = None
-    properties = []
-    for line in lines:
-        if line.startswith("element vertex "):
-            try:
-                n_points = int(line.split()[2])
-            except (IndexError, ValueError):
-                raise ExtractError(f"bad vertex count {line.split()[2:]}", path=name) from None
-            if n_points < 0:
-                raise ExtractError(f"negative vertex count {n_points}", path=name)
-        elif line.startswith("property "):
-            properties.append(tuple(line.split()[1:]))
-    if n_points is None or properties != [("float", p) for p in PROPERTIES]:
+    metadata = _meta_from_lines(lines, name)
+    counts = [text.split() for text in texts if text.startswith("element ")]
+    properties = [tuple(text.split()[1:]) for text in texts if text.startswith("property ")]
+    if (
+        len(counts) != 1
+        or counts[0][:2] != ["element", "vertex"]
+        or properties != [("float", p) for p in PROPERTIES]
+    ):
         raise ExtractError(f"unexpected vertex layout {properties}", path=name)
-    body = data[body_offset:]
-    if len(body) != n_points * 4 * len(PROPERTIES):
-        raise ExtractError(f"body has {len(body)} bytes, expected {n_points * 20}", path=name)
-    points = np.frombuffer(body, dtype="<f4").reshape(n_points, len(PROPERTIES))
-    return points.astype(np.float32), metadata
+    try:
+        n_points = int(counts[0][2])
+    except (IndexError, ValueError):
+        raise ExtractError(f"bad vertex count {counts[0][2:]}", path=name) from None
+    if n_points < 0:
+        raise ExtractError(f"negative vertex count {n_points}", path=name)
+    expected = n_points * 4 * len(PROPERTIES)
+    if size - offset != expected:
+        raise ExtractError(f"body has {size - offset} bytes, expected {expected}", path=name)
+    return n_points, metadata, offset, size
 
 
 def _header_line_iter(handle, name: str, max_header_bytes: int) -> Iterator[tuple[int, str]]:
     read = 0
     number = 1
+    carry = b""  # the last bytes before the scan below, for an end_header cut across
     while read < max_header_bytes:
         line = handle.readline(max_header_bytes - read)  # bounded: a file without newlines
         if not line:
             raise ExtractError("not a PLY file (no 'end_header')", path=name)
         read += len(line)
         number += 1
+        if read >= max_header_bytes and not line.endswith(b"\n"):
+            carry = line[-16:]
+            line = b""  # a line cut at the limit: never decoded, and not held while scanning
+            break
         if line in (b"end_header\n", b"end_header\r\n"):
             return
         yield number, line.decode("ascii", errors="replace").rstrip("\n").removesuffix("\r")
     # Over the limit: say which it is, a header too large or no header at all (the rest of
     # the file is scanned in bounded pieces for end_header).
-    carry = b""
     while chunk := handle.read(1 << 20):
         if b"\nend_header\n" in carry + chunk:
             raise ExtractError(
@@ -490,9 +518,8 @@ def read_ply_metadata(path: str | os.PathLike, *, max_header_bytes: int = MAX_HE
     """
     name = os.fspath(path)
     try:
-        with open(name, "rb") as handle:
-            if handle.readline() not in (b"ply\n", b"ply\r\n"):
-                raise ExtractError("not a PLY file (no 'ply' line)", path=name)
+        with open_regular_input(name) as handle:
+            _first_line(handle, name)
             return _meta_from_lines(_header_line_iter(handle, name, max_header_bytes), name)
     except OSError as exc:
         raise ExtractError(f"cannot read file ({exc.strerror or exc})", path=name) from exc
@@ -509,35 +536,11 @@ def map_ply(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
     metadata : dict
     """
     name = os.fspath(path)
-    lines: list[tuple[int, str]] = []
     try:
-        with open(name, "rb") as handle:
-            if handle.readline() not in (b"ply\n", b"ply\r\n"):
-                raise ExtractError("not a PLY file (no 'ply' line)", path=name)
-            lines = list(_header_line_iter(handle, name, MAX_HEADER_BYTES))
-            offset = handle.tell()
-            size = os.fstat(handle.fileno()).st_size
+        with open_regular_input(name) as handle:
+            n_points, metadata, offset, _size = _read_header(handle, name)
     except OSError as exc:
         raise ExtractError(f"cannot read file ({exc.strerror or exc})", path=name) from exc
-    texts = [text for _, text in lines]
-    if "format binary_little_endian 1.0" not in texts:
-        raise ExtractError("not a binary little-endian PLY", path=name)
-    metadata = _meta_from_lines(lines, name)
-    counts = [text.split() for text in texts if text.startswith("element ")]
-    properties = [tuple(text.split()[1:]) for text in texts if text.startswith("property ")]
-    if (
-        len(counts) != 1
-        or counts[0][:2] != ["element", "vertex"]
-        or properties != [("float", p) for p in PROPERTIES]
-    ):
-        raise ExtractError(f"unexpected vertex layout {properties}", path=name)
-    try:
-        n_points = int(counts[0][2])
-    except (IndexError, ValueError):
-        raise ExtractError(f"bad vertex count {counts[0][2:]}", path=name) from None
-    expected = n_points * 4 * len(PROPERTIES)
-    if size - offset != expected:
-        raise ExtractError(f"body has {size - offset} bytes, expected {expected}", path=name)
     if n_points == 0:
         return np.zeros((0, len(PROPERTIES)), "<f4"), metadata
     points = np.memmap(name, dtype="<f4", mode="r", offset=offset, shape=(n_points, 5))
