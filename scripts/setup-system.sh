@@ -32,6 +32,8 @@ declare -A need=(
   # ffprobe and play under Xvfb with mpv.
   [ffmpeg]=/usr/bin/ffmpeg
   [mpv]=/usr/bin/mpv
+  # The report tests read the PDF pages' text back with pdftotext.
+  [poppler-utils]=/usr/bin/pdftotext
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then

@@ -76,6 +76,11 @@ def _curve(curves: dict, key: str, start_key: str) -> tuple[np.ndarray, np.ndarr
     return times, values
 
 
+def _dots(values: np.ndarray) -> str | None:
+    """A marker for a curve too short to show as a line (a song under a few seconds)."""
+    return "o" if np.count_nonzero(np.isfinite(values)) < 5 else None
+
+
 def _fmt(value, unit: str, digits: int = 1, sign: bool = False) -> str:
     if value is None:
         return "n/a"
@@ -205,7 +210,10 @@ def _time_axis(ax, duration: float) -> None:
 
     ax.set_xlim(0.0, max(duration, 1.0))
     ax.xaxis.set_major_locator(MaxNLocator(nbins=10, steps=[1, 1.5, 2, 3, 5, 6, 10]))
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda s, _pos: minutes(s).split(".")[0]))
+    tenths = duration < 20.0  # a short song's ticks are under a second apart
+    ax.xaxis.set_major_formatter(
+        FuncFormatter(lambda s, _pos: minutes(s) if tenths else minutes(s).split(".")[0])
+    )
 
 
 def _style(ax) -> None:
@@ -232,8 +240,17 @@ def _curves_panel(ax, page: dict, duration: float) -> None:
         return
     tm, momentary = _curve(curves, "momentary_lufs", "momentary_start_s")
     ts, short = _curve(curves, "short_term_lufs", "short_term_start_s")
-    ax.plot(tm, momentary, color=_MOMENTARY, linewidth=0.6, label="momentary (400 ms)")
-    ax.plot(ts, short, color=_SHORT_TERM, linewidth=1.3, label="short-term (3 s)")
+    ax.plot(
+        tm,
+        momentary,
+        color=_MOMENTARY,
+        linewidth=0.6,
+        label="momentary (400 ms)",
+        marker=_dots(momentary),
+    )
+    ax.plot(
+        ts, short, color=_SHORT_TERM, linewidth=1.3, label="short-term (3 s)", marker=_dots(short)
+    )
     integrated = metrics.get("integrated_lufs")
     if integrated is not None:
         ax.axhline(
@@ -314,7 +331,7 @@ def _psr_panel(ax, page: dict, duration: float) -> None:
         _missing(ax, "no PSR curve in this cloud")
         return
     times, psr = _curve(song["curves"], "psr_db", "short_term_start_s")
-    ax.plot(times, psr, color="#6c3483", linewidth=1.0)
+    ax.plot(times, psr, color="#6c3483", linewidth=1.0, marker=_dots(psr))
     median = song["metrics"].get("psr_median_db")
     if median is not None:
         ax.axhline(median, color=_INK, linestyle="--", linewidth=0.8)
@@ -377,8 +394,11 @@ def _notes_panel(fig, page: dict, rect) -> None:
     if song["curves"] is None:
         notes.append("The input cloud carries no loudness curves (written by an older version).")
     metrics = song["metrics"]
-    if metrics.get("max_momentary_lufs") is None or metrics.get("max_short_term_lufs") is None:
-        notes.append("Max momentary and short-term loudness: not among the input's metrics.")
+    if "max_momentary_lufs" not in metrics or "max_short_term_lufs" not in metrics:
+        notes.append(
+            "Max momentary and short-term loudness: not among the input's metrics (a cloud "
+            "written by an older version); extract the song again for them."
+        )
     if not notes:
         notes.append("No warnings about the input.")
     notes.append(
