@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import os
+import re
 import time
 import warnings
 from collections.abc import Callable, Iterator
@@ -23,7 +24,14 @@ from loudscape_extract.stream_decode import DEFAULT_BLOCK_SAMPLES, DecodedMono
 from loudscape_extract.stream_points import SongPlan, plan_song, song_point_blocks
 from loudscape_extract.version import GENERATOR
 
-__all__ = ["POINTS_BLOCK_FRAMES", "POINTS_EVERY_S", "ROW_BYTES", "body_file_path", "extract_song"]
+__all__ = [
+    "POINTS_BLOCK_FRAMES",
+    "POINTS_EVERY_S",
+    "ROW_BYTES",
+    "body_file_path",
+    "extract_song",
+    "remove_stale_body_files",
+]
 
 #: Bytes of one point in the PLY body and the body file: 5 little-endian float32.
 ROW_BYTES = 20
@@ -40,6 +48,51 @@ def body_file_path(output: str) -> str:
     ``.<output name>.points-<pid>`` (docs/FORMAT.md, "Points while extracting")."""
     folder, name = os.path.split(os.path.abspath(output))
     return os.path.join(folder, f".{name}.points-{os.getpid()}")
+
+
+#: A body file's name (:func:`body_file_path`): the output's name (a ``.ply``) and a PID.
+_BODY_NAME = re.compile(r"\.(.+\.ply)\.points-([1-9][0-9]{0,9})", re.IGNORECASE)
+
+
+def _process_is_gone(pid: int) -> bool:
+    """True only when no process ``pid`` exists (one of another user's counts as alive)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except (PermissionError, OverflowError, OSError):
+        return False
+    return False
+
+
+def remove_stale_body_files(folder: str) -> list[str]:
+    """Remove the body files (:func:`body_file_path`) in ``folder`` that an extraction killed
+    without a chance to clean up (SIGKILL, a power cut) left behind: those whose process is
+    gone. A running extraction's file (its PID alive, or this process's own) is never touched,
+    and nothing but regular files named as body files is.
+
+    Returns
+    -------
+    list of str
+        The paths removed.
+    """
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        match = _BODY_NAME.fullmatch(entry.name)
+        if match is None:
+            continue
+        pid = int(match.group(2))
+        if pid == os.getpid() or not _process_is_gone(pid):
+            continue
+        with contextlib.suppress(OSError):
+            if entry.is_file(follow_symlinks=False):
+                os.unlink(entry.path)
+                removed.append(entry.path)
+    return removed
 
 
 def extract_song(
@@ -65,7 +118,9 @@ def extract_song(
     file (:func:`body_file_path`) as it is made; the signal pass (loudness, dynamics, true
     peak: a second decode); then the PLY, header and the body file's bytes, written atomically.
     The body file is removed on every exit path that Python sees (errors, Ctrl+C, SIGTERM
-    under :func:`~loudscape_extract.interrupts.sigterm_raises`).
+    under :func:`~loudscape_extract.interrupts.sigterm_raises`); those of extractions killed
+    outright (SIGKILL) are removed by the next extraction into the folder
+    (:func:`remove_stale_body_files`).
 
     Parameters
     ----------
@@ -105,6 +160,7 @@ def extract_song(
     floor = DEFAULT_FLOOR_DB if floor_db is None else floor_db
     check_output_path(output, inputs=[source])
     body = body_file_path(output)
+    remove_stale_body_files(os.path.dirname(body))
     try:
         made = {}
 
