@@ -660,7 +660,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         what = "terminated" if isinstance(exc, Terminated) else "interrupted"
         kept = "; songs finished so far stay in the cache" if args.command == "timeline" else ""
-        _say(f"{what}; no file written{kept}")
+        if args.command == "report" and os.path.isdir(args.input):
+            _say(f"{what}; the pages finished so far are kept, no summary.csv written")
+        else:
+            _say(f"{what}; no file written{kept}")
         return 143 if isinstance(exc, Terminated) else 130
     except Exception as exc:  # noqa: BLE001 - one line, no traceback, unless --debug
         if args.debug:

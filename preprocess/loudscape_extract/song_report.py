@@ -27,6 +27,7 @@ import json
 import math
 import os
 import signal
+import socket
 import threading
 import time
 import uuid
@@ -45,7 +46,7 @@ from loudscape_extract.paths import check_output_path, check_regular_input, fsyn
 from loudscape_extract.ply import read_ply_metadata
 from loudscape_extract.report_pdf import PAGE_EXTENSIONS, draw_page
 from loudscape_extract.stream import stream_track
-from loudscape_extract.timeline.cache import cache_key
+from loudscape_extract.timeline.cache import cache_key, remove_temporaries
 from loudscape_extract.timeline.inputs import discover_audio
 
 __all__ = [
@@ -100,6 +101,7 @@ SUMMARY_COLUMNS = (
     + ("target", "target_lufs", "target_max_true_peak_dbtp", "verdict", "warnings")
 )
 _CURVE_LISTS = ("momentary_lufs", "short_term_lufs", "psr_db")
+_HOSTNAME = socket.gethostname()
 
 
 @dataclass(frozen=True)
@@ -409,6 +411,12 @@ def read_song_entry(entry: str, path: str) -> tuple[SongLoudness | None, str]:
     return song, ""
 
 
+def _host() -> str:
+    """This machine's name as one file-name component, as the timeline's cache spells it."""
+    name = "".join(c if c.isascii() and (c.isalnum() or c in "-_") else "-" for c in _HOSTNAME)
+    return name[:40] or "host"
+
+
 def _save_song_entry(entry: str, song: SongLoudness) -> None:
     """Atomically, with a checksum line; a temporary unique to this process, removed on any
     error or interrupt."""
@@ -416,7 +424,9 @@ def _save_song_entry(entry: str, song: SongLoudness) -> None:
     stored = {k: v for k, v in asdict(song).items() if k not in ("name", "path")}
     content = json.dumps(stored, allow_nan=False).encode("utf-8")
     digest = hashlib.sha256(content).hexdigest().encode("ascii")
-    temporary = f"{entry}.{uuid.uuid4().hex[:12]}.{os.getpid()}.tmp"
+    # Named as the timeline's temporaries, so its clean-up of dead writers' leftovers
+    # (:func:`remove_temporaries`, run here too) covers these.
+    temporary = f"{entry}.{_host()}.{uuid.uuid4().hex[:12]}.{os.getpid()}.tmp"
     try:
         with open(temporary, "wb") as handle:
             handle.write(_MAGIC + digest + b"\n" + content)
@@ -568,15 +578,28 @@ def _report_job(path, page, target, cache_dir, strict):
         return path, None, False, notes, "out of memory"
 
 
+def _terminated(signum, _frame):
+    raise Terminated(f"received signal {signum}")
+
+
+def _worker_job(*arguments):
+    """:func:`_report_job` in a worker: SIGTERM while a song is being made removes its page's
+    and cache entry's temporaries, then ends the worker; it ends an idle worker quietly."""
+    signal.signal(signal.SIGTERM, _terminated)
+    try:
+        return _report_job(*arguments)
+    except Terminated:
+        # Its temporaries are gone (the ``finally`` blocks ran); exit instead of taking the
+        # next song already queued to this worker.
+        os._exit(143)
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _worker_start(parent: int) -> None:
-    """Pool initializer: the parent decides on Ctrl+C; SIGTERM raises (so a page's temporary
-    is removed); exit once the parent is gone."""
+    """Pool initializer: the parent decides on Ctrl+C; exit once the parent is gone."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-    def terminated(signum, _frame):
-        raise Terminated(f"received signal {signum}")
-
-    signal.signal(signal.SIGTERM, terminated)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
     def watch():
         while os.getppid() == parent:
@@ -643,6 +666,8 @@ def write_folder_report(
     result.summary = os.path.join(out_dir, "summary.csv")
     for page in [*pages.values(), result.summary]:
         check_output_path(page, inputs=paths, extensions=(*PAGE_EXTENSIONS, ".csv"))
+    if cache_dir is not None:
+        remove_temporaries(cache_dir)  # left by a run that was killed
     rows: dict[str, dict] = {}
 
     def collect(outcome):
@@ -666,7 +691,7 @@ def write_folder_report(
             max_workers=min(jobs, len(paths)), initializer=_worker_start, initargs=(os.getpid(),)
         )
         try:
-            futures = {pool.submit(_report_job, p, pages[p], *arguments): p for p in paths}
+            futures = {pool.submit(_worker_job, p, pages[p], *arguments): p for p in paths}
             for future in as_completed(futures):
                 try:
                     outcome = future.result()

@@ -4,6 +4,7 @@ checked against libebur128 (pyebur128), the verdict, the cache, bad input."""
 import csv
 import os
 import re
+import signal
 import subprocess
 import sys
 
@@ -11,6 +12,7 @@ import numpy as np
 import pyebur128
 import pytest
 import soundfile as sf
+from test_interrupts import alive, children, wait_for
 
 from loudscape_extract.cli import main
 from loudscape_extract.ply import read_ply_metadata, write_ply
@@ -255,3 +257,42 @@ def test_bad_input_one_line_and_nothing_written(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "pip install 'loudscape-extract[report]'" in err
     assert not page.exists()
+
+
+def test_sigterm_stops_a_folder_without_temporaries_or_workers(tmp_path):
+    album, out, cache = tmp_path / "album", tmp_path / "out", tmp_path / "cache"
+    album.mkdir()
+    for i in range(6):
+        write_song(album / f"s{i}.wav", master(seconds=40.0, seed=i))
+    argv = [sys.executable, "-m", "loudscape_extract.cli", "report", str(album)]
+    process = subprocess.Popen(
+        [*argv, "-o", str(out), "--cache-dir", str(cache), "-j", "2"],
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        wait_for(lambda: len(children(process.pid)) >= 2, 60, "two workers")
+        workers = children(process.pid)
+        wait_for(
+            lambda: cache.exists() and any(n.endswith(ENTRY_SUFFIX) for n in os.listdir(cache)),
+            120,
+            "a measured song",
+        )
+        process.send_signal(signal.SIGTERM)
+        _, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 143, err
+    assert err.strip().splitlines()[-1] == (
+        "loudscape-extract: terminated; the pages finished so far are kept, no summary.csv written"
+    )
+    assert "Traceback" not in err
+    wait_for(lambda: not any(alive(pid) for pid in workers), 10, "the workers to exit")
+    assert not (out / "summary.csv").exists()
+    # No temporaries (".NAME.PID.tmp.pdf", "ENTRY.HOST.UNIQUE.PID.tmp"), nothing half made.
+    assert [n for n in os.listdir(out) if n.startswith(".") or not n.endswith(".pdf")] == []
+    assert [n for n in os.listdir(cache) if not n.endswith(ENTRY_SUFFIX)] == []
+    for page in os.listdir(out):  # every page there is whole
+        assert "Integrated loudness" in pdf_text(out / page)
