@@ -238,8 +238,28 @@ def test_bad_input_one_line_and_nothing_written(tmp_path, capsys, monkeypatch):
         points=np.zeros((1, 5), np.float32),
         metadata={"format_version": 2, "mode": "timeline", "point_count": 1, "songs": []},
     )
+    bad_curves = tmp_path / "bad.ply"
+    write_ply(
+        bad_curves,
+        points=np.zeros((1, 5), np.float32),
+        metadata={
+            "format_version": 2,
+            "mode": "song",
+            "point_count": 1,
+            "metrics": {"integrated_lufs": -9.0},
+            "loudness": {
+                "rate_hz": 10,
+                "momentary_start_s": 0.2,
+                "short_term_start_s": 1.5,
+                "momentary_lufs": ["loud"],
+                "short_term_lufs": [],
+                "psr_db": [],
+            },
+        },
+    )
     cases = [
         (["report", str(junk), "-o", str(page)], str(junk)),
+        (["report", str(bad_curves), "-o", str(page)], "momentary_lufs is not a list of numbers"),
         (["report", song, "-o", song], "refusing to write over an input"),
         (["report", song, "-o", str(tmp_path / "r.txt")], "must end with .pdf or .png"),
         (["report", song, "-o", str(tmp_path / "no" / "r.pdf")], "does not exist"),
