@@ -12,9 +12,14 @@
 Every picture is drawn by the ``loudscape render`` command (the binary installed with this
 package, or a checkout's ``target/`` build): there is no second renderer. Audio is extracted by
 ``loudscape-extract``, installed beside it.
+
+Errors: every function raises one exception type, :class:`ExtractError` (the extractor's),
+whose message names the bad argument or file and the reason. Warnings: what is found wrong or
+odd about an input (a truncated file, channels that cancel...) is raised as a
+:class:`LoudscapeWarning` and kept on the picture (``picture.warnings``).
 """
 
-from loudscape.api import Cloud, read_cloud, render, show
+from loudscape.api import Cloud, LoudscapeWarning, read_cloud, render, show
 from loudscape.binary import find_binary
 from loudscape.picture import Picture
 from loudscape_extract.errors import ExtractError
@@ -23,6 +28,7 @@ from loudscape_extract.version import __version__
 __all__ = [
     "Cloud",
     "ExtractError",
+    "LoudscapeWarning",
     "Picture",
     "__version__",
     "find_binary",

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import numbers
 import os
+import re
 import subprocess
 import tempfile
 import threading
+import warnings
 from pathlib import Path
 from typing import NamedTuple
 
@@ -14,11 +17,33 @@ import numpy as np
 from loudscape.binary import find_binary
 from loudscape.picture import Picture
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.paths import check_regular_input
 from loudscape_extract.ply import read_ply, write_ply
 
-__all__ = ["Cloud", "read_cloud", "render", "show"]
+__all__ = ["Cloud", "LoudscapeWarning", "read_cloud", "render", "show"]
 
 VIEWS = ("points", "surface", "volume")
+METHODS = ("mt", "dc")
+COLORMAPS = ("classic", "puor", "cividis", "viridis")
+BACKGROUNDS = ("dark", "light")
+FREQ_AXES = ("linear", "log", "mel")
+#: Each side of a picture, in pixels (the renderer's own range).
+SIZE_RANGE = (16, 8192)
+#: Point disc diameters the renderer draws, in pixels.
+POINT_SIZE_RANGE = (0.5, 64.0)
+#: A warning line of the binary's stderr: ``warning: FILE: MESSAGE`` (a cloud's warnings,
+#: docs/FORMAT.md "Warnings") or ``loudscape: warning: ...`` (the renderer's own).
+_WARNING_LINE = re.compile(r"(?:loudscape: )?warning: (.+)")
+
+
+class LoudscapeWarning(UserWarning):
+    """What the extractor or the renderer found wrong or odd about an input: a truncated or
+    corrupt file (``decoded 14.12 s of the 30.00 s``), channels that cancel, a large DC
+    offset, clipping, a cache that cannot be written. The file is still drawn.
+
+    :func:`render` raises one for each line (once), and keeps the lines on the picture
+    (:attr:`Picture.warnings`); a cloud's own (its metadata's ``warnings``) are among them.
+    """
 
 
 class Cloud(NamedTuple):
@@ -37,9 +62,39 @@ class Cloud(NamedTuple):
     points: np.ndarray
     metadata: dict
 
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What the extractor found wrong or odd about the input, ``"FILE: MESSAGE"`` each
+        (the metadata's ``warnings``; empty when there is nothing to say).
+
+        Examples
+        --------
+        >>> Cloud(np.zeros((1, 5), np.float32), {"source": {"path": "a.flac"}, "warnings": [
+        ...     {"kind": "truncated", "message": "decoded 1.00 s of the 2.00 s"}]}).warnings
+        ('a.flac: decoded 1.00 s of the 2.00 s',)
+        """
+        return tuple(_metadata_warnings(self.metadata))
+
+
+def _metadata_warnings(metadata) -> list[str]:
+    """``"FILE: MESSAGE"`` for each of the metadata's ``warnings`` (docs/FORMAT.md)."""
+    if not isinstance(metadata, dict) or not isinstance(metadata.get("warnings"), list):
+        return []
+    source = metadata.get("source")
+    default = source.get("path") if isinstance(source, dict) else None
+    lines = []
+    for item in metadata["warnings"]:
+        if isinstance(item, dict) and isinstance(item.get("message"), str):
+            file = item.get("path") if isinstance(item.get("path"), str) else default
+            lines.append(f"{file}: {item['message']}" if isinstance(file, str) else item["message"])
+    return lines
+
 
 def read_cloud(path: str | os.PathLike) -> Cloud:
     """Read a loudscape point cloud (.ply, song or timeline).
+
+    Only a regular file is read: a FIFO, a device or a directory is refused at once, and the
+    memory used is the points' own whatever the file holds (docs/RELIABILITY.md).
 
     Parameters
     ----------
@@ -49,68 +104,253 @@ def read_cloud(path: str | os.PathLike) -> Cloud:
     Returns
     -------
     Cloud
-        Its points and metadata.
+        Its points and metadata (the extractor's warnings about the input:
+        :attr:`Cloud.warnings`).
 
     Raises
     ------
     ExtractError
         The file cannot be read or is not a loudscape PLY.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise ExtractError(f"path must be a file name, not {type(path).__name__}: {path!r:.80}")
     name = os.fspath(path)
-    if not name.lower().endswith(".ply"):
+    if not isinstance(name, str) or not name.lower().endswith(".ply"):
         raise ExtractError("read_cloud reads .ply point clouds (render takes audio)", path=name)
     points, metadata = read_ply(name)
     return Cloud(points, metadata)
 
 
-def _as_input(source, metadata: dict | None, folder: str) -> str:
-    """A file the binary can open for ``source``: the path itself, or a PLY written in
-    ``folder`` for arrays."""
+# --- checking the arguments ---------------------------------------------------------------
+
+
+def _shown(value) -> str:
+    """``value`` for a message: its repr, cut short."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (numbers.Real, np.number)) and not isinstance(value, (bool, np.bool_))
+
+
+def _number(name: str, value, *, low: float, high: float, what: str) -> float:
+    """``value`` as a float in [low, high]; an ExtractError naming ``name`` otherwise."""
+    if not _is_number(value):
+        raise ExtractError(f"{name} must be {what}, got {_shown(value)}")
+    number = float(value)
+    if not (low <= number <= high):  # NaN fails too
+        raise ExtractError(f"{name} must be {what}, got {_shown(value)}")
+    return number
+
+
+def _choice(name: str, value, choices: tuple[str, ...]) -> str:
+    if not isinstance(value, str) or value not in choices:
+        raise ExtractError(f"{name}={_shown(value)} is not one of {', '.join(choices)}")
+    return value
+
+
+def _flag(name: str, value) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ExtractError(f"{name} must be True or False, got {_shown(value)}")
+    return bool(value)
+
+
+def _size(size) -> tuple[int, int]:
+    low, high = SIZE_RANGE
+    what = f"(width, height): two whole numbers of pixels from {low} to {high}"
+    if isinstance(size, (str, bytes)) or not isinstance(size, (tuple, list, np.ndarray)):
+        raise ExtractError(f"size must be {what}, got {_shown(size)}")
+    if len(size) != 2 or not all(_is_number(side) for side in size):
+        raise ExtractError(f"size must be {what}, got {_shown(size)}")
+    sides = [float(side) for side in size]
+    if not all(low <= side <= high and side == int(side) for side in sides):
+        raise ExtractError(f"size must be {what}, got {_shown(size)}")
+    return int(sides[0]), int(sides[1])
+
+
+def _camera(camera) -> tuple[float, float, float]:
+    what = "(azimuth degrees, elevation degrees, distance > 0): three finite numbers"
+    if isinstance(camera, (str, bytes)) or not isinstance(camera, (tuple, list, np.ndarray)):
+        raise ExtractError(f"camera must be {what}, got {_shown(camera)}")
+    if len(camera) != 3 or not all(_is_number(v) for v in camera):
+        raise ExtractError(f"camera must be {what}, got {_shown(camera)}")
+    azimuth, elevation, distance = (float(v) for v in camera)
+    if not all(np.isfinite([azimuth, elevation, distance])) or distance <= 0:
+        raise ExtractError(f"camera must be {what}, got {_shown(camera)}")
+    return azimuth, elevation, distance
+
+
+def _json_problem(value, where: str, depth: int = 0) -> str | None:
+    """What makes ``value`` not plain JSON (the file's metadata), naming where; None if
+    nothing does."""
+    if depth > 64:
+        return f"{where} is nested more than 64 levels deep"
+    if value is None or isinstance(value, (bool, str)):
+        return None
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, np.bool_):
+        if not np.isfinite(float(value)):
+            return f"{where} is {value!r}: JSON has no NaN or infinity"
+        return None
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if not isinstance(key, str):
+                return f"{where} has the key {_shown(key)}: keys must be strings"
+            problem = _json_problem(item, f"{where}[{key!r}]", depth + 1)
+            if problem:
+                return problem
+        return None
+    if isinstance(value, (list, tuple)):
+        for index, item in enumerate(value):
+            problem = _json_problem(item, f"{where}[{index}]", depth + 1)
+            if problem:
+                return problem
+        return None
+    return f"{where} is a {type(value).__name__}, which is not JSON"
+
+
+def _options(
+    *,
+    view,
+    size,
+    camera,
+    point_size,
+    iso,
+    method,
+    colormap,
+    background,
+    freq_axis,
+    labels,
+    legend,
+) -> list[str]:
+    """The ``loudscape render`` options for the arguments of :func:`render`, each checked
+    first (an ExtractError naming the argument and its value). Every value is passed as
+    ``--name=value``, so none (``-1``) can be read as an option."""
+    low, high = POINT_SIZE_RANGE
+    width, height = _size(size)
+    options = [
+        f"--view={_choice('view', view, VIEWS)}",
+        f"--size={width}x{height}",
+        f"--iso={_number('iso', iso, low=0.0, high=1.0, what='a number from 0 to 1'):g}",
+        f"--method={_choice('method', method, METHODS)}",
+        f"--colormap={_choice('colormap', colormap, COLORMAPS)}",
+        f"--background={_choice('background', background, BACKGROUNDS)}",
+        f"--freq-axis={_choice('freq_axis', freq_axis, FREQ_AXES)}",
+    ]
+    if camera is not None:
+        azimuth, elevation, distance = _camera(camera)
+        options.append(f"--camera={azimuth!r},{elevation!r},{distance!r}")
+    if point_size is not None:
+        what = f"a number of pixels from {low:g} to {high:g}"
+        options.append(
+            f"--point-size={_number('point_size', point_size, low=low, high=high, what=what)!r}"
+        )
+    if not _flag("labels", labels):
+        options.append("--no-labels")
+    if not _flag("legend", legend):
+        options.append("--no-legend")
+    return options
+
+
+def _timeout(timeout) -> float | None:
+    if timeout is None:
+        return None
+    what = "None or a positive number of seconds"
+    return _number("timeout", timeout, low=np.nextafter(0, 1), high=np.inf, what=what)
+
+
+def _as_input(source, metadata, folder: str) -> tuple[str, str]:
+    """A file the binary can open for ``source`` and the name its warnings should give: the
+    path itself (absolute, so no name is read as an option), or a PLY written in ``folder``
+    for arrays (named by the metadata's source, else ``points``)."""
     if isinstance(source, (str, os.PathLike)):
         name = os.fspath(source)
-        if not os.path.isfile(name):
-            raise ExtractError("no such file", path=name)
-        return name
+        if not isinstance(name, str):
+            raise ExtractError(f"source must be a file name as str, got {_shown(source)}")
+        check_regular_input(name)
+        return os.path.abspath(name), name
     if isinstance(source, tuple) and len(source) == 2:
         points, meta = source
+        where = "source's metadata"
         if metadata is not None:
             raise ExtractError("metadata is given twice: in the source pair and as metadata=")
-    elif isinstance(source, np.ndarray):
-        points, meta = source, metadata
+    elif isinstance(source, (np.ndarray, list)):
+        points, meta, where = source, metadata, "metadata"
     else:
         raise ExtractError(
             f"source must be a path, a Cloud, a (points, metadata) pair or a points array, "
             f"not {type(source).__name__}"
         )
-    points = np.asarray(points, dtype=np.float32)
-    if points.ndim != 2 or points.shape[1] != 5 or points.shape[0] == 0:
-        raise ExtractError(
-            f"points must have shape (n_points, 5), n_points > 0, got {points.shape}"
-        )
-    if not np.isfinite(points).all():
-        raise ExtractError("points hold NaN or infinite values")
-    meta = dict(meta or {})
+    try:
+        array = np.asarray(points)
+    except (ValueError, TypeError) as exc:
+        raise ExtractError(f"points must be an array of shape (n_points, 5) ({exc})") from None
+    if array.dtype.kind not in "iuf":
+        raise ExtractError(f"points must be numbers, got an array of dtype {array.dtype}")
+    if array.ndim != 2 or array.shape[1] != 5 or array.shape[0] == 0:
+        raise ExtractError(f"points must have shape (n_points, 5), n_points > 0, got {array.shape}")
+    with np.errstate(over="ignore"):
+        array = array.astype(np.float32)
+    if not np.isfinite(array).all():
+        raise ExtractError("points hold NaN or infinite values (or values beyond float32)")
+    if meta is None:
+        meta = {}
+    if not isinstance(meta, dict):
+        raise ExtractError(f"{where} must be a dict, got {type(meta).__name__}: {_shown(meta)}")
+    problem = _json_problem(meta, where)
+    if problem:
+        raise ExtractError(f"{problem} (the metadata must be plain JSON: docs/FORMAT.md)")
+    meta = dict(meta)
     if "point_count" in meta:
         # A selection of a cloud's points (``points[points[:, 4] > 0.5]``) keeps its metadata.
-        meta["point_count"] = points.shape[0]
+        meta["point_count"] = array.shape[0]
     name = os.path.join(folder, "cloud.ply")
-    write_ply(name, points=points, metadata=meta)
-    return name
+    write_ply(name, points=array, metadata=meta)
+    source_entry = meta.get("source")
+    label = source_entry.get("path") if isinstance(source_entry, dict) else None
+    return name, label if isinstance(label, str) else "points"
 
 
-def _run(command: list[str], *, timeout: float | None) -> None:
+# --- running the binary -------------------------------------------------------------------
+
+
+def _run(command: list[str], *, timeout: float | None) -> str:
+    """Run the binary; its stderr. An ExtractError with its error line if it fails."""
     try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=timeout, check=False)
+        done = subprocess.run(
+            command,
+            capture_output=True,
+            timeout=timeout,
+            check=False,
+            stdin=subprocess.DEVNULL,
+        )
     except subprocess.TimeoutExpired as exc:
-        raise ExtractError(f"loudscape took longer than {timeout} s") from exc
+        raise ExtractError(f"loudscape took longer than timeout={timeout:g} s") from exc
     except OSError as exc:
         raise ExtractError(
             f"cannot run the binary ({exc.strerror or exc})", path=command[0]
         ) from exc
+    stderr = done.stderr.decode("utf-8", "surrogateescape")
     if done.returncode != 0:
-        lines = [line for line in done.stderr.splitlines() if line.strip()]
-        reason = lines[-1].strip() if lines else f"exit status {done.returncode}"
-        raise ExtractError(reason)
+        lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+        errors = [line for line in lines if line.startswith(("loudscape: error:", "error:"))]
+        reason = (errors or lines or [f"exit status {done.returncode}"])[0]
+        raise ExtractError(reason.removeprefix("loudscape: ").removeprefix("error: "))
+    return stderr
+
+
+def _warnings(stderr: str, *, input_name: str, label: str) -> list[str]:
+    """The warning lines of the binary's stderr, once each, in order, without their
+    ``warning:`` prefix; the temporary cloud of arrays is called ``label``."""
+    found: list[str] = []
+    for line in stderr.splitlines():
+        match = _WARNING_LINE.fullmatch(line.strip())
+        if match is None:
+            continue
+        text = match.group(1).replace(input_name, label)
+        if text not in found:
+            found.append(text)
+    return found
 
 
 def render(
@@ -138,13 +378,14 @@ def render(
         A point cloud (.ply) or an audio file (extracted by ``loudscape-extract`` and cached,
         as the app does); a :class:`Cloud` or the ``(points, metadata)`` pair
         ``loudscape_extract.read_ply`` returns; or a points array of shape (n_points, 5).
+        Any file name works, ``-i.ply`` included.
     view : {"points", "surface", "volume"}
     size : tuple of int
-        (width, height) in pixels.
+        (width, height) in pixels, each 16 to 8192.
     camera : tuple of float, optional
-        (azimuth degrees, elevation degrees, distance); fitted to the data when omitted.
+        (azimuth degrees, elevation degrees, distance > 0); fitted to the data when omitted.
     point_size : float, optional
-        Point disc diameter in pixels (default: by the number of points).
+        Point disc diameter in pixels, 0.5 to 64 (default: by the number of points).
     iso : float
         Surface isovalue in [0, 1] of the normalized loudness density.
     method : {"mt", "dc"}
@@ -157,43 +398,52 @@ def render(
     labels, legend : bool
         Draw the axis labels, and the legend.
     metadata : dict, optional
-        Metadata for a bare points array (``axes`` etc., see docs/FORMAT.md).
+        Metadata for a bare points array (``axes`` etc., see docs/FORMAT.md); plain JSON.
     timeout : float, optional
         Seconds to wait for the binary.
 
     Returns
     -------
     Picture
-        Shown inline by Jupyter; ``.to_numpy()``, ``.save(path)``.
+        Shown inline by Jupyter; ``.to_numpy()``, ``.save(path)``; ``.warnings``.
 
     Raises
     ------
     ExtractError
-        Bad arguments, an unreadable source, or the renderer's own one-line error.
+        The one exception of the package: a bad argument (the message names it and its
+        value), an unreadable source, or the renderer's own one-line error.
+
+    Warns
+    -----
+    LoudscapeWarning
+        Once for each thing found wrong or odd about the input (a truncated or corrupt file,
+        cancelling channels...), as the command line says it; also kept in
+        :attr:`Picture.warnings`.
     """
-    if view not in VIEWS:
-        raise ExtractError(f"view {view!r} is not one of {', '.join(VIEWS)}")
-    width, height = (int(v) for v in size)
-    if width <= 0 or height <= 0:
-        raise ExtractError(f"size must be two positive integers, got {size!r}")
+    options = _options(
+        view=view,
+        size=size,
+        camera=camera,
+        point_size=point_size,
+        iso=iso,
+        method=method,
+        colormap=colormap,
+        background=background,
+        freq_axis=freq_axis,
+        labels=labels,
+        legend=legend,
+    )
+    seconds = _timeout(timeout)
     binary = find_binary()
     with tempfile.TemporaryDirectory(prefix="loudscape-render-") as folder:
         output = os.path.join(folder, "picture.png")
-        command = [str(binary), "--quiet", "render", _as_input(source, metadata, folder)]
-        command += ["--view", view, "--size", f"{width}x{height}", "--output", output]
-        command += ["--iso", str(iso), "--method", method, "--colormap", colormap]
-        command += ["--background", background, "--freq-axis", freq_axis]
-        if camera is not None:
-            azimuth, elevation, distance = (float(v) for v in camera)
-            command += ["--camera", f"{azimuth},{elevation},{distance}"]
-        if point_size is not None:
-            command += ["--point-size", str(float(point_size))]
-        if not labels:
-            command.append("--no-labels")
-        if not legend:
-            command.append("--no-legend")
-        _run(command, timeout=timeout)
-        return Picture(Path(output).read_bytes())
+        name, label = _as_input(source, metadata, folder)
+        command = [str(binary), "--quiet", "render", *options, f"--output={output}", "--", name]
+        stderr = _run(command, timeout=seconds)
+        said = _warnings(stderr, input_name=name, label=label)
+        for text in said:
+            warnings.warn(text, LoudscapeWarning, stacklevel=2)
+        return Picture(Path(output).read_bytes(), warnings=said)
 
 
 def show(source, *, view: str | None = None, metadata: dict | None = None, wait: bool = True):
@@ -218,18 +468,21 @@ def show(source, *, view: str | None = None, metadata: dict | None = None, wait:
     Raises
     ------
     ExtractError
-        Bad arguments, an unreadable source, or the window's own error.
+        The one exception of the package: a bad argument (named, with its value), an
+        unreadable source, or the window's own error.
     """
-    if view is not None and view not in VIEWS:
-        raise ExtractError(f"view {view!r} is not one of {', '.join(VIEWS)}")
+    if view is not None:
+        _choice("view", view, VIEWS)
+    _flag("wait", wait)
     binary = find_binary()
     folder = tempfile.mkdtemp(prefix="loudscape-show-")
     try:
-        command = [str(binary), _as_input(source, metadata, folder)]
+        # An absolute path: no file name (``-i.ply``) is read as an option.
+        command = [str(binary), _as_input(source, metadata, folder)[0]]
         if view is not None:
             command += ["--view", view]
         if wait:
-            _run(command, timeout=None)
+            _run(command, timeout=None)  # the window shows the input's warnings itself
             return None
         process = subprocess.Popen(command)
     except BaseException:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import os
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -24,23 +25,31 @@ class Picture:
     ----------
     png : bytes
         The PNG file's bytes.
+    warnings : sequence of str
+        What was found wrong or odd about the input, ``"FILE: MESSAGE"`` each.
 
     Attributes
     ----------
     png : bytes
     width, height : int
         Size in pixels, from the PNG header.
+    warnings : tuple of str
+        The input's warnings (a truncated or corrupt file, cancelling channels...), each
+        once; empty when there is nothing to say. :func:`loudscape.render` also raises each as
+        a :class:`loudscape.LoudscapeWarning`.
     """
 
-    def __init__(self, png: bytes) -> None:
+    def __init__(self, png: bytes, *, warnings: Sequence[str] = ()) -> None:
         if not png.startswith(PNG_SIGNATURE) or len(png) < 24 or png[12:16] != b"IHDR":
             raise ExtractError("the renderer's output is not a PNG file")
         self.png = bytes(png)
+        self.warnings = tuple(str(text) for text in warnings)
         self.width = int.from_bytes(png[16:20], "big")
         self.height = int.from_bytes(png[20:24], "big")
 
     def __repr__(self) -> str:
-        return f"<loudscape.Picture {self.width}x{self.height}>"
+        said = f", {len(self.warnings)} warning(s)" if self.warnings else ""
+        return f"<loudscape.Picture {self.width}x{self.height}{said}>"
 
     def _repr_png_(self) -> bytes:
         return self.png
