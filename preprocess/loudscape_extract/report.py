@@ -37,6 +37,7 @@ from loudscape_extract.normalization import (
 )
 from loudscape_extract.paths import atomic_output, check_output_path, check_regular_input
 from loudscape_extract.ply import read_ply_metadata
+from loudscape_extract.report_pdf import require_matplotlib
 
 __all__ = [
     "BAND_MIN_SONGS",
@@ -235,6 +236,7 @@ def write_report(
     check_output_path(output, inputs=[path], extensions=(".png",))
     if csv_path:
         check_output_path(csv_path, inputs=[path, output], extensions=(".csv",), flag="--csv")
+    require_matplotlib()
     metadata = read_ply_metadata(path)
     songs = _checked_songs(metadata, path)
     if csv_path:

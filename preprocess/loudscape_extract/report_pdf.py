@@ -22,10 +22,11 @@ import time
 
 import numpy as np
 
+from loudscape_extract.errors import ExtractError
 from loudscape_extract.paths import atomic_output
 from loudscape_extract.version import GENERATOR
 
-__all__ = ["PAGE_EXTENSIONS", "draw_page", "lra_band", "minutes"]
+__all__ = ["PAGE_EXTENSIONS", "draw_page", "lra_band", "minutes", "require_matplotlib"]
 
 #: What a page may be written as.
 PAGE_EXTENSIONS = (".pdf", ".png")
@@ -37,6 +38,18 @@ _OVER_0, _OVER_1 = "#c0392b", "#f0a35e"
 _PASS, _FAIL = "#1e7b34", "#b03a2e"
 _DOWN, _UP = "#c0392b", "#1e7b34"
 _CHEVRON_DB = 2.0
+
+
+def require_matplotlib() -> None:
+    """Raise :class:`ExtractError` saying how to install matplotlib when it is missing (the
+    reports draw with it; it is the ``report`` extra), before any work is done."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError as exc:
+        raise ExtractError(
+            "matplotlib is not installed: pip install 'loudscape-extract[report]' "
+            f"(needed to draw reports; {exc})"
+        ) from exc
 
 
 def minutes(seconds: float) -> str:

@@ -44,7 +44,7 @@ from loudscape_extract.normalization import PRESETS, normalization_gain
 from loudscape_extract.notices import track_warnings
 from loudscape_extract.paths import check_output_path, check_regular_input, fsync_directory
 from loudscape_extract.ply import read_ply_metadata
-from loudscape_extract.report_pdf import PAGE_EXTENSIONS, draw_page
+from loudscape_extract.report_pdf import PAGE_EXTENSIONS, draw_page, require_matplotlib
 from loudscape_extract.stream import stream_track
 from loudscape_extract.timeline.cache import cache_key, remove_temporaries
 from loudscape_extract.timeline.inputs import discover_audio
@@ -474,16 +474,6 @@ def load_song(
     return song, False
 
 
-def _check_matplotlib() -> None:
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError as exc:
-        raise ExtractError(
-            "matplotlib is not installed: pip install 'loudscape-extract[report]' "
-            f"(needed to draw reports; {exc})"
-        ) from exc
-
-
 def write_song_report(
     path: str,
     output: str,
@@ -507,7 +497,7 @@ def write_song_report(
     check_output_path(output, inputs=[path], extensions=PAGE_EXTENSIONS)
     if csv_path:
         check_output_path(csv_path, inputs=[path, output], extensions=(".csv",), flag="--csv")
-    _check_matplotlib()
+    require_matplotlib()
     song, _ = load_song(path, cache_dir=cache_dir, strict=strict, notes=notes)
     verdict = None if target is None else check_target(song.metrics, target)
     draw_page(song_page(song, target, verdict), output)
@@ -648,7 +638,7 @@ def write_folder_report(
     """
     if extension not in PAGE_EXTENSIONS:
         raise ExtractError(f"pages are {' or '.join(PAGE_EXTENSIONS)}, got {extension!r}")
-    _check_matplotlib()
+    require_matplotlib()
     skipped: dict = {}
     paths = discover_audio([folder], skipped=skipped)
     result = FolderReport(failed=dict(skipped))

@@ -2,6 +2,7 @@
 
 import csv
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -140,3 +141,13 @@ def test_demo_timeline_shows_the_loudness_war():
     assert psr[-1] < psr[0] - 3 and dr[-1] < dr[0] - 3
     assert meta["axes"]["z"]["measure"] == "psr"
     assert np.all(np.abs(points[:, :3]) <= 1)
+
+
+def test_report_without_matplotlib_says_how_to_install_it(tmp_path, capsys, monkeypatch):
+    path = tmp_path / "t.ply"
+    timeline_file(path, [song(1975, -16.0, 9.0)])
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    assert main(["report", str(path), "-o", str(tmp_path / "r.png")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pip install 'loudscape-extract[report]'" in err, err
+    assert "internal error" not in err and not (tmp_path / "r.png").exists()
