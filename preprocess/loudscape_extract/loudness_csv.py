@@ -34,7 +34,9 @@ from numpy.lib.stride_tricks import sliding_window_view
 from loudscape_extract.audio import decode_audio, mix_to_mono
 from loudscape_extract.csv_table import write_csv
 from loudscape_extract.dynamics import (
+    DC_WARN_THRESHOLD,
     dc_and_highpass,
+    dc_warning,
     dynamics_from_segments,
     segment_true_peak,
     song_dynamics_metrics,
@@ -49,6 +51,7 @@ from loudscape_extract.loudness import (
     true_peak_dbtp,
     window_maxima,
 )
+from loudscape_extract.notices import warning_lines
 from loudscape_extract.paths import check_output_path, check_regular_input
 from loudscape_extract.ply import read_ply_metadata
 
@@ -107,7 +110,8 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
     readings : dict
         ``integrated_lufs``, ``lra_lu``, ``max_momentary_lufs``, ``max_momentary_s``,
         ``max_short_term_lufs``, ``max_short_term_s``, ``true_peak_dbtp``,
-        ``sample_peak_dbfs``, ``plr_db``, ``psr_median_db`` (None where not measurable).
+        ``sample_peak_dbfs``, ``plr_db``, ``psr_median_db`` (None where not measurable) and
+        ``dc_offset`` (the largest channel mean removed).
 
     Examples
     --------
@@ -120,7 +124,7 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
     >>> round(rows[29]["short_term_lufs"], 1), round(readings["max_momentary_lufs"], 1)
     (-20.0, -20.0)
     """
-    clean, _dc = dc_and_highpass(samples, sample_rate=sample_rate, highpass_hz=None)
+    clean, dc = dc_and_highpass(samples, sample_rate=sample_rate, highpass_hz=None)
     energy, boundaries = segment_energy(clean, sample_rate)
     segment_peak, overall_peak = segment_true_peak(clean, boundaries)
     lengths = np.diff(boundaries).astype(np.float64)
@@ -175,6 +179,7 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
         "sample_peak_dbfs": sample_peak_dbfs(samples),
         "plr_db": None if integrated is None or clean_peak is None else clean_peak - integrated,
         "psr_median_db": song_dynamics_metrics(dynamics)["psr_median_db"],
+        "dc_offset": float(np.max(np.abs(dc))) if dc.size else 0.0,
     }
     return rows, readings
 
@@ -246,7 +251,7 @@ def _is_cloud(path: str) -> bool:
 
 def write_loudness_csv(
     source: str, csv_path: str | None, *, strict: bool = False
-) -> tuple[list[dict], dict]:
+) -> tuple[list[dict], dict, list[str]]:
     """Read ``source`` (audio or a Song cloud) and, with ``csv_path``, write the curves there
     and the summary beside it (:func:`summary_path`), each atomically.
 
@@ -254,6 +259,9 @@ def write_loudness_csv(
     -------
     rows, readings
         As :func:`audio_curves`.
+    warnings : list of str
+        ``<source>: <message>`` lines: a truncated file, a large DC offset removed, or the
+        warnings a cloud carries.
 
     Raises
     ------
@@ -267,14 +275,19 @@ def write_loudness_csv(
         for output in (csv_path, summary):
             check_output_path(output, inputs=[source], extensions=(".csv",), flag="--csv")
     if _is_cloud(source):
-        rows, readings = cloud_curves(read_ply_metadata(source), path=source)
+        metadata = read_ply_metadata(source)
+        rows, readings = cloud_curves(metadata, path=source)
+        warnings = warning_lines(metadata)
     else:
         audio = decode_audio(source, strict=strict)
         rows, readings = audio_curves(audio.samples, sample_rate=audio.sample_rate)
+        warnings = [f"{source}: {audio.warning}"] if audio.warning else []
+        if readings["dc_offset"] > DC_WARN_THRESHOLD:
+            warnings.append(dc_warning(source, readings["dc_offset"]))
     if csv_path is not None:
         write_csv(csv_path, CURVE_COLUMNS, rows)
         write_csv(summary, SUMMARY_COLUMNS, _summary_rows(readings))
-    return rows, readings
+    return rows, readings, warnings
 
 
 def _summary_rows(readings: dict) -> list[dict]:
@@ -320,9 +333,11 @@ def _format(value: float | None, unit: str) -> str:
 
 
 def run(args: argparse.Namespace, *, say) -> int:
-    """The ``loudness`` subcommand: the readings on stdout, one a line; ``wrote`` lines on
-    stderr (through ``say``) for the CSVs."""
-    rows, readings = write_loudness_csv(args.input, args.csv, strict=args.strict)
+    """The ``loudness`` subcommand: the readings on stdout, one a line; warnings and
+    ``wrote`` lines on stderr (through ``say``)."""
+    rows, readings, warnings = write_loudness_csv(args.input, args.csv, strict=args.strict)
+    for line in warnings:
+        say(f"warning: {line}")
     for key, unit, time_key in _SUMMARY:
         line = f"{key:<20} {_format(readings.get(key), unit)}"
         if time_key and readings.get(time_key) is not None:

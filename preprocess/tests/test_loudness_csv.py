@@ -166,3 +166,14 @@ def test_a_cloud_without_curves_needs_the_audio(song, tmp_path, capsys):
     assert main(["loudness", timeline]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "timeline cloud stores no loudness curves" in err
+
+
+def test_warnings_travel_with_the_readings(song, tmp_path, capsys):
+    """A large DC offset is removed and said, as the song command says it."""
+    _, _, stereo = song
+    shifted = str(tmp_path / "dc.wav")
+    soundfile.write(shifted, stereo + 0.05, RATE, subtype="FLOAT")
+    assert main(["loudness", shifted, "-q"]) == 0
+    captured = capsys.readouterr()
+    assert "warning:" in captured.err and "DC offset 0.050" in captured.err
+    assert shifted in captured.err and "integrated_lufs" in captured.out
