@@ -395,6 +395,9 @@ def read_song_entry(entry: str, path: str) -> tuple[SongLoudness | None, str]:
     warnings = stored.get("warnings")
     if not isinstance(warnings, list) or not all(isinstance(w, str) for w in warnings):
         return None, "warnings are not a list of lines"
+    for key in ("duration_s", "sample_rate", "channels"):
+        if not _number(stored.get(key)) or stored[key] <= 0:
+            return None, f"{key} is not a positive number"
     try:
         song = SongLoudness(
             name=os.path.basename(path),
@@ -566,6 +569,8 @@ def _report_job(path, page, target, cache_dir, strict):
         return path, None, False, notes, exc.message
     except MemoryError:
         return path, None, False, notes, "out of memory"
+    except Exception as exc:  # noqa: BLE001 - one bad song must not stop the folder
+        return path, None, False, notes, " ".join(str(exc).split()) or type(exc).__name__
 
 
 def _terminated(signum, _frame):

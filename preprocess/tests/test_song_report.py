@@ -2,6 +2,8 @@
 checked against libebur128 (pyebur128), the verdict, the cache, bad input."""
 
 import csv
+import hashlib
+import json
 import os
 import re
 import signal
@@ -19,9 +21,12 @@ from loudscape_extract.ply import read_ply_metadata, write_ply
 from loudscape_extract.song_report import (
     ENTRY_SUFFIX,
     SUMMARY_COLUMNS,
+    SongLoudness,
     Target,
+    _save_song_entry,
     check_target,
     preset_target,
+    read_song_entry,
 )
 
 RATE = 44100
@@ -316,3 +321,45 @@ def test_sigterm_stops_a_folder_without_temporaries_or_workers(tmp_path):
     assert [n for n in os.listdir(cache) if not n.endswith(ENTRY_SUFFIX)] == []
     for page in os.listdir(out):  # every page there is whole
         assert "Integrated loudness" in pdf_text(out / page)
+
+
+def test_cache_entries_round_trip_and_odd_values_are_refused(tmp_path):
+    song = SongLoudness(
+        name="a.wav",
+        path="a.wav",
+        duration_s=12.5,
+        sample_rate=44100,
+        channels=2,
+        metrics={"integrated_lufs": -9.5, "lra_lu": None},
+        curves=None,
+        warnings=["clipped"],
+    )
+    entry = tmp_path / ("k" + ENTRY_SUFFIX)
+    _save_song_entry(str(entry), song)
+    assert read_song_entry(str(entry), "a.wav") == (song, "")
+    assert os.listdir(tmp_path) == [entry.name]
+
+    def forged(**changes):  # a valid checksum over values no measurement gives
+        stored = {
+            "duration_s": 12.5,
+            "sample_rate": 44100,
+            "channels": 2,
+            "curves": None,
+            "metrics": {"integrated_lufs": -9.5},
+            "warnings": [],
+            **changes,
+        }
+        content = json.dumps(stored).encode()
+        digest = hashlib.sha256(content).hexdigest().encode()
+        entry.write_bytes(b"loudscape-loudness 1 " + digest + b"\n" + content)
+        return read_song_entry(str(entry), "a.wav")
+
+    assert forged()[0] is not None
+    for changes, reason in (
+        ({"duration_s": "long"}, "duration_s is not a positive number"),
+        ({"channels": 0}, "channels is not a positive number"),
+        ({"metrics": {"integrated_lufs": "loud"}}, "a metric that is not a number"),
+        ({"curves": {"rate_hz": -1}}, "curves: rate_hz is '-1'"),
+        ({"warnings": "clipped"}, "warnings are not a list of lines"),
+    ):
+        assert forged(**changes) == (None, reason)
