@@ -558,14 +558,27 @@ def run_song_report(args: argparse.Namespace, kind: str) -> int:
             raise ExtractError("give the folder for the pages with -o", path=args.input)
         if args.csv:
             raise ExtractError("--csv is for one song; a folder's numbers are in summary.csv")
-        result = write_folder_report(
-            args.input,
-            args.output,
-            extension="." + args.format,
-            target=target,
-            jobs=args.jobs,
-            cache_dir=cache_dir,
-        )
+        tty, width = not args.quiet and sys.stderr.isatty(), [0]
+
+        def progress(done: int, total: int, path: str) -> None:
+            if tty:
+                line = f"{PROG}: [{done}/{total}] {os.path.basename(path)}"[:100]
+                print("\r" + line.ljust(width[0]), end="", file=sys.stderr, flush=True)
+                width[0] = len(line)
+
+        try:
+            result = write_folder_report(
+                args.input,
+                args.output,
+                extension="." + args.format,
+                target=target,
+                jobs=args.jobs,
+                cache_dir=cache_dir,
+                on_done=progress,
+            )
+        finally:
+            if width[0]:
+                print("\r" + " " * width[0] + "\r", end="", file=sys.stderr, flush=True)
         for line in result.notes:
             _say(line)
         for path, reason in sorted(result.failed.items()):
