@@ -111,7 +111,9 @@ def _readings(song: dict) -> list[tuple[str, str]]:
     dr = metrics.get("dr_db")
     overs = "n/a"
     if "overs_0dbtp_count" in curves:
-        overs = f"{curves['overs_0dbtp_count']} over 0 dBTP, {curves['overs_1dbtp_count']} over -1"
+        overs = (
+            f"{curves['overs_0dbtp_count']} runs over 0 dBTP, {curves['overs_1dbtp_count']} over -1"
+        )
     return [
         ("Integrated loudness", _fmt(metrics.get("integrated_lufs"), "LUFS")),
         ("Loudness range (LRA)", _fmt(metrics.get("lra_lu"), "LU")),

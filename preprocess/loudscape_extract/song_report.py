@@ -502,6 +502,11 @@ def write_song_report(
         check_output_path(csv_path, inputs=[path, output], extensions=(".csv",), flag="--csv")
     require_matplotlib()
     song, _ = load_song(path, cache_dir=cache_dir, strict=strict, notes=notes)
+    if song.curves is None and notes is not None:
+        notes.append(
+            f"{path}: the cloud carries no loudness curves (written before they existed); "
+            "the page shows its numbers only"
+        )
     verdict = None if target is None else check_target(song.metrics, target)
     draw_page(song_page(song, target, verdict), output)
     if csv_path:
