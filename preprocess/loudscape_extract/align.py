@@ -429,6 +429,19 @@ def align(
     Returns
     -------
     Alignment
+
+    Examples
+    --------
+    Noise with a changing level, and the same 0.25 s (2,000 samples) later and 6 dB louder:
+
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> rate = 8000
+    >>> a = rng.standard_normal(rate * 20) * np.repeat(rng.uniform(0.1, 1, 200), rate // 10)
+    >>> b = 2.0 * np.concatenate([np.zeros(2000), a])
+    >>> found = align(a, b, rate)
+    >>> found.alignable, round(found.offset_s * rate, 2), round(found.b_time(10.0), 4)
+    (True, 2000.0, 10.25)
     """
     sample_rate_b = sample_rate_a if sample_rate_b is None else sample_rate_b
     for name, x in (("A", a), ("B", b)):
