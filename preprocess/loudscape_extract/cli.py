@@ -14,14 +14,18 @@ import time
 from collections.abc import Sequence
 
 from loudscape_extract import export
+from loudscape_extract.audio import decode_audio
+from loudscape_extract.compare import MAX_VERSIONS, compare_versions
+from loudscape_extract.compare_sheet import summary_json, write_compare_csv, write_sheet
 from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.loudness_csv import add_parser as add_loudness_parser
 from loudscape_extract.loudness_csv import run as run_loudness
 from loudscape_extract.messages import one_line
-from loudscape_extract.normalization import NORMALIZE_CHOICES
+from loudscape_extract.normalization import NORMALIZE_CHOICES, PRESETS
 from loudscape_extract.notices import warning_lines
+from loudscape_extract.paths import check_output_path
 from loudscape_extract.ply import read_ply_metadata
 from loudscape_extract.progress import JsonProgress, JsonTimelineProgress, Progress
 from loudscape_extract.report import write_report
@@ -349,13 +353,36 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_song_report_arguments(report)
 
+    compare = commands.add_parser(
+        "compare",
+        help="compare 2 to 8 versions of a song: aligned in time, matched in loudness",
+        description="Aligns every version to the first (offset and time map, with a "
+        "confidence; unrelated music is said and not shifted), finds the gain that matches "
+        "each to the quietest one's integrated loudness (or to a service's level, --match), "
+        "and prints or writes the metrics, the aligned loudness curves and the tonal balance "
+        "at matched loudness (docs/COMPARE.md).",
+    )
+    compare.add_argument("versions", nargs="+", metavar="VERSION", help="audio files, A first")
+    compare.add_argument("-o", "--output", help="write the sheet (.png or .pdf)")
+    compare.add_argument("--csv", help="write the table as CSV (.csv), one row a version")
+    compare.add_argument(
+        "--json", action="store_true", help="print each version's offset, gain and metrics as JSON"
+    )
+    compare.add_argument(
+        "--match",
+        choices=("quietest", *PRESETS),
+        default="quietest",
+        help="the loudness the versions are matched to: the quietest version's (default) or a "
+        "service's level with its rules",
+    )
+
     for sub in (song, timeline):
         sub.add_argument(
             "--strict",
             action="store_true",
             help="refuse truncated or corrupt audio instead of using what decodes (with a warning)",
         )
-    for sub in (song, timeline, report, export.add_parser(commands)):
+    for sub in (song, timeline, report, compare, export.add_parser(commands)):
         sub.add_argument(
             "-q",
             "--quiet",
@@ -631,6 +658,40 @@ def run_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_compare(args: argparse.Namespace) -> int:
+    """The compare subcommand: decode, align, match; JSON on stdout, sheet and CSV files."""
+    if not 2 <= len(args.versions) <= MAX_VERSIONS:
+        raise ExtractError(f"compare takes 2 to {MAX_VERSIONS} versions, got {len(args.versions)}")
+    if args.output:
+        check_output_path(args.output, inputs=args.versions, extensions=(".png", ".pdf"))
+    if args.csv:
+        check_output_path(args.csv, inputs=args.versions, extensions=(".csv",), flag="--csv")
+    if not (args.output or args.csv or args.json):
+        raise ExtractError("say what to write: -o SHEET.png, --csv TABLE.csv or --json")
+    audios = []
+    for path in args.versions:
+        audio = decode_audio(path)
+        if audio.warning:
+            _say(f"warning: {path}: {audio.warning}")
+        audios.append(audio)
+    say = (lambda _m: None) if args.quiet else (lambda m: _say(m))
+    versions = compare_versions(audios, match=args.match, progress=say)
+    for v in versions[1:]:
+        if not v.alignment.alignable:
+            _say(f"warning: {v.path}: not aligned to {versions[0].path}: {v.alignment.reason}")
+    if args.output:
+        write_sheet(args.output, versions, match=args.match)
+        if not args.quiet:
+            _say(f"wrote {args.output} ({len(versions)} versions)")
+    if args.csv:
+        write_compare_csv(args.csv, versions)
+        if not args.quiet:
+            _say(f"wrote {args.csv} ({len(versions)} row(s), one per version)")
+    if args.json:
+        print(summary_json(versions, match=args.match))
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``loudscape-extract``; returns the exit status.
 
@@ -660,6 +721,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return run_export(args)
             if args.command == "loudness":
                 return run_loudness(args, say=_say)
+            if args.command == "compare":
+                return run_compare(args)
             return run_report(args)
     except ExtractError as exc:
         if args.debug:
