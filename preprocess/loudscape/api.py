@@ -113,7 +113,7 @@ def read_cloud(path: str | os.PathLike) -> Cloud:
         The file cannot be read or is not a loudscape PLY.
     """
     if not isinstance(path, (str, os.PathLike)):
-        raise ExtractError(f"path must be a file name, not {type(path).__name__}: {path!r:.80}")
+        raise ExtractError(f"path must be a file name, not {type(path).__name__}: {_shown(path)}")
     name = os.fspath(path)
     if not isinstance(name, str) or not name.lower().endswith(".ply"):
         raise ExtractError("read_cloud reads .ply point clouds (render takes audio)", path=name)
@@ -125,8 +125,8 @@ def read_cloud(path: str | os.PathLike) -> Cloud:
 
 
 def _shown(value) -> str:
-    """``value`` for a message: its repr, cut short."""
-    text = repr(value)
+    """``value`` for a message: its repr on one line, cut short."""
+    text = " ".join(repr(value).split())
     return text if len(text) <= 80 else text[:77] + "..."
 
 

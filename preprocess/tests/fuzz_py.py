@@ -1,7 +1,8 @@
-"""Fuzzing the Python readers of untrusted files: the manifest parser and the PLY reader.
+"""Fuzzing the Python readers of untrusted files (the manifest parser, the PLY readers,
+``loudscape.read_cloud``) and the notebook API's arguments.
 
-    python preprocess/tests/fuzz_py.py --seconds 600 [--target manifest|ply|all] [--round N]
-                                       [--json]
+    python preprocess/tests/fuzz_py.py --seconds 600 [--target manifest|ply|read_cloud|api|all]
+                                       [--round N] [--json]
 
 Inputs come from hypothesis strategies, built structurally (a manifest's header, rows, cells
 with quotes, commas, line breaks, BOMs, odd years; a PLY's header lines, both metadata
@@ -16,7 +17,17 @@ under limits, and breaking one is a finding, as is any exception but :class:`Ext
   instead of taking the machine;
 - consistency: the PLY readers (``read_ply``, ``map_ply``, ``read_ply_metadata``) agree on
   what they all accept, and a manifest's entries are files that exist, with plausible years
-  and one-line values.
+  and one-line values;
+- ``read_cloud`` gets the PLY inputs as a regular file or behind what is not one (a FIFO, a
+  link to /dev/zero, a directory, a missing name, a name that is no path at all): it answers
+  at once with ExtractError or the same cloud as ``read_ply``;
+- ``api``: ``loudscape.render`` with every argument drawn from good values and junk (NaN,
+  strings, tuples of any length, bools, bytes; point arrays of any shape and dtype; metadata
+  with NaN, non-string keys, odd types; file names starting with ``-``). The binary is a
+  stand-in (``_run`` replaced in-process) that checks the command it would run: options only
+  as ``--name=value`` with finite numbers, the source an absolute path after ``--``, the
+  temporary cloud readable and equal to the points given. Anything but a picture or one
+  one-line ExtractError is a finding, as is a temporary folder left behind.
 
 Prints one line (or a JSON object): inputs run, seconds, findings (each with its input,
 shortened). Exit status 1 when there is a finding.
@@ -34,6 +45,7 @@ import tempfile
 import time
 import tracemalloc
 
+TARGETS = ("manifest", "ply", "read_cloud", "api")
 TIME_LIMIT_S = 2.0
 MEMORY_BASE = 32 << 20
 MEMORY_FACTOR = 20
@@ -144,6 +156,114 @@ def ply_target(data: bytes, folder: str) -> None:
         assert meta_a == meta_b and np.array_equal(a, b, equal_nan=True), "readers disagree"
 
 
+_KINDS = ("file", "fifo", "dev_zero", "directory", "missing", "not_a_path")
+
+
+def read_cloud_target(case, folder: str) -> None:
+    """``loudscape.read_cloud`` on ``data`` behind a path of the given kind; accepted files
+    must read as ``read_ply`` reads them."""
+    import numpy as np
+
+    import loudscape
+    from loudscape_extract.errors import ExtractError
+    from loudscape_extract.ply import read_ply
+
+    data, kind = case
+    path = os.path.join(folder, f"read_cloud-{kind}.ply")
+    if kind == "file":
+        with open(path, "wb") as handle:
+            handle.write(data)
+    elif not os.path.lexists(path):
+        if kind == "fifo":
+            os.mkfifo(path)
+        elif kind == "dev_zero":
+            os.symlink("/dev/zero", path)
+        elif kind == "directory":
+            os.mkdir(path)
+    argument = {"not_a_path": data, "missing": path + ".gone"}.get(kind, path)
+    cloud = loudscape.read_cloud(argument)  # ExtractError is the expected answer
+    assert kind == "file", f"read_cloud accepted a {kind}"
+    try:
+        points, metadata = read_ply(path)
+    except ExtractError as exc:
+        raise AssertionError(f"read_cloud accepted what read_ply refuses: {exc}") from None
+    assert np.array_equal(cloud.points, points, equal_nan=True) and cloud.metadata == metadata
+
+
+_API_RUNS: list[list[str]] = []
+
+
+def _stand_in_run(command: list[str], *, timeout) -> str:
+    """``loudscape.api._run`` for the fuzzer: checks the command, writes a small PNG."""
+    import numpy as np
+
+    from loudscape_extract.ply import read_ply
+
+    assert all(isinstance(part, str) and "\n" not in part for part in command), command
+    assert command[1:3] == ["--quiet", "render"] and command[-2] == "--", command
+    name = command[-1]
+    assert os.path.isabs(name) and os.path.isfile(name), name
+    for option in command[3:-2]:
+        key, equals, value = option.partition("=")
+        assert key.startswith("--") and (equals or key in ("--no-labels", "--no-legend")), option
+        for number in value.replace("x", ",").split(","):
+            try:
+                assert np.isfinite(float(number)), option
+            except ValueError:
+                pass  # a name (view, colour map...) or a path
+    assert timeout is None or (timeout > 0 and np.isfinite(timeout)), timeout
+    if os.path.basename(name) == "cloud.ply":
+        read_ply(name)  # the temporary cloud of arrays is a valid file
+    output = next(o.split("=", 1)[1] for o in command if o.startswith("--output="))
+    with open(output, "wb") as handle:
+        handle.write(_PNG)
+    _API_RUNS.append(command)
+    return ""
+
+
+# A 1x1 PNG (signature, IHDR, IDAT, IEND): enough for Picture.
+_PNG = bytes.fromhex(
+    "89504e470d0a1a0a0000000d49484452000000010000000108060000001f15c489"
+    "0000000d4944415478da63f8ffff3f0005fe02fea7d6a4f20000000049454e44ae426082"
+)
+
+
+def api_target(case, folder: str) -> None:
+    """``loudscape.render`` (and ``read_cloud``) with the drawn arguments, the binary a
+    stand-in; a picture or one one-line ExtractError, and no temporary folder left."""
+    import tempfile as tempfile_module
+
+    import loudscape
+    import loudscape.api as api
+    from loudscape_extract.errors import ExtractError
+
+    source, kwargs, junk = case
+    if isinstance(source, str):
+        source = os.path.join(folder, "api", source)  # "-i.ply" and friends: real files
+    api._run = _stand_in_run
+    os.environ["LOUDSCAPE_BIN"] = sys.executable  # found, never run
+    previous = tempfile_module.tempdir
+    private = os.path.join(folder, "api-tmp")
+    os.makedirs(private, exist_ok=True)
+    tempfile_module.tempdir = private
+    try:
+        for call in (
+            lambda: loudscape.render(source, **kwargs),
+            lambda: loudscape.read_cloud(junk),
+        ):
+            try:
+                picture = call()
+            except ExtractError as exc:
+                message = str(exc)
+                assert message and "\n" not in message, message
+                continue
+            if isinstance(picture, loudscape.Picture):
+                assert picture.width == 1 and picture.warnings == ()
+        assert os.listdir(private) == [], f"left behind: {os.listdir(private)}"
+    finally:
+        tempfile_module.tempdir = previous
+
+
 # --- strategies --------------------------------------------------------------------------
 
 
@@ -210,7 +330,79 @@ def strategies():
         },
         optional={"extra": json_values, "source": st.fixed_dictionaries({"path": st.text()})},
     )
-    return {"manifest": manifest, "ply": _ply_strategy(st, metadata)}
+    ply = _ply_strategy(st, metadata)
+    return {
+        "manifest": manifest,
+        "ply": ply,
+        "read_cloud": st.tuples(
+            st.one_of(ply, st.just(_VALID_PLY)),
+            st.sampled_from(_KINDS),
+        ),
+        "api": _api_strategy(st, json_values),
+    }
+
+
+def _api_strategy(st, json_values):
+    import numpy as np
+
+    junk = st.one_of(
+        st.none(),
+        st.booleans(),
+        st.integers(-(2**70), 2**70),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.text(max_size=12),
+        st.binary(max_size=6),
+        st.lists(st.one_of(st.floats(allow_nan=True), st.integers(-5, 5000)), max_size=4).flatmap(
+            lambda items: st.sampled_from([items, tuple(items), np.array(items, dtype=object)])
+        ),
+        st.builds(object),
+    )
+
+    def argument(good):
+        return st.one_of(good, good, good, junk)  # mostly good: a junk one refuses the call
+
+    number = st.floats(-2, 2000, allow_nan=False)
+    names = {
+        "view": st.sampled_from(["points", "surface", "volume", "-x", "sideways"]),
+        "size": st.tuples(st.integers(-1, 9000), st.integers(-1, 9000)),
+        "camera": st.tuples(number, number, number),
+        "point_size": st.one_of(st.floats(0.5, 64), st.sampled_from([-1, 0, 0.49, 65])),
+        "iso": st.floats(-0.5, 1.5),
+        "method": st.sampled_from(["mt", "dc", "--help"]),
+        "colormap": st.sampled_from(["classic", "viridis", "jet"]),
+        "background": st.sampled_from(["dark", "light", ""]),
+        "freq_axis": st.sampled_from(["linear", "log", "mel", "bark"]),
+        "labels": st.booleans(),
+        "legend": st.booleans(),
+        "timeout": st.sampled_from([None, 30, 0.5, 0, -1]),
+        "metadata": st.one_of(
+            st.none(), st.dictionaries(st.text(max_size=6), json_values, max_size=3), junk
+        ),
+    }
+    kwargs = st.fixed_dictionaries({}, optional={k: argument(v) for k, v in names.items()})
+
+    dtypes = st.sampled_from(["f4", "f8", "i4", "u1", "f2", "U3", "c8", "?", "O"])
+    shapes = st.tuples(st.integers(0, 6), st.integers(0, 7)) | st.tuples(st.integers(0, 3))
+    values = st.sampled_from([0.5, 0.0, 1.0, float("nan"), 1e39, -3, "0.5", "x"])
+
+    def array(dtype, shape, value):
+        try:
+            with np.errstate(all="ignore"):
+                return np.full(shape, value, dtype=dtype)
+        except (ValueError, TypeError, OverflowError):
+            return np.zeros(shape, dtype=dtype)
+
+    good_points = st.builds(
+        array,
+        st.sampled_from(["f4", "f8", "i4"]),
+        st.tuples(st.integers(1, 6), st.just(5)),
+        st.sampled_from([0.5, 0.0, 1.0]),
+    )
+    points = st.one_of(good_points, st.builds(array, dtypes, shapes, values))
+    pair = st.tuples(points, st.one_of(kwargs.map(lambda k: k.get("metadata")), junk))
+    files = st.sampled_from(["-i.ply", "--help.ply", "good.ply", "missing.ply", "-"])
+    source = st.one_of(files, points, pair, points.map(lambda p: p.tolist()), junk)
+    return st.tuples(source, kwargs, junk)
 
 
 def _ply_strategy(st, metadata):
@@ -286,10 +478,19 @@ def _mutate(data: bytes, rng) -> bytes:
 # --- the run -----------------------------------------------------------------------------
 
 
+def _input_size(case) -> int:
+    """The bytes of an input, for the memory limit (the file's bytes; 0 for arguments)."""
+    if isinstance(case, bytes):
+        return len(case)
+    if isinstance(case, tuple) and case and isinstance(case[0], bytes):
+        return len(case[0])
+    return 0
+
+
 def _round(target, name: str, folder: str, counts: dict, findings: list):
     def one(data):
         counts[name] += 1
-        problem = _limited(lambda: target(data, folder), len(data))
+        problem = _limited(lambda: target(data, folder), _input_size(data))
         if problem:
             findings.append({"target": name, "problem": problem, "input": data[:300]})
             raise AssertionError(problem)
@@ -304,7 +505,12 @@ def run(seconds: float, targets: list[str], *, examples_per_round: int = 200) ->
     resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
     signal.signal(signal.SIGALRM, _alarm)
     found = strategies()
-    functions = {"manifest": manifest_target, "ply": ply_target}
+    functions = {
+        "manifest": manifest_target,
+        "ply": ply_target,
+        "read_cloud": read_cloud_target,
+        "api": api_target,
+    }
     counts = dict.fromkeys(targets, 0)
     findings: list[dict] = []
     start = time.perf_counter()
@@ -314,11 +520,19 @@ def run(seconds: float, targets: list[str], *, examples_per_round: int = 200) ->
         for song in _SONGS:
             with open(os.path.join(folder, song), "wb") as handle:
                 handle.write(b"RIFF")
+        os.makedirs(os.path.join(folder, "api"))
+        for name in ("-i.ply", "--help.ply", "good.ply", "-"):
+            with open(os.path.join(folder, "api", name), "wb") as handle:
+                handle.write(_VALID_PLY)
         # Warm up (imports, caches) before measuring: only the inputs' own memory counts.
         manifest_target(b"path,year\ns0.wav,1990\n", folder)
         ply_target(_VALID_PLY, folder)
+        read_cloud_target((_VALID_PLY, "file"), folder)
+        api_target(("-i.ply", {}, None), folder)
+        assert _API_RUNS and _API_RUNS[-1][-1].endswith("/-i.ply"), "-i.ply was not drawn"
         tracemalloc.start()
-        while time.perf_counter() - start < seconds:
+        # Every target gets one round at least, however short the run.
+        while time.perf_counter() - start < seconds or round_number < len(targets):
             name = targets[round_number % len(targets)]
             round_number += 1
             target = functions[name]
@@ -349,13 +563,13 @@ def run(seconds: float, targets: list[str], *, examples_per_round: int = 200) ->
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=60.0)
-    parser.add_argument("--target", choices=("manifest", "ply", "all"), default="all")
+    parser.add_argument("--target", choices=(*TARGETS, "all"), default="all")
     parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
     parser.add_argument(
         "--round", type=int, default=200, help="inputs per hypothesis run, targets alternate"
     )
     args = parser.parse_args(argv)
-    targets = ["manifest", "ply"] if args.target == "all" else [args.target]
+    targets = list(TARGETS) if args.target == "all" else [args.target]
     report = run(args.seconds, targets, examples_per_round=args.round)
     if args.json:
         print(json.dumps(report))

@@ -1,5 +1,6 @@
 """The Python fuzzers (fuzz_py.py) in a short run: a few seconds of structured and mutated
-manifests and PLY files, each under its time and memory limit, with no finding. ``make
+manifests and PLY files (read_cloud's behind FIFOs, devices and folders too) and of the notebook
+API's arguments, each under its time and memory limit, with no finding. ``make
 fuzz-py`` runs them for longer. Also the regressions of what they found."""
 
 import json
@@ -29,7 +30,8 @@ def test_short_fuzz_run_has_no_finding():
     assert done.returncode in (0, 1), done.stderr
     report = json.loads(done.stdout)
     assert report["findings"] == [], report["findings"]
-    assert report["inputs"]["manifest"] >= 20 and report["inputs"]["ply"] >= 20, report
+    for target in ("manifest", "ply", "read_cloud", "api"):
+        assert report["inputs"][target] >= 20, report
 
 
 @pytest.mark.parametrize("count", [b"x", b"1e3", b"", b"-4"])
