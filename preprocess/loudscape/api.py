@@ -268,7 +268,7 @@ def _as_input(source, metadata, folder: str) -> tuple[str, str]:
         if not isinstance(name, str):
             raise ExtractError(f"source must be a file name as str, got {_shown(source)}")
         check_regular_input(name)
-        return os.path.abspath(name), name
+        return os.path.abspath(name), _display(name)
     if isinstance(source, tuple) and len(source) == 2:
         points, meta = source
         where = "source's metadata"
@@ -339,17 +339,29 @@ def _run(command: list[str], *, timeout: float | None) -> str:
     return stderr
 
 
+def _display(name: str) -> str:
+    """A file name as the binary prints it: undecodable bytes as U+FFFD."""
+    return os.fsencode(name).decode("utf-8", "replace")
+
+
 def _warnings(stderr: str, *, input_name: str, label: str) -> list[str]:
     """The warning lines of the binary's stderr, once each, in order, without their
-    ``warning:`` prefix; the temporary cloud of arrays is called ``label``."""
+    ``warning:`` prefix. The input is named ``label`` (the name the caller gave, or what the
+    temporary cloud of arrays stands for). A line that repeats an earlier one's message
+    behind a second file name (``FILE: FILE: MESSAGE``) is the same warning said twice."""
     found: list[str] = []
+    messages: list[str] = []
     for line in stderr.splitlines():
         match = _WARNING_LINE.fullmatch(line.strip())
         if match is None:
             continue
-        text = match.group(1).replace(input_name, label)
-        if text not in found:
-            found.append(text)
+        text = match.group(1)
+        for form in (input_name, _display(input_name)):
+            text = text.replace(form, label)
+        if text in found or any(text.endswith(": " + message) for message in messages):
+            continue
+        found.append(text)
+        messages.append(text.split(": ", 1)[-1])
     return found
 
 

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import os
 import stat
+import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +20,8 @@ import pytest
 import soundfile
 
 import loudscape
-from loudscape_extract import ExtractError, read_ply
+import loudscape.api as api
+from loudscape_extract import ExtractError, read_ply, write_ply
 from loudscape_extract.fixtures import SAMPLE_RATE, fixture_signal
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -158,3 +161,130 @@ def test_show_opens_the_window_on_the_source(tmp_path, monkeypatch):
             break
         time.sleep(0.05)
     assert not folder.exists()
+
+
+# --- warnings: said once, as LoudscapeWarning, and kept on the picture ----------------------
+
+
+def _rendered_with_warnings(source, **options):
+    """render(source) with every LoudscapeWarning recorded (none filtered as seen before)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        picture = loudscape.render(source, size=(160, 100), **options)
+    said = [str(w.message) for w in caught if issubclass(w.category, loudscape.LoudscapeWarning)]
+    return picture, said
+
+
+def _song(path: Path, stereo: np.ndarray) -> Path:
+    soundfile.write(path, stereo, SAMPLE_RATE)
+    return path
+
+
+def _long_fixture() -> np.ndarray:
+    return np.tile(fixture_signal(), (6, 1))  # 3 s, stereo
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("LOUDSCAPE_CACHE_DIR", str(tmp_path / "cache"))
+
+
+def test_a_truncated_flac_warns_once_and_the_picture_keeps_it(tmp_path, cache):
+    whole = (ROOT / "data" / "demo_song.flac").read_bytes()
+    cut = tmp_path / "trunc.flac"
+    cut.write_bytes(whole[: len(whole) // 2])
+    for attempt in ("extracted", "from the cache"):
+        picture, said = _rendered_with_warnings(cut)
+        assert len(said) == 1, (attempt, said)
+        assert said[0].startswith(f"{cut}: truncated or corrupt audio: decoded "), said
+        assert picture.warnings == tuple(said), attempt
+        assert "1 warning" in repr(picture)
+    # A name that is not UTF-8: said once too, the name as given (bad bytes shown as U+FFFD).
+    odd = tmp_path / os.fsdecode(b"trunc\xff.flac")
+    odd.write_bytes(cut.read_bytes())
+    picture, said = _rendered_with_warnings(odd)
+    shown = os.fsencode(str(odd)).decode("utf-8", "replace")
+    assert len(said) == 1 and said[0].startswith(f"{shown}: truncated or corrupt"), said
+
+
+def test_corrupt_ogg_and_antiphase_input_warn(tmp_path, cache):
+    ogg = _song(tmp_path / "damaged.ogg", _long_fixture())
+    data = bytearray(ogg.read_bytes())
+    middle = len(data) // 2
+    data[middle : middle + 64] = bytes(b ^ 0xFF for b in data[middle : middle + 64])
+    ogg.write_bytes(bytes(data))
+    picture, said = _rendered_with_warnings(ogg)
+    assert len(said) == 1 and said[0].startswith(f"{ogg}: "), said
+    assert "corrupt" in said[0] and picture.warnings == tuple(said)
+
+    left = _long_fixture()[:, 0]
+    antiphase = _song(tmp_path / "antiphase.wav", np.stack([left, -left], axis=1))
+    picture, said = _rendered_with_warnings(antiphase)
+    assert len(said) == 1 and said[0].startswith(f"{antiphase}: "), said
+    assert "cancel" in said[0] and picture.warnings == tuple(said)
+
+
+def test_a_clean_song_says_nothing(tmp_path, cache):
+    picture, said = _rendered_with_warnings(_song(tmp_path / "clean.wav", _long_fixture()))
+    assert said == [] and picture.warnings == ()
+
+
+def test_a_clouds_own_warnings_are_said_once_naming_its_source_not_a_temporary(tmp_path):
+    points, metadata = read_ply(SONG)
+    metadata = {
+        **metadata,
+        "source": {**metadata.get("source", {}), "path": "song.flac"},
+        "warnings": [{"kind": "truncated", "message": "decoded 14.12 s of the 30.00 s"}],
+    }
+    expected = ["song.flac: decoded 14.12 s of the 30.00 s"]
+    picture, said = _rendered_with_warnings((points, metadata))
+    assert said == expected and list(picture.warnings) == expected
+    # The same cloud as a file: its warnings name the file as given.
+    cloud = tmp_path / "warned.ply"
+    write_ply(cloud, points=points, metadata=metadata)
+    picture, said = _rendered_with_warnings(cloud)
+    assert said == [f"{cloud}: decoded 14.12 s of the 30.00 s"], said
+    assert loudscape.read_cloud(cloud).warnings == tuple(expected)
+
+
+def test_a_file_named_like_an_option_is_drawn(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for name in ("-i.ply", "--help.ply", "-"):
+        (tmp_path / name).write_bytes(SONG.read_bytes())
+        picture = loudscape.render(name, size=(160, 100))
+        assert _drawn(picture.to_numpy()) > 20, name
+
+
+def test_values_that_look_like_options_reach_the_renderer():
+    # A negative azimuth and the smallest point size pass as values, not options.
+    picture = loudscape.render(SONG, size=(160, 100), camera=(-35, -10, 4), point_size=0.5)
+    assert _drawn(picture.to_numpy()) > 20
+
+
+@pytest.mark.parametrize(
+    ("argument", "option"),
+    [
+        ("view", "view"),
+        ("method", "method"),
+        ("colormap", "colormap"),
+        ("background", "background"),
+        ("freq_axis", "freq-axis"),
+    ],
+)
+def test_the_names_checked_in_python_are_the_renderers(tmp_path, argument, option):
+    """The lists render checks its names against are the binary's own (its error message
+    lists them), so the two cannot drift apart."""
+    command = [str(BINARY), "--quiet", "render", f"--{option}=bogus", "--size=64x64"]
+    command += [f"--output={tmp_path / 'x.png'}", "--", str(SONG)]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode != 0
+    listed = done.stderr.strip().rsplit(" is not ", 1)[1]
+    listed = listed.removeprefix("one of ").replace(" or ", ", ")
+    known = {
+        "view": api.VIEWS,
+        "method": api.METHODS,
+        "colormap": api.COLORMAPS,
+        "background": api.BACKGROUNDS,
+        "freq_axis": api.FREQ_AXES,
+    }[argument]
+    assert tuple(listed.split(", ")) == known, done.stderr
