@@ -70,6 +70,9 @@ enum Command {
     Bench(commands::bench::BenchArgs),
     /// Make an MP4 video of a view with the playhead moving through the song, and its sound.
     Video(Box<commands::video::VideoArgs>),
+    /// Compare 2 to 8 releases of a song, aligned in time and matched in loudness: a sheet,
+    /// a CSV table or JSON (docs/COMPARE.md).
+    Compare(commands::compare::CompareArgs),
 }
 
 fn parse_view(name: &str) -> Result<loudscape::render::scene::ViewKind, String> {
@@ -206,6 +209,7 @@ fn main() -> ExitCode {
         Some(Command::Mesh(args)) => commands::mesh::run(args),
         Some(Command::Bench(args)) => commands::bench::run(args),
         Some(Command::Video(args)) => commands::video::run(*args),
+        Some(Command::Compare(args)) => commands::compare::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -18,7 +18,7 @@
 pub mod stream;
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::{Thread, ThreadId};
 use std::time::{Duration, Instant};
@@ -192,6 +192,9 @@ pub struct Transport {
     /// decoder restarts from the position when it changes, and frames decoded before are stale.
     serial: AtomicU64,
     frames: u64,
+    /// The linear gain applied to every sample (`f32` bits; 1.0 as the file is): A/B compare's
+    /// loudness matching.
+    gain: AtomicU32,
     /// The decoder threads filling sources of this transport (one in the app): every change of
     /// what they wait on wakes them. Locked only on the UI's side (seek, play, loop, replace)
     /// and when a decoder starts or ends, never on the audio callback.
@@ -208,8 +211,24 @@ impl Transport {
             retired: AtomicBool::new(false),
             serial: AtomicU64::new(0),
             frames,
+            gain: AtomicU32::new(1.0f32.to_bits()),
             decoders: Mutex::new(Vec::new()),
         }
+    }
+
+    /// Plays every sample `db` decibels louder (negative: quieter) from the next frame on.
+    pub fn set_gain_db(&self, db: f32) {
+        let linear = if db.is_finite() {
+            10f32.powf(db / 20.0)
+        } else {
+            1.0
+        };
+        self.gain.store(linear.to_bits(), Ordering::Relaxed);
+    }
+
+    /// The linear gain [`Transport::set_gain_db`] set.
+    pub fn gain(&self) -> f32 {
+        f32::from_bits(self.gain.load(Ordering::Relaxed))
     }
 
     /// Registers a decoder thread to wake on changes (by the thread itself, as it starts).
@@ -374,6 +393,8 @@ pub struct TrackSource {
     current: Vec<f32>,
     frame: u64,
     channel: u16,
+    /// The transport's gain, read once a frame.
+    gain: f32,
 }
 
 impl TrackSource {
@@ -398,6 +419,7 @@ impl TrackSource {
             current: vec![0.0; usize::from(channels)],
             frame: 0,
             channel: 0,
+            gain: 1.0,
         }
     }
 
@@ -466,8 +488,9 @@ impl Iterator for TrackSource {
             self.frame = self.transport.position();
             self.shared.ring.pop(&mut self.current);
             self.shared.took();
+            self.gain = self.transport.gain();
         }
-        let sample = self.current[usize::from(self.channel)];
+        let sample = self.current[usize::from(self.channel)] * self.gain;
         self.channel += 1;
         if self.channel == channels {
             self.channel = 0;
@@ -621,6 +644,13 @@ impl Player {
             loaded
                 .transport
                 .seek(seconds_to_frames(seconds, loaded.sample_rate));
+        }
+    }
+
+    /// Plays the loaded song `db` decibels louder or quieter (A/B compare's loudness matching).
+    pub fn set_gain_db(&self, db: f32) {
+        if let Some(loaded) = &self.loaded {
+            loaded.transport.set_gain_db(db);
         }
     }
 

@@ -5,6 +5,7 @@ pub mod args;
 pub mod bench;
 pub mod bench_surface;
 pub mod bench_volume;
+pub mod compare;
 pub mod mesh;
 pub mod render;
 pub mod render_compare;
@@ -27,6 +28,11 @@ static QUIET: AtomicBool = AtomicBool::new(false);
 /// Silences the "wrote ..." summaries (`-q`).
 pub fn set_quiet(quiet: bool) {
     QUIET.store(quiet, Ordering::Relaxed);
+}
+
+/// Whether `-q` was given (for commands that hand it on to the extractor).
+pub fn quiet() -> bool {
+    QUIET.load(Ordering::Relaxed)
 }
 
 /// The one summary line every command prints per file written, on stderr (stdout stays for

@@ -8,6 +8,7 @@
 //! command that takes a cloud share: a PLY file is read as it is, anything else is taken for
 //! audio.
 
+pub mod align;
 pub mod cache;
 pub mod child;
 pub mod lines;

@@ -108,6 +108,30 @@ fn wait_buffered(source: &mut TrackSource) {
 }
 
 #[test]
+fn a_gain_scales_every_sample_from_the_next_frame_on() {
+    let dir = scratch("gain");
+    let track = ramp_track(&dir, 1000, 2, 100);
+    let transport = Arc::new(Transport::new(1000));
+    let mut source = TrackSource::new(track, transport.clone());
+    transport.set_playing(true);
+    transport.seek(100);
+    assert_eq!(play(&mut source, 2, 1), vec![100.0, 100.0]);
+    // A/B compare's matching: -6.0206 dB is half the amplitude, exactly enough here.
+    transport.set_gain_db(-20.0 * 2f32.log10());
+    let played = play(&mut source, 2, 2);
+    for (got, want) in played.iter().zip([50.5, 50.5, 51.0, 51.0]) {
+        assert!((got - want).abs() < 1e-3, "{played:?}");
+    }
+    transport.set_gain_db(0.0);
+    assert_eq!(play(&mut source, 2, 1), vec![103.0, 103.0]);
+    // A gain that is not a number plays the file as it is.
+    transport.set_gain_db(f32::NAN);
+    assert_eq!(play(&mut source, 2, 1), vec![104.0, 104.0]);
+    drop(source);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
 fn the_source_counts_frames_and_seeking_moves_it() {
     let dir = scratch("counts");
     let track = ramp_track(&dir, 1000, 2, 100);
