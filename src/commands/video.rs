@@ -27,7 +27,7 @@ use loudscape::view::frame_view::FrameView;
 
 use super::args::{check_iso, check_output, load_cloud, parse_method, parse_size};
 use super::render::{DrawArgs, camera_from, prepare_grid};
-use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound};
+use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound, song_sound};
 
 /// The largest frame: 4K UHD (either way round).
 pub const MAX_PIXELS: u64 = 3840 * 2160;
@@ -156,6 +156,9 @@ pub fn passage(
     if !start.is_finite() || start < 0.0 {
         bail!("--start {start} is not a time in seconds (0 or more)");
     }
+    if start >= duration_s {
+        bail!("--start {start} is past the song's end ({duration_s:.1} s)");
+    }
     if !end.is_finite() || end <= start {
         bail!("--end {end} must come after --start {start}");
     }
@@ -282,9 +285,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         let sound = if args.silent {
             Sound::Silence
         } else {
-            let path = loudscape::playback::resolve_source(&cloud).map_err(|e| {
-                anyhow::anyhow!("{e}; pass --silent for a video without the song's sound")
-            })?;
+            let path = song_sound(&args.input, &cloud)?;
             check_output(&args.output, &["mp4"], &[path.as_path()])?;
             Sound::Passage {
                 path,
@@ -671,6 +672,10 @@ mod tests {
         assert!(passage(Some(3.0), Some(2.0), 30.0).is_err());
         assert!(passage(None, Some(31.0), 30.0).is_err());
         assert!(passage(Some(-1.0), None, 30.0).is_err());
+        // No --end given: the message is about --start, not an --end the user never wrote.
+        let late = passage(Some(100.0), None, 30.0).unwrap_err().to_string();
+        assert_eq!(late, "--start 100 is past the song's end (30.0 s)");
+        assert!(passage(Some(30.0), None, 30.0).is_err());
         assert_eq!(frame_count(1.0, 30), 30);
         assert_eq!(frame_count(2.5, 24), 60);
         assert_eq!(frame_count(0.001, 24), 1);

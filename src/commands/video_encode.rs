@@ -4,18 +4,30 @@
 //! audio input: ffmpeg decodes and trims it sample-exactly), writing H.264 (yuv420p) and AAC into
 //! MP4 with the index up front (`+faststart`).
 //!
-//! The file is written under a temporary name beside the output and renamed when ffmpeg has
-//! finished cleanly; ffmpeg is killed and the temporary file removed on an error, on Ctrl+C and
-//! on SIGTERM (`loudscape::files::{OwnedChild, TempFile}`).
+//! Every path reaches ffmpeg as `file:` + the absolute path ([`ffmpeg_url`]), so ffmpeg reads
+//! and writes exactly the files named, whatever the name (`file:x.mp4`, `a:b.mp4`, `-x.mp4`,
+//! bytes that are not UTF-8): never another protocol, option or file.
+//!
+//! The file is written under a temporary name beside the output that carries the writer's PID
+//! (`NAME.mp4.loudscape-PID.partial.mp4`) and renamed when ffmpeg has finished cleanly; ffmpeg
+//! is killed and the temporary file removed on an error, on Ctrl+C and on SIGTERM
+//! (`loudscape::files::{OwnedChild, TempFile}`), and dies with the command if it is killed
+//! (SIGKILL); what such a run leaves is removed by the next run into that folder, once no
+//! process of that PID lives ([`remove_stale_temporaries`]).
+//!
+//! Where the sound comes from ([`song_sound`]): the audio file the user named, or for a cloud
+//! its recorded source, checked against the cloud first.
 //!
 //! Also the progress report of long runs: a line on a terminal, or JSON lines.
 
+use std::ffi::{OsStr, OsString};
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{ChildStdin, Command, Stdio};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use loudscape::data::cloud::PointCloud;
 use loudscape::files::{OwnedChild, TempFile};
 
 /// The Debian package that brings the `ffmpeg` command.
@@ -58,6 +70,154 @@ pub enum Sound {
     Silence,
 }
 
+/// How far the source's length may be from the cloud's: MP3 decoders differ by the encoder's
+/// delay and padding (under 4,096 frames), and the length is written rounded.
+const LENGTH_TOLERANCE_FRAMES: f64 = 4096.0;
+
+/// The audio file whose sound a video of `input` (as the user named it) carries: an audio file
+/// itself, never the source its cached cloud recorded (the same bytes may have been cached
+/// under another name, since changed); for a cloud, its recorded source, found as the window
+/// finds it and checked against the cloud: sample rate, channels and length must be the ones
+/// the cloud was made from (the extractor records no hash of the audio). Errors are one line
+/// naming the file, the reason and `--silent`.
+pub fn song_sound(input: &Path, cloud: &PointCloud) -> anyhow::Result<PathBuf> {
+    if loudscape::extract::is_audio(input) {
+        return Ok(input.to_path_buf());
+    }
+    let silent = "pass --silent for a video without the song's sound";
+    let path = loudscape::playback::resolve_source(cloud)
+        .map_err(|e| anyhow::anyhow!("{}: its source audio: {e}; {silent}", input.display()))?;
+    let Some(recorded) = cloud.meta.source.as_ref() else {
+        bail!(
+            "{}: the cloud records no source audio; {silent}",
+            input.display()
+        );
+    };
+    let mismatch = |why: String| {
+        anyhow::anyhow!(
+            "{}: its source audio {} is not the audio the cloud was made from ({why}); {silent}, \
+             or extract the cloud again from that audio",
+            input.display(),
+            path.display()
+        )
+    };
+    let found = probe_audio(&path).map_err(|why| {
+        anyhow::anyhow!(
+            "{}: cannot check its source audio {} against the cloud ({why}); {silent}",
+            input.display(),
+            path.display()
+        )
+    })?;
+    if let Some(rate) = recorded.sample_rate
+        && rate != found.sample_rate
+    {
+        return Err(mismatch(format!(
+            "{} Hz, the cloud's {rate} Hz",
+            found.sample_rate
+        )));
+    }
+    if let (Some(channels), Some(found_channels)) = (recorded.channels, found.channels)
+        && channels != found_channels
+    {
+        return Err(mismatch(format!(
+            "{found_channels} channels, the cloud's {channels}"
+        )));
+    }
+    let Some(length) = recorded.duration_s.filter(|d| d.is_finite() && *d > 0.0) else {
+        bail!(
+            "{}: the cloud records no length of its source audio {} to check it by; {silent}",
+            input.display(),
+            path.display()
+        );
+    };
+    let tolerance = LENGTH_TOLERANCE_FRAMES / f64::from(found.sample_rate.max(1)) + 0.001;
+    // A truncated or corrupt source was decoded as far as it goes: its header promises more.
+    let cut_short = cloud
+        .warnings()
+        .iter()
+        .any(|w| w.kind == "truncated" || w.kind == "corrupt");
+    let fits = if cut_short {
+        found.duration_s >= length - tolerance
+    } else {
+        (found.duration_s - length).abs() <= tolerance
+    };
+    if !fits {
+        return Err(mismatch(format!(
+            "{:.3} s long, the cloud's {length:.3} s",
+            found.duration_s
+        )));
+    }
+    Ok(path)
+}
+
+/// What [`probe_audio`] reads of an audio file.
+struct AudioFacts {
+    sample_rate: u32,
+    channels: Option<u32>,
+    duration_s: f64,
+}
+
+/// The sample rate, channels and length of an audio file: read as playback reads it (WAV,
+/// FLAC, Ogg Vorbis, MP3), else by ffprobe (the formats only ffmpeg reads).
+fn probe_audio(path: &Path) -> Result<AudioFacts, String> {
+    match loudscape::playback::decode(path) {
+        Ok(track) => Ok(AudioFacts {
+            sample_rate: track.sample_rate,
+            channels: Some(u32::from(track.channels)),
+            duration_s: track.duration_s(),
+        }),
+        Err(loudscape::playback::PlaybackError::Unsupported { .. }) => ffprobe_audio(path),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// [`probe_audio`] by ffprobe (beside ffmpeg, or on PATH): the first audio stream's rate and
+/// channels, and the file's length.
+fn ffprobe_audio(path: &Path) -> Result<AudioFacts, String> {
+    let name = if cfg!(windows) {
+        "ffprobe.exe"
+    } else {
+        "ffprobe"
+    };
+    let beside = find_ffmpeg()
+        .ok()
+        .and_then(|f| f.parent().map(|d| d.join(name)))
+        .filter(|p| p.is_file());
+    let program = beside.unwrap_or_else(|| PathBuf::from(name));
+    let output = Command::new(&program)
+        .args(["-v", "error", "-select_streams", "a:0", "-show_entries"])
+        .args(["stream=sample_rate,channels:format=duration", "-of", "json"])
+        .arg(ffmpeg_url(path))
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("ffprobe cannot start: {e}"))?;
+    let said = String::from_utf8_lossy(&output.stderr);
+    if !output.status.success() {
+        return Err(format!(
+            "ffprobe: {}",
+            said.lines().next().unwrap_or("it failed").trim()
+        ));
+    }
+    let json: serde_json::Value = serde_json::from_slice(&output.stdout)
+        .map_err(|e| format!("ffprobe's answer is not JSON: {e}"))?;
+    let stream = &json["streams"][0];
+    let number = |v: &serde_json::Value| {
+        v.as_f64()
+            .or_else(|| v.as_str().and_then(|s| s.trim().parse().ok()))
+    };
+    let sample_rate = number(&stream["sample_rate"])
+        .filter(|r| *r >= 1.0 && *r <= f64::from(u32::MAX))
+        .ok_or("ffprobe finds no audio stream")? as u32;
+    let duration_s = number(&json["format"]["duration"])
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .ok_or("ffprobe states no length")?;
+    Ok(AudioFacts {
+        sample_rate,
+        channels: number(&stream["channels"]).map(|c| c as u32),
+        duration_s,
+    })
+}
+
 /// What to encode.
 #[derive(Clone, Debug)]
 pub struct EncodeSpec {
@@ -70,8 +230,18 @@ pub struct EncodeSpec {
     pub crf: u32,
 }
 
+/// `path` as ffmpeg must be given it: `file:` + the absolute path, so that no name is taken
+/// for another protocol (`a:b.mp4`), an option (`-x.mp4`) or a `file:` URL of another file
+/// (`file:c.ogg`); the bytes pass as they are (a name that is not UTF-8).
+pub fn ffmpeg_url(path: &Path) -> OsString {
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut url = OsString::from("file:");
+    url.push(absolute.as_os_str());
+    url
+}
+
 /// The ffmpeg arguments that encode `spec` into `output`.
-pub fn ffmpeg_args(spec: &EncodeSpec, output: &Path) -> Vec<String> {
+pub fn ffmpeg_args(spec: &EncodeSpec, output: &Path) -> Vec<OsString> {
     let seconds = |s: f64| format!("{s:.6}");
     let video_s = spec.frames as f64 / f64::from(spec.fps);
     let mut args: Vec<String> = [
@@ -95,6 +265,7 @@ pub fn ffmpeg_args(spec: &EncodeSpec, output: &Path) -> Vec<String> {
         "-i".into(),
         "pipe:0".into(),
     ]);
+    let mut audio_input = None;
     match &spec.sound {
         Sound::Passage {
             path,
@@ -106,31 +277,27 @@ pub fn ffmpeg_args(spec: &EncodeSpec, output: &Path) -> Vec<String> {
                 seconds(*start_s),
                 "-t".into(),
                 seconds(*duration_s),
-                "-i".into(),
-                path.display().to_string(),
             ]);
+            audio_input = Some(ffmpeg_url(path));
         }
         Sound::Silence => {
-            args.extend([
-                "-f".into(),
-                "lavfi".into(),
-                "-t".into(),
-                seconds(video_s),
-                "-i".into(),
-                "anullsrc=channel_layout=stereo:sample_rate=48000".into(),
-            ]);
+            args.extend(["-f".into(), "lavfi".into(), "-t".into(), seconds(video_s)]);
         }
     }
-    args.extend(
-        [
-            "-map", "0:v:0", "-map", "1:a:0", "-c:v", "libx264", "-preset", "veryfast", "-crf",
-        ]
-        .map(String::from),
+    let mut args: Vec<OsString> = args.into_iter().map(OsString::from).collect();
+    args.push("-i".into());
+    args.push(
+        audio_input.unwrap_or_else(|| "anullsrc=channel_layout=stereo:sample_rate=48000".into()),
     );
-    args.push(spec.crf.to_string());
+    let mut rest: Vec<String> = [
+        "-map", "0:v:0", "-map", "1:a:0", "-c:v", "libx264", "-preset", "veryfast", "-crf",
+    ]
+    .map(String::from)
+    .to_vec();
+    rest.push(spec.crf.to_string());
     // BT.709 colour (HD video's), converted and tagged, so players do not guess (untagged HD
     // is shown as BT.709 by most, while ffmpeg converts with BT.601 unless told).
-    args.extend(
+    rest.extend(
         [
             "-vf",
             "scale=out_color_matrix=bt709:out_range=tv",
@@ -155,8 +322,79 @@ pub fn ffmpeg_args(spec: &EncodeSpec, output: &Path) -> Vec<String> {
         ]
         .map(String::from),
     );
-    args.push(output.display().to_string());
+    args.extend(rest.into_iter().map(OsString::from));
+    args.push(ffmpeg_url(output));
     args
+}
+
+/// The mark of a temporary video file: `.loudscape-PID` + this, after the output's name.
+const PARTIAL_SUFFIX: &str = ".partial.mp4";
+
+/// The temporary file's suffix for this process: `.loudscape-PID.partial.mp4`.
+fn partial_suffix() -> String {
+    format!(".loudscape-{}{PARTIAL_SUFFIX}", std::process::id())
+}
+
+/// The PID in the name of a temporary video file (`….loudscape-PID.partial.mp4`), if it is one.
+pub fn partial_owner(name: &OsStr) -> Option<u32> {
+    let name = name.as_encoded_bytes();
+    let rest = name.strip_suffix(PARTIAL_SUFFIX.as_bytes())?;
+    let marker = b".loudscape-";
+    let at = rest.windows(marker.len()).rposition(|w| w == marker)?;
+    let digits = &rest[at + marker.len()..];
+    if digits.is_empty() || digits.len() > 10 || !digits.iter().all(u8::is_ascii_digit) {
+        return None;
+    }
+    std::str::from_utf8(digits)
+        .ok()?
+        .parse()
+        .ok()
+        .filter(|&pid| pid > 0)
+}
+
+/// Whether a process `pid` lives (or may: one of another user's counts as living).
+#[cfg(unix)]
+fn process_lives(pid: u32) -> bool {
+    let Ok(pid) = i32::try_from(pid) else {
+        return false;
+    };
+    // SAFETY: kill(2) with signal 0 sends nothing; it only asks whether the process exists.
+    let result = unsafe { libc::kill(pid, 0) };
+    result == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+}
+
+/// Removes what killed video runs left beside `output`: every regular file of its folder named
+/// `….loudscape-PID.partial.mp4` whose PID no longer lives (SIGKILL gives no chance to clean
+/// up), and `NAME.partial.mp4`, the temporary of `output` that versions without the PID wrote.
+/// Best effort: a file that cannot be removed stays. Returns the names removed.
+pub fn remove_stale_temporaries(output: &Path) -> Vec<PathBuf> {
+    let mut removed = Vec::new();
+    #[cfg(unix)]
+    {
+        let folder = match output.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        let mut legacy = output.file_name().unwrap_or_default().to_os_string();
+        legacy.push(PARTIAL_SUFFIX);
+        let Ok(entries) = std::fs::read_dir(folder) else {
+            return removed;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let stale = match partial_owner(&name) {
+                Some(pid) => pid != std::process::id() && !process_lives(pid),
+                None => name == legacy,
+            };
+            let regular = entry.file_type().is_ok_and(|t| t.is_file());
+            if stale && regular && std::fs::remove_file(entry.path()).is_ok() {
+                removed.push(entry.path());
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = output;
+    removed
 }
 
 /// A running ffmpeg taking frames.
@@ -174,7 +412,8 @@ impl Encoder {
     /// Starts ffmpeg writing to a temporary file beside `output`.
     pub fn start(spec: &EncodeSpec, output: &Path) -> anyhow::Result<Encoder> {
         let ffmpeg = find_ffmpeg()?;
-        let tmp = TempFile::create(output, ".partial.mp4")
+        remove_stale_temporaries(output);
+        let tmp = TempFile::create(output, &partial_suffix())
             .with_context(|| format!("{}: cannot write", output.display()))?;
         let mut command = Command::new(&ffmpeg);
         command
@@ -183,9 +422,9 @@ impl Encoder {
             .stdout(Stdio::null())
             .stderr(Stdio::piped());
         // Its own process group: Ctrl+C in the terminal reaches loudscape alone, whose handler
-        // kills ffmpeg before removing the file (ffmpeg would otherwise finish the file itself).
-        #[cfg(unix)]
-        std::os::unix::process::CommandExt::process_group(&mut command, 0);
+        // kills ffmpeg before removing the file (ffmpeg would otherwise finish the file itself);
+        // and on Linux killed with loudscape (SIGKILL), not left to finish a stray file.
+        loudscape::files::own_process_group(&mut command);
         let mut child = command
             .spawn()
             .with_context(|| format!("cannot start {}", ffmpeg.display()))?;
@@ -391,30 +630,75 @@ mod tests {
             },
             crf: 18,
         };
-        let args = ffmpeg_args(&spec, Path::new("out.mp4.partial.mp4"));
+        let text = |args: Vec<OsString>| -> Vec<String> {
+            args.iter()
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect()
+        };
+        let args = text(ffmpeg_args(&spec, Path::new("out.mp4.partial.mp4")));
         let joined = args.join(" ");
+        let here = std::env::current_dir().unwrap();
         assert!(
             joined.contains("-s 640x360 -framerate 25 -i pipe:0"),
             "{joined}"
         );
+        let song = format!("file:{}", here.join("song.flac").display());
         assert!(
-            joined.contains("-ss 1.500000 -t 2.000000 -i song.flac"),
+            joined.contains(&format!("-ss 1.500000 -t 2.000000 -i {song}")),
             "{joined}"
         );
         assert!(joined.contains("-pix_fmt yuv420p"), "{joined}");
         assert!(joined.contains("-movflags +faststart"), "{joined}");
-        assert_eq!(args.last().map(String::as_str), Some("out.mp4.partial.mp4"));
-        let silent = ffmpeg_args(
+        let out = format!("file:{}", here.join("out.mp4.partial.mp4").display());
+        assert_eq!(args.last(), Some(&out));
+        let silent = text(ffmpeg_args(
             &EncodeSpec {
                 sound: Sound::Silence,
                 ..spec
             },
             Path::new("o.mp4"),
-        )
+        ))
         .join(" ");
         assert!(
             silent.contains("-f lavfi -t 2.000000 -i anullsrc"),
             "{silent}"
         );
+    }
+
+    #[test]
+    fn every_path_is_a_file_url_of_its_absolute_path() {
+        let here = std::env::current_dir().unwrap();
+        for name in ["file:c.ogg", "a:b.mp4", "-x.mp4", "pipe:1"] {
+            let url = ffmpeg_url(Path::new(name));
+            let expected = format!("file:{}", here.join(name).display());
+            assert_eq!(url.to_string_lossy(), expected);
+        }
+        assert_eq!(
+            ffmpeg_url(Path::new("/m/a.mp4")),
+            OsString::from("file:/m/a.mp4")
+        );
+        #[cfg(unix)]
+        {
+            use std::os::unix::ffi::OsStrExt;
+            let odd = OsStr::from_bytes(b"/m/caf\xe9 \xff.wav");
+            let url = ffmpeg_url(Path::new(odd));
+            assert_eq!(url.as_encoded_bytes(), b"file:/m/caf\xe9 \xff.wav");
+        }
+    }
+
+    #[test]
+    fn the_temporary_names_its_owner() {
+        let mine = partial_suffix();
+        let name = OsString::from(format!("out.mp4{mine}"));
+        assert_eq!(partial_owner(&name), Some(std::process::id()));
+        let owner = |s: &str| partial_owner(OsStr::new(s));
+        assert_eq!(owner("a.mp4.loudscape-42.partial.mp4"), Some(42));
+        assert_eq!(owner(".loudscape-7-0.loudscape-7.partial.mp4"), Some(7));
+        assert_eq!(owner("a.mp4.partial.mp4"), None);
+        assert_eq!(owner("holiday.2019.partial.mp4"), None);
+        assert_eq!(owner("a.mp4.loudscape-.partial.mp4"), None);
+        assert_eq!(owner("a.mp4.loudscape-0.partial.mp4"), None);
+        assert_eq!(owner("a.mp4.loudscape-4x2.partial.mp4"), None);
+        assert_eq!(owner("a.mp4.loudscape-42.partial.mp4.txt"), None);
     }
 }

@@ -29,6 +29,7 @@ mod screenshot;
 mod shaders_msl;
 mod surface;
 mod video;
+mod video_trust;
 mod volume;
 mod voxelize;
 mod window;

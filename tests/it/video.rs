@@ -392,7 +392,6 @@ fn sigterm_and_ctrl_c_stop_at_once_and_leave_no_file_and_no_encoder() {
 #[cfg(unix)]
 fn stops_on(signal: &str, code: i32) {
     let video = out(&format!("killed_{signal}.mp4"));
-    let partial = out(&format!("killed_{signal}.mp4.partial.mp4"));
     let mut child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
         .args([
             "video",
@@ -408,6 +407,11 @@ fn stops_on(signal: &str, code: i32) {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
+    // The temporary beside the output carries the writer's PID.
+    let partial = out(&format!(
+        "killed_{signal}.mp4.loudscape-{}.partial.mp4",
+        child.id()
+    ));
     // Frames are flowing to ffmpeg once the first progress line comes.
     let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
     let first = lines.next().expect("a progress line").unwrap();

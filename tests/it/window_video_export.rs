@@ -99,7 +99,17 @@ fn closing_the_window_while_exporting_stops_the_export_and_leaves_no_file() {
     assert_display();
     let dir = fresh_dir("window_video_close");
     let video = dir.join("closed.mp4");
-    let partial = dir.join("closed.mp4.partial.mp4");
+    // The command's temporary beside the video: `closed.mp4.loudscape-PID.partial.mp4`.
+    let partial_of = |dir: &std::path::Path| {
+        std::fs::read_dir(dir)
+            .ok()?
+            .flatten()
+            .map(|e| e.path())
+            .find(|p| {
+                let name = p.file_name().unwrap_or_default().to_string_lossy();
+                name.starts_with("closed.mp4.") && name.ends_with(".partial.mp4")
+            })
+    };
     let mut child = common::home_in(&mut Command::new(env!("CARGO_BIN_EXE_loudscape")), &dir)
         .arg(repo().join("data/demo_song.ply"))
         .args(["--press", &format!("export-video={}", video.display())])
@@ -111,10 +121,12 @@ fn closing_the_window_while_exporting_stops_the_export_and_leaves_no_file() {
     let window = wait_for_window(&mut child);
     // Wait until frames are being encoded (the command's temporary file exists).
     let start = Instant::now();
-    while !partial.exists() && start.elapsed() < Duration::from_secs(60) {
+    while partial_of(&dir).is_none() && start.elapsed() < Duration::from_secs(60) {
         std::thread::sleep(Duration::from_millis(100));
     }
-    let encoding = partial.exists();
+    let partial = partial_of(&dir);
+    let encoding = partial.is_some();
+    let partial = partial.unwrap_or_else(|| dir.join("closed.mp4.partial.mp4"));
     if let Some(id) = &window {
         let _ = Command::new("xdotool").args(["windowclose", id]).status();
     }
