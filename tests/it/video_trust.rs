@@ -208,10 +208,22 @@ fn the_sound_is_the_audio_file_named_not_the_source_its_cached_cloud_recorded() 
     let sound = decode_audio(&mp4);
     let with_backup = correlation(&sound, &decode_audio(&backup), 0.5);
     let with_mine = correlation(&sound, &decode_audio(&mine), 0.5);
+    eprintln!(
+        "the sound correlates {with_backup:.3} with backup.wav, {with_mine:.3} with mine.wav"
+    );
     assert!(
         with_backup > 0.9 && with_mine < 0.5,
         "the sound correlates {with_backup:.3} with backup.wav, {with_mine:.3} with mine.wav"
     );
+    // With mine.wav gone, the video of backup.wav needs nothing of it.
+    std::fs::remove_file(&mine).unwrap();
+    std::fs::remove_file(&mp4).unwrap();
+    assert_success(&video(
+        &dir,
+        backup.as_os_str(),
+        mp4.as_os_str(),
+        &["--end", "1"],
+    ));
 }
 
 /// A cloud's source is the file it names, as long as it is the audio the cloud was made from:
