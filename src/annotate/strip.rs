@@ -1,12 +1,13 @@
 //! The loudness strip under the 3D view in Song mode, as plain data: momentary (400 ms) and
 //! short-term (3 s) BS.1770 loudness on a LUFS axis, PSR on a dB axis, the true-peak overs
-//! marked along the top, and the playhead, all over the song's time. It reads the metadata's
+//! marked along the top, the song's maximum momentary and short-term loudness (a dot and a
+//! label where each occurs, from the metrics), and the playhead, all over the song's time. It reads the metadata's
 //! `loudness` object once per cloud ([`crate::data::cloud::loudness_curves`]); songs without
 //! curves (older files) have no strip. The window paints [`LoudnessStrip::layout`] with egui
 //! (and seeks on clicks, `ui::strip`); a video draws it on the CPU.
 
 use super::{Anchor, Annotation, Rect, Rgba, Shape, Text};
-use crate::data::cloud::{LoudnessCurves, PointCloud, loudness_curves};
+use crate::data::cloud::{LoudnessCurves, Metrics, PointCloud, loudness_curves};
 
 /// Height of the strip in points.
 pub const STRIP_HEIGHT: f32 = 118.0;
@@ -63,11 +64,51 @@ pub fn lufs_range(curves: &LoudnessCurves) -> (f32, f32) {
     (low.min(-10.0), 0.0)
 }
 
+/// One EBU Mode maximum the strip marks: its loudness and where its window lies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoudnessMaximum {
+    /// `"max M"` or `"max S"`.
+    pub label: &'static str,
+    pub lufs: f32,
+    /// The centre of the loudest window, seconds (the metrics give its end, when a meter
+    /// shows it; the curves are drawn at window centres).
+    pub centre_s: f64,
+}
+
+/// The maxima of `metrics` (`max_momentary_*`, `max_short_term_*`) that the file has.
+pub fn loudness_maxima(metrics: &Metrics) -> Vec<LoudnessMaximum> {
+    [
+        (
+            "max M",
+            metrics.max_momentary_lufs,
+            metrics.max_momentary_s,
+            0.4,
+        ),
+        (
+            "max S",
+            metrics.max_short_term_lufs,
+            metrics.max_short_term_s,
+            3.0,
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(label, lufs, end_s, window_s)| {
+        let (lufs, end_s) = (lufs?, end_s?);
+        (lufs.is_finite() && end_s.is_finite()).then(|| LoudnessMaximum {
+            label,
+            lufs: lufs as f32,
+            centre_s: (end_s - window_s / 2.0).max(0.0),
+        })
+    })
+    .collect()
+}
+
 /// What the strip keeps: the parsed curves of the current Song cloud.
 #[derive(Default)]
 pub struct LoudnessStrip {
     cloud_id: Option<u64>,
     curves: Option<LoudnessCurves>,
+    maxima: Vec<LoudnessMaximum>,
     duration_s: f64,
 }
 
@@ -79,6 +120,12 @@ impl LoudnessStrip {
         }
         self.cloud_id = Some(id);
         self.curves = loudness_curves(&cloud.meta.raw);
+        self.maxima = cloud
+            .meta
+            .metrics
+            .as_ref()
+            .map(loudness_maxima)
+            .unwrap_or_default();
         let recorded = cloud
             .meta
             .source
@@ -257,6 +304,34 @@ impl LoudnessStrip {
             &y_lufs,
             (2.0, SHORT_TERM),
         );
+        // The maxima: a dot on the curve's level where the loudest window is centred, and a
+        // label beside it (to its left when the dot is in the strip's right quarter).
+        for maximum in &self.maxima {
+            let colour = if maximum.label == "max M" {
+                MOMENTARY
+            } else {
+                SHORT_TERM
+            };
+            let at = [x(maximum.centre_s), y_lufs(maximum.lufs)];
+            out.fill(
+                Rect::from_min_max([at[0] - 3.0, at[1] - 3.0], [at[0] + 3.0, at[1] + 3.0]),
+                3.0,
+                colour,
+            );
+            let right = at[0] > plot.left() + 0.75 * plot.width();
+            let (anchor, dx) = if right {
+                (Anchor::RIGHT_BOTTOM, -5.0)
+            } else {
+                (Anchor::LEFT_BOTTOM, 5.0)
+            };
+            out.text(Text::new(
+                format!("{} {:.1}", maximum.label, maximum.lufs),
+                [at[0] + dx, at[1] - 2.0],
+                anchor,
+                SMALL,
+                colour,
+            ));
+        }
         if let Some(playhead_s) = playhead_s {
             let head = x(playhead_s);
             out.line([head, rect.top()], [head, plot.bottom()], 1.5, [255; 4]);
@@ -285,6 +360,53 @@ mod tests {
         assert_eq!(time_of_x(1000.0, left, right, duration), 200.0);
         assert_eq!(time_of_x(500.0, left, left, duration), 0.0);
         assert_eq!(x_of_time(10.0, left, right, 0.0), left);
+    }
+
+    #[test]
+    fn the_maxima_are_marked_at_their_window_centres() {
+        let metrics = Metrics {
+            max_momentary_lufs: Some(-9.04),
+            max_momentary_s: Some(50.4),
+            max_short_term_lufs: Some(-12.0),
+            max_short_term_s: None, // not in the file: not marked
+            ..Metrics::default()
+        };
+        let maxima = loudness_maxima(&metrics);
+        assert_eq!(maxima.len(), 1);
+        assert_eq!(maxima[0].label, "max M");
+        assert!((maxima[0].centre_s - 50.2).abs() < 1e-9);
+        assert!(loudness_maxima(&Metrics::default()).is_empty());
+
+        let strip = LoudnessStrip {
+            cloud_id: Some(1),
+            curves: Some(LoudnessCurves {
+                rate_hz: 10.0,
+                momentary_lufs: vec![Some(-20.0); 1000],
+                short_term_lufs: vec![Some(-20.0); 1000],
+                ..LoudnessCurves::default()
+            }),
+            maxima,
+            duration_s: 100.0,
+        };
+        let rect = Rect::from_min_max([0.0, 0.0], [1098.0, STRIP_HEIGHT]);
+        let out = strip.layout(rect, None);
+        let label = out
+            .texts()
+            .find(|t| t.text == "max M -9.0")
+            .expect("the maximum's label");
+        let plot = LoudnessStrip::plot_rect(rect);
+        let x = x_of_time(50.2, plot.left(), plot.right(), 100.0);
+        // Left-anchored 5 points right of the dot (text boxes sit on whole points).
+        assert!(
+            (label.rect.left() - (x + 5.0)).abs() <= 1.0,
+            "label at {:?}",
+            label.rect
+        );
+        let dot = out.shapes.iter().any(|s| {
+            matches!(s, Shape::Fill { rect, colour, .. }
+                if *colour == MOMENTARY && (rect.center()[0] - x).abs() < 1e-3)
+        });
+        assert!(dot, "a dot at the maximum's time");
     }
 
     #[test]

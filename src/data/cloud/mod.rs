@@ -283,6 +283,13 @@ pub struct Metrics {
     pub crest_3s_median_db: Option<f64>,
     /// Largest channel mean removed before the measures (full scale 1).
     pub dc_offset: Option<f64>,
+    /// EBU Tech 3341's maximum momentary (400 ms) and short-term (3 s) loudness, over every
+    /// window position, and when a meter shows each (the end of its window, seconds); absent
+    /// in files written before them (docs/FORMAT.md, "Metrics").
+    pub max_momentary_lufs: Option<f64>,
+    pub max_momentary_s: Option<f64>,
+    pub max_short_term_lufs: Option<f64>,
+    pub max_short_term_s: Option<f64>,
 }
 
 /// Timeline mode: one song.
@@ -478,6 +485,27 @@ mod tests {
             "source": {"path": "s\u{e9}ance.wav", "sample_rate": 44100, "channels": 2, "duration_s": 10.0},
             "metrics": {"integrated_lufs": -14.2, "lra_lu": null}
         })
+    }
+
+    #[test]
+    fn the_window_maxima_parse_and_older_files_lack_them() {
+        let metrics: Metrics = serde_json::from_value(serde_json::json!({
+            "integrated_lufs": -14.0,
+            "max_momentary_lufs": -9.25,
+            "max_momentary_s": 61.43,
+            "max_short_term_lufs": -11.5,
+            "max_short_term_s": null
+        }))
+        .expect("metrics parse");
+        assert_eq!(metrics.max_momentary_lufs, Some(-9.25));
+        assert_eq!(metrics.max_momentary_s, Some(61.43));
+        assert_eq!(metrics.max_short_term_lufs, Some(-11.5));
+        assert_eq!(metrics.max_short_term_s, None);
+        let older: Metrics = serde_json::from_value(meta()["metrics"].clone()).expect("parse");
+        assert_eq!(
+            (older.max_momentary_lufs, older.max_short_term_s),
+            (None, None)
+        );
     }
 
     #[test]
