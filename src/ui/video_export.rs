@@ -1,6 +1,9 @@
-//! "Export video…" in the side panel's Screenshot section: the shown cloud as an MP4 through
-//! the app's own `loudscape video`, started as a child process with the window's view, camera,
-//! size and settings, so the window never blocks. A thread reads the child's `--progress json`
+//! The side panel's Video row: "Export video…", the passage (start and end: the loop range
+//! when one is set, else the whole song) and the file's name. The shown cloud becomes an MP4
+//! through the app's own `loudscape video`, started as a child process with the window's view,
+//! camera, size and settings, so the window never blocks. A video goes only to an `.mp4` name,
+//! and never over a file this window did not write (`state/written.rs`: `name-2.mp4` instead,
+//! said in the status line); the native save dialog, where one can open, asks itself. A thread reads the child's `--progress json`
 //! lines; the status area under the view shows the frames done, fps and ETA with a progress
 //! bar and Cancel (SIGTERM: the command stops at once and leaves no partial file). Closing the
 //! window stops an export still running (`state/video_export.rs`).
@@ -21,10 +24,14 @@ use crate::render::volume::VolumeSettings;
 use crate::ui::open::file_name;
 use crate::ui::state::LoudscapeApp;
 use crate::ui::state::video_export::{RunningExport, VideoProgress};
+use crate::ui::state::written;
 use crate::view::camera::Camera;
 
 /// The frame size when the view's own cannot be a video's (odd, tiny or over 3840x2160).
 const FALLBACK_SIZE: (u32, u32) = (1280, 720);
+
+/// What `loudscape video` writes (its `-o` takes only this).
+pub(super) const VIDEO_EXTENSION: &str = "mp4";
 
 /// What an export takes from the window.
 #[derive(Clone, Debug)]
@@ -42,8 +49,29 @@ pub(super) struct ExportChoice {
     pub(super) freq_axis: FreqAxis,
     /// Timeline mode's "level as heard" preset key.
     pub(super) normalize: Option<&'static str>,
-    /// The passage's end, seconds (scripted test runs only).
-    pub(super) end: Option<f64>,
+    /// A song's passage, seconds (start, end); `None`: the whole song.
+    pub(super) passage: Option<(f64, f64)>,
+}
+
+/// The passage a song's export covers: the start and end fields once edited, else the loop
+/// range when one is set, else the whole song (`None`).
+pub(super) fn export_passage(
+    edited: Option<(f64, f64)>,
+    looped: Option<(f64, f64)>,
+) -> Option<(f64, f64)> {
+    edited.or(looped.filter(|(start, end)| end > start))
+}
+
+/// A song's length in seconds as `loudscape video` takes it: the source's, else the time
+/// axis's end.
+fn song_duration(cloud: &crate::data::cloud::PointCloud) -> f64 {
+    cloud
+        .meta
+        .source
+        .as_ref()
+        .and_then(|s| s.duration_s)
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .unwrap_or_else(|| cloud.meta.axes.x.value_at(1.0))
 }
 
 /// The frame size a view of `px` exports at: its size rounded down to even sides, or
@@ -129,55 +157,153 @@ pub(super) fn video_args(choice: &ExportChoice) -> Vec<String> {
         if choice.freq_axis != FreqAxis::Linear {
             args.extend(["--freq-axis".into(), choice.freq_axis.name().into()]);
         }
-        if let Some(end) = choice.end {
-            args.extend(["--end".into(), format!("{end}")]);
+        if let Some((start, end)) = choice.passage {
+            args.extend([
+                "--start".into(),
+                format!("{start}"),
+                "--end".into(),
+                format!("{end}"),
+            ]);
         }
     }
     args
 }
 
 impl LoudscapeApp {
-    /// The "Export video…" button, beside Save PNG.
-    pub(super) fn export_video_button(&mut self, ui: &mut egui::Ui) {
+    /// The Video row: Export video…, the passage's start and end (a song's), and the name.
+    pub(super) fn video_controls(&mut self, ui: &mut egui::Ui) {
         let exportable = self
             .active()
             .is_some_and(|l| l.cloud.meta.mode != DataMode::Generic);
         let idle = self.video_export.running.is_none() && self.video_export.save_dialog.is_none();
-        if ui
-            .add_enabled(exportable && idle, egui::Button::new("Export video…"))
-            .on_hover_text(
-                "An MP4 (H.264 + AAC) of this view, camera and settings with the playhead moving \
-                 through the song and its sound (a timeline sweeps across its years): \
-                 loudscape video",
-            )
-            .clicked()
-        {
-            self.ask_where_to_export();
-        }
+        let passage = self.passage_row();
+        let ordered = passage.is_none_or(|p| p.start < p.end);
+        ui.horizontal(|ui| {
+            let button = ui
+                .add_enabled(
+                    exportable && idle && ordered,
+                    egui::Button::new("Export video…"),
+                )
+                .on_hover_text(
+                    "An MP4 (H.264 + AAC) of this view, camera and settings with the playhead \
+                     moving through the passage and its sound (a timeline sweeps across its \
+                     years): loudscape video",
+                )
+                .on_disabled_hover_text(if !exportable {
+                    "open a song or a timeline: a cloud without a time axis has no video"
+                } else if !idle {
+                    "an export is under way (its Cancel is under the view)"
+                } else {
+                    "the start must come before the end"
+                });
+            if button.clicked() {
+                self.ask_where_to_export(crate::ui::open::dialogs_available());
+            }
+            if let Some(mut p) = passage {
+                let start = ui
+                    .add(
+                        egui::DragValue::new(&mut p.start)
+                            .range(0.0..=p.duration)
+                            .speed(0.1)
+                            .fixed_decimals(1)
+                            .suffix(" s"),
+                    )
+                    .on_hover_text("the video's start, seconds into the song");
+                ui.label("to");
+                let end = ui
+                    .add(
+                        egui::DragValue::new(&mut p.end)
+                            .range(0.0..=p.duration)
+                            .speed(0.1)
+                            .fixed_decimals(1)
+                            .suffix(" s"),
+                    )
+                    .on_hover_text("the video's end, seconds into the song");
+                if start.changed() || end.changed() {
+                    self.video_export.passage = Some((p.start, p.end));
+                }
+                if p.looped {
+                    ui.label(RichText::new("the loop").small().weak())
+                        .on_hover_text("the loop range under the view; edit to choose another");
+                }
+            }
+        });
+        let hint = format!("{}.{VIDEO_EXTENSION}", self.export_stem());
+        ui.add(
+            egui::TextEdit::singleline(&mut self.video_export.path)
+                .hint_text(hint)
+                .desired_width(230.0),
+        )
+        .on_hover_text(
+            "where Export video… writes: an .mp4 name (the save dialog starts from it where one \
+             can open); a file this window did not write is kept, and the video goes to \
+             name-2.mp4 beside it",
+        );
     }
 
-    /// Asks where to write the video (native dialog, `<song>.mp4` in the current folder); where
-    /// no dialog can open, the Screenshot field's path if it names an .mp4, else that name.
-    fn ask_where_to_export(&mut self) {
-        let name = PathBuf::from(format!("{}.mp4", self.export_stem()));
-        if crate::ui::open::dialogs_available() {
+    /// The start and end fields of the shown song (Song mode; a timeline sweeps its years):
+    /// the edited passage, else the loop range, else the whole song. Edits made for another
+    /// song are forgotten.
+    fn passage_row(&mut self) -> Option<PassageRow> {
+        let loaded = self.active()?;
+        if loaded.cloud.meta.mode != DataMode::Song {
+            return None;
+        }
+        let (id, duration) = (loaded.id, song_duration(&loaded.cloud));
+        if self.video_export.passage_for != Some(id) {
+            self.video_export.passage = None;
+            self.video_export.passage_for = Some(id);
+        }
+        let chosen = export_passage(self.video_export.passage, self.audio.loop_shown());
+        let (start, end) = chosen.unwrap_or((0.0, duration));
+        Some(PassageRow {
+            start,
+            end,
+            duration,
+            looped: self.video_export.passage.is_none() && chosen.is_some(),
+        })
+    }
+
+    /// Asks where to write the video: the native dialog, starting from the Video field's name
+    /// (else `<song>.mp4`), where one can open (it asks before replacing a file); else that
+    /// name itself, or `name-2.mp4` beside it when a file this window did not write has it.
+    fn ask_where_to_export(&mut self, dialog: bool) {
+        let typed = self.video_export.path.trim().to_string();
+        let name = if typed.is_empty() {
+            PathBuf::from(format!("{}.{VIDEO_EXTENSION}", self.export_stem()))
+        } else {
+            PathBuf::from(&typed)
+        };
+        let Ok(name) = written::of_kind(&name, VIDEO_EXTENSION) else {
+            self.messages.error(format!(
+                "Export video: {} is not an .{VIDEO_EXTENSION} name: nothing exported (the \
+                 video is H.264 + AAC in MP4)",
+                name.display()
+            ));
+            return;
+        };
+        if dialog {
             self.video_export.save_dialog = Some(crate::ui::open::save_dialog_as(
                 "Export the view as a video",
-                ("MP4 video", "mp4"),
+                ("MP4 video", VIDEO_EXTENSION),
                 &name.display().to_string(),
             ));
             return;
         }
-        let typed = PathBuf::from(self.save_shot.path.trim());
-        let typed_mp4 = typed
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("mp4"));
-        let path = if typed_mp4 { typed } else { name };
-        self.messages.warn(format!(
-            "{}: exporting to {} (type a .mp4 path in the Screenshot field to choose)",
-            crate::ui::open::NO_DIALOG,
-            path.display()
-        ));
+        let (path, renamed) = written::target(&name, &self.video_export.made);
+        if renamed {
+            self.messages.warn(format!(
+                "{} exists and this window did not write it: exporting to {} instead",
+                name.display(),
+                path.display()
+            ));
+        } else if typed.is_empty() {
+            self.messages.info(format!(
+                "{}: exporting to {} (type a name in the Video field to choose)",
+                crate::ui::open::NO_DIALOG,
+                path.display()
+            ));
+        }
         self.start_video_export(path);
     }
 
@@ -197,7 +323,7 @@ impl LoudscapeApp {
     }
 
     /// What the window shows, for an export to `output`.
-    fn export_choice(&self, output: PathBuf) -> Option<ExportChoice> {
+    fn export_choice(&mut self, output: PathBuf) -> Option<ExportChoice> {
         let loaded = self.active()?;
         let input = std::path::absolute(&loaded.cloud.path).unwrap_or(loaded.cloud.path.clone());
         Some(ExportChoice {
@@ -209,11 +335,15 @@ impl LoudscapeApp {
             view_px: self.view_px,
             freq_axis: self.freq_axis,
             normalize: self.heard.preset_key(),
-            end: self.video_export.test_end,
+            passage: self.passage_row().and_then(|p| {
+                // The whole song is no passage (the command's default, to the sample).
+                (p.start > 0.0 || p.end < p.duration).then_some((p.start, p.end))
+            }),
         })
     }
 
-    /// Starts `loudscape video` writing `output`, its progress read on threads.
+    /// Starts `loudscape video` writing `output` (an `.mp4` name: the dialog's answer, or
+    /// [`Self::ask_where_to_export`]'s), its progress read on threads.
     pub(super) fn start_video_export(&mut self, output: PathBuf) {
         if self.video_export.running.is_some() {
             return;
@@ -297,8 +427,15 @@ impl LoudscapeApp {
         match answer {
             Some(Ok(picked)) => {
                 self.video_export.save_dialog = None;
-                if let Some(path) = picked {
-                    self.start_video_export(path);
+                // The dialog asked before replacing a file; the name must still be a video's.
+                match picked.map(|path| written::of_kind(&path, VIDEO_EXTENSION).map_err(|_| path))
+                {
+                    Some(Ok(path)) => self.start_video_export(path),
+                    Some(Err(path)) => self.messages.error(format!(
+                        "Export video: {} is not an .{VIDEO_EXTENSION} name: nothing exported",
+                        path.display()
+                    )),
+                    None => {}
                 }
             }
             Some(Err(TryRecvError::Disconnected)) => self.video_export.save_dialog = None,
@@ -344,6 +481,7 @@ impl LoudscapeApp {
                 let frames = running
                     .latest
                     .map_or(String::new(), |p| format!(" ({} frames)", p.frames));
+                self.video_export.made.record(&running.output);
                 self.messages
                     .info(format!("saved video {}{frames}", running.output.display()));
             }
@@ -403,20 +541,27 @@ impl LoudscapeApp {
         }
     }
 
-    /// The scripted presses of tests: `export-video=PATH` exports to PATH as the button does
-    /// (no dialog), `export-video-cancel=PATH` starts one and cancels it once it has begun,
-    /// `export-video-end=SECONDS` makes the next one short (`--end`).
+    /// The scripted presses of tests: `export-video=PATH` types PATH in the Video field and
+    /// presses Export video… where no dialog opens, `export-video-cancel=PATH` does so and
+    /// cancels the export once it has begun, `export-video-end=SECONDS` sets the end field
+    /// (a short video).
     pub(super) fn scripted_video_export(&mut self, name: &str) -> bool {
         if let Some(end) = name.strip_prefix("export-video-end=") {
-            match end.parse::<f64>() {
-                Ok(end) if end > 0.0 => self.video_export.test_end = Some(end),
-                _ => self.messages.error(format!("--press {name}: not a time")),
+            match (end.parse::<f64>(), self.passage_row()) {
+                (Ok(end), Some(row)) if end > row.start && end <= row.duration => {
+                    self.video_export.passage = Some((row.start, end));
+                }
+                _ => self
+                    .messages
+                    .error(format!("--press {name}: not a time in the song")),
             }
         } else if let Some(path) = name.strip_prefix("export-video-cancel=") {
             self.video_export.cancel_at_start = true;
-            self.start_video_export(PathBuf::from(path));
+            self.video_export.path = path.to_string();
+            self.ask_where_to_export(false);
         } else if let Some(path) = name.strip_prefix("export-video=") {
-            self.start_video_export(PathBuf::from(path));
+            self.video_export.path = path.to_string();
+            self.ask_where_to_export(false);
         } else {
             return false;
         }
@@ -427,6 +572,16 @@ impl LoudscapeApp {
     pub(super) fn video_exporting(&self) -> bool {
         self.video_export.running.is_some() || self.video_export.save_dialog.is_some()
     }
+}
+
+/// The start and end fields as the Video row shows them, seconds.
+#[derive(Clone, Copy, Debug)]
+struct PassageRow {
+    start: f64,
+    end: f64,
+    duration: f64,
+    /// Taken from the loop range (not edited).
+    looped: bool,
 }
 
 /// Linux: the child gets SIGTERM if the window's process dies without stopping it, so it still
@@ -479,7 +634,7 @@ mod tests {
             view_px: (1101, 641),
             freq_axis: FreqAxis::Mel,
             normalize: Some("spotify"),
-            end: None,
+            passage: None,
         }
     }
 
@@ -528,23 +683,43 @@ mod tests {
     fn a_timeline_takes_its_preset_and_no_frequency_axis_or_passage() {
         let mut c = choice();
         c.timeline = true;
-        c.end = Some(2.0);
+        c.passage = Some((1.0, 2.0));
         c.camera = None;
         c.settings.show_box = false;
         c.settings.volume.shading = false;
         let args = video_args(&c);
         assert!(!args.iter().any(|a| a.starts_with("--camera-at")));
-        assert!(!args.iter().any(|a| a == "--freq-axis" || a == "--end"));
+        assert!(
+            !args
+                .iter()
+                .any(|a| a == "--freq-axis" || a == "--end" || a == "--start")
+        );
         let tail = &args[args.len() - 4..];
         assert_eq!(
             tail,
             ["--no-shading", "--no-labels", "--normalize", "spotify"]
         );
-        // A song's test passage.
+        // A song's passage.
         let mut song = choice();
-        song.end = Some(1.5);
+        song.passage = Some((12.25, 31.5));
         let args = video_args(&song);
-        assert_eq!(&args[args.len() - 2..], ["--end", "1.5"]);
+        assert_eq!(
+            &args[args.len() - 4..],
+            ["--start", "12.25", "--end", "31.5"]
+        );
+    }
+
+    #[test]
+    fn the_passage_is_the_edited_one_else_the_loop_else_the_whole_song() {
+        assert_eq!(export_passage(None, None), None, "the whole song");
+        assert_eq!(export_passage(None, Some((10.0, 20.0))), Some((10.0, 20.0)));
+        // A loop range not yet set (0 to 0) is no passage.
+        assert_eq!(export_passage(None, Some((0.0, 0.0))), None);
+        assert_eq!(
+            export_passage(Some((3.0, 4.5)), Some((10.0, 20.0))),
+            Some((3.0, 4.5)),
+            "the fields, once edited, win over the loop"
+        );
     }
 
     #[test]

@@ -1,7 +1,10 @@
 //! The window's two screenshot paths: "Save PNG" (the 3D view rendered offscreen at the
-//! window's or a chosen size, through [`crate::ui::screenshot::render_view`], labels included)
+//! 3D view's or a chosen size, through [`crate::ui::screenshot::render_view`], labels included)
 //! and the scripted `--screenshot` of the whole window (egui's own, for tests), which closes the
-//! window once saved.
+//! window once saved. Save PNG writes only to a `.png` name (a video's name in the field saves
+//! nothing and says why) and never over a file this window did not save in this run: a file
+//! already there that it did not make is kept, the PNG goes to `name-2.png` beside it, and the
+//! status line says so (`state/written.rs`).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -12,6 +15,7 @@ use crate::ui::bridge::CompareResources;
 use crate::ui::bridge::ViewResources;
 use crate::ui::compare_shot::{CompareView, render_compare_image};
 use crate::ui::state::compare_window::CompareLayout;
+use crate::ui::state::written;
 use crate::ui::state::{LoudscapeApp, Slot};
 
 impl LoudscapeApp {
@@ -69,13 +73,17 @@ impl LoudscapeApp {
         ui.horizontal(|ui| {
             if ui
                 .add_enabled(self.active().is_some(), egui::Button::new("Save PNG"))
-                .on_hover_text("Ctrl+S (Cmd+S): the 3D view as a PNG")
+                .on_hover_text(
+                    "Ctrl+S (Cmd+S): the 3D view as a PNG, at the view's size or the size \
+                     chosen here",
+                )
+                .on_disabled_hover_text("open a song or a cloud first")
                 .clicked()
             {
                 self.save_shot.requested = true;
             }
-            ui.checkbox(&mut self.save_shot.custom_size, "size");
-            self.export_video_button(ui);
+            ui.checkbox(&mut self.save_shot.custom_size, "size")
+                .on_hover_text("save at a chosen size instead of the 3D view's");
         });
         if self.save_shot.custom_size {
             ui.horizontal(|ui| {
@@ -89,7 +97,14 @@ impl LoudscapeApp {
             egui::TextEdit::singleline(&mut self.save_shot.path)
                 .hint_text("loudscape-<time>.png")
                 .desired_width(230.0),
+        )
+        .on_hover_text(
+            "where Save PNG writes: a .png name; a file this window did not save is kept, and \
+             the picture goes to name-2.png beside it",
         );
+        ui.add_space(4.0);
+        ui.label(RichText::new("Video").strong());
+        self.video_controls(ui);
     }
 
     /// Renders the current view offscreen (window size or the chosen size) and saves it.
@@ -105,10 +120,12 @@ impl LoudscapeApp {
             view.width = self.save_shot.size[0].max(1);
             view.height = self.save_shot.size[1].max(1);
         }
-        // Ctrl+S and Save PNG ask where (native dialog) unless the field names a file; where
-        // no dialog can open, the timestamped name in the current folder, as before.
+        // Ctrl+S and Save PNG ask where (native dialog, which asks before replacing a file)
+        // unless the field names a file; where no dialog can open, the timestamped name in the
+        // current folder. Only a .png name, and not over a file this window did not save.
         let mut no_dialog = false;
-        let path = if let Some(chosen) = self.open.save_to.take() {
+        let dialog_chose = self.open.save_to.is_some();
+        let wanted = if let Some(chosen) = self.open.save_to.take() {
             chosen
         } else if self.save_shot.path.trim().is_empty() {
             let name = crate::ui::screenshot::timestamped_name(std::time::SystemTime::now());
@@ -119,6 +136,19 @@ impl LoudscapeApp {
             name
         } else {
             PathBuf::from(self.save_shot.path.trim())
+        };
+        let Ok(wanted) = written::of_kind(&wanted, "png") else {
+            self.messages.error(format!(
+                "Save PNG: {} is not a .png name: nothing saved (Save PNG writes PNG pictures; \
+                 a video's name goes in the Video field)",
+                wanted.display()
+            ));
+            return;
+        };
+        let (path, renamed) = if dialog_chose {
+            (wanted.clone(), false)
+        } else {
+            written::target(&wanted, &self.save_shot.made)
         };
         let mut settings = self.settings.clone();
         settings.markers = self.markers();
@@ -148,26 +178,37 @@ impl LoudscapeApp {
         };
         match result {
             Ok((width, height)) => {
+                self.save_shot.made.record(&path);
                 // The full path: a bare name lands in the folder the window was started from.
                 let shown = std::path::absolute(&path).unwrap_or(path);
+                let mut notes = String::new();
+                if renamed {
+                    notes += &format!(
+                        "; {} exists and this window did not save it, so it is kept",
+                        wanted.display()
+                    );
+                }
+                if no_dialog {
+                    notes += &format!("; {}", crate::ui::open::NO_DIALOG);
+                }
                 self.messages.info(format!(
-                    "saved {} ({}×{}){}",
+                    "saved {} ({}×{}){notes}",
                     shown.display(),
                     width,
                     height,
-                    if no_dialog {
-                        format!("; {}", crate::ui::open::NO_DIALOG)
-                    } else {
-                        String::new()
-                    }
                 ));
             }
             Err(e) => self.messages.error(e),
         }
     }
 
-    /// The scripted `--press shot-size=WxH` of tests: Save PNG at that size.
+    /// The scripted `--press shot-size=WxH` of tests: Save PNG at that size; `shot-path=PATH`
+    /// types PATH into the Screenshot field.
     pub(super) fn scripted_shot_size(&mut self, name: &str) -> bool {
+        if let Some(path) = name.strip_prefix("shot-path=") {
+            self.save_shot.path = path.to_string();
+            return true;
+        }
         let Some((w, h)) = name
             .strip_prefix("shot-size=")
             .and_then(|size| size.split_once('x'))
@@ -182,7 +223,7 @@ impl LoudscapeApp {
     }
 
     /// How the view shows the compare now, if it does.
-    fn compare_shown_as(&self) -> Option<CompareView> {
+    pub(super) fn compare_shown_as(&self) -> Option<CompareView> {
         let state = self.compare.as_ref().filter(|c| c.shown())?;
         if self.active != Slot::Song {
             return None;

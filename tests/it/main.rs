@@ -40,6 +40,7 @@ mod window_messages;
 mod window_open_audio;
 mod window_open_music;
 mod window_responsive;
+mod window_save_safety;
 mod window_stream;
 mod window_strip;
 mod window_timeline_build;

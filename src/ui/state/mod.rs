@@ -50,6 +50,7 @@ pub(super) mod surface_status;
 pub(super) mod timeline_build;
 pub(super) mod video_export;
 pub(super) mod view_motion;
+pub(super) mod written;
 
 use compare_window::CompareState;
 use iso_sweep::IsoSweep;
@@ -163,7 +164,7 @@ pub(super) struct ScreenshotState {
     pub(super) done: Arc<AtomicBool>,
 }
 
-/// The "Save PNG" panel's choices.
+/// The "Save PNG" panel's choices (where it may write: `written.rs`).
 pub(super) struct SaveShot {
     /// Where to save; empty saves `loudscape-<time>.png` in the current directory.
     pub(super) path: String,
@@ -172,6 +173,8 @@ pub(super) struct SaveShot {
     pub(super) size: [u32; 2],
     /// Save on this frame (the button or Ctrl+S).
     pub(super) requested: bool,
+    /// The PNGs saved in this run: only these are written again under their own name.
+    pub(super) made: written::MadeHere,
 }
 
 impl Default for SaveShot {
@@ -181,6 +184,7 @@ impl Default for SaveShot {
             custom_size: false,
             size: [1920, 1080],
             requested: false,
+            made: written::MadeHere::default(),
         }
     }
 }

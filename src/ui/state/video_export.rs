@@ -1,6 +1,6 @@
 //! An "Export video…" on its way (`ui/video_export.rs`): the `loudscape video` child the window
 //! started, the thread reading its `--progress json` lines, the last progress it sent and the
-//! tail of its stderr; and the save dialog while it is open.
+//! tail of its stderr; the save dialog while it is open; the Video row's name field and passage.
 
 use std::path::PathBuf;
 use std::process::Child;
@@ -82,16 +82,22 @@ impl Drop for RunningExport {
     }
 }
 
-/// The "Export video…" button's state.
+/// The Video row's state: its name field, the passage, the export under way.
 #[derive(Default)]
 pub(in crate::ui) struct VideoExport {
+    /// The Video field: where to write (empty: `<song>.mp4` in the current folder); the save
+    /// dialog starts from it.
+    pub(in crate::ui) path: String,
+    /// The start and end fields, seconds, once edited (`None`: the loop range when one is set,
+    /// else the whole song), and the cloud they were edited for (another song starts afresh).
+    pub(in crate::ui) passage: Option<(f64, f64)>,
+    pub(in crate::ui) passage_for: Option<u64>,
+    /// The videos written in this run: only these are written again under their own name.
+    pub(in crate::ui) made: super::written::MadeHere,
     /// The export under way, if one is.
     pub(in crate::ui) running: Option<RunningExport>,
     /// The save dialog's answer, while it is open.
     pub(in crate::ui) save_dialog: Option<Receiver<Option<PathBuf>>>,
-    /// Scripted runs (tests): the passage's end, seconds, passed as `--end` so a test's video is
-    /// short. The button always exports the whole song.
-    pub(in crate::ui) test_end: Option<f64>,
     /// Scripted runs (tests): cancel the export as soon as it has started.
     pub(in crate::ui) cancel_at_start: bool,
 }
