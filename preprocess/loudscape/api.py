@@ -181,32 +181,32 @@ def _camera(camera) -> tuple[float, float, float]:
     return azimuth, elevation, distance
 
 
-def _json_problem(value, where: str, depth: int = 0) -> str | None:
-    """What makes ``value`` not plain JSON (the file's metadata), naming where; None if
-    nothing does."""
+def _plain_json(value, where: str, depth: int = 0):
+    """``value`` as plain JSON for the file's metadata: numpy numbers become Python numbers;
+    an ExtractError naming where (``metadata['axes']['x']['min']``) for NaN, infinity, a key
+    that is not a string or a value JSON has no type for."""
     if depth > 64:
-        return f"{where} is nested more than 64 levels deep"
+        raise ExtractError(f"{where} is nested more than 64 levels deep")
     if value is None or isinstance(value, (bool, str)):
-        return None
-    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, np.bool_):
-        if not np.isfinite(float(value)):
-            return f"{where} is {value!r}: JSON has no NaN or infinity"
-        return None
+        return value
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        if not np.isfinite(value):
+            raise ExtractError(f"{where} is {value!r}: JSON has no NaN or infinity")
+        return float(value)
     if isinstance(value, dict):
+        plain = {}
         for key, item in value.items():
             if not isinstance(key, str):
-                return f"{where} has the key {_shown(key)}: keys must be strings"
-            problem = _json_problem(item, f"{where}[{key!r}]", depth + 1)
-            if problem:
-                return problem
-        return None
+                raise ExtractError(f"{where} has the key {_shown(key)}: keys must be strings")
+            plain[key] = _plain_json(item, f"{where}[{key!r}]", depth + 1)
+        return plain
     if isinstance(value, (list, tuple)):
-        for index, item in enumerate(value):
-            problem = _json_problem(item, f"{where}[{index}]", depth + 1)
-            if problem:
-                return problem
-        return None
-    return f"{where} is a {type(value).__name__}, which is not JSON"
+        return [_plain_json(item, f"{where}[{i}]", depth + 1) for i, item in enumerate(value)]
+    raise ExtractError(f"{where} is a {type(value).__name__}, which is not JSON")
 
 
 def _options(
@@ -297,10 +297,10 @@ def _as_input(source, metadata, folder: str) -> tuple[str, str]:
         meta = {}
     if not isinstance(meta, dict):
         raise ExtractError(f"{where} must be a dict, got {type(meta).__name__}: {_shown(meta)}")
-    problem = _json_problem(meta, where)
-    if problem:
-        raise ExtractError(f"{problem} (the metadata must be plain JSON: docs/FORMAT.md)")
-    meta = dict(meta)
+    try:
+        meta = _plain_json(meta, where)
+    except ExtractError as exc:
+        raise ExtractError(f"{exc} (the metadata must be plain JSON: docs/FORMAT.md)") from None
     if "point_count" in meta:
         # A selection of a cloud's points (``points[points[:, 4] > 0.5]``) keeps its metadata.
         meta["point_count"] = array.shape[0]

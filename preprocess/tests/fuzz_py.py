@@ -356,6 +356,9 @@ def _api_strategy(st, json_values):
             lambda items: st.sampled_from([items, tuple(items), np.array(items, dtype=object)])
         ),
         st.builds(object),
+        st.floats(allow_nan=True, allow_infinity=True, width=32).map(np.float32),
+        st.integers(-(2**63), 2**63 - 1).map(np.int64),
+        st.booleans().map(np.bool_),
     )
 
     def argument(good):
@@ -376,7 +379,10 @@ def _api_strategy(st, json_values):
         "legend": st.booleans(),
         "timeout": st.sampled_from([None, 30, 0.5, 0, -1]),
         "metadata": st.one_of(
-            st.none(), st.dictionaries(st.text(max_size=6), json_values, max_size=3), junk
+            st.none(),
+            st.dictionaries(st.text(max_size=6), json_values, max_size=3),
+            st.dictionaries(st.text(max_size=6), junk, max_size=2),
+            junk,
         ),
     }
     kwargs = st.fixed_dictionaries({}, optional={k: argument(v) for k, v in names.items()})

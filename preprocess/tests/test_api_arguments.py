@@ -169,6 +169,25 @@ def test_arrays_that_are_not_numbers_are_refused(points):
     _refused(lambda: loudscape.render(points), "points must")
 
 
+def test_numpy_numbers_in_metadata_are_written_as_numbers(tmp_path, monkeypatch):
+    # json.dumps refuses numpy's int64 and float32 (TypeError); the API writes them as the
+    # numbers they are. The binary is a stand-in that keeps the cloud it is given.
+    import loudscape.api as api
+    from loudscape_extract.ply import read_ply
+
+    kept = {}
+
+    def keep(command, *, timeout):
+        kept["metadata"] = read_ply(command[-1])[1]
+        raise ExtractError("stop here")
+
+    monkeypatch.setattr(api, "_run", keep)
+    metadata = {"count": np.int64(3), "level": np.float32(1.5), "flag": np.bool_(True)}
+    _refused(lambda: loudscape.render(POINTS, metadata=metadata), "stop here")
+    assert {k: kept["metadata"][k] for k in metadata} == {"count": 3, "level": 1.5, "flag": True}
+    _refused(lambda: loudscape.render(POINTS, metadata={"x": np.float32("nan")}), "metadata['x']")
+
+
 def test_arrays_out_of_float32_range_are_refused():
     _refused(lambda: loudscape.render(np.full((4, 5), 1e300)), "NaN or infinite")
 
