@@ -304,29 +304,28 @@ impl LoudnessStrip {
             &y_lufs,
             (2.0, SHORT_TERM),
         );
-        // The maxima: a dot on the curve's level where the loudest window is centred, and a
-        // label beside it (to its left when the dot is in the strip's right quarter).
+        // The maxima: a dot ringed in the background colour where the loudest window is
+        // centred, on its level; the label beside it (to its left in the strip's right
+        // quarter), momentary above the dot and short-term below, so the two never overlap.
         for maximum in &self.maxima {
-            let colour = if maximum.label == "max M" {
-                MOMENTARY
-            } else {
-                SHORT_TERM
-            };
+            let momentary = maximum.label == "max M";
+            let colour = if momentary { MOMENTARY } else { SHORT_TERM };
             let at = [x(maximum.centre_s), y_lufs(maximum.lufs)];
-            out.fill(
-                Rect::from_min_max([at[0] - 3.0, at[1] - 3.0], [at[0] + 3.0, at[1] + 3.0]),
-                3.0,
-                colour,
-            );
+            let dot = |r: f32| Rect::from_min_max([at[0] - r, at[1] - r], [at[0] + r, at[1] + r]);
+            out.fill(dot(4.5), 4.5, [18, 18, 18, 255]);
+            out.fill(dot(3.0), 3.0, colour);
             let right = at[0] > plot.left() + 0.75 * plot.width();
-            let (anchor, dx) = if right {
-                (Anchor::RIGHT_BOTTOM, -5.0)
-            } else {
-                (Anchor::LEFT_BOTTOM, 5.0)
+            let anchor = match (right, momentary) {
+                (false, true) => Anchor::LEFT_BOTTOM,
+                (false, false) => Anchor::LEFT_TOP,
+                (true, true) => Anchor::RIGHT_BOTTOM,
+                (true, false) => Anchor::RIGHT_TOP,
             };
+            let dx = if right { -5.0 } else { 5.0 };
+            let dy = if momentary { -2.0 } else { 2.0 };
             out.text(Text::new(
                 format!("{} {:.1}", maximum.label, maximum.lufs),
-                [at[0] + dx, at[1] - 2.0],
+                [at[0] + dx, at[1] + dy],
                 anchor,
                 SMALL,
                 colour,
