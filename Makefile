@@ -57,8 +57,10 @@ lint-py: venv
 real-music:
 	@bash scripts/fetch-real-music.sh data/real-music
 
+# The tests, and the `>>>` examples in the docstrings of both packages (they run as written).
 test-py: venv real-music
 	$(VENV)/bin/pytest -q preprocess/tests
+	$(VENV)/bin/pytest -q --doctest-modules preprocess/loudscape_extract preprocess/loudscape
 
 # The app's isosurfaces against scikit-image, through the `loudscape` binary (the one the Rust
 # tests use: `cargo build` would rebuild with other features).
