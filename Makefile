@@ -86,7 +86,8 @@ fuzz: fuzz-py
 	$(CARGO) run -q --release --example fuzz_ply -- --inputs $(N)
 	$(CARGO) run -q --release --example fuzz_formats -- --inputs $(N)
 
-# The Python readers of untrusted files (manifest parser, PLY readers) fuzzed with hypothesis,
+# The Python readers of untrusted files (manifest parser, PLY readers, read_cloud on any kind of
+# path) and the notebook API's arguments, fuzzed with hypothesis,
 # each input under a time and memory limit (preprocess/tests/fuzz_py.py); a few seconds of it
 # run in test-py. FUZZ_PY_SECONDS=3600 for a long run.
 FUZZ_PY_SECONDS ?= 300
