@@ -10,7 +10,9 @@ segment, so the windows end there too):
 - ``psr_db``: true peak of those 3 s minus their short-term loudness (empty below -70 LUFS);
 - ``true_peak_dbtp``: true peak (4x oversampled) of the 100 ms segment itself.
 
-Everything is measured on the DC-free channels, as the cloud's metrics and curves are. The whole
+Everything is measured on the DC-free channels, as the cloud's metrics and curves are: an
+audio file goes through the streamed extraction's two decoding passes (bounded memory; the
+same sums a Song cloud's metrics come from, :func:`file_curves`). The whole
 track's readings (integrated loudness, LRA, true peak, PLR, and the maximum momentary and
 short-term loudness at any window position with the times a meter shows them) go to a second
 table beside the first, ``NAME-summary.csv`` (``reading, value, unit, time_s``): spreadsheets
@@ -31,7 +33,7 @@ import os
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from loudscape_extract.audio import decode_audio, mix_to_mono
+from loudscape_extract.audio import mix_to_mono
 from loudscape_extract.csv_table import write_csv
 from loudscape_extract.dynamics import (
     DC_WARN_THRESHOLD,
@@ -46,14 +48,15 @@ from loudscape_extract.loudness import (
     MOMENTARY_S,
     SHORT_TERM_S,
     loudness_from_energy,
-    sample_peak_dbfs,
     segment_energy,
     true_peak_dbtp,
     window_maxima,
 )
+from loudscape_extract.measures import WINDOW_MAXIMA_KEYS
 from loudscape_extract.notices import warning_lines
 from loudscape_extract.paths import check_output_path, check_regular_input
 from loudscape_extract.ply import read_ply_metadata
+from loudscape_extract.stream_decode import decode_track, signal_pass
 
 __all__ = [
     "CURVE_COLUMNS",
@@ -61,6 +64,7 @@ __all__ = [
     "add_parser",
     "audio_curves",
     "cloud_curves",
+    "file_curves",
     "run",
     "summary_path",
     "write_loudness_csv",
@@ -70,6 +74,9 @@ __all__ = [
 CURVE_COLUMNS = ("time_s", "momentary_lufs", "short_term_lufs", "psr_db", "true_peak_dbtp")
 #: The summary table's columns.
 SUMMARY_COLUMNS = ("reading", "value", "unit", "time_s")
+#: The decoding passes' frame length (the command needs no spectrogram; only the frame
+#: checks of the passes use it).
+_N_FFT = 2048
 _MOMENTARY_SEGMENTS = 4
 _SHORT_TERM_SEGMENTS = 30
 #: (reading, unit, the metric holding its time) in the summary's order.
@@ -127,6 +134,94 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
     clean, dc = dc_and_highpass(samples, sample_rate=sample_rate, highpass_hz=None)
     energy, boundaries = segment_energy(clean, sample_rate)
     segment_peak, overall_peak = segment_true_peak(clean, boundaries)
+    mono = np.asarray(mix_to_mono(clean)[: boundaries[-1]], dtype=np.float64)
+    starts = boundaries[:-1].astype(np.int64)
+    n = energy.shape[0]
+    dynamics = dynamics_from_segments(
+        energy,
+        boundaries,
+        segment_peak=segment_peak,
+        true_peak=overall_peak,
+        mono_squares=np.add.reduceat(mono * mono, starts) if n else np.zeros(0),
+        mono_peaks=np.maximum.reduceat(np.abs(mono), starts) if n else np.zeros(0),
+        sample_rate=sample_rate,
+    )
+    true_peak = true_peak_dbtp(samples, sample_rate=sample_rate)
+    return _curves(
+        energy,
+        boundaries,
+        segment_peak=segment_peak,
+        dynamics=dynamics,
+        sample_rate=sample_rate,
+        maxima=window_maxima(clean, sample_rate=sample_rate),
+        true_peak=10.0 ** (true_peak / 20.0) if true_peak is not None else 0.0,
+        sample_peak=float(np.max(np.abs(samples))) if samples.size else 0.0,
+        dc=dc,
+    )
+
+
+def file_curves(path: str, *, strict: bool = False) -> tuple[list[dict], dict, list[str]]:
+    """:func:`audio_curves` of an audio file in bounded memory: the streamed extraction's two
+    decoding passes (:mod:`loudscape_extract.stream_decode`), so the readings are the very
+    values a Song cloud of the file holds.
+
+    Returns
+    -------
+    rows, readings
+        As :func:`audio_curves`.
+    warnings : list of str
+        ``<path>: <message>`` lines: a truncated file, clipping or cancelling channels, a
+        large DC offset removed.
+
+    Raises
+    ------
+    ExtractError
+        As :func:`~loudscape_extract.stream_decode.decode_track` (unreadable, silent or
+        shorter than 2048 samples).
+    """
+    decoded = decode_track(path, n_fft=_N_FFT, strict=strict)
+    stats = signal_pass(decoded, n_fft=_N_FFT, hop_length=_N_FFT)
+    rate = decoded.info.sample_rate
+    dynamics = dynamics_from_segments(
+        stats.energy,
+        stats.boundaries,
+        segment_peak=stats.segment_peak,
+        true_peak=stats.true_peak_clean,
+        mono_squares=stats.mono_squares,
+        mono_peaks=stats.mono_peaks,
+        sample_rate=rate,
+    )
+    rows, readings = _curves(
+        stats.energy,
+        stats.boundaries,
+        segment_peak=stats.segment_peak,
+        dynamics=dynamics,
+        sample_rate=rate,
+        maxima=stats.window_maxima,
+        true_peak=max(stats.true_peak_decoded, decoded.sample_peak),
+        sample_peak=decoded.sample_peak,
+        dc=decoded.dc,
+    )
+    warnings = [f"{path}: {decoded.warning}"] if decoded.warning else []
+    warnings += [f"{path}: {item['message']}" for item in decoded.signal if "message" in item]
+    if readings["dc_offset"] > DC_WARN_THRESHOLD:
+        warnings.append(dc_warning(path, readings["dc_offset"]))
+    return rows, readings, warnings
+
+
+def _curves(
+    energy: np.ndarray,
+    boundaries: np.ndarray,
+    *,
+    segment_peak: np.ndarray,
+    dynamics,
+    sample_rate: float,
+    maxima: dict,
+    true_peak: float,
+    sample_peak: float,
+    dc: np.ndarray,
+) -> tuple[list[dict], dict]:
+    """Rows and readings from the per-segment sums (one copy for both front ends)."""
     lengths = np.diff(boundaries).astype(np.float64)
     n = energy.shape[0]
 
@@ -143,17 +238,6 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
     momentary = windows(_MOMENTARY_SEGMENTS)
     short_term = windows(_SHORT_TERM_SEGMENTS)
     # PSR and its median exactly as the cloud's curves and metrics have them.
-    mono = np.asarray(mix_to_mono(clean)[: boundaries[-1]], dtype=np.float64)
-    starts = boundaries[:-1].astype(np.int64)
-    dynamics = dynamics_from_segments(
-        energy,
-        boundaries,
-        segment_peak=segment_peak,
-        true_peak=overall_peak,
-        mono_squares=np.add.reduceat(mono * mono, starts) if n else np.zeros(0),
-        mono_peaks=np.maximum.reduceat(np.abs(mono), starts) if n else np.zeros(0),
-        sample_rate=sample_rate,
-    )
     psr = np.full(n, np.nan)
     if n >= _SHORT_TERM_SEGMENTS:
         psr[_SHORT_TERM_SEGMENTS - 1 :] = dynamics.psr_db
@@ -170,16 +254,16 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
         for k in range(n)
     ]
     integrated, lra = loudness_from_energy(energy, boundaries)
-    clean_peak = _db(overall_peak)
+    clean_peak = _db(dynamics.true_peak)
     readings = {
         "integrated_lufs": integrated,
         "lra_lu": lra,
-        **window_maxima(clean, sample_rate=sample_rate),
-        "true_peak_dbtp": true_peak_dbtp(samples, sample_rate=sample_rate),
-        "sample_peak_dbfs": sample_peak_dbfs(samples),
+        **{key: maxima.get(key) for key in WINDOW_MAXIMA_KEYS},
+        "true_peak_dbtp": _db(true_peak),
+        "sample_peak_dbfs": _db(sample_peak),
         "plr_db": None if integrated is None or clean_peak is None else clean_peak - integrated,
         "psr_median_db": song_dynamics_metrics(dynamics)["psr_median_db"],
-        "dc_offset": float(np.max(np.abs(dc))) if dc.size else 0.0,
+        "dc_offset": float(np.max(np.abs(dc))) if np.size(dc) else 0.0,
     }
     return rows, readings
 
@@ -279,11 +363,7 @@ def write_loudness_csv(
         rows, readings = cloud_curves(metadata, path=source)
         warnings = warning_lines(metadata)
     else:
-        audio = decode_audio(source, strict=strict)
-        rows, readings = audio_curves(audio.samples, sample_rate=audio.sample_rate)
-        warnings = [f"{source}: {audio.warning}"] if audio.warning else []
-        if readings["dc_offset"] > DC_WARN_THRESHOLD:
-            warnings.append(dc_warning(source, readings["dc_offset"]))
+        rows, readings, warnings = file_curves(source, strict=strict)
     if csv_path is not None:
         write_csv(csv_path, CURVE_COLUMNS, rows)
         write_csv(summary, SUMMARY_COLUMNS, _summary_rows(readings))

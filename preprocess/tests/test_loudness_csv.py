@@ -12,7 +12,13 @@ import pytest
 import soundfile
 
 from loudscape_extract.cli import main
-from loudscape_extract.loudness_csv import CURVE_COLUMNS, SUMMARY_COLUMNS, summary_path
+from loudscape_extract.loudness_csv import (
+    CURVE_COLUMNS,
+    SUMMARY_COLUMNS,
+    audio_curves,
+    file_curves,
+    summary_path,
+)
 from loudscape_extract.ply import read_ply, write_ply
 
 RATE = 48000
@@ -177,3 +183,20 @@ def test_warnings_travel_with_the_readings(song, tmp_path, capsys):
     captured = capsys.readouterr()
     assert "warning:" in captured.err and "DC offset 0.050" in captured.err
     assert shifted in captured.err and "integrated_lufs" in captured.out
+
+
+def test_the_file_is_streamed_and_reads_as_the_whole_track(song):
+    """The command reads the file in the streamed passes (bounded memory); the in-memory
+    function gives the same rows and readings."""
+    wav, _, stereo = song
+    rows, readings, warnings = file_curves(wav)
+    whole_rows, whole_readings = audio_curves(stereo.astype(np.float32), sample_rate=RATE)
+    assert warnings == [] and len(rows) == len(whole_rows)
+    for a, b in zip(rows, whole_rows, strict=True):
+        for column in CURVE_COLUMNS:
+            if b[column] is None:
+                assert a[column] is None, (b["time_s"], column)
+            else:
+                assert a[column] == pytest.approx(b[column], abs=1e-3), (b["time_s"], column)
+    for key, value in whole_readings.items():
+        assert readings[key] == pytest.approx(value, abs=1e-3), key
