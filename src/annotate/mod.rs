@@ -10,6 +10,7 @@
 //! under its name where the two would meet.
 
 pub mod axes;
+pub mod bidi;
 pub mod compare;
 pub mod font;
 pub mod legend;

@@ -1,5 +1,6 @@
 //! Shapes drawn onto an image on the CPU (vello_cpu, anti-aliased, blended in the image's
-//! sRGB-encoded values as the window's egui blends in its gamma-encoded target).
+//! sRGB-encoded values as the window's egui blends in its gamma-encoded target). Text is shaped
+//! by [`super::font`]: in visual order, each run in its direction and its fallback font.
 
 use vello_cpu::color::{AlphaColor, Srgb};
 use vello_cpu::kurbo::{self, Affine, BezPath, Shape as _};
@@ -87,16 +88,17 @@ pub fn draw(image: &mut image::RgbaImage, shapes: &[Shape], pixels_per_point: f3
 fn draw_text(ctx: &mut RenderContext, text: &Text, ppp: f64) {
     let px = text.size * ppp as f32;
     let shaped = shape(&text.text, px);
-    let outliner = Outliner::new(px);
+    let mut outliner = Outliner::new(px);
     // egui puts the box's top left and each glyph's baseline on whole pixels, and its glyphs on
     // quarter pixels across.
     let left = (f64::from(text.rect.left()) * ppp).round();
-    let baseline = (f64::from(text.rect.top()) * ppp).round() + f64::from(shaped.baseline);
+    let top = (f64::from(text.rect.top()) * ppp).round();
     ctx.set_transform(Affine::IDENTITY);
     ctx.set_paint(paint(text.colour));
     for glyph in &shaped.glyphs {
         let x = left + (f64::from(glyph.x) * 4.0).round() / 4.0;
-        if let Some(path) = outliner.outline(glyph.glyph, x, baseline) {
+        let baseline = top + f64::from(glyph.y).round();
+        if let Some(path) = outliner.outline(glyph.face, glyph.glyph, x, baseline) {
             ctx.fill_path(&path);
         }
     }
@@ -172,5 +174,42 @@ mod tests {
         draw(&mut plated, &plate.shapes, 1.0);
         let mut all = image.pixels().chain(big.pixels()).chain(plated.pixels());
         assert!(all.all(|p| p[3] == 255));
+    }
+
+    /// `text` drawn white at 20 points on black, alone.
+    fn drawn(text: &str) -> image::RgbaImage {
+        let mut image = image::RgbaImage::from_pixel(48, 40, image::Rgba([0, 0, 0, 255]));
+        let mut a = Annotation::default();
+        a.text(Text::new(
+            text,
+            [4.0, 4.0],
+            Anchor::LEFT_TOP,
+            20.0,
+            [255; 4],
+        ));
+        draw(&mut image, &a.shapes, 1.0);
+        image
+    }
+
+    #[test]
+    fn hebrew_arabic_and_emoji_are_drawn_as_letters_not_the_empty_box() {
+        // A character no font has is drawn as Ubuntu Light's empty box: what every one of these
+        // was drawn as before the fallback fonts.
+        let empty_box = drawn("\u{10FFFD}");
+        let ink = |image: &image::RgbaImage| image.pixels().filter(|p| p[0] > 100).count();
+        assert!(ink(&empty_box) > 20);
+        for c in "שלוםمرحباब🎵😀🔊".chars() {
+            let letter = drawn(&c.to_string());
+            let differing = letter
+                .pixels()
+                .zip(empty_box.pixels())
+                .filter(|(a, b)| a[0].abs_diff(b[0]) > 60)
+                .count();
+            assert!(ink(&letter) > 10, "{c} has no ink");
+            assert!(
+                differing * 4 > ink(&empty_box),
+                "{c} is drawn as the empty box ({differing} pixels differ)"
+            );
+        }
     }
 }

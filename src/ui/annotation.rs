@@ -1,7 +1,7 @@
 //! Picture annotation (`annotate`: labels, legends, titles, the loudness strip as plain data)
 //! painted with egui's painter, so the window shows what pictures draw.
 
-use eframe::egui::{self, Align2, Color32, FontId, Stroke};
+use eframe::egui::{self, Color32, FontId, Stroke};
 
 use crate::annotate::{Annotation, Rect, Rgba, Shape};
 
@@ -65,13 +65,14 @@ pub fn paint(painter: &egui::Painter, annotation: &Annotation) {
                 }
             }
             Shape::Text(text) => {
-                painter.text(
-                    pos(text.rect.min),
-                    Align2::LEFT_TOP,
+                // In visual order, as pictures draw it (a Hebrew title right to left).
+                let job = super::style::bidi_job(
                     &text.text,
                     FontId::proportional(text.size),
                     colour(text.colour),
                 );
+                let galley = painter.layout_job(job);
+                painter.galley(pos(text.rect.min), galley, colour(text.colour));
             }
         }
     }

@@ -70,6 +70,7 @@ pub fn run(options: WindowOptions) -> anyhow::Result<()> {
                 crate::render::gpu::context::check_limits(&render_state.device.limits())
                     .map_err(|reason| format!("the GPU is too small for loudscape: {reason}"))?;
                 ViewResources::install(render_state);
+                crate::ui::style::install_fonts(&cc.egui_ctx);
                 cc.egui_ctx
                     .options_mut(|o| o.input_options.max_click_duration = MAX_CLICK_SECONDS);
                 // Scripted screenshot runs (tests) start from defaults and remember nothing.

@@ -234,12 +234,14 @@ pub(super) fn paint_readings(
         .collect::<Vec<_>>()
         .join("\n");
     let (min, galley) = readout_layout(rect, pos, |wrap| {
-        painter.layout(
-            text.clone(),
+        // A song's title in visual order (a Hebrew title right to left, its year in order).
+        let mut job = super::style::bidi_job(
+            &text,
             egui::FontId::monospace(12.0),
             Color32::from_gray(230),
-            wrap,
-        )
+        );
+        job.wrap.max_width = wrap;
+        painter.layout_job(job)
     });
     let size = galley.size() + egui::vec2(12.0, 8.0);
     let frame = egui::Rect::from_min_size(min, size);

@@ -73,8 +73,10 @@ pub struct HeadlessPainter {
 
 impl HeadlessPainter {
     pub fn new(gpu: &GpuContext) -> Self {
+        let ctx = egui::Context::default();
+        super::style::install_fonts(&ctx);
         Self {
-            ctx: egui::Context::default(),
+            ctx,
             renderer: egui_wgpu::Renderer::new(
                 &gpu.device,
                 COLOR_FORMAT,

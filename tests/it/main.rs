@@ -28,6 +28,7 @@ mod render_points;
 mod screenshot;
 mod shaders_msl;
 mod surface;
+mod text_scripts;
 mod video;
 mod video_trust;
 mod volume;
