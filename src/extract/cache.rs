@@ -4,9 +4,14 @@
 //! renamed or moved song still hits; an edited one misses. Each cloud `NAME.ply` has a checksum
 //! file beside it, `NAME.ply.sum` (JSON: the cloud's SHA-256 and length, and the warnings the
 //! extractor printed): a cloud is used only when it matches it and loads ([`load_checked`]);
-//! anything else is extracted again and replaced. Both are written to a temporary name, fsynced
-//! and renamed, the cloud first ([`store`]). A cloud without a checksum file (written by an
-//! older loudscape) is used when it loads, and given one. The file's name carries the extractor's
+//! anything else is extracted again and replaced. A cloud without a checksum file is never
+//! trusted (nothing vouches for its bytes: it is extracted again). Both files are written under
+//! names of the writer's own (in its private `.extract-PID-N` folder), fsynced, then renamed into
+//! place, the cloud first, while the writer holds the cache folder's lock ([`FolderLock`]);
+//! readers verify a pair under the same lock, shared, so several processes storing the same song
+//! at once leave the last one's pair whole and a reader never takes a new cloud with an old
+//! checksum (on Windows, where the folder cannot be locked, such a mix fails its check and is
+//! extracted again). The file's name carries the extractor's
 //! version too (`KEY-VERSIONHASH.ply`, `version.rs`): a new extractor writes new clouds instead
 //! of reusing an older one's; where no extractor can be found at all, the newest cloud of the
 //! song under these settings still opens (a cached song needs no Python).
@@ -20,7 +25,7 @@ use sha2::{Digest, Sha256};
 
 use super::{ExtractError, Settings};
 use crate::data::cloud::{CloudWarning, PointCloud};
-use crate::files::{sync_parent, write_file_atomically};
+use crate::files::sync_parent;
 
 /// The checksum file of a cached cloud (`NAME.ply.sum`).
 pub fn sum_path(ply: &Path) -> PathBuf {
@@ -97,70 +102,131 @@ pub fn add_said(cloud: &mut PointCloud, said: &[String]) {
     }
 }
 
-/// Loads the cached cloud `ply` if it is whole: its checksum file matches its bytes (or there is
-/// none, from an older loudscape: it is written now, best effort) and the loader accepts it. The
-/// extractor's printed warnings recorded beside it are added to the cloud's.
-/// Errors: why it cannot be used (its bytes differ from its checksum, or it does not load).
-pub fn load_checked(ply: &Path) -> Result<PointCloud, String> {
+/// Why a cached cloud is not used.
+#[derive(Debug, PartialEq)]
+pub enum Unusable {
+    /// No checksum file vouches for its bytes (a writer killed between its two renames, or one
+    /// removed by hand): it is extracted again, and no checksum is made for it.
+    NoSum,
+    /// Its bytes differ from its checksum, or it does not load; the reason.
+    Damaged(String),
+}
+
+impl std::fmt::Display for Unusable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unusable::NoSum => write!(f, "it has no checksum file to check it against"),
+            Unusable::Damaged(reason) => write!(f, "{reason}"),
+        }
+    }
+}
+
+/// A lock on the cache folder itself (no file of its own is left in the cache): exclusive while
+/// a writer puts a cloud and its checksum file in place or a damaged pair is removed, shared
+/// while a reader verifies a pair. Released when dropped. Best effort: where the folder cannot be
+/// opened or locked (Windows opens no folder as a file), nothing is held, and a reader that meets
+/// a new cloud with an old checksum finds them unequal and extracts again.
+pub struct FolderLock {
+    _folder: Option<File>,
+}
+
+impl FolderLock {
+    pub fn shared(dir: &Path) -> FolderLock {
+        FolderLock::take(dir, false)
+    }
+
+    pub fn exclusive(dir: &Path) -> FolderLock {
+        FolderLock::take(dir, true)
+    }
+
+    fn take(dir: &Path, exclusive: bool) -> FolderLock {
+        let Ok(folder) = File::open(dir) else {
+            return FolderLock { _folder: None };
+        };
+        let locked = if exclusive {
+            folder.lock()
+        } else {
+            folder.lock_shared()
+        };
+        FolderLock {
+            _folder: locked.ok().map(|()| folder),
+        }
+    }
+}
+
+/// The folder a cache file lies in.
+fn folder_of(ply: &Path) -> &Path {
+    match ply.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    }
+}
+
+/// Loads the cached cloud `ply` if it is whole: its checksum file matches its bytes and the
+/// loader accepts it (the caller holds the folder's lock: see [`FolderLock`]). The extractor's
+/// printed warnings recorded beside it are added to the cloud's.
+/// Errors: why it cannot be used: no checksum file, or its bytes differ from it, or it does not
+/// load. Nothing is written, whatever the answer.
+pub fn load_checked(ply: &Path) -> Result<PointCloud, Unusable> {
     let sum_file = sum_path(ply);
+    let damaged = Unusable::Damaged;
     let recorded = match File::open(&sum_file) {
         Ok(file) => {
             let mut text = String::new();
             file.take(MAX_SUM_BYTES)
                 .read_to_string(&mut text)
-                .map_err(|e| format!("its checksum file cannot be read: {e}"))?;
-            Some(
-                serde_json::from_str::<Sum>(&text)
-                    .map_err(|e| format!("its checksum file is damaged: {e}"))?,
-            )
+                .map_err(|e| damaged(format!("its checksum file cannot be read: {e}")))?;
+            serde_json::from_str::<Sum>(&text)
+                .map_err(|e| damaged(format!("its checksum file is damaged: {e}")))?
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(Unusable::NoSum),
         Err(e) => {
-            return Err(format!("its checksum file cannot be read: {e}"));
+            return Err(damaged(format!("its checksum file cannot be read: {e}")));
         }
-    };
-    let loaded = load_hashing(ply);
-    let Some(recorded) = recorded else {
-        let (cloud, sha256, bytes) = loaded?;
-        let _ = write_sum(ply, &sha256, bytes, &[]);
-        return Ok(cloud);
     };
     // The checksum speaks first: a damaged file is reported as such, whatever the loader says.
-    let (mut cloud, sha256, bytes) = match loaded {
+    let (mut cloud, sha256, bytes) = match load_hashing(ply) {
         Ok(done) => done,
         Err(reason) => {
             let actual = std::fs::metadata(ply).map(|m| m.len()).unwrap_or(0);
-            return Err(if actual != recorded.bytes {
+            return Err(damaged(if actual != recorded.bytes {
                 format!(
                     "{actual} bytes where its checksum file says {} ({reason})",
                     recorded.bytes
                 )
             } else {
                 reason
-            });
+            }));
         }
     };
     if bytes != recorded.bytes || sha256 != recorded.sha256 {
-        return Err(format!(
+        return Err(damaged(format!(
             "its content does not match its checksum ({bytes} bytes, SHA-256 {}..., recorded {} \
              bytes, {}...)",
             &sha256[..12],
             recorded.bytes,
             recorded.sha256.get(..12).unwrap_or(&recorded.sha256)
-        ));
+        )));
     }
     add_said(&mut cloud, &recorded.said);
     Ok(cloud)
 }
 
-fn write_sum(ply: &Path, sha256: &str, bytes: u64, said: &[String]) -> std::io::Result<()> {
+/// Writes the checksum file of a cloud to `path` (a new name in the writer's private folder),
+/// fsynced.
+fn write_sum(path: &Path, sha256: &str, bytes: u64, said: &[String]) -> std::io::Result<()> {
     let sum = Sum {
         sha256: sha256.to_string(),
         bytes,
         said: said.to_vec(),
     };
     let text = serde_json::to_string(&sum).map_err(std::io::Error::other)?;
-    write_file_atomically(&sum_path(ply), text.as_bytes())
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)?;
+    std::io::Write::write_all(&mut file, text.as_bytes())?;
+    file.sync_all()
 }
 
 /// Checks a freshly extracted cloud `partial` (it loads) and returns it with the extractor's
@@ -171,9 +237,12 @@ pub fn load_fresh(partial: &Path, said: &[String]) -> Result<(PointCloud, String
     Ok((cloud, sha256, bytes))
 }
 
-/// Moves a checked cloud `partial` (in a folder beside the cache, same file system) to `ply`
-/// with its checksum file: the cloud fsynced and renamed, then the checksum file written
-/// atomically, then the folder fsynced.
+/// Moves a checked cloud `partial` (in the writer's private folder beside the cache, same file
+/// system) to `ply` with its checksum file: both written and fsynced under their names in that
+/// folder, then, holding the cache folder's lock, the cloud renamed into place and then its
+/// checksum file, then the folder fsynced. Whoever renames last leaves a whole pair; where the
+/// second rename fails, the cloud just put there is taken away again (under the lock), so no
+/// cloud stays beside a checksum that is not its own.
 pub fn store(
     partial: &Path,
     ply: &Path,
@@ -182,14 +251,16 @@ pub fn store(
     said: &[String],
 ) -> std::io::Result<()> {
     File::open(partial)?.sync_all()?;
-    // A stale checksum file must not vouch for the new cloud in between.
-    match std::fs::remove_file(sum_path(ply)) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e),
-        _ => {}
-    }
+    let sum_temporary = sum_path(partial);
+    write_sum(&sum_temporary, sha256, bytes, said)?;
+    let _lock = FolderLock::exclusive(folder_of(ply));
     std::fs::rename(partial, ply)?;
+    if let Err(e) = std::fs::rename(&sum_temporary, sum_path(ply)) {
+        remove(ply);
+        return Err(e);
+    }
     sync_parent(ply);
-    write_sum(ply, sha256, bytes, said)
+    Ok(())
 }
 
 /// Removes a damaged cloud and its checksum file.

@@ -57,27 +57,69 @@ pub fn parse_line(text: &str) -> Line {
     }
 }
 
-/// Removes what runs of an app that was killed before it could clean up may have left beside
-/// `cache` more than a day ago (a live run's is minutes old at most): its private extraction
-/// folders (`.extract-PID-N`) and the partial clouds of older versions (`*.partial-PID.ply`).
+/// Removes what runs of an app that were killed before they could clean up (SIGKILL, a power
+/// cut) left in `cache`: their private extraction folders (`.extract-PID-N`) and the partial
+/// clouds of older versions (`*.partial-PID.ply`). One whose process is gone goes at once; one
+/// whose process still runs (this one's too) stays; where that cannot be told (no PID in the
+/// name, or not Unix), after a day (a live run's is minutes old at most).
 pub fn remove_stale_partials(cache: &Path) {
     let Ok(entries) = std::fs::read_dir(cache) else {
         return;
     };
     for entry in entries.flatten() {
-        let stale = entry
-            .metadata()
-            .and_then(|m| m.modified())
-            .ok()
-            .and_then(|t| t.elapsed().ok())
-            .is_some_and(|age| age > Duration::from_secs(24 * 3600));
         let name = entry.file_name().to_string_lossy().into_owned();
-        if stale && name.starts_with(SCRATCH_PREFIX) {
+        let scratch = name.starts_with(&format!("{SCRATCH_PREFIX}-"));
+        let partial = name.contains(".partial-");
+        if !(scratch || partial) {
+            continue;
+        }
+        let pid = if scratch {
+            name[SCRATCH_PREFIX.len() + 1..]
+                .split('-')
+                .next()
+                .and_then(|p| p.parse::<u32>().ok())
+        } else {
+            name.rsplit_once(".partial-")
+                .and_then(|(_, rest)| rest.strip_suffix(".ply"))
+                .and_then(|p| p.parse::<u32>().ok())
+        };
+        let stale = match pid.and_then(process_runs) {
+            Some(runs) => !runs,
+            None => entry
+                .metadata()
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| t.elapsed().ok())
+                .is_some_and(|age| age > Duration::from_secs(24 * 3600)),
+        };
+        if stale && scratch {
             let _ = std::fs::remove_dir_all(entry.path());
-        } else if stale && name.contains(".partial-") {
+        } else if stale {
             let _ = std::fs::remove_file(entry.path());
         }
     }
+}
+
+/// Whether process `pid` runs on this machine (a zombie counts: its folder may be in use until
+/// it is reaped); None where that cannot be told.
+#[cfg(unix)]
+fn process_runs(pid: u32) -> Option<bool> {
+    let pid = i32::try_from(pid).ok().filter(|&p| p > 0)?;
+    // SAFETY: kill(2) with signal 0 sends nothing; it only checks that the process exists.
+    if unsafe { libc::kill(pid, 0) } == 0 {
+        return Some(true);
+    }
+    match std::io::Error::last_os_error().raw_os_error() {
+        Some(libc::ESRCH) => Some(false),
+        // EPERM: it runs, as another user.
+        Some(libc::EPERM) => Some(true),
+        _ => None,
+    }
+}
+
+#[cfg(not(unix))]
+fn process_runs(_pid: u32) -> Option<bool> {
+    None
 }
 
 /// The name of the private folder an extraction writes into (`.extract-PID-N`).

@@ -210,33 +210,70 @@ pub fn find_extractor(audio: &Path) -> Result<Extractor, ExtractError> {
     Ok(Extractor { path, version })
 }
 
-/// The cached cloud `ply` of `audio` if it is whole ([`cache::load_checked`]); a damaged one is
-/// removed, with one line saying so.
+/// The cached cloud `ply` of `audio` if it is whole ([`cache::load_checked`], under the cache
+/// folder's shared lock); one that is not is removed, with one line saying why. The removal
+/// holds the lock exclusively and checks the pair again first: a writer may have just put a whole
+/// one in its place.
 fn cached(audio: &Path, ply: &Path) -> Option<PointCloud> {
-    match cache::load_checked(ply) {
-        Ok(cloud) => Some(cloud),
-        Err(reason) => {
-            eprintln!(
-                "loudscape: {}: the cached cloud {} is damaged ({}); extracting it again",
-                audio.display(),
-                ply.display(),
-                crate::data::cloud::one_line(&reason)
-            );
-            cache::remove(ply);
-            None
+    let dir = ply.parent().unwrap_or(Path::new("."));
+    {
+        let _lock = cache::FolderLock::shared(dir);
+        if let Ok(cloud) = cache::load_checked(ply) {
+            return Some(cloud);
         }
     }
+    let _lock = cache::FolderLock::exclusive(dir);
+    let reason = match cache::load_checked(ply) {
+        Ok(cloud) => return Some(cloud),
+        Err(reason) => reason,
+    };
+    let what = match reason {
+        cache::Unusable::NoSum => "cannot be trusted",
+        cache::Unusable::Damaged(_) => "is damaged",
+    };
+    eprintln!(
+        "loudscape: {}: the cached cloud {} {what} ({}); extracting it again",
+        audio.display(),
+        ply.display(),
+        crate::data::cloud::one_line(&reason.to_string())
+    );
+    cache::remove(ply);
+    None
 }
 
-/// Says once per run that the cache folder cannot be written.
-fn cache_not_writable(dir: &Path, reason: &std::io::Error) {
+/// Says once per run that the cache folder cannot be written, and why.
+fn cache_not_writable(dir: &Path, reason: &dyn std::fmt::Display) {
     static SAID: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
     if !SAID.swap(true, std::sync::atomic::Ordering::Relaxed) {
         eprintln!(
-            "loudscape: warning: {}: cannot write the cloud cache ({reason}); songs are \
+            "loudscape: warning: {}: cannot write the cloud cache ({}); songs are \
              extracted to a temporary folder and not kept",
-            dir.display()
+            dir.display(),
+            crate::data::cloud::one_line(&reason.to_string())
         );
+    }
+}
+
+/// A private folder for one extraction in the system's temporary folder (the cache cannot be
+/// written).
+fn temporary_scratch() -> Result<crate::files::TempDir, ExtractError> {
+    crate::files::TempDir::create_in(&std::env::temp_dir(), "loudscape-extract").map_err(|e| {
+        ExtractError::Io {
+            path: std::env::temp_dir(),
+            reason: format!("cannot create a temporary folder: {e}"),
+        }
+    })
+}
+
+/// The extractor's reason where a failed extraction into `scratch` failed writing there (a full
+/// disk, a quota): that reason names its output, which lies in `scratch`, where a failure about
+/// the input names the audio.
+fn failed_writing_in<'a>(error: &'a ExtractError, scratch: &Path) -> Option<&'a str> {
+    match error {
+        ExtractError::Failed { reason, .. } if reason.contains(&*scratch.to_string_lossy()) => {
+            Some(reason)
+        }
+        _ => None,
     }
 }
 
@@ -275,6 +312,8 @@ pub fn cloud_for_audio_watching(
         fraction: 0.0,
     });
     let key = cache::key(audio, settings)?;
+    // What killed runs left in the cache goes first, hit or miss.
+    child::remove_stale_partials(dir);
     let extractor = match find() {
         Ok(extractor) => extractor,
         // No extractor to ask for its version: the newest cloud of the song still opens.
@@ -306,23 +345,14 @@ pub fn cloud_for_audio_watching(
     // where the cache cannot be written, in the system's temporary folder.
     let in_cache = std::fs::create_dir_all(dir)
         .and_then(|()| crate::files::TempDir::create_in(dir, child::SCRATCH_PREFIX));
-    let (scratch, keep) = match in_cache {
-        Ok(scratch) => {
-            child::remove_stale_partials(dir);
-            (scratch, true)
-        }
+    let (mut scratch, mut keep) = match in_cache {
+        Ok(scratch) => (scratch, true),
         Err(reason) => {
             cache_not_writable(dir, &reason);
-            let scratch =
-                crate::files::TempDir::create_in(&std::env::temp_dir(), "loudscape-extract")
-                    .map_err(|e| ExtractError::Io {
-                        path: std::env::temp_dir(),
-                        reason: format!("cannot create a temporary folder: {e}"),
-                    })?;
-            (scratch, false)
+            (temporary_scratch()?, false)
         }
     };
-    let (partial, said) = child::run(
+    let mut extracted = child::run(
         &extractor.path,
         &absolute,
         audio,
@@ -331,7 +361,29 @@ pub fn cloud_for_audio_watching(
         cancel,
         on_progress,
         on_points,
-    )?;
+    );
+    // No room in the cache folder (a full disk): the cache stops nothing, the song is
+    // extracted again in the temporary folder.
+    if keep
+        && let Err(error) = &extracted
+        && let Some(reason) = failed_writing_in(error, scratch.path())
+    {
+        cache_not_writable(dir, &reason);
+        drop(scratch);
+        scratch = temporary_scratch()?;
+        keep = false;
+        extracted = child::run(
+            &extractor.path,
+            &absolute,
+            audio,
+            scratch.path(),
+            settings,
+            cancel,
+            on_progress,
+            on_points,
+        );
+    }
+    let (partial, said) = extracted?;
     let (cloud, sha256, bytes) =
         cache::load_fresh(&partial, &said).map_err(|reason| ExtractError::Failed {
             audio: audio.to_owned(),
@@ -341,7 +393,6 @@ pub fn cloud_for_audio_watching(
         true => match cache::store(&partial, &ply, &sha256, bytes, &said) {
             Ok(()) => Some(ply),
             Err(reason) => {
-                cache::remove(&ply);
                 cache_not_writable(dir, &reason);
                 None
             }

@@ -23,6 +23,7 @@ mod open_audio;
 mod pick;
 mod playback;
 mod reliability_cache;
+mod reliability_cache_shared;
 mod reliability_loader;
 mod render_points;
 mod screenshot;
