@@ -167,6 +167,11 @@ pub fn picture_legend(cloud: &PointCloud, settings: &RenderSettings) -> PictureL
             ),
         ),
     };
+    // Songs a normalization left where they were are named (data/normalize.rs).
+    let detail = match crate::data::normalize::left_out_note(cloud) {
+        Some(note) => format!("{detail}; {note}"),
+        None => detail,
+    };
     PictureLegend {
         name: picture_name(cloud),
         detail,

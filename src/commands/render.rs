@@ -108,13 +108,18 @@ impl DrawArgs {
     }
 
     /// `cloud` as heard under `--normalize` (a timeline's songs shifted by their playback
-    /// gain); unchanged with `none`. An unknown preset is refused.
+    /// gain); unchanged with `none`. An unknown preset is refused. Each song left where it was
+    /// (no integrated loudness) is named on stderr with the reason (the legend says it too).
     pub fn heard(&self, cloud: PointCloud) -> anyhow::Result<PointCloud> {
-        let preset = loudscape::data::normalize::parse_preset(&self.normalize)
-            .map_err(anyhow::Error::msg)?;
+        use loudscape::data::normalize;
+        let preset = normalize::parse_preset(&self.normalize).map_err(anyhow::Error::msg)?;
         match preset {
             Some(preset) => {
-                loudscape::data::normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)
+                let heard = normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)?;
+                for line in normalize::left_out_lines(&heard) {
+                    eprintln!("{line}");
+                }
+                Ok(heard)
             }
             None => Ok(cloud),
         }

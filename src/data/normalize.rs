@@ -153,6 +153,132 @@ pub fn parse_preset(key: &str) -> Result<Option<Preset>, String> {
 pub const GAIN_KEY: &str = "normalization_gain_db";
 /// Metadata key (in each song's object) of the preset's name.
 pub const PRESET_KEY: &str = "normalization";
+/// Metadata key (in each song's object) of why the song was left where it is, when the preset
+/// gives it no gain ([`no_gain_reason`]).
+pub const LEFT_OUT_KEY: &str = "normalization_left_out";
+
+/// Why `service` gives a song no gain (see [`normalization_gain`]): no integrated loudness
+/// (a silent or near-silent song, or metrics the file does not give), or a turn-up that needs
+/// the true peak the file does not give.
+pub fn no_gain_reason(
+    service: &StreamingService,
+    integrated_lufs: Option<f64>,
+    true_peak_dbtp: Option<f64>,
+) -> Option<&'static str> {
+    if normalization_gain(service, integrated_lufs, true_peak_dbtp).is_some() {
+        return None;
+    }
+    if integrated_lufs.is_some_and(f64::is_finite) {
+        Some("no true peak to limit its turn-up by")
+    } else {
+        Some("no integrated loudness")
+    }
+}
+
+/// A song a normalized cloud leaves where it was.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LeftOut {
+    /// Its title, else its file's name, else `songs[INDEX]`.
+    pub song: String,
+    /// Its file, as recorded, where it has a title too (titles repeat).
+    pub file: Option<String>,
+    pub reason: String,
+}
+
+/// The songs of a cloud made by [`normalized`] that were not moved, in file order.
+pub fn left_out(cloud: &PointCloud) -> Vec<LeftOut> {
+    cloud
+        .meta
+        .songs
+        .iter()
+        .enumerate()
+        .filter_map(|(index, song)| {
+            let reason = song.extra.get(LEFT_OUT_KEY)?.as_str()?.to_string();
+            let file_name = song.path.as_deref().and_then(|p| {
+                std::path::Path::new(p)
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+            });
+            let title = Some(song.title.trim())
+                .filter(|t| !t.is_empty())
+                .map(str::to_string);
+            let file = title.as_ref().and(song.path.clone());
+            let name = title
+                .or(file_name)
+                .unwrap_or_else(|| format!("songs[{index}]"));
+            Some(LeftOut {
+                song: name,
+                file,
+                reason,
+            })
+        })
+        .collect()
+}
+
+/// Most lines [`left_out_lines`] gives one song each.
+pub const LEFT_OUT_LINES: usize = 10;
+
+/// The warning lines about the songs `cloud` (made by [`normalized`]) leaves unmoved: one a
+/// song, `warning: FILE: SONG was not normalized (PRESET): REASON`, at most [`LEFT_OUT_LINES`],
+/// then one line counting the rest.
+pub fn left_out_lines(cloud: &PointCloud) -> Vec<String> {
+    let left = left_out(cloud);
+    let preset = cloud
+        .meta
+        .songs
+        .iter()
+        .find_map(|s| s.extra.get(PRESET_KEY)?.as_str())
+        .unwrap_or("normalization");
+    let file = cloud.path.display();
+    let mut lines: Vec<String> = left
+        .iter()
+        .take(LEFT_OUT_LINES)
+        .map(|l| {
+            let song = match &l.file {
+                Some(path) => format!("{} ({path})", l.song),
+                None => l.song.clone(),
+            };
+            format!(
+                "warning: {file}: {} was not normalized ({preset}): {}; it is drawn as \
+                 mastered",
+                crate::data::cloud::one_line(&song),
+                l.reason
+            )
+        })
+        .collect();
+    if left.len() > LEFT_OUT_LINES {
+        lines.push(format!(
+            "warning: {file}: {} more songs were not normalized ({preset})",
+            left.len() - LEFT_OUT_LINES
+        ));
+    }
+    lines
+}
+
+/// The legend's note on the songs `cloud` (made by [`normalized`]) leaves unmoved, or None
+/// where there are none: "1 song not normalized (no integrated loudness): Hum", the reason
+/// given where all share it, the names listed (the legend cuts what does not fit).
+pub fn left_out_note(cloud: &PointCloud) -> Option<String> {
+    let left = left_out(cloud);
+    let first = left.first()?;
+    let count = match left.len() {
+        1 => "1 song".to_string(),
+        n => format!("{n} songs"),
+    };
+    let reason = if left.iter().all(|l| l.reason == first.reason) {
+        format!(" ({})", first.reason)
+    } else {
+        String::new()
+    };
+    let names: Vec<String> = left
+        .iter()
+        .map(|l| crate::data::cloud::one_line(&l.song))
+        .collect();
+    Some(format!(
+        "{count} not normalized{reason}: {}",
+        names.join(", ")
+    ))
+}
 
 /// How far (in normalized y units) a gain of `gain_db` moves a point on an axis from
 /// `min` to `max` dB over [-1, 1].
@@ -168,7 +294,8 @@ pub fn y_shift(gain_db: f64, min: f64, max: f64) -> f32 {
 /// the preset's gain for it (clamped to the axis, as the extractor clamps), the y axis
 /// titled "…, as heard on <service>", and the gain recorded in each song's object
 /// ([`GAIN_KEY`], [`PRESET_KEY`]) for the read-out. A song without an integrated loudness
-/// (or a true peak a turn-up needs) stays where it is, its gain recorded as unknown.
+/// (or a true peak a turn-up needs) stays where it is, its gain recorded as unknown and the
+/// reason as [`LEFT_OUT_KEY`]: [`left_out_lines`] and [`left_out_note`] say so.
 ///
 /// Errors: not a timeline, or a song without a valid point range.
 pub fn normalized(cloud: &PointCloud, preset: &Preset) -> Result<PointCloud, String> {
@@ -208,6 +335,14 @@ pub fn normalized(cloud: &PointCloud, preset: &Preset) -> Result<PointCloud, Str
         );
         song.extra
             .insert(PRESET_KEY.into(), preset.service.name.into());
+        match no_gain_reason(
+            &preset.service,
+            metrics.integrated_lufs,
+            metrics.true_peak_dbtp,
+        ) {
+            Some(reason) => song.extra.insert(LEFT_OUT_KEY.into(), reason.into()),
+            None => song.extra.remove(LEFT_OUT_KEY),
+        };
     }
     out.meta.axes.y.label = format!(
         "{}, as heard on {}",
@@ -230,7 +365,13 @@ pub fn gain_reading(song: &crate::data::cloud::SongInfo) -> Option<(String, Stri
     let name = song.extra.get(PRESET_KEY)?.as_str()?;
     let value = match song.extra.get(GAIN_KEY).and_then(|g| g.as_f64()) {
         Some(g) => format!("{g:+.1} dB"),
-        None => "unknown (no integrated loudness)".into(),
+        None => format!(
+            "unknown ({})",
+            song.extra
+                .get(LEFT_OUT_KEY)
+                .and_then(|r| r.as_str())
+                .unwrap_or("no integrated loudness")
+        ),
     };
     Some((format!("{name} gain"), value))
 }
@@ -330,6 +471,89 @@ mod tests {
             "momentary loudness (BS.1770, 400 ms), as heard on Spotify (normal)"
         );
         assert!(gain_reading(&base.meta.songs[0]).is_none());
+    }
+
+    /// A song without an integrated loudness (a -75 dB sine: the gate leaves nothing) and one
+    /// without the true peak a turn-up needs stay where they are, each with its reason, said on
+    /// one warning line each and in the legend's note; a song that moved is not named.
+    #[test]
+    fn songs_left_where_they_are_are_named_with_their_reason() {
+        let mut base = cloud();
+        base.meta.songs[0].title = "Hum".into();
+        base.meta.songs[0].metrics = Some(Metrics::default());
+        base.meta.songs[1].path = Some("/music/quiet.flac".into());
+        base.meta.songs[1].metrics.as_mut().unwrap().true_peak_dbtp = None;
+        let spotify = normalized(&base, &parse_preset("spotify").unwrap().unwrap()).unwrap();
+        assert!(
+            (heard(&spotify, 0) - -8.0).abs() < 1e-4,
+            "moved without a loudness"
+        );
+        assert!(
+            (heard(&spotify, 3) - -20.0).abs() < 1e-4,
+            "turned up without a peak"
+        );
+        assert_eq!(
+            left_out(&spotify),
+            [
+                LeftOut {
+                    song: "Hum".into(),
+                    file: None,
+                    reason: "no integrated loudness".into()
+                },
+                LeftOut {
+                    song: "quiet.flac".into(),
+                    file: None,
+                    reason: "no true peak to limit its turn-up by".into()
+                }
+            ]
+        );
+        assert_eq!(
+            left_out_lines(&spotify),
+            [
+                "warning: t.ply: Hum was not normalized (Spotify (normal)): no integrated \
+                 loudness; it is drawn as mastered",
+                "warning: t.ply: quiet.flac was not normalized (Spotify (normal)): no true peak \
+                 to limit its turn-up by; it is drawn as mastered"
+            ]
+        );
+        assert_eq!(
+            left_out_note(&spotify).as_deref(),
+            Some("2 songs not normalized: Hum, quiet.flac")
+        );
+        assert_eq!(
+            gain_reading(&spotify.meta.songs[1]).unwrap().1,
+            "unknown (no true peak to limit its turn-up by)"
+        );
+        // A title names the song, its file follows on stderr (titles repeat).
+        let mut titled = base.clone();
+        titled.meta.songs[0].path = Some("songs/hum.flac".into());
+        let lines = left_out_lines(&normalized(&titled, &PRESETS[0]).unwrap());
+        assert!(
+            lines[0].contains(": Hum (songs/hum.flac) was not"),
+            "{lines:?}"
+        );
+        // EBU R 128 turns up freely: only the song without a loudness is left.
+        let ebu = normalized(&base, &parse_preset("ebu_r128").unwrap().unwrap()).unwrap();
+        assert_eq!(
+            left_out_note(&ebu).as_deref(),
+            Some("1 song not normalized (no integrated loudness): Hum")
+        );
+        // Many: ten lines and one counting the rest.
+        let mut many = cloud();
+        many.meta.songs = (0..13).map(|_| song(0, 3, -8.0, 0.5)).collect();
+        for song in &mut many.meta.songs {
+            song.metrics = None;
+        }
+        let lines = left_out_lines(&normalized(&many, &PRESETS[0]).unwrap());
+        assert_eq!(lines.len(), LEFT_OUT_LINES + 1);
+        assert!(
+            lines[0].contains("songs[0] was not normalized"),
+            "{lines:?}"
+        );
+        assert!(lines[10].contains("3 more songs"), "{lines:?}");
+        // Nothing left out, nothing said.
+        let all = normalized(&cloud(), &PRESETS[0]).unwrap();
+        assert!(left_out_lines(&all).is_empty() && left_out_note(&all).is_none());
     }
 
     #[test]
