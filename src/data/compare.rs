@@ -166,6 +166,36 @@ pub fn moved_onto(cloud: &PointCloud, axes: &Axes) -> PointCloud {
     moved
 }
 
+/// B's cloud with its time axis moved onto A's time: the music at B's `t` plays at A's
+/// `t - offset_s` (`offset_s` > 0: B starts later, as `Alignment::offset_s` says), so after
+/// [`on_union_axes`] the same moment of the music sits at the same x in both. Only the axis ends
+/// move (every point keeps its normalized coordinate); the file's time ticks, which name B's
+/// own seconds, are dropped. A cloud whose x axis is not time in seconds is returned as it is.
+pub fn aligned_in_time(b: &PointCloud, offset_s: f64) -> PointCloud {
+    let mut aligned = b.clone();
+    let x = &mut aligned.meta.axes.x;
+    if offset_s == 0.0 || x.unit != "s" || x.scale != AxisScale::Linear {
+        return aligned;
+    }
+    x.min -= offset_s;
+    x.max -= offset_s;
+    x.ticks = None;
+    aligned
+}
+
+/// The legend's words for B's alignment and matching: "B aligned +0.731 s, -3.8 dB to match
+/// A", the parts that apply ("B aligned +0.731 s"), or None when neither was done.
+pub fn aligned_words(offset_s: Option<f64>, gain_db: Option<f64>) -> Option<String> {
+    let mut parts = Vec::new();
+    if let Some(offset) = offset_s {
+        parts.push(format!("aligned {offset:+.3} s"));
+    }
+    if let Some(gain) = gain_db {
+        parts.push(format!("{gain:+.1} dB to match A"));
+    }
+    (!parts.is_empty()).then(|| format!("B {}", parts.join(", ")))
+}
+
 /// Both clouds on the union of their axes: `(A, B)`.
 pub fn on_union_axes(
     a: &PointCloud,
@@ -190,6 +220,94 @@ mod tests {
         let yb = move_coordinate(&b, &u, 0.0);
         let db = (u.value_at(f64::from(yb)) - u.value_at(f64::from(ya))) as f32;
         assert!((db - 6.0).abs() < 1e-4, "{db}");
+    }
+
+    /// A point cloud of "music" whose points are A's, each `delay_s` later in time: B is A
+    /// delayed, with its own time axis starting at 0 as a file's does.
+    fn delayed_copy(a: &PointCloud, delay_s: f64) -> PointCloud {
+        let mut b = a.clone();
+        let x = &a.meta.axes.x;
+        b.meta.axes.x.max = x.max + delay_s;
+        for p in &mut b.points {
+            let t = x.value_at(f64::from(p.position[0])) + delay_s;
+            p.position[0] = b.meta.axes.x.normalized_of(t) as f32;
+        }
+        b
+    }
+
+    /// The largest distance between a point of A and the same point of B, in A's seconds.
+    fn largest_time_gap(a: &PointCloud, b: &PointCloud) -> f64 {
+        let x = &a.meta.axes.x;
+        a.points
+            .iter()
+            .zip(&b.points)
+            .map(|(p, q)| {
+                (x.value_at(f64::from(p.position[0])) - x.value_at(f64::from(q.position[0]))).abs()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn a_delayed_copy_aligned_by_its_offset_lies_on_a() {
+        let a = PointCloud::synthetic(
+            crate::data::synthetic::synthetic_song(20_000, 7),
+            crate::data::cloud::DataMode::Song,
+        );
+        let b = delayed_copy(&a, 0.5);
+        let (a_plain, b_plain) = on_union_axes(&a, &b).unwrap();
+        let before = largest_time_gap(&a_plain, &b_plain);
+        assert!(
+            (before - 0.5).abs() < 1e-3,
+            "unaligned, B is 0.5 s late: {before}"
+        );
+        let (a_moved, b_moved) = on_union_axes(&a, &aligned_in_time(&b, 0.5)).unwrap();
+        let after = largest_time_gap(&a_moved, &b_moved);
+        assert!(
+            after < 1e-4,
+            "aligned, the same music at the same time: {after} s apart"
+        );
+        // The difference of the two clouds is nothing: the same counts in every cell.
+        let cells = |c: &PointCloud| {
+            let mut counts = std::collections::BTreeMap::new();
+            for p in &c.points {
+                let cell = p.position.map(|v| ((v + 1.0) * 32.0).floor() as i32);
+                *counts.entry(cell).or_insert(0usize) += 1;
+            }
+            counts
+        };
+        let (ca, cb) = (cells(&a_moved), cells(&b_moved));
+        let moved: usize = ca
+            .iter()
+            .map(|(cell, n)| n.abs_diff(*cb.get(cell).unwrap_or(&0)))
+            .sum();
+        assert!(
+            moved * 200 < a.points.len(),
+            "{moved} of {} points in another cell",
+            a.points.len()
+        );
+        assert_eq!(aligned_in_time(&b, 0.0).meta.axes, b.meta.axes);
+    }
+
+    #[test]
+    fn only_a_time_axis_in_seconds_is_aligned() {
+        let timeline = PointCloud::synthetic(Vec::new(), crate::data::cloud::DataMode::Timeline);
+        assert_eq!(
+            aligned_in_time(&timeline, 0.5).meta.axes,
+            timeline.meta.axes
+        );
+    }
+
+    #[test]
+    fn the_legend_says_what_was_aligned_and_matched() {
+        assert_eq!(
+            aligned_words(Some(0.731), Some(-3.8)).as_deref(),
+            Some("B aligned +0.731 s, -3.8 dB to match A")
+        );
+        assert_eq!(
+            aligned_words(None, Some(2.0)).as_deref(),
+            Some("B +2.0 dB to match A")
+        );
+        assert_eq!(aligned_words(None, None), None);
     }
 
     #[test]

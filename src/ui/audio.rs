@@ -32,6 +32,8 @@ pub struct AudioPanel {
     no_device_said: bool,
     /// The song now in the player (its file and length: it streams), for an A/B swap to hand back.
     track: Option<Track>,
+    /// The gain (f64 bits) last told to the player's loaded song (a new load plays at 0 dB).
+    gain_set: Option<u64>,
 }
 
 impl AudioPanel {
@@ -52,12 +54,14 @@ impl AudioPanel {
             time_s: 0.0,
             no_device_said: false,
             track: None,
+            gain_set: None,
         }
     }
 
     /// Finds and decodes the song of a freshly loaded Song cloud (on a worker thread).
     pub fn load_for(&mut self, cloud: &PointCloud, remembered: Option<PathBuf>) {
         self.player.unload();
+        self.gain_set = None;
         self.track = None;
         self.playhead = None;
         self.time_s = 0.0;
@@ -103,6 +107,7 @@ impl AudioPanel {
                     self.loop_range = (0.0, track.duration_s());
                     self.track = Some(track.clone());
                     self.player.load(track);
+                    self.gain_set = None;
                     self.source = Source::Ready;
                 }
                 Ok(Err(e)) => self.source = Source::Failed(e.to_string()),
@@ -154,7 +159,18 @@ impl AudioPanel {
     /// current song is at, and hands the current song back so it can be swapped in again. The
     /// loop range stays. Returns `None` when no song was loaded yet (then `other` just loads).
     pub fn swap_track(&mut self, other: Track) -> Option<Track> {
+        self.swap_track_at(other, |t| t)
+    }
+
+    /// As [`Self::swap_track`], `other` starting at `target(t)`, `t` being the current song's
+    /// position: the same moment of the music in an aligned release (A/B compare).
+    pub fn swap_track_at(
+        &mut self,
+        other: Track,
+        target: impl FnOnce(f64) -> f64,
+    ) -> Option<Track> {
         let (time, playing) = (self.time_s, self.player.is_playing());
+        let time = target(time);
         let previous = self.track.take();
         self.playhead = Some(Playhead::new(other.sample_rate));
         if previous.is_none() {
@@ -163,6 +179,7 @@ impl AudioPanel {
         self.path_field = other.path.display().to_string();
         self.track = Some(other.clone());
         self.player.load(other);
+        self.gain_set = None;
         self.source = Source::Ready;
         if previous.is_some() {
             self.seek(time);
@@ -174,6 +191,15 @@ impl AudioPanel {
             }
         }
         previous
+    }
+
+    /// Plays the loaded song `db` decibels louder or quieter (A/B loudness matching); told to
+    /// the player only when it changes, and again after every load or swap.
+    pub fn set_gain_db(&mut self, db: f64) {
+        if self.gain_set != Some(db.to_bits()) && self.player.loaded.is_some() {
+            self.player.set_gain_db(db as f32);
+            self.gain_set = Some(db.to_bits());
+        }
     }
 
     /// The bar under the 3D view.

@@ -118,13 +118,15 @@ impl LoudscapeApp {
         let mut switch = None;
         ui.horizontal(|ui| {
             ui.label("listen");
-            for (side, name) in [(Listening::A, "A"), (Listening::B, "B")] {
+            for side in [Listening::A, Listening::B] {
+                // "B −3.8 dB": the gain it plays at to match the other's loudness.
+                let name = state.alignment.gain_label(side);
                 let response = ui
                     .add_enabled(
                         state.can_listen(side),
                         egui::Button::selectable(state.listening == side, name),
                     )
-                    .on_hover_text("key B switches, at the same position");
+                    .on_hover_text("key B switches, at the same moment of the music");
                 if response.clicked() {
                     switch = Some(side);
                 }
@@ -133,6 +135,7 @@ impl LoudscapeApp {
                 ui.spinner();
             }
         });
+        self.alignment_controls(ui);
         if let Some(side) = switch {
             self.listen(side);
         }

@@ -73,6 +73,7 @@ impl LoudscapeApp {
             self.audio.seek(seconds);
             self.pending_seek = None;
         }
+        self.poll_alignment(ctx);
         let Some(state) = self.compare.as_mut() else {
             return;
         };
@@ -92,7 +93,9 @@ impl LoudscapeApp {
             return;
         };
         if state.rebuild_for(song.id) {
-            match on_union_axes(&song.cloud, &b) {
+            // B on A's time when the alignment has come (compare_align.rs).
+            let b_aligned = crate::ui::compare_align::aligned_b(&state.alignment, &b);
+            match on_union_axes(&song.cloud, &b_aligned) {
                 Ok((a, b_moved)) => {
                     state.labels = Some(labels::axis_labels_for_box(
                         &a,
@@ -157,13 +160,20 @@ impl LoudscapeApp {
         let Some(track) = state.other_track.take() else {
             return;
         };
-        state.other_track = self.audio.swap_track(track);
+        // The same moment of the music in B (aligned), at the side's matching gain.
+        let mut from = None;
+        state.other_track = self.audio.swap_track_at(track, |t| {
+            from = Some(t);
+            state.alignment.target_time(to, t)
+        });
         state.listening = to;
+        self.audio.set_gain_db(state.alignment.gain_db(to));
         // The window tells stderr, as it does of loads: a log, not a script's input.
         eprintln!(
-            "listening to {} at {:.3} s",
+            "listening to {} at {:.3} s{}",
             if to == Listening::A { "A" } else { "B" },
-            self.audio.position_s().unwrap_or(0.0)
+            self.audio.position_s().unwrap_or(0.0),
+            crate::ui::compare_align::switch_words(&state.alignment, to, from)
         );
     }
 

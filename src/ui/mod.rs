@@ -14,6 +14,7 @@ pub mod audio;
 pub mod bridge;
 mod colour_controls;
 pub mod compare;
+mod compare_align;
 mod compare_panel;
 mod compare_readouts;
 pub mod compare_shot;

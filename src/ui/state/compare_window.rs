@@ -61,6 +61,8 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) labels: Option<AxisLabels>,
     /// The compare dialog's answer.
     pub(in crate::ui) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
+    /// A and B aligned in time and matched in loudness (`state/alignment.rs`).
+    pub(in crate::ui) alignment: super::alignment::CompareAlignment,
 }
 
 /// The difference's CPU copy for read-outs: the shown grid, the signed values per voxel and per
@@ -92,6 +94,7 @@ impl CompareState {
             grids_announced: false,
             labels: None,
             dialog: None,
+            alignment: Default::default(),
         }
     }
 
