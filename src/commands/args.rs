@@ -58,17 +58,52 @@ pub fn check_not_input(output: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
     loudscape::files::check_not_input(output, inputs).map_err(anyhow::Error::msg)
 }
 
-/// Fails, naming the output, when the folder it would be written into does not exist.
+/// Fails, naming the output, when the folder it would be written into does not exist or
+/// cannot be written into (a read-only folder or file system), before any work.
 pub fn check_output_folder(output: &Path) -> anyhow::Result<()> {
-    if let Some(dir) = output.parent().filter(|p| !p.as_os_str().is_empty())
-        && !dir.is_dir()
-    {
+    let dir = output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
         bail!(
             "{}: the folder {} does not exist",
             output.display(),
             dir.display()
         );
     }
+    if let Err(reason) = folder_writable(dir) {
+        bail!(
+            "{}: cannot write into the folder {}: {reason}",
+            output.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Whether this process may create files in `dir` (access(2) with W_OK and X_OK: the rights of
+/// the user the process runs as, and a read-only file system).
+#[cfg(unix)]
+fn folder_writable(dir: &Path) -> Result<(), String> {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(name) = std::ffi::CString::new(dir.as_os_str().as_bytes()) else {
+        return Ok(());
+    };
+    // SAFETY: `name` is a valid NUL-terminated string for the duration of the call.
+    if unsafe { libc::access(name.as_ptr(), libc::W_OK | libc::X_OK) } == 0 {
+        return Ok(());
+    }
+    let error = std::io::Error::last_os_error();
+    Err(match error.raw_os_error() {
+        Some(libc::EACCES) | Some(libc::EPERM) => "permission denied".into(),
+        Some(libc::EROFS) => "the file system is read-only".into(),
+        _ => error.to_string(),
+    })
+}
+
+#[cfg(not(unix))]
+fn folder_writable(_dir: &Path) -> Result<(), String> {
     Ok(())
 }
 

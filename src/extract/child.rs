@@ -129,8 +129,33 @@ pub const SCRATCH_PREFIX: &str = ".extract";
 /// reader names the file itself), as one line.
 fn said(warning: &str, audio: &Path) -> String {
     let prefix = format!("{}: ", audio.display());
-    let message = warning.strip_prefix(&prefix).unwrap_or(warning);
+    let python = format!("{}: ", python_spelling(audio));
+    let message = warning
+        .strip_prefix(&prefix)
+        .or_else(|| warning.strip_prefix(&python))
+        .unwrap_or(warning);
     crate::data::cloud::one_line(message)
+}
+
+/// How Python prints `path` on stderr: a byte that is not UTF-8 as `\udcXX` (its file-system
+/// encoding's surrogate escape, written out by stderr's backslashreplace), so a warning about a
+/// file whose name is not UTF-8 is recognised as the same one the cloud's metadata holds.
+#[cfg(unix)]
+fn python_spelling(path: &Path) -> String {
+    use std::os::unix::ffi::OsStrExt;
+    let mut out = String::new();
+    for chunk in path.as_os_str().as_bytes().utf8_chunks() {
+        out.push_str(chunk.valid());
+        for byte in chunk.invalid() {
+            out.push_str(&format!("\\udc{byte:02x}"));
+        }
+    }
+    out
+}
+
+#[cfg(not(unix))]
+fn python_spelling(path: &Path) -> String {
+    path.display().to_string()
 }
 
 /// Runs `extractor` on `audio`, writing its cloud into `scratch` (a private folder: whatever the
@@ -280,5 +305,16 @@ mod tests {
             "decoded 1.49 s of the 4.00 s"
         );
         assert_eq!(said("other.flac: odd", audio), "other.flac: odd");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_name_that_is_not_utf8_is_recognised_as_python_prints_it() {
+        use std::os::unix::ffi::OsStrExt;
+        let audio = Path::new(std::ffi::OsStr::from_bytes(b"/music/caf\xe9.flac"));
+        assert_eq!(
+            said("/music/caf\\udce9.flac: decoded 1.49 s of the 4.00 s", audio),
+            "decoded 1.49 s of the 4.00 s"
+        );
     }
 }

@@ -22,7 +22,7 @@ use crate::view::frame_view::FrameView;
 pub enum ScreenshotError {
     #[error("cannot read the screenshot back from the GPU: {0}")]
     Readback(#[from] crate::render::gpu::readback::ReadbackError),
-    #[error("{path}: cannot write the screenshot: {reason}")]
+    #[error("{path}: cannot write the picture: {reason}")]
     Write { path: PathBuf, reason: String },
 }
 
