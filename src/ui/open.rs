@@ -150,6 +150,16 @@ pub(super) fn save_dialog_as(
     receiver
 }
 
+/// The Open row's path field: narrow, beside Open… and Folder…, with a hint that fits it whole.
+pub(super) fn open_field(path: &mut String) -> egui::TextEdit<'_> {
+    egui::TextEdit::singleline(path)
+        .hint_text(OPEN_HINT)
+        .desired_width(95.0)
+}
+
+/// The Open field's hint.
+const OPEN_HINT: &str = "song or .ply";
+
 pub(super) fn file_name(path: &Path) -> String {
     path.file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -160,11 +170,9 @@ impl LoudscapeApp {
     /// The Open row: a path (audio or .ply) and a button; the same path as a drop.
     pub(super) fn open_controls(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            let field = ui.add(
-                egui::TextEdit::singleline(&mut self.open.path)
-                    .hint_text("song.ogg or cloud.ply")
-                    .desired_width(95.0),
-            );
+            let field = ui
+                .add(open_field(&mut self.open.path))
+                .on_hover_text("a song or a .ply cloud: type its path and press Enter");
             let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
             if enter && !self.open.path.trim().is_empty() {
                 let path = PathBuf::from(self.open.path.trim());
@@ -293,14 +301,15 @@ impl LoudscapeApp {
         }
     }
 
-    /// How the recent list names `path`: its file name, or for a timeline built in the window
-    /// (a `timeline-<key>.ply` in the cloud cache) the folder its songs share when it is the
-    /// one loaded, else "timeline built here".
+    /// How the recent list names `path`: its file name; a folder (opened, it is a timeline)
+    /// `name/ (timeline)`, as the timeline it made is named when it is loaded from the cloud
+    /// cache; another timeline built in the window, not loaded, "timeline built here".
     fn recent_name(&self, path: &Path) -> String {
         let name = file_name(path);
-        let cache = crate::extract::cache::dir();
-        let cache = std::path::absolute(&cache).unwrap_or(cache);
-        if !(name.starts_with("timeline-") && path.parent() == Some(cache.as_path())) {
+        if path.is_dir() {
+            return format!("{name}/ (timeline)");
+        }
+        if !built_timeline(path) {
             return name;
         }
         match &self.timeline {
@@ -316,10 +325,68 @@ impl LoudscapeApp {
 
     /// A file (song, cloud) or folder opened as `path` into `cloud`: first in the recent list.
     /// A timeline of several songs is named by no one path: its cloud (in the cache) is kept.
-    pub(super) fn opened(&mut self, path: &Path, cloud: &Path) {
-        let kept = if path.exists() { path } else { cloud };
-        if let Err(message) = self.open.recent.add(kept) {
+    /// A timeline built from a folder is listed once, by the folder (`recent.rs`).
+    pub(super) fn opened(&mut self, path: &Path, cloud: &PointCloud) {
+        let kept = if path.exists() { path } else { &cloud.path };
+        let folder = built_timeline(&cloud.path)
+            .then(|| {
+                crate::ui::recent::common_folder(
+                    cloud.meta.songs.iter().filter_map(|s| s.open_path()),
+                )
+            })
+            .flatten()
+            .filter(|f| f.is_dir());
+        if let Err(message) = self
+            .open
+            .recent
+            .add_opened(kept, &cloud.path, folder.as_deref())
+        {
             log::warn!("{message}");
         }
+    }
+}
+
+/// Whether `path` is a timeline built in the window: `timeline-<key>.ply` in the cloud cache.
+fn built_timeline(path: &Path) -> bool {
+    let cache = crate::extract::cache::dir();
+    let cache = std::path::absolute(&cache).unwrap_or(cache);
+    let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+    file_name(&path).starts_with("timeline-") && path.parent() == Some(cache.as_path())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_open_field_shows_its_whole_hint() {
+        let ctx = egui::Context::default();
+        let mut path = String::new();
+        let mut output = ctx.run_ui(egui::RawInput::default(), |ui| {
+            ui.add(open_field(&mut path));
+        });
+        output.textures_delta.clear();
+        /// Each text drawn, and whether it was cut short ("song.ogg o…").
+        fn texts(shape: &egui::Shape, into: &mut Vec<(String, bool)>) {
+            match shape {
+                egui::Shape::Text(text) => {
+                    into.push((text.galley.text().to_string(), text.galley.elided));
+                }
+                egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| texts(s, into)),
+                _ => {}
+            }
+        }
+        let mut drawn = Vec::new();
+        for clipped in &output.shapes {
+            texts(&clipped.shape, &mut drawn);
+        }
+        assert!(
+            drawn.iter().any(|(t, _)| t == OPEN_HINT),
+            "no hint drawn: {drawn:?}"
+        );
+        assert!(
+            drawn.iter().all(|(_, elided)| !elided),
+            "the hint is cut: {drawn:?}"
+        );
     }
 }

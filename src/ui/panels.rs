@@ -1,5 +1,8 @@
 //! The side panel: data slots, view, points, voxel grid, volume and surface controls, camera,
-//! the timeline's song and what the file says about itself.
+//! the timeline's song and what the file says about itself. A control that does nothing for
+//! what is shown is disabled with the reason on hover: the compare in Timeline mode, and in the
+//! compare's Difference view (always a volume of B - A in its own colours) the view buttons,
+//! the surface's method and isovalue, the transfer function's choices.
 
 use std::path::{Path, PathBuf};
 
@@ -7,6 +10,7 @@ use eframe::egui::{self, Color32, RichText};
 
 use crate::data::cloud::{DataMode, PointCloud};
 use crate::render::scene::ViewKind;
+use crate::ui::compare_shot::CompareView;
 use crate::ui::hover::song_title;
 use crate::ui::labels;
 use crate::ui::legends;
@@ -30,7 +34,22 @@ impl LoudscapeApp {
         });
         ui.add_space(4.0);
         self.open_controls(ui);
-        self.compare_controls(ui);
+        if self.active == Slot::Timeline {
+            // B is compared with the song (A): nothing here acts on a timeline. The reason
+            // shows over the whole section (its disabled widgets take no hover of their own).
+            let section = ui
+                .add_enabled_ui(false, |ui| self.compare_controls(ui))
+                .response;
+            ui.interact(
+                section.rect,
+                ui.scope_id().with("compare-in-timeline"),
+                egui::Sense::hover(),
+            )
+            .on_hover_text(COMPARE_IN_TIMELINE);
+        } else {
+            self.compare_controls(ui);
+        }
+        let difference = self.difference_shown();
 
         ui.label(RichText::new("Data").strong());
         ui.horizontal(|ui| {
@@ -58,10 +77,12 @@ impl LoudscapeApp {
         ui.label(RichText::new("View").strong());
         ui.horizontal(|ui| {
             for view in ViewKind::ALL {
-                let response = ui.add(egui::Button::selectable(
-                    self.settings.view == view,
-                    view.name(),
-                ));
+                let response = ui
+                    .add_enabled(
+                        !difference,
+                        egui::Button::selectable(self.settings.view == view, view.name()),
+                    )
+                    .on_disabled_hover_text(DIFFERENCE_DRAWS);
                 if response.clicked() {
                     self.settings.view = view;
                 }
@@ -69,7 +90,7 @@ impl LoudscapeApp {
         });
         self.freq_axis_controls(ui);
 
-        if self.settings.view == ViewKind::Points {
+        if self.settings.view == ViewKind::Points && !difference {
             ui.add_space(6.0);
             ui.label(RichText::new("Points").strong());
             if let Some(size) = self.active().map(|l| l.point_size) {
@@ -94,15 +115,17 @@ impl LoudscapeApp {
             );
             legends::hp(ui, self.settings.colours.hp);
         }
-        if self.settings.view != ViewKind::Points {
+        if self.settings.view != ViewKind::Points || difference {
             self.grid_controls(ui);
         }
-        if self.settings.view == ViewKind::Volume {
-            self.volume_controls(ui);
+        if self.settings.view == ViewKind::Volume || difference {
+            self.volume_controls(ui, difference);
         }
         if self.settings.view == ViewKind::Surface {
-            self.surface_controls(ui);
-            legends::surface(ui, self.settings.colours.hp);
+            ui.add_enabled_ui(!difference, |ui| self.surface_controls(ui));
+            if !difference {
+                legends::surface(ui, self.settings.colours.hp);
+            }
         }
 
         self.colour_controls(ui);
@@ -195,19 +218,26 @@ impl LoudscapeApp {
         }
     }
 
-    pub(super) fn volume_controls(&mut self, ui: &mut egui::Ui) {
+    /// The volume's controls; in the Difference view (`difference`) only the density, opacity
+    /// and step apply, the rest is disabled with the reason on hover.
+    pub(super) fn volume_controls(&mut self, ui: &mut egui::Ui, difference: bool) {
         use crate::render::transfer::TransferPreset;
         ui.add_space(6.0);
         ui.label(RichText::new("Volume").strong());
-        let volume = &mut self.settings.volume;
-        ui.horizontal(|ui| {
-            for preset in TransferPreset::ALL {
-                ui.selectable_value(&mut volume.preset, preset, preset.name());
-            }
+        ui.add_enabled_ui(!difference, |ui| {
+            let volume = &mut self.settings.volume;
+            ui.horizontal(|ui| {
+                for preset in TransferPreset::ALL {
+                    ui.selectable_value(&mut volume.preset, preset, preset.name())
+                        .on_disabled_hover_text(DIFFERENCE_DRAWS);
+                }
+            });
+            self.density_colour_controls(ui);
         });
-        self.density_colour_controls(ui);
         let volume = &mut self.settings.volume;
-        legends::transfer(ui, volume.preset, &self.settings.colours);
+        if !difference {
+            legends::transfer(ui, volume.preset, &self.settings.colours);
+        }
         ui.add(egui::Slider::new(&mut volume.density_scale, 0.1..=4.0).text("density"));
         ui.add(egui::Slider::new(&mut volume.opacity_scale, 0.1..=4.0).text("opacity scale"));
         ui.add(
@@ -216,10 +246,14 @@ impl LoudscapeApp {
                 .text("step (voxels)"),
         )
         .on_hover_text("Smaller steps: finer detail, slower frames");
-        ui.horizontal(|ui| {
-            ui.checkbox(&mut volume.hp_tint, "hp tint")
-                .on_hover_text("Colour by mean hp: red percussive to blue harmonic");
-            ui.checkbox(&mut volume.shading, "shading");
+        ui.add_enabled_ui(!difference, |ui| {
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut volume.hp_tint, "hp tint")
+                    .on_hover_text("Colour by mean hp: red percussive to blue harmonic")
+                    .on_disabled_hover_text(DIFFERENCE_DRAWS);
+                ui.checkbox(&mut volume.shading, "shading")
+                    .on_disabled_hover_text(DIFFERENCE_DRAWS);
+            });
         });
     }
 
@@ -230,15 +264,17 @@ impl LoudscapeApp {
         let surface = &mut self.settings.surface;
         ui.horizontal(|ui| {
             for method in SurfaceMethod::ALL {
-                ui.selectable_value(&mut surface.method, method, method.name());
+                ui.selectable_value(&mut surface.method, method, method.name())
+                    .on_disabled_hover_text(DIFFERENCE_DRAWS);
             }
         });
         let slider = ui
-            .add(egui::Slider::new(&mut surface.iso_value, MIN_ISOVALUE..=1.0).text("isovalue"))
+            .add(isovalue_slider(&mut surface.iso_value))
             .on_hover_text(
                 "The loudness density the surface encloses (above 0: at 0 it is only the \
                  grid's box, a grey solid with no hp colour)",
-            );
+            )
+            .on_disabled_hover_text(DIFFERENCE_DRAWS);
         if surface.iso_value < LOW_ISOVALUE {
             // What a low isovalue shows: the envelope of nearly every point, where percussive
             // and harmonic average out to the neutral middle of the hp colours.
@@ -342,6 +378,30 @@ impl LoudscapeApp {
             }
         }
     }
+}
+
+impl LoudscapeApp {
+    /// Whether the view shows the compare's Difference (a volume of B - A in its own colours).
+    fn difference_shown(&self) -> bool {
+        matches!(self.compare_shown_as(), Some(CompareView::Difference(_)))
+    }
+}
+
+/// Why the view's, the surface's and the colour choices are disabled in the Difference view.
+pub(super) const DIFFERENCE_DRAWS: &str = "The Difference view draws B - A as a volume in its \
+    own diverging colours: only the voxel grid, density, opacity and step apply; choose A only \
+    or Side by side for the views";
+
+/// Why the compare section is disabled in Timeline mode.
+pub(super) const COMPARE_IN_TIMELINE: &str = "A/B compare is for songs: B is compared with the \
+    song (A). Switch Data to Song to compare";
+
+/// The isovalue slider, its value always with two decimals (0.50, 1.00), so the number does not
+/// change width or precision as it moves.
+pub(super) fn isovalue_slider(iso_value: &mut f32) -> egui::Slider<'_> {
+    egui::Slider::new(iso_value, MIN_ISOVALUE..=1.0)
+        .text("isovalue")
+        .fixed_decimals(2)
 }
 
 /// The songs (indices) of `year` in a timeline, in their order; none for an unknown year.
@@ -477,6 +537,46 @@ mod tests {
         assert_eq!(path, dir.join("b-side.ply"), "its own Song cloud first");
         song.path = Some(dir.join("gone.wav").display().to_string());
         assert_eq!(song_open_target(&timeline, &song), None);
+    }
+
+    /// The texts a frame of `add` draws.
+    fn texts_drawn(add: impl FnMut(&mut egui::Ui)) -> Vec<String> {
+        let ctx = egui::Context::default();
+        let mut add = add;
+        let mut output = ctx.run_ui(egui::RawInput::default(), |ui| add(ui));
+        output.textures_delta.clear();
+        let mut texts = Vec::new();
+        for clipped in output.shapes {
+            collect_texts(&clipped.shape, &mut texts);
+        }
+        texts
+    }
+
+    fn collect_texts(shape: &egui::Shape, texts: &mut Vec<String>) {
+        match shape {
+            egui::Shape::Text(text) => texts.push(text.galley.text().to_string()),
+            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| collect_texts(s, texts)),
+            _ => {}
+        }
+    }
+
+    #[test]
+    fn the_isovalue_shows_two_decimals_at_every_value() {
+        for (value, shown) in [
+            (0.5, "0.50"),
+            (1.0, "1.00"),
+            (0.01, "0.01"),
+            (0.123, "0.12"),
+        ] {
+            let mut iso = value;
+            let texts = texts_drawn(|ui| {
+                ui.add(isovalue_slider(&mut iso));
+            });
+            assert!(
+                texts.iter().any(|t| t == shown),
+                "{value} is shown as {texts:?}, not {shown}"
+            );
+        }
     }
 
     #[test]

@@ -3,7 +3,8 @@
 //! else `~/.local/state/loudscape`) as soon as each opens, so the list survives a crash as well
 //! as a restart. The Open panel lists them; one that is no longer there is shown as missing and
 //! cannot be clicked. Scripted screenshot runs keep no list unless `$LOUDSCAPE_STATE_DIR` names
-//! one (tests).
+//! one (tests). A timeline built in the window from a folder is listed once, by its folder,
+//! whether it was opened as the folder or as its cloud in the cache (a restored session).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -89,6 +90,30 @@ impl RecentFiles {
         })
     }
 
+    /// Records what was opened: `opened`, which gave the cloud `cloud`. `timeline_folder`, for a
+    /// timeline built in the window (its cloud in the cache), is the folder its songs share: a
+    /// timeline is listed once, by that folder when the folder was opened or is in the list
+    /// already, else by its cloud.
+    pub(super) fn add_opened(
+        &mut self,
+        opened: &Path,
+        cloud: &Path,
+        timeline_folder: Option<&Path>,
+    ) -> Result<(), String> {
+        let Some(folder) = timeline_folder else {
+            return self.add(opened);
+        };
+        let folder = std::path::absolute(folder).unwrap_or_else(|_| folder.to_owned());
+        let cloud = std::path::absolute(cloud).unwrap_or_else(|_| cloud.to_owned());
+        let by_folder = opened.is_dir() || self.files.contains(&folder);
+        if by_folder {
+            self.files.retain(|f| f != &cloud);
+            self.add(&folder)
+        } else {
+            self.add(&cloud)
+        }
+    }
+
     /// Looks again which files are there.
     pub(super) fn recheck(&mut self) {
         self.present = self.files.iter().map(|f| f.exists()).collect();
@@ -108,9 +133,74 @@ impl RecentFiles {
     }
 }
 
+/// The deepest folder holding every one of `paths` (`None` for none).
+pub(super) fn common_folder(paths: impl IntoIterator<Item = PathBuf>) -> Option<PathBuf> {
+    let mut common: Option<PathBuf> = None;
+    for path in paths {
+        let folder = path.parent()?.to_path_buf();
+        common = Some(match common {
+            None => folder,
+            Some(mut c) => {
+                while !folder.starts_with(&c) {
+                    if !c.pop() {
+                        break;
+                    }
+                }
+                c
+            }
+        });
+    }
+    common.filter(|c| !c.as_os_str().is_empty())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_timeline_built_from_a_folder_is_listed_once_by_its_folder() {
+        let dir = std::env::temp_dir().join(format!("loudscape-recent-tl-{}", std::process::id()));
+        let folder = dir.join("albums");
+        let other = dir.join("singles");
+        let cache = dir.join("cache");
+        for d in [&folder, &other, &cache] {
+            std::fs::create_dir_all(d).unwrap();
+        }
+        let built = cache.join("timeline-0123456789abcdef.ply");
+        let elsewhere = cache.join("timeline-fedcba9876543210.ply");
+        std::fs::write(&built, b"ply").unwrap();
+        std::fs::write(&elsewhere, b"ply").unwrap();
+        let song = dir.join("song.wav");
+        std::fs::write(&song, b"RIFF").unwrap();
+        let mut recent = RecentFiles::load(None);
+        // The folder opened in the window, then its cloud restored at the next launch.
+        recent.add_opened(&folder, &built, Some(&folder)).unwrap();
+        recent.add_opened(&song, &song, None).unwrap();
+        recent.add_opened(&built, &built, Some(&folder)).unwrap();
+        assert_eq!(recent.files, [folder.clone(), song.clone()]);
+        // A timeline whose folder was never opened is listed by its cloud, until the folder is.
+        recent
+            .add_opened(&elsewhere, &elsewhere, Some(&other))
+            .unwrap();
+        assert_eq!(recent.files[0], elsewhere);
+        recent.add_opened(&other, &elsewhere, Some(&other)).unwrap();
+        assert_eq!(recent.files, [other.clone(), folder.clone(), song.clone()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_common_folder_of_songs() {
+        let p = |s: &str| PathBuf::from(s);
+        assert_eq!(
+            common_folder([p("/m/a/1.wav"), p("/m/a/b/2.wav"), p("/m/a/3.wav")]),
+            Some(p("/m/a"))
+        );
+        assert_eq!(
+            common_folder([p("/m/x/1.wav"), p("/m/y/2.wav")]),
+            Some(p("/m"))
+        );
+        assert_eq!(common_folder(Vec::<PathBuf>::new()), None);
+    }
 
     #[test]
     fn newest_first_no_repeats_capped_kept_and_missing_seen() {

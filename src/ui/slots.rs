@@ -77,7 +77,7 @@ impl LoudscapeApp {
             let preview = preview.filter(|p| self.song.as_ref().is_some_and(|l| l.id == p.id));
             match result {
                 Ok(cloud) => {
-                    self.opened(&path, &cloud.path);
+                    self.opened(&path, &cloud);
                     // What the extractor found wrong in the input, in sight (also in the
                     // side panel under the metrics).
                     let file = path.file_name().map_or_else(

@@ -33,6 +33,14 @@ pub(super) fn parse_year(text: &str) -> Option<i32> {
     (1860..=2100).contains(&year).then_some(year)
 }
 
+/// Whether the years dialog says "not a year" under `text`: only for a whole entry that is no
+/// year (four characters or more, or the field left or Enter pressed), not while the first
+/// digits are typed.
+pub(super) fn says_not_a_year(text: &str, typing: bool) -> bool {
+    let whole = !typing || text.trim().chars().count() >= 4;
+    !text.trim().is_empty() && whole && parse_year(text).is_none()
+}
+
 /// Whether these paths make a timeline: a folder, or two audio files or more.
 pub(super) fn makes_timeline(paths: &[PathBuf]) -> bool {
     let audio = paths
@@ -316,7 +324,8 @@ impl LoudscapeApp {
                             field.request_focus();
                             *focused = true;
                         }
-                        if !text.is_empty() && parse_year(text).is_none() {
+                        let typing = field.has_focus() && !*enter_refused;
+                        if says_not_a_year(text, typing) {
                             ui.label(RichText::new("not a year").small().weak());
                         }
                         ui.end_row();
@@ -478,6 +487,14 @@ mod tests {
     #[test]
     fn years_parse() {
         assert_eq!(parse_year(" 1999 "), Some(1999));
+        // Said once the entry is whole, not after the first digit.
+        assert!(!says_not_a_year("1", true));
+        assert!(!says_not_a_year("199", true));
+        assert!(!says_not_a_year("", false));
+        assert!(!says_not_a_year("1996", true));
+        assert!(says_not_a_year("1", false), "the field left with one digit");
+        assert!(says_not_a_year("19x6", true));
+        assert!(says_not_a_year("3000", true));
         assert_eq!(parse_year("99"), None);
         assert_eq!(parse_year("abcd"), None);
     }
