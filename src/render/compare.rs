@@ -12,10 +12,15 @@ use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
 use crate::data::compare::{CompareError, on_union_axes};
+use crate::render::gpu::frame::FrameBinding;
+use crate::render::grid::VoxelGrid;
+use crate::render::grid::difference::DifferencePass;
 use crate::render::grid::difference::{
     DifferenceError, DifferenceGrids, DifferenceMeasure, signed_range,
 };
-use crate::render::grid::voxelize::{VoxelSettings, VoxelizeError, VoxelizeRequest};
+use crate::render::grid::voxelize::{
+    VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass, VoxelizeRequest,
+};
 use crate::render::grid::voxelize_cpu::grid_box;
 use crate::render::scene::{Renderer, SceneData};
 
@@ -91,14 +96,32 @@ impl CompareScene {
 
     /// The one grid box of both: the union of their own grid boxes.
     pub fn shared_box(&self) -> (Vec3, Vec3) {
-        let (min_a, max_a) = grid_box(&self.a.points);
-        let (min_b, max_b) = grid_box(&self.b.points);
-        (min_a.min(min_b), max_a.max(max_b))
+        shared_box(&self.a, &self.b)
+    }
+
+    /// The key of the grids `settings` build: (resolution, smoothing bits).
+    fn grids_key(&self, settings: &VoxelSettings) -> (u32, u32) {
+        (
+            settings.resolution_for(self.a.meta.mode),
+            settings.smoothing_sigma.to_bits(),
+        )
+    }
+
+    /// Whether the grids are built for `settings`.
+    pub fn grids_built_for(&self, settings: &VoxelSettings) -> bool {
+        let key = self.grids_key(settings);
+        self.grids.as_ref().is_some_and(|g| g.key == key)
+    }
+
+    /// The measure the Difference view shows (the default before any grid).
+    pub fn measure(&self) -> DifferenceMeasure {
+        self.grids.as_ref().map(|g| g.measure).unwrap_or_default()
     }
 
     /// Builds both grids in the shared box, their difference and the shown grid, unless they
     /// exist for `settings`. Waits for the GPU (the statistics and the ranges are read back).
-    /// Returns whether anything was built.
+    /// Returns whether anything was built. The window builds them on a thread instead
+    /// ([`build_grids`] with passes of its own, then [`CompareScene::install_grids`]).
     pub fn ensure_grids(
         &mut self,
         device: &wgpu::Device,
@@ -106,88 +129,69 @@ impl CompareScene {
         renderer: &Renderer,
         settings: &VoxelSettings,
     ) -> Result<bool, CompareBuildError> {
-        let resolution = settings.resolution_for(self.a.meta.mode);
-        let key = (resolution, settings.smoothing_sigma.to_bits());
-        if self.grids.as_ref().is_some_and(|g| g.key == key) {
+        if self.grids_built_for(settings) {
             return Ok(false);
         }
-        let measure = self.grids.as_ref().map(|g| g.measure).unwrap_or_default();
+        let measure = self.measure();
         self.grids = None;
-        let shared_box = self.shared_box();
-        let voxelize = |cloud: &PointCloud| {
-            renderer
-                .voxelize
-                .voxelize(
-                    device,
-                    queue,
-                    &VoxelizeRequest::new(&cloud.points, resolution, settings.smoothing_sigma)
-                        .in_box(Some(shared_box)),
-                )
-                .map_err(|source| CompareBuildError::Voxelize {
-                    file: cloud.path.display().to_string(),
-                    source,
-                })
+        let passes = GridPasses {
+            voxelize: &renderer.voxelize,
+            difference: &renderer.difference,
         };
-        let (grid_a, stats_a) = voxelize(&self.a)?;
-        let (grid_b, stats_b) = voxelize(&self.b)?;
-        let grids =
-            renderer
-                .difference
-                .build(device, queue, (&grid_a, &stats_a), (&grid_b, &stats_b))?;
-        let difference = grids
-            .read_difference(device, queue)
-            .map_err(DifferenceError::from)?;
-        let columns = grids
-            .read_columns(device, queue)
-            .map_err(DifferenceError::from)?;
-        let ranges = [signed_range(&difference), signed_range(&columns)];
-        let scaled = |grid: &crate::render::grid::VoxelGrid| crate::render::grid::VoxelGrid {
-            dims: grid.dims,
-            box_min: grid.box_min,
-            box_max: grid.box_max,
-            density: grid.density.clone(),
-            hp_mean: grid.hp_mean.clone(),
-        };
+        let built = build_grids(device, queue, &passes, &self.a, &self.b, settings, measure)?;
+        self.install_grids(device, renderer, built);
+        Ok(true)
+    }
+
+    /// Installs grids built by [`build_grids`] for this scene's clouds: A's and B's on one
+    /// scale (what the Surface and Volume halves draw; their old surfaces are dropped) and the
+    /// Difference view's scene.
+    pub fn install_grids(&mut self, device: &wgpu::Device, renderer: &Renderer, built: BuiltGrids) {
+        let BuiltGrids {
+            grids,
+            stats,
+            settings,
+            measure,
+            ranges,
+            difference_cpu,
+            columns_cpu,
+        } = built;
+        let resolution = settings.resolution_for(self.a.meta.mode);
+        let [stats_a, stats_b] = stats;
         self.data_a.set_grid(
             device,
             renderer,
-            scaled(&grids.scaled_a),
+            share(&grids.scaled_a),
             Some(stats_a),
             resolution,
-            settings,
+            &settings,
         );
         self.data_b.set_grid(
             device,
             renderer,
-            scaled(&grids.scaled_b),
+            share(&grids.scaled_b),
             Some(stats_b),
             resolution,
-            settings,
+            &settings,
         );
         let mut data = SceneData::new(device, renderer, &self.a);
         data.set_grid(
             device,
             renderer,
-            scaled(&grids.shown),
+            share(&grids.shown),
             None,
             resolution,
-            settings,
+            &settings,
         );
-        let mut built = CompareGrids {
+        self.grids = Some(CompareGrids {
             grids,
             data,
             measure,
             ranges,
-            difference_cpu: difference,
-            columns_cpu: columns,
-            key,
-        };
-        renderer
-            .difference
-            .shade(device, queue, &built.grids, measure, built.range());
-        built.measure = measure;
-        self.grids = Some(built);
-        Ok(true)
+            difference_cpu,
+            columns_cpu,
+            key: self.grids_key(&settings),
+        });
     }
 
     /// Shows `measure` in the Difference view (no rebuild: one pass over the grid).
@@ -207,4 +211,126 @@ impl CompareScene {
                 .shade(device, queue, &grids.grids, measure, grids.range());
         }
     }
+}
+
+/// A second handle on a grid's buffers (shared, not copied).
+fn share(grid: &VoxelGrid) -> VoxelGrid {
+    VoxelGrid {
+        dims: grid.dims,
+        box_min: grid.box_min,
+        box_max: grid.box_max,
+        density: grid.density.clone(),
+        hp_mean: grid.hp_mean.clone(),
+    }
+}
+
+/// The passes a grid build runs: the renderer's, or a thread's own ([`GridPasses::own`]).
+pub struct GridPasses<'p> {
+    pub voxelize: &'p VoxelizePass,
+    pub difference: &'p DifferencePass,
+}
+
+/// Passes built for one thread (their pipelines are compiled there, off the window's thread).
+pub struct OwnGridPasses {
+    _frame: FrameBinding,
+    voxelize: VoxelizePass,
+    difference: DifferencePass,
+}
+
+impl OwnGridPasses {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let frame = FrameBinding::new(device);
+        Self {
+            voxelize: VoxelizePass::new(device, &frame),
+            difference: DifferencePass::new(device),
+            _frame: frame,
+        }
+    }
+
+    pub fn passes(&self) -> GridPasses<'_> {
+        GridPasses {
+            voxelize: &self.voxelize,
+            difference: &self.difference,
+        }
+    }
+}
+
+/// Both grids of a compare, their difference shaded with a measure and read back, ready for
+/// [`CompareScene::install_grids`]. Only buffers and numbers: it can be built on one thread and
+/// installed on another.
+pub struct BuiltGrids {
+    pub grids: DifferenceGrids,
+    /// A's and B's statistics.
+    pub stats: [VoxelStats; 2],
+    /// The voxel settings they were built with.
+    pub settings: VoxelSettings,
+    pub measure: DifferenceMeasure,
+    pub ranges: [f32; 2],
+    pub difference_cpu: Vec<f32>,
+    pub columns_cpu: Vec<f32>,
+}
+
+/// The union of the grid boxes of `a` and `b` (clouds on one set of axes).
+pub fn shared_box(a: &PointCloud, b: &PointCloud) -> (Vec3, Vec3) {
+    let (min_a, max_a) = grid_box(&a.points);
+    let (min_b, max_b) = grid_box(&b.points);
+    (min_a.min(min_b), max_a.max(max_b))
+}
+
+/// Builds both grids of `a` and `b` (already on one set of axes) in their shared box, their
+/// difference, and shades the shown grid with `measure`. Waits for the GPU (the statistics and
+/// the differences are read back): the window runs it on a thread of its own.
+pub fn build_grids(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    passes: &GridPasses<'_>,
+    a: &PointCloud,
+    b: &PointCloud,
+    settings: &VoxelSettings,
+    measure: DifferenceMeasure,
+) -> Result<BuiltGrids, CompareBuildError> {
+    let resolution = settings.resolution_for(a.meta.mode);
+    let shared_box = shared_box(a, b);
+    let voxelize = |cloud: &PointCloud| {
+        passes
+            .voxelize
+            .voxelize(
+                device,
+                queue,
+                &VoxelizeRequest::new(&cloud.points, resolution, settings.smoothing_sigma)
+                    .in_box(Some(shared_box)),
+            )
+            .map_err(|source| CompareBuildError::Voxelize {
+                file: cloud.path.display().to_string(),
+                source,
+            })
+    };
+    let (grid_a, stats_a) = voxelize(a)?;
+    let (grid_b, stats_b) = voxelize(b)?;
+    let grids = passes
+        .difference
+        .build(device, queue, (&grid_a, &stats_a), (&grid_b, &stats_b))?;
+    let difference_cpu = grids
+        .read_difference(device, queue)
+        .map_err(DifferenceError::from)?;
+    let columns_cpu = grids
+        .read_columns(device, queue)
+        .map_err(DifferenceError::from)?;
+    let ranges = [signed_range(&difference_cpu), signed_range(&columns_cpu)];
+    passes.difference.shade(
+        device,
+        queue,
+        &grids,
+        measure,
+        ranges[measure.index() as usize],
+    );
+    Ok(BuiltGrids {
+        grids,
+        stats: [stats_a, stats_b],
+        settings: *settings,
+        measure,
+        ranges,
+        difference_cpu,
+        columns_cpu,
+    })
 }

@@ -122,6 +122,7 @@ impl LoudscapeApp {
             view_px: (1, 1),
             audio_for: Vec::new(),
             persist,
+            saved: None,
             surface: Default::default(),
             refining: None,
             iso_sweep,
@@ -226,8 +227,14 @@ impl eframe::App for LoudscapeApp {
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         if self.persist {
-            eframe::set_value(storage, eframe::APP_KEY, &self.remembered());
+            let remembered = self.remembered();
+            eframe::set_value(storage, eframe::APP_KEY, &remembered);
+            self.saved = Some(remembered);
         }
+    }
+
+    fn auto_save_interval(&self) -> Duration {
+        crate::ui::persistence::AUTO_SAVE
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
@@ -246,6 +253,8 @@ impl eframe::App for LoudscapeApp {
             .zip(self.active().map(|l| l.id))
             .map(|(render_state, id)| ViewResources::surface_status(render_state, id))
             .unwrap_or_default();
+        // The compare's two surfaces where it covers the view.
+        let surface = self.compare_surface_status(frame).unwrap_or(surface);
         self.surface
             .extracted(surface.counts, surface.error.clone());
         self.surface.frame(
@@ -345,6 +354,7 @@ impl eframe::App for LoudscapeApp {
             self.save_screenshot(frame);
         }
         self.remember_audio_choice();
+        self.ask_to_save(&ctx);
         if self.step_iso_sweep(frame) {
             self.handle_screenshot(&ctx);
         } else {

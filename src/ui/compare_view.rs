@@ -13,6 +13,7 @@ use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::state::compare_window::CompareLayout;
 use crate::ui::state::{LoudscapeApp, Slot};
+use crate::ui::view_3d::busy_badge;
 use crate::view::frame_view::FrameView;
 
 /// Points between the two halves of the side-by-side view.
@@ -122,6 +123,12 @@ impl LoudscapeApp {
         }
         if let Some((pos, lines)) = readings {
             paint_readings(painter, rect, pos, &lines);
+        }
+        // What the halves wait for, as the normal view shows it.
+        if state.grids_building() {
+            busy_badge(painter, rect, "building the compare grids…");
+        } else if self.surface.busy {
+            busy_badge(painter, rect, "extracting surface…");
         }
         true
     }

@@ -15,22 +15,64 @@ use eframe::egui;
 use crate::data::cloud::PointCloud;
 use crate::data::compare::on_union_axes;
 use crate::playback::{self, PlaybackError, Track};
+use crate::render::compare::{BuiltGrids, OwnGridPasses};
+use crate::render::grid::difference::DifferenceMeasure;
+use crate::render::grid::voxelize::VoxelSettings;
+use crate::render::scene::ViewKind;
+use crate::render::surface::state::ExtractionStatus;
 use crate::ui::bridge::CompareResources;
 use crate::ui::labels;
-use crate::ui::state::LoudscapeApp;
-use crate::ui::state::compare_window::{CompareLayout, CompareState, Listening};
+use crate::ui::state::compare_window::{CompareLayout, CompareState, GridStep, Listening};
+use crate::ui::state::loading::Shared;
+use crate::ui::state::{LoudscapeApp, Slot};
 
 /// The B field's id (typed into before any compare exists).
 pub(super) const COMPARE_FIELD: &str = "compare-b-field";
 
-/// Loads B on a thread, as the Open row loads any file.
-fn load_b(path: PathBuf) -> Receiver<Result<PointCloud, String>> {
+/// Loads B on a thread, as the Open row loads any file; its progress and Cancel go through
+/// `shared` (no points while it is extracted: `shared.preview` is off).
+fn load_b(path: PathBuf, shared: Shared) -> Receiver<Result<PointCloud, String>> {
     let (sender, receiver) = channel();
     std::thread::spawn(move || {
         let settings = crate::extract::Settings::default();
-        let shared = crate::ui::state::loading::Shared::default();
         let _ = sender.send(crate::ui::open::open_path(&path, &settings, &shared));
     });
+    receiver
+}
+
+/// The status line while the compare's grids are built.
+const GRIDS_BUSY: &str = "building the compare grids…";
+
+/// Builds the compare's grids of `clouds` (A and B on their union axes) on a thread with
+/// passes of its own (their pipelines compiled there too), so the window keeps drawing.
+fn build_grids(
+    render_state: &eframe::egui_wgpu::RenderState,
+    clouds: Arc<(PointCloud, PointCloud)>,
+    voxels: VoxelSettings,
+    measure: DifferenceMeasure,
+) -> Receiver<Result<BuiltGrids, String>> {
+    let (sender, receiver) = channel();
+    let (device, queue) = (render_state.device.clone(), render_state.queue.clone());
+    let spawned = std::thread::Builder::new()
+        .name("compare-grids".into())
+        .spawn(move || {
+            let passes = OwnGridPasses::new(&device);
+            let (a, b) = &*clouds;
+            let built = crate::render::compare::build_grids(
+                &device,
+                &queue,
+                &passes.passes(),
+                a,
+                b,
+                &voxels,
+                measure,
+            );
+            let _ = sender.send(built.map_err(|e| e.to_string()));
+        });
+    // No thread: the receiver's sender is gone, which the state tells as an error.
+    if let Err(e) = spawned {
+        log::warn!("no thread for the compare grids: {e}");
+    }
     receiver
 }
 
@@ -50,7 +92,7 @@ impl LoudscapeApp {
     pub(super) fn compare_with(&mut self, path: PathBuf) {
         self.open.compare_path = path.display().to_string();
         let mut state = CompareState::after(self.compare.as_ref(), path.clone());
-        state.receiver = Some(load_b(path));
+        state.receiver = Some(load_b(path, state.shared.clone()));
         if self.listening_b() {
             // B's track is the one playing: bring A back first (position kept).
             self.listen(Listening::A);
@@ -79,6 +121,12 @@ impl LoudscapeApp {
         };
         // Either still on its way: come back for it.
         let loading = state.poll_load();
+        if !loading && state.b_loaded.is_none() && state.cancelled() {
+            // Cancel on B's row: no compare, and nothing to call an error.
+            self.compare = None;
+            self.messages.info("compare: loading B cancelled");
+            return;
+        }
         let decoding = state.poll_decoding();
         if loading || decoding {
             ctx.request_repaint_after(Duration::from_millis(50));
@@ -117,36 +165,89 @@ impl LoudscapeApp {
             }
             self.motion.request_fit();
         }
+        // Grids built on a thread arrive here; the window keeps drawing meanwhile.
+        if let Some((built, frames)) = state.poll_grid_build() {
+            let dims = built.grids.dims;
+            CompareResources::install_grids(render_state, built);
+            state.difference = None;
+            // A log line, as loads are told: tests read it.
+            eprintln!(
+                "compare: grids built ({}x{}x{}) while the window drew {frames} frames",
+                dims.x, dims.y, dims.z
+            );
+        }
+        if state.grid_build.is_none() && self.busy.as_deref() == Some(GRIDS_BUSY) {
+            self.busy = None;
+        }
         if !state.needs_grids(self.settings.view) {
             return;
         }
         let voxels = self.settings.voxels;
-        if !CompareResources::grids_match(render_state, &voxels) {
-            // Building blocks the window for a moment: say so first, build on the next frame.
-            // (A flag of its own: the song's grid build, later in the same frame, cleared the
-            // shared one every frame, so in side by side the grids were never built and both
-            // halves drew points whatever the view.)
-            if !state.grids_announced {
-                self.busy = Some("building the compare grids…".into());
-                state.grids_announced = true;
-                self.needs_repaint = true;
+        let built = CompareResources::grids_match(render_state, &voxels);
+        match state.grid_step(&voxels, built) {
+            GridStep::Ready => {}
+            GridStep::Failed => return,
+            GridStep::Wait => {
+                ctx.request_repaint_after(Duration::from_millis(30));
                 return;
             }
-            state.grids_announced = false;
-            self.busy = None;
-            state.difference = None;
-            if let Err(message) = CompareResources::ensure_grids(render_state, &voxels) {
-                state.error = Some(message);
+            GridStep::Start => {
+                let (Some(clouds), Some(measure)) = (
+                    state.clouds.clone(),
+                    CompareResources::measure(render_state),
+                ) else {
+                    return;
+                };
+                state.difference = None;
+                state.building(voxels, build_grids(render_state, clouds, voxels, measure));
+                self.busy = Some(GRIDS_BUSY.into());
+                ctx.request_repaint_after(Duration::from_millis(30));
                 return;
             }
-        } else if std::mem::take(&mut state.grids_announced) {
-            // Built meanwhile by another path (Save PNG renders the compare itself).
-            self.busy = None;
         }
         CompareResources::set_measure(render_state, state.measure);
         if state.difference_stale() {
             state.difference = CompareResources::read_difference(render_state);
         }
+    }
+
+    /// Whether the compare is drawn in place of the Song slot's view.
+    pub(super) fn compare_covers_view(&self) -> bool {
+        self.active == Slot::Song && self.compare.as_ref().is_some_and(|c| c.shown())
+    }
+
+    /// The compare's two surfaces as one status, where the compare covers the Surface view
+    /// (None elsewhere: the active cloud's surface is the one shown). When both halves show
+    /// the surface asked for, says so once on stderr with their triangles (a log, as loads are
+    /// told; tests compare it with a fresh extraction).
+    pub(super) fn compare_surface_status(
+        &mut self,
+        frame: &eframe::Frame,
+    ) -> Option<ExtractionStatus> {
+        if self.settings.view != ViewKind::Surface || !self.compare_covers_view() {
+            return None;
+        }
+        let render_state = frame.wgpu_render_state()?;
+        let settings = self.settings.surface;
+        let Some(surfaces) = CompareResources::surface_status(render_state, &settings) else {
+            // Its grids are still coming: nothing extracted yet.
+            return Some(ExtractionStatus::default());
+        };
+        let state = self.compare.as_mut()?;
+        if let [Some(a), Some(b)] = surfaces.triangles
+            && !surfaces.status.extracting
+        {
+            let told = (settings.method, settings.iso_value.to_bits(), a, b);
+            if state.surface_told != Some(told) {
+                state.surface_told = Some(told);
+                eprintln!(
+                    "compare surface: A {a} triangles, B {b} triangles ({}, isovalue {:.3})",
+                    settings.method.name(),
+                    settings.iso_value
+                );
+            }
+        }
+        Some(surfaces.status)
     }
 
     /// Switches the heard song to `to`, at the same position, playing if it was.
@@ -177,8 +278,16 @@ impl LoudscapeApp {
         );
     }
 
-    /// The scripted `--press compare=off|side|difference` of tests: the compare's layout.
+    /// The scripted `--press compare=off|side|difference` of tests: the compare's layout; and
+    /// `surface=mt|dc`, the surface method (as its radio buttons set it).
     pub(super) fn scripted_compare(&mut self, name: &str) -> bool {
+        if let Some(method) = name
+            .strip_prefix("surface=")
+            .and_then(crate::render::surface::SurfaceMethod::parse)
+        {
+            self.settings.surface.method = method;
+            return true;
+        }
         let Some(layout) = name.strip_prefix("compare=").and_then(CompareLayout::named) else {
             return false;
         };
@@ -223,7 +332,7 @@ mod tests {
 
     fn load(path: &Path) -> CompareState {
         let mut state = CompareState::new(path.to_path_buf());
-        state.receiver = Some(load_b(path.to_path_buf()));
+        state.receiver = Some(load_b(path.to_path_buf(), state.shared.clone()));
         loaded(state)
     }
 

@@ -1,15 +1,23 @@
 //! What the window remembers between runs ([`Remembered`], kept by eframe's storage): the
-//! files, view, camera, surface and volume choices, colours, and audio picked by hand for a
-//! cloud.
+//! files, the slot shown, view, camera, surface and volume choices, colours, "level as heard",
+//! B of an A/B compare, and audio picked by hand for a cloud.
+//!
+//! eframe saves on a clean close and every [`AUTO_SAVE`]; a window destroyed from outside
+//! (`xdotool windowclose`, a killed X client) gets no close, so a change asks for a frame once
+//! the interval has passed ([`LoudscapeApp::ask_to_save`]) and at most that much is lost.
 
 use std::path::PathBuf;
+use std::time::Duration;
 
 use crate::render::scene::ViewKind;
-use crate::ui::state::LoudscapeApp;
+use crate::ui::state::{LoudscapeApp, Slot};
 use crate::view::camera::Camera;
 
+/// How often eframe saves what is remembered (when it changed; its default is 30 s).
+pub(super) const AUTO_SAVE: Duration = Duration::from_secs(1);
+
 /// What the app remembers between runs.
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct Remembered {
     pub files: Vec<PathBuf>,
@@ -30,6 +38,29 @@ pub struct Remembered {
     /// Colour maps and background (`render::colormap::Colours`).
     #[serde(default)]
     pub colours: Option<crate::render::colormap::Colours>,
+    /// The slot shown: "song" or "timeline" (the camera is its).
+    #[serde(default)]
+    pub active: Option<String>,
+    /// B of the A/B compare (absolute), reopened with A.
+    #[serde(default)]
+    pub compare: Option<PathBuf>,
+    /// The "level as heard" preset of Timeline mode (`normalize::PRESETS` key).
+    #[serde(default)]
+    pub heard: Option<String>,
+}
+
+/// The name a slot is remembered by.
+fn slot_name(slot: Slot) -> &'static str {
+    match slot {
+        Slot::Song => "song",
+        Slot::Timeline => "timeline",
+    }
+}
+
+fn slot_named(name: &str) -> Option<Slot> {
+    [Slot::Song, Slot::Timeline]
+        .into_iter()
+        .find(|&slot| slot_name(slot) == name)
 }
 
 impl LoudscapeApp {
@@ -50,6 +81,45 @@ impl LoudscapeApp {
             surface_method: Some(self.settings.surface.method.short_name().to_string()),
             audio_for: self.audio_for.clone(),
             colours: Some(self.settings.colours),
+            active: self
+                .active()
+                .is_some()
+                .then(|| slot_name(self.active).to_string()),
+            compare: self
+                .compare
+                .as_ref()
+                .filter(|c| c.b_loaded.is_some() || c.receiver.is_some())
+                .map(|c| std::path::absolute(&c.path).unwrap_or_else(|_| c.path.clone())),
+            heard: self
+                .heard
+                .pending
+                .unwrap_or(self.heard.preset)
+                .map(|i| crate::ui::normalize::PRESETS[i].key.to_string()),
+        }
+    }
+
+    /// Asks for a frame once [`AUTO_SAVE`] has passed when what is remembered changed since
+    /// eframe last saved it (eframe saves only in a frame), so a window destroyed from outside
+    /// loses at most that much.
+    pub(super) fn ask_to_save(&mut self, ctx: &eframe::egui::Context) {
+        if self.persist && self.saved.as_ref() != Some(&self.remembered()) {
+            ctx.request_repaint_after(AUTO_SAVE + Duration::from_millis(100));
+        }
+    }
+
+    /// A load failed while the window was reopened: the slot it waited for may be the one that
+    /// failed, so the other slot's cloud is shown (fitted) if nothing else is.
+    pub(super) fn restore_failed(&mut self) {
+        if !self.motion.abandon_restore() || self.active().is_some() {
+            return;
+        }
+        let other = match self.active {
+            Slot::Song => Slot::Timeline,
+            Slot::Timeline => Slot::Song,
+        };
+        if self.slot(other).is_some() {
+            self.motion.cloud_installed(self.active, other);
+            self.active = other;
         }
     }
 
@@ -91,13 +161,28 @@ impl LoudscapeApp {
                 self.settings.colours = colours;
             }
             self.audio_for = r.audio_for;
-            // The camera and the files go together: the view comes back as it was left.
+            if self.heard.pending.is_none()
+                && let Some(key) = r.heard.as_deref()
+            {
+                self.heard = crate::ui::normalize::heard_starting(Some(key));
+            }
+            // The camera and the files go together: the view comes back as it was left, the
+            // slot it showed first, and B of a compare with A.
             if files.is_empty() {
                 files = r.files.into_iter().filter(|f| f.is_file()).collect();
-                if let Some(camera) = r.camera
-                    && !files.is_empty()
-                {
-                    self.motion.restore(camera, files.len());
+                let active = r.active.as_deref().and_then(slot_named);
+                match (r.camera, active) {
+                    (Some(camera), Some(slot)) if files.len() > 1 => {
+                        self.active = slot;
+                        self.motion.restore_for(camera, slot);
+                    }
+                    (Some(camera), _) if !files.is_empty() => {
+                        self.motion.restore(camera, files.len());
+                    }
+                    _ => {}
+                }
+                if let Some(b) = r.compare.filter(|b| b.is_file() && !files.is_empty()) {
+                    self.compare_with(b);
                 }
             }
         }
@@ -131,6 +216,73 @@ impl LoudscapeApp {
 #[cfg(test)]
 mod tests {
     use super::Remembered;
+    use crate::ui::app::WindowOptions;
+    use crate::ui::state::{LoudscapeApp, Slot};
+
+    /// No audio device, no recent list: a scripted run's options (`run` passes it nothing
+    /// remembered; here it is given what a reopened window reads).
+    fn options(files: Vec<std::path::PathBuf>) -> WindowOptions {
+        WindowOptions {
+            files,
+            screenshot: Some(std::env::temp_dir().join("loudscape-unit-never-written.png")),
+            ..Default::default()
+        }
+    }
+
+    /// A window reopened with `remembered` (no files on the command line).
+    fn reopened(remembered: Remembered) -> LoudscapeApp {
+        LoudscapeApp::new(options(Vec::new()), Some(remembered))
+    }
+
+    #[test]
+    fn the_compare_level_as_heard_and_the_slot_shown_come_back() {
+        let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let song = repo.join("data/demo_song.ply");
+        let timeline = repo.join("data/demo_timeline.ply");
+        let b = repo.join("data/fixture_song.ply");
+        let key = crate::ui::normalize::PRESETS[1].key.to_string();
+        let mut camera = crate::view::camera::Camera::default();
+        camera.azimuth += 0.5;
+        let app = reopened(Remembered {
+            files: vec![song.clone(), timeline.clone()],
+            camera: Some(camera),
+            active: Some("timeline".into()),
+            compare: Some(b.clone()),
+            heard: Some(key.clone()),
+            ..Default::default()
+        });
+        assert_eq!(
+            app.compare.as_ref().map(|c| c.path.clone()),
+            Some(b.clone())
+        );
+        assert_eq!(app.heard.pending, Some(Some(1)), "level as heard");
+        assert_eq!(app.active, Slot::Timeline, "the slot it closed on");
+        assert_eq!(app.motion.camera(), camera);
+        let again = app.remembered();
+        assert_eq!(
+            again.compare,
+            Some(b.clone()),
+            "remembered again while B loads"
+        );
+        assert_eq!(again.heard, Some(key));
+        assert_eq!(again.active, None, "nothing shown yet");
+
+        // A B that is gone is not asked for; a command line's files start afresh.
+        let app = reopened(Remembered {
+            files: vec![song.clone()],
+            compare: Some(repo.join("data/no-such-b.ply")),
+            ..Default::default()
+        });
+        assert!(app.compare.is_none());
+        let app = LoudscapeApp::new(
+            options(vec![song]),
+            Some(Remembered {
+                compare: Some(b),
+                ..Default::default()
+            }),
+        );
+        assert!(app.compare.is_none(), "B goes with the remembered A only");
+    }
     use crate::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 
     #[test]

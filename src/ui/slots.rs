@@ -86,7 +86,8 @@ impl LoudscapeApp {
                     );
                     for warning in cloud.warnings() {
                         let about = warning.path.as_deref().unwrap_or(&file);
-                        self.messages.warn(format!("{about}: {}", warning.message));
+                        self.messages
+                            .warn_about(&cloud.path, format!("{about}: {}", warning.message));
                     }
                     match preview {
                         Some(shown) => {
@@ -106,6 +107,7 @@ impl LoudscapeApp {
                     if let Some(shown) = preview {
                         self.drop_preview(render_state, shown);
                     }
+                    self.restore_failed();
                     if message.contains(&path.display().to_string()) {
                         self.messages.error(message);
                     } else {
@@ -285,6 +287,10 @@ impl LoudscapeApp {
             // Fitted once, to the axes the growing cloud already had.
             return;
         }
+        if self.motion.waits_behind_restore(slot) {
+            // Reopened: the slot shown when the window closed comes first, with its camera.
+            return;
+        }
         // A new cloud in this slot starts from its own fitted camera, not another slot's.
         self.motion.cloud_installed(self.active, slot);
         self.active = slot;
@@ -293,7 +299,8 @@ impl LoudscapeApp {
     /// Builds the active cloud's voxel grid when the view needs one (only when the cloud or the
     /// grid settings changed), and reads it back once for hovering.
     pub(super) fn fetch_grid(&mut self, frame: &eframe::Frame) {
-        if self.settings.view == ViewKind::Points {
+        // The compare draws its own grids in place of the Song slot's view.
+        if self.settings.view == ViewKind::Points || self.compare_covers_view() {
             // A build announced before the switch to Points is not coming.
             if std::mem::take(&mut self.busy_shown) {
                 self.busy = None;

@@ -70,7 +70,9 @@ impl LoudscapeApp {
         let height = (rect.height() * ppp).round().max(1.0) as u32;
         self.view_px = ((rect.width() * ppp).round().max(1.0) as u32, height);
         let target = self.fit_target();
-        self.motion.size_view(width as f32 / height as f32, target);
+        let heights = (rect.height(), ctx.content_rect().height());
+        self.motion
+            .size_view_within(width as f32 / height as f32, target, Some(heights));
         (width, height)
     }
 
@@ -261,7 +263,7 @@ fn shown_legend(
 }
 
 /// A spinner and `text` in the bottom-left corner of the 3D view, over a dark plate.
-fn busy_badge(painter: &egui::Painter, rect: egui::Rect, text: &str) {
+pub(super) fn busy_badge(painter: &egui::Painter, rect: egui::Rect, text: &str) {
     let font = egui::FontId::proportional(14.0);
     let galley = painter.layout_no_wrap(text.into(), font, Color32::from_gray(220));
     let spinner = 14.0;

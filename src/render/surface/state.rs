@@ -275,6 +275,12 @@ impl ExtractedSurface {
         self.lock().installed
     }
 
+    /// Whether the full mesh drawn is the surface `settings` ask of `grid` (extracted and
+    /// installed: what a fresh extraction of them gives).
+    pub fn shows(&self, grid: &VoxelGrid, settings: &SurfaceSettings) -> bool {
+        self.lock().key.as_ref() == Some(&CacheKey::new(grid, settings))
+    }
+
     /// The isovalue of the surface on screen (None before the first extraction).
     pub fn shown_iso_value(&self) -> Option<f32> {
         self.lock().key.as_ref().map(|k| f32::from_bits(k.iso_bits))

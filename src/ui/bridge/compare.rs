@@ -10,10 +10,12 @@ use eframe::egui_wgpu::{self, CallbackResources};
 use super::{Offscreen, OffscreenJob, Prepare, ViewResources};
 use crate::data::cloud::PointCloud;
 use crate::data::field::Field;
-use crate::render::compare::CompareScene;
+use crate::render::compare::{BuiltGrids, CompareScene};
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::grid::voxelize::VoxelSettings;
 use crate::render::scene::{RenderSettings, ViewKind};
+use crate::render::surface::SurfaceSettings;
+use crate::render::surface::state::ExtractionStatus;
 use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::ui::state::compare_window::DifferenceCopy;
 use crate::view::frame_view::FrameView;
@@ -90,35 +92,73 @@ impl CompareResources {
         voxels: &VoxelSettings,
     ) -> bool {
         Self::with(render_state, |compare, _| {
-            compare.scene.as_ref().is_none_or(|scene| {
-                scene.grids.is_some() && scene.data_a.grid_matches(&scene.a, voxels)
-            })
+            compare
+                .scene
+                .as_ref()
+                .is_none_or(|scene| scene.grids_built_for(voxels))
         })
         .unwrap_or(true)
     }
 
-    pub(in crate::ui) fn ensure_grids(
+    /// What a build of the grids on a thread needs: the device, its queue, and the measure the
+    /// Difference view shows (None without a scene).
+    pub(in crate::ui) fn measure(
         render_state: &egui_wgpu::RenderState,
-        voxels: &VoxelSettings,
-    ) -> Result<(), String> {
+    ) -> Option<DifferenceMeasure> {
+        Self::with(render_state, |compare, _| {
+            compare.scene.as_ref().map(|scene| scene.measure())
+        })
+        .flatten()
+    }
+
+    /// Installs grids built on a thread (`render::compare::build_grids`) in the scene.
+    pub(in crate::ui) fn install_grids(render_state: &egui_wgpu::RenderState, built: BuiltGrids) {
         Self::with(render_state, |compare, view| {
-            let Some(scene) = compare.scene.as_mut() else {
-                return Ok(());
-            };
-            let built = scene
-                .ensure_grids(
-                    &render_state.device,
-                    &render_state.queue,
-                    &view.renderer,
-                    voxels,
-                )
-                .map_err(|e| e.to_string())?;
-            if built {
+            if let Some(scene) = compare.scene.as_mut() {
+                scene.install_grids(&render_state.device, &view.renderer, built);
                 compare.revision += 1;
             }
-            Ok(())
+        });
+    }
+
+    /// The surfaces of the two halves in the Surface view with `settings`: their status as
+    /// one (extracting while either is; the larger mesh's counts, so "no surface" only when
+    /// neither has one) and each half's triangles once the mesh on screen is the one
+    /// `settings` ask of its grid. None without grids.
+    pub(in crate::ui) fn surface_status(
+        render_state: &egui_wgpu::RenderState,
+        settings: &SurfaceSettings,
+    ) -> Option<CompareSurfaces> {
+        Self::with(render_state, |compare, _| {
+            let scene = compare.scene.as_ref()?;
+            let halves = [&scene.data_a, &scene.data_b];
+            let statuses = halves.map(|data| data.surface.status());
+            let shown = halves.map(|data| {
+                let grid = data.grid.as_ref()?;
+                data.surface
+                    .shows(grid, settings)
+                    .then(|| data.surface.counts().map(|c| c.triangles()))
+                    .flatten()
+            });
+            if halves.iter().any(|d| d.grid.is_none()) {
+                return None;
+            }
+            let [a, b] = statuses;
+            let larger = if b.triangles() > a.triangles() {
+                &b
+            } else {
+                &a
+            };
+            Some(CompareSurfaces {
+                status: ExtractionStatus {
+                    counts: larger.counts,
+                    error: a.error.clone().or(b.error.clone()),
+                    extracting: a.extracting || b.extracting,
+                },
+                triangles: shown,
+            })
         })
-        .unwrap_or(Ok(()))
+        .flatten()
     }
 
     pub(in crate::ui) fn set_measure(
@@ -166,6 +206,13 @@ impl CompareResources {
         })
         .flatten()
     }
+}
+
+/// The compare's surfaces as the window reads them once a frame.
+pub(in crate::ui) struct CompareSurfaces {
+    pub(in crate::ui) status: ExtractionStatus,
+    /// A's and B's triangles when each shows the surface asked for.
+    pub(in crate::ui) triangles: [Option<u32>; 2],
 }
 
 /// One half of the compare (0 A, 1 B) or the difference (2).

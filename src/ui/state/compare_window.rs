@@ -16,9 +16,13 @@ use std::task::Poll;
 use crate::data::cloud::PointCloud;
 use crate::data::field::Field;
 use crate::playback::{PlaybackError, Track};
+use crate::render::compare::BuiltGrids;
 use crate::render::grid::difference::DifferenceMeasure;
+use crate::render::grid::voxelize::VoxelSettings;
 use crate::render::scene::ViewKind;
+use crate::render::surface::SurfaceMethod;
 use crate::ui::labels::AxisLabels;
+use crate::ui::state::loading::Shared;
 
 /// How the compare is shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,6 +44,9 @@ pub(in crate::ui) enum Listening {
 pub(in crate::ui) struct CompareState {
     pub(in crate::ui) path: PathBuf,
     pub(in crate::ui) receiver: Option<Receiver<Result<PointCloud, String>>>,
+    /// What B's loading thread shares with the window: the extractor's stage and Cancel, shown
+    /// as A's are.
+    pub(in crate::ui) shared: Shared,
     /// A and B on the union axes, as the GPU scene holds them (for hover and labels).
     pub(in crate::ui) clouds: Option<Arc<(PointCloud, PointCloud)>>,
     pub(in crate::ui) b_loaded: Option<Arc<PointCloud>>,
@@ -54,8 +61,12 @@ pub(in crate::ui) struct CompareState {
     /// The difference's CPU copy for read-outs: the shown grid and the signed values.
     pub(in crate::ui) difference: Option<DifferenceCopy>,
     pub(in crate::ui) error: Option<String>,
-    /// The "building the compare grids" notice has been on screen for a frame: build now.
-    pub(in crate::ui) grids_announced: bool,
+    /// The grids being built on a thread, when they are.
+    pub(in crate::ui) grid_build: Option<GridBuild>,
+    /// The surfaces last told on stderr: method, isovalue bits, A's and B's triangles.
+    pub(in crate::ui) surface_told: Option<(SurfaceMethod, u32, u32, u32)>,
+    /// The voxel settings whose grids failed to build (not tried again until they change).
+    pub(in crate::ui) grids_failed: Option<VoxelSettings>,
     /// The error last told in the window's messages (each new one is told once).
     pub(in crate::ui) error_told: Option<String>,
     pub(in crate::ui) labels: Option<AxisLabels>,
@@ -63,6 +74,27 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
     /// A and B aligned in time and matched in loudness (`state/alignment.rs`).
     pub(in crate::ui) alignment: super::alignment::CompareAlignment,
+}
+
+/// The compare's grids built on a thread (`render::compare::build_grids`): the voxel settings
+/// they are built with, where the answer comes, and the frames the window drew meanwhile.
+pub(in crate::ui) struct GridBuild {
+    pub(in crate::ui) voxels: VoxelSettings,
+    pub(in crate::ui) receiver: Receiver<Result<BuiltGrids, String>>,
+    pub(in crate::ui) frames: u32,
+}
+
+/// What a frame does about the compare's grids ([`CompareState::grid_step`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(in crate::ui) enum GridStep {
+    /// Built for the settings shown: draw them.
+    Ready,
+    /// None for these settings and none coming: start a build.
+    Start,
+    /// A build for these settings runs: come back.
+    Wait,
+    /// The build for these settings failed (its error is told): nothing to do.
+    Failed,
 }
 
 /// The difference's CPU copy for read-outs: the shown grid, the signed values per voxel and per
@@ -80,6 +112,7 @@ impl CompareState {
         Self {
             path,
             receiver: None,
+            shared: Shared::default(),
             clouds: None,
             b_loaded: None,
             built_for: None,
@@ -91,7 +124,9 @@ impl CompareState {
             difference: None,
             error: None,
             error_told: None,
-            grids_announced: false,
+            grid_build: None,
+            grids_failed: None,
+            surface_told: None,
             labels: None,
             dialog: None,
             alignment: Default::default(),
@@ -142,6 +177,13 @@ impl CompareState {
         false
     }
 
+    /// Whether B's load was cancelled (its row's Cancel).
+    pub(in crate::ui) fn cancelled(&self) -> bool {
+        self.shared
+            .cancel
+            .load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// Takes B's decoded audio (or why it failed) once decoded; true while it decodes.
     pub(in crate::ui) fn poll_decoding(&mut self) -> bool {
         let Some(receiver) = &self.decoding else {
@@ -174,7 +216,69 @@ impl CompareState {
         }
         self.built_for = Some(song_id);
         self.difference = None;
+        // A build for the old scene has nothing to give the new one.
+        self.grid_build = None;
+        self.grids_failed = None;
         true
+    }
+
+    /// What this frame does about the grids, `built` saying whether the scene has them for
+    /// `voxels`: a build for other settings is dropped (its answer is not waited for).
+    pub(in crate::ui) fn grid_step(&mut self, voxels: &VoxelSettings, built: bool) -> GridStep {
+        if built {
+            return GridStep::Ready;
+        }
+        if let Some(build) = &mut self.grid_build {
+            if build.voxels == *voxels {
+                build.frames += 1;
+                return GridStep::Wait;
+            }
+            self.grid_build = None;
+        }
+        if self.grids_failed == Some(*voxels) {
+            return GridStep::Failed;
+        }
+        GridStep::Start
+    }
+
+    /// Waits for a build started on a thread with `voxels`.
+    pub(in crate::ui) fn building(
+        &mut self,
+        voxels: VoxelSettings,
+        receiver: Receiver<Result<BuiltGrids, String>>,
+    ) {
+        self.grids_failed = None;
+        self.grid_build = Some(GridBuild {
+            voxels,
+            receiver,
+            frames: 0,
+        });
+    }
+
+    /// Whether grids are being built on a thread.
+    pub(in crate::ui) fn grids_building(&self) -> bool {
+        self.grid_build.is_some()
+    }
+
+    /// The build's answer once it came, with the frames drawn while it ran; a failure (or a
+    /// thread that ended without answering) is kept as the compare's error and not tried again
+    /// for the same settings.
+    pub(in crate::ui) fn poll_grid_build(&mut self) -> Option<(BuiltGrids, u32)> {
+        let build = self.grid_build.as_ref()?;
+        let answer = match build.receiver.try_recv() {
+            Ok(answer) => answer,
+            Err(TryRecvError::Empty) => return None,
+            Err(TryRecvError::Disconnected) => Err("the compare grids' build stopped".into()),
+        };
+        let build = self.grid_build.take()?;
+        match answer {
+            Ok(built) => Some((built, build.frames)),
+            Err(message) => {
+                self.grids_failed = Some(build.voxels);
+                self.error = Some(message);
+                None
+            }
+        }
     }
 
     /// Whether what is shown draws from the voxel grids: the difference, or side by side in
@@ -398,6 +502,60 @@ mod tests {
         state.layout = CompareLayout::Off;
         assert!(!state.needs_grids(ViewKind::Volume));
         assert!(!state.shown());
+    }
+
+    #[test]
+    fn grids_are_built_once_per_settings_and_a_failure_is_not_retried() {
+        let mut state = CompareState::new(PathBuf::from("b.ply"));
+        let voxels = VoxelSettings::default();
+        assert_eq!(state.grid_step(&voxels, true), GridStep::Ready);
+        assert_eq!(state.grid_step(&voxels, false), GridStep::Start);
+        let (sender, receiver) = channel();
+        state.building(voxels, receiver);
+        assert!(state.grids_building());
+        assert_eq!(state.grid_step(&voxels, false), GridStep::Wait);
+        assert_eq!(state.grid_step(&voxels, false), GridStep::Wait);
+        assert!(state.poll_grid_build().is_none(), "nothing sent yet");
+        assert_eq!(state.grid_build.as_ref().map(|b| b.frames), Some(2));
+        sender
+            .send(Err("b.ply: voxelizing: too large".into()))
+            .unwrap();
+        assert!(state.poll_grid_build().is_none());
+        assert!(!state.grids_building());
+        assert_eq!(state.error.as_deref(), Some("b.ply: voxelizing: too large"));
+        assert_eq!(
+            state.grid_step(&voxels, false),
+            GridStep::Failed,
+            "not started again every frame"
+        );
+        let mut other = voxels;
+        other.smoothing_sigma += 0.5;
+        assert_eq!(state.grid_step(&other, false), GridStep::Start);
+
+        // A build for other settings is dropped; a thread that died is an error.
+        let (sender, receiver) = channel();
+        state.building(voxels, receiver);
+        assert_eq!(state.grid_step(&other, false), GridStep::Start);
+        assert!(!state.grids_building());
+        drop(sender);
+        let (sender, receiver) = channel::<Result<BuiltGrids, String>>();
+        state.building(other, receiver);
+        drop(sender);
+        assert!(state.poll_grid_build().is_none());
+        assert!(
+            state
+                .error
+                .as_deref()
+                .is_some_and(|e| e.contains("stopped")),
+            "{:?}",
+            state.error
+        );
+
+        // A new scene drops the build of the old one.
+        let (_sender, receiver) = channel();
+        state.building(voxels, receiver);
+        assert!(state.rebuild_for(9));
+        assert!(!state.grids_building());
     }
 
     #[test]

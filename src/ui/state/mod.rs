@@ -87,6 +87,9 @@ pub(super) struct LoudscapeApp {
     pub(super) audio_for: Vec<(PathBuf, PathBuf)>,
     /// Whether to remember state (off for scripted screenshot runs).
     pub(super) persist: bool,
+    /// What was last handed to eframe's storage (`persistence.rs` asks for a frame to save a
+    /// change).
+    pub(super) saved: Option<crate::ui::persistence::Remembered>,
     /// The active cloud's surface: its status and level of detail (`surface_status.rs`).
     pub(super) surface: surface_status::SurfaceStatus,
     /// Work that blocks the window, announced a frame before it runs (shown with a spinner).

@@ -69,11 +69,16 @@ pub(in crate::ui) struct ViewMotion {
     fitted: bool,
     /// The view's width over its height when last drawn.
     aspect: f32,
+    /// The view's height and the window's when last drawn (points), where known.
+    heights: Option<(f32, f32)>,
     last_motion: Option<Instant>,
     /// The camera each data slot (Song, Timeline) was left with.
     slot_cameras: [Option<Camera>; 2],
     /// Loads that keep the camera instead of fitting (a remembered view, a re-extraction).
     keep_camera_loads: usize,
+    /// Reopened with the remembered camera of this slot: a cloud of the other slot arriving
+    /// first waits unseen ([`ViewMotion::waits_behind_restore`]).
+    restoring: Option<Slot>,
     /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
     moving_divisor: [u32; 3],
     /// Points the Points view draws while moving, following the device's pace.
@@ -87,9 +92,11 @@ impl Default for ViewMotion {
             fit_pending: true,
             fitted: false,
             aspect: 1.6,
+            heights: None,
             last_motion: None,
             slot_cameras: [None, None],
             keep_camera_loads: 0,
+            restoring: None,
             moving_divisor: [1; 3],
             moving_points: PointStyle::default().max_points_moving,
         }
@@ -121,6 +128,37 @@ impl ViewMotion {
         self.camera = camera;
         self.fit_pending = false;
         self.keep_camera_loads = loads;
+    }
+
+    /// As [`ViewMotion::restore`] for several files, the camera being `slot`'s (the slot shown
+    /// when the window closed): its cloud takes the camera, another slot's cloud arriving
+    /// first is installed unseen (it was shown for a second with the wrong camera).
+    pub(in crate::ui) fn restore_for(&mut self, camera: Camera, slot: Slot) {
+        self.restore(camera, 1);
+        self.restoring = Some(slot);
+    }
+
+    /// Whether a cloud arriving in `slot` waits unseen behind the restored slot's cloud; the
+    /// restored slot's own ends the wait.
+    pub(in crate::ui) fn waits_behind_restore(&mut self, slot: Slot) -> bool {
+        match self.restoring {
+            Some(restoring) if restoring != slot => true,
+            Some(_) => {
+                self.restoring = None;
+                false
+            }
+            None => false,
+        }
+    }
+
+    /// The restored slot's cloud is not coming (its load failed): nothing waits for it, and
+    /// its camera is not kept for another cloud.
+    pub(in crate::ui) fn abandon_restore(&mut self) -> bool {
+        if self.restoring.take().is_none() {
+            return false;
+        }
+        self.keep_camera_loads = 0;
+        true
     }
 
     /// The next load keeps the camera (the same data, seen the same way).
@@ -163,7 +201,35 @@ impl ViewMotion {
     /// The view is `aspect` wide over high this frame. A camera left as fitted is fitted again
     /// when that changed (an 800x600 window cut the labels off); a pending fit is done when
     /// there is a cloud (`target`).
+    #[cfg(test)]
     pub(in crate::ui) fn size_view(&mut self, aspect: f32, target: Option<FitBox>) {
+        self.size_view_within(aspect, target, None);
+    }
+
+    /// As [`ViewMotion::size_view`], `heights` being the view's height and the window's (in
+    /// points). When the view's height changed and the window's did not, the window itself
+    /// took or gave the room (the loudness strip arriving with the whole song, a line under
+    /// the view): the picture keeps its framing, the camera stepping back or closer so a
+    /// world unit at the target keeps its size on screen, instead of being fitted again.
+    pub(in crate::ui) fn size_view_within(
+        &mut self,
+        aspect: f32,
+        target: Option<FitBox>,
+        heights: Option<(f32, f32)>,
+    ) {
+        if let (Some((view, window)), Some((old_view, old_window))) = (heights, self.heights)
+            && (window - old_window).abs() < 0.5
+            && (view - old_view).abs() >= 0.5
+            && old_view > 0.0
+            && view > 0.0
+            && !self.fit_pending
+        {
+            self.camera.distance *= view / old_view;
+            self.aspect = aspect;
+        }
+        if heights.is_some() {
+            self.heights = heights;
+        }
         if (aspect - self.aspect).abs() > 1e-3 && self.fitted {
             self.fit_pending = true;
         }
@@ -348,6 +414,85 @@ mod tests {
         let refit = motion.camera();
         motion.size_view(0.8, Some(BOX));
         assert_ne!(motion.camera(), refit, "F leaves it as fitted again");
+    }
+
+    /// Pixels a world unit at the camera's target takes in a view `height` pixels high.
+    fn scale(camera: &Camera, height: f32) -> f32 {
+        let fov = crate::view::camera::FOV_Y_DEGREES.to_radians();
+        height / (2.0 * camera.distance * (fov / 2.0).tan())
+    }
+
+    #[test]
+    fn the_window_taking_room_from_the_view_keeps_the_framing() {
+        // Fitted, then moved by hand: both keep their scale when the strip takes 110 points.
+        for by_hand in [false, true] {
+            let mut motion = ViewMotion::default();
+            motion.size_view_within(1200.0 / 700.0, Some(BOX), Some((700.0, 800.0)));
+            if by_hand {
+                let orbit = dragged(Drag::Orbit(30.0, 10.0));
+                motion.input(&orbit, 700.0, Some(BOX), Instant::now());
+            }
+            let before = motion.camera();
+            motion.size_view_within(1200.0 / 590.0, Some(BOX), Some((590.0, 800.0)));
+            let after = motion.camera();
+            assert!(
+                (scale(&before, 700.0) - scale(&after, 590.0)).abs() < 1e-4,
+                "the picture jumped: {} px a unit before, {} after",
+                scale(&before, 700.0),
+                scale(&after, 590.0)
+            );
+            assert_eq!(
+                (after.target, after.azimuth, after.elevation),
+                (before.target, before.azimuth, before.elevation),
+                "the same view, only its size kept"
+            );
+        }
+        // The user resizing the window: a fitted camera is fitted again as before.
+        let mut motion = ViewMotion::default();
+        motion.size_view_within(1.6, Some(BOX), Some((700.0, 800.0)));
+        let wide = motion.camera();
+        motion.size_view_within(0.8, Some(BOX), Some((400.0, 500.0)));
+        let mut fitted = ViewMotion::default();
+        fitted.size_view(0.8, Some(BOX));
+        assert_ne!(motion.camera(), wide);
+        assert_eq!(motion.camera(), fitted.camera(), "fitted to the new window");
+    }
+
+    #[test]
+    fn a_reopened_window_shows_the_slot_it_closed_on_first() {
+        let mut camera = Camera::default();
+        camera.azimuth += 0.7;
+        let mut motion = ViewMotion::default();
+        motion.restore_for(camera, Slot::Song);
+        assert!(
+            motion.waits_behind_restore(Slot::Timeline),
+            "the timeline arrived first: it waits unseen"
+        );
+        assert_eq!(motion.camera(), camera, "not taken by the timeline");
+        assert!(!motion.waits_behind_restore(Slot::Song));
+        motion.cloud_installed(Slot::Song, Slot::Song);
+        assert_eq!(
+            motion.camera(),
+            camera,
+            "the song comes back as it was left"
+        );
+        assert!(
+            !motion.waits_behind_restore(Slot::Timeline),
+            "the wait is over"
+        );
+        motion.cloud_installed(Slot::Song, Slot::Song);
+        assert!(motion.fit_pending(), "a later cloud is fitted");
+
+        let mut motion = ViewMotion::default();
+        motion.restore_for(camera, Slot::Song);
+        assert!(motion.abandon_restore(), "the song failed to load");
+        assert!(!motion.waits_behind_restore(Slot::Timeline));
+        motion.cloud_installed(Slot::Song, Slot::Timeline);
+        assert!(
+            motion.fit_pending(),
+            "the timeline is fitted, not given the song's camera"
+        );
+        assert!(!motion.abandon_restore());
     }
 
     #[test]
