@@ -124,7 +124,7 @@ impl LoudscapeApp {
         // unless the field names a file; where no dialog can open, the timestamped name in the
         // current folder. Only a .png name, and not over a file this window did not save.
         let mut no_dialog = false;
-        let dialog_chose = self.open.save_to.is_some();
+        let dialog_chose = self.open.save_to.clone();
         let wanted = if let Some(chosen) = self.open.save_to.take() {
             chosen
         } else if self.save_shot.path.trim().is_empty() {
@@ -145,7 +145,9 @@ impl LoudscapeApp {
             ));
             return;
         };
-        let (path, renamed) = if dialog_chose {
+        // The dialog asked before replacing the name it gave; a name it did not give (".png"
+        // added) was not asked about.
+        let (path, renamed) = if dialog_chose.as_ref() == Some(&wanted) {
             (wanted.clone(), false)
         } else {
             written::target(&wanted, &self.save_shot.made)
