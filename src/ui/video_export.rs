@@ -23,6 +23,7 @@ use crate::render::scene::RenderSettings;
 use crate::render::volume::VolumeSettings;
 use crate::ui::open::file_name;
 use crate::ui::state::LoudscapeApp;
+use crate::ui::state::messages::{Kind, VIDEO_EXPORT};
 use crate::ui::state::video_export::{RunningExport, VideoProgress};
 use crate::ui::state::written;
 use crate::view::camera::Camera;
@@ -292,17 +293,25 @@ impl LoudscapeApp {
         }
         let (path, renamed) = written::target(&name, &self.video_export.made);
         if renamed {
-            self.messages.warn(format!(
-                "{} exists and this window did not write it: exporting to {} instead",
-                name.display(),
-                path.display()
-            ));
+            self.messages.say(
+                VIDEO_EXPORT,
+                Kind::Warning,
+                format!(
+                    "{} exists and this window did not write it: exporting to {} instead",
+                    name.display(),
+                    path.display()
+                ),
+            );
         } else if typed.is_empty() {
-            self.messages.info(format!(
-                "{}: exporting to {} (type a name in the Video field to choose)",
-                crate::ui::open::NO_DIALOG,
-                path.display()
-            ));
+            self.messages.say(
+                VIDEO_EXPORT,
+                Kind::Info,
+                format!(
+                    "{}: exporting to {} (type a name in the Video field to choose)",
+                    crate::ui::open::NO_DIALOG,
+                    path.display()
+                ),
+            );
         }
         self.start_video_export(path);
     }
@@ -484,25 +493,37 @@ impl LoudscapeApp {
             .map(|l| l.clone())
             .unwrap_or_default();
         match ended {
-            _ if running.cancelled => self.messages.info("video export cancelled"),
+            _ if running.cancelled => {
+                self.messages
+                    .say(VIDEO_EXPORT, Kind::Info, "video export cancelled")
+            }
             Ok(status) if status.success() && running.output.is_file() => {
                 let frames = running
                     .latest
                     .map_or(String::new(), |p| format!(" ({} frames)", p.frames));
                 self.video_export.made.record(&running.output);
-                self.messages
-                    .info(format!("saved video {}{frames}", running.output.display()));
+                self.messages.say(
+                    VIDEO_EXPORT,
+                    Kind::Info,
+                    format!("saved video {}{frames}", running.output.display()),
+                );
             }
-            Ok(_) => self.messages.error(format!(
-                "video export to {} failed: {}",
-                file_name(&running.output),
-                if last_error.is_empty() {
-                    "the video command stopped without saying why".to_string()
-                } else {
-                    last_error.trim_start_matches("error: ").to_string()
-                }
-            )),
-            Err(e) => self.messages.error(format!("video export: {e}")),
+            Ok(_) => self.messages.say(
+                VIDEO_EXPORT,
+                Kind::Error,
+                format!(
+                    "video export to {} failed: {}",
+                    file_name(&running.output),
+                    if last_error.is_empty() {
+                        "the video command stopped without saying why".to_string()
+                    } else {
+                        last_error.trim_start_matches("error: ").to_string()
+                    }
+                ),
+            ),
+            Err(e) => self
+                .messages
+                .say(VIDEO_EXPORT, Kind::Error, format!("video export: {e}")),
         }
         ctx.request_repaint();
     }
