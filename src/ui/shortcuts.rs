@@ -62,7 +62,7 @@ pub(super) const SHORTCUTS: &[Shortcut] = &[
         key: Key::S,
         modifiers: Modifiers::COMMAND,
         keys: "Ctrl+S (Cmd+S)",
-        what: "save the 3D view as a PNG (asks where)",
+        what: "save the 3D view as a PNG (the Screenshot field's name, else asks where)",
     },
     Shortcut {
         action: Action::Open,
