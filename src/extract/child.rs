@@ -297,6 +297,37 @@ mod tests {
         }
     }
 
+    /// Leftovers named by a PID: those of a process that is gone are removed, those of a running
+    /// one (this test's) and names without a PID (recent) stay; other files are not touched.
+    #[cfg(unix)]
+    #[test]
+    fn leftovers_go_with_their_process() {
+        let dir = std::env::temp_dir().join(format!("loudscape-stale-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut gone = std::process::Command::new("true").spawn().unwrap();
+        let (dead, live) = (gone.id(), std::process::id());
+        gone.wait().unwrap();
+        let names = [
+            format!("{SCRATCH_PREFIX}-{dead}-3"),
+            format!("{SCRATCH_PREFIX}-{live}-0"),
+            format!("{SCRATCH_PREFIX}-x-0"),
+            format!("song.partial-{dead}.ply"),
+            format!("song.partial-{live}.ply"),
+            format!("KEY-{dead}.ply"),
+        ];
+        for name in &names[..3] {
+            std::fs::create_dir(dir.join(name)).unwrap();
+        }
+        for name in &names[3..] {
+            std::fs::write(dir.join(name), b"ply").unwrap();
+        }
+        remove_stale_partials(&dir);
+        let kept: Vec<bool> = names.iter().map(|n| dir.join(n).exists()).collect();
+        assert_eq!(kept, [false, true, true, false, true, true], "{names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn printed_warnings_lose_the_audio_path_only() {
         let audio = Path::new("/music/a.flac");
@@ -313,7 +344,10 @@ mod tests {
         use std::os::unix::ffi::OsStrExt;
         let audio = Path::new(std::ffi::OsStr::from_bytes(b"/music/caf\xe9.flac"));
         assert_eq!(
-            said("/music/caf\\udce9.flac: decoded 1.49 s of the 4.00 s", audio),
+            said(
+                "/music/caf\\udce9.flac: decoded 1.49 s of the 4.00 s",
+                audio
+            ),
             "decoded 1.49 s of the 4.00 s"
         );
     }
