@@ -25,6 +25,14 @@ pub fn visual_runs(text: &str) -> Vec<Run> {
     if text.is_empty() {
         return Vec::new();
     }
+    // Nothing before Hebrew (U+0590) is right to left or a direction control: most labels
+    // ("-30 dB", "time (s)") are one run without the algorithm's cost.
+    if text.chars().all(|c| u32::from(c) < 0x0590) {
+        return vec![Run {
+            range: 0..text.len(),
+            rtl: false,
+        }];
+    }
     let info = BidiInfo::new(text, None);
     if !info.has_rtl() {
         return vec![Run {
