@@ -91,6 +91,33 @@ pub fn describe_metrics(m: &crate::data::cloud::Metrics) -> Vec<String> {
         .iter()
         .filter_map(|(name, value, unit)| value.map(|v| format!("{name}: {v:.1} {unit}")))
         .collect();
+    // EBU Mode's maxima, with the time a meter shows them (the window's end).
+    let maxima = [
+        (
+            "max momentary (400 ms)",
+            m.max_momentary_lufs,
+            m.max_momentary_s,
+        ),
+        (
+            "max short-term (3 s)",
+            m.max_short_term_lufs,
+            m.max_short_term_s,
+        ),
+    ];
+    let mut next = lines
+        .iter()
+        .position(|l| l.starts_with("loudness range"))
+        .or_else(|| lines.iter().position(|l| l.starts_with("integrated")))
+        .map_or(0, |i| i + 1);
+    for (name, value, at) in maxima {
+        if let Some(v) = value {
+            let when = at.map_or(String::new(), |t| {
+                format!(" at {}", crate::playback::format_clock(t))
+            });
+            lines.insert(next, format!("{name}: {v:.1} LUFS{when}"));
+            next += 1;
+        }
+    }
     if let (Some(low), Some(high)) = (m.psr_p10_db, m.psr_p90_db) {
         lines.push(format!("PSR, 10th-90th pct: {low:.1} to {high:.1} dB"));
     }
@@ -129,6 +156,9 @@ mod metrics_tests {
             psr_p10_db: Some(8.5),
             psr_p90_db: Some(11.3),
             dc_offset: Some(0.315),
+            max_momentary_lufs: Some(-5.94),
+            max_momentary_s: Some(61.43),
+            max_short_term_lufs: Some(-6.5),
             ..Metrics::default()
         };
         let lines = describe_metrics(&m);
@@ -136,6 +166,8 @@ mod metrics_tests {
             lines,
             [
                 "integrated loudness: -8.0 LUFS",
+                "max momentary (400 ms): -5.9 LUFS at 1:01.4",
+                "max short-term (3 s): -6.5 LUFS",
                 "DR (TT meter): 5.5 dB",
                 "PSR, median of 3 s: 10.0 dB",
                 "PSR, 10th-90th pct: 8.5 to 11.3 dB",

@@ -34,6 +34,7 @@ mod panels;
 mod persistence;
 pub mod progressive;
 mod recent;
+mod report_link;
 pub mod screenshot;
 mod shortcuts;
 mod slots;

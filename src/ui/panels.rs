@@ -443,6 +443,7 @@ pub(super) fn cloud_info(ui: &mut egui::Ui, cloud: &PointCloud) {
     for line in crate::ui::labels::describe_cloud(cloud) {
         ui.label(RichText::new(line).small());
     }
+    crate::ui::report_link::report_button(ui, cloud);
     // What the extractor found wrong or odd in the input (truncated, clipping...), by the
     // metrics it may have made less true.
     for warning in cloud.warnings() {

@@ -144,11 +144,12 @@ impl CompareResources {
                 return None;
             }
             let [a, b] = statuses;
-            let larger = if b.triangles() > a.triangles() {
-                &b
-            } else {
-                &a
-            };
+            let larger =
+                if b.counts.map_or(0, |c| c.triangles()) > a.counts.map_or(0, |c| c.triangles()) {
+                    &b
+                } else {
+                    &a
+                };
             Some(CompareSurfaces {
                 status: ExtractionStatus {
                     counts: larger.counts,
