@@ -81,7 +81,7 @@ pub fn report_button(ui: &mut egui::Ui, cloud: &PointCloud) {
     if cloud.meta.mode != DataMode::Song {
         return;
     }
-    let id = egui::Id::new("loudness-report-job");
+    let id = egui::Id::unique("loudness-report-job");
     let shared: Shared = ui
         .ctx()
         .data_mut(|d| d.get_temp_mut_or_default::<Shared>(id).clone());
