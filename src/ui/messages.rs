@@ -117,7 +117,7 @@ impl LoudscapeApp {
                 let label = if open {
                     "hide the list".to_string()
                 } else {
-                    format!("{count} ▴")
+                    format!("{count}: show all")
                 };
                 if ui
                     .small_button(label)

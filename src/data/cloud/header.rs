@@ -127,33 +127,108 @@ pub(super) fn excerpt(bytes: &[u8]) -> String {
     }
 }
 
+/// Reads the header from `reader` (positioned at the file's start) up to `end_header`: one
+/// [`HeaderParser`] method per keyword.
 pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<Header, CloudError> {
-    let error = |line: usize, reason: String| CloudError::Header {
-        path: path.to_owned(),
-        line,
-        reason,
-    };
-    let meta_error = |line: usize, reason: String| CloudError::Meta {
-        path: path.to_owned(),
-        line,
-        reason,
-    };
-    let mut consumed: u64 = 0;
-    let mut line_no = 0;
+    let mut parser = HeaderParser::new(path);
     let mut buf = Vec::new();
-    let mut format: Option<(Encoding, usize)> = None;
-    let mut meta: Option<(usize, String)> = None;
-    let mut v2 = MetaParts::default();
-    let mut elements: Vec<Element> = Vec::new();
     loop {
-        line_no += 1;
+        let complete = parser.read_line(reader, &mut buf)?;
+        let line = parser.split(&buf, complete)?;
+        match line.keyword {
+            "ply" if parser.line_no == 1 => {}
+            "format" => parser.format(&line)?,
+            "comment" => parser.comment(&line)?,
+            "obj_info" | "" => {}
+            "element" => parser.element(&line)?,
+            "property" => parser.property(&line)?,
+            "end_header" => return parser.end_header(&line),
+            other => {
+                return Err(parser.error(format!(
+                    "unknown header keyword {}",
+                    excerpt(other.as_bytes())
+                )));
+            }
+        }
+    }
+}
+
+/// One header line, split into its keyword and the words after it.
+struct Line<'t> {
+    /// The line without its `\n` or `\r\n`.
+    text: &'t str,
+    keyword: &'t str,
+    /// The text after the keyword, trimmed.
+    rest: &'t str,
+    /// The words of `rest` (of a comment, only the first: a version-1 metadata line could
+    /// hold millions).
+    tokens: Vec<&'t str>,
+}
+
+/// What the header said so far, line by line; each keyword has its method.
+struct HeaderParser<'p> {
+    path: &'p Path,
+    /// Bytes read so far, `end_header`'s line included once it is read.
+    consumed: u64,
+    /// The line being parsed, from 1.
+    line_no: usize,
+    format: Option<(Encoding, usize)>,
+    meta: Option<(usize, String)>,
+    v2: MetaParts,
+    elements: Vec<Element>,
+}
+
+impl<'p> HeaderParser<'p> {
+    fn new(path: &'p Path) -> HeaderParser<'p> {
+        HeaderParser {
+            path,
+            consumed: 0,
+            line_no: 0,
+            format: None,
+            meta: None,
+            v2: MetaParts::default(),
+            elements: Vec::new(),
+        }
+    }
+
+    /// A header error at the current line.
+    fn error(&self, reason: String) -> CloudError {
+        self.error_at(self.line_no, reason)
+    }
+
+    fn error_at(&self, line: usize, reason: String) -> CloudError {
+        CloudError::Header {
+            path: self.path.to_owned(),
+            line,
+            reason,
+        }
+    }
+
+    /// A metadata error at `line`.
+    fn meta_error_at(&self, line: usize, reason: String) -> CloudError {
+        CloudError::Meta {
+            path: self.path.to_owned(),
+            line,
+            reason,
+        }
+    }
+
+    /// Reads the next line into `buf` (without `\n` or `\r\n`), never past
+    /// [`MAX_HEADER_BYTES`]; checks the first line is `ply`. Returns whether the line ended
+    /// with `\n`.
+    fn read_line<R: BufRead>(
+        &mut self,
+        reader: &mut R,
+        buf: &mut Vec<u8>,
+    ) -> Result<bool, CloudError> {
+        self.line_no += 1;
         buf.clear();
         let n = reader
             .by_ref()
-            .take(MAX_HEADER_BYTES - consumed)
-            .read_until(b'\n', &mut buf)
-            .map_err(|e| error(line_no, format!("cannot read the header: {e}")))?;
-        consumed += n as u64;
+            .take(MAX_HEADER_BYTES - self.consumed)
+            .read_until(b'\n', buf)
+            .map_err(|e| self.error(format!("cannot read the header: {e}")))?;
+        self.consumed += n as u64;
         let complete = buf.last() == Some(&b'\n');
         if complete {
             buf.pop();
@@ -161,260 +236,249 @@ pub(super) fn parse_header<R: BufRead>(reader: &mut R, path: &Path) -> Result<He
         if buf.last() == Some(&b'\r') {
             buf.pop();
         }
-        if line_no == 1 {
+        if self.line_no == 1 {
             if n == 0 {
-                return Err(error(1, "the file is empty (expected a PLY header)".into()));
+                return Err(self.error("the file is empty (expected a PLY header)".into()));
             }
             if buf.as_slice() != b"ply" {
-                return Err(error(
-                    1,
-                    format!("not a PLY file: expected `ply`, found {}", excerpt(&buf)),
-                ));
+                return Err(self.error(format!(
+                    "not a PLY file: expected `ply`, found {}",
+                    excerpt(buf)
+                )));
             }
         }
-        let text = std::str::from_utf8(&buf).map_err(|e| {
-            error(
-                line_no,
-                format!(
-                    "not valid UTF-8 at column {} (PLY headers are ASCII text)",
-                    e.valid_up_to() + 1
-                ),
-            )
+        Ok(complete)
+    }
+
+    /// Splits the line just read; a line that does not end (the file's end, or the size
+    /// limit) is an error unless it is `end_header`.
+    fn split<'t>(&self, buf: &'t [u8], complete: bool) -> Result<Line<'t>, CloudError> {
+        let text = std::str::from_utf8(buf).map_err(|e| {
+            self.error(format!(
+                "not valid UTF-8 at column {} (PLY headers are ASCII text)",
+                e.valid_up_to() + 1
+            ))
         })?;
         let (keyword, rest) = match text.trim().split_once(char::is_whitespace) {
             Some((keyword, rest)) => (keyword, rest.trim()),
             None => (text.trim(), ""),
         };
-        // A comment is not split: its words could number millions (a version-1 metadata line).
         let tokens: Vec<&str> = if keyword == "comment" {
             rest.split_whitespace().take(1).collect()
         } else {
             rest.split_whitespace().collect()
         };
         if !complete && keyword != "end_header" {
-            return Err(if consumed >= MAX_HEADER_BYTES {
-                error(
-                    line_no,
-                    format!(
-                        "the header is longer than {} MiB, the most loudscape reads \
-                         (docs/FORMAT.md, \"Header size\")",
-                        MAX_HEADER_BYTES >> 20
-                    ),
-                )
+            return Err(if self.consumed >= MAX_HEADER_BYTES {
+                self.error(format!(
+                    "the header is longer than {} MiB, the most loudscape reads \
+                     (docs/FORMAT.md, \"Header size\")",
+                    MAX_HEADER_BYTES >> 20
+                ))
             } else {
-                error(line_no, "the file ends before `end_header`".into())
+                self.error("the file ends before `end_header`".into())
             });
         }
-        match keyword {
-            "ply" if line_no == 1 => {}
-            "format" => {
-                if let Some((_, first)) = format {
-                    return Err(error(
-                        line_no,
-                        format!("second `format` line (the first is line {first})"),
-                    ));
-                }
-                let encoding = match tokens.first() {
-                    Some(&"ascii") => Encoding::Ascii,
-                    Some(&"binary_little_endian") => Encoding::BinaryLittleEndian,
-                    Some(&"binary_big_endian") => Encoding::BinaryBigEndian,
-                    _ => {
-                        return Err(error(
-                            line_no,
-                            format!(
-                                "unknown format {}: expected `format binary_little_endian 1.0`, \
-                                 `format ascii 1.0` or `format binary_big_endian 1.0`",
-                                excerpt(text.as_bytes())
-                            ),
-                        ));
-                    }
-                };
-                if tokens.len() != 2 || !matches!(tokens[1], "1.0" | "1") {
-                    return Err(error(
-                        line_no,
-                        format!(
-                            "expected `format {} 1.0`, found {}",
-                            encoding.name(),
-                            excerpt(text.as_bytes())
-                        ),
-                    ));
-                }
-                format = Some((encoding, line_no));
+        Ok(Line {
+            text,
+            keyword,
+            rest,
+            tokens,
+        })
+    }
+
+    /// `format ascii|binary_little_endian|binary_big_endian 1.0`, once.
+    fn format(&mut self, line: &Line) -> Result<(), CloudError> {
+        if let Some((_, first)) = self.format {
+            return Err(self.error(format!("second `format` line (the first is line {first})")));
+        }
+        let encoding = match line.tokens.first() {
+            Some(&"ascii") => Encoding::Ascii,
+            Some(&"binary_little_endian") => Encoding::BinaryLittleEndian,
+            Some(&"binary_big_endian") => Encoding::BinaryBigEndian,
+            _ => {
+                return Err(self.error(format!(
+                    "unknown format {}: expected `format binary_little_endian 1.0`, \
+                     `format ascii 1.0` or `format binary_big_endian 1.0`",
+                    excerpt(line.text.as_bytes())
+                )));
             }
-            "comment" => {
-                let word = tokens.first().copied().unwrap_or("");
-                if word == META_KEYWORD {
-                    if let Some((first, _)) = meta {
-                        return Err(meta_error(
-                            line_no,
-                            format!("second loudscape-meta comment (the first is line {first})"),
-                        ));
-                    }
-                    if let Some(first) = v2.first_line {
-                        return Err(meta_error(
-                            line_no,
-                            format!(
-                                "both a version-1 loudscape-meta comment and version-2 \
-                                 {META_V2_KEYWORD} parts (the first is line {first})"
-                            ),
-                        ));
-                    }
-                    meta = Some((line_no, rest[META_KEYWORD.len()..].trim().to_owned()));
-                } else if word == META_V2_KEYWORD {
-                    if let Some((first, _)) = meta {
-                        return Err(meta_error(
-                            line_no,
-                            format!(
-                                "both version-2 {META_V2_KEYWORD} parts and a version-1 \
-                                 loudscape-meta comment (line {first})"
-                            ),
-                        ));
-                    }
-                    v2.push(text, line_no)
-                        .map_err(|reason| meta_error(line_no, reason))?;
-                }
-            }
-            "obj_info" | "" => {}
-            "element" => {
-                let (name, count) = match tokens.as_slice() {
-                    [name, count] => (*name, *count),
-                    [name] => {
-                        return Err(error(
-                            line_no,
-                            format!("`element {name}` has no count, e.g. `element {name} 1000`"),
-                        ));
-                    }
-                    _ => {
-                        return Err(error(
-                            line_no,
-                            format!(
-                                "expected `element NAME COUNT`, found {}",
-                                excerpt(text.as_bytes())
-                            ),
-                        ));
-                    }
-                };
-                let count: u64 = count.parse().map_err(|_| {
-                    error(
-                        line_no,
-                        format!(
-                            "element count {} is not a whole number of at most {}",
-                            excerpt(count.as_bytes()),
-                            u64::MAX
-                        ),
-                    )
-                })?;
-                if let Some(previous) = elements.iter().find(|e| e.name == name) {
-                    return Err(error(
-                        line_no,
-                        format!(
-                            "second `element {name}` (the first is line {})",
-                            previous.line
-                        ),
-                    ));
-                }
-                elements.push(Element {
-                    name: name.to_owned(),
-                    count,
-                    line: line_no,
-                    properties: Vec::new(),
-                });
-            }
-            "property" => {
-                let Some(element) = elements.last_mut() else {
-                    return Err(error(line_no, "`property` before any `element`".into()));
-                };
-                let scalar = |name: &str| {
-                    ScalarType::parse(name).ok_or_else(|| {
-                        error(
-                            line_no,
-                            format!("unknown property type {}", excerpt(name.as_bytes())),
-                        )
-                    })
-                };
-                let (kind, name) = match tokens.as_slice() {
-                    ["list", count, item, name] => (
-                        PropertyKind::List {
-                            count: scalar(count)?,
-                            item: scalar(item)?,
-                        },
-                        *name,
-                    ),
-                    [kind, name] if *kind != "list" => (PropertyKind::Scalar(scalar(kind)?), *name),
-                    _ => {
-                        return Err(error(
-                            line_no,
-                            format!(
-                                "expected `property TYPE NAME` or `property list COUNT_TYPE \
-                                 ITEM_TYPE NAME`, found {}",
-                                excerpt(text.as_bytes())
-                            ),
-                        ));
-                    }
-                };
-                if let Some(previous) = element.properties.iter().find(|p| p.name == name) {
-                    return Err(error(
-                        line_no,
-                        format!(
-                            "second property `{name}` in `element {}` (the first is line {})",
-                            element.name, previous.line
-                        ),
-                    ));
-                }
-                element.properties.push(Property {
-                    name: name.to_owned(),
-                    kind,
-                    text: text.trim().to_owned(),
-                    line: line_no,
-                });
-            }
-            "end_header" => {
-                if !tokens.is_empty() {
-                    return Err(error(
-                        line_no,
-                        format!(
-                            "unexpected text after `end_header`: {}",
-                            excerpt(rest.as_bytes())
-                        ),
-                    ));
-                }
-                if let Some(first) = v2.first_line {
-                    if v2.parts != v2.total {
-                        return Err(meta_error(
-                            first,
-                            format!(
-                                "{META_V2_KEYWORD} has {} of its {} parts (the header ends on \
-                                 line {line_no})",
-                                v2.parts, v2.total
-                            ),
-                        ));
-                    }
-                    meta = Some((first, std::mem::take(&mut v2.text)));
-                }
-                let Some((encoding, format_line)) = format else {
-                    return Err(error(
-                        line_no,
-                        "no `format` line before `end_header` (expected `format \
-                         binary_little_endian 1.0` on line 2)"
-                            .into(),
-                    ));
-                };
-                return Ok(Header {
-                    encoding,
-                    format_line,
-                    meta,
-                    elements,
-                    end_line: line_no,
-                    byte_len: consumed,
-                });
-            }
-            other => {
-                return Err(error(
-                    line_no,
-                    format!("unknown header keyword {}", excerpt(other.as_bytes())),
+        };
+        if line.tokens.len() != 2 || !matches!(line.tokens[1], "1.0" | "1") {
+            return Err(self.error(format!(
+                "expected `format {} 1.0`, found {}",
+                encoding.name(),
+                excerpt(line.text.as_bytes())
+            )));
+        }
+        self.format = Some((encoding, self.line_no));
+        Ok(())
+    }
+
+    /// A comment: the version-1 metadata line, a version-2 part, or any other (ignored).
+    fn comment(&mut self, line: &Line) -> Result<(), CloudError> {
+        let word = line.tokens.first().copied().unwrap_or("");
+        if word == META_KEYWORD {
+            if let Some((first, _)) = self.meta {
+                return Err(self.meta_error_at(
+                    self.line_no,
+                    format!("second loudscape-meta comment (the first is line {first})"),
                 ));
             }
+            if let Some(first) = self.v2.first_line {
+                return Err(self.meta_error_at(
+                    self.line_no,
+                    format!(
+                        "both a version-1 loudscape-meta comment and version-2 \
+                         {META_V2_KEYWORD} parts (the first is line {first})"
+                    ),
+                ));
+            }
+            self.meta = Some((
+                self.line_no,
+                line.rest[META_KEYWORD.len()..].trim().to_owned(),
+            ));
+        } else if word == META_V2_KEYWORD {
+            if let Some((first, _)) = self.meta {
+                return Err(self.meta_error_at(
+                    self.line_no,
+                    format!(
+                        "both version-2 {META_V2_KEYWORD} parts and a version-1 \
+                         loudscape-meta comment (line {first})"
+                    ),
+                ));
+            }
+            let line_no = self.line_no;
+            if let Err(reason) = self.v2.push(line.text, line_no) {
+                return Err(self.meta_error_at(line_no, reason));
+            }
         }
+        Ok(())
+    }
+
+    /// `element NAME COUNT`, each name once.
+    fn element(&mut self, line: &Line) -> Result<(), CloudError> {
+        let (name, count) = match line.tokens.as_slice() {
+            [name, count] => (*name, *count),
+            [name] => {
+                return Err(self.error(format!(
+                    "`element {name}` has no count, e.g. `element {name} 1000`"
+                )));
+            }
+            _ => {
+                return Err(self.error(format!(
+                    "expected `element NAME COUNT`, found {}",
+                    excerpt(line.text.as_bytes())
+                )));
+            }
+        };
+        let count: u64 = count.parse().map_err(|_| {
+            self.error(format!(
+                "element count {} is not a whole number of at most {}",
+                excerpt(count.as_bytes()),
+                u64::MAX
+            ))
+        })?;
+        if let Some(previous) = self.elements.iter().find(|e| e.name == name) {
+            return Err(self.error(format!(
+                "second `element {name}` (the first is line {})",
+                previous.line
+            )));
+        }
+        self.elements.push(Element {
+            name: name.to_owned(),
+            count,
+            line: self.line_no,
+            properties: Vec::new(),
+        });
+        Ok(())
+    }
+
+    /// `property TYPE NAME` or `property list COUNT_TYPE ITEM_TYPE NAME` of the last element,
+    /// each name once.
+    fn property(&mut self, line: &Line) -> Result<(), CloudError> {
+        let scalar = |name: &str| {
+            ScalarType::parse(name).ok_or_else(|| {
+                self.error(format!(
+                    "unknown property type {}",
+                    excerpt(name.as_bytes())
+                ))
+            })
+        };
+        let Some(element) = self.elements.last() else {
+            return Err(self.error("`property` before any `element`".into()));
+        };
+        let (kind, name) = match line.tokens.as_slice() {
+            ["list", count, item, name] => (
+                PropertyKind::List {
+                    count: scalar(count)?,
+                    item: scalar(item)?,
+                },
+                *name,
+            ),
+            [kind, name] if *kind != "list" => (PropertyKind::Scalar(scalar(kind)?), *name),
+            _ => {
+                return Err(self.error(format!(
+                    "expected `property TYPE NAME` or `property list COUNT_TYPE \
+                     ITEM_TYPE NAME`, found {}",
+                    excerpt(line.text.as_bytes())
+                )));
+            }
+        };
+        if let Some(previous) = element.properties.iter().find(|p| p.name == name) {
+            return Err(self.error(format!(
+                "second property `{name}` in `element {}` (the first is line {})",
+                element.name, previous.line
+            )));
+        }
+        let property = Property {
+            name: name.to_owned(),
+            kind,
+            text: line.text.trim().to_owned(),
+            line: self.line_no,
+        };
+        if let Some(element) = self.elements.last_mut() {
+            element.properties.push(property);
+        }
+        Ok(())
+    }
+
+    /// `end_header`: the version-2 parts complete, a `format` line seen; the header.
+    fn end_header(mut self, line: &Line) -> Result<Header, CloudError> {
+        if !line.tokens.is_empty() {
+            return Err(self.error(format!(
+                "unexpected text after `end_header`: {}",
+                excerpt(line.rest.as_bytes())
+            )));
+        }
+        if let Some(first) = self.v2.first_line {
+            if self.v2.parts != self.v2.total {
+                return Err(self.meta_error_at(
+                    first,
+                    format!(
+                        "{META_V2_KEYWORD} has {} of its {} parts (the header ends on \
+                         line {})",
+                        self.v2.parts, self.v2.total, self.line_no
+                    ),
+                ));
+            }
+            self.meta = Some((first, std::mem::take(&mut self.v2.text)));
+        }
+        let Some((encoding, format_line)) = self.format else {
+            return Err(self.error(
+                "no `format` line before `end_header` (expected `format \
+                 binary_little_endian 1.0` on line 2)"
+                    .into(),
+            ));
+        };
+        Ok(Header {
+            encoding,
+            format_line,
+            meta: self.meta,
+            elements: self.elements,
+            end_line: self.line_no,
+            byte_len: self.consumed,
+        })
     }
 }
 
