@@ -48,6 +48,20 @@ pub fn kill_process_group(pid: u32) {
     let _ = pid;
 }
 
+/// Asks `child` to stop with SIGTERM (it may clean up first); nothing if its pid does not fit
+/// a `pid_t`.
+#[cfg(unix)]
+pub fn terminate(child: &std::process::Child) {
+    if let Ok(pid) = i32::try_from(child.id())
+        && pid > 0
+    {
+        // SAFETY: kill(2) on our own child's pid; no memory is shared.
+        unsafe {
+            libc::kill(pid, libc::SIGTERM);
+        }
+    }
+}
+
 /// Starts `command`'s child as the leader of a process group of its own, so that
 /// [`kill_process_group`] reaches what it starts, and (Linux) so that it is killed if the app
 /// dies without a chance to (SIGKILL).

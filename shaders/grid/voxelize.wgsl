@@ -87,7 +87,7 @@ fn voxel_total() -> u32 {
 }
 
 // The voxel holding data-space point `p`: floor((p - box_min) * voxels_per_unit), clamped.
-// Keep in sync with voxel_of in src/render/grid/voxelize.rs (the CPU reference).
+// Keep in sync with voxel_of in src/render/grid/voxelize_cpu.rs (the CPU reference).
 fn voxel_of(p: vec3<f32>) -> u32 {
     let u = (p - params.box_min.xyz) * params.voxels_per_unit.xyz;
     let top = vec3<i32>(params.dims.xyz) - vec3<i32>(1);
@@ -124,7 +124,8 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     atomicAdd(&point_counts[voxel], 1u);
 }
 
-// The histogram bin of a non-empty voxel's sum. Keep in sync with histogram_bin in voxelize.rs.
+// The histogram bin of a non-empty voxel's sum. Keep in sync with histogram_bin in
+// src/render/grid/voxelize_cpu.rs.
 // `scales` is VoxelParams.scales (y: log2 of the lowest edge, z: bins per octave).
 fn histogram_bin(sum: f32, scales: vec4<f32>) -> u32 {
     if (sum <= 0.0) {
@@ -220,7 +221,7 @@ fn histogram(
 // The reference sum: the upper edge of the bin holding the percentile's rank among the
 // voxels with a positive sum (rank ceil(p * n), 1-based), so at most 1 - p of them exceed it;
 // capped at the largest sum (so a lone voxel, or a field of equal voxels, reaches exactly 1).
-// Keep in sync with reference_sum in src/render/grid/voxelize.rs.
+// Keep in sync with reference_sum in src/render/grid/voxelize_cpu.rs.
 @compute @workgroup_size(1)
 fn percentile() {
     var nonempty = 0u;

@@ -395,8 +395,6 @@ pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Op
     Ok((settings, camera))
 }
 
-/// Builds the grid (until the GPU voxelizer lands, the CPU stand-in) and extracts the surface,
-/// waiting for it, so the single headless frame shows the whole surface.
 /// Builds the voxel grid the volume and surface views need, and extracts the surface when
 /// that is the view (headless rendering waits for it; the window does not).
 pub fn prepare_grid(

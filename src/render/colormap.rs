@@ -273,10 +273,6 @@ impl Background {
         }
     }
 
-    pub fn rgb_u8(self) -> [u8; 3] {
-        to_u8(self.rgb())
-    }
-
     /// Text and line colour for titles (strong) and ticks (soft) on this background.
     pub fn ink(self, strong: bool) -> [u8; 3] {
         match (self, strong) {

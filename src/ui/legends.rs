@@ -1,7 +1,7 @@
 //! Colour legends: the side panel's strips (one painter for every palette: the points' hp map,
 //! the surface's, the volume's transfer function, with their ends named below), and the legends
-//! of pictures painted over the window's view ([`paint_picture`], [`paint_diverging`]): laid
-//! out by `annotate::legend`, which headless pictures draw on the CPU.
+//! of pictures painted over the window's view ([`paint_picture`]): laid out by
+//! `annotate::legend`, which headless pictures draw on the CPU.
 
 use eframe::egui::{self, Color32, RichText};
 
@@ -9,7 +9,7 @@ pub use crate::annotate::legend::{
     Key, MARGIN, PictureLegend, diverging_position, picture_legend, picture_name, timeline_name,
     titled_with_reference,
 };
-use crate::render::colormap::{Background, Colours, HpColourMap, Ramp};
+use crate::render::colormap::{Colours, HpColourMap};
 use crate::render::transfer::TransferPreset;
 use crate::ui::annotation;
 
@@ -90,21 +90,6 @@ pub fn key_strip_rect(rect: egui::Rect) -> egui::Rect {
 /// under the name where they would meet).
 pub fn paint_picture(painter: &egui::Painter, rect: egui::Rect, legend: &PictureLegend) {
     let shapes = crate::annotate::legend::layout(annotation::rect(rect), legend);
-    annotation::paint(painter, &shapes);
-}
-
-/// Paints the legend of a diverging map over `range` in `strip`
-/// (`annotate::legend::diverging`).
-pub fn paint_diverging(
-    painter: &egui::Painter,
-    strip: egui::Rect,
-    ramp: &Ramp,
-    range: (f32, f32),
-    title: &str,
-    background: Background,
-) {
-    let shapes =
-        crate::annotate::legend::diverging(annotation::rect(strip), ramp, range, title, background);
     annotation::paint(painter, &shapes);
 }
 

@@ -12,8 +12,8 @@ use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::headless::render_image;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::TransferPreset;
-use loudscape::ui::legends;
 use loudscape::ui::screenshot;
+use loudscape::ui::{annotation, legends};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -104,7 +104,7 @@ fn volume_in_magma_matches_its_golden() {
     let magma = render_image(&gpu, &renderer, Some(&data), &view, &settings).expect("render");
     let (share, _) = common::difference(&classic, &magma, 24);
     assert!(share > 0.1, "magma looks like classic ({share})");
-    common::assert_golden("volume_magma", &magma, 0.01);
+    common::assert_golden("volume_magma", &magma, common::RAY_MARCH);
 }
 
 /// On the light background the volume is still readable: it is drawn in ink darker than the
@@ -132,7 +132,7 @@ fn volume_on_the_light_background_is_ink_on_paper() {
         inked / total
     );
     assert!(dark > 0.0, "no dense core drawn dark");
-    common::assert_golden("volume_light", &image, 0.01);
+    common::assert_golden("volume_light", &image, common::RAY_MARCH);
 }
 
 /// Renders `settings` of the demo song as a screenshot (labels and legend drawn over it).
@@ -237,7 +237,7 @@ fn light_background_picture_matches_its_golden() {
         .filter(|&(x, y)| image.get_pixel(x, y)[0] < 100)
         .count();
     assert!(dark_text > 40, "no dark name on the light background");
-    common::assert_golden("points_light", &image, 0.01);
+    common::assert_golden("points_light", &image, common::RASTER_EDGES);
 }
 
 /// The diverging painter puts zero at the map's centre and the signed ends at its ends.
@@ -263,15 +263,16 @@ fn the_diverging_legend_centres_zero() {
         eframe::egui::pos2(40.0, 40.0),
         eframe::egui::vec2(300.0, 16.0),
     );
+    // As the window paints a diverging legend: laid out by annotate::legend, painted by egui.
     screenshot::paint_headless(&gpu, &target, |painter, _| {
-        legends::paint_diverging(
-            painter,
-            strip,
+        let shapes = loudscape::annotate::legend::diverging(
+            annotation::rect(strip),
             &ramp,
             (-2.0, 6.0),
             "B - A, density",
             Background::Dark,
         );
+        annotation::paint(painter, &shapes);
     });
     let image = target.read_rgba(&gpu.device, &gpu.queue).expect("read");
     let at = |value: f32| {

@@ -19,6 +19,7 @@ mod compare;
 mod format_fixtures;
 mod freq_axis;
 mod gpu_limits;
+mod layout;
 mod normalize_left_out;
 mod open_audio;
 mod pick;

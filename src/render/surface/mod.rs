@@ -146,4 +146,9 @@ impl SurfaceCounts {
     pub fn triangles(&self) -> u32 {
         self.indices_needed / 3
     }
+
+    /// The extraction fitted and found no surface (the isovalue is above every voxel).
+    pub fn found_nothing(&self) -> bool {
+        self.fits() && self.triangles() == 0
+    }
 }

@@ -32,11 +32,6 @@ impl ExtractionStatus {
     pub fn triangles(&self) -> u32 {
         self.counts.map_or(0, |c| c.triangles())
     }
-
-    /// The last extraction fitted and found no surface (the isovalue is above every voxel).
-    pub fn found_nothing(&self) -> bool {
-        self.counts.is_some_and(|c| c.fits() && c.triangles() == 0)
-    }
 }
 
 /// Identifies the extracted surface: a change re-extracts it.

@@ -33,7 +33,7 @@ impl SurfaceStatus {
         error: Option<String>,
     ) {
         self.error = error;
-        self.empty = counts.is_some_and(|c| c.fits() && c.triangles() == 0);
+        self.empty = counts.is_some_and(|c| c.found_nothing());
     }
 
     /// This frame's surface: whether one is being extracted for the Surface view, and the

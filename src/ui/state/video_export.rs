@@ -58,14 +58,7 @@ impl RunningExport {
     /// at once), a kill elsewhere.
     pub(in crate::ui) fn stop(&mut self) {
         #[cfg(unix)]
-        if let Ok(pid) = i32::try_from(self.child.id())
-            && pid > 0
-        {
-            // SAFETY: kill(2) on our own child's pid; no memory is shared.
-            unsafe {
-                libc::kill(pid, libc::SIGTERM);
-            }
-        }
+        crate::files::terminate(&self.child);
         #[cfg(not(unix))]
         let _ = self.child.kill();
     }
