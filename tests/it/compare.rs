@@ -205,13 +205,13 @@ fn picture(what: CompareView, size: (u32, u32)) -> image::RgbaImage {
 fn golden_compare_side_by_side() {
     let image = picture(CompareView::SideBySide(ViewKind::Points), SIZE);
     assert!(common::coverage(&image) > 0.05);
-    common::assert_golden("compare_points", &image, 0.01);
+    common::assert_golden("compare_points", &image, common::RASTER_EDGES);
 }
 
 #[test]
 fn golden_compare_volumes_on_one_scale() {
     let image = picture(CompareView::SideBySide(ViewKind::Volume), SIZE);
-    common::assert_golden("compare_volume", &image, 0.01);
+    common::assert_golden("compare_volume", &image, common::RAY_MARCH);
 }
 
 #[test]
@@ -220,12 +220,12 @@ fn golden_difference_views() {
         CompareView::Difference(DifferenceMeasure::Density),
         (480, 300),
     );
-    common::assert_golden("difference_density", &density, 0.01);
+    common::assert_golden("difference_density", &density, common::RASTER_EDGES);
     let level = picture(
         CompareView::Difference(DifferenceMeasure::Level),
         (480, 300),
     );
-    common::assert_golden("difference_level", &level, 0.01);
+    common::assert_golden("difference_level", &level, common::RASTER_EDGES);
     // B is louder everywhere: the level view is warm (red over blue) wherever it is tinted.
     let (mut warm, mut cool) = (0usize, 0usize);
     for p in level.pixels() {

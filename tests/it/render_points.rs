@@ -29,7 +29,7 @@ fn demo_song_points_match_golden() {
         common::coverage(&image) > 0.05,
         "the points view is nearly empty"
     );
-    common::assert_golden("points_demo_song", &image, 0.01);
+    common::assert_golden("points_demo_song", &image, common::RASTER_EDGES);
 }
 
 /// Points uploaded in many small chunks draw exactly what one buffer draws.

@@ -90,7 +90,7 @@ fn volume_presets_match_golden_images_and_differ_from_each_other() {
         common::assert_golden(
             &format!("volume_{}", preset.name().to_lowercase()),
             &image,
-            0.01,
+            common::RAY_MARCH,
         );
         assert!(common::coverage(&image) > 0.1, "{preset:?} is nearly blank");
         images.push(image);
@@ -113,7 +113,7 @@ fn hp_tint_matches_golden_image() {
     let mut settings = volume_settings(TransferPreset::Classic);
     settings.volume.hp_tint = true;
     let tinted = render(&mut scene, &settings, false);
-    common::assert_golden("volume_hp_tint", &tinted, 0.01);
+    common::assert_golden("volume_hp_tint", &tinted, common::RAY_MARCH);
     settings.volume.hp_tint = false;
     let plain = render(&mut scene, &settings, false);
     let (share, _) = common::difference(&tinted, &plain, 24);

@@ -1,7 +1,11 @@
 //! Helpers shared by the integration tests: a device on whatever adapter exists (lavapipe on
 //! machines without a GPU), golden-image comparison with a tolerance, the demo song, running the
 //! `loudscape` binary, and the window tests' display, window and process look-ups.
+
 #![allow(dead_code)]
+
+mod golden;
+pub use golden::{RASTER_EDGES, RAY_MARCH, assert_golden};
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -240,53 +244,6 @@ pub fn processes_naming(path: &Path) -> usize {
         .filter_map(|e| std::fs::read(e.path().join("cmdline")).ok())
         .filter(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
         .count()
-}
-
-/// Compares `actual` with tests/golden/NAME.png. Differences allowed: at most `max_share` of the
-/// pixels may differ by more than 32 in some channel (rasterizers differ at edges).
-/// Run with `UPDATE_GOLDEN=1` to write the golden after looking at the actual image.
-/// On failure the actual image and a difference image are written to tests/output/.
-pub fn assert_golden(name: &str, actual: &image::RgbaImage, max_share: f64) {
-    let golden_path = repo()
-        .join("tests")
-        .join("golden")
-        .join(format!("{name}.png"));
-    if std::env::var_os("UPDATE_GOLDEN").is_some() {
-        actual.save(&golden_path).expect("write golden");
-        return;
-    }
-    let actual_path = output_dir().join(format!("{name}.actual.png"));
-    actual.save(&actual_path).expect("write actual");
-    let golden = match image::open(&golden_path) {
-        Ok(img) => img.to_rgba8(),
-        Err(e) => panic!(
-            "no golden image {} ({e}); look at {} and run with UPDATE_GOLDEN=1 to accept it",
-            golden_path.display(),
-            actual_path.display()
-        ),
-    };
-    assert_eq!(
-        golden.dimensions(),
-        actual.dimensions(),
-        "{name}: size differs"
-    );
-    let (share, mean) = difference(&golden, actual, 32);
-    if share > max_share {
-        let diff = image::RgbaImage::from_fn(actual.width(), actual.height(), |x, y| {
-            let (a, b) = (actual.get_pixel(x, y), golden.get_pixel(x, y));
-            let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
-            image::Rgba([d.saturating_mul(4), 0, 0, 255])
-        });
-        let diff_path = output_dir().join(format!("{name}.diff.png"));
-        diff.save(&diff_path).expect("write diff");
-        panic!(
-            "{name}: {:.3}% of pixels differ (allowed {:.3}%), mean difference {mean:.2}; see {} and {}",
-            share * 100.0,
-            max_share * 100.0,
-            actual_path.display(),
-            diff_path.display()
-        );
-    }
 }
 
 /// The share of pixels that are not the background, to check an image is not blank.

@@ -46,12 +46,12 @@ fn render_song_surface(method: SurfaceMethod) -> image::RgbaImage {
 fn golden_surface_marching_tets() {
     let image = render_song_surface(MT);
     assert!(common::coverage(&image) > 0.08, "the surface is missing");
-    common::assert_golden("surface_mt", &image, 0.01);
+    common::assert_golden("surface_mt", &image, common::RASTER_EDGES);
 }
 
 #[test]
 fn golden_surface_dual_contour() {
     let image = render_song_surface(DC);
     assert!(common::coverage(&image) > 0.08, "the surface is missing");
-    common::assert_golden("surface_dc", &image, 0.01);
+    common::assert_golden("surface_dc", &image, common::RASTER_EDGES);
 }
