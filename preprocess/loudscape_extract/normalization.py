@@ -9,13 +9,16 @@ that positive gain is limited by its turn-up rule:
 - ``"never"``: only turned down.
 
 The rules and their public sources are in docs/DYNAMICS.md ("Streaming normalization"); only
-what a public source documents is here.
+what a public source documents is here. The presets are read from ``normalization_presets.json``
+beside this module, the one table the app's ``src/data/normalize.rs`` is tested against.
 """
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from importlib import resources
 
 __all__ = [
     "BROADCAST",
@@ -52,20 +55,21 @@ class Service:
     ceiling_dbtp: float | None = None
 
 
-SERVICES = (
-    Service("spotify", "Spotify (normal)", -14.0, "peak", -1.0),
-    Service("spotify_loud", "Spotify (loud)", -11.0, "free"),
-    Service("spotify_quiet", "Spotify (quiet)", -19.0, "peak", -1.0),
-    Service("youtube", "YouTube", -14.0, "never"),
-    Service("aes_td1008", "AES TD1008 (track)", -16.0, "peak", -1.0),
-)
+def _load_presets(name: str = "normalization_presets.json") -> dict:
+    """The presets file's ``services`` and ``broadcast`` lists as :class:`Service` tuples."""
+    table = json.loads(resources.files(__package__).joinpath(name).read_text(encoding="utf-8"))
+    return {
+        group: tuple(Service(**entry) for entry in table[group])
+        for group in ("services", "broadcast")
+    }
 
+
+_PRESETS_FILE = _load_presets()
+#: Streaming services, in the app's order.
+SERVICES = _PRESETS_FILE["services"]
 #: Broadcast loudness standards: programmes are brought to the target both ways, the true
 #: peak kept under the standard's ceiling by a limiter (modelled as ``"free"`` turn-up).
-BROADCAST = (
-    Service("ebu_r128", "EBU R 128 (broadcast)", -23.0, "free"),
-    Service("atsc_a85", "ATSC A/85 (broadcast)", -24.0, "free"),
-)
+BROADCAST = _PRESETS_FILE["broadcast"]
 #: Every normalization preset by key (``--normalize``): the services, then broadcast.
 PRESETS = {service.key: service for service in SERVICES + BROADCAST}
 #: ``--normalize`` choices: ``none`` (the files as they are) and :data:`PRESETS`.

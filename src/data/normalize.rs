@@ -19,8 +19,10 @@ pub enum TurnUp {
 }
 
 /// A playback normalization rule: `gain = target - integrated loudness`, positive gain
-/// limited by [`TurnUp`]. Keep in sync with `preprocess/loudscape_extract/normalization.py`
-/// (sources in docs/DYNAMICS.md, "Streaming normalization").
+/// limited by [`TurnUp`]. The extractor reads the same presets from
+/// `preprocess/loudscape_extract/normalization_presets.json`; the test
+/// `presets_match_the_extractors_file` holds [`PRESETS`] equal to it (sources in
+/// docs/DYNAMICS.md, "Streaming normalization").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StreamingService {
     pub name: &'static str,
@@ -554,6 +556,59 @@ mod tests {
         // Nothing left out, nothing said.
         let all = normalized(&cloud(), &PRESETS[0]).unwrap();
         assert!(left_out_lines(&all).is_empty() && left_out_note(&all).is_none());
+    }
+
+    #[test]
+    fn presets_match_the_extractors_file() {
+        let file: serde_json::Value = serde_json::from_str(include_str!(
+            "../../preprocess/loudscape_extract/normalization_presets.json"
+        ))
+        .expect("normalization_presets.json is JSON");
+        let group = |name: &str| file[name].as_array().cloned().unwrap_or_default();
+        let entries: Vec<serde_json::Value> = group("services")
+            .into_iter()
+            .chain(group("broadcast"))
+            .collect();
+        let from_file: Vec<(String, String, f64, String)> = entries
+            .iter()
+            .map(|e| {
+                let turn_up = match (e["turn_up"].as_str(), e["ceiling_dbtp"].as_f64()) {
+                    (Some("peak"), Some(ceiling)) => format!("{:?}", TurnUp::PeakCeiling(ceiling)),
+                    (Some("free"), None) => format!("{:?}", TurnUp::Free),
+                    (Some("never"), None) => format!("{:?}", TurnUp::Never),
+                    other => format!("unknown turn-up {other:?}"),
+                };
+                let text = |key: &str| e[key].as_str().unwrap_or("").to_string();
+                (
+                    text("key"),
+                    text("name"),
+                    e["target_lufs"].as_f64().unwrap_or(f64::NAN),
+                    turn_up,
+                )
+            })
+            .collect();
+        let in_rust: Vec<(String, String, f64, String)> = PRESETS
+            .iter()
+            .map(|p| {
+                let s = p.service;
+                (
+                    p.key.into(),
+                    s.name.into(),
+                    s.target_lufs,
+                    format!("{:?}", s.turn_up),
+                )
+            })
+            .collect();
+        assert_eq!(in_rust, from_file);
+        let services: Vec<String> = group("services")
+            .iter()
+            .map(|e| e["name"].as_str().unwrap_or("").to_string())
+            .collect();
+        let names: Vec<String> = STREAMING_SERVICES.iter().map(|s| s.name.into()).collect();
+        assert_eq!(
+            services, names,
+            "STREAMING_SERVICES are the file's services, in order"
+        );
     }
 
     #[test]
