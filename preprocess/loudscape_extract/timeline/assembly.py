@@ -22,11 +22,10 @@ from loudscape_extract.timeline.layout import (
     LEVEL_MAX_DBFS,
     LEVEL_MIN_DBFS,
     X_BY,
-    Y_MEASURES,
-    Z_MEASURES,
     frames_per_song_for,
     timeline_points,
 )
+from loudscape_extract.timeline.series import y_measure_of, z_measure_of
 from loudscape_extract.version import GENERATOR
 
 __all__ = ["TimelineResult", "build_timeline"]
@@ -94,10 +93,8 @@ def build_timeline(
     """
     if x_by not in X_BY:
         raise ExtractError(f"--x-by must be one of {', '.join(X_BY)}, got {x_by!r}")
-    if z_measure not in Z_MEASURES:
-        raise ExtractError(f"--z-measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
-    if y_measure not in Y_MEASURES:
-        raise ExtractError(f"--y-measure must be one of {', '.join(Y_MEASURES)}, got {y_measure!r}")
+    z_measure_of(z_measure, what="--z-measure")
+    y_measure_of(y_measure, what="--y-measure")
     check_output_path(output)
     entries, without_year, tag_failures, notes = collect_entries(
         inputs, manifest=manifest, need_year=x_by == "year"

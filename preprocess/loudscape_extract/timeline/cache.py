@@ -19,6 +19,7 @@ from loudscape_extract.notices import warnings_problem
 from loudscape_extract.paths import fsync_directory
 from loudscape_extract.timeline.frames import SongFrames
 from loudscape_extract.timeline.layout import METRIC_KEYS
+from loudscape_extract.timeline.series import SERIES
 
 __all__ = [
     "CACHE_VERSION",
@@ -65,30 +66,11 @@ def cache_key(path: str, *, n_fft: int, hop_length: int, highpass_hz: float | No
 #: The first line: this, the sha256 of everything after the line in hex, a newline.
 _MAGIC = b"loudscape-frames 2 "
 _OLD_MAGIC = b"loudscape-frames "
-_SERIES = (
-    "rms_dbfs",
-    "crest_db",
-    "loudness_a_db",
-    "hp_mean",
-    "psr_db",
-    "crest_3s_db",
-    "momentary_lufs",
-    "short_term_lufs",
-)
-#: What each series may hold: (lowest, highest, NaN allowed). Ranges are wide (a float file
-#: may be +60 dBFS, a frame of one tiny sample -900 dB); they catch garbage, not odd music.
-#: A series not listed here (a new one) gets the default: NaN or a finite |value| <= 1e4.
-_SERIES_RANGES = {
-    "rms_dbfs": (-1000.0, 70.0, False),  # non-silent frames only: always a level
-    "crest_db": (-0.01, 100.0, False),  # peak >= RMS
-    "loudness_a_db": (-1500.0, 100.0, True),
-    "hp_mean": (0.0, 1.0, True),
-    "psr_db": (-50.0, 200.0, True),  # NaN: the 3 s window is under the gate
-    "crest_3s_db": (-0.01, 200.0, True),
-    # BS.1770 loudness of the 400 ms / 3 s block around each frame; NaN where unmeasurable.
-    "momentary_lufs": (-1000.0, 100.0, True),
-    "short_term_lufs": (-1000.0, 100.0, True),
-}
+#: The series of an entry's body, in order, and what each may hold: (lowest, highest, NaN
+#: allowed), from the one table of them (:data:`series.SERIES`).
+_SERIES = tuple(series.name for series in SERIES)
+_SERIES_RANGES = {series.name: (series.low, series.high, series.nan_allowed) for series in SERIES}
+#: A series not in the table (none today) gets this: NaN or a finite |value| <= 1e4.
 _DEFAULT_RANGE = (-1e4, 1e4, True)
 #: Metrics every entry carries (the ones the timeline shows); each a finite number or null.
 _REQUIRED_METRICS = METRIC_KEYS

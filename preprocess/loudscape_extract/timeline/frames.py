@@ -8,13 +8,15 @@ import numpy as np
 
 from loudscape_extract.features import TrackFeatures
 from loudscape_extract.stream import StreamedTrack, stream_track
+from loudscape_extract.timeline.series import SERIES
 
 __all__ = ["SongFrames", "compute_song_frames", "frames_of"]
 
 
 @dataclass(frozen=True)
 class SongFrames:
-    """What the timeline keeps of one song: its non-silent frames and metrics.
+    """What the timeline keeps of one song: its non-silent frames and metrics. Its series are
+    those of :data:`series.SERIES` (a new one: a row there and a field here).
 
     Attributes
     ----------
@@ -71,23 +73,22 @@ def frames_of(features: TrackFeatures | StreamedTrack, *, warning: str = "") -> 
     ``warning`` is the decoder's note on a damaged file."""
     frames = features.frames
     keep = ~frames.silent
-    hp = frames.hp_mean[keep]
+    kept = {
+        series.name: _series(getattr(frames, series.name), keep)
+        if series.optional
+        else getattr(frames, series.name)[keep].astype(np.float32)
+        for series in SERIES
+    }
     metrics = dict(features.metrics)
+    hp = frames.hp_mean[keep]  # the metric from the series as computed, not as kept (float32)
     finite = hp[np.isfinite(hp)]
     metrics["hp_mean"] = float(finite.mean()) if finite.size else None
     return SongFrames(
-        rms_dbfs=frames.rms_dbfs[keep].astype(np.float32),
-        crest_db=frames.crest_db[keep].astype(np.float32),
-        loudness_a_db=frames.loudness_a_db[keep].astype(np.float32),
-        hp_mean=hp.astype(np.float32),
+        **kept,
         n_frames_total=int(frames.silent.shape[0]),
         metrics=metrics,
         warning=warning,
-        psr_db=frames.psr_db[keep].astype(np.float32),
-        crest_3s_db=frames.crest_3s_db[keep].astype(np.float32),
         signal=tuple(getattr(features, "signal", ())),
-        momentary_lufs=_series(frames.momentary_lufs, keep),
-        short_term_lufs=_series(frames.short_term_lufs, keep),
     )
 
 

@@ -14,6 +14,14 @@ from loudscape_extract.format import METRIC_KEYS, axis, hp_axis, scalar_axis
 from loudscape_extract.notices import track_warnings
 from loudscape_extract.timeline.frames import SongFrames
 from loudscape_extract.timeline.inputs import SongEntry
+from loudscape_extract.timeline.series import (
+    DEFAULT_Y_MEASURE,
+    DEFAULT_Z_MEASURE,
+    Y_MEASURES,
+    Z_MEASURES,
+    y_measure_of,
+    z_measure_of,
+)
 
 __all__ = [
     "CREST_PERCENTILES",
@@ -45,37 +53,6 @@ LEVEL_MAX_DBFS = 0.0
 SCALAR_FLOOR_DB = -100.0
 CREST_PERCENTILES = (1.0, 99.0)
 X_BY = ("year", "order")
-#: The z axis: PSR of the 3 s window centred on the frame (default), the 3 s crest factor, or
-#: the paper's crest factor of the STFT frame itself (46 ms at 44.1 kHz; measures waveform
-#: shape rather than compression, see docs/DYNAMICS.md).
-Z_MEASURES = ("psr", "crest-3s", "crest-frame")
-DEFAULT_Z_MEASURE = "psr"
-_Z_SERIES = {"psr": "psr_db", "crest-3s": "crest_3s_db", "crest-frame": "crest_db"}
-_Z_LABELS = {
-    "psr": "PSR (true peak - short-term loudness, 3 s)",
-    "crest-3s": "crest factor (3 s)",
-    "crest-frame": "crest factor (frame)",
-}
-#: The y axis: BS.1770 momentary loudness of the 400 ms block centred on the frame (default),
-#: short-term loudness of the 3 s window, the paper's unweighted frame RMS, or the frame's
-#: A-weighted level (docs/DYNAMICS.md, "The level axis").
-Y_MEASURES = ("momentary", "short-term", "rms", "a-weighted")
-DEFAULT_Y_MEASURE = "momentary"
-_Y_SERIES = {
-    "momentary": "momentary_lufs",
-    "short-term": "short_term_lufs",
-    "rms": "rms_dbfs",
-    "a-weighted": "loudness_a_db",
-}
-#: (label, unit) of each y measure: the axis names the measure and its reference.
-Y_LABELS = {
-    "momentary": ("momentary loudness (BS.1770, 400 ms)", "LUFS"),
-    "short-term": ("short-term loudness (BS.1770, 3 s)", "LUFS"),
-    "rms": ("RMS level (frame)", "dBFS"),
-    "a-weighted": ("A-weighted level (frame, re full-scale sine)", "dB"),
-}
-
-
 #: Default cap on a timeline's points (``--max-points``): see :func:`frames_per_song_for`.
 DEFAULT_MAX_POINTS = 4_000_000
 #: No song is drawn with fewer frames than this because of the cap.
@@ -136,7 +113,7 @@ class SampledSong:
 
     def level(self, y_measure: str) -> np.ndarray:
         """The drawn frames' y measure (one of :data:`Y_MEASURES`), NaN where unknown."""
-        values = getattr(self, _Y_SERIES[y_measure])
+        values = getattr(self, y_measure_of(y_measure).series)
         if values.shape != self.rms_dbfs.shape:  # a series the song was computed without
             return np.full(self.rms_dbfs.shape, np.nan, np.float32)
         return values
@@ -144,10 +121,9 @@ class SampledSong:
 
 def sample_song(song: SongFrames, *, frames_per_song: int, z_measure: str) -> SampledSong:
     """The frames :func:`timeline_points` draws of ``song`` (:func:`sample_frames`)."""
-    if z_measure not in Z_MEASURES:
-        raise ExtractError(f"z_measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
+    series = z_measure_of(z_measure).series
     index = sample_frames(song.rms_dbfs.shape[0], frames_per_song)
-    measure = getattr(song, _Z_SERIES[z_measure])
+    measure = getattr(song, series)
     finite = measure[np.isfinite(measure)].astype(np.float64)
     return SampledSong(
         rms_dbfs=song.rms_dbfs[index],
@@ -261,8 +237,11 @@ def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
 
 def y_axis(y_measure: str) -> dict:
     """The y axis object of ``y_measure``: its label and unit, -60 .. 0, and ``measure``."""
-    label, unit = Y_LABELS[y_measure]
-    return {**axis(label, unit, LEVEL_MIN_DBFS, LEVEL_MAX_DBFS), "measure": y_measure}
+    measure = y_measure_of(y_measure)
+    return {
+        **axis(measure.label, measure.unit, LEVEL_MIN_DBFS, LEVEL_MAX_DBFS),
+        "measure": y_measure,
+    }
 
 
 def _scalar_range(levels: Sequence[np.ndarray]) -> tuple[float, float]:
@@ -306,10 +285,8 @@ def timeline_points(
     """
     if x_by not in X_BY:
         raise ExtractError(f"x_by must be one of {', '.join(X_BY)}, got {x_by!r}")
-    if z_measure not in Z_MEASURES:
-        raise ExtractError(f"z_measure must be one of {', '.join(Z_MEASURES)}, got {z_measure!r}")
-    if y_measure not in Y_MEASURES:
-        raise ExtractError(f"y_measure must be one of {', '.join(Y_MEASURES)}, got {y_measure!r}")
+    z_axis_of = z_measure_of(z_measure)
+    y_measure_of(y_measure)  # refused here, before any work
     if x_by == "year" and any(e.year is None for e in entries):
         raise ExtractError("x_by='year' needs a year for every song")
     entries = sort_entries(entries)
@@ -371,8 +348,8 @@ def timeline_points(
         "y": y_axis(y_measure),
         "z": {
             **axis(
-                _Z_LABELS[z_measure],
-                "dB",
+                z_axis_of.label,
+                z_axis_of.unit,
                 # A constant z: every z is 0, the axis spans half a dB either side.
                 *(round(v, 6) for v in spread_range(crest_low, crest_high, 0.5)),
             ),
