@@ -6,6 +6,7 @@ pub mod bench;
 pub mod bench_surface;
 pub mod bench_volume;
 pub mod compare;
+pub mod compare_align;
 pub mod mesh;
 pub mod render;
 pub mod render_compare;

@@ -80,6 +80,19 @@ pub struct DrawArgs {
     /// With --view difference: density (B - A per voxel) or level (level-weighted, per column).
     #[arg(long, default_value = "density")]
     pub measure: String,
+    /// With --compare: B moved onto A's time by the offset found in their audio (the
+    /// extractor's comparison; docs/COMPARE.md "Releases"), so the same moment of the music
+    /// is at the same place.
+    #[arg(long)]
+    pub align: bool,
+    /// With --compare: B's offset against A in seconds (positive: B's music comes later),
+    /// added to the one --align finds.
+    #[arg(long, allow_hyphen_values = true)]
+    pub offset: Option<f64>,
+    /// With --compare and --align: B's levels moved by the gain that matches its loudness to
+    /// A's, so the difference shows dynamics and tonal balance, not loudness.
+    #[arg(long)]
+    pub match_loudness: bool,
     #[command(flatten)]
     pub volume: VolumeArgs,
     /// A timeline as heard after playback normalization: each song's y shifted by the gain the
@@ -310,6 +323,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let view = parse_view(&args.view)?;
     let camera = camera_from(args.camera.as_deref())?;
     args.draw.check_point_size()?;
+    super::compare_align::check(&args.draw)?;
     let method = parse_method(&args.draw.method)?;
     let iso_value = check_iso(args.draw.iso)?;
     let freq_axis = parse_freq_axis(&args.draw.freq_axis)?;
@@ -388,6 +402,7 @@ pub fn playhead_marker(cloud: &PointCloud, seconds: f64) -> anyhow::Result<Marke
 pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Option<Camera>)> {
     let camera = camera_from(args.camera.as_deref())?;
     args.draw.check_point_size()?;
+    super::compare_align::check(&args.draw)?;
     let mut settings = RenderSettings::default();
     settings.surface.method = parse_method(&args.draw.method)?;
     settings.surface.iso_value = check_iso(args.draw.iso)?;

@@ -7,7 +7,7 @@
 //! `picture::compare`.
 
 use anyhow::{Context, bail};
-use loudscape::picture::compare::{CompareView, render_compare_image};
+use loudscape::picture::compare::{CompareView, render_compare_image_noted};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::difference::DifferenceMeasure;
@@ -58,6 +58,9 @@ pub fn run(
     let what = parse_compare_view(&args.view, &args.draw.compare_as, &args.draw.measure)?;
     let cloud_a = super::args::load_cloud(&args.input)?;
     let cloud_b = super::args::load_cloud(compare)?;
+    // B on A's time (and loudness) as --align, --offset and --match-loudness ask.
+    let aligned = super::compare_align::align_b(&cloud_a, cloud_b, &args.draw)?;
+    let cloud_b = aligned.cloud;
     let mut settings = settings;
     settings.points.size_px = args
         .draw
@@ -71,7 +74,7 @@ pub fn run(
     if let Some(seconds) = args.playhead {
         settings.markers = vec![super::render::playhead_marker(&scene.a, seconds)?];
     }
-    let image = render_compare_image(
+    let image = render_compare_image_noted(
         &gpu,
         &renderer,
         &mut scene,
@@ -80,6 +83,7 @@ pub fn run(
         size,
         &settings,
         !args.draw.no_labels,
+        aligned.note.as_deref(),
     )?;
     super::render::save_png(&image, &args.output)?;
     let detail = match what {
@@ -89,6 +93,10 @@ pub fn run(
             format!("difference, {} range ±{range:.3}", measure.name())
         }
     };
-    super::wrote(&args.output, &format!("{}x{} {detail}", size.0, size.1));
+    let note = aligned.note.map(|n| format!(", {n}")).unwrap_or_default();
+    super::wrote(
+        &args.output,
+        &format!("{}x{} {detail}{note}", size.0, size.1),
+    );
     Ok(())
 }

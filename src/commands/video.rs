@@ -16,7 +16,7 @@ use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
 use loudscape::annotate::{Annotation, Rect, raster};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
-use loudscape::picture::compare::{CompareView, render_compare_image};
+use loudscape::picture::compare::{CompareView, render_compare_image_noted};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::markers::MarkerBox;
@@ -197,6 +197,8 @@ enum Drawn {
         scene: Box<CompareScene>,
         what: CompareView,
         labels: bool,
+        /// What B was aligned and matched by, for the legend.
+        note: Option<String>,
     },
 }
 
@@ -217,6 +219,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let progress_mode = ProgressMode::parse(&args.progress)?;
     let base_camera = camera_from(args.camera_at.as_deref())?;
     args.draw.check_point_size()?;
+    super::compare_align::check(&args.draw)?;
     let view_name = args.view.to_ascii_lowercase();
     let compare_view = match &args.draw.compare {
         Some(_) => Some(super::render_compare::parse_compare_view(
@@ -315,7 +318,12 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let renderer = Renderer::new(&gpu.device);
     let mut drawn = match (&args.draw.compare, compare_view) {
         (Some(compare), Some(what)) => {
-            let cloud_b = load_cloud(compare)?;
+            // B on A's time (and loudness): the playhead at A's moment is B's same moment.
+            let aligned = super::compare_align::align_b(&cloud, load_cloud(compare)?, &args.draw)?;
+            if let Some(note) = &aligned.note {
+                eprintln!("compare: {note}");
+            }
+            let cloud_b = aligned.cloud;
             settings.points.size_px = args.draw.point_size.unwrap_or_else(|| {
                 PointStyle::size_for(cloud.points.len().max(cloud_b.points.len()))
             });
@@ -325,6 +333,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
                 scene: Box::new(scene),
                 what,
                 labels: !args.draw.no_labels,
+                note: aligned.note,
             }
         }
         _ => {
@@ -504,6 +513,7 @@ fn render_video_frame(
             scene,
             what,
             labels,
+            note,
         } => {
             let x = loudscape::playback::time_to_x(&scene.a.meta.axes.x, plan.start_s + elapsed);
             settings.markers = vec![MarkerBox::playhead(x)];
@@ -531,7 +541,7 @@ fn render_video_frame(
                     Some(motion.camera(base, elapsed, head_x))
                 }
             };
-            render_compare_image(
+            render_compare_image_noted(
                 gpu,
                 renderer,
                 scene,
@@ -540,6 +550,7 @@ fn render_video_frame(
                 (w, h),
                 &settings,
                 *labels,
+                note.as_deref(),
             )
         }
     }

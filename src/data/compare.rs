@@ -183,6 +183,27 @@ pub fn aligned_in_time(b: &PointCloud, offset_s: f64) -> PointCloud {
     aligned
 }
 
+/// B's cloud with its levels moved by `gain_db` (the matching gain that brings B to A's
+/// loudness): its y and scalar axes, where they are levels in dB, shifted by the gain, so
+/// after [`on_union_axes`] what differs is dynamics and spectral balance, not loudness (the
+/// difference view's "matched" reading; docs/COMPARE.md). Only the axis ends move; the level
+/// ticks, which name B's own levels, are dropped.
+pub fn matched_in_level(b: &PointCloud, gain_db: f64) -> PointCloud {
+    let mut matched = b.clone();
+    if gain_db == 0.0 {
+        return matched;
+    }
+    let axes = &mut matched.meta.axes;
+    for axis in [&mut axes.y, &mut axes.scalar] {
+        if axis.unit == "dB" && axis.scale == AxisScale::Linear {
+            axis.min += gain_db;
+            axis.max += gain_db;
+            axis.ticks = None;
+        }
+    }
+    matched
+}
+
 /// The legend's words for B's alignment and matching: "B aligned +0.731 s, -3.8 dB to match
 /// A", the parts that apply ("B aligned +0.731 s"), or None when neither was done.
 pub fn aligned_words(offset_s: Option<f64>, gain_db: Option<f64>) -> Option<String> {
@@ -294,6 +315,39 @@ mod tests {
         assert_eq!(
             aligned_in_time(&timeline, 0.5).meta.axes,
             timeline.meta.axes
+        );
+    }
+
+    #[test]
+    fn a_louder_copy_matched_by_its_gain_lies_on_a() {
+        let a = PointCloud::synthetic(
+            crate::data::synthetic::synthetic_song(5_000, 3),
+            crate::data::cloud::DataMode::Song,
+        );
+        // B: the same points, 4 dB louder (its level and loudness axes 4 dB higher).
+        let mut b = a.clone();
+        for axis in [&mut b.meta.axes.y, &mut b.meta.axes.scalar] {
+            axis.min += 4.0;
+            axis.max += 4.0;
+        }
+        let gap = |a: &PointCloud, b: &PointCloud| {
+            a.points
+                .iter()
+                .zip(&b.points)
+                .map(|(p, q)| {
+                    (p.position[1] - q.position[1])
+                        .abs()
+                        .max((p.scalar - q.scalar).abs())
+                })
+                .fold(0.0f32, f32::max)
+        };
+        let (a_plain, b_plain) = on_union_axes(&a, &b).unwrap();
+        assert!(gap(&a_plain, &b_plain) > 0.05, "B louder, higher up");
+        let (a_moved, b_moved) = on_union_axes(&a, &matched_in_level(&b, -4.0)).unwrap();
+        assert!(
+            gap(&a_moved, &b_moved) < 1e-5,
+            "matched: {}",
+            gap(&a_moved, &b_moved)
         );
     }
 

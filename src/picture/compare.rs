@@ -153,6 +153,30 @@ pub fn render_compare_image(
     base: &RenderSettings,
     labels_on: bool,
 ) -> anyhow::Result<image::RgbaImage> {
+    render_compare_image_noted(
+        gpu, renderer, scene, what, camera, size, base, labels_on, None,
+    )
+}
+
+/// As [`render_compare_image`], B's title saying what B was aligned and matched by (`note`:
+/// "B aligned +0.731 s, -3.8 dB to match A", `data::compare::aligned_words`).
+#[allow(clippy::too_many_arguments)]
+pub fn render_compare_image_noted(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    scene: &mut CompareScene,
+    what: CompareView,
+    camera: Option<Camera>,
+    size: (u32, u32),
+    base: &RenderSettings,
+    labels_on: bool,
+    note: Option<&str>,
+) -> anyhow::Result<image::RgbaImage> {
+    // The note before the file names, which are elided first when the title is too long.
+    let (b_title, difference_title) = match note {
+        Some(note) => (format!("{note}: "), format!("B - A, {note}: ")),
+        None => ("B: ".to_string(), "B - A: ".to_string()),
+    };
     let needs_grids = match what {
         CompareView::SideBySide(view) => view != ViewKind::Points,
         CompareView::Difference(_) => true,
@@ -204,7 +228,7 @@ pub fn render_compare_image(
                 &frame,
                 &settings,
                 labels_on,
-                &format!("B: {name_b}"),
+                &format!("{b_title}{name_b}"),
                 None,
             )?;
             let mut image =
@@ -229,7 +253,7 @@ pub fn render_compare_image(
                 &frame,
                 &settings,
                 labels_on,
-                &format!("B - A: {name_b} against {name_a}"),
+                &format!("{difference_title}{name_b} against {name_a}"),
                 Some((measure, grids.range())),
             )
         }

@@ -16,6 +16,7 @@ mod cloud_loader;
 mod cloud_loader_malformed;
 mod colours;
 mod compare;
+mod compare_align;
 mod format_fixtures;
 mod freq_axis;
 mod gpu_limits;

@@ -1,0 +1,241 @@
+//! `render A --compare B` with `--align`, `--offset` and `--match-loudness` (issue 34): B moved
+//! onto A's time and loudness before the union axes. A song against itself differs by zero
+//! until it is offset; a real song against its copy delayed by 0.731 s and 4 dB louder is found
+//! at that offset and gain (the extractor's comparison), and its difference then shrinks to the
+//! STFT's frame-phase residue. Needs the project's extractor (.venv, `make venv`) and ffmpeg.
+
+use crate::common::{self, assert_success, repo};
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn extractor() -> PathBuf {
+    let path = repo().join(".venv/bin/loudscape-extract");
+    assert!(
+        path.is_file(),
+        "these tests run the Python extractor: install it with `make venv` ({} is missing)",
+        path.display()
+    );
+    path
+}
+
+/// Renders `a --compare b --view difference --measure level` with `extra`, the song cache in
+/// `dir/cache`; returns stderr, asserting success.
+fn difference(dir: &Path, a: &Path, b: &Path, name: &str, extra: &[&str]) -> String {
+    let out = dir.join(format!("{name}.png"));
+    let mut args: Vec<&OsStr> = vec![
+        "render".as_ref(),
+        a.as_os_str(),
+        "--compare".as_ref(),
+        b.as_os_str(),
+        "--view".as_ref(),
+        "difference".as_ref(),
+        "--measure".as_ref(),
+        "level".as_ref(),
+        "--size".as_ref(),
+        "480x300".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ];
+    args.extend(extra.iter().map(OsStr::new));
+    let output = common::loudscape_extracting(&args, &dir.join("cache"), &extractor());
+    assert_success(&output);
+    assert!(image::open(&out).is_ok(), "{} is a picture", out.display());
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// The number after `word` in `text` ("range ±0.123" -> 0.123 for "range ±").
+fn number_after(text: &str, word: &str) -> f64 {
+    let at = text
+        .find(word)
+        .unwrap_or_else(|| panic!("no '{word}' in {text}"));
+    let rest = &text[at + word.len()..];
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+'))
+        .unwrap_or(rest.len());
+    rest[..end]
+        .parse()
+        .unwrap_or_else(|_| panic!("no number after '{word}' in {text}"))
+}
+
+#[test]
+fn an_offset_moves_b_in_time_and_the_legend_says_so() {
+    let dir = common::fresh_dir("compare_offset");
+    let song = repo().join("data/demo_song.ply");
+    let same = difference(&dir, &song, &song, "same", &[]);
+    assert_eq!(number_after(&same, "range ±"), 0.0, "{same}");
+    let moved = difference(&dir, &song, &song, "moved", &["--offset", "0.5"]);
+    assert!(number_after(&moved, "range ±") > 0.01, "{moved}");
+    assert!(moved.contains("B aligned +0.500 s"), "{moved}");
+}
+
+#[test]
+fn the_flags_are_checked_before_any_work() {
+    let dir = common::fresh_dir("compare_align_flags");
+    let song = repo().join("data/demo_song.ply");
+    let out = dir.join("no.png");
+    for (extra, expected) in [
+        (&["--compare", "x", "--match-loudness"][..], "needs --align"),
+        (&["--offset", "0.5"][..], "need a second cloud"),
+        (&["--compare", "x", "--offset", "inf"][..], "--offset inf"),
+    ] {
+        let mut args: Vec<&OsStr> = vec![
+            "render".as_ref(),
+            song.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ];
+        args.extend(extra.iter().map(OsStr::new));
+        let output = common::loudscape(&args);
+        assert!(!output.status.success(), "{extra:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(expected), "{extra:?}: {stderr}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn a_delayed_louder_copy_is_aligned_and_matched_before_the_difference() {
+    let dir = common::fresh_dir("compare_align_real");
+    let a = repo().join("data/demo_song.flac");
+    let b = dir.join("delayed_louder.wav");
+    // The same music 0.731 s later and 4 dB louder (as a remaster that starts later).
+    let made = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(&a)
+        .args(["-af", "adelay=731:all=1,volume=4dB", "-c:a", "pcm_f32le"])
+        .arg(&b)
+        .output()
+        .expect("this test needs ffmpeg");
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let plain = difference(&dir, &a, &b, "plain", &[]);
+    let aligned = difference(&dir, &a, &b, "aligned", &["--align", "--match-loudness"]);
+    let offset = number_after(&aligned, "B aligned ");
+    assert!((offset - 0.731).abs() < 0.001, "{aligned}");
+    let said = &aligned[aligned.find("B aligned").unwrap_or(0)..];
+    let gain = number_after(said, "s, ");
+    assert!((gain + 4.0).abs() < 0.2, "{aligned}");
+    assert!(aligned.contains("dB to match A"), "{aligned}");
+    let (before, after) = (
+        number_after(&plain, "range ±"),
+        number_after(&aligned, "range ±"),
+    );
+    println!(
+        "level difference range: {before:.4} as the files are, {after:.4} aligned and matched"
+    );
+    assert!(after < before * 0.5, "{before} -> {after}");
+}
+
+/// `image` at half the size, each pixel the mean of four: the resolution yuv420p keeps colour
+/// at, so that what is compared is the picture, not the codec's loss (as tests/it/video.rs).
+fn half(image: &image::RgbaImage) -> image::RgbaImage {
+    image::imageops::resize(
+        image,
+        image.width() / 2,
+        image.height() / 2,
+        image::imageops::FilterType::Triangle,
+    )
+}
+
+/// The last frame of `path`'s video as RGBA (ffmpeg decodes every frame of the short video).
+fn last_frame(path: &Path, (w, h): (u32, u32)) -> image::RgbaImage {
+    let output = Command::new("ffmpeg")
+        .args(["-v", "error", "-i"])
+        .arg(path)
+        .args(["-map", "0:v:0", "-f", "rawvideo", "-pix_fmt", "rgba", "-"])
+        .output()
+        .expect("this test needs ffmpeg");
+    assert_success(&output);
+    let frame = (w * h * 4) as usize;
+    assert!(output.stdout.len() >= frame && output.stdout.len().is_multiple_of(frame));
+    let last = output.stdout[output.stdout.len() - frame..].to_vec();
+    image::RgbaImage::from_raw(w, h, last).unwrap()
+}
+
+/// `video A --compare B --offset` draws B on A's time as `render --compare --offset
+/// --playhead` does, and says the alignment.
+#[test]
+fn a_compare_video_follows_the_aligned_time() {
+    let dir = common::fresh_dir("compare_align_video");
+    let song = repo().join("data/demo_song.ply");
+    let song = song.to_str().unwrap();
+    let video = dir.join("aligned.mp4");
+    let output = common::loudscape(&[
+        "video",
+        song,
+        "--compare",
+        song,
+        "--view",
+        "compare",
+        "--offset",
+        "0.5",
+        "--size",
+        "640x360",
+        "--fps",
+        "5",
+        "--start",
+        "20",
+        "--end",
+        "20.4",
+        "--progress",
+        "none",
+        "-o",
+        video.to_str().unwrap(),
+    ]);
+    assert_success(&output);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("compare: B aligned +0.500 s"), "{stderr}");
+    let png = dir.join("aligned.png");
+    let output = common::loudscape(&[
+        "render",
+        song,
+        "--compare",
+        song,
+        "--view",
+        "compare",
+        "--offset",
+        "0.5",
+        "--size",
+        "640x360",
+        "--playhead",
+        "20.2",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_success(&output);
+    let render = image::open(&png).unwrap().to_rgba8();
+    let frame = last_frame(&video, (640, 360));
+    let (share, mean) = common::difference(&half(&frame), &half(&render), 32);
+    println!("video frame against render --offset: {share} of pixels differ (mean {mean})");
+    assert!(share < 0.002, "{share} of pixels differ (mean {mean})");
+    // Not aligned, B's half is another picture.
+    let plain = dir.join("plain.png");
+    let output = common::loudscape(&[
+        "render",
+        song,
+        "--compare",
+        song,
+        "--view",
+        "compare",
+        "--size",
+        "640x360",
+        "--playhead",
+        "20.2",
+        "-o",
+        plain.to_str().unwrap(),
+    ]);
+    assert_success(&output);
+    let plain = image::open(&plain).unwrap().to_rgba8();
+    let (share_plain, _) = common::difference(&half(&frame), &half(&plain), 32);
+    println!("video frame against render without the offset: {share_plain} of pixels differ");
+    assert!(
+        share_plain > 10.0 * share.max(0.0005),
+        "{share_plain} against {share}"
+    );
+}
