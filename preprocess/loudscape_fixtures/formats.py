@@ -1,7 +1,7 @@
 """The format fixtures: small files of both versions that readers of the format test against.
 
-    python -m loudscape_extract.format_fixtures [--out-dir tests/fixtures/format]
-    python -m loudscape_extract.format_fixtures --large --out-dir tests/output
+    python -m loudscape_fixtures.formats [--out-dir tests/fixtures/format]
+    python -m loudscape_fixtures.formats --large --out-dir tests/output
 
 writes, for each fixture ``NAME``, ``NAME.ply`` and ``NAME.expected.json`` (point count, first
 and last three records, float64 column sums, the number of ``loudscape-meta-v2`` lines and the

@@ -1,6 +1,6 @@
 """Regenerate the small Song-mode fixture the Rust reader's tests use.
 
-    python -m loudscape_extract.fixtures [--out-dir data]
+    python -m loudscape_fixtures.song [--out-dir data]
 
 writes ``fixture_song.ply`` (the real extractor run on a short synthesized signal) and
 ``fixture_song.expected.json`` (point count, first and last three records, per-column sums in
@@ -11,7 +11,7 @@ Extraction: n_fft 64, hop 64, floor 40 dB, linear frequency. ``source.path`` is 
 the wav itself is not kept.
 
 The file is written in format version 2, which the app reads (``--format-version 1`` for the
-older layout); ``loudscape_extract.format_fixtures`` writes the fixtures of both versions in
+older layout); ``loudscape_fixtures.formats`` writes the fixtures of both versions in
 tests/fixtures/format/.
 """
 

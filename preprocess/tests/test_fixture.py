@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from loudscape_extract.fixtures import FIXTURE_STEM, write_fixture
+from loudscape_fixtures.song import FIXTURE_STEM, write_fixture
 
 from test_ply import tiny_read
 

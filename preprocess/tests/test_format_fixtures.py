@@ -6,13 +6,13 @@ import os
 
 import numpy as np
 
-from loudscape_extract.format_fixtures import (
+from loudscape_extract.ply import MAX_LINE_BYTES, read_ply, read_ply_metadata
+from loudscape_fixtures.formats import (
     NON_UTF8_SKIPPED_PATH,
     NON_UTF8_SONG_PATH,
     NON_UTF8_TIMELINE_PATH,
     write_format_fixtures,
 )
-from loudscape_extract.ply import MAX_LINE_BYTES, read_ply, read_ply_metadata
 
 from test_ply import tiny_read
 

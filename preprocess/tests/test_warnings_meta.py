@@ -193,7 +193,7 @@ def test_contract_refuses_malformed_warnings(warnings, timeline, problem):
 def test_format_fixtures_with_warnings_pass_the_contract():
     import os
 
-    from loudscape_extract.format_fixtures import NON_UTF8_TIMELINE_PATH, SONG_WARNINGS
+    from loudscape_fixtures.formats import NON_UTF8_TIMELINE_PATH, SONG_WARNINGS
 
     folder = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "fixtures", "format")
     points, song = read_ply(os.path.join(folder, "song_v2_warnings.ply"))
@@ -208,7 +208,7 @@ def test_format_fixtures_with_warnings_pass_the_contract():
 def test_export_and_report_show_the_warnings_a_cloud_carries(tmp_path, capsys):
     import os
 
-    from loudscape_extract.format_fixtures import SONG_WARNINGS
+    from loudscape_fixtures.formats import SONG_WARNINGS
 
     folder = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "fixtures", "format")
     song = os.path.join(folder, "song_v2_warnings.ply")

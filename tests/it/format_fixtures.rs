@@ -1,5 +1,5 @@
 //! Format versions 1 and 2 (docs/FORMAT.md): every fixture in tests/fixtures/format/ (written by
-//! the Python extractor's `loudscape_extract.format_fixtures`) against its `.expected.json`, the
+//! the Python extractor's `loudscape_fixtures.formats`) against its `.expected.json`, the
 //! exact bytes of non-UTF-8 paths, every version-2 error case of the spec, the Rust writer's
 //! version-2 layout, and a 10,000-song timeline header (megabytes, no 64 KiB cap).
 

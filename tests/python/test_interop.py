@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 import soundfile
 
-from loudscape_extract.format_fixtures import write_format_fixtures
 from loudscape_extract.ply import read_ply
+from loudscape_fixtures.formats import write_format_fixtures
 
 ROOT = Path(__file__).resolve().parents[1].parent
 BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape"))

@@ -22,7 +22,7 @@ import soundfile
 import loudscape
 import loudscape.api as api
 from loudscape_extract import ExtractError, read_ply, write_ply
-from loudscape_extract.fixtures import SAMPLE_RATE, fixture_signal
+from loudscape_fixtures.song import SAMPLE_RATE, fixture_signal
 
 ROOT = Path(__file__).resolve().parents[2]
 SONG = ROOT / "data" / "demo_song.ply"
