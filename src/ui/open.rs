@@ -303,7 +303,8 @@ impl LoudscapeApp {
 
     /// How the recent list names `path`: its file name; a folder (opened, it is a timeline)
     /// `name/ (timeline)`, as the timeline it made is named when it is loaded from the cloud
-    /// cache; another timeline built in the window, not loaded, "timeline built here".
+    /// cache, or was named when it was open; another timeline built in the window, never
+    /// named, "timeline built here".
     fn recent_name(&self, path: &Path) -> String {
         let name = file_name(path);
         if path.is_dir() {
@@ -314,36 +315,41 @@ impl LoudscapeApp {
         }
         match &self.timeline {
             Some(loaded) if std::path::absolute(&loaded.cloud.path).is_ok_and(|p| p == path) => {
-                format!(
-                    "{} (timeline)",
-                    crate::ui::legends::timeline_name(&loaded.cloud)
-                )
+                timeline_entry_name(&loaded.cloud)
             }
-            _ => "timeline built here".to_string(),
+            _ => self
+                .open
+                .recent
+                .name(path)
+                .map_or_else(|| "timeline built here".to_string(), str::to_string),
         }
     }
 
     /// A file (song, cloud) or folder opened as `path` into `cloud`: first in the recent list.
-    /// A timeline of several songs is named by no one path: its cloud (in the cache) is kept.
-    /// A timeline built from a folder is listed once, by the folder (`recent.rs`).
+    /// A timeline of several songs is named by no one path: its cloud (in the cache) is kept,
+    /// with its name. A timeline built from a folder is listed once, by the folder
+    /// (`recent.rs`).
     pub(super) fn opened(&mut self, path: &Path, cloud: &PointCloud) {
         let kept = if path.exists() { path } else { &cloud.path };
-        let folder = built_timeline(&cloud.path)
-            .then(|| {
-                crate::ui::recent::common_folder(
-                    cloud.meta.songs.iter().filter_map(|s| s.open_path()),
-                )
-            })
-            .flatten()
+        let timeline = built_timeline(&cloud.path).then(|| {
+            let folder = crate::ui::recent::common_folder(
+                cloud.meta.songs.iter().filter_map(|s| s.open_path()),
+            )
             .filter(|f| f.is_dir());
-        if let Err(message) = self
-            .open
-            .recent
-            .add_opened(kept, &cloud.path, folder.as_deref())
-        {
+            (folder, timeline_entry_name(cloud))
+        });
+        let timeline = timeline
+            .as_ref()
+            .map(|(folder, name)| (folder.as_deref(), name.as_str()));
+        if let Err(message) = self.open.recent.add_opened(kept, &cloud.path, timeline) {
             log::warn!("{message}");
         }
     }
+}
+
+/// How Recent names a timeline built in the window: `folder/ (timeline)`.
+fn timeline_entry_name(cloud: &PointCloud) -> String {
+    format!("{} (timeline)", crate::ui::legends::timeline_name(cloud))
 }
 
 /// Whether `path` is a timeline built in the window: `timeline-<key>.ply` in the cloud cache.

@@ -4,7 +4,10 @@
 //! as a restart. The Open panel lists them; one that is no longer there is shown as missing and
 //! cannot be clicked. Scripted screenshot runs keep no list unless `$LOUDSCAPE_STATE_DIR` names
 //! one (tests). A timeline built in the window from a folder is listed once, by its folder,
-//! whether it was opened as the folder or as its cloud in the cache (a restored session).
+//! whether it was opened as the folder or as its cloud in the cache (a restored session); one
+//! listed by its cloud keeps the name it had when it was open (`folder/ (timeline)`), so it is
+//! not a cache file's name when it is not loaded. The file is a JSON list of paths, or of
+//! `{"path", "name"}` for those named so.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -21,6 +24,9 @@ pub(super) struct RecentFiles {
     pub(super) files: Vec<PathBuf>,
     /// Whether each file (or folder) was there when last looked at.
     present: Vec<bool>,
+    /// The names given to some of them (a timeline built in the window: its cloud's own file
+    /// name says nothing).
+    names: Vec<(PathBuf, String)>,
     checked: Option<Instant>,
     /// The list's file; `None`: not kept (a scripted run).
     store: Option<PathBuf>,
@@ -40,6 +46,14 @@ pub(super) fn default_store() -> Option<PathBuf> {
     Some(base.join("loudscape").join("recent.json"))
 }
 
+/// One entry of the kept list: a path, or a path with the name the list shows.
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+enum Entry {
+    Path(PathBuf),
+    Named { path: PathBuf, name: String },
+}
+
 /// `path` with `file` moved to the front (absolute), without repeats, at most
 /// [`MAX_RECENT`].
 pub(super) fn with_first(mut files: Vec<PathBuf>, file: &Path) -> Vec<PathBuf> {
@@ -54,13 +68,25 @@ impl RecentFiles {
     /// The list kept in `store` (empty when it is missing or unreadable: a list of recent
     /// files is not worth an error).
     pub(super) fn load(store: Option<PathBuf>) -> Self {
-        let files = store
+        let entries = store
             .as_ref()
             .and_then(|s| std::fs::read(s).ok())
-            .and_then(|bytes| serde_json::from_slice::<Vec<PathBuf>>(&bytes).ok())
+            .and_then(|bytes| serde_json::from_slice::<Vec<Entry>>(&bytes).ok())
             .unwrap_or_default();
+        let mut files = Vec::new();
+        let mut names = Vec::new();
+        for entry in entries {
+            match entry {
+                Entry::Path(path) => files.push(path),
+                Entry::Named { path, name } => {
+                    names.push((path.clone(), name));
+                    files.push(path);
+                }
+            }
+        }
         let mut recent = Self {
             files,
+            names,
             store,
             ..Self::default()
         };
@@ -76,7 +102,19 @@ impl RecentFiles {
         let Some(store) = &self.store else {
             return Ok(());
         };
-        let text = serde_json::to_vec_pretty(&self.files).map_err(|e| e.to_string())?;
+        self.names.retain(|(p, _)| self.files.contains(p));
+        let entries: Vec<Entry> = self
+            .files
+            .iter()
+            .map(|path| match self.name(path) {
+                Some(name) => Entry::Named {
+                    path: path.clone(),
+                    name: name.to_string(),
+                },
+                None => Entry::Path(path.clone()),
+            })
+            .collect();
+        let text = serde_json::to_vec_pretty(&entries).map_err(|e| e.to_string())?;
         let fail =
             |e: std::io::Error| format!("{}: cannot keep the recent files: {e}", store.display());
         if let Some(dir) = store.parent() {
@@ -90,26 +128,41 @@ impl RecentFiles {
         })
     }
 
-    /// Records what was opened: `opened`, which gave the cloud `cloud`. `timeline_folder`, for a
-    /// timeline built in the window (its cloud in the cache), is the folder its songs share: a
-    /// timeline is listed once, by that folder when the folder was opened or is in the list
-    /// already, else by its cloud.
+    /// The name the list gives `path`, if it was given one.
+    pub(super) fn name(&self, path: &Path) -> Option<&str> {
+        self.names
+            .iter()
+            .find(|(p, _)| p == path)
+            .map(|(_, name)| name.as_str())
+    }
+
+    /// Records what was opened: `opened`, which gave the cloud `cloud`. `timeline`, for a
+    /// timeline built in the window (its cloud in the cache), is the folder its songs share and
+    /// its name: a timeline is listed once, by that folder when the folder was opened or is in
+    /// the list already, else by its cloud, shown with that name.
     pub(super) fn add_opened(
         &mut self,
         opened: &Path,
         cloud: &Path,
-        timeline_folder: Option<&Path>,
+        timeline: Option<(Option<&Path>, &str)>,
     ) -> Result<(), String> {
-        let Some(folder) = timeline_folder else {
+        let Some((folder, name)) = timeline else {
             return self.add(opened);
         };
-        let folder = std::path::absolute(folder).unwrap_or_else(|_| folder.to_owned());
         let cloud = std::path::absolute(cloud).unwrap_or_else(|_| cloud.to_owned());
+        let Some(folder) = folder else {
+            self.names.retain(|(p, _)| p != &cloud);
+            self.names.push((cloud.clone(), name.to_string()));
+            return self.add(&cloud);
+        };
+        let folder = std::path::absolute(folder).unwrap_or_else(|_| folder.to_owned());
         let by_folder = opened.is_dir() || self.files.contains(&folder);
         if by_folder {
             self.files.retain(|f| f != &cloud);
             self.add(&folder)
         } else {
+            self.names.retain(|(p, _)| p != &cloud);
+            self.names.push((cloud.clone(), name.to_string()));
             self.add(&cloud)
         }
     }
@@ -172,19 +225,31 @@ mod tests {
         std::fs::write(&elsewhere, b"ply").unwrap();
         let song = dir.join("song.wav");
         std::fs::write(&song, b"RIFF").unwrap();
-        let mut recent = RecentFiles::load(None);
+        let store = dir.join("state").join("recent.json");
+        let mut recent = RecentFiles::load(Some(store.clone()));
         // The folder opened in the window, then its cloud restored at the next launch.
-        recent.add_opened(&folder, &built, Some(&folder)).unwrap();
+        let albums = Some((Some(folder.as_path()), "albums/ (timeline)"));
+        recent.add_opened(&folder, &built, albums).unwrap();
         recent.add_opened(&song, &song, None).unwrap();
-        recent.add_opened(&built, &built, Some(&folder)).unwrap();
+        recent.add_opened(&built, &built, albums).unwrap();
         assert_eq!(recent.files, [folder.clone(), song.clone()]);
-        // A timeline whose folder was never opened is listed by its cloud, until the folder is.
-        recent
-            .add_opened(&elsewhere, &elsewhere, Some(&other))
-            .unwrap();
+        // A timeline whose folder was never opened is listed by its cloud, with its name, also
+        // after a restart, until the folder is opened.
+        let singles = Some((Some(other.as_path()), "singles/ (timeline)"));
+        recent.add_opened(&elsewhere, &elsewhere, singles).unwrap();
         assert_eq!(recent.files[0], elsewhere);
-        recent.add_opened(&other, &elsewhere, Some(&other)).unwrap();
+        let again = RecentFiles::load(Some(store.clone()));
+        assert_eq!(again.files, recent.files);
+        assert_eq!(again.name(&elsewhere), Some("singles/ (timeline)"));
+        assert_eq!(again.name(&song), None);
+        recent.add_opened(&other, &elsewhere, singles).unwrap();
         assert_eq!(recent.files, [other.clone(), folder.clone(), song.clone()]);
+        // A list kept by an older version (paths only) still loads.
+        std::fs::write(&store, serde_json::to_vec(&[&song]).unwrap()).unwrap();
+        assert_eq!(
+            RecentFiles::load(Some(store)).files,
+            std::slice::from_ref(&song)
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
