@@ -126,13 +126,13 @@ impl LoudscapeApp {
         }
         let before = alignment.nudge_s;
         if alignment.offset_s().is_some() {
-            ui.horizontal(|ui| {
-                ui.label("nudge B");
+            ui.horizontal_wrapped(|ui| {
+                ui.label("nudge");
                 for step in NUDGE_STEPS_S {
-                    let label = format!("{:+.0} ms", step * 1000.0);
+                    let label = format!("{:+.0}", step * 1000.0);
                     if ui
                         .small_button(label)
-                        .on_hover_text("moves B's offset against A")
+                        .on_hover_text("moves B's offset against A by this many milliseconds")
                         .clicked()
                     {
                         alignment.nudge(step);

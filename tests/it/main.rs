@@ -39,6 +39,7 @@ mod volume;
 mod voxelize;
 mod window;
 mod window_compare;
+mod window_compare_align;
 mod window_compare_save;
 mod window_heard;
 mod window_compare_surface;
