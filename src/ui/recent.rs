@@ -6,8 +6,8 @@
 //! one (tests). A timeline built in the window from a folder is listed once, by its folder,
 //! whether it was opened as the folder or as its cloud in the cache (a restored session); one
 //! listed by its cloud keeps the name it had when it was open (`folder/ (timeline)`), so it is
-//! not a cache file's name when it is not loaded. The file is a JSON list of paths, or of
-//! `{"path", "name"}` for those named so.
+//! not a cache file's name when it is not loaded. `recent.json` stays a JSON list of paths;
+//! the names are in `recent-names.json` beside it (pairs of path and name).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -46,12 +46,24 @@ pub(super) fn default_store() -> Option<PathBuf> {
     Some(base.join("loudscape").join("recent.json"))
 }
 
-/// One entry of the kept list: a path, or a path with the name the list shows.
-#[derive(serde::Serialize, serde::Deserialize)]
-#[serde(untagged)]
-enum Entry {
-    Path(PathBuf),
-    Named { path: PathBuf, name: String },
+/// Where the names of `store`'s entries are kept: `recent-names.json` beside it.
+fn names_store(store: &Path) -> PathBuf {
+    store.with_file_name("recent-names.json")
+}
+
+/// Writes `value` as JSON to `path`: beside it, then renamed (never half a file).
+fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), String> {
+    let fail = |e: std::io::Error| format!("{}: cannot keep the recent files: {e}", path.display());
+    let text = serde_json::to_vec_pretty(value).map_err(|e| e.to_string())?;
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(fail)?;
+    }
+    let temporary = path.with_extension(format!("json.{}.tmp", std::process::id()));
+    std::fs::write(&temporary, text).map_err(fail)?;
+    std::fs::rename(&temporary, path).map_err(|e| {
+        let _ = std::fs::remove_file(&temporary);
+        fail(e)
+    })
 }
 
 /// `path` with `file` moved to the front (absolute), without repeats, at most
@@ -68,22 +80,17 @@ impl RecentFiles {
     /// The list kept in `store` (empty when it is missing or unreadable: a list of recent
     /// files is not worth an error).
     pub(super) fn load(store: Option<PathBuf>) -> Self {
-        let entries = store
-            .as_ref()
-            .and_then(|s| std::fs::read(s).ok())
-            .and_then(|bytes| serde_json::from_slice::<Vec<Entry>>(&bytes).ok())
+        let read = |path: &Path| std::fs::read(path).ok();
+        let files = store
+            .as_deref()
+            .and_then(read)
+            .and_then(|bytes| serde_json::from_slice::<Vec<PathBuf>>(&bytes).ok())
             .unwrap_or_default();
-        let mut files = Vec::new();
-        let mut names = Vec::new();
-        for entry in entries {
-            match entry {
-                Entry::Path(path) => files.push(path),
-                Entry::Named { path, name } => {
-                    names.push((path.clone(), name));
-                    files.push(path);
-                }
-            }
-        }
+        let names = store
+            .as_deref()
+            .and_then(|s| read(&names_store(s)))
+            .and_then(|bytes| serde_json::from_slice::<Vec<(PathBuf, String)>>(&bytes).ok())
+            .unwrap_or_default();
         let mut recent = Self {
             files,
             names,
@@ -103,29 +110,8 @@ impl RecentFiles {
             return Ok(());
         };
         self.names.retain(|(p, _)| self.files.contains(p));
-        let entries: Vec<Entry> = self
-            .files
-            .iter()
-            .map(|path| match self.name(path) {
-                Some(name) => Entry::Named {
-                    path: path.clone(),
-                    name: name.to_string(),
-                },
-                None => Entry::Path(path.clone()),
-            })
-            .collect();
-        let text = serde_json::to_vec_pretty(&entries).map_err(|e| e.to_string())?;
-        let fail =
-            |e: std::io::Error| format!("{}: cannot keep the recent files: {e}", store.display());
-        if let Some(dir) = store.parent() {
-            std::fs::create_dir_all(dir).map_err(fail)?;
-        }
-        let temporary = store.with_extension(format!("json.{}.tmp", std::process::id()));
-        std::fs::write(&temporary, text).map_err(fail)?;
-        std::fs::rename(&temporary, store).map_err(|e| {
-            let _ = std::fs::remove_file(&temporary);
-            fail(e)
-        })
+        write_json(&names_store(store), &self.names)?;
+        write_json(store, &self.files)
     }
 
     /// The name the list gives `path`, if it was given one.
@@ -244,12 +230,9 @@ mod tests {
         assert_eq!(again.name(&song), None);
         recent.add_opened(&other, &elsewhere, singles).unwrap();
         assert_eq!(recent.files, [other.clone(), folder.clone(), song.clone()]);
-        // A list kept by an older version (paths only) still loads.
-        std::fs::write(&store, serde_json::to_vec(&[&song]).unwrap()).unwrap();
-        assert_eq!(
-            RecentFiles::load(Some(store)).files,
-            std::slice::from_ref(&song)
-        );
+        // The list itself stays a list of paths (for other tools, and older versions).
+        let kept: Vec<PathBuf> = serde_json::from_slice(&std::fs::read(&store).unwrap()).unwrap();
+        assert_eq!(kept, recent.files);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
