@@ -23,6 +23,7 @@ use crate::render::grid::voxelize::{
 };
 use crate::render::grid::voxelize_cpu::grid_box;
 use crate::render::scene::{Renderer, SceneData};
+use crate::render::surface::driver::wait_polling;
 
 #[derive(Debug, Error)]
 pub enum CompareBuildError {
@@ -30,6 +31,8 @@ pub enum CompareBuildError {
     Voxelize { file: String, source: VoxelizeError },
     #[error(transparent)]
     Difference(#[from] DifferenceError),
+    #[error("waiting for the compare grids: {0}")]
+    Wait(String),
 }
 
 /// The difference of the two grids, ready to draw.
@@ -137,6 +140,7 @@ impl CompareScene {
         let passes = GridPasses {
             voxelize: &renderer.voxelize,
             difference: &renderer.difference,
+            poll_waits: false,
         };
         let built = build_grids(device, queue, &passes, &self.a, &self.b, settings, measure)?;
         self.install_grids(device, renderer, built);
@@ -224,10 +228,13 @@ fn share(grid: &VoxelGrid) -> VoxelGrid {
     }
 }
 
-/// The passes a grid build runs: the renderer's, or a thread's own ([`GridPasses::own`]).
+/// The passes a grid build runs: the renderer's, or a thread's own ([`OwnGridPasses`]).
 pub struct GridPasses<'p> {
     pub voxelize: &'p VoxelizePass,
     pub difference: &'p DifferencePass,
+    /// Wait for the GPU by polling (a thread beside the window: a blocking wait holds the
+    /// device, and every frame's submission waits behind it); otherwise by blocking.
+    pub poll_waits: bool,
 }
 
 /// Passes built for one thread (their pipelines are compiled there, off the window's thread).
@@ -247,10 +254,12 @@ impl OwnGridPasses {
         }
     }
 
+    /// Its passes, waiting by polling.
     pub fn passes(&self) -> GridPasses<'_> {
         GridPasses {
             voxelize: &self.voxelize,
             difference: &self.difference,
+            poll_waits: true,
         }
     }
 }
@@ -291,25 +300,40 @@ pub fn build_grids(
 ) -> Result<BuiltGrids, CompareBuildError> {
     let resolution = settings.resolution_for(a.meta.mode);
     let shared_box = shared_box(a, b);
-    let voxelize = |cloud: &PointCloud| {
-        passes
+    // Waits for the GPU's work before each read-back, by polling where asked (the read then
+    // finds it done instead of blocking the device for all of it).
+    let wait = || -> Result<(), CompareBuildError> {
+        if passes.poll_waits {
+            wait_polling(device, queue).map_err(|e| CompareBuildError::Wait(e.to_string()))?;
+        }
+        Ok(())
+    };
+    let voxelize = |cloud: &PointCloud| -> Result<(VoxelGrid, VoxelStats), CompareBuildError> {
+        let failed = |source| CompareBuildError::Voxelize {
+            file: cloud.path.display().to_string(),
+            source,
+        };
+        let request = VoxelizeRequest::new(&cloud.points, resolution, settings.smoothing_sigma)
+            .in_box(Some(shared_box));
+        let job = passes.voxelize.prepare(device, &request).map_err(failed)?;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("compare::voxelize"),
+        });
+        passes.voxelize.encode(&mut encoder, &job, None);
+        queue.submit([encoder.finish()]);
+        wait()?;
+        let stats = passes
             .voxelize
-            .voxelize(
-                device,
-                queue,
-                &VoxelizeRequest::new(&cloud.points, resolution, settings.smoothing_sigma)
-                    .in_box(Some(shared_box)),
-            )
-            .map_err(|source| CompareBuildError::Voxelize {
-                file: cloud.path.display().to_string(),
-                source,
-            })
+            .read_stats(device, queue, &job)
+            .map_err(failed)?;
+        Ok((VoxelizePass::finish(job), stats))
     };
     let (grid_a, stats_a) = voxelize(a)?;
     let (grid_b, stats_b) = voxelize(b)?;
     let grids = passes
         .difference
         .build(device, queue, (&grid_a, &stats_a), (&grid_b, &stats_b))?;
+    wait()?;
     let difference_cpu = grids
         .read_difference(device, queue)
         .map_err(DifferenceError::from)?;

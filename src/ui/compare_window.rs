@@ -166,14 +166,20 @@ impl LoudscapeApp {
             self.motion.request_fit();
         }
         // Grids built on a thread arrive here; the window keeps drawing meanwhile.
-        if let Some((built, frames)) = state.poll_grid_build() {
+        if let Some((built, frames, took)) = state.poll_grid_build() {
             let dims = built.grids.dims;
+            let installing = std::time::Instant::now();
             CompareResources::install_grids(render_state, built);
             state.difference = None;
-            // A log line, as loads are told: tests read it.
+            // A log line, as loads are told: tests read it (the frame count ends it).
             eprintln!(
-                "compare: grids built ({}x{}x{}) while the window drew {frames} frames",
-                dims.x, dims.y, dims.z
+                "compare: grids built ({}x{}x{}) in {:.2} s, installed in {:.0} ms, while the \
+                 window drew {frames} frames",
+                dims.x,
+                dims.y,
+                dims.z,
+                took.as_secs_f64(),
+                installing.elapsed().as_secs_f64() * 1000.0
             );
         }
         if state.grid_build.is_none() && self.busy.as_deref() == Some(GRIDS_BUSY) {

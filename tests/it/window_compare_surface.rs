@@ -117,7 +117,10 @@ fn first_compare_surface(a: &Path, b: &Path, press: &[&str], name: &str) -> ((u3
     let lines = lines_of(&mut child);
     let mut seen = Vec::new();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        wait_for_window(&mut child).expect("no window");
+        if wait_for_window(&mut child).is_none() {
+            let said: Vec<String> = lines.try_iter().collect();
+            panic!("no window: {said:#?}");
+        }
         let built = line_starting(
             &lines,
             "compare: grids built",

@@ -183,7 +183,7 @@ fn map_for_writing(
 
 /// Waits for the work submitted so far by polling the device without blocking it (see
 /// [`map_polling`]).
-fn wait_polling(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), SurfaceError> {
+pub(crate) fn wait_polling(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), SurfaceError> {
     use std::sync::Arc;
     use std::sync::atomic::{AtomicBool, Ordering};
     let done = Arc::new(AtomicBool::new(false));

@@ -82,6 +82,7 @@ pub(in crate::ui) struct GridBuild {
     pub(in crate::ui) voxels: VoxelSettings,
     pub(in crate::ui) receiver: Receiver<Result<BuiltGrids, String>>,
     pub(in crate::ui) frames: u32,
+    pub(in crate::ui) started: std::time::Instant,
 }
 
 /// What a frame does about the compare's grids ([`CompareState::grid_step`]).
@@ -252,6 +253,7 @@ impl CompareState {
             voxels,
             receiver,
             frames: 0,
+            started: std::time::Instant::now(),
         });
     }
 
@@ -260,10 +262,13 @@ impl CompareState {
         self.grid_build.is_some()
     }
 
-    /// The build's answer once it came, with the frames drawn while it ran; a failure (or a
+    /// The build's answer once it came, with the frames drawn while it ran and how long it
+    /// took; a failure (or a
     /// thread that ended without answering) is kept as the compare's error and not tried again
     /// for the same settings.
-    pub(in crate::ui) fn poll_grid_build(&mut self) -> Option<(BuiltGrids, u32)> {
+    pub(in crate::ui) fn poll_grid_build(
+        &mut self,
+    ) -> Option<(BuiltGrids, u32, std::time::Duration)> {
         let build = self.grid_build.as_ref()?;
         let answer = match build.receiver.try_recv() {
             Ok(answer) => answer,
@@ -272,7 +277,7 @@ impl CompareState {
         };
         let build = self.grid_build.take()?;
         match answer {
-            Ok(built) => Some((built, build.frames)),
+            Ok(built) => Some((built, build.frames, build.started.elapsed())),
             Err(message) => {
                 self.grids_failed = Some(build.voxels);
                 self.error = Some(message);
