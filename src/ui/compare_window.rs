@@ -314,6 +314,8 @@ impl LoudscapeApp {
         }
         if crate::ui::shortcuts::pressed(ctx, crate::ui::shortcuts::Action::SwapAb) {
             self.listen(state.listening.other());
+            // The panel shows the side now heard (it was drawn before the key was read).
+            ctx.request_repaint();
         }
     }
 }
