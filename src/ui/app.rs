@@ -354,7 +354,7 @@ impl eframe::App for LoudscapeApp {
             self.save_screenshot(frame);
         }
         self.remember_audio_choice();
-        self.ask_to_save(&ctx);
+        self.ask_to_save(&ctx, frame);
         if self.step_iso_sweep(frame) {
             self.handle_screenshot(&ctx);
         } else {

@@ -101,8 +101,12 @@ impl LoudscapeApp {
     /// Asks for a frame once [`AUTO_SAVE`] has passed when what is remembered changed since
     /// eframe last saved it (eframe saves only in a frame), so a window destroyed from outside
     /// loses at most that much.
-    pub(super) fn ask_to_save(&mut self, ctx: &eframe::egui::Context) {
-        if self.persist && self.saved.as_ref() != Some(&self.remembered()) {
+    pub(super) fn ask_to_save(&mut self, ctx: &eframe::egui::Context, frame: &eframe::Frame) {
+        // Without storage eframe never saves: nothing to come back for.
+        if self.persist
+            && frame.storage().is_some()
+            && self.saved.as_ref() != Some(&self.remembered())
+        {
             ctx.request_repaint_after(AUTO_SAVE + Duration::from_millis(100));
         }
     }
