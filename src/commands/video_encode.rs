@@ -336,6 +336,7 @@ fn partial_suffix() -> String {
 }
 
 /// The PID in the name of a temporary video file (`….loudscape-PID.partial.mp4`), if it is one.
+#[cfg_attr(not(unix), allow(dead_code))]
 pub fn partial_owner(name: &OsStr) -> Option<u32> {
     let name = name.as_encoded_bytes();
     let rest = name.strip_suffix(PARTIAL_SUFFIX.as_bytes())?;
@@ -368,6 +369,7 @@ fn process_lives(pid: u32) -> bool {
 /// up), and `NAME.partial.mp4`, the temporary of `output` that versions without the PID wrote.
 /// Best effort: a file that cannot be removed stays. Returns the names removed.
 pub fn remove_stale_temporaries(output: &Path) -> Vec<PathBuf> {
+    #[cfg_attr(not(unix), allow(unused_mut))]
     let mut removed = Vec::new();
     #[cfg(unix)]
     {

@@ -26,6 +26,8 @@ mod open_audio;
 mod pick;
 mod playback;
 mod reliability_cache;
+// Its stand-in extractors are shell scripts, its locks and PIDs are Unix's.
+#[cfg(unix)]
 mod reliability_cache_shared;
 mod reliability_loader;
 mod render_points;
@@ -41,13 +43,13 @@ mod window;
 mod window_compare;
 mod window_compare_align;
 mod window_compare_save;
-mod window_heard;
 mod window_compare_surface;
+mod window_heard;
 mod window_messages;
 mod window_open_audio;
 mod window_open_music;
-mod window_responsive;
 mod window_persist;
+mod window_responsive;
 mod window_save_safety;
 mod window_stream;
 mod window_strip;
