@@ -5,7 +5,6 @@
 //! (`extract::align::compare_audio`, docs/COMPARE.md "Releases"); `--offset` alone needs no
 //! audio, and with `--align` it is added to the offset found (a nudge).
 
-use anyhow::bail;
 use loudscape::data::cloud::PointCloud;
 use loudscape::data::compare::{aligned_in_time, aligned_words, matched_in_level};
 use loudscape::extract::align::compare_audio;
@@ -18,24 +17,6 @@ pub struct AlignedB {
     pub cloud: PointCloud,
     /// "B aligned +0.731 s, -3.8 dB to match A"; None when B is drawn as it is.
     pub note: Option<String>,
-}
-
-/// Checks the flags before any work: `--match-loudness` needs the comparison (`--align`), and
-/// none of them means anything without `--compare`; an offset is a finite number of seconds.
-pub fn check(draw: &DrawArgs) -> anyhow::Result<()> {
-    let asked = draw.align || draw.offset.is_some() || draw.match_loudness;
-    if asked && draw.compare.is_none() {
-        bail!("--align, --offset and --match-loudness need a second cloud: --compare B");
-    }
-    if draw.match_loudness && !draw.align {
-        bail!("--match-loudness needs --align (the matching gain comes from comparing the audio)");
-    }
-    if let Some(offset) = draw.offset
-        && (!offset.is_finite() || offset.abs() > 3600.0)
-    {
-        bail!("--offset {offset} is not a number of seconds between -3600 and 3600");
-    }
-    Ok(())
 }
 
 /// B moved as `draw` asks (see the module's words); `a` and `b` are the loaded clouds.

@@ -103,6 +103,27 @@ pub struct DrawArgs {
 }
 
 impl DrawArgs {
+    /// Checks the flags before any work: `--match-loudness` needs the comparison (`--align`), and
+    /// none of them means anything without `--compare`; an offset is a finite number of seconds.
+    pub fn check_alignment(&self) -> anyhow::Result<()> {
+        let draw = self;
+        let asked = draw.align || draw.offset.is_some() || draw.match_loudness;
+        if asked && draw.compare.is_none() {
+            bail!("--align, --offset and --match-loudness need a second cloud: --compare B");
+        }
+        if draw.match_loudness && !draw.align {
+            bail!(
+                "--match-loudness needs --align (the matching gain comes from comparing the audio)"
+            );
+        }
+        if let Some(offset) = draw.offset
+            && (!offset.is_finite() || offset.abs() > 3600.0)
+        {
+            bail!("--offset {offset} is not a number of seconds between -3600 and 3600");
+        }
+        Ok(())
+    }
+
     /// Refuses a `--point-size` outside 0.5 to 64 pixels.
     pub fn check_point_size(&self) -> anyhow::Result<()> {
         if let Some(size) = self.point_size
@@ -323,7 +344,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let view = parse_view(&args.view)?;
     let camera = camera_from(args.camera.as_deref())?;
     args.draw.check_point_size()?;
-    super::compare_align::check(&args.draw)?;
+    args.draw.check_alignment()?;
     let method = parse_method(&args.draw.method)?;
     let iso_value = check_iso(args.draw.iso)?;
     let freq_axis = parse_freq_axis(&args.draw.freq_axis)?;
@@ -402,7 +423,7 @@ pub fn playhead_marker(cloud: &PointCloud, seconds: f64) -> anyhow::Result<Marke
 pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Option<Camera>)> {
     let camera = camera_from(args.camera.as_deref())?;
     args.draw.check_point_size()?;
-    super::compare_align::check(&args.draw)?;
+    args.draw.check_alignment()?;
     let mut settings = RenderSettings::default();
     settings.surface.method = parse_method(&args.draw.method)?;
     settings.surface.iso_value = check_iso(args.draw.iso)?;

@@ -219,7 +219,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let progress_mode = ProgressMode::parse(&args.progress)?;
     let base_camera = camera_from(args.camera_at.as_deref())?;
     args.draw.check_point_size()?;
-    super::compare_align::check(&args.draw)?;
+    args.draw.check_alignment()?;
     let view_name = args.view.to_ascii_lowercase();
     let compare_view = match &args.draw.compare {
         Some(_) => Some(super::render_compare::parse_compare_view(

@@ -13,11 +13,8 @@ use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::state::compare_window::CompareLayout;
 use crate::ui::state::{LoudscapeApp, Slot};
-use crate::ui::view_3d::busy_badge;
+use crate::ui::view_3d::{GAP, busy_badge};
 use crate::view::frame_view::FrameView;
-
-/// Points between the two halves of the side-by-side view.
-pub(super) const GAP: f32 = 4.0;
 
 impl LoudscapeApp {
     /// Draws the compare into `rect` when it is shown (then the normal view is not drawn) and

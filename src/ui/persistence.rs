@@ -9,45 +9,12 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use crate::render::scene::ViewKind;
 use crate::ui::state::{LoudscapeApp, Slot};
-use crate::view::camera::Camera;
 
 /// How often eframe saves what is remembered (when it changed; its default is 30 s).
 pub(super) const AUTO_SAVE: Duration = Duration::from_secs(1);
 
-/// What the app remembers between runs.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
-pub struct Remembered {
-    pub files: Vec<PathBuf>,
-    pub view: Option<ViewKind>,
-    pub camera: Option<Camera>,
-    pub iso_value: Option<f32>,
-    pub show_box: Option<bool>,
-    /// Transfer function preset name (Classic, Ember, Glacial) and the volume's hp tint.
-    #[serde(default)]
-    pub transfer: Option<String>,
-    #[serde(default)]
-    pub hp_tint: Option<bool>,
-    /// Surface method short name (mt, dc).
-    #[serde(default)]
-    pub surface_method: Option<String>,
-    /// Audio picked by hand for a cloud whose recorded source moved: cloud path -> audio path.
-    pub audio_for: Vec<(PathBuf, PathBuf)>,
-    /// Colour maps and background (`render::colormap::Colours`).
-    #[serde(default)]
-    pub colours: Option<crate::render::colormap::Colours>,
-    /// The slot shown: "song" or "timeline" (the camera is its).
-    #[serde(default)]
-    pub active: Option<String>,
-    /// B of the A/B compare (absolute), reopened with A.
-    #[serde(default)]
-    pub compare: Option<PathBuf>,
-    /// The "level as heard" preset of Timeline mode (`normalize::PRESETS` key).
-    #[serde(default)]
-    pub heard: Option<String>,
-}
+pub use crate::ui::state::remembered::Remembered;
 
 /// The name a slot is remembered by.
 fn slot_name(slot: Slot) -> &'static str {

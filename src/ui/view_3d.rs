@@ -12,13 +12,15 @@ use eframe::egui::{self, Color32};
 use crate::render::scene::ViewKind;
 use crate::ui::app::last_frame_ms;
 use crate::ui::bridge::{ViewCallback, paint_callback};
-use crate::ui::compare_view::GAP;
 use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::shortcuts::{self, Action};
 use crate::ui::state::view_motion::{CameraInput, Drag, FitBox};
 use crate::ui::state::{LoudscapeApp, Slot};
 use crate::view::frame_view::FrameView;
+
+/// Points between the two halves of the side-by-side view.
+pub(super) const GAP: f32 = 4.0;
 
 impl LoudscapeApp {
     /// The 3D view: the central panel's whole area.

@@ -8,7 +8,23 @@
 use std::sync::mpsc::{Receiver, TryRecvError};
 
 use crate::extract::align::{Alignment, Comparison};
-use crate::ui::state::compare_window::Listening;
+
+/// Which song is heard.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(in crate::ui) enum Listening {
+    A,
+    B,
+}
+
+impl Listening {
+    /// The other song (key B).
+    pub(in crate::ui) fn other(self) -> Self {
+        match self {
+            Listening::A => Listening::B,
+            Listening::B => Listening::A,
+        }
+    }
+}
 
 /// One step of the nudge buttons, seconds: -100, -10, +10 and +100 ms.
 pub(in crate::ui) const NUDGE_STEPS_S: [f64; 4] = [-0.1, -0.01, 0.01, 0.1];

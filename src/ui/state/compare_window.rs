@@ -33,12 +33,8 @@ pub(in crate::ui) enum CompareLayout {
     Difference,
 }
 
-/// Which song is heard.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(in crate::ui) enum Listening {
-    A,
-    B,
-}
+/// Which song is heard (the two sides the alignment maps between).
+pub(in crate::ui) use super::alignment::Listening;
 
 /// The window's compare state (one field of `LoudscapeApp`).
 pub(in crate::ui) struct CompareState {
@@ -340,16 +336,6 @@ impl CompareLayout {
             "side" => Some(CompareLayout::SideBySide),
             "difference" => Some(CompareLayout::Difference),
             _ => None,
-        }
-    }
-}
-
-impl Listening {
-    /// The other song (key B).
-    pub(in crate::ui) fn other(self) -> Self {
-        match self {
-            Listening::A => Listening::B,
-            Listening::B => Listening::A,
         }
     }
 }

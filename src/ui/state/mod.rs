@@ -46,6 +46,7 @@ pub(super) mod iso_sweep;
 pub(super) mod loading;
 pub(super) mod messages;
 pub(super) mod open;
+pub(super) mod remembered;
 mod slot;
 pub(super) mod surface_status;
 pub(super) mod timeline_build;
@@ -89,7 +90,7 @@ pub(super) struct LoudscapeApp {
     pub(super) persist: bool,
     /// What was last handed to eframe's storage (`persistence.rs` asks for a frame to save a
     /// change).
-    pub(super) saved: Option<crate::ui::persistence::Remembered>,
+    pub(super) saved: Option<remembered::Remembered>,
     /// The active cloud's surface: its status and level of detail (`surface_status.rs`).
     pub(super) surface: surface_status::SurfaceStatus,
     /// Work that blocks the window, announced a frame before it runs (shown with a spinner).
