@@ -22,6 +22,7 @@ from loudscape_extract.song_cloud import DEFAULT_FLOOR_DB, song_metadata
 from loudscape_extract.stream import DEFAULT_BLOCK_FRAMES, SpectralLevels, stream_track
 from loudscape_extract.stream_decode import DEFAULT_BLOCK_SAMPLES, DecodedMono
 from loudscape_extract.stream_points import SongPlan, plan_song, song_point_blocks
+from loudscape_extract.timeline.inputs import read_tags
 from loudscape_extract.version import GENERATOR
 
 __all__ = [
@@ -217,6 +218,7 @@ def extract_song(
         )
         if found:  # absent: nothing to say (docs/FORMAT.md, "Warnings")
             metadata["warnings"] = found
+        _add_tags(metadata["source"], source)
         # The contract (check_cloud's rules): each block was checked as it went into the body
         # file, the metadata is checked now; the file is put in place only after both.
         check_metadata(metadata, n_points=rows, path=output)
@@ -230,6 +232,16 @@ def extract_song(
             os.unlink(body)
     say("done")
     return metadata
+
+
+def _add_tags(described: dict, path: str) -> None:
+    """The song's title and artist from its tags into ``source`` (as the timeline names its
+    songs), when it has them; a file without tags, or whose tags cannot be read, adds nothing."""
+    tags = read_tags(path)
+    for key in ("title", "artist"):
+        value = " ".join(str(tags.get(key) or "").split())
+        if value:
+            described[key] = value[:200]
 
 
 def _write_body(

@@ -109,13 +109,28 @@ pub fn picture_name(cloud: &PointCloud) -> String {
             let name = timeline_name(cloud);
             format!("{name}: timeline of {} songs{span}", songs.len())
         }
-        DataMode::Song | DataMode::Generic => cloud
-            .meta
-            .source
-            .as_ref()
-            .and_then(|s| s.path.as_deref())
-            .map(file_name)
-            .unwrap_or_else(|| file_name(&cloud.path.to_string_lossy())),
+        DataMode::Song | DataMode::Generic => {
+            let source = cloud.meta.source.as_ref();
+            // A tagged song by its tag, as the timeline names it: "Title — Artist".
+            let tagged = source
+                .and_then(|s| s.title.as_deref())
+                .map(str::trim)
+                .filter(|t| !t.is_empty());
+            if let Some(title) = tagged {
+                let artist = source
+                    .and_then(|s| s.artist.as_deref())
+                    .map(str::trim)
+                    .filter(|a| !a.is_empty());
+                return match artist {
+                    Some(artist) => format!("{title} \u{2014} {artist}"),
+                    None => title.to_string(),
+                };
+            }
+            source
+                .and_then(|s| s.path.as_deref())
+                .map(file_name)
+                .unwrap_or_else(|| file_name(&cloud.path.to_string_lossy()))
+        }
     }
 }
 
@@ -584,5 +599,27 @@ mod picture_tests {
         );
         cloud.path = cache.join("my-years.ply");
         assert_eq!(timeline_name_in(&cloud, cache), "my-years.ply");
+    }
+}
+
+#[cfg(test)]
+mod name_tests {
+    use super::picture_name;
+
+    #[test]
+    fn a_tagged_song_is_named_by_its_tag_as_in_the_timeline() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply");
+        let mut cloud = crate::data::cloud::load(&path).expect("the demo song loads");
+        assert_eq!(picture_name(&cloud), "demo_song.flac");
+        let source = cloud.meta.source.as_mut().expect("a song has a source");
+        source.title = Some("שלום 2020".into());
+        assert_eq!(picture_name(&cloud), "שלום 2020");
+        let source = cloud.meta.source.as_mut().unwrap();
+        source.artist = Some("Ensemble".into());
+        assert_eq!(picture_name(&cloud), "שלום 2020 \u{2014} Ensemble");
+        // Blank tags are no name.
+        let source = cloud.meta.source.as_mut().unwrap();
+        source.title = Some("  ".into());
+        assert_eq!(picture_name(&cloud), "demo_song.flac");
     }
 }

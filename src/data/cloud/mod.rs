@@ -234,6 +234,9 @@ pub struct Source {
     #[serde(deserialize_with = "lenient_u32")]
     pub channels: Option<u32>,
     pub duration_s: Option<f64>,
+    /// The song's title and artist from its tags, when it has them (absent in older files).
+    pub title: Option<String>,
+    pub artist: Option<String>,
 }
 
 /// Song mode: the spectrogram parameters.
