@@ -23,6 +23,7 @@ from loudscape_extract.timeline import (
     song_spans,
     timeline_points,
 )
+from loudscape_extract.timeline.layout import x_axis as x_axis_of
 
 from conftest import musical_signal
 
@@ -155,7 +156,7 @@ def test_layout_order_spans_and_axes():
     assert np.all(np.diff(points[:, 0]) > 0)
     x_axis = layout["axes"]["x"]
     assert (x_axis["min"], x_axis["max"], x_axis["unit"]) == (1980, 2002, "year")
-    assert [t["label"] for t in x_axis["ticks"]] == ["1980", "1990", "2000"]
+    assert [t["label"] for t in x_axis["ticks"]] == ["1980", "1985", "1990", "1995", "2000"]
     assert x_axis["ticks"][0]["at"] == -1.0
     # y: momentary loudness on an absolute -60 .. 0 scale, clamped; z: 1st-99th percentiles
     # over the drawn frames.
@@ -177,6 +178,23 @@ def test_layout_order_spans_and_axes():
     assert points[:, 2].min() == -1.0 and points[:, 2].max() == 1.0
     assert np.allclose(points[:, 3], 0.7) and np.allclose(points[:, 4], 0.25)
     assert described[0]["metrics"]["integrated_lufs"] == -14.0
+
+
+def test_a_span_of_years_has_several_year_ticks():
+    """Songs from 1996 to 2009 tick every 2 years, not "2000" alone; each tick where its year
+    begins; at most 8 ticks whatever the span."""
+    entries = [SongEntry(str(year), year, "", "") for year in (1996, 2001, 2009)]
+    axis = x_axis_of(entries, song_spans(entries, "year"), "year")
+    labels = [t["label"] for t in axis["ticks"]]
+    assert labels == ["1996", "1998", "2000", "2002", "2004", "2006", "2008"]
+    for tick in axis["ticks"]:
+        assert tick["at"] == pytest.approx(2 * (int(tick["label"]) - 1996) / 14 - 1, abs=1e-6)
+    by_order = x_axis_of(entries, song_spans(entries, "order"), "order")
+    assert [t["label"] for t in by_order["ticks"]] == ["1996", "2000", "2008"]
+    for first, last in ((1996, 2009), (1900, 2024), (1980, 2001), (1, 3000)):
+        years = [SongEntry("a", first, "", ""), SongEntry("b", last, "", "")]
+        count = len(x_axis_of(years, song_spans(years, "year"), "year")["ticks"])
+        assert 2 <= count <= 8, (first, last, count)
 
 
 def test_order_mode_equal_spans():

@@ -201,10 +201,25 @@ def song_spans(entries: Sequence[SongEntry], x_by: str) -> list[tuple[float, flo
     return spans
 
 
+#: At most this many year ticks on the x axis (the pictures lay out 8 ticks an axis).
+MAX_YEAR_TICKS = 8
+
+
+def _year_step(first: int, last: int) -> int:
+    """The smallest of 1, 2, 5, 10, 20, 50, ... years that puts at most ``MAX_YEAR_TICKS``
+    multiples of itself in ``first .. last`` (1996 to 2009: every 2 years)."""
+    step, factors = 1, (2, 2.5, 2)
+    k = 0
+    while last // step - (first + step - 1) // step + 1 > MAX_YEAR_TICKS:
+        step = round(step * factors[k % 3])
+        k += 1
+    return step
+
+
 def _tick_years(first: int, last: int) -> list[int]:
-    if last - first <= 12:
+    if last - first < MAX_YEAR_TICKS:
         return list(range(first, last + 1))
-    step = 10 if last - first <= 80 else 20
+    step = _year_step(first, last)
     return [y for y in range(first - first % step, last + 1, step) if y >= first]
 
 
@@ -222,7 +237,7 @@ def x_axis(entries: Sequence[SongEntry], spans, x_by: str) -> dict:
             ticks.append({"at": round(2.0 * (year - first) / width - 1.0, 6), "label": str(year)})
         return axis("year", "year", first, last + 1, ticks=ticks)
     # By order: a tick at the first song of each year (short ranges) or decade, where one is.
-    step = 1 if last - first <= 12 else (10 if last - first <= 80 else 20)
+    step = 1 if last - first < MAX_YEAR_TICKS else _year_step(first, last)
     seen = set()
     for entry, span in zip(entries, spans, strict=True):
         if entry.year is None:

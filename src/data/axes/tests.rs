@@ -147,6 +147,46 @@ fn years() {
     assert_eq!(axis.format_value(1984.2), "1984");
 }
 
+/// A timeline by year from 1996 to 2009 whose file gives one tick a decade ("2000"): the axis
+/// ticks its years itself, several of them, where they lie. A timeline by order keeps the
+/// file's ticks (each year's first song), which the axis cannot compute.
+#[test]
+fn a_span_of_years_shows_several_years_whatever_the_file_gives() {
+    let mut axis = Axis::linear("year", "year", 1996.0, 2010.0);
+    let at_year = |axis: &Axis, year: f64| axis.normalized_of(year) as f32;
+    axis.ticks = Some(vec![Tick {
+        at: at_year(&axis, 2000.0),
+        label: "2000".into(),
+    }]);
+    let ticks = axis.ticks(8);
+    assert_eq!(
+        labels(&ticks),
+        [
+            "1996", "1998", "2000", "2002", "2004", "2006", "2008", "2010"
+        ]
+    );
+    for tick in &ticks {
+        let year: f64 = tick.label.parse().unwrap();
+        assert!((tick.at - at_year(&axis, year)).abs() < 1e-6, "{tick:?}");
+    }
+    // Fewer labels fit: every 5 years.
+    assert_eq!(labels(&axis.ticks(4)), ["2000", "2005", "2010"]);
+    // By order: songs 1996..2009 spread evenly, a tick at the first song of 1996 and of 2000.
+    let mut by_order = Axis::linear("year", "year", 1996.0, 2009.0);
+    by_order.ticks = Some(vec![
+        Tick {
+            at: -1.0,
+            label: "1996".into(),
+        },
+        Tick {
+            at: 0.1,
+            label: "2000".into(),
+        },
+    ]);
+    assert_eq!(labels(&by_order.ticks(8)), ["1996", "2000"]);
+    assert_eq!(by_order.ticks(8)[1].at, 0.1);
+}
+
 #[test]
 fn unitless_and_other_units() {
     let axis = Axis::linear("hp", "", 0.0, 1.0);

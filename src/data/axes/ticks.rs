@@ -8,7 +8,7 @@ impl Axis {
     /// axes), decades with 2 and 5 between them on log axes when few decades are shown. Linear
     /// ticks include the ends when those are round; log ticks lie strictly inside the axis.
     pub fn ticks(&self, max_count: usize) -> Vec<Tick> {
-        if let Some(ticks) = &self.ticks {
+        if let Some(ticks) = self.ticks.as_ref().filter(|t| !self.are_plain_years(t)) {
             // Up to 100 as the file gives them; more (which no axis can show) thinned evenly to
             // `max_count`, so a file's tick list cannot make every picture lay out a million
             // labels.
@@ -38,6 +38,24 @@ impl Axis {
         } else {
             ticks
         }
+    }
+
+    /// Whether a file's `ticks` are only whole years, each where its year lies on this linear
+    /// year axis (a timeline with x by year). The axis computes such ticks itself, as many as
+    /// `max_count` allows (every 2 or 5 years over a span of 14), where a file may give one
+    /// tick a decade ("2000" alone for 1996 to 2009). Ticks elsewhere (a timeline by order:
+    /// each year's first song) are the file's to place.
+    fn are_plain_years(&self, ticks: &[Tick]) -> bool {
+        self.unit == "year"
+            && self.scale == AxisScale::Linear
+            && self.problem().is_none()
+            && !self.is_degenerate()
+            && !ticks.is_empty()
+            && ticks.iter().all(|tick| {
+                tick.label.trim().parse::<i32>().is_ok_and(|year| {
+                    (self.normalized_of(f64::from(year)) - f64::from(tick.at)).abs() < 1e-4
+                })
+            })
     }
 
     /// When no round values fit (a span too small for f64 to step through, or too wide for a
