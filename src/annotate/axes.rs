@@ -29,6 +29,32 @@ pub const TICK_SIZE: f32 = 12.0;
 pub const TITLE_SIZE: f32 = 14.0;
 /// Space kept between a title and its axis's tick labels, points.
 pub const TITLE_GAP: f32 = 4.0;
+/// How far a title keeps inside the view's edges, points.
+pub const TITLE_MARGIN: f32 = 8.0;
+/// The smallest size a title too wide for the view shrinks to before it is cut, points.
+pub const MIN_TITLE_SIZE: f32 = 10.0;
+
+/// `title` fitted to `width` points: as it is at [`TITLE_SIZE`] where it fits, else smaller
+/// (down to [`MIN_TITLE_SIZE`]), else at that size cut with "…". Its text and size.
+pub fn fitted_title(title: &str, width: f32) -> (String, f32) {
+    let measured = super::font::measure(title, TITLE_SIZE)[0];
+    if measured <= width {
+        return (title.to_string(), TITLE_SIZE);
+    }
+    // Text width grows about linearly with the size (hinting aside): step down to a size
+    // that fits.
+    let mut size = (TITLE_SIZE * width / measured.max(1.0)).floor();
+    while size >= MIN_TITLE_SIZE {
+        if super::font::measure(title, size)[0] <= width {
+            return (title.to_string(), size);
+        }
+        size -= 1.0;
+    }
+    (
+        super::legend::fit_text(title, MIN_TITLE_SIZE, width),
+        MIN_TITLE_SIZE,
+    )
+}
 
 /// A tick label or an axis title, placed along one axis of the box.
 #[derive(Clone, Debug)]
@@ -164,8 +190,8 @@ fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3
 /// Rules: a label whose anchor projects far outside the picture is left out; each title goes
 /// beyond its own axis's tick labels (left of the level axis's ticks, below the others') where
 /// that stays in the picture, and where the level axis's title has no room left of its ticks
-/// it goes above the axis's top end; a title moves in from the picture's edge rather than being
-/// cut off; titles are placed first and a tick label that would overlap a label already placed
+/// it goes above the axis's top end; a title keeps [`TITLE_MARGIN`] inside the picture's edges,
+/// moving in, drawn smaller or, failing that, cut with "…" rather than reaching them; titles are placed first and a tick label that would overlap a label already placed
 /// is left out.
 pub fn layout(
     rect: Rect,
@@ -295,10 +321,10 @@ fn clear_of(mut text: Text, ticks: &[Text], dx: f32, dy: f32) -> Text {
     text
 }
 
-/// Moved across so it lies within `rect` (2 points in), where it fits.
+/// Moved across so it lies within `rect` ([`TITLE_MARGIN`] in), where it fits.
 fn within_width(text: Text, rect: Rect) -> Text {
-    let dx = (rect.left() + 2.0 - text.rect.left()).max(0.0)
-        + (rect.right() - 2.0 - text.rect.right()).min(0.0);
+    let dx = (rect.left() + TITLE_MARGIN - text.rect.left()).max(0.0)
+        + (rect.right() - TITLE_MARGIN - text.rect.right()).min(0.0);
     text.moved(dx, 0.0)
 }
 
@@ -315,20 +341,23 @@ fn place_title(
 ) -> Text {
     let (offset, anchor) = tick_offset(axis);
     let at = [pos[0] + offset[0] * 3.0, pos[1] + offset[1] * 3.0];
-    let text = Text::new(title, at, anchor, TITLE_SIZE, colour);
+    // A title wider than the view is drawn smaller, or cut, to stay inside it.
+    let (title, size) = fitted_title(title, rect.width() - 2.0 * TITLE_MARGIN);
+    let title = title.as_str();
+    let text = Text::new(title, at, anchor, size, colour);
     if axis != 1 {
         // Below its ticks where that stays in the picture; else where it was (the ticks it
         // covers make way).
         let text = within_width(text, rect);
         let below = clear_of(text.clone(), ticks, 0.0, 1.0);
-        if below.rect.bottom() <= rect.bottom() - 2.0 && !meets(&below.rect, occupied) {
+        if below.rect.bottom() <= rect.bottom() - TITLE_MARGIN && !meets(&below.rect, occupied) {
             return below;
         }
-        let dy = (rect.bottom() - 2.0 - text.rect.bottom()).min(0.0);
+        let dy = (rect.bottom() - TITLE_MARGIN - text.rect.bottom()).min(0.0);
         return text.moved(0.0, dy);
     }
     let beside = clear_of(text, ticks, -1.0, 0.0);
-    if beside.rect.left() >= rect.left() + 2.0 && !meets(&beside.rect, occupied) {
+    if beside.rect.left() >= rect.left() + TITLE_MARGIN && !meets(&beside.rect, occupied) {
         return beside;
     }
     // No room left of the ticks: above the axis's top end, clear of its top tick.
@@ -337,16 +366,16 @@ fn place_title(
             title,
             [end[0], end[1] - 10.0],
             Anchor::CENTER_BOTTOM,
-            TITLE_SIZE,
+            size,
             colour,
         );
         let above = clear_of(within_width(above, rect), ticks, 0.0, -1.0);
-        if above.rect.top() >= rect.top() + 2.0 && !meets(&above.rect, occupied) {
+        if above.rect.top() >= rect.top() + TITLE_MARGIN && !meets(&above.rect, occupied) {
             return above;
         }
     }
     let inside = within_width(beside.clone(), rect);
-    if meets(&inside.rect, occupied) && beside.rect.left() >= rect.left() + 2.0 {
+    if meets(&inside.rect, occupied) && beside.rect.left() >= rect.left() + TITLE_MARGIN {
         return beside;
     }
     inside

@@ -120,3 +120,87 @@ fn a_half_views_legend_never_covers_its_title() {
         }
     }
 }
+
+/// A timeline as heard on a service titles its level axis "momentary loudness (BS.1770,
+/// 400 ms), as heard on Spotify (normal) (LUFS)", which reached the view's edge: every title now
+/// keeps [`axes::TITLE_MARGIN`] inside the view, drawn smaller where it is wider than the view
+/// and cut with "…" only where even the smallest size is.
+#[test]
+fn long_titles_stay_inside_the_view() {
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cloud = crate::data::cloud::load(&repo.join("data/demo_timeline.ply"))
+        .expect("the demo timeline loads");
+    cloud.meta.axes.y.label =
+        "momentary loudness (BS.1770, 400 ms), as heard on Spotify (normal)".into();
+    let labels = axes::axis_labels_for_box(&cloud, Vec3::splat(-1.0), Vec3::splat(1.0));
+    let titles: Vec<String> = labels
+        .labels
+        .iter()
+        .filter(|l| l.title)
+        .map(|l| l.text.clone())
+        .collect();
+    let level_title = titles
+        .iter()
+        .find(|t| t.contains("as heard on Spotify"))
+        .expect("the level title names the service")
+        .clone();
+    let transform = world_from_data(cloud.meta.mode);
+    let bounds = world_box(transform, Vec3::splat(-1.0), Vec3::splat(1.0));
+    let margin = axes::TITLE_MARGIN - 0.5;
+    let mut shrunk = false;
+    for (w, h) in [(1010, 631), (700, 500), (500, 400), (320, 200), (250, 300)] {
+        for azimuth in [-35.0f32, -60.0, 20.0, 90.0] {
+            let camera = Camera {
+                azimuth: azimuth.to_radians(),
+                ..Camera::default()
+            };
+            let view = FrameView::fitted(camera, transform, bounds, w, h);
+            let rect = Rect::from_min_size([0.0, 0.0], [w as f32, h as f32]);
+            let out = axes::layout(rect, &view, &labels, Background::Dark);
+            let texts: Vec<&Text> = out.texts().collect();
+            let is_title = |t: &Text| {
+                titles.iter().any(|title| {
+                    *title == t.text
+                        || t.text
+                            .strip_suffix('…')
+                            .is_some_and(|kept| title.starts_with(kept))
+                })
+            };
+            for t in texts.iter().filter(|t| is_title(t)) {
+                assert!(
+                    t.rect.left() >= margin
+                        && t.rect.right() <= w as f32 - margin
+                        && t.rect.top() >= margin
+                        && t.rect.bottom() <= h as f32 - margin,
+                    "{w}x{h} at {azimuth}: '{}' reaches the view's edge ({:?})",
+                    t.text,
+                    t.rect
+                );
+                assert!(t.size >= axes::MIN_TITLE_SIZE);
+            }
+            let level = texts
+                .iter()
+                .find(|t| t.text.starts_with("momentary loudness"))
+                .unwrap_or_else(|| panic!("{w}x{h} at {azimuth}: no level title"));
+            if w >= 500 {
+                // Wide enough for the whole title at some size: never cut.
+                assert_eq!(level.text, level_title, "{w}x{h} at {azimuth}");
+            }
+            shrunk |= level.size < axes::TITLE_SIZE;
+        }
+    }
+    assert!(shrunk, "some view is narrower than the title at full size");
+    // The rule itself: full size where it fits, smaller, then cut at the smallest size.
+    let full = crate::annotate::font::measure(&level_title, axes::TITLE_SIZE)[0];
+    assert_eq!(
+        axes::fitted_title(&level_title, full + 1.0),
+        (level_title.clone(), axes::TITLE_SIZE)
+    );
+    let (text, size) = axes::fitted_title(&level_title, full * 0.8);
+    assert_eq!(text, level_title);
+    assert!(size < axes::TITLE_SIZE && size >= axes::MIN_TITLE_SIZE);
+    assert!(crate::annotate::font::measure(&text, size)[0] <= full * 0.8);
+    let (text, size) = axes::fitted_title(&level_title, 100.0);
+    assert!(text.ends_with('…') && size == axes::MIN_TITLE_SIZE);
+    assert!(crate::annotate::font::measure(&text, size)[0] <= 100.0);
+}
