@@ -198,7 +198,7 @@ fn long_titles_stay_inside_the_view() {
     );
     let (text, size) = axes::fitted_title(&level_title, full * 0.8);
     assert_eq!(text, level_title);
-    assert!(size < axes::TITLE_SIZE && size >= axes::MIN_TITLE_SIZE);
+    assert!((axes::MIN_TITLE_SIZE..axes::TITLE_SIZE).contains(&size));
     assert!(crate::annotate::font::measure(&text, size)[0] <= full * 0.8);
     let (text, size) = axes::fitted_title(&level_title, 100.0);
     assert!(text.ends_with('…') && size == axes::MIN_TITLE_SIZE);
