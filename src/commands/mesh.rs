@@ -43,7 +43,7 @@ pub struct MeshArgs {
     pub output: PathBuf,
 }
 
-/// The cloud's voxel grid, built by the GPU voxelizer with the default smoothing.
+/// The cloud's voxel grid, built by the GPU voxelizer with its mode's default smoothing.
 pub fn voxel_grid(
     gpu: &GpuContext,
     frame: &FrameBinding,
@@ -55,7 +55,11 @@ pub fn voxel_grid(
         .voxelize(
             &gpu.device,
             &gpu.queue,
-            &VoxelizeRequest::new(&cloud.points, res, VoxelSettings::default().smoothing_sigma),
+            &VoxelizeRequest::new(
+                &cloud.points,
+                res,
+                VoxelSettings::default().smoothing_for(cloud.meta.mode),
+            ),
         )
         .with_context(|| format!("{}: voxelizing", cloud.path.display()))?;
     Ok(grid)

@@ -228,9 +228,10 @@ pub struct VolumeArgs {
     /// timeline.
     #[arg(long)]
     pub res: Option<u32>,
-    /// Gaussian smoothing of the grid, sigma in voxels (0 turns it off).
-    #[arg(long, default_value_t = 1.0)]
-    pub smooth: f32,
+    /// Gaussian smoothing of the grid, sigma in voxels (0 turns it off); by default 1 for a
+    /// song, 4 for a timeline.
+    #[arg(long)]
+    pub smooth: Option<f32>,
 }
 
 impl VolumeArgs {
@@ -245,7 +246,9 @@ impl VolumeArgs {
         check_range(self.density, VolumeSettings::DENSITY_RANGE, "density")?;
         check_range(self.opacity, VolumeSettings::OPACITY_RANGE, "opacity")?;
         check_range(self.step, VolumeSettings::STEP_RANGE, "step")?;
-        check_smoothing(self.smooth)?;
+        if let Some(sigma) = self.smooth {
+            check_smoothing(sigma)?;
+        }
         check_resolution(self.res)?;
         settings.volume = VolumeSettings {
             preset,

@@ -15,7 +15,9 @@ use anyhow::{Context, bail};
 use glam::{UVec3, Vec3};
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
-use loudscape::render::grid::voxelize::{VoxelizePass, VoxelizeRequest, default_resolution};
+use loudscape::render::grid::voxelize::{
+    VoxelizePass, VoxelizeRequest, default_resolution, default_smoothing,
+};
 use loudscape::render::grid::voxelize_cpu::PERCENTILE;
 
 use crate::commands::args::{
@@ -29,9 +31,10 @@ pub struct VoxelizeArgs {
     /// Voxels per side (64 to 384); by default 128 for a song, 224 for a timeline.
     #[arg(long)]
     pub res: Option<u32>,
-    /// Gaussian smoothing, sigma in voxels (0 turns it off).
-    #[arg(long, default_value_t = 1.0)]
-    pub smooth: f32,
+    /// Gaussian smoothing, sigma in voxels (0 turns it off); by default 1 for a song, 4 for a
+    /// timeline.
+    #[arg(long)]
+    pub smooth: Option<f32>,
     /// Where to write: a .npy file, or a .nrrd file (plus NAME_hp.nrrd).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -68,9 +71,12 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
     }
     check_output_folder(&args.output)?;
     check_resolution(args.res)?;
-    check_smoothing(args.smooth)?;
+    if let Some(sigma) = args.smooth {
+        check_smoothing(sigma)?;
+    }
     let cloud = load_cloud(&args.input)?;
     let resolution = args.res.unwrap_or(default_resolution(cloud.meta.mode));
+    let sigma = args.smooth.unwrap_or(default_smoothing(cloud.meta.mode));
     let gpu = GpuContext::new_headless()?;
     let frame = FrameBinding::new(&gpu.device);
     let pass = VoxelizePass::new(&gpu.device, &frame);
@@ -78,7 +84,7 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
         .voxelize(
             &gpu.device,
             &gpu.queue,
-            &VoxelizeRequest::new(&cloud.points, resolution, args.smooth),
+            &VoxelizeRequest::new(&cloud.points, resolution, sigma),
         )
         .with_context(|| format!("{}", args.input.display()))?;
     let density = grid.read_field(&gpu.device, &gpu.queue, &grid.density)?;
@@ -92,7 +98,7 @@ pub fn run(args: VoxelizeArgs) -> anyhow::Result<()> {
         "voxel_centre": "box_min + (index + 0.5) * (box_max - box_min) / dims",
         "npy_axes": ["field", "z", "y", "x"],
         "fields": ["density", "hp_mean"],
-        "smoothing_sigma_voxels": args.smooth,
+        "smoothing_sigma_voxels": sigma,
         "normalization": format!(
             "density = min(loudness sum / reference_sum, 1); reference_sum is the {}th percentile of the positive sums",
             PERCENTILE * 100.0

@@ -106,7 +106,7 @@ impl CompareScene {
     fn grids_key(&self, settings: &VoxelSettings) -> (u32, u32) {
         (
             settings.resolution_for(self.a.meta.mode),
-            settings.smoothing_sigma.to_bits(),
+            settings.smoothing_for(self.a.meta.mode).to_bits(),
         )
     }
 
@@ -160,14 +160,13 @@ impl CompareScene {
             difference_cpu,
             columns_cpu,
         } = built;
-        let resolution = settings.resolution_for(self.a.meta.mode);
         let [stats_a, stats_b] = stats;
         self.data_a.set_grid(
             device,
             renderer,
             share(&grids.scaled_a),
             Some(stats_a),
-            resolution,
+            self.a.meta.mode,
             &settings,
         );
         self.data_b.set_grid(
@@ -175,7 +174,7 @@ impl CompareScene {
             renderer,
             share(&grids.scaled_b),
             Some(stats_b),
-            resolution,
+            self.a.meta.mode,
             &settings,
         );
         let mut data = SceneData::new(device, renderer, &self.a);
@@ -184,7 +183,7 @@ impl CompareScene {
             renderer,
             share(&grids.shown),
             None,
-            resolution,
+            self.a.meta.mode,
             &settings,
         );
         self.grids = Some(CompareGrids {
@@ -313,8 +312,12 @@ pub fn build_grids(
             file: cloud.path.display().to_string(),
             source,
         };
-        let request = VoxelizeRequest::new(&cloud.points, resolution, settings.smoothing_sigma)
-            .in_box(Some(shared_box));
+        let request = VoxelizeRequest::new(
+            &cloud.points,
+            resolution,
+            settings.smoothing_for(a.meta.mode),
+        )
+        .in_box(Some(shared_box));
         let job = passes.voxelize.prepare(device, &request).map_err(failed)?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("compare::voxelize"),

@@ -250,11 +250,8 @@ impl SceneData {
         settings: &VoxelSettings,
     ) -> Result<bool, VoxelizeError> {
         let resolution = settings.resolution_for(cloud.meta.mode);
-        let key = (
-            resolution,
-            settings.smoothing_sigma.to_bits(),
-            self.freq_axis(),
-        );
+        let sigma = settings.smoothing_for(cloud.meta.mode);
+        let key = (resolution, sigma.to_bits(), self.freq_axis());
         if self.grid.is_some() && self.grid_key == Some(key) {
             return Ok(false);
         }
@@ -269,7 +266,7 @@ impl SceneData {
             self.points.chunk_buffers(),
             (cloud.bounds.min, cloud.bounds.max),
             resolution,
-            settings.smoothing_sigma,
+            sigma,
         )
         .mapped(mapping)
         .in_box(mapping.map(|m| grid_box_mapped(&cloud.points, Some(m))));
@@ -282,22 +279,23 @@ impl SceneData {
     }
 
     /// Installs a grid built elsewhere (an A/B compare's grids in their shared box and scale,
-    /// or their difference) as if [`SceneData::ensure_grid`] had built it with `settings`.
+    /// or their difference) as if [`SceneData::ensure_grid`] had built it with `settings` for
+    /// data of `mode`.
     pub fn set_grid(
         &mut self,
         device: &wgpu::Device,
         renderer: &Renderer,
         grid: VoxelGrid,
         stats: Option<VoxelStats>,
-        resolution: u32,
+        mode: DataMode,
         settings: &VoxelSettings,
     ) {
         self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
         self.grid = Some(grid);
         self.grid_stats = stats;
         self.grid_key = Some((
-            resolution,
-            settings.smoothing_sigma.to_bits(),
+            settings.resolution_for(mode),
+            settings.smoothing_for(mode).to_bits(),
             self.freq_axis(),
         ));
         self.surface = ExtractedSurface::new();
@@ -310,7 +308,7 @@ impl SceneData {
             && self.grid_key
                 == Some((
                     resolution,
-                    settings.smoothing_sigma.to_bits(),
+                    settings.smoothing_for(cloud.meta.mode).to_bits(),
                     self.freq_axis(),
                 ))
     }

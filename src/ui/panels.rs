@@ -209,12 +209,16 @@ impl LoudscapeApp {
         if changed {
             self.settings.voxels.resolution = Some(resolution);
         }
-        let mut sigma = self.settings.voxels.smoothing_sigma;
+        let mut sigma = self.settings.voxels.smoothing_for(mode);
         if ui
-            .add(egui::Slider::new(&mut sigma, 0.0..=3.0).text("smoothing σ"))
+            .add(egui::Slider::new(&mut sigma, 0.0..=8.0).text("smoothing σ"))
+            .on_hover_text(
+                "Gaussian smoothing of the grid in voxels: 1 for songs and 4 for timelines \
+                 (a few hundred points a song) by default; rebuilt on release",
+            )
             .drag_stopped()
         {
-            self.settings.voxels.smoothing_sigma = sigma;
+            self.settings.voxels.smoothing_sigma = Some(sigma);
         }
     }
 

@@ -100,7 +100,11 @@ fn grid_from_the_device_copy_equals_the_grid_from_the_host() {
         .voxelize(
             &gpu.device,
             &gpu.queue,
-            &VoxelizeRequest::new(&cloud.points, resolution, voxels.smoothing_sigma),
+            &VoxelizeRequest::new(
+                &cloud.points,
+                resolution,
+                voxels.smoothing_for(DataMode::Song),
+            ),
         )
         .expect("voxelize from the host");
     from_host.grid = Some(grid);

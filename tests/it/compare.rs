@@ -49,7 +49,7 @@ fn a_song_against_itself_differs_by_exactly_zero() {
             .voxelize(
                 &gpu.device,
                 &gpu.queue,
-                &VoxelizeRequest::new(&cloud.points, 128, settings.smoothing_sigma)
+                &VoxelizeRequest::new(&cloud.points, 128, settings.smoothing_for(cloud.meta.mode))
                     .in_box(Some(shared_box)),
             )
             .expect("voxelize")

@@ -60,7 +60,7 @@ fn gpu_and_reference(
         .expect("a song has a frequency axis");
     let settings = VoxelSettings {
         resolution: Some(resolution),
-        smoothing_sigma: 0.0,
+        smoothing_sigma: Some(0.0),
     };
     data.ensure_grid(&gpu.device, &gpu.queue, renderer, cloud, &settings)
         .expect("voxelize");

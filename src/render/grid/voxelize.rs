@@ -91,27 +91,41 @@ struct SmoothParams {
 }
 const _: () = assert!(std::mem::size_of::<SmoothParams>() == 160);
 
-/// How the grid is built. Changing these rebuilds the grid; nothing else does.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// How the grid is built (by default each by the data's mode). Changing these rebuilds the grid;
+/// nothing else does.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct VoxelSettings {
     /// Voxels per side; `None` picks by data mode (128 song, 224 timeline).
     pub resolution: Option<u32>,
-    /// Gaussian smoothing of the loudness sums, sigma in voxels; 0 turns it off.
-    pub smoothing_sigma: f32,
-}
-
-impl Default for VoxelSettings {
-    fn default() -> Self {
-        Self {
-            resolution: None,
-            smoothing_sigma: 1.0,
-        }
-    }
+    /// Gaussian smoothing of the loudness sums, sigma in voxels; 0 turns it off. `None` picks by
+    /// data mode ([`default_smoothing`]: 1 song, 4 timeline).
+    pub smoothing_sigma: Option<f32>,
 }
 
 impl VoxelSettings {
     pub fn resolution_for(&self, mode: DataMode) -> u32 {
         self.resolution.unwrap_or(default_resolution(mode))
+    }
+
+    /// The smoothing sigma (voxels) of a grid of `mode`'s data.
+    pub fn smoothing_for(&self, mode: DataMode) -> f32 {
+        self.smoothing_sigma.unwrap_or(default_smoothing(mode))
+    }
+}
+
+/// The smoothing sigma a song's grid gets by default, in voxels.
+pub const SONG_SMOOTHING: f32 = 1.0;
+/// The smoothing sigma a timeline's grid gets by default, in voxels: a timeline holds a few
+/// hundred points a song in a 224^3 grid, so with a song's sigma of 1 each point is a speck of
+/// its own and the isosurface at 0.5 of the 99th-percentile density is "a few specks" (the
+/// demo timeline: 20 songs of 400 points). Sigma 4 (1.8 % of the box a side) joins each song's
+/// points into one body, which is the shape of its loudness over the years.
+pub const TIMELINE_SMOOTHING: f32 = 4.0;
+
+pub fn default_smoothing(mode: DataMode) -> f32 {
+    match mode {
+        DataMode::Timeline => TIMELINE_SMOOTHING,
+        DataMode::Song | DataMode::Generic => SONG_SMOOTHING,
     }
 }
 

@@ -520,7 +520,7 @@ mod tests {
             "not started again every frame"
         );
         let mut other = voxels;
-        other.smoothing_sigma += 0.5;
+        other.smoothing_sigma = Some(other.smoothing_for(crate::data::cloud::DataMode::Song) + 0.5);
         assert_eq!(state.grid_step(&other, false), GridStep::Start);
 
         // A build for other settings is dropped; a thread that died is an error.
