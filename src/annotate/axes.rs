@@ -187,12 +187,13 @@ fn label_edge(labels: &AxisLabels, view: &FrameView, axis: usize) -> Option<Vec3
 /// The labels of `labels` laid out over a view occupying `rect` (points), projected through
 /// `view`, in the ink of `background`, each on a plate of the background's colour.
 ///
-/// Rules: a label whose anchor projects far outside the picture is left out; each title goes
-/// beyond its own axis's tick labels (left of the level axis's ticks, below the others') where
-/// that stays in the picture, and where the level axis's title has no room left of its ticks
-/// it goes above the axis's top end; a title keeps [`TITLE_MARGIN`] inside the picture's edges,
-/// moving in, drawn smaller or, failing that, cut with "…" rather than reaching them; titles are placed first and a tick label that would overlap a label already placed
-/// is left out.
+/// Rules: a label whose anchor projects far outside the picture is left out, and so is a tick
+/// label the picture's edge would cut; each title goes beyond its own axis's tick labels (left
+/// of the level axis's ticks, below the others') where that stays in the picture, and where the
+/// level axis's title has no room left of its ticks it goes above the axis's top end; a title
+/// keeps [`TITLE_MARGIN`] inside the picture's edges, moving in, drawn smaller or, failing
+/// that, cut with "…" rather than reaching them; titles are placed first and a tick label that
+/// would overlap a label already placed is left out.
 pub fn layout(
     rect: Rect,
     view: &FrameView,
@@ -233,13 +234,11 @@ pub fn layout_avoiding(
         };
         let (offset, anchor) = tick_offset(axis);
         let pos = [pos[0] + offset[0], pos[1] + offset[1]];
-        ticks[axis].push(Text::new(
-            label.text.clone(),
-            pos,
-            anchor,
-            TICK_SIZE,
-            ink(false),
-        ));
+        let text = Text::new(label.text.clone(), pos, anchor, TICK_SIZE, ink(false));
+        // A tick label the view's edge would cut ("dB" of "-10 dB") is left out.
+        if within(&text.rect, rect) {
+            ticks[axis].push(text);
+        }
     }
     let mut placed: Vec<Text> = Vec::new();
     for label in labels.labels.iter().filter(|l| l.title) {
@@ -287,6 +286,14 @@ fn tick_offset(axis: usize) -> ([f32; 2], Anchor) {
     } else {
         ([0.0, 8.0], Anchor::CENTER_TOP)
     }
+}
+
+/// Whether `text` lies wholly in `rect` (half a point of rounding allowed).
+fn within(text: &Rect, rect: Rect) -> bool {
+    text.left() >= rect.left() - 0.5
+        && text.right() <= rect.right() + 0.5
+        && text.top() >= rect.top() - 0.5
+        && text.bottom() <= rect.bottom() + 0.5
 }
 
 fn meets(rect: &Rect, occupied: &[Rect]) -> bool {

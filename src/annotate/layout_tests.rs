@@ -204,3 +204,58 @@ fn long_titles_stay_inside_the_view() {
     assert!(text.ends_with('…') && size == axes::MIN_TITLE_SIZE);
     assert!(crate::annotate::font::measure(&text, size)[0] <= 100.0);
 }
+
+/// At 500x400 the window's view (about 300x300 beside the side panel) showed tick labels cut at
+/// its edge ("dB" of "-10 dB"): a tick label the edge would cut is now left out, so every label
+/// drawn is whole, on songs and timelines, at every size and angle.
+#[test]
+fn no_label_is_cut_by_the_views_edge() {
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for file in ["data/demo_song.ply", "data/demo_timeline.ply"] {
+        let cloud = crate::data::cloud::load(&repo.join(file)).expect("the demo loads");
+        let labels = axes::axis_labels_for_box(&cloud, Vec3::splat(-1.0), Vec3::splat(1.0));
+        let transform = world_from_data(cloud.meta.mode);
+        let bounds = world_box(transform, Vec3::splat(-1.0), Vec3::splat(1.0));
+        let mut ticks_drawn = 0;
+        for (w, h) in [(300, 300), (300, 240), (500, 400), (1010, 631), (200, 150)] {
+            for azimuth in [-35.0f32, -60.0, 20.0, 90.0, 160.0] {
+                for distance in [1.0f32, 0.6] {
+                    let fitted = FrameView::fitted(
+                        Camera {
+                            azimuth: azimuth.to_radians(),
+                            ..Camera::default()
+                        },
+                        transform,
+                        bounds,
+                        w,
+                        h,
+                    );
+                    // Zoomed in: the box reaches past the view's edges.
+                    let camera = Camera {
+                        distance: fitted.camera.distance * distance,
+                        ..fitted.camera
+                    };
+                    let view = FrameView::at_rest(camera, transform, w, h);
+                    let rect = Rect::from_min_size([0.0, 0.0], [w as f32, h as f32]);
+                    let out = axes::layout(rect, &view, &labels, Background::Dark);
+                    for t in out.texts() {
+                        assert!(
+                            t.rect.left() >= -0.5
+                                && t.rect.right() <= w as f32 + 0.5
+                                && t.rect.top() >= -0.5
+                                && t.rect.bottom() <= h as f32 + 0.5,
+                            "{file} {w}x{h} at {azimuth} x{distance}: '{}' is cut ({:?})",
+                            t.text,
+                            t.rect
+                        );
+                        ticks_drawn += usize::from(t.size == axes::TICK_SIZE);
+                    }
+                }
+            }
+        }
+        assert!(
+            ticks_drawn > 100,
+            "{file}: ticks are still drawn ({ticks_drawn})"
+        );
+    }
+}
