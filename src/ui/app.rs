@@ -299,15 +299,7 @@ impl eframe::App for LoudscapeApp {
             .frame(crate::ui::style::panel_frame(ui.style()))
             .resizable(false)
             .exact_size(panel_width)
-            .show(ui, |ui| {
-                // Narrower than its rows in a small window: they scroll sideways too.
-                let scroll = if panel_width < SIDE_PANEL_WIDTH {
-                    egui::ScrollArea::both()
-                } else {
-                    egui::ScrollArea::vertical()
-                };
-                scroll.show(ui, |ui| self.controls(ui));
-            });
+            .show(ui, |ui| self.side_panel(ui));
         self.audio.poll(&ctx);
         self.compare_keys(&ctx);
         if self.active == Slot::Song && shortcuts::pressed(&ctx, Action::PlayPause) {

@@ -12,18 +12,22 @@ impl LoudscapeApp {
         ui.add_space(6.0);
         ui.label(RichText::new("Colours").strong());
         let colours = &mut self.settings.colours;
-        egui::ComboBox::from_label("hp colour map")
-            .selected_text(colours.hp.name())
-            .show_ui(ui, |ui| {
-                for map in HpColourMap::ALL {
-                    ui.selectable_value(&mut colours.hp, map, map.name());
-                }
-            })
-            .response
-            .on_hover_text(
-                "Points, surface and hp tint. PuOr and Cividis are colour-blind safe; \
-                 Cividis and Viridis are perceptually uniform",
-            );
+        // Wrapped: in a narrow side panel the name goes under the box rather than past the edge.
+        ui.horizontal_wrapped(|ui| {
+            egui::ComboBox::from_id_salt("hp colour map")
+                .selected_text(colours.hp.name())
+                .show_ui(ui, |ui| {
+                    for map in HpColourMap::ALL {
+                        ui.selectable_value(&mut colours.hp, map, map.name());
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "Points, surface and hp tint. PuOr and Cividis are colour-blind safe; \
+                     Cividis and Viridis are perceptually uniform",
+                );
+            ui.label("hp colour map");
+        });
         let mut light = colours.background.is_light();
         if ui
             .checkbox(&mut light, "light background (print)")

@@ -20,7 +20,7 @@ impl LoudscapeApp {
         ui.add_space(6.0);
         ui.label(RichText::new("Compare (A/B)").strong());
         let mut start = None;
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             let field = &mut self.open.compare_path;
             let edit = ui.add(
                 egui::TextEdit::singleline(field)
@@ -69,7 +69,7 @@ impl LoudscapeApp {
             return;
         };
         if state.receiver.is_some() {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ui.spinner();
                 ui.label(format!("loading B: {}", state.path.display()));
             });
@@ -80,7 +80,7 @@ impl LoudscapeApp {
         if state.clouds.is_none() {
             return;
         }
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for (layout, name) in [
                 (CompareLayout::Off, "A only"),
                 (CompareLayout::SideBySide, "Side by side"),
@@ -98,7 +98,7 @@ impl LoudscapeApp {
             }
         });
         if state.layout == CompareLayout::Difference {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ui.label("measure");
                 for measure in DifferenceMeasure::ALL {
                     if ui
@@ -116,7 +116,7 @@ impl LoudscapeApp {
             });
         }
         let mut switch = None;
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ui.label("listen");
             for side in [Listening::A, Listening::B] {
                 // "B −3.8 dB": the gain it plays at to match the other's loudness.

@@ -28,7 +28,7 @@ impl LoudscapeApp {
         }
         ui.add_space(6.0);
         ui.label(egui::RichText::new("Frequency axis").strong());
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for axis in FreqAxis::ALL {
                 ui.selectable_value(&mut self.freq_axis, axis, axis.title())
                     .on_hover_text(match axis {

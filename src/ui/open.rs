@@ -169,7 +169,8 @@ pub(super) fn file_name(path: &Path) -> String {
 impl LoudscapeApp {
     /// The Open row: a path (audio or .ply) and a button; the same path as a drop.
     pub(super) fn open_controls(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
+        // Wrapped: in a narrow side panel Folder… goes under the field rather than past the edge.
+        ui.horizontal_wrapped(|ui| {
             let field = ui
                 .add(open_field(&mut self.open.path))
                 .on_hover_text("a song or a .ply cloud: type its path and press Enter");

@@ -17,7 +17,26 @@ use crate::ui::legends;
 use crate::ui::state::LoudscapeApp;
 use crate::ui::state::Slot;
 
+/// The narrowest a slider's track gets in a narrow side panel, points.
+const MIN_SLIDER_WIDTH: f32 = 50.0;
+
+/// The track of a slider in a side panel whose rows are `available` points wide: egui's 100 at
+/// the full width, narrower in a small window so the value and the slider's name still fit
+/// beside it (about 110 points for "opacity scale" and its value).
+pub(super) fn slider_width(available: f32) -> f32 {
+    (available - 125.0).clamp(MIN_SLIDER_WIDTH, 100.0)
+}
+
 impl LoudscapeApp {
+    /// The side panel's contents, scrolling down when taller than the window; never sideways:
+    /// rows of buttons wrap and sliders narrow to the panel's width.
+    pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            ui.spacing_mut().slider_width = slider_width(ui.available_width());
+            self.controls(ui);
+        });
+    }
+
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             ui.heading("loudscape");
@@ -52,7 +71,7 @@ impl LoudscapeApp {
         let difference = self.difference_shown();
 
         ui.label(RichText::new("Data").strong());
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for slot in [Slot::Song, Slot::Timeline] {
                 let present = self.slot(slot).is_some();
                 let response = ui.add_enabled(
@@ -75,7 +94,7 @@ impl LoudscapeApp {
 
         ui.add_space(6.0);
         ui.label(RichText::new("View").strong());
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for view in ViewKind::ALL {
                 let response = ui
                     .add_enabled(
@@ -132,7 +151,7 @@ impl LoudscapeApp {
 
         ui.add_space(6.0);
         ui.label(RichText::new("Camera").strong());
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             if ui
                 .button("Fit (F)")
                 .on_hover_text("Frame the data, keeping the viewing direction")
@@ -230,7 +249,7 @@ impl LoudscapeApp {
         ui.label(RichText::new("Volume").strong());
         ui.add_enabled_ui(!difference, |ui| {
             let volume = &mut self.settings.volume;
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 for preset in TransferPreset::ALL {
                     ui.selectable_value(&mut volume.preset, preset, preset.name())
                         .on_disabled_hover_text(DIFFERENCE_DRAWS);
@@ -251,7 +270,7 @@ impl LoudscapeApp {
         )
         .on_hover_text("Smaller steps: finer detail, slower frames");
         ui.add_enabled_ui(!difference, |ui| {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ui.checkbox(&mut volume.hp_tint, "hp tint")
                     .on_hover_text("Colour by mean hp: red percussive to blue harmonic")
                     .on_disabled_hover_text(DIFFERENCE_DRAWS);
@@ -266,7 +285,7 @@ impl LoudscapeApp {
         ui.add_space(6.0);
         ui.label(RichText::new("Surface").strong());
         let surface = &mut self.settings.surface;
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             for method in SurfaceMethod::ALL {
                 ui.selectable_value(&mut surface.method, method, method.name())
                     .on_disabled_hover_text(DIFFERENCE_DRAWS);
@@ -297,7 +316,7 @@ impl LoudscapeApp {
         }
         ui.checkbox(&mut surface.lit, "lit from above");
         if self.surface.busy {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ui.spinner();
                 ui.label("extracting surface…");
             });

@@ -179,7 +179,7 @@ impl LoudscapeApp {
         let idle = self.video_export.running.is_none() && self.video_export.save_dialog.is_none();
         let passage = self.passage_row();
         let ordered = passage.is_none_or(|p| p.start < p.end);
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             let button = ui
                 .add_enabled(
                     exportable && idle && ordered,
@@ -233,7 +233,7 @@ impl LoudscapeApp {
         ui.add(
             egui::TextEdit::singleline(&mut self.video_export.path)
                 .hint_text(hint)
-                .desired_width(230.0),
+                .desired_width(ui.available_width().min(230.0)),
         )
         .on_hover_text(
             "where Export video… writes: an .mp4 name (the save dialog starts from it where one \

@@ -70,7 +70,7 @@ impl LoudscapeApp {
 
     pub(super) fn screenshot_controls(&mut self, ui: &mut egui::Ui) {
         ui.label(RichText::new("Screenshot").strong());
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             if ui
                 .add_enabled(self.active().is_some(), egui::Button::new("Save PNG"))
                 .on_hover_text(
@@ -86,7 +86,7 @@ impl LoudscapeApp {
                 .on_hover_text("save at a chosen size instead of the 3D view's");
         });
         if self.save_shot.custom_size {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ui.add(egui::DragValue::new(&mut self.save_shot.size[0]).range(16..=8192));
                 ui.label("×");
                 ui.add(egui::DragValue::new(&mut self.save_shot.size[1]).range(16..=8192));
@@ -96,7 +96,7 @@ impl LoudscapeApp {
         ui.add(
             egui::TextEdit::singleline(&mut self.save_shot.path)
                 .hint_text("loudscape-<time>.png")
-                .desired_width(230.0),
+                .desired_width(ui.available_width().min(230.0)),
         )
         .on_hover_text(
             "where Save PNG writes: a .png name; a file this window did not save is kept, and \

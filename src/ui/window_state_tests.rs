@@ -144,3 +144,70 @@ fn a_low_isovalue_says_why_the_surface_is_grey_and_zero_is_not_offered() {
         app.settings.surface.iso_value
     );
 }
+
+/// At 500x400 the side panel's rows ran past its edge (Folder…, Compare with…, Volume, Mel,
+/// the sliders' names), scrolled sideways out of sight: the rows now wrap and the sliders
+/// narrow, so every button and name in the panel is whole within its 200 points, in the Points
+/// and the Volume view.
+#[test]
+fn a_small_windows_side_panel_cuts_no_button_or_name() {
+    let mut app = app();
+    let ctx = egui::Context::default();
+    let width = crate::ui::app::side_panel_width(500.0);
+    assert!(width <= 200.0);
+    // Tall enough to show every row: only the width is tested.
+    let size = egui::vec2(500.0, 3000.0);
+    let names = [
+        "Open…",
+        "Folder…",
+        "Compare with…",
+        "Points",
+        "Surface",
+        "Volume",
+        "Linear",
+        "Logarithmic",
+        "Mel",
+        "size (px)",
+        "min loudness",
+        "hp colour map",
+        "Save PNG",
+        "Export video…",
+        "voxels/side",
+        "smoothing σ",
+        "opacity scale",
+        "step (voxels)",
+    ];
+    let mut seen = std::collections::BTreeSet::new();
+    for view in [
+        crate::render::scene::ViewKind::Points,
+        crate::render::scene::ViewKind::Volume,
+    ] {
+        app.settings.view = view;
+        let mut last = None;
+        for _ in 0..3 {
+            let mut output = ctx.run_ui(input(size, Vec::new()), |ui| {
+                egui::Panel::left("controls")
+                    .resizable(false)
+                    .exact_size(width)
+                    .show(ui, |ui| app.side_panel(ui));
+            });
+            output.textures_delta.clear();
+            last = Some(output);
+        }
+        let output = last.unwrap();
+        for name in names {
+            for (rect, clip) in texts_starting(&output, name) {
+                seen.insert(name);
+                assert!(
+                    rect.right() <= clip.right() + 0.5 && rect.right() <= width + 0.5,
+                    "{view:?}: '{name}' is cut at the panel's edge: {rect:?} (clip {clip:?})"
+                );
+            }
+        }
+    }
+    // The song-only rows (frequency axis, points) need no song to be laid out; what is drawn
+    // must include the buttons the walk found cut.
+    for name in ["Folder…", "Compare with…", "Volume", "opacity scale"] {
+        assert!(seen.contains(name), "'{name}' is drawn: {seen:?}");
+    }
+}
