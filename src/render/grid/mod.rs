@@ -88,3 +88,20 @@ impl VoxelGrid {
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 }
+
+/// The smoothing sigma a song's grid gets by default, in voxels.
+pub const SONG_SMOOTHING: f32 = 1.0;
+/// The smoothing sigma a timeline's grid gets by default, in voxels: a timeline holds a few
+/// hundred points a song in a 224^3 grid, so with a song's sigma of 1 each point is a speck of
+/// its own and the isosurface at 0.5 of the 99th-percentile density is "a few specks" (the
+/// demo timeline: 20 songs of 400 points). Sigma 4 (1.8 % of the box a side) joins each song's
+/// points into one body, which is the shape of its loudness over the years.
+pub const TIMELINE_SMOOTHING: f32 = 4.0;
+
+pub fn default_smoothing(mode: crate::data::cloud::DataMode) -> f32 {
+    use crate::data::cloud::DataMode;
+    match mode {
+        DataMode::Timeline => TIMELINE_SMOOTHING,
+        DataMode::Song | DataMode::Generic => SONG_SMOOTHING,
+    }
+}

@@ -113,21 +113,7 @@ impl VoxelSettings {
     }
 }
 
-/// The smoothing sigma a song's grid gets by default, in voxels.
-pub const SONG_SMOOTHING: f32 = 1.0;
-/// The smoothing sigma a timeline's grid gets by default, in voxels: a timeline holds a few
-/// hundred points a song in a 224^3 grid, so with a song's sigma of 1 each point is a speck of
-/// its own and the isosurface at 0.5 of the 99th-percentile density is "a few specks" (the
-/// demo timeline: 20 songs of 400 points). Sigma 4 (1.8 % of the box a side) joins each song's
-/// points into one body, which is the shape of its loudness over the years.
-pub const TIMELINE_SMOOTHING: f32 = 4.0;
-
-pub fn default_smoothing(mode: DataMode) -> f32 {
-    match mode {
-        DataMode::Timeline => TIMELINE_SMOOTHING,
-        DataMode::Song | DataMode::Generic => SONG_SMOOTHING,
-    }
-}
+pub use super::{SONG_SMOOTHING, TIMELINE_SMOOTHING, default_smoothing};
 
 pub fn default_resolution(mode: DataMode) -> u32 {
     match mode {
