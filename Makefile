@@ -48,8 +48,12 @@ lint-rust:
 	$(CARGO) fmt --check
 	$(CARGO) clippy --all-targets -- -D warnings
 
+# The window tests (every test named "window...") run after the others, one at a time, with the
+# machine to themselves: they drive real windows on one screen, and in full runs on 2 cores with
+# the GPU tests beside them a window now and then failed to appear (each passes alone).
 test-rust: system venv
-	$(XVFB) $(CARGO) test
+	$(XVFB) $(CARGO) test -- --skip window
+	$(XVFB) $(CARGO) test window -- --test-threads=1
 
 lint-py: venv
 	$(VENV)/bin/ruff check preprocess bench tests/python
