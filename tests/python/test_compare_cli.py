@@ -19,7 +19,7 @@ import soundfile
 ROOT = Path(__file__).resolve().parents[2]
 CLOUD = ROOT / "data" / "demo_song.ply"
 AUDIO = ROOT / "data" / "demo_song.flac"
-BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape"))
+BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape")).absolute()
 
 
 def _run(*args, cwd=None):

@@ -26,7 +26,7 @@ from loudscape_fixtures.song import SAMPLE_RATE, fixture_signal
 
 ROOT = Path(__file__).resolve().parents[2]
 SONG = ROOT / "data" / "demo_song.ply"
-BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape"))
+BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape")).absolute()
 
 
 @pytest.fixture(autouse=True)
