@@ -322,3 +322,43 @@ fn sigterm_removes_the_partial_png() {
     assert!(!partial.exists(), "the partial PNG was left behind");
     assert!(!png.exists(), "a PNG was written after SIGTERM");
 }
+
+/// A folder the user cannot write into is refused before any work, naming the folder and why
+/// (`render` used to draw first and then fail with "cannot write the screenshot"). Root may write
+/// anywhere, so as root the command runs as `nobody` (util-linux's setpriv).
+#[cfg(unix)]
+#[test]
+fn a_folder_that_cannot_be_written_is_refused_first() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = folder("read_only");
+    let locked = dir.join("locked");
+    std::fs::create_dir_all(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let binary = PathBuf::from(env!("CARGO_BIN_EXE_loudscape"));
+    let out = locked.join("x.png");
+    // SAFETY: geteuid has no preconditions.
+    let mut command = if unsafe { libc::geteuid() } == 0 {
+        let mut as_nobody = Command::new("setpriv");
+        as_nobody.args(["--reuid=nobody", "--regid=nogroup", "--clear-groups", "--"]);
+        as_nobody.arg(&binary);
+        as_nobody
+    } else {
+        Command::new(&binary)
+    };
+    let output = command
+        .env_remove("XDG_RUNTIME_DIR")
+        .arg("render")
+        .arg(repo("data/demo_song.ply"))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .expect("run loudscape (setpriv is in util-linux)");
+    assert_one_line_error(&output, "cannot write into the folder");
+    assert!(
+        stderr(&output).contains("permission denied"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!out.exists());
+    let _ = std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755));
+}
