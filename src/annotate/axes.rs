@@ -51,7 +51,7 @@ pub fn fitted_title(title: &str, width: f32) -> (String, f32) {
         size -= 1.0;
     }
     (
-        super::legend::fit_text(title, MIN_TITLE_SIZE, width),
+        super::font::fit_text(title, MIN_TITLE_SIZE, width),
         MIN_TITLE_SIZE,
     )
 }

@@ -85,7 +85,7 @@ pub fn diverging_legend(rect: Rect, measure: DifferenceMeasure, range: f32) -> A
 /// A title at the top left of `rect` on a plate; returns it and the plate's box.
 pub fn title(rect: Rect, text: &str) -> (Annotation, Rect) {
     let room = (rect.width() - 20.0).max(0.0);
-    let text = super::legend::fit_text(text, 15.0, room);
+    let text = super::font::fit_text(text, 15.0, room);
     let label = Text::new(
         text,
         [rect.left() + 10.0, rect.top() + 8.0],

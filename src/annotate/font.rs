@@ -365,6 +365,27 @@ impl OutlinePen for Pen<'_> {
     }
 }
 
+/// `text` cut to at most `width` points at `size`, ending in "…" where cut.
+pub fn fit_text(text: &str, size: f32, width: f32) -> String {
+    if measure(text, size)[0] <= width {
+        return text.to_string();
+    }
+    let chars: Vec<char> = text.chars().collect();
+    let (mut lo, mut hi) = (0usize, chars.len());
+    // The longest prefix that fits with its ellipsis.
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        let candidate: String = chars[..mid].iter().collect::<String>() + "…";
+        if measure(&candidate, size)[0] <= width {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    let kept: String = chars[..lo].iter().collect();
+    format!("{}…", kept.trim_end())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

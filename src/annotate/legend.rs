@@ -225,26 +225,7 @@ pub fn key_strip_rect(rect: Rect) -> Rect {
     )
 }
 
-/// `text` cut to at most `width` points at `size`, ending in "…" where cut.
-pub fn fit_text(text: &str, size: f32, width: f32) -> String {
-    if super::font::measure(text, size)[0] <= width {
-        return text.to_string();
-    }
-    let chars: Vec<char> = text.chars().collect();
-    let (mut lo, mut hi) = (0usize, chars.len());
-    // The longest prefix that fits with its ellipsis.
-    while lo < hi {
-        let mid = (lo + hi).div_ceil(2);
-        let candidate: String = chars[..mid].iter().collect::<String>() + "…";
-        if super::font::measure(&candidate, size)[0] <= width {
-            lo = mid;
-        } else {
-            hi = mid - 1;
-        }
-    }
-    let kept: String = chars[..lo].iter().collect();
-    format!("{}…", kept.trim_end())
-}
+pub use super::font::fit_text;
 
 /// The legend over a picture occupying `rect`: the name top left, the key top right, or under
 /// the name where the key's block (title, strip, ticks) would come within a margin of it. The
