@@ -80,7 +80,9 @@ def clouds(tmp_path_factory) -> dict[str, Path]:
         path = music / f"song {i}.flac"
         soundfile.write(str(path), tone(1.0, i), RATE)
         tags = mutagen.flac.FLAC(str(path))
-        tags["date"], tags["title"], tags["artist"] = str(year), f"Song {i}", "Band"
+        # A title beyond ASCII (recorded in the song's source since tags are): every reader copes.
+        title = f"Song {i} \u266a \u05e9\u05dc\u05d5\u05dd"
+        tags["date"], tags["title"], tags["artist"] = str(year), title, "Band"
         tags.save()
     extract = [sys.executable, "-m", "loudscape_extract.cli"]
     fast = ["--n-fft", "256", "--hop", "128", "-q"]
