@@ -5,7 +5,8 @@
 //! that this button did not just write is never replaced: the next free `NAME.loudness-report-2.pdf`
 //! is taken instead. The job's state lives in egui's memory under one id, so the panel needs no
 //! field of the app: the button shows "making the report…" while the extractor runs, then the
-//! file written (or the extractor's one-line reason).
+//! file written with the warnings the extractor printed about the song (a truncated decode:
+//! the report's readings are of what decoded), or the extractor's one-line reason.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -41,29 +42,53 @@ pub fn report_input(cloud: &PointCloud) -> PathBuf {
     crate::playback::resolve_source(cloud).unwrap_or_else(|_| cloud.path.clone())
 }
 
+/// A report written, and what the extractor warned about on the way.
+#[derive(Debug, PartialEq)]
+struct Written {
+    path: PathBuf,
+    /// Each `warning:` line's text, the input's path before it shortened to its file name.
+    warnings: Vec<String>,
+}
+
 #[derive(Default)]
 struct Job {
     /// The song the job is for (a new song shows the button again).
     song: PathBuf,
     running: bool,
-    result: Option<Result<PathBuf, String>>,
+    result: Option<Result<Written, String>>,
 }
 
 type Shared = Arc<Mutex<Job>>;
 
-fn run(extractor: &Path, input: &Path, output: &Path) -> Result<PathBuf, String> {
+fn run(extractor: &Path, input: &Path, output: &Path) -> Result<Written, String> {
     let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let input = absolute(input);
     let out = Command::new(extractor)
         .arg("report")
         .arg("-q")
         .arg("-o")
         .arg(absolute(output))
         .arg("--")
-        .arg(absolute(input))
+        .arg(&input)
         .output()
         .map_err(|e| format!("cannot run {}: {e}", extractor.display()))?;
     if out.status.success() && output.is_file() {
-        return Ok(output.to_path_buf());
+        let prefix = format!("{}: ", input.display());
+        let name = input
+            .file_name()
+            .map_or_else(String::new, |n| format!("{}: ", n.to_string_lossy()));
+        let warnings = crate::extract::lines::Stderr::read_from(&out.stderr[..])
+            .warnings
+            .into_iter()
+            .map(|w| match w.strip_prefix(&prefix) {
+                Some(rest) => format!("{name}{rest}"),
+                None => w,
+            })
+            .collect();
+        return Ok(Written {
+            path: output.to_path_buf(),
+            warnings,
+        });
     }
     let stderr = String::from_utf8_lossy(&out.stderr);
     let reason = stderr
@@ -109,8 +134,15 @@ pub fn report_button(ui: &mut egui::Ui, cloud: &PointCloud) {
         )
         .clicked();
     match &job.result {
-        Some(Ok(path)) => {
-            ui.label(egui::RichText::new(format!("wrote {}", path.display())).small());
+        Some(Ok(written)) => {
+            ui.label(egui::RichText::new(format!("wrote {}", written.path.display())).small());
+            for warning in &written.warnings {
+                ui.label(
+                    egui::RichText::new(format!("warning: {warning}"))
+                        .small()
+                        .color(ui.visuals().warn_fg_color),
+                );
+            }
         }
         Some(Err(reason)) => {
             ui.label(
@@ -141,7 +173,12 @@ pub fn report_button(ui: &mut egui::Ui, cloud: &PointCloud) {
     std::thread::spawn(move || {
         let result = run(&extractor, &input, &output);
         match &result {
-            Ok(path) => eprintln!("wrote {}", path.display()),
+            Ok(written) => {
+                for warning in &written.warnings {
+                    eprintln!("loudscape: warning: loudness report: {warning}");
+                }
+                eprintln!("wrote {}", written.path.display());
+            }
             Err(reason) => eprintln!("loudscape: no loudness report: {reason}"),
         }
         let mut job = shared.lock().unwrap_or_else(|p| p.into_inner());
@@ -167,6 +204,36 @@ mod tests {
         assert_eq!(
             std::fs::read(dir.join("song.loudness-report.pdf")).unwrap(),
             b"the client's copy"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A report made of a truncated song: the extractor's warning comes back with the file
+    /// written (the panel shows both), not "wrote …" alone.
+    #[cfg(unix)]
+    #[test]
+    fn the_extractors_warnings_come_back_with_the_report() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir =
+            std::env::temp_dir().join(format!("loudscape-report-warn-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let song = dir.join("song.ogg");
+        std::fs::write(&song, b"audio").unwrap();
+        // `report -q -o OUT -- INPUT`, as the extractor prints a truncated decode.
+        let extractor = dir.join("fake-extract");
+        std::fs::write(
+            &extractor,
+            "#!/bin/sh\nprintf 'x' > \"$4\"\n\
+             echo \"warning: $6: decoded 1.49 s of 4.00 s (the file ends early)\" >&2\n",
+        )
+        .unwrap();
+        std::fs::set_permissions(&extractor, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let output = report_path(&song);
+        let written = run(&extractor, &song, &output).expect("a report");
+        assert_eq!(written.path, output);
+        assert_eq!(
+            written.warnings,
+            ["song.ogg: decoded 1.49 s of 4.00 s (the file ends early)"]
         );
         let _ = std::fs::remove_dir_all(&dir);
     }
