@@ -29,6 +29,17 @@ pub struct FontFile {
     pub scale: f32,
 }
 
+/// A script font of data/fonts/, drawn at the text's size.
+macro_rules! script_font {
+    ($name:literal) => {
+        FontFile {
+            name: $name,
+            bytes: include_bytes!(concat!("../../data/fonts/", $name, ".ttf")),
+            scale: 1.0,
+        }
+    };
+}
+
 /// The fonts a character looks for its glyph in, in order: Ubuntu Light, the script fonts,
 /// then egui's icons and the emoji (egui's `FontDefinitions::default` order and tweaks, with the
 /// script fonts before the last-resort symbol fonts as egui advises).
@@ -38,36 +49,12 @@ pub const FONTS: [FontFile; 10] = [
         bytes: epaint_default_fonts::UBUNTU_LIGHT,
         scale: 1.0,
     },
-    FontFile {
-        name: "NotoSansHebrew-Regular",
-        bytes: include_bytes!("../../data/fonts/NotoSansHebrew-Regular.ttf"),
-        scale: 1.0,
-    },
-    FontFile {
-        name: "NotoSansArabic-Regular",
-        bytes: include_bytes!("../../data/fonts/NotoSansArabic-Regular.ttf"),
-        scale: 1.0,
-    },
-    FontFile {
-        name: "NotoSansDevanagari-Regular",
-        bytes: include_bytes!("../../data/fonts/NotoSansDevanagari-Regular.ttf"),
-        scale: 1.0,
-    },
-    FontFile {
-        name: "NotoSansThai-Regular",
-        bytes: include_bytes!("../../data/fonts/NotoSansThai-Regular.ttf"),
-        scale: 1.0,
-    },
-    FontFile {
-        name: "NotoSansArmenian-Regular",
-        bytes: include_bytes!("../../data/fonts/NotoSansArmenian-Regular.ttf"),
-        scale: 1.0,
-    },
-    FontFile {
-        name: "NotoSansGeorgian-Regular",
-        bytes: include_bytes!("../../data/fonts/NotoSansGeorgian-Regular.ttf"),
-        scale: 1.0,
-    },
+    script_font!("NotoSansHebrew-Regular"),
+    script_font!("NotoSansArabic-Regular"),
+    script_font!("NotoSansDevanagari-Regular"),
+    script_font!("NotoSansThai-Regular"),
+    script_font!("NotoSansArmenian-Regular"),
+    script_font!("NotoSansGeorgian-Regular"),
     FontFile {
         name: "egui-icons",
         bytes: epaint_default_fonts::EGUI_ICONS,
