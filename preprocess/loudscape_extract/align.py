@@ -212,26 +212,35 @@ def onset_envelope(samples: np.ndarray, sample_rate: int) -> np.ndarray:
     return flux / spread if spread > 0 else flux
 
 
-def _normalized_xcorr(window: np.ndarray, other: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Normalized cross-correlation of ``window`` at every lag over ``other``.
+class _Correlator:
+    """Normalized cross-correlation of windows of ``n`` values at every lag over ``other``.
 
-    Returns ``(lags, rho)``: ``rho[i]`` is the Pearson correlation of ``window`` with
-    ``other[lags[i]: lags[i] + len(window)]`` over the part that overlaps ``other``.
+    ``other``'s spectrum and running sums depend on ``other`` alone: computed once here, not
+    once a window (a long song has hundreds of windows, each searched over the whole of B).
     """
-    n, m = len(window), len(other)
-    size = 1 << int(np.ceil(np.log2(n + m)))
-    w = window - window.mean()
-    raw = fft.irfft(fft.rfft(other, size) * np.conj(fft.rfft(w, size)), size)
-    lags = np.arange(0, m - n + 1)
-    if len(lags) == 0:
-        return lags, np.zeros(0)
-    sums = np.concatenate(([0.0], np.cumsum(other)))
-    sq = np.concatenate(([0.0], np.cumsum(other * other)))
-    seg_sum = sums[lags + n] - sums[lags]
-    seg_sq = sq[lags + n] - sq[lags]
-    seg_var = np.maximum(seg_sq - seg_sum * seg_sum / n, 1e-12)
-    rho = raw[lags] / (np.sqrt(seg_var) * np.linalg.norm(w) + 1e-12)
-    return lags, rho
+
+    def __init__(self, other: np.ndarray, n: int) -> None:
+        m = len(other)
+        self.n = n
+        self.size = 1 << int(np.ceil(np.log2(n + m)))
+        self.spectrum = fft.rfft(other, self.size)
+        self.lags = np.arange(0, m - n + 1)
+        sums = np.concatenate(([0.0], np.cumsum(other)))
+        sq = np.concatenate(([0.0], np.cumsum(other * other)))
+        seg_sum = sums[self.lags + n] - sums[self.lags]
+        seg_sq = sq[self.lags + n] - sq[self.lags]
+        self.seg_std = np.sqrt(np.maximum(seg_sq - seg_sum * seg_sum / n, 1e-12))
+
+    def __call__(self, window: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Returns ``(lags, rho)``: ``rho[i]`` is the Pearson correlation of ``window`` with
+        ``other[lags[i]: lags[i] + n]`` over the part that overlaps ``other``."""
+        lags = self.lags
+        if len(lags) == 0:
+            return lags, np.zeros(0)
+        w = window - window.mean()
+        raw = fft.irfft(self.spectrum * np.conj(fft.rfft(w, self.size)), self.size)
+        rho = raw[lags] / (self.seg_std * np.linalg.norm(w) + 1e-12)
+        return lags, rho
 
 
 def _peaks(rho: np.ndarray, k: int, min_gap: int) -> list[int]:
@@ -259,12 +268,13 @@ def _window_candidates(env_a: np.ndarray, env_b: np.ndarray) -> list[tuple[float
     # Pad B by a window on each side so A's windows can fall before B's start (B = A cut at
     # the start) or after its end; padding is zeros (the envelope's mean).
     padded = np.concatenate((np.zeros(n), env_b, np.zeros(n)))
+    correlate = _Correlator(padded, n)
     for start in range(0, max(len(env_a) - n, 0) + 1, step):
         window = env_a[start : start + n]
         if window.std() < 1e-6:
             out.append((start / ENVELOPE_RATE, []))
             continue
-        lags, rho = _normalized_xcorr(window, padded)
+        lags, rho = correlate(window)
         candidates = []
         for best in _peaks(rho, _CANDIDATES, min_gap=5):
             # Sub-frame lag: a parabola through the peak and its neighbours.
