@@ -15,6 +15,7 @@
 //! No device (CI machines, a headless server) is not an error of the app: [`Player::new`] keeps
 //! the reason in [`PlayerState::NoDevice`] and every other feature works.
 
+pub mod source;
 pub mod stream;
 
 use std::path::{Path, PathBuf};
@@ -26,6 +27,7 @@ use std::time::{Duration, Instant};
 use thiserror::Error;
 
 use crate::data::cloud::PointCloud;
+pub use source::{SourceError, checked_source};
 use stream::{OpenError, Reader, Ring, Shared};
 
 /// Why the song cannot be played.

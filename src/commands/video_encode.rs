@@ -29,32 +29,22 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use loudscape::data::cloud::PointCloud;
 use loudscape::files::{OwnedChild, TempFile};
+use loudscape::playback::source::ffmpeg_path;
+pub use loudscape::playback::source::ffmpeg_url;
+use loudscape::playback::{SourceError, checked_source};
 
 /// The Debian package that brings the `ffmpeg` command.
 pub const FFMPEG_PACKAGE: &str = "ffmpeg";
 
 /// The `ffmpeg` command on PATH (or `$LOUDSCAPE_FFMPEG`), with a clear error when missing.
 pub fn find_ffmpeg() -> anyhow::Result<PathBuf> {
-    if let Some(path) = std::env::var_os("LOUDSCAPE_FFMPEG") {
-        return Ok(PathBuf::from(path));
-    }
-    let name = if cfg!(windows) {
-        "ffmpeg.exe"
-    } else {
-        "ffmpeg"
-    };
-    std::env::var_os("PATH")
-        .iter()
-        .flat_map(std::env::split_paths)
-        .map(|dir| dir.join(name))
-        .find(|p| p.is_file())
-        .with_context(|| {
-            format!(
-                "ffmpeg is not installed (not found on PATH); `loudscape video` encodes with it: \
-                 install the Debian/Ubuntu package '{FFMPEG_PACKAGE}' (apt install \
-                 {FFMPEG_PACKAGE}), or ffmpeg from ffmpeg.org elsewhere"
-            )
-        })
+    ffmpeg_path().with_context(|| {
+        format!(
+            "ffmpeg is not installed (not found on PATH); `loudscape video` encodes with it: \
+             install the Debian/Ubuntu package '{FFMPEG_PACKAGE}' (apt install \
+             {FFMPEG_PACKAGE}), or ffmpeg from ffmpeg.org elsewhere"
+        )
+    })
 }
 
 /// Where the sound of the video comes from.
@@ -70,151 +60,22 @@ pub enum Sound {
     Silence,
 }
 
-/// How far the source's length may be from the cloud's: MP3 decoders differ by the encoder's
-/// delay and padding (under 4,096 frames), and the length is written rounded.
-const LENGTH_TOLERANCE_FRAMES: f64 = 4096.0;
-
 /// The audio file whose sound a video of `input` (as the user named it) carries: an audio file
 /// itself, never the source its cached cloud recorded (the same bytes may have been cached
-/// under another name, since changed); for a cloud, its recorded source, found as the window
-/// finds it and checked against the cloud: sample rate, channels and length must be the ones
-/// the cloud was made from (the extractor records no hash of the audio). Errors are one line
-/// naming the file, the reason and `--silent`.
+/// under another name, since changed); for a cloud, its checked source
+/// ([`loudscape::playback::checked_source`]). Errors are one line naming the file, the reason
+/// and `--silent`.
 pub fn song_sound(input: &Path, cloud: &PointCloud) -> anyhow::Result<PathBuf> {
     if loudscape::extract::is_audio(input) {
         return Ok(input.to_path_buf());
     }
     let silent = "pass --silent for a video without the song's sound";
-    let path = loudscape::playback::resolve_source(cloud)
-        .map_err(|e| anyhow::anyhow!("{}: its source audio: {e}; {silent}", input.display()))?;
-    let Some(recorded) = cloud.meta.source.as_ref() else {
-        bail!(
-            "{}: the cloud records no source audio; {silent}",
+    checked_source(cloud).map_err(|e| match e {
+        SourceError::Mismatch { .. } => anyhow::anyhow!(
+            "{}: {e}; {silent}, or extract the cloud again from that audio",
             input.display()
-        );
-    };
-    let mismatch = |why: String| {
-        anyhow::anyhow!(
-            "{}: its source audio {} is not the audio the cloud was made from ({why}); {silent}, \
-             or extract the cloud again from that audio",
-            input.display(),
-            path.display()
-        )
-    };
-    let found = probe_audio(&path).map_err(|why| {
-        anyhow::anyhow!(
-            "{}: cannot check its source audio {} against the cloud ({why}); {silent}",
-            input.display(),
-            path.display()
-        )
-    })?;
-    if let Some(rate) = recorded.sample_rate
-        && rate != found.sample_rate
-    {
-        return Err(mismatch(format!(
-            "{} Hz, the cloud's {rate} Hz",
-            found.sample_rate
-        )));
-    }
-    if let (Some(channels), Some(found_channels)) = (recorded.channels, found.channels)
-        && channels != found_channels
-    {
-        return Err(mismatch(format!(
-            "{found_channels} channels, the cloud's {channels}"
-        )));
-    }
-    let Some(length) = recorded.duration_s.filter(|d| d.is_finite() && *d > 0.0) else {
-        bail!(
-            "{}: the cloud records no length of its source audio {} to check it by; {silent}",
-            input.display(),
-            path.display()
-        );
-    };
-    let tolerance = LENGTH_TOLERANCE_FRAMES / f64::from(found.sample_rate.max(1)) + 0.001;
-    // A truncated or corrupt source was decoded as far as it goes: its header promises more.
-    let cut_short = cloud
-        .warnings()
-        .iter()
-        .any(|w| w.kind == "truncated" || w.kind == "corrupt");
-    let fits = if cut_short {
-        found.duration_s >= length - tolerance
-    } else {
-        (found.duration_s - length).abs() <= tolerance
-    };
-    if !fits {
-        return Err(mismatch(format!(
-            "{:.3} s long, the cloud's {length:.3} s",
-            found.duration_s
-        )));
-    }
-    Ok(path)
-}
-
-/// What [`probe_audio`] reads of an audio file.
-struct AudioFacts {
-    sample_rate: u32,
-    channels: Option<u32>,
-    duration_s: f64,
-}
-
-/// The sample rate, channels and length of an audio file: read as playback reads it (WAV,
-/// FLAC, Ogg Vorbis, MP3), else by ffprobe (the formats only ffmpeg reads).
-fn probe_audio(path: &Path) -> Result<AudioFacts, String> {
-    match loudscape::playback::decode(path) {
-        Ok(track) => Ok(AudioFacts {
-            sample_rate: track.sample_rate,
-            channels: Some(u32::from(track.channels)),
-            duration_s: track.duration_s(),
-        }),
-        Err(loudscape::playback::PlaybackError::Unsupported { .. }) => ffprobe_audio(path),
-        Err(e) => Err(e.to_string()),
-    }
-}
-
-/// [`probe_audio`] by ffprobe (beside ffmpeg, or on PATH): the first audio stream's rate and
-/// channels, and the file's length.
-fn ffprobe_audio(path: &Path) -> Result<AudioFacts, String> {
-    let name = if cfg!(windows) {
-        "ffprobe.exe"
-    } else {
-        "ffprobe"
-    };
-    let beside = find_ffmpeg()
-        .ok()
-        .and_then(|f| f.parent().map(|d| d.join(name)))
-        .filter(|p| p.is_file());
-    let program = beside.unwrap_or_else(|| PathBuf::from(name));
-    let output = Command::new(&program)
-        .args(["-v", "error", "-select_streams", "a:0", "-show_entries"])
-        .args(["stream=sample_rate,channels:format=duration", "-of", "json"])
-        .arg(ffmpeg_url(path))
-        .stdin(Stdio::null())
-        .output()
-        .map_err(|e| format!("ffprobe cannot start: {e}"))?;
-    let said = String::from_utf8_lossy(&output.stderr);
-    if !output.status.success() {
-        return Err(format!(
-            "ffprobe: {}",
-            said.lines().next().unwrap_or("it failed").trim()
-        ));
-    }
-    let json: serde_json::Value = serde_json::from_slice(&output.stdout)
-        .map_err(|e| format!("ffprobe's answer is not JSON: {e}"))?;
-    let stream = &json["streams"][0];
-    let number = |v: &serde_json::Value| {
-        v.as_f64()
-            .or_else(|| v.as_str().and_then(|s| s.trim().parse().ok()))
-    };
-    let sample_rate = number(&stream["sample_rate"])
-        .filter(|r| *r >= 1.0 && *r <= f64::from(u32::MAX))
-        .ok_or("ffprobe finds no audio stream")? as u32;
-    let duration_s = number(&json["format"]["duration"])
-        .filter(|d| d.is_finite() && *d > 0.0)
-        .ok_or("ffprobe states no length")?;
-    Ok(AudioFacts {
-        sample_rate,
-        channels: number(&stream["channels"]).map(|c| c as u32),
-        duration_s,
+        ),
+        _ => anyhow::anyhow!("{}: {e}; {silent}", input.display()),
     })
 }
 
@@ -228,16 +89,6 @@ pub struct EncodeSpec {
     pub sound: Sound,
     /// x264's constant rate factor (lower is better; 18 is visually lossless for most content).
     pub crf: u32,
-}
-
-/// `path` as ffmpeg must be given it: `file:` + the absolute path, so that no name is taken
-/// for another protocol (`a:b.mp4`), an option (`-x.mp4`) or a `file:` URL of another file
-/// (`file:c.ogg`); the bytes pass as they are (a name that is not UTF-8).
-pub fn ffmpeg_url(path: &Path) -> OsString {
-    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-    let mut url = OsString::from("file:");
-    url.push(absolute.as_os_str());
-    url
 }
 
 /// The ffmpeg arguments that encode `spec` into `output`.
