@@ -28,8 +28,6 @@ import math
 import os
 import signal
 import socket
-import threading
-import time
 import uuid
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -47,6 +45,7 @@ from loudscape_extract.ply import read_ply_metadata
 from loudscape_extract.report_pdf import PAGE_EXTENSIONS, draw_page, require_matplotlib
 from loudscape_extract.stream import stream_track
 from loudscape_extract.timeline.cache import cache_key, remove_temporaries
+from loudscape_extract.timeline.engine import stop_pool, worker_start
 from loudscape_extract.timeline.inputs import discover_audio
 
 __all__ = [
@@ -596,34 +595,6 @@ def _worker_job(*arguments):
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
-def _worker_start(parent: int) -> None:
-    """Pool initializer: the parent decides on Ctrl+C; exit once the parent is gone."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-    def watch():
-        while os.getppid() == parent:
-            time.sleep(0.5)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="loudscape-parent-watch", daemon=True).start()
-
-
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """Cancel queued songs and stop the running workers (SIGTERM: their temporaries go)."""
-    processes = list((getattr(pool, "_processes", None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        if process.is_alive():
-            process.terminate()
-    deadline = time.monotonic() + 5.0
-    for process in processes:
-        process.join(max(deadline - time.monotonic(), 0.0))
-        if process.is_alive():
-            process.kill()
-            process.join(1.0)
-
-
 def write_folder_report(
     folder: str,
     out_dir: str,
@@ -688,7 +659,7 @@ def write_folder_report(
             collect(_report_job(path, pages[path], *arguments))
     else:
         pool = ProcessPoolExecutor(
-            max_workers=min(jobs, len(paths)), initializer=_worker_start, initargs=(os.getpid(),)
+            max_workers=min(jobs, len(paths)), initializer=worker_start, initargs=(os.getpid(),)
         )
         try:
             futures = {pool.submit(_worker_job, p, pages[p], *arguments): p for p in paths}
@@ -700,7 +671,8 @@ def write_folder_report(
                     outcome = (futures[future], None, False, [], f"worker failed ({reason})")
                 collect(outcome)
         except BaseException:
-            _stop(pool)
+            # The workers catch SIGTERM to remove their temporaries: time to do so.
+            stop_pool(pool, cache_dir, grace_s=5.0)
             raise
         pool.shutdown(wait=True)
     result.rows = [rows[p] for p in paths if p in rows]

@@ -29,7 +29,7 @@ from loudscape_extract.timeline.cache import (
 from loudscape_extract.timeline.frames import SongFrames, compute_song_frames
 from loudscape_extract.timeline.layout import DEFAULT_Z_MEASURE, sample_song
 
-__all__ = ["SongOutcome", "compute_all", "song_frames"]
+__all__ = ["SongOutcome", "compute_all", "song_frames", "stop_pool", "worker_start"]
 
 
 @dataclass
@@ -139,9 +139,10 @@ def _job(
     return outcome
 
 
-def _worker_start(parent: int) -> None:
+def worker_start(parent: int) -> None:
     """Pool initializer: leave SIGINT to the parent, die on SIGTERM, and exit once the parent
-    process is gone (SIGKILL, crash) instead of waiting forever for work."""
+    process is gone (SIGKILL, crash) instead of waiting forever for work. The timeline's and
+    the folder report's pools (:mod:`loudscape_extract.song_report`) both start with it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
@@ -153,8 +154,9 @@ def _worker_start(parent: int) -> None:
     threading.Thread(target=watch, name="loudscape-parent-watch", daemon=True).start()
 
 
-def _stop_pool(pool: ProcessPoolExecutor, cache_dir: str | None) -> None:
-    """Cancel queued songs, terminate running workers, remove their cache temporaries."""
+def stop_pool(pool: ProcessPoolExecutor, cache_dir: str | None, *, grace_s: float = 2.0) -> None:
+    """Cancel queued songs, terminate running workers (killed after ``grace_s`` seconds),
+    remove their cache temporaries."""
     # The executor has no public way to stop running calls: its worker processes are
     # terminated directly (``_processes``, present in CPython 3.10 to 3.14).
     processes = list((getattr(pool, "_processes", None) or {}).values())
@@ -162,7 +164,7 @@ def _stop_pool(pool: ProcessPoolExecutor, cache_dir: str | None) -> None:
     for process in processes:
         if process.is_alive():
             process.terminate()
-    deadline = time.monotonic() + 2.0
+    deadline = time.monotonic() + grace_s
     for process in processes:
         process.join(max(deadline - time.monotonic(), 0.0))
         if process.is_alive():
@@ -264,7 +266,7 @@ def compute_all(
             collect(_job(path, *arguments))
         return songs, failed, n_cached
     pool = ProcessPoolExecutor(
-        max_workers=min(jobs, len(paths)), initializer=_worker_start, initargs=(os.getpid(),)
+        max_workers=min(jobs, len(paths)), initializer=worker_start, initargs=(os.getpid(),)
     )
     try:
         futures = {pool.submit(_job, p, *arguments): p for p in paths}
@@ -275,7 +277,7 @@ def compute_all(
                 outcome = SongOutcome(futures[future], error=f"worker failed ({_one_line(exc)})")
             collect(outcome)
     except BaseException:
-        _stop_pool(pool, cache_dir)
+        stop_pool(pool, cache_dir)
         raise
     pool.shutdown(wait=True)
     return songs, failed, n_cached
