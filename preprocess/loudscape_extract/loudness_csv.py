@@ -182,15 +182,7 @@ def file_curves(path: str, *, strict: bool = False) -> tuple[list[dict], dict, l
     decoded = decode_track(path, n_fft=_N_FFT, strict=strict)
     stats = signal_pass(decoded, n_fft=_N_FFT, hop_length=_N_FFT)
     rate = decoded.info.sample_rate
-    dynamics = dynamics_from_segments(
-        stats.energy,
-        stats.boundaries,
-        segment_peak=stats.segment_peak,
-        true_peak=stats.true_peak_clean,
-        mono_squares=stats.mono_squares,
-        mono_peaks=stats.mono_peaks,
-        sample_rate=rate,
-    )
+    dynamics = stats.dynamics(rate)
     rows, readings = _curves(
         stats.energy,
         stats.boundaries,

@@ -29,7 +29,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from loudscape_extract.curves import loudness_curves
 from loudscape_extract.dsp import hann_window
-from loudscape_extract.dynamics import dr_from_blocks, dynamics_from_segments
+from loudscape_extract.dynamics import dr_from_blocks
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.hpss import (
     HPSS_KERNEL,
@@ -382,15 +382,7 @@ def finish_track(
             path=info.path,
         )
     rms_dbfs, crest_db = level_series(stats.frame_rms, stats.frame_peak, silent)
-    dynamics = dynamics_from_segments(
-        stats.energy,
-        stats.boundaries,
-        segment_peak=stats.segment_peak,
-        true_peak=stats.true_peak_clean,
-        mono_squares=stats.mono_squares,
-        mono_peaks=stats.mono_peaks,
-        sample_rate=rate,
-    )
+    dynamics = stats.dynamics(rate)
     frames = FrameFeatures(
         times_s=levels.times_s,
         rms_dbfs=rms_dbfs,

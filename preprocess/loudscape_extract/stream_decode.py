@@ -29,7 +29,12 @@ from loudscape_extract.audio import (
     read_blocks,
 )
 from loudscape_extract.dsp import fft_convolve, sos_impulse_response
-from loudscape_extract.dynamics import dr_block_length, highpass_sos
+from loudscape_extract.dynamics import (
+    Dynamics,
+    dr_block_length,
+    dynamics_from_segments,
+    highpass_sos,
+)
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.loudness import (
     TRUE_PEAK_OVERSAMPLING,
@@ -336,6 +341,19 @@ class SignalStats:
     dr_lengths: np.ndarray
     true_peak_decoded: float
     window_maxima: dict = field(default_factory=dict)
+
+    def dynamics(self, sample_rate: float) -> Dynamics:
+        """Short-term loudness, PSR and 3 s crest every 100 ms from these sums
+        (:func:`~loudscape_extract.dynamics.dynamics_from_segments`)."""
+        return dynamics_from_segments(
+            self.energy,
+            self.boundaries,
+            segment_peak=self.segment_peak,
+            true_peak=self.true_peak_clean,
+            mono_squares=self.mono_squares,
+            mono_peaks=self.mono_peaks,
+            sample_rate=sample_rate,
+        )
 
 
 def signal_pass(
