@@ -28,9 +28,8 @@ from loudscape_extract.dynamics import (
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.loudness import (
     loudness_from_energy,
-    segment_energy,
+    segment_energy_and_maxima,
     true_peak_dbtp,
-    window_maxima,
 )
 from loudscape_extract.normalization import PRESETS, preset_gain, streaming_gains
 
@@ -126,7 +125,7 @@ def version_metrics(audio: Audio) -> tuple[dict, np.ndarray, np.ndarray]:
     rate = audio.sample_rate
     clean, dc = dc_and_highpass(samples, sample_rate=rate, highpass_hz=None)
     mono_clean = mix_to_mono(samples) - np.float32(dc.mean())
-    energy = segment_energy(clean, rate)
+    energy, maxima = segment_energy_and_maxima(clean, sample_rate=rate)
     dynamics = short_term_dynamics(clean, mono_clean, sample_rate=rate, energy=energy)
     integrated, lra = loudness_from_energy(*energy)
     clean_peak = 20.0 * math.log10(dynamics.true_peak) if dynamics.true_peak > 0 else None
@@ -137,7 +136,6 @@ def version_metrics(audio: Audio) -> tuple[dict, np.ndarray, np.ndarray]:
         "plr_db": None if integrated is None or clean_peak is None else clean_peak - integrated,
         "dr_db": dr_meter(clean, sample_rate=rate),
     }
-    maxima = window_maxima(clean, sample_rate=rate)
     metrics["max_momentary_lufs"] = maxima.get("max_momentary_lufs")
     metrics["max_short_term_lufs"] = maxima.get("max_short_term_lufs")
     metrics["psr_median_db"] = song_dynamics_metrics(dynamics)["psr_median_db"]

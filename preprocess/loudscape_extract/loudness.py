@@ -32,6 +32,7 @@ __all__ = [
     "interpolator_taps",
     "sample_peak_dbfs",
     "segment_energy",
+    "segment_energy_and_maxima",
     "short_term_loudness",
     "valid_interpolated_samples",
     "true_peak_dbtp",
@@ -129,22 +130,37 @@ def segment_energy(samples: np.ndarray, sample_rate: float) -> tuple[np.ndarray,
     Returns ``(energy [n_segments], boundaries [n_segments + 1])`` with boundaries in samples.
     """
     samples = _as_channels(samples)
-    n_samples, n_channels = samples.shape
+    boundaries = _segment_boundaries(samples.shape[0], sample_rate)
+    if boundaries.shape[0] == 1:
+        return np.zeros(0), boundaries
+    return _segment_sums(*_k_weighted(samples, sample_rate), boundaries), boundaries
+
+
+def _segment_boundaries(n_samples: int, sample_rate: float) -> np.ndarray:
+    """The sample boundaries of the complete 100 ms segments (one more than segments)."""
     n_segments = int(math.floor(n_samples / (_SEGMENT_S * sample_rate) + 1e-9))
     boundaries = np.round(np.arange(n_segments + 1) * _SEGMENT_S * sample_rate).astype(np.int64)
-    boundaries = np.minimum(boundaries, n_samples)
-    energy = np.zeros(n_segments)
-    if n_segments == 0:
-        return energy, boundaries
-    sos = k_weighting_sos(sample_rate=sample_rate)
-    gains = channel_gains(n_channels)
+    return np.minimum(boundaries, n_samples)
+
+
+def _k_weighted(samples: np.ndarray, sample_rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """The K-weighted channels that have a weight (``[n_used, n_samples]``, float32: relative
+    error ~1e-7 of the signal, far below any gate) and those channels' weights."""
+    gains = channel_gains(samples.shape[1])
     used = np.flatnonzero(gains)
-    # float32 working precision: relative error ~1e-7 of the signal, far below any gate.
-    filtered = sos_filter(sos, samples[:, used].T, dtype=np.float32)
-    for row, channel in enumerate(used):
+    sos = k_weighting_sos(sample_rate=sample_rate)
+    return sos_filter(sos, samples[:, used].T, dtype=np.float32), gains[used]
+
+
+def _segment_sums(filtered: np.ndarray, gains: np.ndarray, boundaries: np.ndarray) -> np.ndarray:
+    """Channel-weighted sums of squares of ``filtered`` per segment between ``boundaries``."""
+    energy = np.zeros(boundaries.shape[0] - 1)
+    if energy.shape[0] == 0:
+        return energy
+    for row, gain in enumerate(gains):
         squared = np.square(filtered[row, : boundaries[-1]], dtype=np.float64)
-        energy += gains[channel] * np.add.reduceat(squared, boundaries[:-1])
-    return energy, boundaries
+        energy += gain * np.add.reduceat(squared, boundaries[:-1])
+    return energy
 
 
 def _blocks(energy: np.ndarray, boundaries: np.ndarray, n_segments: int) -> np.ndarray:
@@ -454,14 +470,37 @@ def window_maxima(samples: np.ndarray, *, sample_rate: float) -> dict[str, float
     """
     samples = _as_channels(samples)
     _check_rate(sample_rate)
-    gains = channel_gains(samples.shape[1])
-    used = np.flatnonzero(gains)
-    filtered = sos_filter(
-        k_weighting_sos(sample_rate=sample_rate), samples[:, used].T, dtype=np.float32
-    )
     maxima = WindowMaxima(sample_rate=sample_rate)
-    maxima.feed(weighted_power(filtered, gains[used]))
+    maxima.feed(weighted_power(*_k_weighted(samples, sample_rate)))
     return maxima.result()
+
+
+def segment_energy_and_maxima(
+    samples: np.ndarray, *, sample_rate: float
+) -> tuple[tuple[np.ndarray, np.ndarray], dict[str, float | None]]:
+    """:func:`segment_energy` and :func:`window_maxima` of the same samples from one
+    K-weighting pass (the filter is most of either's cost): ``((energy, boundaries),
+    maxima)``, each equal to what those functions give.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(4 * 8000) / 8000
+    >>> tone = 0.1 * np.sin(2 * np.pi * 1000 * t)
+    >>> (energy, boundaries), maxima = segment_energy_and_maxima(tone, sample_rate=8000)
+    >>> np.array_equal(energy, segment_energy(tone, 8000)[0])
+    True
+    >>> maxima == window_maxima(tone, sample_rate=8000)
+    True
+    """
+    samples = _as_channels(samples)
+    _check_rate(sample_rate)
+    boundaries = _segment_boundaries(samples.shape[0], sample_rate)
+    filtered, gains = _k_weighted(samples, sample_rate)
+    energy = _segment_sums(filtered, gains, boundaries)
+    maxima = WindowMaxima(sample_rate=sample_rate)
+    maxima.feed(weighted_power(filtered, gains))
+    return (energy, boundaries), maxima.result()
 
 
 def momentary_per_frame(

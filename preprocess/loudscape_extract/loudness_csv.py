@@ -48,9 +48,8 @@ from loudscape_extract.loudness import (
     MOMENTARY_S,
     SHORT_TERM_S,
     loudness_from_energy,
-    segment_energy,
+    segment_energy_and_maxima,
     true_peak_dbtp,
-    window_maxima,
 )
 from loudscape_extract.measures import WINDOW_MAXIMA_KEYS
 from loudscape_extract.notices import warning_lines
@@ -132,7 +131,7 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
     (-20.0, -20.0)
     """
     clean, dc = dc_and_highpass(samples, sample_rate=sample_rate, highpass_hz=None)
-    energy, boundaries = segment_energy(clean, sample_rate)
+    (energy, boundaries), maxima = segment_energy_and_maxima(clean, sample_rate=sample_rate)
     segment_peak, overall_peak = segment_true_peak(clean, boundaries)
     mono = np.asarray(mix_to_mono(clean)[: boundaries[-1]], dtype=np.float64)
     starts = boundaries[:-1].astype(np.int64)
@@ -153,7 +152,7 @@ def audio_curves(samples: np.ndarray, *, sample_rate: float) -> tuple[list[dict]
         segment_peak=segment_peak,
         dynamics=dynamics,
         sample_rate=sample_rate,
-        maxima=window_maxima(clean, sample_rate=sample_rate),
+        maxima=maxima,
         true_peak=10.0 ** (true_peak / 20.0) if true_peak is not None else 0.0,
         sample_peak=float(np.max(np.abs(samples))) if samples.size else 0.0,
         dc=dc,
