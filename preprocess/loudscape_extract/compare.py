@@ -83,6 +83,9 @@ class Version:
         Band levels at matched loudness, dB (relative to full scale).
     spectrum_difference_db : np.ndarray
         ``spectrum_db`` minus the first version's, per band.
+    warnings : tuple of str
+        The decoder's warning (a truncated or corrupt file: the numbers are of the part that
+        decoded), in the JSON and the CSV, since a reader of those sees no stderr.
     """
 
     path: str
@@ -93,6 +96,7 @@ class Version:
     short_term_lufs: np.ndarray
     spectrum_db: np.ndarray
     spectrum_difference_db: np.ndarray
+    warnings: tuple[str, ...] = ()
 
     def to_json(self) -> dict:
         def clean(v):
@@ -111,6 +115,7 @@ class Version:
                 str(f): clean(d)
                 for f, d in zip(THIRD_OCTAVE_HZ, self.spectrum_difference_db, strict=True)
             },
+            "warnings": list(self.warnings),
         }
 
 
@@ -234,6 +239,7 @@ def compare_versions(
                 short_term_lufs=short_term,
                 spectrum_db=spectrum,
                 spectrum_difference_db=spectrum - reference_spectrum,
+                warnings=(audio.warning,) if audio.warning else (),
             )
         )
     return out

@@ -43,6 +43,7 @@ CSV_COLUMNS = (
     *METRIC_KEYS,
     *(f"{key}_diff" for key in METRIC_KEYS),
     *(f"streaming_{service.key}_db" for service in SERVICES),
+    "warnings",
 )
 
 
@@ -68,6 +69,7 @@ def _rows(versions: list[Version]) -> list[dict]:
             row[f"{key}_diff"] = None if value is None or base is None else value - base
         for service in SERVICES:
             row[f"streaming_{service.key}_db"] = v.metrics.get("streaming", {}).get(service.key)
+        row["warnings"] = "; ".join(v.warnings)
         rows.append(row)
     return rows
 
@@ -210,6 +212,14 @@ def write_sheet(path: str, versions: list[Version], *, match: str) -> None:
         color="0.3",
         va="bottom",
     )
+    warned = [
+        f"{chr(ord('A') + i)} ({_name(v.path)}): {line}"
+        for i, v in enumerate(versions)
+        for line in v.warnings
+    ]
+    if warned:
+        text = "warning: " + " | ".join(warned)
+        fig.text(0.06, 0.015, text[:300], fontsize=7.5, color="#b00000", va="bottom")
     try:
         with atomic_output(path) as temporary:
             fig.savefig(temporary, format=extension[1:])

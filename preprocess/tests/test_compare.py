@@ -178,3 +178,24 @@ def test_the_command_refuses_before_work(versions, tmp_path, capsys):
     assert "2 to 8 versions" in capsys.readouterr().err
     assert main(["compare", versions["a"], versions["tilt"]]) == 1
     assert "say what to write" in capsys.readouterr().err
+
+
+def test_a_truncated_version_s_warning_is_in_the_json_and_the_csv(versions, tmp_path, capsys):
+    """The app runs ``compare --json -q`` and reads stdout only: a version decoded in part
+    must say so in the JSON (and the CSV), not on stderr alone."""
+    flac = tmp_path / "remaster.flac"
+    _ffmpeg("-i", versions["louder"], str(flac))
+    data = flac.read_bytes()
+    half = tmp_path / "half.flac"
+    half.write_bytes(data[: len(data) // 2])
+    table = tmp_path / "table.csv"
+    code = main(["compare", versions["a"], str(half), "--json", "-q", "--csv", str(table)])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    summary = json.loads(captured.out)
+    assert summary["versions"][0]["warnings"] == []
+    (line,) = summary["versions"][1]["warnings"]
+    assert "truncated" in line
+    with open(table, newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert rows[0]["warnings"] == "" and "truncated" in rows[1]["warnings"]
