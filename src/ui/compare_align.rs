@@ -6,6 +6,7 @@
 //! panel's part: the offset and its confidence, the "match loudness" switch and the nudge. What
 //! is kept and decided is `state/alignment.rs`.
 
+use std::borrow::Cow;
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Duration;
@@ -34,11 +35,15 @@ fn align_on_thread(a: PathBuf, b: PathBuf) -> Receiver<Result<Comparison, String
     receiver
 }
 
-/// B's cloud with its time moved onto A's by the alignment (as it is, before one has come).
-pub(super) fn aligned_b(alignment: &CompareAlignment, b: &PointCloud) -> PointCloud {
+/// B's cloud with its time moved onto A's by the alignment (B itself, not a copy, before one
+/// has come).
+pub(super) fn aligned_b<'a>(
+    alignment: &CompareAlignment,
+    b: &'a PointCloud,
+) -> Cow<'a, PointCloud> {
     match alignment.offset_s() {
-        Some(offset) => crate::data::compare::aligned_in_time(b, offset),
-        None => b.clone(),
+        Some(offset) => Cow::Owned(crate::data::compare::aligned_in_time(b, offset)),
+        None => Cow::Borrowed(b),
     }
 }
 

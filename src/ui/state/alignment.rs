@@ -123,9 +123,9 @@ impl CompareAlignment {
     /// B's offset against A for the pictures (B's time of A's moment `t` is `t + offset`),
     /// None when B is not aligned (no comparison yet, or an unrelated pair).
     pub(in crate::ui) fn offset_s(&self) -> Option<f64> {
-        self.b_alignment()
-            .filter(|a| a.alignable)
-            .map(|a| a.offset_s)
+        // Read in place: the panel asks every frame, and b_alignment copies the segments.
+        let found = &self.comparison.as_ref()?.versions.get(1)?.alignment;
+        found.alignable.then(|| found.offset_s + self.nudge_s)
     }
 
     /// The time a switch to `to` seeks to, `t` being the time of the side heard now: the same
