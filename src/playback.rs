@@ -179,6 +179,18 @@ pub fn resolve_source(cloud: &PointCloud) -> Result<PathBuf, PlaybackError> {
     })
 }
 
+/// A song cloud's length in seconds, as `loudscape video` and the window's export take it: its
+/// source's duration as recorded, else the end of the time axis.
+pub fn song_duration_s(cloud: &PointCloud) -> f64 {
+    cloud
+        .meta
+        .source
+        .as_ref()
+        .and_then(|s| s.duration_s)
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .unwrap_or_else(|| cloud.meta.axes.x.value_at(1.0))
+}
+
 /// The playback position and state shared between the UI and the audio thread.
 #[derive(Debug)]
 pub struct Transport {

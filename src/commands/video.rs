@@ -283,7 +283,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         }
         (0.0, args.sweep, Sound::Silence)
     } else {
-        let duration = song_duration(&cloud);
+        let duration = loudscape::playback::song_duration_s(&cloud);
         let (start, end) = passage(args.start, args.end, duration)?;
         let sound = if args.silent {
             Sound::Silence
@@ -413,17 +413,6 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     );
     super::wrote(&args.output, &detail_text);
     Ok(())
-}
-
-/// The song's length: the source's duration as recorded, else the end of the time axis.
-fn song_duration(cloud: &PointCloud) -> f64 {
-    cloud
-        .meta
-        .source
-        .as_ref()
-        .and_then(|s| s.duration_s)
-        .filter(|d| d.is_finite() && *d > 0.0)
-        .unwrap_or_else(|| cloud.meta.axes.x.value_at(1.0))
 }
 
 /// Frame `k` of the video, without the strip.
