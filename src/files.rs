@@ -73,21 +73,34 @@ pub fn own_process_group(command: &mut std::process::Command) -> &mut std::proce
 }
 
 /// Linux: the child gets SIGKILL when the thread that started it ends (the app killed).
+pub fn die_with_parent(command: &mut std::process::Command) {
+    #[cfg(target_os = "linux")]
+    on_parent_death(command, libc::SIGKILL);
+    #[cfg(not(target_os = "linux"))]
+    let _ = command;
+}
+
+/// Linux: the child gets SIGTERM when the thread that started it ends (the app killed), so
+/// that it may clean up (a command that removes its temporary files on SIGTERM).
+pub fn stop_with_parent(command: &mut std::process::Command) {
+    #[cfg(target_os = "linux")]
+    on_parent_death(command, libc::SIGTERM);
+    #[cfg(not(target_os = "linux"))]
+    let _ = command;
+}
+
 #[cfg(target_os = "linux")]
-fn die_with_parent(command: &mut std::process::Command) {
+fn on_parent_death(command: &mut std::process::Command, signal: libc::c_int) {
     use std::os::unix::process::CommandExt;
     // SAFETY: between fork and exec the closure only calls prctl(2), which is
     // async-signal-safe and touches no memory of the parent.
     unsafe {
-        command.pre_exec(|| {
-            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+        command.pre_exec(move || {
+            libc::prctl(libc::PR_SET_PDEATHSIG, signal);
             Ok(())
         });
     }
 }
-
-#[cfg(not(target_os = "linux"))]
-fn die_with_parent(_: &mut std::process::Command) {}
 
 /// A running child process registered to be killed (its whole process group) when the app gets
 /// SIGTERM, SIGINT or SIGHUP; unregistered when dropped.
