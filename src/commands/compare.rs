@@ -2,7 +2,8 @@
 //! loudness (docs/COMPARE.md, "Releases"). The analysis is the extractor's
 //! (`loudscape-extract compare`, the one implementation of alignment and loudness); this command
 //! takes what the app takes (audio files, or song clouds whose recorded source it finds as
-//! playback does), checks the outputs before any work, and hands the extractor absolute paths.
+//! playback does, checked against the cloud: `playback::checked_source`), checks the outputs
+//! before any work, and hands the extractor absolute paths.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -11,6 +12,7 @@ use anyhow::{Context, bail};
 use clap::Args;
 
 use loudscape::extract::locate;
+use loudscape::playback::SourceError;
 
 /// The most versions one comparison takes.
 pub const MAX_VERSIONS: usize = 8;
@@ -55,11 +57,15 @@ fn audio_of(path: &Path) -> anyhow::Result<PathBuf> {
     }
     let cloud = loudscape::data::cloud::load(path)
         .with_context(|| format!("{}: cannot read the cloud", path.display()))?;
-    loudscape::playback::resolve_source(&cloud).map_err(|e| {
-        anyhow::anyhow!(
+    loudscape::playback::checked_source(&cloud).map_err(|e| match e {
+        SourceError::NotFound(e) => anyhow::anyhow!(
             "{}: the comparison needs the song's audio, and its source is not found ({e})",
             path.display()
-        )
+        ),
+        e => anyhow::anyhow!(
+            "{}: the comparison needs the song's audio: {e}",
+            path.display()
+        ),
     })
 }
 

@@ -8,7 +8,7 @@
 use loudscape::data::cloud::PointCloud;
 use loudscape::data::compare::{aligned_in_time, aligned_words, matched_in_level};
 use loudscape::extract::align::compare_audio;
-use loudscape::playback::resolve_source;
+use loudscape::playback::checked_source;
 
 use super::render::DrawArgs;
 
@@ -31,7 +31,7 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
     let mut gain = None;
     if draw.align {
         let audio = |cloud: &PointCloud| {
-            resolve_source(cloud).map_err(|e| {
+            checked_source(cloud).map_err(|e| {
                 anyhow::anyhow!("{}: --align needs its audio: {e}", cloud.path.display())
             })
         };

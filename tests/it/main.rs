@@ -33,6 +33,7 @@ mod reliability_loader;
 mod render_points;
 mod screenshot;
 mod shaders_msl;
+mod source_checked;
 mod surface;
 mod text_scripts;
 mod video;
