@@ -2,44 +2,11 @@
 //! opens side by side, and key B switches the heard song without moving the playback
 //! position (read from the new song's transport, which the window reports on stderr).
 
-use crate::common;
+use crate::common::{self, switch_with_b, xdotool};
 
-use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
-use std::time::{Duration, Instant};
-
-fn xdotool(args: &[&str]) -> Option<String> {
-    let output = Command::new("xdotool").args(args).output().ok()?;
-    output
-        .status
-        .success()
-        .then(|| String::from_utf8_lossy(&output.stdout).trim().to_string())
-}
-
-/// The next "listening to X at T s" line within `timeout`, pressing B on the window every
-/// second until one comes.
-fn switch(window: &str, lines: &Receiver<String>, timeout: Duration) -> Option<(String, f64)> {
-    let start = Instant::now();
-    while start.elapsed() < timeout {
-        xdotool(&["windowfocus", "--sync", window]);
-        xdotool(&["key", "--clearmodifiers", "b"]);
-        let deadline = Instant::now() + Duration::from_secs(1);
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            let Ok(line) = lines.recv_timeout(left) else {
-                break;
-            };
-            if let Some(rest) = line.strip_prefix("listening to ") {
-                let mut words = rest.split_whitespace();
-                let side = words.next()?.to_string();
-                let seconds: f64 = words.nth(1)?.parse().ok()?;
-                return Some((side, seconds));
-            }
-        }
-    }
-    None
-}
+use std::time::Duration;
 
 #[test]
 fn switching_a_and_b_keeps_the_playback_position() {
@@ -70,34 +37,23 @@ fn switching_a_and_b_keeps_the_playback_position() {
         .stdout(Stdio::null())
         .spawn()
         .expect("start loudscape");
-    let (sender, lines) = channel();
-    let stderr = child.stderr.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let _ = sender.send(line);
-        }
-    });
+    let lines = common::stderr_lines(&mut child);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         // Its own window: the other window tests' run in the same process, on the same display.
         let window = common::wait_for_window(&mut child).expect("no window");
-        let (side, at_b) =
-            switch(&window, &lines, Duration::from_secs(120)).expect("B never played");
+        let (side, at_b, _) =
+            switch_with_b(&window, &lines, Duration::from_secs(120)).expect("B never played");
         assert_eq!(side, "B");
         assert!((at_b - 12.5).abs() < 0.01, "B starts at {at_b} s, not 12.5");
-        let (side, at_a) =
-            switch(&window, &lines, Duration::from_secs(30)).expect("A never came back");
+        let (side, at_a, _) =
+            switch_with_b(&window, &lines, Duration::from_secs(30)).expect("A never came back");
         assert_eq!(side, "A");
         assert!(
             (at_a - at_b).abs() < 0.01,
             "A came back at {at_a} s, B was at {at_b}"
         );
         let shot = common::output_dir().join("window_compare.png");
-        let status = Command::new("import")
-            .args(["-window", "root"])
-            .arg(&shot)
-            .status()
-            .expect("import");
-        assert!(status.success());
+        common::screenshot_root(&shot);
         let image = image::open(&shot).unwrap().to_rgba8();
         // Side by side: both halves of the 3D view (right of the 270-point panel) show data.
         let (w, h) = image.dimensions();

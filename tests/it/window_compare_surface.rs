@@ -5,13 +5,11 @@
 //! the coarse stand-in until a method toggle extracted again). The window tells stderr each
 //! compare surface it shows; the reference is the same compare built and extracted here.
 
-use crate::common::{self, assert_display, repo, wait_for_window};
+use crate::common::{self, assert_display, line_starting, repo, wait_for_window};
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
-use std::time::{Duration, Instant};
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
 use loudscape::data::cloud::PointCloud;
 use loudscape::render::compare::CompareScene;
@@ -53,36 +51,6 @@ fn reference(a: &Path, b: &Path, method: SurfaceMethod) -> (u32, u32) {
     (triangles[0], triangles[1])
 }
 
-/// The window's stderr, a line at a time.
-fn lines_of(child: &mut Child) -> Receiver<String> {
-    let (sender, lines) = channel();
-    let stderr = child.stderr.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let _ = sender.send(line);
-        }
-    });
-    lines
-}
-
-/// The first line starting with `start` within `timeout`; every line seen goes to `seen`.
-fn line_starting(
-    lines: &Receiver<String>,
-    start: &str,
-    timeout: Duration,
-    seen: &mut Vec<String>,
-) -> Option<String> {
-    let deadline = Instant::now() + timeout;
-    while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-        let line = lines.recv_timeout(left).ok()?;
-        seen.push(line.clone());
-        if line.starts_with(start) {
-            return Some(line);
-        }
-    }
-    None
-}
-
 /// "compare surface: A 123 triangles, B 45 triangles (...)" -> (123, 45).
 fn triangles_told(line: &str) -> (u32, u32) {
     let words: Vec<&str> = line.split_whitespace().collect();
@@ -114,7 +82,7 @@ fn first_compare_surface(a: &Path, b: &Path, press: &[&str], name: &str) -> ((u3
         .stderr(Stdio::piped())
         .spawn()
         .expect("start loudscape");
-    let lines = lines_of(&mut child);
+    let lines = common::stderr_lines(&mut child);
     let mut seen = Vec::new();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         if wait_for_window(&mut child).is_none() {
@@ -143,13 +111,7 @@ fn first_compare_surface(a: &Path, b: &Path, press: &[&str], name: &str) -> ((u3
             &mut seen,
         )
         .unwrap_or_else(|| panic!("no compare surface was shown: {seen:#?}"));
-        let shot = common::output_dir().join(format!("{name}.png"));
-        let status = Command::new("import")
-            .args(["-window", "root"])
-            .arg(&shot)
-            .status()
-            .expect("import (imagemagick)");
-        assert!(status.success());
+        common::screenshot_root(&common::output_dir().join(format!("{name}.png")));
         (triangles_told(&told), frames)
     }));
     let _ = child.kill();

@@ -4,12 +4,10 @@
 //! arguments, it shows the same compare (B is remembered with A) in the same view. Needs a
 //! display (`make test` runs it under xvfb-run) and xdotool.
 
-use crate::common::{self, assert_display, repo, wait_for_window};
+use crate::common::{self, assert_display, line_starting, repo, wait_for_window};
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::sync::mpsc::channel;
 use std::time::{Duration, Instant};
 
 /// The camera's azimuth in eframe's saved state, when there is one.
@@ -38,11 +36,7 @@ fn wait_for_saved(state: &Path, wanted: impl Fn(&str) -> bool) -> Option<String>
 }
 
 fn xdotool(args: &[&str]) {
-    let status = Command::new("xdotool")
-        .args(args)
-        .status()
-        .expect("xdotool");
-    assert!(status.success(), "xdotool {args:?}");
+    assert!(common::xdotool(args).is_some(), "xdotool {args:?}");
 }
 
 #[test]
@@ -109,26 +103,15 @@ fn a_window_closed_from_outside_comes_back_as_it_was_left() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("start loudscape again");
-    let (sender, lines) = channel();
-    let stderr = child.stderr.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let _ = sender.send(line);
-        }
-    });
+    let lines = common::stderr_lines(&mut child);
     let mut seen = Vec::new();
-    let deadline = Instant::now() + Duration::from_secs(180);
-    let mut shown = false;
-    while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-        let Ok(line) = lines.recv_timeout(left) else {
-            break;
-        };
-        shown = line.starts_with("compare surface:");
-        seen.push(line);
-        if shown {
-            break;
-        }
-    }
+    let shown = line_starting(
+        &lines,
+        "compare surface:",
+        Duration::from_secs(180),
+        &mut seen,
+    )
+    .is_some();
     let _ = child.kill();
     let _ = child.wait();
     assert!(shown, "the compare did not come back: {seen:#?}");

@@ -1,6 +1,6 @@
 //! Helpers shared by the integration tests: a device on whatever adapter exists (lavapipe on
 //! machines without a GPU), golden-image comparison with a tolerance, the demo song, running the
-//! `loudscape` binary, and the window tests' display, window and process look-ups.
+//! `loudscape` binary, and the window tests' display, window, stderr and process look-ups.
 
 #![allow(dead_code)]
 
@@ -8,8 +8,10 @@ mod golden;
 pub use golden::{RASTER_EDGES, RAY_MARCH, assert_golden};
 
 use std::ffi::OsStr;
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output};
+use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 use loudscape::data::cloud::{self, PointCloud};
@@ -174,6 +176,82 @@ pub fn wait_for_window(child: &mut Child) -> Option<String> {
         std::thread::sleep(Duration::from_millis(200));
     }
     None
+}
+
+/// `xdotool` with `args`: what it printed, trimmed, if it ran and succeeded.
+pub fn xdotool(args: &[&str]) -> Option<String> {
+    let output = Command::new("xdotool").args(args).output().ok()?;
+    output
+        .status
+        .success()
+        .then(|| String::from_utf8_lossy(&output.stdout).trim().to_string())
+}
+
+/// `child`'s stderr (spawned piped) a line at a time, read on a thread of its own.
+pub fn stderr_lines(child: &mut Child) -> Receiver<String> {
+    let (sender, lines) = channel();
+    let stderr = child.stderr.take().expect("the child's stderr is piped");
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = sender.send(line);
+        }
+    });
+    lines
+}
+
+/// The first line starting with `prefix` within `timeout`; every line read goes to `seen`.
+pub fn line_starting(
+    lines: &Receiver<String>,
+    prefix: &str,
+    timeout: Duration,
+    seen: &mut Vec<String>,
+) -> Option<String> {
+    let deadline = Instant::now() + timeout;
+    while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+        let line = lines.recv_timeout(left).ok()?;
+        seen.push(line.clone());
+        if line.starts_with(prefix) {
+            return Some(line);
+        }
+    }
+    None
+}
+
+/// Presses B on a compare's `window` every second until a "listening to X at T s" line comes
+/// (within `timeout`): X, T and the whole line.
+pub fn switch_with_b(
+    window: &str,
+    lines: &Receiver<String>,
+    timeout: Duration,
+) -> Option<(String, f64, String)> {
+    let start = Instant::now();
+    while start.elapsed() < timeout {
+        xdotool(&["windowfocus", "--sync", window]);
+        xdotool(&["key", "--clearmodifiers", "b"]);
+        let heard = line_starting(
+            lines,
+            "listening to ",
+            Duration::from_secs(1),
+            &mut Vec::new(),
+        );
+        if let Some(line) = heard {
+            let mut words = line["listening to ".len()..].split_whitespace();
+            let side = words.next()?.to_string();
+            let seconds: f64 = words.nth(1)?.parse().ok()?;
+            return Some((side, seconds, line));
+        }
+    }
+    None
+}
+
+/// The whole screen saved to `path` (imagemagick's `import`), to look at.
+pub fn screenshot_root(path: &Path) {
+    let status = Command::new("import")
+        .args(["-window", "root"])
+        .arg(path)
+        .status()
+        .expect("import (imagemagick)");
+    assert!(status.success(), "import -window root {}", path.display());
 }
 
 /// Runs the window on `file` until it saves its screenshot to `shot`; returns the screenshot.
