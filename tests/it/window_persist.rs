@@ -64,23 +64,24 @@ fn a_window_closed_from_outside_comes_back_as_it_was_left() {
         let first = wait_for_saved(&state, |text| text.contains(&b_name))
             .expect("the state was never saved while the window was open");
         let before = saved_azimuth(&state).unwrap_or_else(|| panic!("no camera in {first}"));
-        // Orbit with the mouse over the 3D view (right of the side panel), paced so the
-        // window's frames see the button held while it moves.
+        // Orbit with the mouse over the 3D view (right of the side panel): the button is held
+        // and the pointer moves right a step at a time until the window has saved a turned
+        // camera, so its frames see the drag however slowly they come.
+        let turned = || saved_azimuth(&state).is_some_and(|a| (a - before).abs() > 1e-3);
         xdotool(&["mousemove", "--window", &window, "700", "300"]);
-        std::thread::sleep(Duration::from_millis(300));
         xdotool(&["mousedown", "1"]);
-        for step in 1..=12 {
-            std::thread::sleep(Duration::from_millis(150));
-            let x = (700 + step * 25).to_string();
-            xdotool(&["mousemove", "--window", &window, &x, "300"]);
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let mut x = 700;
+        while !turned() && Instant::now() < deadline {
+            if x < 1000 {
+                x += 25;
+                xdotool(&["mousemove", "--window", &window, &x.to_string(), "300"]);
+            }
+            std::thread::sleep(Duration::from_millis(100));
         }
-        std::thread::sleep(Duration::from_millis(300));
         xdotool(&["mouseup", "1"]);
         xdotool(&["mousemove", "--window", &window, "5", "5"]);
-        wait_for_saved(&state, |_| {
-            saved_azimuth(&state).is_some_and(|a| (a - before).abs() > 1e-3)
-        })
-        .expect("the orbit was never saved");
+        wait_for_saved(&state, |_| turned()).expect("the orbit was never saved");
         let orbited = saved_azimuth(&state).unwrap();
         xdotool(&["windowclose", &window]);
         (orbited, before)
