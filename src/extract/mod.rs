@@ -352,16 +352,19 @@ pub fn cloud_for_audio_watching(
             (temporary_scratch()?, false)
         }
     };
-    let mut extracted = child::run(
-        &extractor.path,
-        &absolute,
-        audio,
-        scratch.path(),
-        settings,
-        cancel,
-        on_progress,
-        on_points,
-    );
+    let mut extract_in = |scratch: &Path| {
+        child::run(
+            &extractor.path,
+            &absolute,
+            audio,
+            scratch,
+            settings,
+            cancel,
+            &mut *on_progress,
+            &mut *on_points,
+        )
+    };
+    let mut extracted = extract_in(scratch.path());
     // No room in the cache folder (a full disk): the cache stops nothing, the song is
     // extracted again in the temporary folder.
     if keep
@@ -372,16 +375,7 @@ pub fn cloud_for_audio_watching(
         drop(scratch);
         scratch = temporary_scratch()?;
         keep = false;
-        extracted = child::run(
-            &extractor.path,
-            &absolute,
-            audio,
-            scratch.path(),
-            settings,
-            cancel,
-            on_progress,
-            on_points,
-        );
+        extracted = extract_in(scratch.path());
     }
     let (partial, said) = extracted?;
     let (cloud, sha256, bytes) =
