@@ -121,7 +121,7 @@ impl Comparison {
 }
 
 /// Runs `loudscape-extract compare VERSIONS --json -q [--match M]` and reads its answer.
-/// The versions are audio files (a cloud's source, [`crate::playback::resolve_source`]).
+/// The versions are audio files (a cloud's source, [`crate::playback::checked_source`]).
 pub fn compare_audio(versions: &[PathBuf], matched_to: &str) -> Result<Comparison, String> {
     let extractor = locate::extractor()?;
     let mut command = Command::new(&extractor);
