@@ -134,11 +134,19 @@ impl DrawArgs {
         Ok(())
     }
 
-    /// Refuses an unknown `--normalize` preset before anything is loaded or extracted.
-    pub fn check_normalize(&self) -> anyhow::Result<()> {
-        loudscape::data::normalize::parse_preset(&self.normalize)
-            .map(|_| ())
-            .map_err(anyhow::Error::msg)
+    /// Refuses an unknown `--normalize` preset, and a preset for `input` when it is an audio
+    /// file (a song: normalization applies to a timeline), before anything is loaded or
+    /// extracted.
+    pub fn check_normalize(&self, input: &Path) -> anyhow::Result<()> {
+        let preset = loudscape::data::normalize::parse_preset(&self.normalize)
+            .map_err(anyhow::Error::msg)?;
+        if preset.is_some() && loudscape::extract::is_audio(input) {
+            bail!(
+                "{}: normalization applies to a timeline, not a song cloud",
+                input.display()
+            );
+        }
+        Ok(())
     }
 
     /// `cloud` as heard under `--normalize` (a timeline's songs shifted by their playback
@@ -359,7 +367,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     settings.surface.iso_value = iso_value;
     args.draw.volume.apply(&mut settings)?;
     args.draw.colours.apply(&mut settings)?;
-    args.draw.check_normalize()?;
+    args.draw.check_normalize(&args.input)?;
     let mut cloud = args.draw.heard(load_cloud(&args.input)?)?;
     if let Some(seconds) = args.playhead {
         settings.markers = vec![playhead_marker(&cloud, seconds)?];

@@ -258,7 +258,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     args.draw.volume.apply(&mut settings)?;
     args.draw.colours.apply(&mut settings)?;
 
-    args.draw.check_normalize()?;
+    args.draw.check_normalize(&args.input)?;
     let cloud = args.draw.heard(load_cloud(&args.input)?)?;
     let timeline = cloud.meta.mode == DataMode::Timeline;
     if view_name == "timeline" && !timeline {

@@ -85,3 +85,32 @@ fn a_song_left_unnormalized_is_named_on_stderr_and_in_the_legend() {
     common::assert_success(&plain);
     assert!(!String::from_utf8_lossy(&plain.stderr).contains("normalized"));
 }
+
+/// An audio file is a song, and `--normalize` applies to a timeline: `render` and `video`
+/// refuse it at once, in one line, before the song is extracted (a 20-minute song took 50 s of
+/// extraction before the refusal). The extractor named here does not exist: any work would fail
+/// otherwise.
+#[test]
+fn normalizing_an_audio_file_is_refused_before_it_is_extracted() {
+    let dir = fresh_dir("normalize_audio_refused");
+    let song = common::repo().join("data/demo_song.flac");
+    for (command, out) in [("render", "song.png"), ("video", "song.mp4")] {
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_loudscape"))
+            .arg(command)
+            .arg(&song)
+            .args(["--normalize", "spotify", "-o"])
+            .arg(dir.join(out))
+            .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
+            .env("LOUDSCAPE_EXTRACT", dir.join("no-extractor"))
+            .output()
+            .expect("start loudscape");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{command}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{command}: {stderr}");
+        assert!(
+            stderr.contains("demo_song.flac: normalization applies to a timeline, not a song"),
+            "{command}: {stderr}"
+        );
+        assert!(!dir.join(out).exists(), "{command}");
+    }
+}
