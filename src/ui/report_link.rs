@@ -5,8 +5,9 @@
 //! that this button did not just write is never replaced: the next free `NAME.loudness-report-2.pdf`
 //! is taken instead. The job's state lives in egui's memory under one id, so the panel needs no
 //! field of the app: the button shows "making the report…" while the extractor runs, then the
-//! file written with the warnings the extractor printed about the song (a truncated decode:
-//! the report's readings are of what decoded), or the extractor's one-line reason.
+//! file written with the warnings the extractor printed about the song that the cloud's own
+//! (listed under it) do not already say (the audio truncated since the cloud was made: the
+//! report's readings are of what decoded), or the extractor's one-line reason.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -136,7 +137,14 @@ pub fn report_button(ui: &mut egui::Ui, cloud: &PointCloud) {
     match &job.result {
         Some(Ok(written)) => {
             ui.label(egui::RichText::new(format!("wrote {}", written.path.display())).small());
-            for warning in &written.warnings {
+            // Those the cloud's own warnings (listed under the button) do not already say.
+            let news = written.warnings.iter().filter(|w| {
+                !cloud
+                    .warnings()
+                    .iter()
+                    .any(|own| w.ends_with(own.message.as_str()))
+            });
+            for warning in news {
                 ui.label(
                     egui::RichText::new(format!("warning: {warning}"))
                         .small()
