@@ -63,18 +63,6 @@ pub(super) fn export_passage(
     edited.or(looped.filter(|(start, end)| end > start))
 }
 
-/// A song's length in seconds as `loudscape video` takes it: the source's, else the time
-/// axis's end.
-fn song_duration(cloud: &crate::data::cloud::PointCloud) -> f64 {
-    cloud
-        .meta
-        .source
-        .as_ref()
-        .and_then(|s| s.duration_s)
-        .filter(|d| d.is_finite() && *d > 0.0)
-        .unwrap_or_else(|| cloud.meta.axes.x.value_at(1.0))
-}
-
 /// The frame size a view of `px` exports at: its size rounded down to even sides, or
 /// [`FALLBACK_SIZE`] where that is too small or larger than `video` takes.
 pub(super) fn video_size(px: (u32, u32)) -> (u32, u32) {
@@ -250,7 +238,7 @@ impl LoudscapeApp {
         if loaded.cloud.meta.mode != DataMode::Song {
             return None;
         }
-        let (id, duration) = (loaded.id, song_duration(&loaded.cloud));
+        let (id, duration) = (loaded.id, crate::playback::song_duration_s(&loaded.cloud));
         if self.video_export.passage_for != Some(id) {
             self.video_export.passage = None;
             self.video_export.passage_for = Some(id);
@@ -382,7 +370,7 @@ impl LoudscapeApp {
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped());
-        stop_with_parent(&mut command);
+        crate::files::stop_with_parent(&mut command);
         let mut child = match command.spawn() {
             Ok(child) => child,
             Err(e) => {
@@ -611,25 +599,6 @@ struct PassageRow {
     duration: f64,
     /// Taken from the loop range (not edited).
     looped: bool,
-}
-
-/// Linux: the child gets SIGTERM if the window's process dies without stopping it, so it still
-/// removes its partial file.
-fn stop_with_parent(command: &mut Command) {
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        // SAFETY: between fork and exec the closure only calls prctl(2), which is
-        // async-signal-safe and touches no memory of the parent.
-        unsafe {
-            command.pre_exec(|| {
-                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
-                Ok(())
-            });
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = command;
 }
 
 #[cfg(test)]
