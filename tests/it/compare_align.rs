@@ -4,21 +4,11 @@
 //! at that offset and gain (the extractor's comparison), and its difference then shrinks to the
 //! STFT's frame-phase residue. Needs the project's extractor (.venv, `make venv`) and ffmpeg.
 
-use crate::common::{self, assert_success, repo};
+use crate::common::{self, assert_success, compare_render, compare_video, extractor, half, repo};
 
 use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
-
-fn extractor() -> PathBuf {
-    let path = repo().join(".venv/bin/loudscape-extract");
-    assert!(
-        path.is_file(),
-        "these tests run the Python extractor: install it with `make venv` ({} is missing)",
-        path.display()
-    );
-    path
-}
 
 /// Renders `a --compare b --view difference --measure level` with `extra`, the song cache in
 /// `dir/cache`; returns stderr, asserting success.
@@ -132,107 +122,23 @@ fn a_delayed_louder_copy_is_aligned_and_matched_before_the_difference() {
     assert!(after < before * 0.5, "{before} -> {after}");
 }
 
-/// `image` at half the size, each pixel the mean of four: the resolution yuv420p keeps colour
-/// at, so that what is compared is the picture, not the codec's loss (as tests/it/video.rs).
-fn half(image: &image::RgbaImage) -> image::RgbaImage {
-    image::imageops::resize(
-        image,
-        image.width() / 2,
-        image.height() / 2,
-        image::imageops::FilterType::Triangle,
-    )
-}
-
-/// The last frame of `path`'s video as RGBA (ffmpeg decodes every frame of the short video).
-fn last_frame(path: &Path, (w, h): (u32, u32)) -> image::RgbaImage {
-    let output = Command::new("ffmpeg")
-        .args(["-v", "error", "-i"])
-        .arg(path)
-        .args(["-map", "0:v:0", "-f", "rawvideo", "-pix_fmt", "rgba", "-"])
-        .output()
-        .expect("this test needs ffmpeg");
-    assert_success(&output);
-    let frame = (w * h * 4) as usize;
-    assert!(output.stdout.len() >= frame && output.stdout.len().is_multiple_of(frame));
-    let last = output.stdout[output.stdout.len() - frame..].to_vec();
-    image::RgbaImage::from_raw(w, h, last).unwrap()
-}
-
 /// `video A --compare B --offset` draws B on A's time as `render --compare --offset
 /// --playhead` does, and says the alignment.
 #[test]
 fn a_compare_video_follows_the_aligned_time() {
     let dir = common::fresh_dir("compare_align_video");
     let song = repo().join("data/demo_song.ply");
-    let song = song.to_str().unwrap();
-    let video = dir.join("aligned.mp4");
-    let output = common::loudscape(&[
-        "video",
-        song,
-        "--compare",
-        song,
-        "--view",
-        "compare",
-        "--offset",
-        "0.5",
-        "--size",
-        "640x360",
-        "--fps",
-        "5",
-        "--start",
-        "20",
-        "--end",
-        "20.4",
-        "--progress",
-        "none",
-        "-o",
-        video.to_str().unwrap(),
-    ]);
-    assert_success(&output);
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let offset = ["--offset", "0.5"];
+    let (frames, stderr) = compare_video(&song, &song, &offset, &dir.join("aligned.mp4"));
     assert!(stderr.contains("compare: B aligned +0.500 s"), "{stderr}");
-    let png = dir.join("aligned.png");
-    let output = common::loudscape(&[
-        "render",
-        song,
-        "--compare",
-        song,
-        "--view",
-        "compare",
-        "--offset",
-        "0.5",
-        "--size",
-        "640x360",
-        "--playhead",
-        "20.2",
-        "-o",
-        png.to_str().unwrap(),
-    ]);
-    assert_success(&output);
-    let render = image::open(&png).unwrap().to_rgba8();
-    let frame = last_frame(&video, (640, 360));
-    let (share, mean) = common::difference(&half(&frame), &half(&render), 32);
+    let render = compare_render(&song, &song, &offset, &dir.join("aligned.png"));
+    let frame = frames.last().expect("a frame");
+    let (share, mean) = common::difference(&half(frame), &half(&render), 32);
     println!("video frame against render --offset: {share} of pixels differ (mean {mean})");
     assert!(share < 0.002, "{share} of pixels differ (mean {mean})");
     // Not aligned, B's half is another picture.
-    let plain = dir.join("plain.png");
-    let output = common::loudscape(&[
-        "render",
-        song,
-        "--compare",
-        song,
-        "--view",
-        "compare",
-        "--size",
-        "640x360",
-        "--playhead",
-        "20.2",
-        "-o",
-        plain.to_str().unwrap(),
-    ]);
-    assert_success(&output);
-    let plain = image::open(&plain).unwrap().to_rgba8();
-    let (share_plain, _) = common::difference(&half(&frame), &half(&plain), 32);
+    let plain = compare_render(&song, &song, &[], &dir.join("plain.png"));
+    let (share_plain, _) = common::difference(&half(frame), &half(&plain), 32);
     println!("video frame against render without the offset: {share_plain} of pixels differ");
     assert!(
         share_plain > 10.0 * share.max(0.0005),

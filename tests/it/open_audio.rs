@@ -3,81 +3,19 @@
 //! of the same song reads the cache without running Python. Cancelling kills the extractor and
 //! leaves nothing behind.
 
-use crate::common::{self, fresh_dir, repo};
+use crate::common::{self, chord_with_clicks, extractor, fresh_dir, names_in, write_wav};
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use loudscape::extract::{self, ExtractError, Extractor, Progress, Settings};
-
-fn extractor() -> PathBuf {
-    let program = repo().join(".venv/bin/loudscape-extract");
-    assert!(
-        program.is_file(),
-        "these tests run the Python extractor: install it with `make venv` ({} is missing)",
-        program.display()
-    );
-    program
-}
 
 /// The project's extractor with its installed version.
 fn found() -> Extractor {
     let path = extractor();
     let version = extract::version::of(&path).expect("the extractor's version");
     Extractor { path, version }
-}
-
-/// `seconds` of a chord with a click every half second, 22,050 Hz mono 16-bit WAV.
-fn write_song(path: &Path, seconds: f32) {
-    let rate = 22_050u32;
-    let n = (seconds * rate as f32) as usize;
-    let mut samples = Vec::with_capacity(n);
-    for i in 0..n {
-        let t = i as f32 / rate as f32;
-        let chord: f32 = [220.0f32, 277.2, 329.6, 880.0]
-            .iter()
-            .map(|f| (std::f32::consts::TAU * f * t).sin())
-            .sum::<f32>()
-            * 0.15;
-        let click = if i % (rate as usize / 2) < 40 {
-            0.6
-        } else {
-            0.0
-        };
-        samples.push(((chord + click).clamp(-1.0, 1.0) * 32_000.0) as i16);
-    }
-    let data_len = (samples.len() * 2) as u32;
-    let mut bytes = Vec::with_capacity(44 + data_len as usize);
-    bytes.extend_from_slice(b"RIFF");
-    bytes.extend_from_slice(&(36 + data_len).to_le_bytes());
-    bytes.extend_from_slice(b"WAVEfmt ");
-    bytes.extend_from_slice(&16u32.to_le_bytes());
-    bytes.extend_from_slice(&1u16.to_le_bytes()); // PCM
-    bytes.extend_from_slice(&1u16.to_le_bytes()); // mono
-    bytes.extend_from_slice(&rate.to_le_bytes());
-    bytes.extend_from_slice(&(rate * 2).to_le_bytes());
-    bytes.extend_from_slice(&2u16.to_le_bytes());
-    bytes.extend_from_slice(&16u16.to_le_bytes());
-    bytes.extend_from_slice(b"data");
-    bytes.extend_from_slice(&data_len.to_le_bytes());
-    for s in samples {
-        bytes.extend_from_slice(&s.to_le_bytes());
-    }
-    std::fs::write(path, bytes).unwrap();
-}
-
-fn files_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .map(|entries| {
-            entries
-                .flatten()
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .collect()
-        })
-        .unwrap_or_default();
-    names.sort();
-    names
 }
 
 /// stderr holds exactly one line, the "wrote PNG (...)" summary: no progress, no noise.
@@ -94,7 +32,7 @@ fn assert_only_the_summary(err: &str, png: &Path) {
 fn render_takes_a_song_and_the_second_run_reads_the_cache() {
     let dir = fresh_dir("open_audio_render");
     let (song, cache) = (dir.join("song.wav"), dir.join("cache"));
-    write_song(&song, 3.0);
+    write_wav(&song, 3.0, 22_050, chord_with_clicks);
     let png = dir.join("v.png");
     let args = [
         "render".as_ref(),
@@ -112,7 +50,7 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
     // stderr is not a terminal: no progress lines, as the extractor does (the window tells);
     // only the one "wrote" summary every command prints.
     assert_only_the_summary(&err, &png);
-    let cached = files_in(&cache);
+    let cached = names_in(&cache);
     assert_eq!(
         cached.len(),
         2,
@@ -152,7 +90,7 @@ fn render_takes_a_song_and_the_second_run_reads_the_cache() {
 fn a_missing_extractor_names_the_file_and_the_install_command() {
     let dir = fresh_dir("open_audio_missing");
     let song = dir.join("song.wav");
-    write_song(&song, 0.5);
+    write_wav(&song, 0.5, 22_050, chord_with_clicks);
     let out = dir.join("grid.npy");
     let output = common::loudscape_extracting(
         &[
@@ -201,14 +139,14 @@ fn bad_audio_is_one_line_naming_the_file_and_leaves_no_partial_cloud() {
         "{err}"
     );
     assert!(!err.contains("Traceback"), "{err}");
-    assert!(files_in(&cache).is_empty(), "{:?}", files_in(&cache));
+    assert!(names_in(&cache).is_empty(), "{:?}", names_in(&cache));
 }
 
 #[test]
 fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
     let dir = fresh_dir("open_audio_cancel");
     let song = dir.join("song.wav");
-    write_song(&song, 20.0);
+    write_wav(&song, 20.0, 22_050, chord_with_clicks);
     let cache = dir.join("cache");
     let settings = Settings::default();
     let cancel = AtomicBool::new(false);
@@ -232,7 +170,7 @@ fn cancel_kills_the_extractor_then_a_full_run_fills_the_cache() {
         result.map(|r| r.ply)
     );
     assert!(!stages.contains(&"write".to_string()), "{stages:?}");
-    assert!(files_in(&cache).is_empty(), "{:?}", files_in(&cache));
+    assert!(names_in(&cache).is_empty(), "{:?}", names_in(&cache));
 
     cancel.store(false, Ordering::Relaxed);
     let mut fractions = Vec::new();
@@ -304,7 +242,7 @@ fn render_of_a_truncated_song_says_so_fresh_and_cached() {
         dir.join("cut.wav"),
         dir.join("cache"),
     );
-    write_song(&whole, 4.0);
+    write_wav(&whole, 4.0, 22_050, chord_with_clicks);
     let bytes = std::fs::read(&whole).unwrap();
     std::fs::write(&song, &bytes[..bytes.len() / 2]).unwrap();
     let png = dir.join("cut.png");

@@ -4,11 +4,13 @@
 //! sample; a 1-second golden video of the demo; bad requests fail cleanly; SIGTERM and SIGINT leave no
 //! file and no encoder behind. Needs ffmpeg and ffprobe (scripts/setup-system.sh installs them).
 
-use crate::common::{self, assert_success, ffprobe, loudscape, repo};
+use crate::common::{
+    self, assert_success, decode_audio, decode_frames, ffprobe, half, loudscape, repo,
+};
 
 #[cfg(unix)]
 use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 #[cfg(unix)]
 use std::process::Stdio;
@@ -66,59 +68,6 @@ fn shared_video() -> &'static (PathBuf, Vec<String>) {
             .collect();
         (path, lines)
     })
-}
-
-/// `image` at half the size, each pixel the mean of four: the resolution yuv420p keeps colour
-/// at, so that what is compared is the picture, not the codec's loss on single points and glyphs.
-fn half(image: &image::RgbaImage) -> image::RgbaImage {
-    let (w, h) = (image.width() / 2, image.height() / 2);
-    image::RgbaImage::from_fn(w, h, |x, y| {
-        let mut sum = [0u32; 4];
-        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            let p = image.get_pixel(2 * x + dx, 2 * y + dy);
-            for c in 0..4 {
-                sum[c] += u32::from(p[c]);
-            }
-        }
-        image::Rgba(sum.map(|v| ((v + 2) / 4) as u8))
-    })
-}
-
-/// Every frame of `path`'s video, decoded to RGBA.
-fn decode_frames(path: &Path, (w, h): (u32, u32)) -> Vec<image::RgbaImage> {
-    let output = Command::new("ffmpeg")
-        .args(["-v", "error", "-i"])
-        .arg(path)
-        .args(["-map", "0:v:0", "-f", "rawvideo", "-pix_fmt", "rgba", "-"])
-        .output()
-        .expect("ffmpeg");
-    assert_success(&output);
-    let frame = (w * h * 4) as usize;
-    assert_eq!(output.stdout.len() % frame, 0, "not whole frames");
-    output
-        .stdout
-        .chunks(frame)
-        .map(|c| image::RgbaImage::from_raw(w, h, c.to_vec()).expect("frame"))
-        .collect()
-}
-
-/// Mono samples of `path`'s audio at `rate` Hz (ffmpeg decodes; AAC priming is undone by the
-/// MP4's edit list).
-fn decode_audio(path: &Path, rate: u32) -> Vec<f32> {
-    let output = Command::new("ffmpeg")
-        .args(["-v", "error", "-i"])
-        .arg(path)
-        .args(["-map", "0:a:0", "-ac", "1", "-ar"])
-        .arg(rate.to_string())
-        .args(["-f", "f32le", "-"])
-        .output()
-        .expect("ffmpeg");
-    assert_success(&output);
-    output
-        .stdout
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect()
 }
 
 #[test]
@@ -526,48 +475,10 @@ fn mpv_plays_the_video_under_xvfb() {
 /// A compare video's frame is `render --compare --playhead` at its time too.
 #[test]
 fn a_compare_frame_is_render_compare_with_the_playhead() {
-    let path = out("compare.mp4");
-    let b = repo().join("data/fixture_song.ply");
-    let output = loudscape(&[
-        "video",
-        &demo(),
-        "--compare",
-        b.to_str().unwrap(),
-        "--view",
-        "compare",
-        "--size",
-        "640x360",
-        "--fps",
-        "5",
-        "--start",
-        "20",
-        "--end",
-        "20.4",
-        "--progress",
-        "none",
-        "-o",
-        path.to_str().unwrap(),
-    ]);
-    assert_success(&output);
-    let frames = decode_frames(&path, SIZE);
+    let (a, b) = (PathBuf::from(demo()), repo().join("data/fixture_song.ply"));
+    let (frames, _) = common::compare_video(&a, &b, &[], &out("compare.mp4"));
     assert_eq!(frames.len(), 2);
-    let png = out("compare_render.png");
-    let output = loudscape(&[
-        "render",
-        &demo(),
-        "--compare",
-        b.to_str().unwrap(),
-        "--view",
-        "compare",
-        "--size",
-        "640x360",
-        "--playhead",
-        "20.2",
-        "-o",
-        png.to_str().unwrap(),
-    ]);
-    assert_success(&output);
-    let render = image::open(&png).unwrap().to_rgba8();
+    let render = common::compare_render(&a, &b, &[], &out("compare_render.png"));
     let (share, mean) = common::difference(&half(&frames[1]), &half(&render), 32);
     assert!(share < 0.001, "{share} of pixels differ (mean {mean})");
 }

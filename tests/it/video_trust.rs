@@ -10,7 +10,9 @@
 // what they need goes unused.
 #![cfg_attr(not(unix), allow(unused_imports, unused_mut))]
 
-use crate::common::{self, assert_success, fresh_dir, repo};
+use crate::common::{
+    self, assert_success, chord_with_clicks, decode_audio, extractor, fresh_dir, repo, write_wav,
+};
 
 use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
@@ -18,36 +20,11 @@ use std::process::{Command, Output};
 
 const RATE: u32 = 22_050;
 
-fn extractor() -> PathBuf {
-    let program = repo().join(".venv/bin/loudscape-extract");
-    assert!(
-        program.is_file(),
-        "these tests run the Python extractor: install it with `make venv` ({} is missing)",
-        program.display()
-    );
-    program
-}
-
 fn demo() -> PathBuf {
     repo().join("data/demo_song.ply")
 }
 
-/// Song A: a chord on A with a click every half second.
-fn song_a(i: usize) -> f32 {
-    let t = i as f32 / RATE as f32;
-    let chord: f32 = [220.0f32, 277.2, 329.6, 880.0]
-        .iter()
-        .map(|f| (std::f32::consts::TAU * f * t).sin())
-        .sum();
-    let click = if i % (RATE as usize / 2) < 40 {
-        0.6
-    } else {
-        0.0
-    };
-    0.15 * chord + click
-}
-
-/// Song B: another chord, clicks at other times.
+/// Song B (song A is `chord_with_clicks`): another chord, clicks at other times.
 fn song_b(i: usize) -> f32 {
     let t = i as f32 / RATE as f32;
     let chord: f32 = [196.0f32, 311.1, 466.2, 622.3]
@@ -56,55 +33,6 @@ fn song_b(i: usize) -> f32 {
         .sum();
     let click = if (i + 3_000) % 8_111 < 40 { 0.6 } else { 0.0 };
     0.15 * chord + click
-}
-
-/// `seconds` of `song` as a mono 16-bit WAV at `rate` Hz.
-fn write_wav(path: &Path, seconds: f32, rate: u32, song: fn(usize) -> f32) {
-    let n = (seconds * rate as f32) as usize;
-    let data_len = (n * 2) as u32;
-    let mut bytes = Vec::with_capacity(44 + n * 2);
-    bytes.extend_from_slice(b"RIFF");
-    bytes.extend_from_slice(&(36 + data_len).to_le_bytes());
-    bytes.extend_from_slice(b"WAVEfmt ");
-    bytes.extend_from_slice(&16u32.to_le_bytes());
-    bytes.extend_from_slice(&1u16.to_le_bytes()); // PCM
-    bytes.extend_from_slice(&1u16.to_le_bytes()); // mono
-    bytes.extend_from_slice(&rate.to_le_bytes());
-    bytes.extend_from_slice(&(rate * 2).to_le_bytes());
-    bytes.extend_from_slice(&2u16.to_le_bytes());
-    bytes.extend_from_slice(&16u16.to_le_bytes());
-    bytes.extend_from_slice(b"data");
-    bytes.extend_from_slice(&data_len.to_le_bytes());
-    for i in 0..n {
-        let s = (song(i).clamp(-1.0, 1.0) * 32_000.0) as i16;
-        bytes.extend_from_slice(&s.to_le_bytes());
-    }
-    std::fs::write(path, bytes).unwrap();
-}
-
-/// `path` for ffmpeg's command line: `file:` + the absolute path, whatever the name.
-fn url(path: &Path) -> OsString {
-    let mut url = OsString::from("file:");
-    url.push(std::path::absolute(path).unwrap());
-    url
-}
-
-/// Mono samples at `RATE` of `path`'s first audio stream.
-fn decode_audio(path: &Path) -> Vec<f32> {
-    let output = Command::new("ffmpeg")
-        .args(["-v", "error", "-i"])
-        .arg(url(path))
-        .args(["-map", "0:a:0", "-ac", "1", "-ar"])
-        .arg(RATE.to_string())
-        .args(["-f", "f32le", "-"])
-        .output()
-        .expect("ffmpeg");
-    assert_success(&output);
-    output
-        .stdout
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect()
 }
 
 /// The best normalized correlation of `sound` (a passage from `start_s`) with `source`, over
@@ -188,7 +116,7 @@ fn assert_refused(output: &Output, needles: &[&str]) {
 fn the_sound_is_the_audio_file_named_not_the_source_its_cached_cloud_recorded() {
     let dir = fresh_dir("video_trust_cached_source");
     let (mine, backup) = (dir.join("mine.wav"), dir.join("backup.wav"));
-    write_wav(&mine, 3.0, RATE, song_a);
+    write_wav(&mine, 3.0, RATE, chord_with_clicks);
     std::fs::copy(&mine, &backup).unwrap();
     let png = dir.join("mine.png");
     assert_success(&run_in(
@@ -209,9 +137,9 @@ fn the_sound_is_the_audio_file_named_not_the_source_its_cached_cloud_recorded() 
         &["--start", "0.5", "--end", "2.5"],
     );
     assert_success(&output);
-    let sound = decode_audio(&mp4);
-    let with_backup = correlation(&sound, &decode_audio(&backup), 0.5);
-    let with_mine = correlation(&sound, &decode_audio(&mine), 0.5);
+    let sound = decode_audio(&mp4, RATE);
+    let with_backup = correlation(&sound, &decode_audio(&backup, RATE), 0.5);
+    let with_mine = correlation(&sound, &decode_audio(&mine, RATE), 0.5);
     eprintln!(
         "the sound correlates {with_backup:.3} with backup.wav, {with_mine:.3} with mine.wav"
     );
@@ -237,7 +165,7 @@ fn the_sound_is_the_audio_file_named_not_the_source_its_cached_cloud_recorded() 
 fn a_clouds_source_that_changed_or_went_is_refused_in_one_line() {
     let dir = fresh_dir("video_trust_ply_source");
     let (wav, ply) = (dir.join("song.wav"), dir.join("song.ply"));
-    write_wav(&wav, 3.0, RATE, song_a);
+    write_wav(&wav, 3.0, RATE, chord_with_clicks);
     let made = Command::new(extractor())
         .args(["song", "-q"])
         .arg(&wav)
@@ -250,7 +178,7 @@ fn a_clouds_source_that_changed_or_went_is_refused_in_one_line() {
     let (p, m) = (ply.as_os_str(), mp4.as_os_str());
     // The source as it was: its sound.
     assert_success(&video(&dir, p, m, &["--start", "1", "--end", "2.5"]));
-    let matched = correlation(&decode_audio(&mp4), &decode_audio(&wav), 1.0);
+    let matched = correlation(&decode_audio(&mp4, RATE), &decode_audio(&wav, RATE), 1.0);
     assert!(matched > 0.9, "correlation {matched:.3}");
     std::fs::remove_file(&mp4).unwrap();
     let name = wav.display().to_string();
@@ -266,7 +194,7 @@ fn a_clouds_source_that_changed_or_went_is_refused_in_one_line() {
     assert_refused(&output, &changed);
     assert!(stderr(&output).contains("2.000 s long, the cloud's 3.000 s"));
     // The same length at another sample rate.
-    write_wav(&wav, 3.0, 16_000, song_a);
+    write_wav(&wav, 3.0, 16_000, chord_with_clicks);
     let output = video(&dir, p, m, &["--end", "1"]);
     assert_refused(&output, &changed);
     assert!(stderr(&output).contains("16000 Hz, the cloud's 22050 Hz"));
@@ -294,7 +222,7 @@ fn odd_output_names_are_written_as_named_and_nothing_else_is() {
         let output = video(&dir, demo().as_os_str(), name, &["--end", "0.5"]);
         assert_success(&output);
         let path = dir.join(name);
-        let sound = decode_audio(&path);
+        let sound = decode_audio(&path, RATE);
         assert!(
             sound.len().abs_diff(RATE as usize / 2) < 2_000,
             "{}: {} samples of sound",
@@ -315,7 +243,7 @@ fn odd_source_names_give_their_own_sound() {
     let dir = fresh_dir("video_trust_source_names");
     write_wav(&dir.join("c.wav"), 3.0, RATE, song_b);
     let url_named = OsString::from("file:c.wav");
-    write_wav(&dir.join(&url_named), 3.0, RATE, song_a);
+    write_wav(&dir.join(&url_named), 3.0, RATE, chord_with_clicks);
     // A cloud whose source.path is `file:c.wav`, relative, as given to the extractor.
     let made = Command::new(extractor())
         .args(["song", "-q", "file:c.wav", "-o", "url.ply"])
@@ -332,16 +260,16 @@ fn odd_source_names_give_their_own_sound() {
         let odd: OsString =
             <OsStr as std::os::unix::ffi::OsStrExt>::from_bytes(b"caf\xe9 \xff.wav").into();
         // Its own song (another length: not the cached cloud of `file:c.wav`).
-        write_wav(&dir.join(&odd), 3.5, RATE, song_a);
+        write_wav(&dir.join(&odd), 3.5, RATE, chord_with_clicks);
         cases.push((odd.clone(), odd));
     }
     for (k, (input, source)) in cases.iter().enumerate() {
         let mp4 = OsString::from(format!("out{k}.mp4"));
         let output = video(&dir, input, &mp4, &["--start", "0.5", "--end", "2.5"]);
         assert_success(&output);
-        let sound = decode_audio(&dir.join(&mp4));
-        let own = correlation(&sound, &decode_audio(&dir.join(source)), 0.5);
-        let other = correlation(&sound, &decode_audio(&dir.join("c.wav")), 0.5);
+        let sound = decode_audio(&dir.join(&mp4), RATE);
+        let own = correlation(&sound, &decode_audio(&dir.join(source), RATE), 0.5);
+        let other = correlation(&sound, &decode_audio(&dir.join("c.wav"), RATE), 0.5);
         assert!(
             own > 0.9 && other < 0.5,
             "{}: correlation {own:.3} with its source, {other:.3} with c.wav",

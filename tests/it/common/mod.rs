@@ -1,11 +1,17 @@
 //! Helpers shared by the integration tests: a device on whatever adapter exists (lavapipe on
 //! machines without a GPU), golden-image comparison with a tolerance, the demo song, running the
-//! `loudscape` binary, and the window tests' display, window, stderr and process look-ups.
+//! `loudscape` binary, songs and videos made and decoded (media.rs), and the window tests'
+//! display, window, stderr and process look-ups.
 
 #![allow(dead_code)]
 
 mod golden;
+mod media;
 pub use golden::{RASTER_EDGES, RAY_MARCH, assert_golden};
+pub use media::{
+    chord_with_clicks, compare_render, compare_video, decode_audio, decode_frames, extractor, half,
+    write_wav,
+};
 
 use std::ffi::OsStr;
 use std::io::{BufRead, BufReader};
@@ -36,6 +42,19 @@ pub fn repo() -> PathBuf {
 /// data/demo_song.ply, loaded.
 pub fn demo_song() -> PointCloud {
     cloud::load(&repo().join("data/demo_song.ply")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The names in `dir`, sorted (none if there is no such folder).
+pub fn names_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
 }
 
 /// The default camera's view of `data`, fitted to a `width` x `height` picture.
