@@ -4,47 +4,23 @@
 //! written does not stop `render`. A fake extractor (a shell script that copies a prepared cloud
 //! and prints what the real one prints) keeps these fast and independent of Python.
 
-use crate::common::{self, fresh_dir};
+use crate::common::{self, fresh_dir, names_in, runs};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-use loudscape::data::cloud::{Point, write};
 
 const TRUNCATED: &str = "decoded 1.49 s of the 4.00 s the file promises";
 const CANCEL: &str = "the channels cancel in the mono mix";
 
 /// A song cloud whose metadata carries one warning (the contract's `warnings`).
 fn cloud_with_warning(path: &Path) {
-    let meta = serde_json::json!({
-        "format_version": 2,
-        "mode": "song",
-        "axes": {
-            "x": {"label": "time", "unit": "s", "min": 0.0, "max": 4.0},
-            "y": {"label": "frequency", "unit": "Hz", "min": 0.0, "max": 11025.0},
-            "z": {"label": "level", "unit": "dB", "min": -80.0, "max": 0.0},
-            "scalar": {"label": "level", "unit": "dB", "min": -80.0, "max": 0.0},
-            "hp": {"label": "hp", "unit": "", "min": 0.0, "max": 1.0}
-        },
-        "warnings": [{"kind": "truncated", "message": TRUNCATED}]
-    });
-    let points: Vec<Point> = (0..2000)
-        .map(|i| {
-            let t = i as f32 / 1999.0;
-            Point {
-                position: [
-                    t * 2.0 - 1.0,
-                    (t * 37.0).sin() * 0.8,
-                    (t * 11.0).cos() * 0.5,
-                ],
-                scalar: t,
-                hp: 1.0 - t,
-            }
-        })
-        .collect();
-    let mut bytes = Vec::new();
-    write(&mut bytes, &points, Some(&meta)).unwrap();
-    std::fs::write(path, bytes).unwrap();
+    let warnings = [serde_json::json!({"kind": "truncated", "message": TRUNCATED})];
+    common::write_song_cloud(
+        path,
+        2000,
+        37.0,
+        serde_json::json!({ "warnings": warnings }),
+    );
 }
 
 /// A fake `loudscape-extract` in `dir`: `--version` answers, `song AUDIO -o OUT` copies
@@ -71,12 +47,6 @@ fn fake_extractor(dir: &Path, cloud: &Path) -> PathBuf {
         std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755)).unwrap();
     }
     script
-}
-
-fn runs(dir: &Path) -> usize {
-    std::fs::read_to_string(dir.join("runs.txt"))
-        .map(|t| t.lines().count())
-        .unwrap_or(0)
 }
 
 fn render(song: &Path, png: &Path, cache: &Path, extractor: &Path) -> (Output, String) {
@@ -109,16 +79,6 @@ fn assert_warned(err: &str, song: &Path) {
     }
 }
 
-fn cache_files(cache: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(cache)
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 #[test]
 fn warnings_travel_with_the_cloud_and_a_damaged_entry_is_extracted_again() {
     let dir = fresh_dir("reliability_warnings_cache");
@@ -136,7 +96,7 @@ fn warnings_travel_with_the_cloud_and_a_damaged_entry_is_extracted_again() {
     let (_, err) = render(&song, &png, &cache, &extractor);
     assert_warned(&err, &song);
     assert_eq!(runs(&dir), 1);
-    let files = cache_files(&cache);
+    let files = names_in(&cache);
     assert_eq!(files.len(), 2, "the cloud and its checksum file: {files:?}");
     let ply = cache.join(files.iter().find(|f| f.ends_with(".ply")).unwrap());
     assert!(
@@ -232,10 +192,8 @@ fn a_cache_that_cannot_be_written_does_not_stop_render() {
     assert_eq!(said.len(), 1, "one warning about the cache: {err}");
     assert_warned(&err, &song);
     // The temporary extraction is gone (the headless runtime folder may stay).
-    let left: Vec<String> = std::fs::read_dir(&tmp)
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
+    let left: Vec<String> = names_in(&tmp)
+        .into_iter()
         .filter(|name| !name.starts_with("loudscape-runtime"))
         .collect();
     assert!(left.is_empty(), "{left:?}");
@@ -446,7 +404,7 @@ fn an_empty_cloud_is_refused_by_the_commands() {
     let dir = fresh_dir("reliability_empty");
     let empty = dir.join("empty.ply");
     let mut bytes = Vec::new();
-    write(&mut bytes, &[], None).unwrap();
+    loudscape::data::cloud::write(&mut bytes, &[], None).unwrap();
     std::fs::write(&empty, bytes).unwrap();
     for (command, out) in [
         ("render", "e.png"),

@@ -5,46 +5,18 @@
 //! cache is removed on the next run when its process is gone. A fake extractor (a shell script
 //! copying a prepared cloud, as in `reliability_cache`) keeps these fast and free of Python.
 
-use crate::common::fresh_dir;
+use crate::common::{self, fresh_dir, names_in, runs};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-use loudscape::data::cloud::{Point, write};
 use sha2::{Digest, Sha256};
 
 /// A song cloud whose metadata holds an integrated loudness of `lufs` (written with two
 /// decimals, so one digit can be changed in place) and whose points depend on `seed`.
 fn cloud_with_metrics(path: &Path, lufs: f64, seed: f32) {
-    let meta = serde_json::json!({
-        "format_version": 2,
-        "mode": "song",
-        "axes": {
-            "x": {"label": "time", "unit": "s", "min": 0.0, "max": 4.0},
-            "y": {"label": "frequency", "unit": "Hz", "min": 0.0, "max": 11025.0},
-            "z": {"label": "level", "unit": "dB", "min": -80.0, "max": 0.0},
-            "scalar": {"label": "level", "unit": "dB", "min": -80.0, "max": 0.0},
-            "hp": {"label": "hp", "unit": "", "min": 0.0, "max": 1.0}
-        },
-        "metrics": {"integrated_lufs": lufs}
-    });
-    let points: Vec<Point> = (0..3000)
-        .map(|i| {
-            let t = i as f32 / 2999.0;
-            Point {
-                position: [
-                    t * 2.0 - 1.0,
-                    (t * (37.0 + seed)).sin() * 0.8,
-                    (t * 11.0).cos() * 0.5,
-                ],
-                scalar: t,
-                hp: 1.0 - t,
-            }
-        })
-        .collect();
-    let mut bytes = Vec::new();
-    write(&mut bytes, &points, Some(&meta)).unwrap();
-    std::fs::write(path, bytes).unwrap();
+    let metrics = serde_json::json!({ "metrics": {"integrated_lufs": lufs} });
+    common::write_song_cloud(path, 3000, 37.0 + seed, metrics);
 }
 
 /// A fake `loudscape-extract` in `dir`: `--version` answers; `song AUDIO -o OUT` appends AUDIO
@@ -81,12 +53,6 @@ fn fake_extractor(dir: &Path, together: usize, full: Option<&Path>) -> PathBuf {
     std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755)).unwrap();
     std::fs::create_dir_all(dir.join("clouds")).unwrap();
     script
-}
-
-fn runs(dir: &Path) -> usize {
-    std::fs::read_to_string(dir.join("runs.txt"))
-        .map(|t| t.lines().count())
-        .unwrap_or(0)
 }
 
 fn render_command(song: &Path, png: &Path, cache: &Path, extractor: &Path) -> Command {
@@ -138,18 +104,6 @@ fn assert_valid_pair(ply: &Path) {
         .collect();
     assert_eq!(sum["sha256"], sha.as_str(), "the pair does not match");
     assert_eq!(sum["bytes"], bytes.len() as u64);
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .map(|d| {
-            d.flatten()
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .collect()
-        })
-        .unwrap_or_default();
-    names.sort();
-    names
 }
 
 /// A cloud whose checksum file is gone and one of whose metrics was changed (-9.77 LUFS made

@@ -44,6 +44,51 @@ pub fn demo_song() -> PointCloud {
     cloud::load(&repo().join("data/demo_song.ply")).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// A song cloud at `path`: `n` points along a curve whose y is `sin(wave * t)` (other waves,
+/// other points), with a song's axes (4 s, 0 to 11,025 Hz, -80 to 0 dB) and `extra`'s fields
+/// (warnings, metrics) in its metadata. The prepared clouds the stand-in extractors copy.
+pub fn write_song_cloud(path: &Path, n: usize, wave: f32, extra: serde_json::Value) {
+    let mut meta = serde_json::json!({
+        "format_version": 2,
+        "mode": "song",
+        "axes": {
+            "x": {"label": "time", "unit": "s", "min": 0.0, "max": 4.0},
+            "y": {"label": "frequency", "unit": "Hz", "min": 0.0, "max": 11025.0},
+            "z": {"label": "level", "unit": "dB", "min": -80.0, "max": 0.0},
+            "scalar": {"label": "level", "unit": "dB", "min": -80.0, "max": 0.0},
+            "hp": {"label": "hp", "unit": "", "min": 0.0, "max": 1.0}
+        }
+    });
+    if let (Some(meta), serde_json::Value::Object(extra)) = (meta.as_object_mut(), extra) {
+        meta.extend(extra);
+    }
+    let last = (n - 1) as f32;
+    let points: Vec<cloud::Point> = (0..n)
+        .map(|i| {
+            let t = i as f32 / last;
+            cloud::Point {
+                position: [
+                    t * 2.0 - 1.0,
+                    (t * wave).sin() * 0.8,
+                    (t * 11.0).cos() * 0.5,
+                ],
+                scalar: t,
+                hp: 1.0 - t,
+            }
+        })
+        .collect();
+    let mut bytes = Vec::new();
+    cloud::write(&mut bytes, &points, Some(&meta)).unwrap();
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// How many runs the stand-in extractors in `dir` have logged (a line each in `runs.txt`).
+pub fn runs(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("runs.txt"))
+        .map(|t| t.lines().count())
+        .unwrap_or(0)
+}
+
 /// The names in `dir`, sorted (none if there is no such folder).
 pub fn names_in(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
