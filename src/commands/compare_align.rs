@@ -6,7 +6,7 @@
 //! audio, and with `--align` it is added to the offset found (a nudge).
 
 use loudscape::data::cloud::PointCloud;
-use loudscape::data::compare::{aligned_in_time, aligned_words, matched_in_level};
+use loudscape::data::compare::{align_in_time, aligned_words, match_in_level};
 use loudscape::extract::align::compare_audio;
 use loudscape::playback::checked_source;
 
@@ -61,10 +61,10 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
         (None, None) => None,
         (found, nudge) => Some(found.unwrap_or(0.0) + nudge.unwrap_or(0.0)),
     };
-    let mut cloud = match offset {
-        Some(offset) => aligned_in_time(&b, offset),
-        None => b,
-    };
+    let mut cloud = b;
+    if let Some(offset) = offset {
+        align_in_time(&mut cloud, offset);
+    }
     let matched = if draw.match_loudness { gain } else { None };
     if draw.match_loudness && matched.is_none() {
         eprintln!(
@@ -73,7 +73,7 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
         );
     }
     if let Some(gain) = matched {
-        cloud = matched_in_level(&cloud, gain);
+        match_in_level(&mut cloud, gain);
     }
     Ok(AlignedB {
         cloud,

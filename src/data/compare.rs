@@ -173,27 +173,31 @@ pub fn moved_onto(cloud: &PointCloud, axes: &Axes) -> PointCloud {
 /// own seconds, are dropped. A cloud whose x axis is not time in seconds is returned as it is.
 pub fn aligned_in_time(b: &PointCloud, offset_s: f64) -> PointCloud {
     let mut aligned = b.clone();
-    let x = &mut aligned.meta.axes.x;
+    align_in_time(&mut aligned, offset_s);
+    aligned
+}
+
+/// [`aligned_in_time`] in place: B's axis ends moved, its points neither copied nor touched.
+pub fn align_in_time(b: &mut PointCloud, offset_s: f64) {
+    let x = &mut b.meta.axes.x;
     if offset_s == 0.0 || x.unit != "s" || x.scale != AxisScale::Linear {
-        return aligned;
+        return;
     }
     x.min -= offset_s;
     x.max -= offset_s;
     x.ticks = None;
-    aligned
 }
 
-/// B's cloud with its levels moved by `gain_db` (the matching gain that brings B to A's
-/// loudness): its y and scalar axes, where they are levels in dB, shifted by the gain, so
-/// after [`on_union_axes`] what differs is dynamics and spectral balance, not loudness (the
-/// difference view's "matched" reading; docs/COMPARE.md). Only the axis ends move; the level
-/// ticks, which name B's own levels, are dropped.
-pub fn matched_in_level(b: &PointCloud, gain_db: f64) -> PointCloud {
-    let mut matched = b.clone();
+/// B's levels moved by `gain_db` (the matching gain that brings B to A's loudness): its y and
+/// scalar axes, where they are levels in dB, shifted by the gain, so after [`on_union_axes`]
+/// what differs is dynamics and spectral balance, not loudness (the difference view's
+/// "matched" reading; docs/COMPARE.md). Only the axis ends move, in place (the points are
+/// neither copied nor touched); the level ticks, which name B's own levels, are dropped.
+pub fn match_in_level(b: &mut PointCloud, gain_db: f64) {
     if gain_db == 0.0 {
-        return matched;
+        return;
     }
-    let axes = &mut matched.meta.axes;
+    let axes = &mut b.meta.axes;
     for axis in [&mut axes.y, &mut axes.scalar] {
         if axis.unit == "dB" && axis.scale == AxisScale::Linear {
             axis.min += gain_db;
@@ -201,7 +205,6 @@ pub fn matched_in_level(b: &PointCloud, gain_db: f64) -> PointCloud {
             axis.ticks = None;
         }
     }
-    matched
 }
 
 /// The legend's words for B's alignment and matching: "B aligned +0.731 s, -3.8 dB to match
@@ -343,7 +346,9 @@ mod tests {
         };
         let (a_plain, b_plain) = on_union_axes(&a, &b).unwrap();
         assert!(gap(&a_plain, &b_plain) > 0.05, "B louder, higher up");
-        let (a_moved, b_moved) = on_union_axes(&a, &matched_in_level(&b, -4.0)).unwrap();
+        let mut matched = b.clone();
+        match_in_level(&mut matched, -4.0);
+        let (a_moved, b_moved) = on_union_axes(&a, &matched).unwrap();
         assert!(
             gap(&a_moved, &b_moved) < 1e-5,
             "matched: {}",
