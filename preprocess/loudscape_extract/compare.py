@@ -62,6 +62,10 @@ THIRD_OCTAVE_HZ = (
 )  # fmt: skip
 
 
+#: Segments of the long-term spectrum's Welch average computed at a time.
+_WELCH_RUN = 256
+
+
 @dataclass(frozen=True)
 class Version:
     """One release in a comparison.
@@ -159,10 +163,22 @@ def third_octave_spectrum(audio: Audio, gain_db: float = 0.0) -> np.ndarray:
     kHz, half overlap), summed over each band's edges (centre x 2^(+-1/6)). A band above
     Nyquist or without a bin is NaN.
     """
-    mono = mix_to_mono(audio.samples).astype(np.float64)
+    mono = mix_to_mono(audio.samples)
     rate = audio.sample_rate
     nperseg = min(len(mono), 1 << int(round(math.log2(rate * 0.17))))
-    freqs, psd = signal.welch(mono, fs=rate, nperseg=nperseg, scaling="spectrum")
+    # Welch's average taken over runs of _WELCH_RUN segments (half overlap, as welch steps)
+    # and weighted by their counts: welch holds every segment and its spectrum at once,
+    # 2 GB for a 20-minute song; a run holds a few megabytes.
+    step = nperseg - nperseg // 2
+    n_segments = (len(mono) - nperseg) // step + 1
+    psd, freqs = 0.0, None
+    for first in range(0, n_segments, _WELCH_RUN):
+        count = min(_WELCH_RUN, n_segments - first)
+        part = mono[first * step : first * step + (count - 1) * step + nperseg]
+        freqs, run = signal.welch(
+            part.astype(np.float64), fs=rate, nperseg=nperseg, scaling="spectrum"
+        )
+        psd = psd + run * (count / n_segments)
     out = np.full(len(THIRD_OCTAVE_HZ), np.nan)
     for i, centre in enumerate(THIRD_OCTAVE_HZ):
         lo, hi = centre * 2 ** (-1 / 6), centre * 2 ** (1 / 6)
