@@ -58,12 +58,14 @@ impl LoudscapeApp {
         if let (Some(song), Some(b)) = (self.song.as_ref(), state.b_loaded.as_ref()) {
             let pair = (song.cloud.path.clone(), b.path.clone());
             if state.alignment.asked_for.as_ref() != Some(&pair) {
+                // The sources held against their clouds: another song where B's audio was
+                // would be aligned with A as if it were B.
                 let a_audio = self
                     .audio
                     .track_path()
                     .map(Ok)
-                    .unwrap_or_else(|| playback::resolve_source(&song.cloud));
-                match (a_audio, playback::resolve_source(b)) {
+                    .unwrap_or_else(|| playback::checked_source(&song.cloud));
+                match (a_audio, playback::checked_source(b)) {
                     (Ok(a), Ok(b)) => {
                         state.alignment.start(pair, align_on_thread(a, b));
                     }

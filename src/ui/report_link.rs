@@ -37,10 +37,10 @@ pub fn report_path(song: &Path) -> PathBuf {
         .expect("a free name")
 }
 
-/// What the report is made from: the song's audio when it is found (the whole curves), else
-/// the cloud itself (its stored metrics and curves).
+/// What the report is made from: the song's audio when it is found and is the audio the cloud
+/// was made from (the whole curves), else the cloud itself (its stored metrics and curves).
 pub fn report_input(cloud: &PointCloud) -> PathBuf {
-    crate::playback::resolve_source(cloud).unwrap_or_else(|_| cloud.path.clone())
+    crate::playback::checked_source(cloud).unwrap_or_else(|_| cloud.path.clone())
 }
 
 /// A report written, and what the extractor warned about on the way.
