@@ -8,7 +8,6 @@ use crate::common::{self, assert_success, compare_render, compare_video, extract
 
 use std::ffi::OsStr;
 use std::path::Path;
-use std::process::Command;
 
 /// Renders `a --compare b --view difference --measure level` with `extra`, the song cache in
 /// `dir/cache`; returns stderr, asserting success.
@@ -91,19 +90,7 @@ fn a_delayed_louder_copy_is_aligned_and_matched_before_the_difference() {
     let dir = common::fresh_dir("compare_align_real");
     let a = repo().join("data/demo_song.flac");
     let b = dir.join("delayed_louder.wav");
-    // The same music 0.731 s later and 4 dB louder (as a remaster that starts later).
-    let made = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-i"])
-        .arg(&a)
-        .args(["-af", "adelay=731:all=1,volume=4dB", "-c:a", "pcm_f32le"])
-        .arg(&b)
-        .output()
-        .expect("this test needs ffmpeg");
-    assert!(
-        made.status.success(),
-        "{}",
-        String::from_utf8_lossy(&made.stderr)
-    );
+    common::delayed_louder_demo(&b);
     let plain = difference(&dir, &a, &b, "plain", &[]);
     let aligned = difference(&dir, &a, &b, "aligned", &["--align", "--match-loudness"]);
     let offset = number_after(&aligned, "B aligned ");

@@ -18,21 +18,10 @@ fn key_b_switches_to_the_same_moment_of_an_aligned_release() {
         "this test needs xdotool to press keys in the window (apt-get install xdotool)"
     );
     let repo = common::repo();
-    let extractor = repo.join(".venv/bin/loudscape-extract");
-    assert!(
-        extractor.is_file(),
-        "this test runs the Python extractor: install it with `make venv`"
-    );
+    let extractor = common::extractor();
     let dir = common::fresh_dir("window_compare_align");
     let b = dir.join("delayed_louder.wav");
-    let made = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-i"])
-        .arg(repo.join("data/demo_song.flac"))
-        .args(["-af", "adelay=731:all=1,volume=4dB", "-c:a", "pcm_f32le"])
-        .arg(&b)
-        .output()
-        .expect("this test needs ffmpeg");
-    assert!(made.status.success());
+    common::delayed_louder_demo(&b);
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
     common::home_in(&mut command, &dir.join("home"));
     let mut child = command

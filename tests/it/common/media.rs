@@ -55,6 +55,23 @@ pub fn write_wav(path: &Path, seconds: f32, rate: u32, song: fn(usize) -> f32) {
     std::fs::write(path, bytes).unwrap();
 }
 
+/// The demo song 0.731 s later and 4 dB louder (as a remaster that starts later), as a float
+/// WAV at `path`: the release the alignment tests find again.
+pub fn delayed_louder_demo(path: &Path) {
+    let made = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(repo().join("data/demo_song.flac"))
+        .args(["-af", "adelay=731:all=1,volume=4dB", "-c:a", "pcm_f32le"])
+        .arg(path)
+        .output()
+        .expect("this test needs ffmpeg");
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+}
+
 /// `path` for ffmpeg's command line: `file:` + the absolute path, whatever the name (a colon,
 /// a leading dash, bytes that are not UTF-8).
 fn ffmpeg_url(path: &Path) -> OsString {

@@ -9,8 +9,8 @@ mod golden;
 mod media;
 pub use golden::{RASTER_EDGES, RAY_MARCH, assert_golden};
 pub use media::{
-    chord_with_clicks, compare_render, compare_video, decode_audio, decode_frames, extractor, half,
-    write_wav,
+    chord_with_clicks, compare_render, compare_video, decode_audio, decode_frames,
+    delayed_louder_demo, extractor, half, write_wav,
 };
 
 use std::ffi::OsStr;
