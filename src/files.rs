@@ -62,6 +62,34 @@ pub fn terminate(child: &std::process::Child) {
     }
 }
 
+/// Whether process `pid` runs on this machine (a zombie counts: what it uses may be in use until
+/// it is reaped; one of another user's counts); `Some(false)` for a PID no process can have (it
+/// does not fit a `pid_t`); None where that cannot be told (PID 0, not Unix).
+#[cfg(unix)]
+pub fn process_runs(pid: u32) -> Option<bool> {
+    if pid == 0 {
+        return None;
+    }
+    let Ok(pid) = i32::try_from(pid) else {
+        return Some(false);
+    };
+    // SAFETY: kill(2) with signal 0 sends nothing; it only checks that the process exists.
+    if unsafe { libc::kill(pid, 0) } == 0 {
+        return Some(true);
+    }
+    match io::Error::last_os_error().raw_os_error() {
+        Some(libc::ESRCH) => Some(false),
+        // EPERM: it runs, as another user.
+        Some(libc::EPERM) => Some(true),
+        _ => None,
+    }
+}
+
+#[cfg(not(unix))]
+pub fn process_runs(_pid: u32) -> Option<bool> {
+    None
+}
+
 /// Starts `command`'s child as the leader of a process group of its own, so that
 /// [`kill_process_group`] reaches what it starts, and (Linux) so that it is killed if the app
 /// dies without a chance to (SIGKILL).

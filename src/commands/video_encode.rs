@@ -204,17 +204,6 @@ pub fn partial_owner(name: &OsStr) -> Option<u32> {
         .filter(|&pid| pid > 0)
 }
 
-/// Whether a process `pid` lives (or may: one of another user's counts as living).
-#[cfg(unix)]
-fn process_lives(pid: u32) -> bool {
-    let Ok(pid) = i32::try_from(pid) else {
-        return false;
-    };
-    // SAFETY: kill(2) with signal 0 sends nothing; it only asks whether the process exists.
-    let result = unsafe { libc::kill(pid, 0) };
-    result == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
-}
-
 /// Removes what killed video runs left beside `output`: every regular file of its folder named
 /// `….loudscape-PID.partial.mp4` whose PID no longer lives (SIGKILL gives no chance to clean
 /// up), and `NAME.partial.mp4`, the temporary of `output` that versions without the PID wrote.
@@ -236,7 +225,10 @@ pub fn remove_stale_temporaries(output: &Path) -> Vec<PathBuf> {
         for entry in entries.flatten() {
             let name = entry.file_name();
             let stale = match partial_owner(&name) {
-                Some(pid) => pid != std::process::id() && !process_lives(pid),
+                // Removed only when surely gone (a process of another user's lives).
+                Some(pid) => {
+                    pid != std::process::id() && loudscape::files::process_runs(pid) == Some(false)
+                }
                 None => name == legacy,
             };
             let regular = entry.file_type().is_ok_and(|t| t.is_file());

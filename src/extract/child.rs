@@ -83,7 +83,7 @@ pub fn remove_stale_partials(cache: &Path) {
                 .and_then(|(_, rest)| rest.strip_suffix(".ply"))
                 .and_then(|p| p.parse::<u32>().ok())
         };
-        let stale = match pid.and_then(process_runs) {
+        let stale = match pid.and_then(crate::files::process_runs) {
             Some(runs) => !runs,
             None => entry
                 .metadata()
@@ -98,28 +98,6 @@ pub fn remove_stale_partials(cache: &Path) {
             let _ = std::fs::remove_file(entry.path());
         }
     }
-}
-
-/// Whether process `pid` runs on this machine (a zombie counts: its folder may be in use until
-/// it is reaped); None where that cannot be told.
-#[cfg(unix)]
-fn process_runs(pid: u32) -> Option<bool> {
-    let pid = i32::try_from(pid).ok().filter(|&p| p > 0)?;
-    // SAFETY: kill(2) with signal 0 sends nothing; it only checks that the process exists.
-    if unsafe { libc::kill(pid, 0) } == 0 {
-        return Some(true);
-    }
-    match std::io::Error::last_os_error().raw_os_error() {
-        Some(libc::ESRCH) => Some(false),
-        // EPERM: it runs, as another user.
-        Some(libc::EPERM) => Some(true),
-        _ => None,
-    }
-}
-
-#[cfg(not(unix))]
-fn process_runs(_pid: u32) -> Option<bool> {
-    None
 }
 
 /// The name of the private folder an extraction writes into (`.extract-PID-N`).
