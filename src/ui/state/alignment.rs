@@ -125,7 +125,7 @@ impl CompareAlignment {
     pub(in crate::ui) fn offset_s(&self) -> Option<f64> {
         // Read in place: the panel asks every frame, and b_alignment copies the segments.
         let found = &self.comparison.as_ref()?.versions.get(1)?.alignment;
-        found.alignable.then(|| found.offset_s + self.nudge_s)
+        found.alignable.then_some(found.offset_s + self.nudge_s)
     }
 
     /// The time a switch to `to` seeks to, `t` being the time of the side heard now: the same
