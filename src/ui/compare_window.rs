@@ -120,7 +120,18 @@ impl LoudscapeApp {
             return;
         };
         // Either still on its way: come back for it.
+        let was_loading = state.receiver.is_some();
         let loading = state.poll_load();
+        if was_loading
+            && !loading
+            && let Some(song) = &self.song
+        {
+            // What B's extractor found wrong in its input, in sight while the compare (with
+            // A) is: the loader wrote it on stderr only.
+            for line in state.b_warning_lines() {
+                self.messages.warn_about(&song.cloud.path, line);
+            }
+        }
         if !loading && state.b_loaded.is_none() && state.cancelled() {
             // Cancel on B's row: no compare, and nothing to call an error.
             self.compare = None;

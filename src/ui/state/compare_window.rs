@@ -196,6 +196,22 @@ impl CompareState {
         false
     }
 
+    /// What B's cloud says about its input, as the window tells it: `B NAME: MESSAGE` (NAME the
+    /// file asked for, as the status overlay names A's; a timeline's song where one is named).
+    pub(in crate::ui) fn b_warning_lines(&self) -> Vec<String> {
+        let Some(b) = &self.b_loaded else {
+            return Vec::new();
+        };
+        let name = self.path.file_name().map_or_else(
+            || self.path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        b.warnings()
+            .iter()
+            .map(|w| format!("B {}: {}", w.path.as_deref().unwrap_or(&name), w.message))
+            .collect()
+    }
+
     /// The error to tell the window's messages: each new one once.
     pub(in crate::ui) fn error_to_tell(&mut self) -> Option<String> {
         if self.error == self.error_told {
@@ -388,6 +404,26 @@ mod tests {
         );
         assert_eq!(state.error, None);
         assert!(!state.poll_load(), "nothing more to take");
+    }
+
+    /// B's warnings (truncated, clipped...) are told as A's are, naming the file asked for
+    /// (for audio B's cloud is a cache file of no meaning to the user).
+    #[test]
+    fn bs_warnings_are_told_by_the_name_it_was_asked_by() {
+        let (mut state, sender) = loading("/music/b_louder.ogg");
+        assert!(state.b_warning_lines().is_empty(), "nothing loaded yet");
+        let mut b = cloud(50);
+        b.meta.warnings.push(crate::data::cloud::CloudWarning {
+            kind: "clipping".into(),
+            message: "clipped: 3 run(s)".into(),
+            path: None,
+        });
+        sender.send(Ok(b)).unwrap();
+        assert!(!state.poll_load());
+        assert_eq!(
+            state.b_warning_lines(),
+            ["B b_louder.ogg: clipped: 3 run(s)"]
+        );
     }
 
     #[test]
