@@ -8,6 +8,7 @@
 //! bar and Cancel (SIGTERM: the command stops at once and leaves no partial file). Closing the
 //! window stops an export still running (`state/video_export.rs`).
 
+use std::ffi::OsString;
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
@@ -75,19 +76,26 @@ pub(super) fn video_size(px: (u32, u32)) -> (u32, u32) {
 }
 
 /// The arguments of `loudscape video` (after the program) for `choice`: only options `video`
-/// takes, with values inside its ranges.
-pub(super) fn video_args(choice: &ExportChoice) -> Vec<String> {
+/// takes, with values inside its ranges. The song and the output go as absolute paths, byte for
+/// byte: a name that is not UTF-8 is not mangled, and none starts with `-` (an option).
+pub(super) fn video_args(choice: &ExportChoice) -> Vec<OsString> {
+    let absolute = |p: &std::path::Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut args: Vec<OsString> = vec![
+        "video".into(),
+        absolute(&choice.input).into_os_string(),
+        "-o".into(),
+        absolute(&choice.output).into_os_string(),
+    ];
+    args.extend(option_args(choice).into_iter().map(OsString::from));
+    args
+}
+
+/// The options of [`video_args`] after the paths.
+fn option_args(choice: &ExportChoice) -> Vec<String> {
     let s = &choice.settings;
     let (w, h) = video_size(choice.view_px);
     let lower = |name: &str| name.to_ascii_lowercase();
-    let mut args: Vec<String> = vec![
-        "video".into(),
-        choice.input.display().to_string(),
-        "-o".into(),
-        choice.output.display().to_string(),
-        "--view".into(),
-        lower(s.view.name()),
-    ];
+    let mut args: Vec<String> = vec!["--view".into(), lower(s.view.name())];
     if let Some(camera) = choice.camera {
         args.push(format!(
             "--camera-at={:.3},{:.3},{:.4}",
@@ -686,7 +694,11 @@ mod tests {
         c.settings.show_box = false;
         c.settings.volume.shading = false;
         let args = video_args(&c);
-        assert!(!args.iter().any(|a| a.starts_with("--camera-at")));
+        assert!(
+            !args
+                .iter()
+                .any(|a| a.to_string_lossy().starts_with("--camera-at"))
+        );
         assert!(
             !args
                 .iter()
@@ -743,8 +755,31 @@ mod tests {
         assert_eq!(value("--iso"), "1");
         assert_eq!(value("--density"), "8");
         assert_eq!(value("--point-size"), "0.5");
-        assert!(HpColourMap::parse(&value("--colormap")).is_some());
-        assert!(TransferPreset::parse(&value("--tf")).is_some());
-        assert!(SurfaceMethod::parse(&value("--method")).is_some());
+        let text = |flag: &str| {
+            value(flag)
+                .into_string()
+                .expect("an option's value is text")
+        };
+        assert!(HpColourMap::parse(&text("--colormap")).is_some());
+        assert!(TransferPreset::parse(&text("--tf")).is_some());
+        assert!(SurfaceMethod::parse(&text("--method")).is_some());
+    }
+
+    /// Any name a file system allows reaches `video` as that file: a song whose name is not
+    /// UTF-8 (it was passed as its lossy display, a name that does not exist), and relative names
+    /// starting with `-`, which `video` would have read as options.
+    #[cfg(unix)]
+    #[test]
+    fn odd_names_reach_video_as_the_files_they_are() {
+        use std::os::unix::ffi::OsStrExt;
+        let mut c = choice();
+        c.input = PathBuf::from(std::ffi::OsStr::from_bytes(b"/music/caf\xe9.ply"));
+        c.output = PathBuf::from("-x.mp4");
+        let args = video_args(&c);
+        assert_eq!(args[1].as_bytes(), b"/music/caf\xe9.ply");
+        assert_eq!(args[2], "-o");
+        let output = std::path::Path::new(&args[3]);
+        assert!(output.is_absolute(), "{output:?}");
+        assert!(output.ends_with("-x.mp4"), "{output:?}");
     }
 }
