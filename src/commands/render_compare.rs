@@ -7,7 +7,7 @@
 //! `picture::compare`.
 
 use anyhow::{Context, bail};
-use loudscape::picture::compare::{CompareView, render_compare_image_noted};
+use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::grid::difference::DifferenceMeasure;
@@ -74,7 +74,7 @@ pub fn run(
     if let Some(seconds) = args.playhead {
         settings.markers = vec![super::render::playhead_marker(&scene.a, seconds)?];
     }
-    let image = render_compare_image_noted(
+    let image = render_compare_image(
         &gpu,
         &renderer,
         &mut scene,

@@ -16,7 +16,7 @@ use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
 use loudscape::annotate::{Annotation, Rect, raster};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
-use loudscape::picture::compare::{CompareView, render_compare_image_noted};
+use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::markers::MarkerBox;
@@ -530,7 +530,7 @@ fn render_video_frame(
                     Some(motion.camera(base, elapsed, head_x))
                 }
             };
-            render_compare_image_noted(
+            render_compare_image(
                 gpu,
                 renderer,
                 scene,

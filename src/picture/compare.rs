@@ -141,27 +141,11 @@ pub fn half_legend(
     picture
 }
 
-/// Renders the compare of `a` and `b` into one image of `size`.
+/// Renders the compare of `a` and `b` into one image of `size`; B's title says what B was
+/// aligned and matched by where `note` gives it ("B aligned +0.731 s, -3.8 dB to match A",
+/// `data::compare::aligned_words`).
 #[allow(clippy::too_many_arguments)]
 pub fn render_compare_image(
-    gpu: &GpuContext,
-    renderer: &Renderer,
-    scene: &mut CompareScene,
-    what: CompareView,
-    camera: Option<Camera>,
-    size: (u32, u32),
-    base: &RenderSettings,
-    labels_on: bool,
-) -> anyhow::Result<image::RgbaImage> {
-    render_compare_image_noted(
-        gpu, renderer, scene, what, camera, size, base, labels_on, None,
-    )
-}
-
-/// As [`render_compare_image`], B's title saying what B was aligned and matched by (`note`:
-/// "B aligned +0.731 s, -3.8 dB to match A", `data::compare::aligned_words`).
-#[allow(clippy::too_many_arguments)]
-pub fn render_compare_image_noted(
     gpu: &GpuContext,
     renderer: &Renderer,
     scene: &mut CompareScene,

@@ -266,6 +266,7 @@ fn compare_screenshot(
             size,
             settings,
             settings.show_box,
+            None,
         )
     })
     .unwrap_or_else(|| Err(anyhow::anyhow!("the compare is not ready yet")))

@@ -197,6 +197,7 @@ fn picture(what: CompareView, size: (u32, u32)) -> image::RgbaImage {
         size,
         &settings,
         true,
+        None,
     )
     .expect("render")
 }
