@@ -48,6 +48,9 @@ impl LoudscapeApp {
             .inner_margin(6.0);
         egui::Area::new(egui::Id::unique("status-overlay"))
             .order(egui::Order::Foreground)
+            // At once, at full colour: a warning fading in was half-drawn in the first frames
+            // (and in a screenshot taken then).
+            .fade_in(false)
             .pivot(egui::Align2::RIGHT_BOTTOM)
             .fixed_pos(view.right_bottom() - egui::vec2(8.0, 8.0))
             .constrain_to(view)

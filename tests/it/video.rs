@@ -457,7 +457,14 @@ fn mpv_plays_the_video_under_xvfb() {
         shot.display()
     );
     let status = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 800x500x24", "bash", "-c", &script])
+        .args([
+            "-a",
+            "-s",
+            "-screen 0 800x500x24 -noreset",
+            "bash",
+            "-c",
+            &script,
+        ])
         .status()
         .expect("xvfb-run (install xvfb, mpv, imagemagick)");
     assert!(status.success());
