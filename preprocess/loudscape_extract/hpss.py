@@ -4,10 +4,12 @@ librosa (``librosa.decompose.hpss``) median-filters the magnitude spectrogram al
 harmonic estimate) and along frequency (the percussive estimate) with
 ``scipy.ndimage.median_filter(..., mode="reflect")`` on the 2-D array, which takes scipy's
 generic n-d rank filter (about 17 s on a 3-minute song). Here each direction is one call to
-scipy's fast 1-D running-median path: every row is padded by half a kernel with numpy's
-``"symmetric"`` mode (scipy's ``"reflect"``: ``d c b a | a b c d | d c b a``), the padded rows
-are laid end to end into one 1-D array and filtered once. The padding is exactly half a kernel,
-so no window reaches across rows, and every median equals librosa's bit for bit.
+scipy's fast 1-D running-median path (on the floats' bits read as unsigned integers, which
+sort alike for the non-negative magnitudes and filter faster): every row is padded by half a
+kernel with numpy's ``"symmetric"`` mode (scipy's ``"reflect"``: ``d c b a | a b c d |
+d c b a``), the padded rows are laid end to end into one 1-D array and filtered once. The
+padding is exactly half a kernel, so no window reaches across rows, and every median equals
+librosa's bit for bit.
 """
 
 from __future__ import annotations
@@ -34,6 +36,13 @@ HPSS_POWER = 2.0
 HPSS_MARGIN = 1.0
 #: The epsilon of ``hp = |H| / (|H| + |P| + eps)``, in full-scale magnitude units (-200 dB).
 HP_EPSILON = 1e-10
+
+
+_UNSIGNED = {np.float32: np.uint32, np.float64: np.uint64}
+_POSITIVE_INFINITY_BITS = {
+    np.uint32: np.array(np.inf, np.float32).view(np.uint32)[()],
+    np.uint64: np.array(np.inf, np.float64).view(np.uint64)[()],
+}
 
 
 def median_filter_axis(data: np.ndarray, *, size: int, axis: int) -> np.ndarray:
@@ -78,7 +87,16 @@ def median_filter_axis(data: np.ndarray, *, size: int, axis: int) -> np.ndarray:
     else:
         source = data if axis == 1 else data.T
         padded = np.pad(source, ((0, 0), (half, half)), mode="symmetric")
-    flat = scipy.ndimage.median_filter(padded.ravel(), size=size, mode="reflect")
+    flat = padded.ravel()
+    unsigned = _UNSIGNED[flat.dtype.type]
+    as_unsigned = flat.view(unsigned)
+    if as_unsigned.max() <= _POSITIVE_INFINITY_BITS[unsigned]:
+        # No value is negative (or -0.0) or NaN: then the floats' bit patterns, read as
+        # unsigned integers, sort as the floats do, and scipy's integer running median is
+        # about a quarter faster. The median is one of the window's values: the same bits.
+        flat = scipy.ndimage.median_filter(as_unsigned, size=size, mode="reflect").view(flat.dtype)
+    else:
+        flat = scipy.ndimage.median_filter(flat, size=size, mode="reflect")
     filtered = flat.reshape(padded.shape)[:, half : half + d]
     return np.ascontiguousarray(filtered if axis == 1 else filtered.T)
 

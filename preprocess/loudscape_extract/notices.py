@@ -54,7 +54,13 @@ class ClipRuns:
         self.samples = 0
         self.first: int | None = None
 
-    def feed(self, start: int, samples: np.ndarray) -> None:
+    def feed(self, start: int, samples: np.ndarray, *, peak: float | None = None) -> None:
+        """Count the runs of ``samples`` (the block from sample ``start``); ``peak``, the
+        block's largest absolute sample when the caller has it, skips a block below full
+        scale at once."""
+        if peak is not None and peak < CLIP_LEVEL:
+            self.tail[:] = False
+            return
         at = np.abs(samples) >= CLIP_LEVEL
         if not at.any():
             self.tail[:] = False

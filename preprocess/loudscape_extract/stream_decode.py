@@ -1,8 +1,11 @@
 """The two decoding passes of the streamed pipeline (:mod:`loudscape_extract.stream`).
 
-1. **decode** (:func:`decode_pass`): the file block by block; keeps only the decoded mono mix
-   (float32, 635 MB for 60 minutes at 44.1 kHz) and each channel's sum (the DC offset);
-2. **signal** (:func:`signal_pass`): the file decoded again, block by block: DC removal, the
+1. **decode** (:func:`decode_pass`): the file block by block; keeps the decoded mono mix
+   (float32, 635 MB for 60 minutes at 44.1 kHz) and each channel's sum (the DC offset), and
+   the decoded blocks themselves while they total at most :data:`KEEP_DECODED_VALUES` values
+   (about 12 minutes of 44.1 kHz stereo), so that a song of ordinary length is decoded once;
+2. **signal** (:func:`signal_pass`): the kept blocks, or the file decoded again, block by
+   block: DC removal, the
    optional high-pass and the K-weighting as FFT convolutions carrying their last ``taps - 1``
    input samples from block to block, the true-peak interpolator likewise, and per 100 ms
    segment, 3 s DR block and STFT frame the sums and peaks the metrics need.
@@ -12,7 +15,6 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -49,6 +51,7 @@ from loudscape_extract.spectrogram import frame_count
 
 __all__ = [
     "DEFAULT_BLOCK_SAMPLES",
+    "KEEP_DECODED_VALUES",
     "DecodedMono",
     "SignalStats",
     "decode_pass",
@@ -58,6 +61,9 @@ __all__ = [
 
 #: Samples decoded at a time (about 24 s at 44.1 kHz).
 DEFAULT_BLOCK_SAMPLES = 1 << 20
+#: The decoded blocks are kept for the signal pass up to this many samples times channels
+#: (float32: 256 MiB); a longer file is decoded a second time instead.
+KEEP_DECODED_VALUES = 1 << 26
 _FRAME_CHUNK = 1024
 _SHORT_PEAK = 1 << 15
 
@@ -87,6 +93,12 @@ class DecodedMono:
     signal : tuple of dict
         Warnings about the signal found while decoding (:func:`notices.cancel_notice`,
         :func:`notices.clip_notice`).
+    blocks : tuple of (int, np.ndarray) or None
+        The decoded blocks as :func:`read_blocks` gave them (start, samples), when the file is
+        short enough to keep them (:data:`KEEP_DECODED_VALUES`); :func:`signal_pass` reads
+        them instead of decoding again.
+    block : int
+        The block length they were read with.
     """
 
     info: AudioInfo
@@ -96,6 +108,8 @@ class DecodedMono:
     any_nonzero: bool
     warning: str = ""
     signal: tuple = ()
+    blocks: tuple | None = field(default=None, repr=False, compare=False)
+    block: int = DEFAULT_BLOCK_SAMPLES
 
     @property
     def n_samples(self) -> int:
@@ -103,12 +117,17 @@ class DecodedMono:
 
 
 def decode_pass(
-    info: AudioInfo, *, block: int = DEFAULT_BLOCK_SAMPLES, strict: bool = False
+    info: AudioInfo,
+    *,
+    block: int = DEFAULT_BLOCK_SAMPLES,
+    strict: bool = False,
+    keep_values: int = KEEP_DECODED_VALUES,
 ) -> DecodedMono:
     """Decode once: the mono mix, channel means and the sample peak (see the module docs).
 
     A truncated or corrupt file is decoded as far as it goes, with a warning, as by
-    :func:`decode_audio` (``strict``: an :class:`ExtractError`).
+    :func:`decode_audio` (``strict``: an :class:`ExtractError`). The decoded blocks are kept
+    while they total at most ``keep_values`` samples times channels.
     """
     report = BlockReport()
     capacity = max(info.n_samples, 1)
@@ -119,6 +138,7 @@ def decode_pass(
     n = 0
     channel_squares = mono_squares = 0.0
     clips = ClipRuns(info.n_channels)
+    kept: list | None = [] if info.n_samples * info.n_channels <= keep_values else None
     for start, samples in read_blocks(info, block=block, report=report):
         count = samples.shape[0]
         if start + count > mono.shape[0]:  # the header understated the length
@@ -126,13 +146,20 @@ def decode_pass(
             grown[:start] = mono[:start]
             mono = grown
         mono[start : start + count] = mix_to_mono(samples)
-        sums += samples.sum(axis=0, dtype=np.float64)
+        # Each channel's sum on its own (pairwise, contiguous after the copy): numpy's sum
+        # over axis 0 of a narrow array casts and adds row by row, ten times slower.
+        channels = np.ascontiguousarray(samples.T)
+        sums += channels.sum(axis=1, dtype=np.float64)
         block_mono = mono[start : start + count]
         mono_squares += float(np.dot(block_mono, block_mono.astype(np.float64)))
         channel_squares += float(np.einsum("ij,ij->", samples, samples, dtype=np.float64))
-        clips.feed(start, samples)
-        block_peak = float(np.abs(samples).max())
+        block_peak = max(float(samples.max()), -float(samples.min()))
+        clips.feed(start, samples, peak=block_peak)
         peak = max(peak, block_peak)
+        if kept is not None:
+            kept.append((start, samples))
+            if (start + count) * info.n_channels > keep_values:  # longer than the header said
+                kept = None
         any_nonzero = any_nonzero or block_peak > 0
         n = start + count
     warning = check_decoded(info, decoded=n, report=report, strict=strict)
@@ -150,6 +177,8 @@ def decode_pass(
         any_nonzero=any_nonzero,
         warning=warning,
         signal=tuple(item for item in signal if item),
+        blocks=None if kept is None else tuple(kept),
+        block=block,
     )
 
 
@@ -183,29 +212,42 @@ class _StreamFir:
         return y
 
 
-def _phase_convolve(x: np.ndarray, phases: list[np.ndarray]) -> Iterator[np.ndarray]:
-    """``fft_convolve(x, h, dtype=np.float32)`` for each ``h`` of ``phases`` (equal lengths),
-    by overlap-save with one forward transform of each segment shared by all filters."""
+def _phase_outputs(x: np.ndarray, phases: list[np.ndarray], count: int):
+    """The causal convolutions of ``x`` with each of ``phases`` (equal lengths ``m``) at
+    outputs ``m - 1 .. m - 2 + count`` (the ones whose window lies inside ``x``), by
+    overlap-save, one forward transform of each segment shared by all filters, float32.
+
+    Yields ``(phase index, first, y)`` with ``y`` of shape (rows, length) the outputs
+    ``first .. first + length - 1`` of that phase, batch after batch, so the caller reduces
+    them while they are in the cache instead of keeping whole-block outputs. The phases are
+    short (25 taps), so the segments are short too (4,096 samples, transformed 128 at a
+    time): transforms that fit the cache cost well under half as much per sample as the
+    65,536-sample ones of :func:`fft_convolve`."""
     rows, n = x.shape
     m = phases[0].shape[0]
-    size = 1 << max(16, math.ceil(math.log2(4 * m)))
+    size = 1 << max(12, math.ceil(math.log2(4 * m)))
     step = size - m + 1
-    n_blocks = -(-n // step)
+    n_blocks = -(-count // step)
     spectra = [scipy.fft.rfft(np.asarray(h, dtype=np.float32), size) for h in phases]
-    padded = np.zeros((rows, m - 1 + n_blocks * step + size), dtype=np.float32)
-    padded[:, m - 1 : m - 1 + n] = x
-    outputs = [np.empty((rows, n_blocks * step), dtype=np.float32) for _ in phases]
-    batch = 8
+    padded = np.zeros((rows, n_blocks * step + m - 1), dtype=np.float32)
+    padded[:, : min(n, padded.shape[1])] = x[:, : padded.shape[1]]
+    batch = max(1, (1 << 19) // size)
+    item = padded.itemsize
     for first in range(0, n_blocks, batch):
-        count = min(batch, n_blocks - first)
-        starts = (first + np.arange(count)) * step
-        segments = padded[:, starts[:, None] + np.arange(size)[None, :]]  # (rows, count, size)
+        blocks = min(batch, n_blocks - first)
+        # (rows, blocks, size) windows of padded, step apart (a view, no gather)
+        segments = np.lib.stride_tricks.as_strided(
+            padded[:, first * step :],
+            shape=(rows, blocks, size),
+            strides=(padded.strides[0], step * item, item),
+            writeable=False,
+        )
         spectrum = scipy.fft.rfft(segments, axis=-1)
-        for out, h_spectrum in zip(outputs, spectra, strict=True):
-            y = scipy.fft.irfft(spectrum * h_spectrum, size, axis=-1)
-            out[:, first * step : (first + count) * step] = y[:, :, m - 1 :].reshape(rows, -1)
-    for out in outputs:
-        yield out[:, :n]
+        begin = first * step
+        length = min(blocks * step, count - begin)
+        for index, h_spectrum in enumerate(spectra):
+            y = scipy.fft.irfft(spectrum * h_spectrum, size, axis=-1)[:, :, m - 1 :]
+            yield index, begin, y.reshape(rows, -1)[:, :length]
 
 
 class _StreamTruePeak:
@@ -228,6 +270,15 @@ class _StreamTruePeak:
         padded = np.zeros(self.per_phase * oversampling)
         padded[: self.taps.shape[0]] = self.taps
         self.phases = [padded[p::oversampling] for p in range(oversampling)]
+        # A phase whose taps are all zero but one (to rounding: the windowed sinc's zeros fall
+        # on phase 0, whose other taps are below 1e-16) is a scaled copy of the input:
+        # (tap index, gain), computed directly instead of by a convolution.
+        self.copies = {}
+        for phase, h in enumerate(self.phases):
+            main = int(np.argmax(np.abs(h)))
+            if np.abs(np.delete(h, main)).sum() <= 1e-12 * abs(h[main]):
+                self.copies[phase] = (main, np.float32(h[main]))
+        self.convolved = [p for p in range(oversampling) if p not in self.copies]
         self.buffer = np.zeros((rows, self.half), dtype=np.float32)
         self.buffer_start = -self.half
         self.offsets = None if offsets is None else np.asarray(offsets, np.float32)[:, None]
@@ -260,19 +311,31 @@ class _StreamTruePeak:
                         y = np.zeros((x.shape[0], count), dtype=np.float32)
                         for k, tap in enumerate(self.taps[phase :: self.factor]):
                             y += tap * x[:, p - 1 - k : p - 1 - k + count]
-                        yield y
+                        yield phase, y
+
+                produced = ((phase, 0, y) for phase, y in outputs())
+            else:
+
+                def outputs():
+                    for phase, (index, gain) in self.copies.items():
+                        yield phase, 0, gain * x[:, p - 1 - index : p - 1 - index + count]
+                    phases = [self.phases[phase] for phase in self.convolved]
+                    for index, first, y in _phase_outputs(x, phases, count):
+                        yield self.convolved[index], first, y
 
                 produced = outputs()
-            else:
-                produced = (y[:, p - 1 :] for y in _phase_convolve(x, self.phases))
-            for phase, y in enumerate(produced):
-                np.maximum(peak, np.abs(y).max(axis=0), out=peak)
+            shifts = {}
+            for phase, first, y in produced:
+                span = slice(first, first + y.shape[1])
+                np.maximum(peak[span], np.abs(y).max(axis=0), out=peak[span])
                 if offset_peak is not None:
-                    if self.buffer_start < 0:
-                        shift = self.offsets * self._offset_response(phase, count)
-                    else:
-                        shift = self.offsets * self._offset_response(phase, 1)
-                    np.maximum(offset_peak, np.abs(y + shift).max(axis=0), out=offset_peak)
+                    if phase not in shifts:
+                        width = count if self.buffer_start < 0 else 1
+                        shifts[phase] = self.offsets * self._offset_response(phase, width)
+                    shift = shifts[phase]
+                    shift = shift[:, span] if shift.shape[1] > 1 else shift
+                    shifted = np.abs(y + shift).max(axis=0)
+                    np.maximum(offset_peak[span], shifted, out=offset_peak[span])
             self.buffer = x[:, count:].copy()
             self.buffer_start += count
         else:
@@ -364,7 +427,8 @@ def signal_pass(
     highpass_hz: float | None = None,
     block: int = DEFAULT_BLOCK_SAMPLES,
 ) -> SignalStats:
-    """Decode again and measure, per block, what the loudness and dynamics metrics need.
+    """Decode again (or read the blocks the decoding pass kept) and measure, per block, what
+    the loudness and dynamics metrics need.
 
     The signal is the DC-free (and optionally high-passed) channels, as in
     :func:`track_features`; the true peak of the decoded signal is measured too.
@@ -402,7 +466,11 @@ def signal_pass(
     overall_clean = 0.0
     overall_decoded = decoded.sample_peak
     seen = 0
-    for start, samples in read_blocks(info, block=block):
+    if decoded.blocks is not None and decoded.block == block:
+        source = iter(decoded.blocks)
+    else:
+        source = read_blocks(info, block=block)
+    for start, samples in source:
         if start + samples.shape[0] > n:
             raise ExtractError("the file changed while it was read (more samples)", path=info.path)
         clean = samples - dc32
@@ -414,7 +482,9 @@ def signal_pass(
             squared = np.square(filtered[row], dtype=np.float64)
             _reduce_into(energy[row], squared, start, boundaries, np.add)
         maxima.feed(weighted_power(filtered, gains[used]))
-        sample_abs = np.abs(clean).max(axis=1).astype(np.float32)
+        sample_abs = np.abs(clean[:, 0])
+        for channel in range(1, nc):
+            np.maximum(sample_abs, np.abs(clean[:, channel]), out=sample_abs)
         _reduce_into(segment_peak, sample_abs, start, boundaries, np.maximum)
         overall_clean = max(overall_clean, float(sample_abs.max()))
         s0, interpolated, decoded_peak = peak_clean.feed(clean.T)
