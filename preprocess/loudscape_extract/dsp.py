@@ -126,11 +126,20 @@ def fft_convolve(x: np.ndarray, h: np.ndarray, *, dtype=np.float64) -> np.ndarra
     padded[:, m - 1 : m - 1 + n] = x
     y = np.empty((x.shape[0], n_blocks * step), dtype=dtype)
     batch = 8
+    item = padded.itemsize
     for first in range(0, n_blocks, batch):
         count = min(batch, n_blocks - first)
-        starts = (first + np.arange(count)) * step
-        segments = padded[:, starts[:, None] + np.arange(size)[None, :]]  # (rows, count, size)
-        out = scipy.fft.irfft(scipy.fft.rfft(segments, axis=-1) * spectrum, size, axis=-1)
+        # (rows, count, size) windows of padded, step apart: a view (the transform reads it
+        # in place; gathering a copy first cost as much as the transforms)
+        segments = np.lib.stride_tricks.as_strided(
+            padded[:, first * step :],
+            shape=(x.shape[0], count, size),
+            strides=(padded.strides[0], step * item, item),
+            writeable=False,
+        )
+        spectra = scipy.fft.rfft(segments, axis=-1)
+        spectra *= spectrum
+        out = scipy.fft.irfft(spectra, size, axis=-1)
         y[:, first * step : (first + count) * step] = out[:, :, m - 1 :].reshape(x.shape[0], -1)
     return y[:, :n].reshape(*lead, n)
 

@@ -186,6 +186,7 @@ def extract_song(
                 n_fft=n_fft,
                 hop_length=hop_length,
                 block_frames=min(block_frames, POINTS_BLOCK_FRAMES),
+                magnitude=levels.magnitude,
             )
             made["rows"] = _write_body(body, blocks, plan=plan, output=output, points=points)
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.fft
@@ -59,6 +59,7 @@ from loudscape_extract.stream_decode import (
 
 __all__ = [
     "DEFAULT_BLOCK_FRAMES",
+    "KEEP_MAGNITUDE_VALUES",
     "SIGNAL_MESSAGE",
     "SpectralBlock",
     "SpectralLevels",
@@ -71,6 +72,10 @@ __all__ = [
 
 #: STFT frames per spectral block (about 48 s at 44.1 kHz with hop 1024).
 DEFAULT_BLOCK_FRAMES = 2048
+#: The level pass keeps the whole magnitude spectrogram for Song mode's points pass up to this
+#: many values (float32: 256 MiB, about 27 minutes at 44.1 kHz with n_fft 2048, hop 1024);
+#: a longer track's points pass computes its STFT again.
+KEEP_MAGNITUDE_VALUES = 1 << 26
 #: The progress message said before :func:`signal_pass`.
 SIGNAL_MESSAGE = (
     "dynamics and loudness (short-term loudness, PSR, DR, integrated, range, true peak)"
@@ -123,8 +128,13 @@ def spectral_blocks(
     block_frames: int = DEFAULT_BLOCK_FRAMES,
     hpss: bool = False,
     kernel_size: int = HPSS_KERNEL,
+    magnitude: np.ndarray | None = None,
 ) -> Iterator[SpectralBlock]:
     """The mono mix's spectrogram block by block (see the module docs for HPSS's overlap).
+
+    ``magnitude``, the whole track's magnitude spectrogram when a pass before kept it
+    (:attr:`SpectralLevels.magnitude`), is sliced instead of computing the STFT again (the
+    same values: each frame's transform does not depend on the frames beside it).
 
     Yields
     ------
@@ -138,11 +148,15 @@ def spectral_blocks(
     window = hann_window(n_fft).astype(np.float32)
     window_scaled = window * np.float32(2.0 / window.sum())
     context = kernel_size // 2 if hpss else 0
+    whole = magnitude
     for start in range(0, n_frames, block_frames):
         stop = min(start + block_frames, n_frames)
         first, last = max(0, start - context), min(n_frames, stop + context)
         frames = _frames_of(mono, first, last, n_fft=n_fft, hop_length=hop_length)
-        extended = _magnitude(frames, window_scaled)
+        if whole is not None:
+            extended = whole[:, first:last]
+        else:
+            extended = _magnitude(frames, window_scaled)
         inner = slice(start - first, stop - first)
         magnitude = np.ascontiguousarray(extended[:, inner])
         decoded_peak = np.abs(frames[inner]).max(axis=1).astype(np.float64)
@@ -219,6 +233,9 @@ class SpectralLevels:
     level_max_db, level_min_db : dict
         Loudest and quietest bin level over the non-silent frames, keyed by the first drawn
         bin (0: all bins, 1: without the 0 Hz bin).
+    magnitude : np.ndarray [shape=(n_bins, n_frames), dtype=float32] or None
+        The magnitude spectrogram, when the pass was asked to keep it and it is at most
+        :data:`KEEP_MAGNITUDE_VALUES` values (Song mode's points pass reads it).
     """
 
     frequencies_hz: np.ndarray
@@ -229,6 +246,7 @@ class SpectralLevels:
     hp_mean: np.ndarray
     level_max_db: dict
     level_min_db: dict
+    magnitude: np.ndarray | None = field(default=None, repr=False, compare=False)
 
 
 def stream_track(
@@ -267,7 +285,9 @@ def stream_track(
         ``track.warning`` says how far.
     progress : callable, optional
     after_levels : callable, optional
-        Called with the decoded track and the level pass's results before the signal pass.
+        Called with the decoded track and the level pass's results before the signal pass
+        (with the magnitude spectrogram kept, :attr:`SpectralLevels.magnitude`, for a track
+        short enough).
 
     Raises
     ------
@@ -284,9 +304,11 @@ def stream_track(
         block_frames=block_frames,
         hpss=frame_hp,
         kernel_size=kernel_size,
+        keep_magnitude=after_levels is not None,
     )
     if after_levels is not None:
         after_levels(decoded, levels)
+        levels = replace(levels, magnitude=None)
     say(SIGNAL_MESSAGE)
     stats = signal_pass(
         decoded, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, block=block_samples
@@ -312,9 +334,11 @@ def spectral_level_pass(
     block_frames: int = DEFAULT_BLOCK_FRAMES,
     hpss: bool = False,
     kernel_size: int = HPSS_KERNEL,
+    keep_magnitude: bool = False,
 ) -> SpectralLevels:
     """One pass over the mono mix's spectrogram: silent frames, A-weighted frame level, the
-    level range (and with ``hpss`` the per-frame hp mean)."""
+    level range (and with ``hpss`` the per-frame hp mean; with ``keep_magnitude`` the whole
+    magnitude spectrogram, up to :data:`KEEP_MAGNITUDE_VALUES` values)."""
     rate = decoded.info.sample_rate
     frequencies = np.arange(n_fft // 2 + 1) * (rate / n_fft)
     a_gain = a_weighting_db(frequencies)
@@ -325,6 +349,10 @@ def spectral_level_pass(
     hp_mean = np.full(n_frames, np.nan)
     level_max = {0: -math.inf, 1: -math.inf}
     level_min = {0: math.inf, 1: math.inf}
+    n_bins = frequencies.shape[0]
+    kept_magnitude = None
+    if keep_magnitude and n_bins * n_frames <= KEEP_MAGNITUDE_VALUES:
+        kept_magnitude = np.empty((n_bins, n_frames), dtype=np.float32)
     for block in spectral_blocks(
         decoded.mono,
         n_fft=n_fft,
@@ -334,6 +362,8 @@ def spectral_level_pass(
         kernel_size=kernel_size,
     ):
         span = slice(block.start, block.stop)
+        if kept_magnitude is not None:
+            kept_magnitude[:, span] = block.magnitude
         block_silent = block.decoded_peak == 0
         silent[span] = block_silent
         loudness_a[span], block_hp = spectral_series(
@@ -357,6 +387,7 @@ def spectral_level_pass(
         hp_mean=hp_mean,
         level_max_db=level_max,
         level_min_db=level_min,
+        magnitude=kept_magnitude,
     )
 
 

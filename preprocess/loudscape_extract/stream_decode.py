@@ -330,12 +330,17 @@ class _StreamTruePeak:
                 np.maximum(peak[span], np.abs(y).max(axis=0), out=peak[span])
                 if offset_peak is not None:
                     if phase not in shifts:
-                        width = count if self.buffer_start < 0 else 1
-                        shifts[phase] = self.offsets * self._offset_response(phase, width)
+                        # Only the outputs before sample 0's window is whole (the first block's
+                        # first few) have shifts of their own; the last column is everyone's.
+                        head = min(count, max(0, -self.buffer_start))
+                        shifts[phase] = self.offsets * self._offset_response(phase, head + 1)
                     shift = shifts[phase]
-                    shift = shift[:, span] if shift.shape[1] > 1 else shift
-                    shifted = np.abs(y + shift).max(axis=0)
-                    np.maximum(offset_peak[span], shifted, out=offset_peak[span])
+                    shifted = y + shift[:, -1:]
+                    lo, hi = span.start, min(span.stop, shift.shape[1] - 1)
+                    if hi > lo:
+                        shifted[:, : hi - lo] = y[:, : hi - lo] + shift[:, lo:hi]
+                    np.abs(shifted, out=shifted)
+                    np.maximum(offset_peak[span], shifted.max(axis=0), out=offset_peak[span])
             self.buffer = x[:, count:].copy()
             self.buffer_start += count
         else:

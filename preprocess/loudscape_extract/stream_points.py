@@ -125,8 +125,13 @@ def song_point_blocks(
     hop_length: int,
     block_frames: int = DEFAULT_BLOCK_FRAMES,
     kernel_size: int = HPSS_KERNEL,
+    magnitude: np.ndarray | None = None,
 ) -> Iterator[tuple[int, np.ndarray]]:
     """:func:`song_points` block by block: STFT and HPSS of the mono mix, the plan's mapping.
+
+    ``magnitude``: the whole track's magnitude spectrogram when the level pass kept it
+    (:attr:`~loudscape_extract.stream.SpectralLevels.magnitude`); otherwise it is computed
+    again block by block.
 
     Yields
     ------
@@ -150,6 +155,7 @@ def song_point_blocks(
         block_frames=block_frames,
         hpss=True,
         kernel_size=kernel_size,
+        magnitude=magnitude,
     ):
         kept = ~plan.silent[block.start : block.stop]
         if not kept.any():

@@ -10,9 +10,10 @@ import pytest
 import scipy.ndimage
 import soundfile
 
-from loudscape_extract import stream_decode
+from loudscape_extract import stream, stream_decode
 from loudscape_extract.audio import audio_info, mix_to_mono
 from loudscape_extract.hpss import median_filter_axis
+from loudscape_extract.song import extract_song
 from loudscape_extract.stream_decode import _StreamTruePeak, decode_pass, signal_pass
 
 from conftest import musical_signal
@@ -95,9 +96,7 @@ def stereo_wav(tmp_path_factory):
     return path
 
 
-def test_a_song_is_decoded_once_and_the_kept_blocks_give_the_same_measures(
-    stereo_wav, monkeypatch
-):
+def test_a_song_is_decoded_once_and_the_kept_blocks_give_the_same_measures(stereo_wav, monkeypatch):
     calls = []
     original = stream_decode.read_blocks
 
@@ -121,3 +120,29 @@ def test_a_song_is_decoded_once_and_the_kept_blocks_give_the_same_measures(
             assert np.array_equal(value, other), name
         else:
             assert value == other, name
+
+
+def test_song_points_reuse_the_level_pass_spectrogram_and_equal_a_second_stft(
+    stereo_wav, tmp_path, monkeypatch
+):
+    """Song mode's points pass slices the magnitudes the level pass kept (one STFT of the
+    track); a track too long to keep them computes the STFT again, and the files are equal
+    byte for byte."""
+    transforms = []
+    original = stream._magnitude
+
+    def counting(frames, window_scaled):
+        transforms.append(frames.shape[0])
+        return original(frames, window_scaled)
+
+    monkeypatch.setattr(stream, "_magnitude", counting)
+    kept = tmp_path / "kept.ply"
+    extract_song(stereo_wav, str(kept), n_fft=256, hop_length=128, block_frames=40)
+    n_frames = 1 + (5 * 8000) // 128
+    assert sum(transforms) == n_frames  # the level pass's blocks only, no context, once
+    transforms.clear()
+    monkeypatch.setattr(stream, "KEEP_MAGNITUDE_VALUES", 0)
+    again = tmp_path / "again.ply"
+    extract_song(stereo_wav, str(again), n_fft=256, hop_length=128, block_frames=40)
+    assert sum(transforms) > 2 * n_frames  # the points pass's own STFT, with HPSS context
+    assert kept.read_bytes() == again.read_bytes()
