@@ -23,6 +23,26 @@
 //!
 //! The binary (`src/main.rs`) adds the command line (`src/commands/`).
 
+/// Makes a closed vocabulary (a type with an `ALL` list) a [`clap::ValueEnum`] named by
+/// `$name` (the command-line spelling, lower case): the command line parses it once where it
+/// enters and lists the choices in its messages, and the window hands it back to a command
+/// under the same name ([`value_name`]). One list of names for the command line, the window
+/// and the docs.
+macro_rules! command_line_names {
+    ($type:ty, |$value:ident| $name:expr) => {
+        impl clap::ValueEnum for $type {
+            fn value_variants<'a>() -> &'a [Self] {
+                &Self::ALL
+            }
+
+            fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+                let $value = *self;
+                Some(clap::builder::PossibleValue::new($name))
+            }
+        }
+    };
+}
+
 pub mod annotate;
 pub mod data;
 pub mod extract;
@@ -32,3 +52,18 @@ pub mod playback;
 pub mod render;
 pub mod ui;
 pub mod view;
+
+/// The command-line name of a value of a closed vocabulary (`points`, `mt`, `spotify`), as the
+/// command line parses it: what the window writes when it hands its settings to a command.
+pub fn value_name<T: clap::ValueEnum>(value: &T) -> String {
+    value
+        .to_possible_value()
+        .map(|v| v.get_name().to_string())
+        .unwrap_or_default()
+}
+
+/// Parses a closed vocabulary's command-line name, any case (for names read back from a
+/// settings file); None for a name that is not one of them.
+pub fn parse_value<T: clap::ValueEnum>(name: &str) -> Option<T> {
+    T::from_str(name.trim(), true).ok()
+}

@@ -19,8 +19,8 @@ struct Cli {
     /// and cached; several audio files or a folder become a timeline), to open in the window.
     files: Vec<PathBuf>,
 
-    /// Open the window in this view: points, surface or volume.
-    #[arg(long, value_parser = parse_view)]
+    /// Open the window in this view.
+    #[arg(long, value_enum, ignore_case = true)]
     view: Option<loudscape::render::scene::ViewKind>,
 
     /// Compare the song with this one (B): side by side, their difference, A/B playback.
@@ -32,9 +32,9 @@ struct Cli {
     seek: Option<f64>,
 
     /// Show the timeline as heard after this playback normalization (the side panel's
-    /// "level as heard"): none, spotify, youtube, ebu_r128, ... (docs/DYNAMICS.md).
-    #[arg(long, default_value = "none")]
-    normalize: String,
+    /// "level as heard"; docs/DYNAMICS.md).
+    #[arg(long, value_enum, ignore_case = true, default_value_t)]
+    normalize: loudscape::data::normalize::Normalization,
 
     /// Save a screenshot of the window to this PNG once the data is shown, then close.
     #[arg(long, hide = true)]
@@ -73,11 +73,6 @@ enum Command {
     /// Compare 2 to 8 releases of a song, aligned in time and matched in loudness: a sheet,
     /// a CSV table or JSON (docs/COMPARE.md).
     Compare(commands::compare::CompareArgs),
-}
-
-fn parse_view(name: &str) -> Result<loudscape::render::scene::ViewKind, String> {
-    loudscape::render::scene::ViewKind::parse(name)
-        .ok_or_else(|| format!("'{name}' is not one of points, surface, volume"))
 }
 
 /// Longest error line printed (characters); longer ones are cut, with an ellipsis.
@@ -167,8 +162,40 @@ fn check_screenshot(cli: &Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Parses the command line. A bad value or a missing argument is reported as every other
+/// error is, on one line (clap's message with its list of possible values, without the hint
+/// to try --help), with clap's exit status 2; help and version print as clap prints them.
+fn parse_command_line() -> Result<Cli, ExitCode> {
+    let error = match Cli::try_parse() {
+        Ok(cli) => return Ok(cli),
+        Err(error) => error,
+    };
+    use clap::error::ErrorKind;
+    if matches!(
+        error.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        error.exit();
+    }
+    let rendered = error.render().to_string();
+    let said: Vec<&str> = rendered
+        .lines()
+        .map(str::trim)
+        .filter(|line| !line.is_empty() && !line.starts_with("For more information"))
+        .collect();
+    let text = said.join(" ");
+    let text = text.strip_prefix("error: ").unwrap_or(&text);
+    eprintln!("loudscape: error: {}", one_line(text, MAX_MESSAGE_CHARS));
+    Err(ExitCode::from(2))
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match parse_command_line() {
+        Ok(cli) => cli,
+        Err(status) => return status,
+    };
     if cli.command.is_some() {
         headless_runtime_dir();
     } else {
@@ -188,10 +215,8 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         None => check_screenshot(&cli).and_then(|()| {
-            let normalize = loudscape::data::normalize::parse_preset(&cli.normalize)
-                .map_err(anyhow::Error::msg)?;
             loudscape::ui::run(loudscape::ui::WindowOptions {
-                normalize: normalize.map(|p| p.key),
+                normalize: cli.normalize,
                 files: cli.files,
                 screenshot: cli.screenshot,
                 view: cli.view,

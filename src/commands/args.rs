@@ -1,6 +1,7 @@
-//! The argument checks the subcommands share, with one set of messages: sizes, cameras, surface
-//! method and isovalue, grid resolution and smoothing, value ranges, output folders, and loading
-//! the input cloud.
+//! The argument checks the subcommands share, with one set of messages: sizes, cameras, the
+//! `--view` choice, isovalue, grid resolution and smoothing, value ranges, output folders, and
+//! loading the input cloud. Closed vocabularies are typed where clap parses them
+//! (`clap::ValueEnum`): clap lists their values in its messages.
 
 use std::ops::RangeInclusive;
 use std::path::Path;
@@ -8,7 +9,7 @@ use std::path::Path;
 use anyhow::{Context, bail};
 use loudscape::data::cloud::PointCloud;
 use loudscape::render::grid::voxelize::{MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION};
-use loudscape::render::surface::SurfaceMethod;
+use loudscape::render::scene::ViewKind;
 
 /// The demo song, the default input of commands that measure (`bench`).
 pub const DEMO_SONG: &str = "data/demo_song.ply";
@@ -136,9 +137,36 @@ pub fn check_smoothing(sigma: f32) -> anyhow::Result<()> {
     check_range(sigma, 0.0..=MAX_SMOOTHING_SIGMA, "smoothing sigma")
 }
 
-/// Parses `--method`.
-pub fn parse_method(text: &str) -> anyhow::Result<SurfaceMethod> {
-    SurfaceMethod::parse(text).with_context(|| format!("method '{text}' is not mt or dc"))
+/// `--view` of `render` and `video`: a view of one cloud, a view of two (with `--compare`), or
+/// a timeline's sweep (`video`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ViewChoice {
+    Points,
+    Surface,
+    Volume,
+    /// A and B side by side (with --compare).
+    Compare,
+    /// The difference B - A (with --compare).
+    Difference,
+    /// The points of a timeline, swept across its years (video).
+    Timeline,
+}
+
+impl ViewChoice {
+    /// The view of one cloud; None for the compare's views and the timeline's sweep.
+    pub fn view_kind(self) -> Option<ViewKind> {
+        match self {
+            ViewChoice::Points => Some(ViewKind::Points),
+            ViewChoice::Surface => Some(ViewKind::Surface),
+            ViewChoice::Volume => Some(ViewKind::Volume),
+            ViewChoice::Compare | ViewChoice::Difference | ViewChoice::Timeline => None,
+        }
+    }
+
+    /// Whether it is one of the views of `--compare`.
+    pub fn compares(self) -> bool {
+        matches!(self, ViewChoice::Compare | ViewChoice::Difference)
+    }
 }
 
 /// Checks `--iso`.

@@ -20,7 +20,7 @@ use loudscape::render::surface::state::ExtractedSurface;
 use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
 
 use crate::commands::args::{
-    check_iso, check_not_input, check_output_folder, check_resolution, load_cloud, parse_method,
+    check_iso, check_not_input, check_output_folder, check_resolution, load_cloud,
 };
 
 #[derive(clap::Args, Debug)]
@@ -29,8 +29,8 @@ pub struct MeshArgs {
     /// or (fields, nz, ny, nx) with the mean hp as field 1, as `loudscape voxelize` writes).
     pub input: PathBuf,
     /// Extraction method: mt (marching tetrahedra) or dc (dual contouring).
-    #[arg(long, default_value = "mt")]
-    pub method: String,
+    #[arg(long, value_enum, ignore_case = true, default_value_t = SurfaceMethod::MarchingTetrahedra)]
+    pub method: SurfaceMethod,
     /// Isovalue in [0, 1] of the normalized loudness density.
     #[arg(long, default_value_t = 0.5)]
     pub iso: f32,
@@ -66,7 +66,7 @@ pub fn voxel_grid(
 }
 
 pub fn run(args: MeshArgs) -> anyhow::Result<()> {
-    let method = parse_method(&args.method)?;
+    let method = args.method;
     let iso_value = check_iso(args.iso)?;
     let format = MeshFormat::from_path(&args.output)?;
     check_resolution(args.res)?;
@@ -354,8 +354,15 @@ mod tests {
 
     #[test]
     fn bad_arguments_are_one_line_errors() {
-        assert!(parse_method("mc").is_err());
-        assert_eq!(parse_method("DC").unwrap(), SurfaceMethod::DualContouring);
+        assert_eq!(SurfaceMethod::parse("mc"), None);
+        assert_eq!(
+            SurfaceMethod::parse("DC"),
+            Some(SurfaceMethod::DualContouring)
+        );
+        assert_eq!(
+            SurfaceMethod::parse("dual-contouring"),
+            Some(SurfaceMethod::DualContouring)
+        );
         assert!(check_iso(f32::NAN).is_err());
         assert!(check_iso(1.5).is_err());
         assert!(MeshFormat::from_path(Path::new("a.stl")).is_err());

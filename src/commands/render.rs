@@ -6,29 +6,32 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::data::freq_axis::FreqAxis;
+use loudscape::data::normalize::Normalization;
 use loudscape::picture::{Overlay, draw_overlay};
 use loudscape::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::grid::difference::DifferenceMeasure;
 use loudscape::render::grid::voxelize::VoxelSettings;
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::surface::SurfaceMethod;
 use loudscape::render::volume::{TransferPreset, VolumeSettings};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
 use crate::commands::args::{
-    check_iso, check_not_input, check_output, check_output_folder, check_range, check_resolution,
-    check_smoothing, load_cloud, parse_camera, parse_method, parse_size,
+    ViewChoice, check_iso, check_not_input, check_output, check_output_folder, check_range,
+    check_resolution, check_smoothing, load_cloud, parse_camera, parse_size,
 };
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
     /// The point cloud (.ply), or an audio file (WAV, FLAC, Ogg, MP3...), extracted by loudscape-extract and cached.
     pub input: PathBuf,
-    /// What to draw: points, surface or volume.
-    #[arg(long, default_value = "points")]
-    pub view: String,
+    /// What to draw: a view of the cloud, or with --compare one of the compare's.
+    #[arg(long, value_enum, ignore_case = true, default_value_t = ViewChoice::Points)]
+    pub view: ViewChoice,
     /// Camera as AZ,EL,DIST (degrees, degrees, world units); fitted to the data when omitted.
     #[arg(long, allow_hyphen_values = true)]
     pub camera: Option<String>,
@@ -54,8 +57,8 @@ pub struct DrawArgs {
     #[arg(long)]
     pub point_size: Option<f32>,
     /// Surface extraction method: mt (marching tetrahedra) or dc (dual contouring).
-    #[arg(long, default_value = "mt")]
-    pub method: String,
+    #[arg(long, value_enum, ignore_case = true, default_value_t = SurfaceMethod::MarchingTetrahedra)]
+    pub method: SurfaceMethod,
     /// Surface isovalue in [0, 1] of the normalized loudness density.
     #[arg(long, default_value_t = 0.5)]
     pub iso: f32,
@@ -67,19 +70,19 @@ pub struct DrawArgs {
     pub no_legend: bool,
     #[command(flatten)]
     pub colours: ColourArgs,
-    /// Frequency axis of a song cloud: linear, log or mel (remapped from the bin frequencies
-    /// in the metadata; no re-extraction). A timeline has no frequency axis: only linear.
-    #[arg(long, default_value = "linear")]
-    pub freq_axis: String,
+    /// Frequency axis of a song cloud (remapped from the bin frequencies in the metadata; no
+    /// re-extraction). A timeline has no frequency axis: only linear.
+    #[arg(long, value_enum, ignore_case = true, default_value_t)]
+    pub freq_axis: FreqAxis,
     /// A second cloud to compare with (B); --view is then compare or difference.
     #[arg(long)]
     pub compare: Option<PathBuf>,
-    /// With --view compare: how each half is drawn (points, surface or volume).
-    #[arg(long, default_value = "points")]
-    pub compare_as: String,
+    /// With --view compare: how each half is drawn.
+    #[arg(long, value_enum, ignore_case = true, default_value_t = ViewKind::Points)]
+    pub compare_as: ViewKind,
     /// With --view difference: density (B - A per voxel) or level (level-weighted, per column).
-    #[arg(long, default_value = "density")]
-    pub measure: String,
+    #[arg(long, value_enum, ignore_case = true, default_value_t)]
+    pub measure: DifferenceMeasure,
     /// With --compare: B moved onto A's time by the offset found in their audio (the
     /// extractor's comparison; docs/COMPARE.md "Releases"), so the same moment of the music
     /// is at the same place.
@@ -96,10 +99,9 @@ pub struct DrawArgs {
     #[command(flatten)]
     pub volume: VolumeArgs,
     /// A timeline as heard after playback normalization: each song's y shifted by the gain the
-    /// preset applies (none, spotify, spotify_loud, spotify_quiet, youtube, aes_td1008,
-    /// ebu_r128, atsc_a85; docs/DYNAMICS.md).
-    #[arg(long, default_value = "none")]
-    pub normalize: String,
+    /// preset applies (docs/DYNAMICS.md).
+    #[arg(long, value_enum, ignore_case = true, default_value_t)]
+    pub normalize: Normalization,
 }
 
 impl DrawArgs {
@@ -134,13 +136,10 @@ impl DrawArgs {
         Ok(())
     }
 
-    /// Refuses an unknown `--normalize` preset, and a preset for `input` when it is an audio
-    /// file (a song: normalization applies to a timeline), before anything is loaded or
-    /// extracted.
+    /// Refuses a `--normalize` preset for `input` when it is an audio file (a song:
+    /// normalization applies to a timeline), before anything is loaded or extracted.
     pub fn check_normalize(&self, input: &Path) -> anyhow::Result<()> {
-        let preset = loudscape::data::normalize::parse_preset(&self.normalize)
-            .map_err(anyhow::Error::msg)?;
-        if preset.is_some() && loudscape::extract::is_audio(input) {
+        if self.normalize.preset().is_some() && loudscape::extract::is_audio(input) {
             bail!(
                 "{}: normalization applies to a timeline, not a song cloud",
                 input.display()
@@ -150,12 +149,11 @@ impl DrawArgs {
     }
 
     /// `cloud` as heard under `--normalize` (a timeline's songs shifted by their playback
-    /// gain); unchanged with `none`. An unknown preset is refused. Each song left where it was
-    /// (no integrated loudness) is named on stderr with the reason (the legend says it too).
+    /// gain); unchanged with `none`. Each song left where it was (no integrated loudness) is
+    /// named on stderr with the reason (the legend says it too).
     pub fn heard(&self, cloud: PointCloud) -> anyhow::Result<PointCloud> {
         use loudscape::data::normalize;
-        let preset = normalize::parse_preset(&self.normalize).map_err(anyhow::Error::msg)?;
-        match preset {
+        match self.normalize.preset() {
             Some(preset) => {
                 let heard = normalize::normalized(&cloud, &preset).map_err(anyhow::Error::msg)?;
                 for line in normalize::left_out_lines(&heard) {
@@ -170,53 +168,35 @@ impl DrawArgs {
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct ColourArgs {
-    /// hp colour map of points, surface and hp tint: classic, puor, cividis or viridis.
-    #[arg(long, default_value = "classic")]
-    pub colormap: String,
-    /// Colour map of the volume's transfer function: preset (the --tf's own ramp), viridis,
-    /// cividis, magma or inferno.
-    #[arg(long, default_value = "preset")]
-    pub tf_colormap: String,
+    /// hp colour map of points, surface and hp tint.
+    #[arg(long, value_enum, ignore_case = true, default_value_t)]
+    pub colormap: HpColourMap,
+    /// Colour map of the volume's transfer function: preset (the --tf's own ramp) or a
+    /// perceptually uniform map.
+    #[arg(long, value_enum, ignore_case = true, default_value_t)]
+    pub tf_colormap: DensityColourMap,
     /// Background: dark, or light for print (dark ink; the volume's ramp dark where dense).
-    #[arg(long, default_value = "dark")]
-    pub background: String,
+    #[arg(long, value_enum, ignore_case = true, default_value_t)]
+    pub background: Background,
 }
 
 impl ColourArgs {
-    /// Checks the names and writes them into `settings`.
-    pub fn apply(&self, settings: &mut RenderSettings) -> anyhow::Result<()> {
-        let hp = HpColourMap::parse(&self.colormap).with_context(|| {
-            format!(
-                "colour map '{}' is not one of {}",
-                self.colormap,
-                HpColourMap::names()
-            )
-        })?;
-        let density = DensityColourMap::parse(&self.tf_colormap).with_context(|| {
-            format!(
-                "transfer-function colour map '{}' is not one of {}",
-                self.tf_colormap,
-                DensityColourMap::names()
-            )
-        })?;
-        let background = Background::parse(&self.background).with_context(|| {
-            format!("background '{}' is not one of dark, light", self.background)
-        })?;
-        settings.colours = Colours {
-            hp,
-            density,
-            background,
-        };
-        Ok(())
+    /// The colour maps and background they choose.
+    pub fn colours(&self) -> Colours {
+        Colours {
+            hp: self.colormap,
+            density: self.tf_colormap,
+            background: self.background,
+        }
     }
 }
 
 /// Volume view options (also used by `voxelize` for --res and --smooth).
 #[derive(clap::Args, Debug, Clone)]
 pub struct VolumeArgs {
-    /// Volume transfer function: classic, ember or glacial.
-    #[arg(long, default_value = "classic")]
-    pub tf: String,
+    /// Volume transfer function.
+    #[arg(long, value_enum, ignore_case = true, default_value_t = TransferPreset::Classic)]
+    pub tf: TransferPreset,
     /// Volume density scale (0.1 to 8).
     #[arg(long, default_value_t = 1.0)]
     pub density: f32,
@@ -245,12 +225,6 @@ pub struct VolumeArgs {
 impl VolumeArgs {
     /// Checks the values and writes them into `settings`.
     pub fn apply(&self, settings: &mut RenderSettings) -> anyhow::Result<()> {
-        let preset = TransferPreset::parse(&self.tf).with_context(|| {
-            format!(
-                "transfer function '{}' is not one of classic, ember, glacial",
-                self.tf
-            )
-        })?;
         check_range(self.density, VolumeSettings::DENSITY_RANGE, "density")?;
         check_range(self.opacity, VolumeSettings::OPACITY_RANGE, "opacity")?;
         check_range(self.step, VolumeSettings::STEP_RANGE, "step")?;
@@ -259,7 +233,7 @@ impl VolumeArgs {
         }
         check_resolution(self.res)?;
         settings.volume = VolumeSettings {
-            preset,
+            preset: self.tf,
             density_scale: self.density,
             opacity_scale: self.opacity,
             hp_tint: self.hp_tint,
@@ -329,14 +303,16 @@ pub fn save_png(image: &image::RgbaImage, output: &Path) -> anyhow::Result<()> {
     Ok(loudscape::picture::save_png(image, output)?)
 }
 
-fn parse_view(name: &str) -> anyhow::Result<ViewKind> {
-    ViewKind::parse(name)
-        .with_context(|| format!("view '{name}' is not one of points, surface, volume"))
-}
-
-fn parse_freq_axis(name: &str) -> anyhow::Result<FreqAxis> {
-    FreqAxis::parse(name)
-        .with_context(|| format!("frequency axis '{name}' is not one of linear, log, mel"))
+/// The view of `render` without `--compare`: one of a single cloud's.
+fn single_view(view: ViewChoice) -> anyhow::Result<ViewKind> {
+    match view.view_kind() {
+        Some(kind) => Ok(kind),
+        None if view.compares() => bail!(
+            "--view {} needs a second cloud: --compare B",
+            loudscape::value_name(&view)
+        ),
+        None => bail!("--view timeline is video's sweep across the years; render draws a timeline with --view points"),
+    }
 }
 
 /// The camera of `--camera AZ,EL,DIST` (render) or `--camera-at` (video); None: fitted.
@@ -352,21 +328,20 @@ pub fn camera_from(text: Option<&str>) -> anyhow::Result<Option<Camera>> {
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     check_output(&args.output, &["png"], &[args.input.as_path()])?;
     let size = parse_size(&args.size)?;
-    let view = parse_view(&args.view)?;
+    let view = single_view(args.view)?;
     let camera = camera_from(args.camera.as_deref())?;
     args.draw.check_point_size()?;
     args.draw.check_alignment()?;
-    let method = parse_method(&args.draw.method)?;
     let iso_value = check_iso(args.draw.iso)?;
-    let freq_axis = parse_freq_axis(&args.draw.freq_axis)?;
+    let freq_axis = args.draw.freq_axis;
     let mut settings = RenderSettings {
         view,
+        colours: args.draw.colours.colours(),
         ..Default::default()
     };
-    settings.surface.method = method;
+    settings.surface.method = args.draw.method;
     settings.surface.iso_value = iso_value;
     args.draw.volume.apply(&mut settings)?;
-    args.draw.colours.apply(&mut settings)?;
     args.draw.check_normalize(&args.input)?;
     let mut cloud = args.draw.heard(load_cloud(&args.input)?)?;
     if let Some(seconds) = args.playhead {
@@ -436,7 +411,7 @@ pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Op
     args.draw.check_point_size()?;
     args.draw.check_alignment()?;
     let mut settings = RenderSettings::default();
-    settings.surface.method = parse_method(&args.draw.method)?;
+    settings.surface.method = args.draw.method;
     settings.surface.iso_value = check_iso(args.draw.iso)?;
     args.draw.volume.apply(&mut settings)?;
     Ok((settings, camera))
@@ -466,9 +441,7 @@ pub fn prepare_grid(
 
 pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
     let size = parse_size(&args.size)?;
-    let mut colours = RenderSettings::default();
-    args.colours.apply(&mut colours)?;
-    let colours = colours.colours;
+    let colours = args.colours.colours();
     // Every output is named up front and checked against every input, before any work.
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
     check_not_input(&args.out_dir, &inputs)?;

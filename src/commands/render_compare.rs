@@ -6,7 +6,7 @@
 //! the diverging map with its legend (`--measure density|level`). The pictures are made by
 //! `picture::compare`.
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
@@ -15,26 +15,22 @@ use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, ViewKind};
 use loudscape::view::camera::Camera;
 
-/// Parses `--view` with `--compare`: `compare` (side by side, as `--compare-as`) or
-/// `difference` (as `--measure`).
-pub fn parse_compare_view(
-    view: &str,
-    compare_as: &str,
-    measure: &str,
+use super::args::ViewChoice;
+
+/// `--view` with `--compare`: `compare` (side by side, as `--compare-as`) or `difference`
+/// (as `--measure`); the views of one cloud are refused.
+pub fn compare_view(
+    view: ViewChoice,
+    compare_as: ViewKind,
+    measure: DifferenceMeasure,
 ) -> anyhow::Result<CompareView> {
-    match view.to_ascii_lowercase().as_str() {
-        "compare" => {
-            let kind = ViewKind::parse(compare_as).with_context(|| {
-                format!("--compare-as '{compare_as}' is not one of points, surface, volume")
-            })?;
-            Ok(CompareView::SideBySide(kind))
-        }
-        "difference" => {
-            let measure = DifferenceMeasure::parse(measure)
-                .with_context(|| format!("--measure '{measure}' is not density or level"))?;
-            Ok(CompareView::Difference(measure))
-        }
-        other => bail!("view '{other}' is not compare or difference (the views of --compare)"),
+    match view {
+        ViewChoice::Compare => Ok(CompareView::SideBySide(compare_as)),
+        ViewChoice::Difference => Ok(CompareView::Difference(measure)),
+        other => bail!(
+            "--view {} is not a view of --compare: compare (side by side) or difference",
+            loudscape::value_name(&other)
+        ),
     }
 }
 
@@ -55,7 +51,7 @@ pub fn run(
     camera: Option<Camera>,
     size: (u32, u32),
 ) -> anyhow::Result<()> {
-    let what = parse_compare_view(&args.view, &args.draw.compare_as, &args.draw.measure)?;
+    let what = compare_view(args.view, args.draw.compare_as, args.draw.measure)?;
     let cloud_a = super::args::load_cloud(&args.input)?;
     let cloud_b = super::args::load_cloud(compare)?;
     // B on A's time (and loudness) as --align, --offset and --match-loudness ask.

@@ -15,7 +15,6 @@ use loudscape::annotate::legend::PictureLegend;
 use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
 use loudscape::annotate::{Annotation, Rect, raster};
 use loudscape::data::cloud::{DataMode, PointCloud};
-use loudscape::data::freq_axis::FreqAxis;
 use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
@@ -25,7 +24,7 @@ use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
-use super::args::{check_iso, check_output, load_cloud, parse_method, parse_size};
+use super::args::{ViewChoice, check_iso, check_output, load_cloud, parse_size};
 use super::render::{DrawArgs, camera_from, prepare_grid};
 use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound, song_sound};
 
@@ -42,12 +41,11 @@ pub struct VideoArgs {
     pub input: PathBuf,
     /// What to draw: points, surface or volume; compare or difference with --compare; timeline
     /// (the points of a timeline cloud; any view of a timeline sweeps across its years).
-    #[arg(long, default_value = "points")]
-    pub view: String,
-    /// Camera motion: fixed (still), orbit (a slow turn, 9 degrees a second) or follow
-    /// (travels along the time axis with the playhead).
-    #[arg(long, default_value = "fixed")]
-    pub camera: String,
+    #[arg(long, value_enum, ignore_case = true, default_value_t = ViewChoice::Points)]
+    pub view: ViewChoice,
+    /// Camera motion.
+    #[arg(long, value_enum, ignore_case = true, default_value_t = CameraMotion::Fixed)]
+    pub camera: CameraMotion,
     /// The camera to start from, as AZ,EL,DIST (as `render --camera`); fitted when omitted.
     #[arg(long, allow_hyphen_values = true)]
     pub camera_at: Option<String>,
@@ -66,11 +64,9 @@ pub struct VideoArgs {
     /// A timeline's sweep: how long it takes to cross the years, seconds.
     #[arg(long, default_value_t = 20.0)]
     pub sweep: f64,
-    /// Level of detail: full (every point, the volume's full ray step: what `render` draws),
-    /// fast (the window's level of detail while the camera moves: at most 40,000 points, a
-    /// coarser ray step) or auto (fast on a software rasterizer such as lavapipe, else full).
-    #[arg(long, default_value = "auto")]
-    pub detail: String,
+    /// Level of detail.
+    #[arg(long, value_enum, ignore_case = true, default_value_t = Detail::Auto)]
+    pub detail: Detail,
     /// Leave out the loudness strip under the view (drawn for songs with loudness curves when
     /// the frame is at least 360 pixels tall).
     #[arg(long)]
@@ -80,10 +76,9 @@ pub struct VideoArgs {
     pub silent: bool,
     #[command(flatten)]
     pub draw: DrawArgs,
-    /// Progress report: auto (a line on a terminal), json (a JSON object a line on stdout:
-    /// frame, frames, fps, eta_s) or none.
-    #[arg(long, default_value = "auto")]
-    pub progress: String,
+    /// Progress report.
+    #[arg(long, value_enum, ignore_case = true, default_value_t = ProgressMode::Auto)]
+    pub progress: ProgressMode,
     /// H.264 quality, x264's constant rate factor (0 to 51, lower is better).
     #[arg(long, default_value_t = 18)]
     pub crf: u32,
@@ -93,23 +88,29 @@ pub struct VideoArgs {
 }
 
 /// Camera motion.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum CameraMotion {
+    /// Still.
     Fixed,
+    /// A slow turn, 9 degrees a second.
     Orbit,
+    /// Travels along the time axis with the playhead.
     Follow,
 }
 
-impl CameraMotion {
-    pub fn parse(text: &str) -> anyhow::Result<Self> {
-        match text.to_ascii_lowercase().as_str() {
-            "fixed" => Ok(Self::Fixed),
-            "orbit" => Ok(Self::Orbit),
-            "follow" => Ok(Self::Follow),
-            _ => bail!("--camera '{text}' is not one of fixed, orbit, follow"),
-        }
-    }
+/// `--detail`: how much of the data each frame draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Detail {
+    /// Fast on a software rasterizer such as lavapipe, else full.
+    Auto,
+    /// Every point, the volume's full ray step: what `render` draws.
+    Full,
+    /// The window's level of detail while the camera moves: at most 40,000 points, a coarser
+    /// ray step.
+    Fast,
+}
 
+impl CameraMotion {
     /// The camera at `elapsed_s` into the video whose playhead is at world x `head_x`.
     pub fn camera(self, base: Camera, elapsed_s: f64, head_x: f32) -> Camera {
         let mut camera = base;
@@ -215,53 +216,41 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     if args.crf > 51 {
         bail!("--crf {} is out of range 0 to 51", args.crf);
     }
-    let motion = CameraMotion::parse(&args.camera)?;
-    let progress_mode = ProgressMode::parse(&args.progress)?;
+    let motion = args.camera;
+    let progress_mode = args.progress;
     let base_camera = camera_from(args.camera_at.as_deref())?;
     args.draw.check_point_size()?;
     args.draw.check_alignment()?;
-    let view_name = args.view.to_ascii_lowercase();
     let compare_view = match &args.draw.compare {
-        Some(_) => Some(super::render_compare::parse_compare_view(
-            &view_name,
-            &args.draw.compare_as,
-            &args.draw.measure,
+        Some(_) => Some(super::render_compare::compare_view(
+            args.view,
+            args.draw.compare_as,
+            args.draw.measure,
         )?),
         None => None,
     };
-    let view = match view_name.as_str() {
-        "timeline" => ViewKind::Points,
-        _ if compare_view.is_some() => ViewKind::Points,
-        "compare" | "difference" => bail!("--view {view_name} needs a second cloud: --compare B"),
-        name => ViewKind::parse(name).with_context(|| {
-            format!(
-                "view '{name}' is not one of points, surface, volume, compare, difference, timeline"
-            )
-        })?,
+    let view = match args.view.view_kind() {
+        Some(kind) if compare_view.is_none() => kind,
+        _ if args.view.compares() && compare_view.is_none() => bail!(
+            "--view {} needs a second cloud: --compare B",
+            loudscape::value_name(&args.view)
+        ),
+        _ => ViewKind::Points,
     };
-    let freq_axis = FreqAxis::parse(&args.draw.freq_axis).with_context(|| {
-        format!(
-            "frequency axis '{}' is not one of linear, log, mel",
-            args.draw.freq_axis
-        )
-    })?;
-    let detail = args.detail.to_ascii_lowercase();
-    if !["auto", "full", "fast"].contains(&detail.as_str()) {
-        bail!("--detail '{}' is not one of auto, full, fast", args.detail);
-    }
+    let freq_axis = args.draw.freq_axis;
     let mut settings = RenderSettings {
         view,
+        colours: args.draw.colours.colours(),
         ..Default::default()
     };
-    settings.surface.method = parse_method(&args.draw.method)?;
+    settings.surface.method = args.draw.method;
     settings.surface.iso_value = check_iso(args.draw.iso)?;
     args.draw.volume.apply(&mut settings)?;
-    args.draw.colours.apply(&mut settings)?;
 
     args.draw.check_normalize(&args.input)?;
     let cloud = args.draw.heard(load_cloud(&args.input)?)?;
     let timeline = cloud.meta.mode == DataMode::Timeline;
-    if view_name == "timeline" && !timeline {
+    if args.view == ViewChoice::Timeline && !timeline {
         bail!(
             "{}: --view timeline needs a timeline cloud",
             args.input.display()
@@ -310,10 +299,10 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let view_height = size.1 - strip_height;
 
     let gpu = GpuContext::new_headless()?;
-    let fast = match detail.as_str() {
-        "full" => false,
-        "fast" => true,
-        _ => gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu,
+    let fast = match args.detail {
+        Detail::Full => false,
+        Detail::Fast => true,
+        Detail::Auto => gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu,
     };
     let renderer = Renderer::new(&gpu.device);
     let mut drawn = match (&args.draw.compare, compare_view) {
@@ -695,6 +684,5 @@ mod tests {
         let follow = CameraMotion::Follow.camera(base, 10.0, 0.5);
         assert_eq!(follow.target.x, 0.5);
         assert!(follow.distance < base.distance);
-        assert!(CameraMotion::parse("spin").is_err());
     }
 }

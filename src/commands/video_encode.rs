@@ -361,24 +361,13 @@ impl Encoder {
 }
 
 /// How progress is reported.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ProgressMode {
     /// A line on stderr when it is a terminal, nothing otherwise.
     Auto,
     /// One JSON object a line on stdout.
     Json,
     None,
-}
-
-impl ProgressMode {
-    pub fn parse(text: &str) -> anyhow::Result<Self> {
-        match text.to_ascii_lowercase().as_str() {
-            "auto" => Ok(Self::Auto),
-            "json" => Ok(Self::Json),
-            "none" => Ok(Self::None),
-            _ => bail!("--progress '{text}' is not one of auto, json, none"),
-        }
-    }
 }
 
 /// Frames done, frames a second and the time left.

@@ -60,9 +60,7 @@ impl FreqAxis {
     }
 
     pub fn parse(text: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|a| a.name().eq_ignore_ascii_case(text))
+        crate::parse_value(text)
     }
 
     fn scale(self) -> AxisScale {
@@ -73,6 +71,8 @@ impl FreqAxis {
         }
     }
 }
+
+command_line_names!(FreqAxis, |axis| axis.name());
 
 /// The mapping's constants as the shaders read them. Keep in sync with `FreqParams` in
 /// shaders/utils/freq_axis.wgsl.

@@ -129,27 +129,54 @@ pub const PRESETS: [Preset; 7] = [
     },
 ];
 
-/// The key names `--normalize` accepts, for messages.
-pub fn preset_names() -> String {
-    std::iter::once("none")
-        .chain(PRESETS.iter().map(|p| p.key))
-        .collect::<Vec<_>>()
-        .join(", ")
+/// What `--normalize` and the window's "level as heard" choose: the files as mastered
+/// (`none`) or a preset, by its key. Parsed once where it enters (`clap::ValueEnum`); the
+/// window hands it to `video` under the same key.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Normalization {
+    /// The files as mastered: no shift (`none`).
+    #[default]
+    AsMastered,
+    /// Each song shifted by the gain this preset applies to it.
+    Preset(Preset),
 }
 
-/// `"none"` -> `Ok(None)`; a preset's key -> that preset; anything else an error naming the
-/// choices.
-pub fn parse_preset(key: &str) -> Result<Option<Preset>, String> {
-    if key == "none" {
-        return Ok(None);
+impl Normalization {
+    /// `none`, then every preset of [`PRESETS`] in order.
+    pub const ALL: [Normalization; 1 + PRESETS.len()] = [
+        Normalization::AsMastered,
+        Normalization::Preset(PRESETS[0]),
+        Normalization::Preset(PRESETS[1]),
+        Normalization::Preset(PRESETS[2]),
+        Normalization::Preset(PRESETS[3]),
+        Normalization::Preset(PRESETS[4]),
+        Normalization::Preset(PRESETS[5]),
+        Normalization::Preset(PRESETS[6]),
+    ];
+
+    /// The command-line key: `none` or the preset's (`spotify`, `ebu_r128`, ...).
+    pub fn key(self) -> &'static str {
+        match self {
+            Normalization::AsMastered => "none",
+            Normalization::Preset(preset) => preset.key,
+        }
     }
-    PRESETS
-        .iter()
-        .find(|p| p.key == key)
-        .copied()
-        .map(Some)
-        .ok_or_else(|| format!("normalization '{key}' is not one of {}", preset_names()))
+
+    /// The preset; None as mastered.
+    pub fn preset(self) -> Option<Preset> {
+        match self {
+            Normalization::AsMastered => None,
+            Normalization::Preset(preset) => Some(preset),
+        }
+    }
+
+    /// The choice of `key` (any case); None for a key that is none of them.
+    pub fn parse(key: &str) -> Option<Self> {
+        crate::parse_value(key)
+    }
 }
+
+command_line_names!(Normalization, |choice| choice.key());
 
 /// Metadata key (in each song's object) of the gain a normalized cloud was shifted by.
 pub const GAIN_KEY: &str = "normalization_gain_db";
@@ -450,7 +477,7 @@ mod tests {
     #[test]
     fn a_loud_master_sits_at_the_target_and_quiet_ones_follow_the_turn_up_rule() {
         let base = cloud();
-        let preset = |key| parse_preset(key).unwrap().unwrap();
+        let preset = |key| Normalization::parse(key).unwrap().preset().unwrap();
         // Spotify (normal), -14 LUFS: -8 comes down 6 dB to -14; -20 with a -5 dBTP peak
         // is raised only to a -1 dBTP peak: +4 dB, to -16 (Spotify's own example).
         let spotify = normalized(&base, &preset("spotify")).unwrap();
@@ -485,7 +512,7 @@ mod tests {
         base.meta.songs[0].metrics = Some(Metrics::default());
         base.meta.songs[1].path = Some("/music/quiet.flac".into());
         base.meta.songs[1].metrics.as_mut().unwrap().true_peak_dbtp = None;
-        let spotify = normalized(&base, &parse_preset("spotify").unwrap().unwrap()).unwrap();
+        let spotify = normalized(&base, &PRESETS[0]).unwrap();
         assert!(
             (heard(&spotify, 0) - -8.0).abs() < 1e-4,
             "moved without a loudness"
@@ -535,7 +562,7 @@ mod tests {
             "{lines:?}"
         );
         // EBU R 128 turns up freely: only the song without a loudness is left.
-        let ebu = normalized(&base, &parse_preset("ebu_r128").unwrap().unwrap()).unwrap();
+        let ebu = normalized(&base, &PRESETS[5]).unwrap();
         assert_eq!(
             left_out_note(&ebu).as_deref(),
             Some("1 song not normalized (no integrated loudness): Hum")
@@ -613,20 +640,18 @@ mod tests {
 
     #[test]
     fn presets_parse_by_key_and_song_clouds_are_refused() {
-        assert_eq!(parse_preset("none"), Ok(None));
-        assert_eq!(
-            parse_preset("atsc_a85")
-                .unwrap()
-                .unwrap()
-                .service
-                .target_lufs,
-            -24.0
-        );
-        let bad = parse_preset("tidal").unwrap_err();
-        assert!(
-            bad.contains("tidal") && bad.contains("spotify_loud"),
-            "{bad}"
-        );
+        assert_eq!(Normalization::parse("none"), Some(Normalization::AsMastered));
+        let atsc = Normalization::parse("atsc_a85").unwrap();
+        assert_eq!(atsc.preset().unwrap().service.target_lufs, -24.0);
+        assert_eq!(crate::value_name(&atsc), "atsc_a85");
+        assert_eq!(Normalization::parse("tidal"), None);
+        // Every preset is a choice, under its own key, once.
+        let keys: Vec<&str> = Normalization::ALL.iter().map(|n| n.key()).collect();
+        let mut unique = keys.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), keys.len());
+        assert!(PRESETS.iter().all(|p| keys.contains(&p.key)));
         let mut song_cloud = cloud();
         song_cloud.meta.mode = DataMode::Song;
         assert!(normalized(&song_cloud, &PRESETS[0]).is_err());

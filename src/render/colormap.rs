@@ -140,14 +140,7 @@ impl HpColourMap {
     }
 
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(name))
-    }
-
-    /// The names, lower case, for messages: "classic, puor, cividis, viridis".
-    pub fn names() -> String {
-        names(Self::ALL.map(Self::name))
+        crate::parse_value(name)
     }
 
     /// The map of the points (and the volume's hp tint).
@@ -209,14 +202,7 @@ impl DensityColourMap {
     }
 
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(name))
-    }
-
-    /// "preset, viridis, cividis, magma, inferno", for messages.
-    pub fn names() -> String {
-        names(Self::ALL.map(Self::name))
+        crate::parse_value(name)
     }
 
     /// The ramp for `preset` (whose own ramp `Preset` means), not yet oriented for a background.
@@ -231,13 +217,9 @@ impl DensityColourMap {
     }
 }
 
-fn names<const N: usize>(names: [&str; N]) -> String {
-    names
-        .iter()
-        .map(|n| n.to_lowercase())
-        .collect::<Vec<_>>()
-        .join(", ")
-}
+command_line_names!(HpColourMap, |map| map.name().to_lowercase());
+command_line_names!(DensityColourMap, |map| map.name().to_lowercase());
+command_line_names!(Background, |background| background.name());
 
 /// The picture's background: dark for the screen, light for print.
 #[derive(
@@ -260,9 +242,7 @@ impl Background {
     }
 
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|b| b.name().eq_ignore_ascii_case(name))
+        crate::parse_value(name)
     }
 
     /// The clear colour (gamma-encoded RGB).
@@ -549,7 +529,8 @@ mod tests {
             Some(DensityColourMap::Magma)
         );
         assert_eq!(Background::parse("Light"), Some(Background::Light));
-        assert_eq!(HpColourMap::names(), "classic, puor, cividis, viridis");
+        let names: Vec<String> = HpColourMap::ALL.iter().map(crate::value_name).collect();
+        assert_eq!(names, ["classic", "puor", "cividis", "viridis"]);
     }
 
     const CLASSIC_TOP: [f32; 3] = [1.00, 0.97, 0.88];

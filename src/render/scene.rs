@@ -51,11 +51,11 @@ impl ViewKind {
     }
 
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|v| v.name().eq_ignore_ascii_case(name))
+        crate::parse_value(name)
     }
 }
+
+command_line_names!(ViewKind, |view| view.name().to_lowercase());
 
 /// Everything the user can set about how the scene is drawn.
 #[derive(Clone, Debug, PartialEq)]

@@ -62,9 +62,7 @@ impl TransferPreset {
     }
 
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|p| p.name().eq_ignore_ascii_case(name))
+        crate::parse_value(name)
     }
 
     /// The index the shader switches on. Keep in sync with volume.wgsl.
@@ -99,6 +97,8 @@ impl TransferPreset {
         }
     }
 }
+
+command_line_names!(TransferPreset, |preset| preset.name().to_lowercase());
 
 #[cfg(test)]
 mod tests {

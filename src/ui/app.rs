@@ -37,8 +37,8 @@ pub struct WindowOptions {
     /// Keys to press once the data is shown (`?`, `Ctrl+S`; for tests: they go through the
     /// same key handling as real keys).
     pub press: Vec<String>,
-    /// The "level as heard" preset to show a timeline with (a key of `normalize::PRESETS`).
-    pub normalize: Option<&'static str>,
+    /// The "level as heard" normalization to show a timeline with.
+    pub normalize: crate::data::normalize::Normalization,
 }
 
 /// Opens the window and runs until it closes.

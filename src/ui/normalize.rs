@@ -8,19 +8,19 @@ pub use crate::data::normalize::*;
 use crate::ui::state::LoudscapeApp;
 use crate::ui::state::heard::Heard;
 
-/// The choice a window starts with: `key` (a preset's) is applied once a timeline is shown.
-pub(super) fn heard_starting(key: Option<&str>) -> Heard {
-    let index = key.and_then(|k| PRESETS.iter().position(|p| p.key == k));
+/// The choice a window starts with, applied once a timeline is shown.
+pub(super) fn heard_starting(choice: Normalization) -> Heard {
     Heard {
-        pending: index.map(Some),
+        pending: (choice != Normalization::AsMastered).then_some(choice),
         ..Heard::default()
     }
 }
 
-impl Heard {
-    /// The preset shown, by its command-line key (`video --normalize`); None: as mastered.
-    pub(super) fn preset_key(&self) -> Option<&'static str> {
-        self.preset.map(|i| PRESETS[i].key)
+/// The combo box's words for `choice`.
+fn choice_name(choice: Normalization) -> &'static str {
+    match choice {
+        Normalization::AsMastered => "as mastered (none)",
+        Normalization::Preset(preset) => preset.service.name,
     }
 }
 
@@ -32,25 +32,23 @@ impl LoudscapeApp {
         };
         if loaded.id != self.heard.shown {
             // a newly loaded timeline is shown as mastered (unless a choice is on its way)
-            self.heard.preset = None;
+            self.heard.preset = Normalization::AsMastered;
             self.heard.original = None;
         }
         let mut choice = self.heard.preset;
-        let name = |choice: Option<usize>| {
-            choice.map_or("as mastered (none)", |i| PRESETS[i].service.name)
-        };
         ui.add_space(6.0);
         egui::ComboBox::from_label("level as heard")
-            .selected_text(name(choice))
+            .selected_text(choice_name(choice))
             .show_ui(ui, |ui| {
-                ui.selectable_value(&mut choice, None, name(None));
-                for (i, preset) in PRESETS.iter().enumerate() {
-                    ui.selectable_value(&mut choice, Some(i), preset.service.name)
-                        .on_hover_text(format!(
+                for option in Normalization::ALL {
+                    let item = ui.selectable_value(&mut choice, option, choice_name(option));
+                    if let Some(preset) = option.preset() {
+                        item.on_hover_text(format!(
                             "{:+.0} LUFS, {}",
                             preset.service.target_lufs,
                             turn_up_words(preset.service.turn_up)
                         ));
+                    }
                 }
             })
             .response
@@ -58,8 +56,8 @@ impl LoudscapeApp {
                 "Shift each song's y by the gain this service or standard applies to it at \
                  playback (from the song's integrated loudness and true peak)",
             );
-        if let Some(i) = self.heard.preset {
-            let service = &PRESETS[i].service;
+        if let Some(preset) = self.heard.preset.preset() {
+            let service = &preset.service;
             ui.label(
                 RichText::new(format!(
                     "y as heard: {:+.0} LUFS, {}",
@@ -90,9 +88,9 @@ impl LoudscapeApp {
             .clone()
             .filter(|_| loaded.id == self.heard.shown)
             .unwrap_or_else(|| loaded.cloud.clone());
-        let cloud = match choice {
+        let cloud = match choice.preset() {
             None => (*original).clone(),
-            Some(i) => match normalized(&original, &PRESETS[i]) {
+            Some(preset) => match normalized(&original, &preset) {
                 Ok(cloud) => cloud,
                 Err(message) => {
                     self.messages.error(message);

@@ -9,6 +9,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use crate::data::normalize::Normalization;
 use crate::ui::state::{LoudscapeApp, Slot};
 
 /// How often eframe saves what is remembered (when it changed; its default is 30 s).
@@ -61,7 +62,8 @@ impl LoudscapeApp {
                 .heard
                 .pending
                 .unwrap_or(self.heard.preset)
-                .map(|i| crate::ui::normalize::PRESETS[i].key.to_string()),
+                .preset()
+                .map(|preset| preset.key.to_string()),
         }
     }
 
@@ -133,9 +135,9 @@ impl LoudscapeApp {
             }
             self.audio_for = r.audio_for;
             if self.heard.pending.is_none()
-                && let Some(key) = r.heard.as_deref()
+                && let Some(choice) = r.heard.as_deref().and_then(Normalization::parse)
             {
-                self.heard = crate::ui::normalize::heard_starting(Some(key));
+                self.heard = crate::ui::normalize::heard_starting(choice);
             }
             // The camera and the files go together: the view comes back as it was left, the
             // slot it showed first, and B of a compare with A.
@@ -186,7 +188,7 @@ impl LoudscapeApp {
 
 #[cfg(test)]
 mod tests {
-    use super::Remembered;
+    use super::{Normalization, Remembered};
     use crate::ui::app::WindowOptions;
     use crate::ui::state::{LoudscapeApp, Slot};
 
@@ -226,7 +228,11 @@ mod tests {
             app.compare.as_ref().map(|c| c.path.clone()),
             Some(b.clone())
         );
-        assert_eq!(app.heard.pending, Some(Some(1)), "level as heard");
+        assert_eq!(
+            app.heard.pending,
+            Some(Normalization::Preset(crate::ui::normalize::PRESETS[1])),
+            "level as heard"
+        );
         assert_eq!(app.active, Slot::Timeline, "the slot it closed on");
         assert_eq!(app.motion.camera(), camera);
         let again = app.remembered();

@@ -20,6 +20,7 @@ use eframe::egui::{self, RichText};
 
 use crate::data::cloud::DataMode;
 use crate::data::freq_axis::FreqAxis;
+use crate::data::normalize::Normalization;
 use crate::render::scene::RenderSettings;
 use crate::render::volume::VolumeSettings;
 use crate::ui::open::file_name;
@@ -27,6 +28,7 @@ use crate::ui::state::LoudscapeApp;
 use crate::ui::state::messages::{Kind, VIDEO_EXPORT};
 use crate::ui::state::video_export::{RunningExport, VideoProgress};
 use crate::ui::state::written;
+use crate::value_name;
 use crate::view::camera::Camera;
 
 /// The frame size when the view's own cannot be a video's (odd, tiny or over 3840x2160).
@@ -49,8 +51,8 @@ pub(super) struct ExportChoice {
     /// The 3D view's size in pixels.
     pub(super) view_px: (u32, u32),
     pub(super) freq_axis: FreqAxis,
-    /// Timeline mode's "level as heard" preset key.
-    pub(super) normalize: Option<&'static str>,
+    /// Timeline mode's "level as heard" choice.
+    pub(super) normalize: Normalization,
     /// A song's passage, seconds (start, end); `None`: the whole song.
     pub(super) passage: Option<(f64, f64)>,
 }
@@ -94,8 +96,7 @@ pub(super) fn video_args(choice: &ExportChoice) -> Vec<OsString> {
 fn option_args(choice: &ExportChoice) -> Vec<String> {
     let s = &choice.settings;
     let (w, h) = video_size(choice.view_px);
-    let lower = |name: &str| name.to_ascii_lowercase();
-    let mut args: Vec<String> = vec!["--view".into(), lower(s.view.name())];
+    let mut args: Vec<String> = vec!["--view".into(), value_name(&s.view)];
     if let Some(camera) = choice.camera {
         args.push(format!(
             "--camera-at={:.3},{:.3},{:.4}",
@@ -112,17 +113,17 @@ fn option_args(choice: &ExportChoice) -> Vec<String> {
         "--progress".into(),
         "json".into(),
         "--colormap".into(),
-        lower(s.colours.hp.name()),
+        value_name(&s.colours.hp),
         "--tf-colormap".into(),
-        lower(s.colours.density.name()),
+        value_name(&s.colours.density),
         "--background".into(),
-        s.colours.background.name().into(),
+        value_name(&s.colours.background),
         "--method".into(),
-        s.surface.method.short_name().into(),
+        value_name(&s.surface.method),
         "--iso".into(),
         format!("{}", s.surface.iso_value.clamp(0.0, 1.0)),
         "--tf".into(),
-        lower(s.volume.preset.name()),
+        value_name(&s.volume.preset),
         "--density".into(),
         format!(
             "{}",
@@ -147,12 +148,12 @@ fn option_args(choice: &ExportChoice) -> Vec<String> {
         args.push("--no-labels".into());
     }
     if choice.timeline {
-        if let Some(key) = choice.normalize {
-            args.extend(["--normalize".into(), key.into()]);
+        if choice.normalize != Normalization::AsMastered {
+            args.extend(["--normalize".into(), value_name(&choice.normalize)]);
         }
     } else {
         if choice.freq_axis != FreqAxis::Linear {
-            args.extend(["--freq-axis".into(), choice.freq_axis.name().into()]);
+            args.extend(["--freq-axis".into(), value_name(&choice.freq_axis)]);
         }
         if let Some((start, end)) = choice.passage {
             args.extend([
@@ -339,7 +340,7 @@ impl LoudscapeApp {
             camera: self.motion.settled_camera(),
             view_px: self.view_px,
             freq_axis: self.freq_axis,
-            normalize: self.heard.preset_key(),
+            normalize: self.heard.preset,
             passage: self.passage_row().and_then(|p| {
                 // The whole song is no passage (the command's default, to the sample).
                 (p.start > 0.0 || p.end < p.duration).then_some((p.start, p.end))
@@ -639,7 +640,7 @@ mod tests {
             camera: Some(Camera::from_angles(-35.0, 25.0, 4.0)),
             view_px: (1101, 641),
             freq_axis: FreqAxis::Mel,
-            normalize: Some("spotify"),
+            normalize: Normalization::Preset(crate::data::normalize::PRESETS[0]),
             passage: None,
         }
     }

@@ -318,17 +318,17 @@ fn render_takes_colour_flags_and_rejects_bad_names() {
         (
             "--colormap",
             "rainbow",
-            "colour map 'rainbow' is not one of classic, puor",
+            "'rainbow' for '--colormap <COLORMAP>' [possible values: classic, puor, cividis, viridis]",
         ),
         (
             "--tf-colormap",
             "jet",
-            "'jet' is not one of preset, viridis",
+            "'jet' for '--tf-colormap <TF_COLORMAP>' [possible values: preset, viridis, cividis, magma, inferno]",
         ),
         (
             "--background",
             "grey",
-            "background 'grey' is not one of dark, light",
+            "'grey' for '--background <BACKGROUND>' [possible values: dark, light]",
         ),
     ] {
         let output = loudscape(&[

@@ -57,8 +57,8 @@ fn a_song_left_unnormalized_is_named_on_stderr_and_in_the_legend() {
 
     // The legend the picture is drawn with says it too; without --normalize nothing is said.
     let loaded = cloud_file::load(&timeline).unwrap();
-    let preset = loudscape::data::normalize::parse_preset("spotify")
-        .unwrap()
+    let preset = loudscape::data::normalize::Normalization::parse("spotify")
+        .and_then(|n| n.preset())
         .unwrap();
     let heard = loudscape::data::normalize::normalized(&loaded, &preset).unwrap();
     let legend = picture_legend(&heard, &RenderSettings::default());

@@ -77,9 +77,7 @@ impl DifferenceMeasure {
     }
 
     pub fn parse(text: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(text))
+        crate::parse_value(text)
     }
 
     /// What the legend says the value is.
@@ -97,6 +95,8 @@ impl DifferenceMeasure {
         }
     }
 }
+
+command_line_names!(DifferenceMeasure, |measure| measure.name());
 
 #[derive(Debug, Error)]
 pub enum DifferenceError {

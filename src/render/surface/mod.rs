@@ -73,15 +73,19 @@ impl SurfaceMethod {
 
     /// Parses "mt" / "dc" (or the full names, any case).
     pub fn parse(text: &str) -> Option<Self> {
-        let t = text
-            .trim()
-            .to_ascii_lowercase()
-            .replace(['-', '_', ' '], "");
-        match t.as_str() {
-            "mt" | "marchingtetrahedra" | "marchingtets" => Some(Self::MarchingTetrahedra),
-            "dc" | "dualcontouring" => Some(Self::DualContouring),
-            _ => None,
-        }
+        crate::parse_value(text)
+    }
+}
+
+/// `mt` and `dc` on the command line, the full names (hyphenated) as aliases.
+impl clap::ValueEnum for SurfaceMethod {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let full = self.name().to_lowercase().replace(' ', "-");
+        Some(clap::builder::PossibleValue::new(self.short_name()).alias(full))
     }
 }
 

@@ -4,14 +4,15 @@
 use std::sync::Arc;
 
 use crate::data::cloud::PointCloud;
+use crate::data::normalize::Normalization;
 
 /// The side panel's "level as heard" choice in Timeline mode.
 #[derive(Default)]
 pub(in crate::ui) struct Heard {
-    /// The preset shown (index into `normalize::PRESETS`); None: the files as mastered.
-    pub(in crate::ui) preset: Option<usize>,
+    /// The normalization shown (the files as mastered, or a preset).
+    pub(in crate::ui) preset: Normalization,
     /// A new choice, applied where the GPU is at hand (`LoudscapeApp::apply_heard`).
-    pub(in crate::ui) pending: Option<Option<usize>>,
+    pub(in crate::ui) pending: Option<Normalization>,
     /// The timeline as loaded, the source of every shifted copy.
     pub(in crate::ui) original: Option<Arc<PointCloud>>,
     /// The id of the timeline this installed; another id means a new file was loaded.
