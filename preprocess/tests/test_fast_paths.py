@@ -14,6 +14,8 @@ from loudscape_extract import stream, stream_decode
 from loudscape_extract.audio import audio_info, mix_to_mono
 from loudscape_extract.hpss import median_filter_axis
 from loudscape_extract.song import extract_song
+from loudscape_extract.spectrogram import level_db
+from loudscape_extract.stream import level_range
 from loudscape_extract.stream_decode import _StreamTruePeak, decode_pass, signal_pass
 
 from conftest import musical_signal
@@ -146,3 +148,19 @@ def test_song_points_reuse_the_level_pass_spectrogram_and_equal_a_second_stft(
     extract_song(stereo_wav, str(again), n_fft=256, hop_length=128, block_frames=40)
     assert sum(transforms) > 2 * n_frames  # the points pass's own STFT, with HPSS context
     assert kept.read_bytes() == again.read_bytes()
+
+
+@pytest.mark.parametrize("shape", [(1025, 2048), (129, 1), (2, 7), (513, 333)])
+def test_level_range_equals_the_levels_of_every_bin(shape):
+    rng = np.random.default_rng(sum(shape))
+    spread = np.exp(rng.uniform(-30.0, 2.0, size=shape))
+    cases = [
+        (rng.standard_normal(shape) ** 2 * spread).astype(np.float32),
+        np.zeros(shape, dtype=np.float32),
+        np.full(shape, 1e-42, dtype=np.float32),  # subnormal, below the -200 dB floor
+    ]
+    cases[0][0, 0] = 7.5  # the loudest in the 0 Hz bin: counted with first bin 0 only
+    for magnitude in cases:
+        levels = level_db(magnitude)
+        expected = {b: (float(levels[b:].max()), float(levels[b:].min())) for b in (0, 1)}
+        assert level_range(magnitude) == expected
