@@ -163,6 +163,7 @@ def main() -> int:
         old_env = dict(os.environ, PYTHONPATH=os.path.abspath(args.vs_code))
     print(f"song: {os.path.relpath(song, REPO)}, {song_s:.1f} s; {os.cpu_count()} CPUs")
     ours, ours_cpu, old, old_cpu, rosa, rosa_cpu, ff, ff_cpu = ([] for _ in range(8))
+    ours_rss, old_rss = [], []
     line_ours, line_tl, line_old_tl, line_ff_tl = [], [], [], []
     loads = []
     with tempfile.TemporaryDirectory() as scratch:
@@ -174,14 +175,16 @@ def main() -> int:
                 handle.write(f"{path},{1990 + 3 * index}\n")
         for _ in range(args.runs):
             loads.append(os.getloadavg()[0])
-            wall, _, cpu, _ = run_child([extractor, "song", song, "-o", ply, "--quiet"])
+            wall, rss, cpu, _ = run_child([extractor, "song", song, "-o", ply, "--quiet"])
             ours.append(wall)
             ours_cpu.append(cpu)
+            ours_rss.append(rss)
             if old_env is not None:
                 command = [sys.executable, "-m", "loudscape_extract.cli", "song", song]
-                wall, _, cpu, _ = run_child([*command, "-o", ply, "--quiet"], env=old_env)
+                wall, rss, cpu, _ = run_child([*command, "-o", ply, "--quiet"], env=old_env)
                 old.append(wall)
                 old_cpu.append(cpu)
+                old_rss.append(rss)
             _, _, _, stdout = run_child(
                 [sys.executable, "-c", LIBROSA_CHILD, song, str(N_FFT), str(HOP)]
             )
@@ -204,9 +207,11 @@ def main() -> int:
     print("\nSong extraction (wall; CPU = user + sys)")
     print(line("ours, whole process", ours))
     print(line("  CPU", ours_cpu))
+    print(f"  peak RSS {max(ours_rss):.0f} MiB")
     if old:
         print(line(f"older code ({args.vs_code})", old))
         print(line("  CPU", old_cpu))
+        print(f"  peak RSS {max(old_rss):.0f} MiB")
     print(line("librosa stft+hpss alone", rosa))
     print(line("  CPU", rosa_cpu))
     print(line("ffmpeg ebur128=peak=true", ff))

@@ -352,9 +352,12 @@ def _open_error(name: str, extension: str, exc: BaseException) -> ExtractError:
 
 
 @contextlib.contextmanager
-def _captured_fd2():
+def _captured_fd2(sink=None):
     """Redirect file descriptor 2 to a temporary file; yields the list of lines written there,
-    filled in when the block ends (C libraries such as libmpg123 print straight to fd 2)."""
+    filled in when the block ends (C libraries such as libmpg123 print straight to fd 2).
+
+    ``sink``, an open temporary file, is emptied and used instead of a new one (a decoding
+    loop captures each piece it reads: one file for all of them)."""
     lines: list[str] = []
     try:
         sys.stderr.flush()
@@ -362,7 +365,12 @@ def _captured_fd2():
     except (OSError, ValueError):
         yield lines
         return
-    with tempfile.TemporaryFile() as sink:
+    with contextlib.ExitStack() as stack:
+        if sink is None:
+            sink = stack.enter_context(tempfile.TemporaryFile())
+        else:
+            sink.seek(0)
+            sink.truncate()
         os.dup2(sink.fileno(), 2)
         try:
             yield lines
@@ -498,13 +506,13 @@ def read_blocks(
     # error loses the piece being read, so a damaged file decodes as far as it does there.
     piece = min(block, _BLOCK_FRAMES)
     ended = False
-    with handle:
+    with handle, tempfile.TemporaryFile() as sink:
         while not ended:
             samples = np.empty((block, info.n_channels), dtype=np.float32)
             filled = 0
             while filled < block:
                 want = min(piece, block - filled)
-                with _captured_fd2() as chatter:
+                with _captured_fd2(sink) as chatter:
                     try:
                         got = handle.read(
                             want,
