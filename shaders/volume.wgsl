@@ -1,7 +1,10 @@
 // Volume view: a full-screen triangle whose fragments march their pixel's ray through the voxel
 // grid, front to back, mapping density through a transfer function (paper 3.3).
 // Reads the grid's density and hp_mean buffers (layout of src/render/grid/mod.rs) with manual
-// trilinear filtering. Writes premultiplied colour (blended over the cleared background) and the
+// trilinear filtering, and the derived grids of shaders/volume_grids.wgsl: each brick's largest
+// density, to step over bricks the transfer function leaves transparent (landing on the same
+// samples the full march takes), and a texture of the density gradient and the density, sampled
+// once per step with the sampler's filtering (the full march is kept for the tests). Writes premultiplied colour (blended over the cleared background) and the
 // depth where the ray's opacity first passes one half, so box lines behind dense volume hide.
 // Keep VolumeParams in sync with src/render/volume.rs and `transfer` with src/render/transfer.rs;
 // colours come from shaders/utils/palette.wgsl.
@@ -18,11 +21,22 @@ struct VolumeParams {
     // x: density scale, y: opacity scale times the opacity per voxel at alpha 1, z: step in
     // voxels, w: emission gain.
     controls: vec4<f32>,
+    // Bricks per axis of brick_max; w: brick size in voxels.
+    bricks: vec4<u32>,
+    // x: skip bricks on, y: density and gradient from the gradient texture on (both off: the
+    // full march, kept as the reference the tests compare with).
+    modes: vec4<u32>,
+    // x: bricks whose largest density is below this are transparent, y: the smallest scaled
+    // density a sample must pass to count, z: the smallest opacity per step (w unused).
+    skip: vec4<f32>,
 };
 
 @group(1) @binding(0) var<uniform> params: VolumeParams;
 @group(1) @binding(1) var<storage, read> density: array<f32>;
 @group(1) @binding(2) var<storage, read> hp_mean: array<f32>;
+@group(1) @binding(3) var<storage, read> brick_max: array<f32>;
+@group(1) @binding(4) var gradient_texture: texture_3d<f32>;
+@group(1) @binding(5) var gradient_sampler: sampler;
 
 struct VertexOut {
     @builtin(position) position: vec4<f32>,
@@ -165,28 +179,64 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     var color = vec3<f32>(0.0);
     var alpha = 0.0;
     var depth = 1.0;
+    let skipping = params.modes.x != 0u;
+    let gradient_texture_on = params.modes.y != 0u;
+    let brick_size = f32(params.bricks.w);
+    let last_brick = vec3<f32>(params.bricks.xyz) - 1.0;
+    let min_value = params.skip.y;
+    let min_step_opacity = params.skip.z;
     for (var i = 0u; i < params.options.w && t < t_exit; i += 1u) {
         let u = origin + dir * t;
-        let c = corners(u);
-        let value = trilinear_density(c) * density_scale;
-        if (value > 0.002) {
+        // The fast path's one filtered sample: the gradient (xyz) and the density (w).
+        var texel = vec4<f32>(0.0);
+        if (skipping) {
+            let brick = clamp(floor(u / brick_size), vec3<f32>(0.0), last_brick);
+            let b = vec3<u32>(brick);
+            if (brick_max[b.x + params.bricks.x * (b.y + params.bricks.y * b.z)] < params.skip.x) {
+                // Every sample in this brick is transparent: step to the first sample past its
+                // far side (whole steps, so the samples after it are the full march's).
+                let far_side = select(brick, brick + 1.0, dir > vec3<f32>(0.0)) * brick_size;
+                let t_sides = select(vec3<f32>(3.0e38), (far_side - origin) * inv, dir != vec3<f32>(0.0));
+                let t_leave = min(min(t_sides.x, t_sides.y), t_sides.z);
+                let steps = max(ceil((t_leave - t) / step), 1.0);
+                let skipped = u32(min(steps, f32(params.options.w)));
+                t += f32(skipped) * step;
+                i += skipped - 1u;
+                continue;
+            }
+        }
+        var value: f32;
+        if (gradient_texture_on) {
+            texel = textureSampleLevel(gradient_texture, gradient_sampler, u / dims, 0.0);
+            value = texel.w * density_scale;
+        } else {
+            value = sample_density(u) * density_scale;
+        }
+        if (value > min_value) {
             let sample = transfer(preset, value);
             // Opacity per step from opacity per voxel, so the look does not depend on the step.
             let a = 1.0 - pow(1.0 - clamp(sample.a * opacity, 0.0, 0.999), step);
-            if (a > 0.0005) {
+            if (a > min_step_opacity) {
                 var rgb = sample.rgb;
                 if (tint) {
                     // The points' palette, brighter where denser.
-                    let tinted = hp_palette(weighted_hp(c)) * (0.45 + 0.65 * clamp(value, 0.0, 1.0));
+                    let tinted = hp_palette(weighted_hp(corners(u))) * (0.45 + 0.65 * clamp(value, 0.0, 1.0));
                     rgb = mix(rgb, tinted, 0.85);
                 }
                 if (shading && a > 0.01) {
-                    // Central differences in voxel space; the normal in data space.
-                    let gv = vec3<f32>(
-                        sample_density(u + vec3<f32>(1.0, 0.0, 0.0)) - sample_density(u - vec3<f32>(1.0, 0.0, 0.0)),
-                        sample_density(u + vec3<f32>(0.0, 1.0, 0.0)) - sample_density(u - vec3<f32>(0.0, 1.0, 0.0)),
-                        sample_density(u + vec3<f32>(0.0, 0.0, 1.0)) - sample_density(u - vec3<f32>(0.0, 0.0, 1.0)),
-                    );
+                    // Central differences in voxel space; the normal in data space. The texture
+                    // holds them at the voxel centres, and filtering them is differencing two
+                    // filtered samples (the full march's six samples).
+                    var gv: vec3<f32>;
+                    if (gradient_texture_on) {
+                        gv = texel.xyz;
+                    } else {
+                        gv = vec3<f32>(
+                            sample_density(u + vec3<f32>(1.0, 0.0, 0.0)) - sample_density(u - vec3<f32>(1.0, 0.0, 0.0)),
+                            sample_density(u + vec3<f32>(0.0, 1.0, 0.0)) - sample_density(u - vec3<f32>(0.0, 1.0, 0.0)),
+                            sample_density(u + vec3<f32>(0.0, 0.0, 1.0)) - sample_density(u - vec3<f32>(0.0, 0.0, 1.0)),
+                        );
+                    }
                     let g = gv * per_unit;
                     let magnitude = length(g);
                     if (magnitude > 1e-6) {

@@ -28,7 +28,8 @@ pub struct BenchArgs {
     /// Isovalue of the isosurface benchmarks.
     #[arg(long, default_value_t = 0.3)]
     pub iso: f32,
-    /// Write the benchmark fields here as .npy files (for bench/bench_surface.py).
+    /// Write the benchmark fields here as .npy files (for bench/bench_surface.py), and the
+    /// volume's grid and view (for bench/peers_volume.py).
     #[arg(long)]
     pub fields_dir: Option<PathBuf>,
     /// Also write the volume benchmark's point clouds (raw float32, five per point) to this
@@ -89,7 +90,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         bench_points(&args)?;
     }
     if wants("volume") {
-        super::bench_volume::run(&args.input, size, args.runs, args.export_points.as_ref())?;
+        super::bench_volume::run(
+            &args.input,
+            size,
+            args.runs,
+            args.export_points.as_ref(),
+            args.fields_dir.as_deref(),
+        )?;
     }
     if wants("surface") {
         let surfaces = super::bench_surface::run(args.runs, args.iso, args.fields_dir.as_deref())?;

@@ -1,6 +1,9 @@
 //! The voxelization and volume part of `loudscape bench`: median GPU times of building grids
-//! and of drawing one volume frame. GPU timestamp queries where the adapter has them, otherwise
-//! the wall time of submit-and-wait.
+//! and of drawing one volume frame (shaded and unshaded, the fast march beside the full one it
+//! must look like). GPU timestamp queries where the adapter has them, otherwise the wall time of
+//! submit-and-wait. With `--fields-dir`, also the song's density grid (`volume_density.npy`) and
+//! the frame's camera, box and step (`volume_view.json`), so bench/peers_volume.py can draw the
+//! same frame with VTK.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -13,7 +16,9 @@ use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::gpu::timing::Timestamps;
 use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob, VoxelizeRequest};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
-use loudscape::view::camera::Camera;
+use loudscape::render::volume::{BASE_OPACITY, VolumeSettings};
+use loudscape::render::volume_grids::VolumeGridsPass;
+use loudscape::view::camera::{Camera, FOV_Y_DEGREES};
 use loudscape::view::frame_view::FrameView;
 
 /// Points of the synthetic stand-in for a song when data/demo_song.ply is absent.
@@ -128,6 +133,7 @@ pub fn run(
     size: (u32, u32),
     runs: usize,
     export_points: Option<&PathBuf>,
+    fields_dir: Option<&Path>,
 ) -> anyhow::Result<()> {
     let runs = runs.max(1);
     let gpu = GpuContext::new_headless()?;
@@ -236,23 +242,105 @@ pub fn run(
         width,
         height,
     );
-    for moving in [false, true] {
-        let view = FrameView { moving, ..at_rest };
+    if let Some(grid) = &data.grid {
+        let grids = VolumeGridsPass::new(&gpu.device);
         let mut times = Vec::new();
         for i in 0..=runs {
-            let ms = timer.time(&gpu, |encoder| {
-                renderer.render(&gpu.queue, encoder, &target, Some(&data), &view, &settings);
-            })?;
+            let start = Instant::now();
+            grids.build(&gpu.device, grid).submit_once(&gpu.queue);
+            gpu.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .context("waiting for the GPU")?;
             if i > 0 {
-                times.push(ms);
+                times.push(start.elapsed().as_secs_f64() * 1e3);
             }
         }
         println!(
-            "volume frame {width}x{height} ({}, {song_resolution}^3, step {} voxel): {:.2} ms",
-            if moving { "moving" } else { "at rest" },
-            settings.volume.step(moving),
+            "volume derived grids (gradient texture, brick maxima), {song_resolution}^3: {:.2} ms \
+             (wall time, once per grid)",
             median(times)
         );
+        if let Some(dir) = fields_dir {
+            export_volume(&gpu, grid, &at_rest, &settings.volume, dir)?;
+        }
     }
+    for (moving, shading) in [(false, true), (false, false), (true, true)] {
+        let view = FrameView { moving, ..at_rest };
+        let mut medians = [0.0; 2];
+        for (full_march, median_ms) in [false, true].into_iter().zip(&mut medians) {
+            let mut settings = settings.clone();
+            settings.volume.shading = shading;
+            settings.volume.full_march = full_march;
+            let mut times = Vec::new();
+            for i in 0..=runs {
+                let ms = timer.time(&gpu, |encoder| {
+                    renderer.render(&gpu.queue, encoder, &target, Some(&data), &view, &settings);
+                })?;
+                if i > 0 {
+                    times.push(ms);
+                }
+            }
+            *median_ms = median(times);
+        }
+        println!(
+            "volume frame {width}x{height} ({}, {song_resolution}^3, step {} voxel, {}): {:.2} ms \
+             (full march {:.2} ms)",
+            if moving { "moving" } else { "at rest" },
+            settings.volume.step(moving),
+            if shading { "shaded" } else { "unshaded" },
+            medians[0],
+            medians[1],
+        );
+    }
+    Ok(())
+}
+
+/// Writes the grid's density (`volume_density.npy`, float32, shape (nz, ny, nx)) and what a
+/// peer needs to draw the same frame (`volume_view.json`: the camera in world space, the grid's
+/// box in world space, the step, the transfer function's constants).
+fn export_volume(
+    gpu: &GpuContext,
+    grid: &loudscape::render::grid::VoxelGrid,
+    view: &FrameView,
+    volume: &VolumeSettings,
+    dir: &Path,
+) -> anyhow::Result<()> {
+    let density = grid
+        .read_field(&gpu.device, &gpu.queue, &grid.density)
+        .context("reading the density grid back")?;
+    let dims = grid.dims;
+    let path = dir.join("volume_density.npy");
+    super::write_atomically(&path, |out| Ok(super::npy::write(out, &[&density], dims)?))?;
+    super::wrote(
+        &path,
+        &format!("{}x{}x{} density grid", dims.x, dims.y, dims.z),
+    );
+    let world = |p: glam::Vec3| view.world_from_data.transform_point3(p).to_array();
+    let camera = &view.camera;
+    let json = serde_json::json!({
+        "width": view.width,
+        "height": view.height,
+        "dims": dims.to_array(),
+        "box_min_world": world(grid.box_min),
+        "box_max_world": world(grid.box_max),
+        "eye": camera.eye().to_array(),
+        "target": camera.target.to_array(),
+        "up": [0.0, 1.0, 0.0],
+        "fov_y_degrees": FOV_Y_DEGREES,
+        "step_voxels": volume.step(false),
+        "preset": volume.preset.name(),
+        "density_scale": volume.density_scale,
+        "opacity_per_voxel": volume.opacity_scale * BASE_OPACITY,
+        "ramp": volume.preset.stops(),
+    });
+    let path = dir.join("volume_view.json");
+    super::write_atomically(&path, |out| {
+        serde_json::to_writer_pretty(&mut *out, &json)?;
+        Ok(())
+    })?;
+    super::wrote(
+        &path,
+        "the volume frame's camera, box and transfer function",
+    );
     Ok(())
 }

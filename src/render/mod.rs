@@ -3,7 +3,7 @@
 //! loaded cloud. One pass a file, each beside its shader in shaders/ (same folders) and its CPU
 //! mirror: [`gpu`] (device, targets, read-back, layouts, frame uniforms), [`grid`] (voxelize),
 //! [`surface`] (marching tetrahedra, dual contouring, the draw), [`points`], [`lines`],
-//! [`markers`], [`volume`] (with [`transfer`]), [`composite`]; [`shaders`] composes the WGSL;
+//! [`markers`], [`volume`] (with [`transfer`] and [`volume_grids`]), [`composite`]; [`shaders`] composes the WGSL;
 //! [`colormap`] holds the colour maps and background every pass reads (the palette uniform).
 
 pub mod colormap;
@@ -21,3 +21,4 @@ pub mod shaders;
 pub mod surface;
 pub mod transfer;
 pub mod volume;
+pub mod volume_grids;

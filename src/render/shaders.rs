@@ -16,6 +16,7 @@ pub const DUAL_CONTOUR: &str = include_str!("../../shaders/surface/dual_contour.
 pub const SURFACE_DRAW: &str = include_str!("../../shaders/surface/draw.wgsl");
 pub const VOXELIZE: &str = include_str!("../../shaders/grid/voxelize.wgsl");
 pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
+pub const VOLUME_GRIDS: &str = include_str!("../../shaders/volume_grids.wgsl");
 pub const DIFFERENCE: &str = include_str!("../../shaders/grid/difference.wgsl");
 pub const DOWNSAMPLE: &str = include_str!("../../shaders/grid/downsample.wgsl");
 
@@ -52,6 +53,10 @@ pub fn volume() -> String {
     compose(&[FRAME, PALETTE, VOLUME])
 }
 
+pub fn volume_grids() -> String {
+    VOLUME_GRIDS.to_string()
+}
+
 pub fn composite() -> String {
     COMPOSITE.to_string()
 }
@@ -80,6 +85,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("surface_draw", surface_draw()),
         ("voxelize", voxelize()),
         ("volume", volume()),
+        ("volume_grids", volume_grids()),
         ("difference", difference()),
         ("downsample", downsample()),
     ]

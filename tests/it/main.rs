@@ -39,6 +39,7 @@ mod text_scripts;
 mod video;
 mod video_trust;
 mod volume;
+mod volume_skip;
 mod voxelize;
 mod window;
 mod window_compare;
