@@ -311,7 +311,9 @@ fn single_view(view: ViewChoice) -> anyhow::Result<ViewKind> {
             "--view {} needs a second cloud: --compare B",
             loudscape::value_name(&view)
         ),
-        None => bail!("--view timeline is video's sweep across the years; render draws a timeline with --view points"),
+        None => bail!(
+            "--view timeline is video's sweep across the years; render draws a timeline with --view points"
+        ),
     }
 }
 

@@ -6,7 +6,7 @@
 use wgpu::util::DeviceExt;
 
 use crate::render::gpu::frame::FrameBinding;
-use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::gpu::pipeline::{DrawPipeline, alpha_blended_target, depth_over, primitives};
 use crate::render::shaders;
 
 /// One end of a line segment, as the vertex stage reads it (keep in sync with `LineVertex` in
@@ -56,44 +56,21 @@ impl LinesPass {
             bind_group_layouts: &[Some(&frame.layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lines::pipeline"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<LineVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
-                })],
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::LineList,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = DrawPipeline {
+            label: "lines::pipeline",
+            layout: &layout,
+            module: &module,
+            vertex_entry: "vs_main",
+            vertex_buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<LineVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+            })],
+            target: alpha_blended_target(),
+            primitive: primitives(wgpu::PrimitiveTopology::LineList),
+            depth: depth_over(),
+        }
+        .build(device);
         Self { pipeline }
     }
 

@@ -6,7 +6,7 @@
 //! A box whose size is zero along one axis is drawn as a plane.
 
 use crate::render::gpu::frame::FrameBinding;
-use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::gpu::pipeline::{DrawPipeline, alpha_blended_target, depth_over, primitives};
 use crate::render::shaders;
 
 pub const MAX_MARKERS: usize = 8;
@@ -62,41 +62,17 @@ impl MarkersPass {
             ],
         };
         let pipeline = |label: &str, entry: &str, topology: wgpu::PrimitiveTopology| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(instance_layout.clone())],
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: COLOR_FORMAT,
-                        blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                primitive: wgpu::PrimitiveState {
-                    topology,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                multiview_mask: None,
-                cache: None,
-            })
+            DrawPipeline {
+                label,
+                layout: &layout,
+                module: &module,
+                vertex_entry: entry,
+                vertex_buffers: &[Some(instance_layout.clone())],
+                target: alpha_blended_target(),
+                primitive: primitives(topology),
+                depth: depth_over(),
+            }
+            .build(device)
         };
         let fill = pipeline(
             "markers::fill_pipeline",

@@ -19,7 +19,7 @@ use crate::data::freq_axis::{FreqMapping, FreqParams};
 use crate::render::gpu::context::storage_binding_limit;
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry};
-use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::gpu::pipeline::{DrawPipeline, depth_opaque, opaque_target, primitives};
 use crate::render::shaders;
 
 /// Keep in sync with `PointParams` in shaders/points.wgsl.
@@ -304,27 +304,17 @@ impl PointsPass {
             bind_group_layouts: &[Some(&frame.layout), Some(&cloud_layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("points::pipeline"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
-            }),
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(depth_state(true)),
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = DrawPipeline {
+            label: "points::pipeline",
+            layout: &layout,
+            module: &module,
+            vertex_entry: "vs_main",
+            vertex_buffers: &[],
+            target: opaque_target(),
+            primitive: primitives(wgpu::PrimitiveTopology::TriangleList),
+            depth: depth_opaque(),
+        }
+        .build(device);
         Self {
             pipeline,
             cloud_layout,
@@ -469,17 +459,6 @@ pub fn lod_stride(total: u64, style: &PointStyle, moving: bool) -> u32 {
         total.div_ceil(budget) as u32
     } else {
         1
-    }
-}
-
-/// Depth test shared by the opaque passes: nearer wins, optionally writing depth.
-pub fn depth_state(write: bool) -> wgpu::DepthStencilState {
-    wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
-        depth_write_enabled: Some(write),
-        depth_compare: Some(wgpu::CompareFunction::Less),
-        stencil: Default::default(),
-        bias: Default::default(),
     }
 }
 

@@ -1,7 +1,12 @@
 //! The scene: one cloud's GPU data plus the passes that draw it, in the order the view needs.
 //!
 //! [`Renderer`] is built once per device and owns every pass; [`SceneData`] is built once per
-//! loaded cloud. [`Renderer::render`] records one frame into a [`RenderTarget`].
+//! loaded cloud. [`Renderer::render`] records one frame into a [`RenderTarget`]; a progressive
+//! points frame is recorded slice by slice ([`Renderer::render_points_slice`]) and finished by
+//! [`Renderer::render_overlay`]. All three start the frame alike ([`Renderer::begin_frame`]:
+//! the frame's uniforms, the markers, the render pass) and draw in one order: the view's
+//! opaque geometry, then what is drawn over it ([`Renderer::draw_over`]: the box, then the
+//! translucent markers).
 
 use glam::{Mat4, Vec3};
 
@@ -379,6 +384,47 @@ impl Renderer {
         }
     }
 
+    /// Starts a frame seen from `view` into `target`: writes the frame's uniforms (camera,
+    /// palette) and the markers of `settings`, and begins the scene's render pass, cleared to
+    /// the background or (`clear` false) drawing over what the target holds. Every recorder
+    /// writes them, not only a frame's first: between two recordings another render (a
+    /// screenshot, a moving frame) may have written other values. They are small.
+    fn begin_frame<'e>(
+        &self,
+        queue: &wgpu::Queue,
+        encoder: &'e mut wgpu::CommandEncoder,
+        target: &RenderTarget,
+        view: &FrameView,
+        settings: &RenderSettings,
+        clear: bool,
+    ) -> wgpu::RenderPass<'e> {
+        self.frame.write(queue, view);
+        self.frame.write_palette(
+            queue,
+            &PaletteUniforms::new(&settings.colours, settings.volume.preset),
+        );
+        self.markers.prepare(queue, &settings.markers);
+        begin_main_pass(
+            encoder,
+            target,
+            clear.then(|| clear_colour(settings.colours.background)),
+        )
+    }
+
+    /// What is drawn over the view's opaque geometry, last: the box, then the markers (last of
+    /// all, so the translucent markers blend over everything drawn before them).
+    fn draw_over(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        data: &SceneData,
+        settings: &RenderSettings,
+    ) {
+        if settings.show_box {
+            self.lines.draw(pass, &self.frame, &data.box_lines);
+        }
+        self.markers.draw(pass, &self.frame, settings.markers.len());
+    }
+
     /// Records one frame of `data` seen from `view` into `target`.
     pub fn render(
         &self,
@@ -389,12 +435,6 @@ impl Renderer {
         view: &FrameView,
         settings: &RenderSettings,
     ) {
-        self.frame.write(queue, view);
-        self.frame.write_palette(
-            queue,
-            &PaletteUniforms::new(&settings.colours, settings.volume.preset),
-        );
-        self.markers.prepare(queue, &settings.markers);
         if let Some(data) = data {
             self.points
                 .prepare(queue, &data.points, &settings.points, view.moving);
@@ -407,11 +447,7 @@ impl Renderer {
                     .prepare(queue, volume, &settings.volume, view.moving);
             }
         }
-        let mut pass = begin_main_pass(
-            encoder,
-            target,
-            Some(clear_colour(settings.colours.background)),
-        );
+        let mut pass = self.begin_frame(queue, encoder, target, view, settings, true);
         let Some(data) = data else {
             return;
         };
@@ -439,12 +475,7 @@ impl Renderer {
                 );
             }
         }
-        if settings.show_box {
-            self.lines.draw(&mut pass, &self.frame, &data.box_lines);
-        }
-        // Last, so translucent markers blend over everything drawn before them.
-        self.markers
-            .draw(&mut pass, &self.frame, settings.markers.len());
+        self.draw_over(&mut pass, data, settings);
     }
 
     /// One slice of a progressive points frame (`points::progressive_ranges`) into `target`:
@@ -452,43 +483,29 @@ impl Renderer {
     /// the target holds (colour and depth kept); the slice that ends at the last point draws the
     /// box and the markers. After all slices the target holds exactly what [`Renderer::render`]
     /// draws at rest.
-    #[allow(clippy::too_many_arguments)]
     pub fn render_points_slice(
         &self,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &RenderTarget,
+        recording: Recording<'_>,
         data: &SceneData,
         view: &FrameView,
         settings: &RenderSettings,
         range: std::ops::Range<u64>,
     ) {
-        let first = range.start == 0;
-        let last = range.end >= data.points.total;
-        // Every slice, not only the first: between two frames' slices another render (a
-        // screenshot, a moving frame) may have written these uniforms. They are small.
-        self.frame.write(queue, view);
-        self.frame.write_palette(
+        let Recording {
             queue,
-            &PaletteUniforms::new(&settings.colours, settings.volume.preset),
-        );
-        self.markers.prepare(queue, &settings.markers);
-        self.points
-            .prepare(queue, &data.points, &settings.points, false);
-        let mut pass = begin_main_pass(
             encoder,
             target,
-            first.then(|| clear_colour(settings.colours.background)),
-        );
+        } = recording;
+        let first = range.start == 0;
+        let last = range.end >= data.points.total;
+        self.points
+            .prepare(queue, &data.points, &settings.points, false);
+        let mut pass = self.begin_frame(queue, encoder, target, view, settings, first);
         self.points
             .draw_range(&mut pass, &self.frame, &data.points, range);
         // The box and the markers after every point, in the single pass's order.
         if last {
-            if settings.show_box {
-                self.lines.draw(&mut pass, &self.frame, &data.box_lines);
-            }
-            self.markers
-                .draw(&mut pass, &self.frame, settings.markers.len());
+            self.draw_over(&mut pass, data, settings);
         }
     }
 
@@ -498,20 +515,20 @@ impl Renderer {
     /// from that index on (those no slice has drawn yet), so the picture is whole, sparse where
     /// the slices have not reached, while it refines; call it after a slice
     /// ([`Renderer::render_points_slice`] prepared the points' parameters).
-    #[allow(clippy::too_many_arguments)]
     pub fn render_overlay(
         &self,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &RenderTarget,
+        recording: Recording<'_>,
         data: &SceneData,
         view: &FrameView,
         settings: &RenderSettings,
         rest_from: Option<u64>,
     ) {
-        self.frame.write(queue, view);
-        self.markers.prepare(queue, &settings.markers);
-        let mut pass = begin_main_pass(encoder, target, None);
+        let Recording {
+            queue,
+            encoder,
+            target,
+        } = recording;
+        let mut pass = self.begin_frame(queue, encoder, target, view, settings, false);
         if let Some(first) = rest_from {
             self.points.draw_lod_from(
                 &mut pass,
@@ -521,12 +538,16 @@ impl Renderer {
                 first,
             );
         }
-        if settings.show_box {
-            self.lines.draw(&mut pass, &self.frame, &data.box_lines);
-        }
-        self.markers
-            .draw(&mut pass, &self.frame, settings.markers.len());
+        self.draw_over(&mut pass, data, settings);
     }
+}
+
+/// Where a recorder records: the queue the frame's uniforms are written through, the encoder
+/// and the target.
+pub struct Recording<'a> {
+    pub queue: &'a wgpu::Queue,
+    pub encoder: &'a mut wgpu::CommandEncoder,
+    pub target: &'a RenderTarget,
 }
 
 /// Whether [`Renderer::render`] draws `data`'s points (not a surface or a volume) at rest with

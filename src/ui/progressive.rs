@@ -12,7 +12,7 @@ use std::ops::Range;
 use std::time::{Duration, Instant};
 
 use crate::render::gpu::target::RenderTarget;
-use crate::render::scene::{Renderer, SceneData};
+use crate::render::scene::{Recording, Renderer, SceneData};
 use crate::ui::frame_cache::RenderKey;
 use crate::view::frame_view::FrameView;
 
@@ -260,7 +260,12 @@ impl ProgressivePoints {
             let mut bare = settings.clone();
             bare.markers.clear();
             bare.show_box = false;
-            renderer.render_points_slice(queue, encoder, points, data, view, &bare, range);
+            let recording = Recording {
+                queue,
+                encoder,
+                target: points,
+            };
+            renderer.render_points_slice(recording, data, view, &bare, range);
         }
         let size = wgpu::Extent3d {
             width: w,
@@ -277,7 +282,12 @@ impl ProgressivePoints {
         // so the picture is whole from the first frame at rest; a frame without a slice has
         // not prepared the points' parameters and needs none (the refinement is complete).
         let rest = slice.and(self.refine.rest_from());
-        renderer.render_overlay(queue, encoder, target, data, view, settings, rest);
+        let recording = Recording {
+            queue,
+            encoder,
+            target,
+        };
+        renderer.render_overlay(recording, data, view, settings, rest);
         self.refine.complete()
     }
 }

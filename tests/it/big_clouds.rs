@@ -11,7 +11,7 @@ use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::grid::voxelize::{VoxelSettings, VoxelizeRequest};
 use loudscape::render::headless::render_image;
 use loudscape::render::points::{PointsGpu, progressive_ranges};
-use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::scene::{Recording, RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::ui::frame_cache::RenderKey;
 use loudscape::ui::progressive::ProgressivePoints;
 use loudscape::view::frame_view::FrameView;
@@ -195,15 +195,12 @@ fn points_drawn_in_slices_equal_the_single_pass_frame() {
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        renderer.render_points_slice(
-            &gpu.queue,
-            &mut encoder,
-            &target,
-            &data,
-            &view,
-            &settings,
-            range,
-        );
+        let recording = Recording {
+            queue: &gpu.queue,
+            encoder: &mut encoder,
+            target: &target,
+        };
+        renderer.render_points_slice(recording, &data, &view, &settings, range);
         gpu.queue.submit([encoder.finish()]);
         if i == 0 {
             first_slice = Some(target.read_rgba(&gpu.device, &gpu.queue).expect("read"));
@@ -280,15 +277,12 @@ fn progressive_frames_stand_in_for_the_rest_and_end_as_the_single_pass() {
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    renderer.render_points_slice(
-        &gpu.queue,
-        &mut encoder,
-        &slice_only,
-        &data,
-        &view,
-        &settings,
-        0..8_000,
-    );
+    let recording = Recording {
+        queue: &gpu.queue,
+        encoder: &mut encoder,
+        target: &slice_only,
+    };
+    renderer.render_points_slice(recording, &data, &view, &settings, 0..8_000);
     gpu.queue.submit([encoder.finish()]);
     let slice_only = slice_only.read_rgba(&gpu.device, &gpu.queue).expect("read");
     let (whole, early, alone) = (

@@ -6,11 +6,10 @@ use glam::Vec3;
 
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::uniform_entry;
+use crate::render::gpu::pipeline::{DrawPipeline, depth_opaque, opaque_target, primitives};
 use crate::render::gpu::readback::read_buffer;
-use crate::render::gpu::target::COLOR_FORMAT;
 use crate::render::gpu::timing::Timestamps;
 use crate::render::grid::VoxelGrid;
-use crate::render::points::depth_state;
 use crate::render::shaders;
 use crate::render::surface::background::{BackgroundExtractor, CoarseJob, Job, Worker, share_grid};
 use crate::render::surface::buffers::{INDEXED_ARGS_OFFSET, MeshVertex};
@@ -85,27 +84,17 @@ impl SurfacePass {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x3],
         };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("surface::draw_pipeline"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vertex_layout)],
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
-            }),
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(depth_state(true)),
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = DrawPipeline {
+            label: "surface::draw_pipeline",
+            layout: &layout,
+            module: &module,
+            vertex_entry: "vs_main",
+            vertex_buffers: &[Some(vertex_layout)],
+            target: opaque_target(),
+            primitive: primitives(wgpu::PrimitiveTopology::TriangleList),
+            depth: depth_opaque(),
+        }
+        .build(device);
         Self {
             device: device.clone(),
             methods: OnceLock::new(),
