@@ -115,9 +115,11 @@ def extract_song(
     """Song mode end to end, streamed in blocks.
 
     The passes in order: decode (the mono mix); the spectrogram level pass, which fixes the
-    cloud's axes; the points (STFT and HPSS block by block), each block appended to the body
-    file (:func:`body_file_path`) as it is made; the signal pass (loudness, dynamics, true
-    peak: a second decode); then the PLY, header and the body file's bytes, written atomically.
+    cloud's axes; the points (HPSS block by block, on the level pass's spectrogram when the
+    track is short enough to keep it), each block appended to the body file
+    (:func:`body_file_path`) as it is made; the signal pass (loudness, dynamics, true peak:
+    on the decoded blocks kept by the first pass, or a second decode of a long track); then
+    the PLY, header and the body file's bytes, written atomically.
     The body file is removed on every exit path that Python sees (errors, Ctrl+C, SIGTERM
     under :func:`~loudscape_extract.interrupts.sigterm_raises`); those of extractions killed
     outright (SIGKILL) are removed by the next extraction into the folder
