@@ -251,9 +251,11 @@ def test_sigterm_to_song_exits_143_and_writes_nothing(tmp_path):
     )
     try:
         # Signal once the command has installed its handler (before that, the default
-        # action ends it, writing nothing either), then a little into the work.
+        # action ends it, writing nothing either) and has begun writing: its points' body
+        # file is beside the output.
         wait_for(lambda: catches_sigterm(process.pid), 60, "the SIGTERM handler")
-        time.sleep(0.5)
+        body = f".long.ply.points-{process.pid}"
+        wait_for(lambda: body in os.listdir(tmp_path), 120, "the points' body file")
         assert process.poll() is None, "finished before the signal: make the song longer"
         process.send_signal(signal.SIGTERM)
         _, err = process.communicate(timeout=10)

@@ -93,8 +93,10 @@ fn closing_the_window_from_outside_exits_cleanly() {
         .spawn()
         .expect("start loudscape");
     let window = wait_for_window(&mut child);
-    // Let it draw the song first.
-    std::thread::sleep(Duration::from_secs(3));
+    // Closed once it has drawn the song.
+    if window.is_some() {
+        common::song_drawn(&home.join("drawn.png"));
+    }
     if let Some(id) = &window {
         let _ = Command::new("xdotool")
             .args(["windowclose", id])

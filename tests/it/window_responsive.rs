@@ -98,10 +98,13 @@ fn opening_the_window_prints_nothing_on_stderr() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("start loudscape");
-    // Wait for the window, then let it draw the song and open the audio device.
-    // Its own window: the other window tests' run in the same process, on the same display.
+    // Wait for the window, then for the song drawn in it (the audio device is opened before
+    // the first frame, `AudioPanel::new`). Its own window: the other window tests' run in the
+    // same process, on the same display.
     let found = common::wait_for_window(&mut child).is_some();
-    std::thread::sleep(Duration::from_secs(4));
+    if found {
+        common::song_drawn(&home.join("drawn.png"));
+    }
     // SIGTERM: the app's handler removes temporaries and exits.
     let _ = Command::new("kill")
         .args(["-TERM", &child.id().to_string()])

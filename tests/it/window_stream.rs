@@ -150,33 +150,23 @@ fn window(pid: u32) -> String {
     }
 }
 
-/// The whole screen.
-fn shoot(path: &Path) -> image::RgbaImage {
-    let status = Command::new("import")
-        .args(["-window", "root"])
-        .arg(path)
-        .status()
-        .expect("ImageMagick's import (apt-get install imagemagick)");
-    assert!(status.success());
-    image::open(path).unwrap().to_rgba8()
+/// The share of the 3D view (`common::view_region`) whose pixels are strongly coloured: the
+/// points, red to blue by hp.
+fn coloured_share(image: &image::RgbaImage, window: (u32, u32)) -> f64 {
+    common::coloured_share(image, common::view_region(window))
 }
 
-/// The share of the 3D view (right of the side panel, the window's top 60 %, above the status
-/// area) whose pixels are strongly coloured: the points, red to blue by hp; the background,
-/// the panels, the axes and the labels are grey.
-fn coloured_share(image: &image::RgbaImage, window: (u32, u32)) -> f64 {
-    let (x0, x1) = (300, window.0.min(image.width()));
-    let (y0, y1) = (60, window.1 * 6 / 10);
-    let mut coloured = 0usize;
-    for y in y0..y1 {
-        for x in x0..x1 {
-            let p = image.get_pixel(x, y);
-            if (i32::from(p[0]) - i32::from(p[2])).abs() > 60 {
-                coloured += 1;
-            }
-        }
-    }
-    coloured as f64 / f64::from((x1 - x0) * (y1 - y0))
+/// How long the window may take to draw what a test waits for.
+const DRAWN_WITHIN: Duration = Duration::from_secs(60);
+
+/// The screen once the 3D view shows what `wanted` accepts and holds still (or at
+/// [`DRAWN_WITHIN`], for the caller's assertion to judge), saved to `path`.
+fn shot_when(
+    path: &Path,
+    size: (u32, u32),
+    wanted: impl Fn(&image::RgbaImage) -> bool,
+) -> image::RgbaImage {
+    common::shot_settled(path, common::view_region(size), DRAWN_WITHIN, wanted)
 }
 
 /// The window's size.
@@ -192,7 +182,9 @@ fn window_size(id: &str) -> (u32, u32) {
     (value("WIDTH"), value("HEIGHT"))
 }
 
-/// A left-button drag across the 3D view: an orbit.
+/// A left-button drag across the 3D view: an orbit. Its pauses are the drag's pace (the
+/// window sees the press, the moves and the release in frames of their own, as from a hand),
+/// not a wait for the window: what the drag did is waited for on the screen.
 fn orbit(id: &str, size: (u32, u32)) {
     let (x, y) = (300 + (size.0 - 300) / 2, size.1 * 3 / 10);
     xdotool(&["mousemove", "--window", id, &x.to_string(), &y.to_string()]);
@@ -273,12 +265,15 @@ fn the_first_points_show_while_extracting_and_the_whole_cloud_replaces_them() {
         let id = window(run.child.id());
         let size = window_size(&id);
         xdotool(&["mousemove", "--window", &id, "5", "5"]);
-        std::thread::sleep(Duration::from_millis(1500));
-        let fitted = shoot(&run.dir.join("fitted.png"));
+        let fitted = shot_when(&run.dir.join("fitted.png"), size, |shot| {
+            coloured_share(shot, size) > 0.01
+        });
         // Turned by hand while the points come: the whole cloud must not take it back.
         orbit(&id, size);
-        std::thread::sleep(Duration::from_millis(1500));
-        let partial = shoot(&run.dir.join("partial.png"));
+        let region = common::view_region(size);
+        let partial = shot_when(&run.dir.join("partial.png"), size, |shot| {
+            !common::same_in(shot, &fitted, region)
+        });
         let partial_share = coloured_share(&partial, size);
         assert!(
             partial_share > 0.01,
@@ -298,8 +293,9 @@ fn the_first_points_show_while_extracting_and_the_whole_cloud_replaces_them() {
             (FIRST..=147_750).contains(&counts[1]),
             "the points shown grew from the first block: {replaced}"
         );
-        std::thread::sleep(Duration::from_millis(2000));
-        let whole = shoot(&run.dir.join("whole.png"));
+        let whole = shot_when(&run.dir.join("whole.png"), size, |shot| {
+            coloured_share(shot, size) > partial_share * 1.3
+        });
         let whole_share = coloured_share(&whole, size);
         assert!(
             whole_share > partial_share * 1.3,
@@ -346,13 +342,13 @@ fn a_failed_extraction_takes_its_first_points_off_the_screen() {
         );
         let id = window(run.child.id());
         let size = window_size(&id);
-        std::thread::sleep(Duration::from_millis(1500));
-        let shown = coloured_share(&shoot(&run.dir.join("shown.png")), size);
+        let drawn = |shot: &image::RgbaImage| coloured_share(shot, size) > 0.01;
+        let shown = coloured_share(&shot_when(&run.dir.join("shown.png"), size, drawn), size);
         assert!(shown > 0.01, "the first points are not drawn");
         run.go();
         // The error is said under the view; the points are gone.
-        std::thread::sleep(Duration::from_millis(3000));
-        let failed = coloured_share(&shoot(&shot), size);
+        let gone = |shot: &image::RgbaImage| coloured_share(shot, size) < 0.001;
+        let failed = coloured_share(&shot_when(&shot, size, gone), size);
         assert!(
             failed < 0.001,
             "the points of the failed extraction are still drawn: {:.2}% (see {})",
@@ -383,44 +379,46 @@ fn a_failed_extraction_brings_back_the_cloud_its_points_replaced() {
         let id = window(run.child.id());
         let size = window_size(&id);
         // The demo's cloud, whole, as it opened.
-        let start = Instant::now();
-        let before = loop {
-            std::thread::sleep(Duration::from_millis(1000));
-            let shot = shoot(&run.dir.join("before.png"));
-            if coloured_share(&shot, size) > 0.02 {
-                std::thread::sleep(Duration::from_millis(1500));
-                break shoot(&run.dir.join("before.png"));
-            }
-            assert!(
-                start.elapsed() < Duration::from_secs(60),
-                "the demo never showed"
-            );
-        };
-        // The song typed in the Open row's path field (no dialog here), Enter.
+        let before = shot_when(&run.dir.join("before.png"), size, |shot| {
+            coloured_share(shot, size) > 0.02
+        });
+        assert!(
+            coloured_share(&before, size) > 0.02,
+            "the demo never showed"
+        );
+        // The song typed in the Open row's path field (no dialog here), Enter: each step once
+        // the row shows the one before it (the field focused, then the name in it).
         let song = run.dir.join("song.flac");
+        let open_row = [0, 20, 300, 56];
+        let row_changed = |path: &Path, from: &image::RgbaImage| {
+            common::shot_settled(path, open_row, Duration::from_secs(10), |shot| {
+                !common::same_in(shot, from, open_row)
+            })
+        };
         xdotool(&["windowfocus", "--sync", &id]);
         xdotool(&["mousemove", "--window", &id, "50", "38"]);
         xdotool(&["click", "1"]);
-        std::thread::sleep(Duration::from_millis(300));
+        let focused = row_changed(&run.dir.join("focused.png"), &before);
         xdotool(&["type", "--delay", "30", &song.display().to_string()]);
-        std::thread::sleep(Duration::from_millis(300));
-        shoot(&run.dir.join("typed.png"));
+        row_changed(&run.dir.join("typed.png"), &focused);
         xdotool(&["key", "Return"]);
         xdotool(&["mousemove", "--window", &id, "5", "5"]);
         run.wait_for(
             "first points shown while extracting",
             Duration::from_secs(120),
         );
-        std::thread::sleep(Duration::from_millis(1500));
-        let shown = shoot(&run.dir.join("shown.png"));
+        let before_share = coloured_share(&before, size);
+        // The first points, fewer than the demo's whole cloud.
+        let shown = shot_when(&run.dir.join("shown.png"), size, |shot| {
+            let share = coloured_share(shot, size);
+            share > 0.001 && share < before_share * 0.8
+        });
+        let shown_share = coloured_share(&shown, size);
         run.go();
-        std::thread::sleep(Duration::from_millis(4000));
-        let after = shoot(&run.dir.join("after.png"));
-        let (before_share, shown_share, after_share) = (
-            coloured_share(&before, size),
-            coloured_share(&shown, size),
-            coloured_share(&after, size),
-        );
+        let after = shot_when(&run.dir.join("after.png"), size, |shot| {
+            coloured_share(shot, size) > shown_share * 1.3
+        });
+        let after_share = coloured_share(&after, size);
         eprintln!(
             "coloured: before {before_share:.4}, first points {shown_share:.4}, after the \
              failure {after_share:.4}"
@@ -458,8 +456,8 @@ fn points_that_cannot_be_read_lose_only_the_preview() {
         run.wait_for("cloud extracted in", Duration::from_secs(120));
         let id = window(run.child.id());
         let size = window_size(&id);
-        std::thread::sleep(Duration::from_millis(2000));
-        let whole = coloured_share(&shoot(&run.dir.join("whole.png")), size);
+        let drawn = |shot: &image::RgbaImage| coloured_share(shot, size) > 0.02;
+        let whole = coloured_share(&shot_when(&run.dir.join("whole.png"), size, drawn), size);
         assert!(whole > 0.02, "the whole cloud is not drawn: {whole:.4}");
         assert!(
             !run.seen.iter().any(|l| l.contains("first points shown")),

@@ -308,6 +308,81 @@ pub fn switch_with_b(
     None
 }
 
+/// The 3D view of a window at the screen's top left that is `size` pixels (right of the side
+/// panel, the window's top 60 %, above the status area): where the window tests look for the
+/// data, as `[x0, y0, x1, y1]`.
+pub fn view_region(size: (u32, u32)) -> [u32; 4] {
+    [300, 60, size.0, size.1 * 6 / 10]
+}
+
+/// The share of `region`'s pixels that are strongly coloured: the points and surfaces, red to
+/// blue by hp; the background, the panels, the axes and the labels are grey.
+pub fn coloured_share(image: &image::RgbaImage, region: [u32; 4]) -> f64 {
+    let [x0, y0, x1, y1] = region;
+    let (x1, y1) = (x1.min(image.width()), y1.min(image.height()));
+    let mut coloured = 0usize;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let p = image.get_pixel(x, y);
+            if (i32::from(p[0]) - i32::from(p[2])).abs() > 60 {
+                coloured += 1;
+            }
+        }
+    }
+    coloured as f64 / f64::from((x1 - x0) * (y1 - y0)).max(1.0)
+}
+
+/// Takes screenshots into `path` until one shows what `wanted` accepts and `region` of it is
+/// the same as in the shot before (the picture there holds still: the window has drawn what
+/// it was waiting for), or until `timeout`; returns that shot, or the last one at the
+/// deadline for the caller's assertion to judge. What the window tests wait for instead of a
+/// fixed time.
+pub fn shot_settled(
+    path: &Path,
+    region: [u32; 4],
+    timeout: Duration,
+    wanted: impl Fn(&image::RgbaImage) -> bool,
+) -> image::RgbaImage {
+    let deadline = Instant::now() + timeout;
+    let mut last: Option<image::RgbaImage> = None;
+    loop {
+        screenshot_root(path);
+        let shot = image::open(path)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            .to_rgba8();
+        let still = last
+            .as_ref()
+            .is_some_and(|before| same_in(before, &shot, region));
+        if (still && wanted(&shot)) || Instant::now() >= deadline {
+            return shot;
+        }
+        last = Some(shot);
+    }
+}
+
+/// The screen once a window opened at its size (1280 x 800, at the screen's top left: there
+/// is no window manager) shows the demo song's points in its 3D view, held still; saved to
+/// `path`. Fails if they are not drawn within 60 s.
+pub fn song_drawn(path: &Path) -> image::RgbaImage {
+    let region = view_region((1280, 800));
+    let drawn = |shot: &image::RgbaImage| coloured_share(shot, region) > 0.02;
+    let shot = shot_settled(path, region, Duration::from_secs(60), drawn);
+    assert!(
+        drawn(&shot),
+        "the song is not drawn (see {})",
+        path.display()
+    );
+    shot
+}
+
+/// Whether `a` and `b` have the same pixels in `region`.
+pub fn same_in(a: &image::RgbaImage, b: &image::RgbaImage, region: [u32; 4]) -> bool {
+    let [x0, y0, x1, y1] = region;
+    a.dimensions() == b.dimensions()
+        && (y0..y1.min(a.height()))
+            .all(|y| (x0..x1.min(a.width())).all(|x| a.get_pixel(x, y) == b.get_pixel(x, y)))
+}
+
 /// The whole screen saved to `path` (imagemagick's `import`), to look at.
 pub fn screenshot_root(path: &Path) {
     let status = Command::new("import")
