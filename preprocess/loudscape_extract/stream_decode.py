@@ -442,7 +442,7 @@ def signal_pass(
     rate = info.sample_rate
     n = decoded.n_samples
     nc = info.n_channels
-    dc32 = decoded.dc.astype(np.float32)[None, :]
+    dc_rows = decoded.dc.astype(np.float32)[:, None]
     highpass = None
     if highpass_hz is not None:
         sos = highpass_sos(highpass_hz, sample_rate=rate)
@@ -478,32 +478,33 @@ def signal_pass(
     for start, samples in source:
         if start + samples.shape[0] > n:
             raise ExtractError("the file changed while it was read (more samples)", path=info.path)
-        clean = samples - dc32
+        # The channels as rows (contiguous): every per-channel pass below reads them so, and
+        # numpy's arithmetic on the decoder's (samples, channels) layout is slow.
+        channels = np.ascontiguousarray(samples.T)
+        clean = channels - dc_rows
         if highpass is not None:
-            clean = np.ascontiguousarray(highpass(clean.T).T)
-        mono_clean = mix_to_mono(clean)
-        filtered = k_weighting(clean[:, used].T)
+            clean = highpass(clean)
+        mono_clean = mix_to_mono(clean.T)
+        filtered = k_weighting(clean[used])
         for row in range(used.shape[0]):
             squared = np.square(filtered[row], dtype=np.float64)
             _reduce_into(energy[row], squared, start, boundaries, np.add)
         maxima.feed(weighted_power(filtered, gains[used]))
-        sample_abs = np.abs(clean[:, 0])
-        for channel in range(1, nc):
-            np.maximum(sample_abs, np.abs(clean[:, channel]), out=sample_abs)
+        sample_abs = np.abs(clean).max(axis=0)
         _reduce_into(segment_peak, sample_abs, start, boundaries, np.maximum)
         overall_clean = max(overall_clean, float(sample_abs.max()))
-        s0, interpolated, decoded_peak = peak_clean.feed(clean.T)
+        s0, interpolated, decoded_peak = peak_clean.feed(clean)
         if interpolated.size:
             _reduce_into(segment_peak, interpolated, s0, boundaries, np.maximum)
             overall_clean = max(overall_clean, float(interpolated.max()))
         if peak_decoded is not None:
-            _, decoded_peak, _ = peak_decoded.feed(samples.T)
+            _, decoded_peak, _ = peak_decoded.feed(channels)
         if decoded_peak is not None and decoded_peak.size:
             overall_decoded = max(overall_decoded, float(decoded_peak.max()))
         m = mono_clean.astype(np.float64)
         _reduce_into(mono_squares, m * m, start, boundaries, np.add)
         _reduce_into(mono_peaks, np.abs(m), start, boundaries, np.maximum)
-        x = clean.T.astype(np.float64)
+        x = clean.astype(np.float64)
         _reduce_into(dr_squares, x * x, start, dr_bounds, np.add)
         _reduce_into(dr_peaks, np.abs(x), start, dr_bounds, np.maximum)
         frames.feed(mono_clean)
