@@ -18,7 +18,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # processes were checked not to hold connections of their own.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24 -maxclients 2048 -noreset")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke fuzz-py demo clean bench-window bench-surface check-platforms test-wheel
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke fuzz-py demo clean bench-window bench-surface check-platforms test-wheel bench-peers
 
 system:
 	@bash scripts/setup-system.sh
@@ -134,6 +134,15 @@ bench-memory: venv
 # Isosurfaces, both engines (GPU passes, CPU extraction) against VTK's flying edges and
 # scikit-image's marching cubes on the same fields, in the same run.
 bench-surface: build venv
+	$(PY) bench/bench_surface.py --loudscape target/release/loudscape --runs 9
+
+# loudscape against its peers, in the same run, alternated, medians and ratios (issue 37;
+# figures in docs/PERFORMANCE.md): the volume against VTK's CPU ray caster on the same grid,
+# camera and ramp; song extraction against librosa's stft+hpss and ffmpeg's ebur128; an 8-track
+# timeline against ffmpeg two at a time; the isosurfaces against VTK's flying edges.
+bench-peers: build venv real-music
+	$(PY) bench/peers_volume.py --loudscape target/release/loudscape
+	$(PY) bench/peers_extract.py
 	$(PY) bench/bench_surface.py --loudscape target/release/loudscape --runs 9
 
 # The window's frame loop under recorded input, release build under Xvfb at 1280x720: orbit
