@@ -8,7 +8,6 @@ use crate::common::{self, assert_display, repo, wait_for_window};
 
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::time::Duration;
 
 /// A PATH without zenity and no session bus: no file dialog can open.
 fn no_dialog(command: &mut Command) -> &mut Command {

@@ -8,7 +8,6 @@ use crate::common::{self, assert_display};
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
-use std::time::Duration;
 
 /// The value of `key=value` in `line`.
 fn value(line: &str, key: &str) -> f64 {
