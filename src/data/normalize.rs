@@ -640,7 +640,10 @@ mod tests {
 
     #[test]
     fn presets_parse_by_key_and_song_clouds_are_refused() {
-        assert_eq!(Normalization::parse("none"), Some(Normalization::AsMastered));
+        assert_eq!(
+            Normalization::parse("none"),
+            Some(Normalization::AsMastered)
+        );
         let atsc = Normalization::parse("atsc_a85").unwrap();
         assert_eq!(atsc.preset().unwrap().service.target_lufs, -24.0);
         assert_eq!(crate::value_name(&atsc), "atsc_a85");
