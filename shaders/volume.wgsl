@@ -185,6 +185,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     let last_brick = vec3<f32>(params.bricks.xyz) - 1.0;
     let min_value = params.skip.y;
     let min_step_opacity = params.skip.z;
+    let unit_step = step == 1.0;
     for (var i = 0u; i < params.options.w && t < t_exit; i += 1u) {
         let u = origin + dir * t;
         // The fast path's one filtered sample: the gradient (xyz) and the density (w).
@@ -214,8 +215,13 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         }
         if (value > min_value) {
             let sample = transfer(preset, value);
-            // Opacity per step from opacity per voxel, so the look does not depend on the step.
-            let a = 1.0 - pow(1.0 - clamp(sample.a * opacity, 0.0, 0.999), step);
+            // Opacity per step from opacity per voxel, so the look does not depend on the step
+            // (at rest the step is one voxel, and the power is the identity).
+            let kept = 1.0 - clamp(sample.a * opacity, 0.0, 0.999);
+            var a = 1.0 - kept;
+            if (!unit_step) {
+                a = 1.0 - pow(kept, step);
+            }
             if (a > min_step_opacity) {
                 var rgb = sample.rgb;
                 if (tint) {
