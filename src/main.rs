@@ -23,9 +23,10 @@ struct Cli {
     #[arg(long, value_enum, ignore_case = true)]
     view: Option<loudscape::render::scene::ViewKind>,
 
-    /// Compare the song with this one (B): side by side, their difference, A/B playback.
-    #[arg(long)]
-    compare: Option<PathBuf>,
+    /// Compare the song with these versions (B, C...; up to 7): side by side, their
+    /// difference, playback switching between them at the same moment of the music.
+    #[arg(long, num_args = 1..=7)]
+    compare: Vec<PathBuf>,
 
     /// Start playback at this position, in seconds.
     #[arg(long)]
@@ -156,7 +157,7 @@ fn reject_unknown_subcommand(files: &[PathBuf]) {
 fn check_screenshot(cli: &Cli) -> anyhow::Result<()> {
     if let Some(shot) = &cli.screenshot {
         let mut inputs: Vec<&std::path::Path> = cli.files.iter().map(PathBuf::as_path).collect();
-        inputs.extend(cli.compare.as_deref());
+        inputs.extend(cli.compare.iter().map(PathBuf::as_path));
         commands::args::check_output(shot, &["png"], &inputs)?;
     }
     Ok(())

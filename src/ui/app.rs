@@ -30,8 +30,9 @@ pub struct WindowOptions {
     pub screenshot: Option<PathBuf>,
     /// The view to open in (otherwise the remembered one, or Points).
     pub view: Option<ViewKind>,
-    /// Compare the song with this one (B): `loudscape A --compare B`.
-    pub compare: Option<PathBuf>,
+    /// Compare the song with these versions (B, C...; 7 at most):
+    /// `loudscape A --compare B C`.
+    pub compare: Vec<PathBuf>,
     /// Start playback at this many seconds once the song's audio is ready.
     pub seek: Option<f64>,
     /// Keys to press once the data is shown (`?`, `Ctrl+S`; for tests: they go through the
@@ -159,8 +160,8 @@ impl LoudscapeApp {
             app.settings.view = view;
         }
         app.start_opening(files);
-        if let Some(b) = compare {
-            app.compare_with(b);
+        for version in compare {
+            app.compare_with(version);
         }
         app
     }
@@ -199,7 +200,7 @@ impl eframe::App for LoudscapeApp {
         }
         // Scripted presses (tests), once the data is shown (whole, not the points so far of a
         // song being extracted) or nothing is loading. A compare's B loaded first too.
-        let compare_ready = self.compare.as_ref().is_none_or(|c| c.receiver.is_none());
+        let compare_ready = self.compare.as_ref().is_none_or(|c| !c.loading());
         if !self.scripted_presses.is_empty()
             && ((self.active().is_some() && !self.previewing()) || self.loading.is_empty())
             && self.scripted_input_ready()

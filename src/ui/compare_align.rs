@@ -1,10 +1,11 @@
-//! The compare's releases aligned in time and matched in loudness, in the window: once B is
-//! loaded and both songs' audio is known, `loudscape-extract compare --json` runs on a thread
-//! (`extract::align::compare_audio`, never on the UI thread) while the panel says "aligning A
-//! and B…"; its answer moves B's time onto A's in the pictures (the scene is built again), makes
-//! key B switch to the same moment of the music, and sets the gain each side plays at. The
-//! panel's part: the offset and its confidence, the "match loudness" switch and the nudge. What
-//! is kept and decided is `state/alignment.rs`.
+//! The compare's releases aligned in time and matched in loudness, in the window: once every
+//! version is loaded and their audio is known, `loudscape-extract compare --json` runs on a
+//! thread for all of them, A first (`extract::align::compare_audio`, never on the UI thread)
+//! while the panel says "aligning the versions…"; its answer moves the version beside A onto
+//! A's time in the pictures (the scene is built again), makes key B switch to the same moment
+//! of the music, and sets the gain each version plays at (the quietest one's loudness). The
+//! panel's part: each version's offset and its confidence, the "match loudness" switch and the
+//! nudge of the version beside A. What is kept and decided is `state/alignment.rs`.
 
 use std::borrow::Cow;
 use std::path::PathBuf;
@@ -20,13 +21,13 @@ use crate::ui::state::LoudscapeApp;
 use crate::ui::state::alignment::{CompareAlignment, NUDGE_STEPS_S};
 use crate::ui::state::compare_window::Listening;
 
-/// Runs the comparison of A's and B's audio on a thread.
-fn align_on_thread(a: PathBuf, b: PathBuf) -> Receiver<Result<Comparison, String>> {
+/// Runs the comparison of the versions' audio (A first) on a thread.
+fn align_on_thread(versions: Vec<PathBuf>) -> Receiver<Result<Comparison, String>> {
     let (sender, receiver) = channel();
     let spawned = std::thread::Builder::new()
         .name("compare-align".into())
         .spawn(move || {
-            let _ = sender.send(compare_audio(&[a, b], "quietest"));
+            let _ = sender.send(compare_audio(&versions, "quietest"));
         });
     // No thread: the receiver's sender is gone, which the state tells as an error.
     if let Err(e) = spawned {
@@ -35,45 +36,64 @@ fn align_on_thread(a: PathBuf, b: PathBuf) -> Receiver<Result<Comparison, String
     receiver
 }
 
-/// B's cloud with its time moved onto A's by the alignment (B itself, not a copy, before one
-/// has come).
+/// `version`'s cloud with its time moved onto A's by the alignment and, `matched`, its levels
+/// by the gain that brings it to A's loudness (the cloud itself, not a copy, where neither
+/// applies).
 pub(super) fn aligned_b<'a>(
     alignment: &CompareAlignment,
+    version: Listening,
     b: &'a PointCloud,
+    matched: bool,
 ) -> Cow<'a, PointCloud> {
-    match alignment.offset_s() {
-        Some(offset) => Cow::Owned(crate::data::compare::aligned_in_time(b, offset)),
-        None => Cow::Borrowed(b),
+    let offset = alignment.offset_s(version);
+    let gain = alignment.level_match_db(version).filter(|_| matched);
+    if offset.is_none() && gain.is_none() {
+        return Cow::Borrowed(b);
     }
+    let mut moved = b.clone();
+    if let Some(offset) = offset {
+        crate::data::compare::align_in_time(&mut moved, offset);
+    }
+    if let Some(gain) = gain {
+        crate::data::compare::match_in_level(&mut moved, gain);
+    }
+    Cow::Owned(moved)
 }
 
 impl LoudscapeApp {
-    /// Starts the comparison once a pair is there, takes its answer, and sets the heard side's
-    /// gain (0 dB without a compare).
+    /// Starts the comparison once every version has loaded (again when the list changed),
+    /// takes its answer, and sets the heard version's gain (0 dB without a compare).
     pub(super) fn poll_alignment(&mut self, ctx: &egui::Context) {
         let Some(state) = self.compare.as_mut() else {
             self.audio.set_gain_db(0.0);
             return;
         };
-        if let (Some(song), Some(b)) = (self.song.as_ref(), state.b_loaded.as_ref()) {
-            let pair = (song.cloud.path.clone(), b.path.clone());
-            if state.alignment.asked_for.as_ref() != Some(&pair) {
-                // The sources held against their clouds: another song where B's audio was
-                // would be aligned with A as if it were B.
-                let a_audio = self
-                    .audio
-                    .track_path()
-                    .map(Ok)
-                    .unwrap_or_else(|| playback::checked_source(&song.cloud));
-                match (a_audio, playback::checked_source(b)) {
-                    (Ok(a), Ok(b)) => {
-                        state.alignment.start(pair, align_on_thread(a, b));
-                    }
-                    (Err(e), _) | (_, Err(e)) => {
-                        state.alignment.asked_for = Some(pair);
+        let clouds: Option<Vec<&PointCloud>> =
+            state.versions.iter().map(|v| v.loaded.as_deref()).collect();
+        if let (Some(song), Some(clouds)) = (self.song.as_ref(), clouds)
+            && !clouds.is_empty()
+        {
+            let mut asked: Vec<PathBuf> = vec![song.cloud.path.clone()];
+            asked.extend(clouds.iter().map(|c| c.path.clone()));
+            if state.alignment.asked_for.as_ref() != Some(&asked) {
+                // The sources held against their clouds: another song where a version's audio
+                // was would be aligned with A as if it were that version. The player's track
+                // is A's (picked by hand, perhaps) only while A is heard.
+                let a_audio = match self.audio.track_path() {
+                    Some(path) if state.listening == Listening::A => Ok(path),
+                    _ => playback::checked_source(&song.cloud),
+                };
+                let sources: Result<Vec<PathBuf>, _> = std::iter::once(a_audio)
+                    .chain(clouds.iter().map(|c| playback::checked_source(c)))
+                    .collect();
+                match sources {
+                    Ok(sources) => state.alignment.start(asked, align_on_thread(sources)),
+                    Err(e) => {
+                        state.alignment.asked_for = Some(asked);
+                        state.alignment.comparison = None;
                         state.alignment.error = Some(format!("nothing to align: {e}"));
                         self.messages.warn(format!(
-                            "compare: A and B not aligned (nothing to align: {e})"
+                            "compare: versions not aligned (nothing to align: {e})"
                         ));
                     }
                 }
@@ -81,20 +101,33 @@ impl LoudscapeApp {
         }
         match state.alignment.poll() {
             Some(true) => {
-                // The pictures again, with B on A's time.
+                // The pictures again, with the version beside A on A's time.
                 state.built_for = None;
-                let line = state.alignment.offset_line().unwrap_or_default();
+                let count = state.alignment.count();
+                let lines: Vec<String> = (1..count)
+                    .filter_map(|i| state.alignment.offset_line(Listening(i)))
+                    .collect();
+                let gains: Vec<String> = (0..count)
+                    .map(|i| {
+                        let version = Listening(i);
+                        format!(
+                            "{} {:+.1} dB",
+                            version.letter(),
+                            state.alignment.gain_db(version)
+                        )
+                    })
+                    .collect();
                 // A log line, as loads are told: tests read it.
                 eprintln!(
-                    "compare: aligned ({line}); gains A {:+.1} dB, B {:+.1} dB",
-                    state.alignment.gain_db(Listening::A),
-                    state.alignment.gain_db(Listening::B)
+                    "compare: aligned ({}); gains {}",
+                    lines.join("; "),
+                    gains.join(", ")
                 );
             }
             Some(false) => {
                 let error = state.alignment.error.clone().unwrap_or_default();
                 self.messages
-                    .warn(format!("compare: A and B not aligned ({error})"));
+                    .warn(format!("compare: versions not aligned ({error})"));
             }
             None => {}
         }
@@ -105,8 +138,9 @@ impl LoudscapeApp {
         self.audio.set_gain_db(gain);
     }
 
-    /// The panel's alignment lines: "aligning A and B…", the offset and its confidence (or why
-    /// not aligned), "match loudness" and the nudge of B's offset.
+    /// The panel's alignment lines: "aligning the versions…", each version's offset and its
+    /// confidence (or why not aligned), "match loudness" and the nudge of the offset of the
+    /// version beside A.
     pub(super) fn alignment_controls(&mut self, ui: &mut egui::Ui) {
         let Some(state) = self.compare.as_mut() else {
             return;
@@ -115,7 +149,7 @@ impl LoudscapeApp {
         if alignment.aligning() {
             ui.horizontal(|ui| {
                 ui.spinner();
-                ui.label("aligning A and B…");
+                ui.label("aligning the versions…");
             });
             return;
         }
@@ -128,46 +162,112 @@ impl LoudscapeApp {
         if alignment.comparison.is_none() {
             return;
         }
-        if let Some(line) = alignment.offset_line() {
-            ui.label(line);
+        for i in 1..alignment.count() {
+            if let Some(line) = alignment.offset_line(Listening(i)) {
+                ui.label(line);
+            }
         }
-        let before = alignment.nudge_s;
-        if alignment.offset_s().is_some() {
+        let beside = state.beside;
+        let before = alignment.nudge_s(beside);
+        if alignment.offset_s(beside).is_some() {
             ui.horizontal_wrapped(|ui| {
-                ui.label("nudge");
+                ui.label(format!("nudge {}", beside.letter()));
                 for step in NUDGE_STEPS_S {
                     let label = format!("{:+.0}", step * 1000.0);
                     if ui
                         .small_button(label)
-                        .on_hover_text("moves B's offset against A by this many milliseconds")
+                        .on_hover_text("moves its offset against A by this many milliseconds")
                         .clicked()
                     {
-                        alignment.nudge(step);
+                        alignment.nudge(beside, step);
                     }
                 }
             });
         }
         ui.checkbox(&mut alignment.match_loudness, "match loudness")
-            .on_hover_text("each side plays at the gain that brings it to the quieter one");
-        if alignment.nudge_s != before {
-            // The pictures again, with B moved.
+            .on_hover_text("each version plays at the gain that brings it to the quietest one");
+        if alignment.nudge_s(beside) != before {
+            // The pictures again, with the version moved.
             state.built_for = None;
             ui.ctx().request_repaint();
         }
     }
 }
 
-/// What the switch line adds after "listening to B at 13.231 s": the moment of the other side
-/// it came from and B's offset (" (from A 12.500 s, B aligned +0.731 s)"), or nothing while
-/// nothing is aligned.
+/// What the switch line adds after "listening to B at 13.231 s": the moment of the version it
+/// came from and the offset of the version switched to (or from, for A): " (from A 12.500 s,
+/// B aligned +0.731 s)"; nothing while that version is not aligned.
 pub(super) fn switch_words(
     alignment: &CompareAlignment,
+    from_version: Listening,
     to: Listening,
     from: Option<f64>,
 ) -> String {
-    let (Some(offset), Some(from)) = (alignment.offset_s(), from) else {
+    let moved = if to == Listening::A { from_version } else { to };
+    let (Some(offset), Some(from)) = (alignment.offset_s(moved), from) else {
         return String::new();
     };
-    let other = if to == Listening::A { "B" } else { "A" };
-    format!(" (from {other} {from:.3} s, B aligned {offset:+.3} s)")
+    format!(
+        " (from {} {from:.3} s, {} aligned {offset:+.3} s)",
+        from_version.letter(),
+        moved.letter()
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+
+    /// A, B 0.731 s later at -3.8 dB, C at +2.0 dB (A is not the quietest: C's matching gain
+    /// is 0, A's -2.0).
+    const JSON: &str = r#"{"match": "quietest", "versions": [
+        {"path": "a.wav", "match_gain_db": -2.0,
+         "alignment": {"alignable": true, "offset_s": 0.0, "confidence": 1.0, "segments": []}},
+        {"path": "b.wav", "match_gain_db": -5.8,
+         "alignment": {"alignable": true, "offset_s": 0.731, "confidence": 0.86,
+                       "segments": []}},
+        {"path": "c.wav", "match_gain_db": 0.0,
+         "alignment": {"alignable": true, "offset_s": 0.0, "confidence": 0.9,
+                       "segments": []}}]}"#;
+
+    /// The difference's "matched" measure moves the version's level axes by the gain that
+    /// brings it to A's loudness (its matching gain less A's), and says so.
+    #[test]
+    fn the_matched_measure_moves_a_versions_levels_by_its_gain_against_a() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/format/song_v2.ply");
+        let cloud = crate::data::cloud::load(&path).unwrap();
+        let axes = &cloud.meta.axes;
+        assert_eq!((axes.y.unit.as_str(), axes.x.unit.as_str()), ("dB", "s"));
+        let alignment = CompareAlignment {
+            comparison: Some(Comparison::parse(JSON).unwrap()),
+            ..Default::default()
+        };
+        let (b, c) = (Listening::B, Listening(2));
+        let aligned = aligned_b(&alignment, b, &cloud, false);
+        assert!((aligned.meta.axes.x.min - (axes.x.min - 0.731)).abs() < 1e-9);
+        assert_eq!(aligned.meta.axes.y.min, axes.y.min, "levels as they are");
+        let matched = aligned_b(&alignment, b, &cloud, true);
+        assert!((matched.meta.axes.y.min - (axes.y.min - 3.8)).abs() < 1e-9);
+        assert!((matched.meta.axes.y.max - (axes.y.max - 3.8)).abs() < 1e-9);
+        assert!((matched.meta.axes.x.min - (axes.x.min - 0.731)).abs() < 1e-9);
+        assert_eq!(
+            alignment.match_words(b).as_deref(),
+            Some("B -3.8 dB to match A")
+        );
+        let matched = aligned_b(&alignment, c, &cloud, true);
+        assert!((matched.meta.axes.y.max - (axes.y.max + 2.0)).abs() < 1e-9);
+        assert_eq!(
+            alignment.match_words(c).as_deref(),
+            Some("C +2.0 dB to match A")
+        );
+        assert_eq!(alignment.match_words(Listening::A), None);
+        // Nothing to move before the comparison: the cloud itself.
+        let none = CompareAlignment::default();
+        assert!(matches!(
+            aligned_b(&none, b, &cloud, true),
+            Cow::Borrowed(_)
+        ));
+    }
 }

@@ -1,9 +1,9 @@
-//! The compare section of the side panel: B's field and the "Compare with…" dialog, loading
-//! and error lines, the layout (A only, side by side, difference), the difference measure and
-//! the A/B listening switch. What it decides from the state (the typed path, the dialog's
+//! The compare section of the side panel: the field and the "Compare with…" dialog (each adds
+//! a version: B, then C...), loading and error lines, the layout (A only, side by side,
+//! difference), the difference measure, and the listening switch with each version's gain and
+//! the one heard named. What it decides from the state (the typed path, the dialog's
 //! answer, which side can be heard) is `state/compare_window.rs`.
 
-use std::path::PathBuf;
 use std::task::Poll;
 use std::time::Duration;
 
@@ -19,7 +19,7 @@ impl LoudscapeApp {
     pub(super) fn compare_controls(&mut self, ui: &mut egui::Ui) {
         ui.add_space(6.0);
         ui.label(RichText::new("Compare (A/B)").strong());
-        let mut start = None;
+        let mut start = Vec::new();
         ui.horizontal_wrapped(|ui| {
             let field = &mut self.open.compare_path;
             let edit = ui.add(
@@ -29,14 +29,17 @@ impl LoudscapeApp {
                     .desired_width(130.0),
             );
             let entered = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-            start = typed_path(field, entered);
+            start.extend(typed_path(field, entered));
             let open = self.compare.as_ref().is_none_or(|c| c.dialog.is_none());
             if ui
                 .add_enabled(
                     open && self.song.is_some(),
                     egui::Button::new("Compare with…"),
                 )
-                .on_hover_text("B beside the song (A); or drop a file with Shift held")
+                .on_hover_text(
+                    "adds a version (B, C...) to compare with the song (A); or drop a file \
+                     with Shift held",
+                )
                 .clicked()
             {
                 if !crate::ui::open::dialogs_available() {
@@ -47,32 +50,42 @@ impl LoudscapeApp {
                     return;
                 }
                 self.compare
-                    .get_or_insert_with(|| CompareState::new(PathBuf::new()))
+                    .get_or_insert_with(CompareState::empty)
                     .await_dialog(crate::ui::open::open_dialog(false));
             }
         });
         if let Some(state) = self.compare.as_mut() {
             match state.poll_dialog() {
-                Poll::Ready(picked) => start = start.or(picked),
+                Poll::Ready(picked) => start.extend(picked),
                 Poll::Pending => ui.ctx().request_repaint_after(Duration::from_millis(100)),
             }
         }
-        if let Some(path) = start {
-            if self.song.is_some() {
+        if !start.is_empty() && self.song.is_none() {
+            self.messages
+                .warn("open a song (A) first, then compare it with B".to_string());
+        } else if !start.is_empty() {
+            for path in start {
                 self.compare_with(path);
-            } else {
-                self.messages
-                    .warn("open a song (A) first, then compare it with B".to_string());
+            }
+            // The version added last is seen beside A (unless another is heard).
+            if let Some(state) = self.compare.as_mut() {
+                state.show(Listening(state.versions.len()));
             }
         }
         let Some(state) = self.compare.as_mut() else {
             return;
         };
-        if state.receiver.is_some() {
-            ui.horizontal_wrapped(|ui| {
-                ui.spinner();
-                ui.label(format!("loading B: {}", state.path.display()));
-            });
+        for (i, version) in state.versions.iter().enumerate() {
+            if version.receiver.is_some() {
+                ui.horizontal_wrapped(|ui| {
+                    ui.spinner();
+                    ui.label(format!(
+                        "loading {}: {}",
+                        Listening(i + 1).letter(),
+                        version.path.display()
+                    ));
+                });
+            }
         }
         if let Some(error) = &state.error {
             ui.colored_label(Color32::from_rgb(240, 120, 100), error);
@@ -103,22 +116,42 @@ impl LoudscapeApp {
                 for measure in DifferenceMeasure::ALL {
                     if ui
                         .add(egui::Button::selectable(
-                            state.measure == measure,
+                            !state.matched && state.measure == measure,
                             measure.name(),
                         ))
                         .on_hover_text(measure.describe())
                         .clicked()
                     {
-                        state.measure = measure;
+                        state.pick_measure(Some(measure));
                         ui.ctx().request_repaint();
                     }
+                }
+                // Level-weighted with the version's levels moved by its matching gain.
+                let gain = state.alignment.match_words(state.beside);
+                let hover = match &gain {
+                    Some(words) => format!(
+                        "level-weighted, {words}: what remains is dynamics and tonal balance"
+                    ),
+                    None => "needs the versions' matching gains (their alignment)".to_string(),
+                };
+                if ui
+                    .add_enabled(
+                        gain.is_some(),
+                        egui::Button::selectable(state.matched, "matched"),
+                    )
+                    .on_hover_text(hover)
+                    .on_disabled_hover_text("needs the versions' matching gains (their alignment)")
+                    .clicked()
+                {
+                    state.pick_measure(None);
+                    ui.ctx().request_repaint();
                 }
             });
         }
         let mut switch = None;
         ui.horizontal_wrapped(|ui| {
             ui.label("listen");
-            for side in [Listening::A, Listening::B] {
+            for side in (0..state.count()).map(Listening) {
                 // "B −3.8 dB": the gain it plays at to match the other's loudness.
                 let name = state.alignment.gain_label(side);
                 let response = ui
@@ -126,15 +159,32 @@ impl LoudscapeApp {
                         state.can_listen(side),
                         egui::Button::selectable(state.listening == side, name),
                     )
-                    .on_hover_text("key B switches, at the same moment of the music");
+                    .on_hover_text(
+                        "key B steps through the versions, at the same moment of the music",
+                    );
                 if response.clicked() {
                     switch = Some(side);
                 }
             }
-            if state.decoding.is_some() {
+            if state.versions.iter().any(|v| v.decoding.is_some()) {
                 ui.spinner();
             }
         });
+        // The version heard: its name and the gain it plays at.
+        let heard = state.listening;
+        let name = match state.version(heard) {
+            Some(version) => version.name(),
+            None => self
+                .song
+                .as_ref()
+                .and_then(|s| s.cloud.path.file_name())
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        };
+        ui.label(format!(
+            "hearing {}: {name} at {:+.1} dB",
+            heard.letter(),
+            state.alignment.gain_db(heard)
+        ));
         self.alignment_controls(ui);
         if let Some(side) = switch {
             self.listen(side);

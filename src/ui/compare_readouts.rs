@@ -11,6 +11,7 @@ use crate::view::pick::{self, Reading};
 /// the point nearest the same time and frequency (the loudest of those within a voxel).
 pub(super) fn compare_readings(
     clouds: &(PointCloud, PointCloud),
+    letter: char,
     side: usize,
     view: &FrameView,
     px: glam::Vec2,
@@ -18,13 +19,13 @@ pub(super) fn compare_readings(
     let both = [&clouds.0, &clouds.1];
     let here = both[side];
     let there = both[1 - side];
-    let names = ["A", "B"];
+    let names = ["A".to_string(), letter.to_string()];
     let Some(index) = pick::pick_point(&here.points, view, px, 6.0, 0.0) else {
         return Vec::new();
     };
     let point = &here.points[index];
     let mut out = vec![Reading {
-        name: names[side].into(),
+        name: names[side].clone(),
         value: here
             .path
             .file_name()
@@ -58,7 +59,7 @@ pub(super) fn compare_readings(
             });
         }
         None => out.push(Reading {
-            name: names[1 - side].into(),
+            name: names[1 - side].clone(),
             value: "nothing at this time and frequency".into(),
         }),
     }

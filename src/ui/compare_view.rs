@@ -11,7 +11,7 @@ use crate::ui::compare_readouts::{compare_readings, difference_readings};
 use crate::ui::compare_shot::difference_settings;
 use crate::ui::hover::paint_readings;
 use crate::ui::labels;
-use crate::ui::state::compare_window::CompareLayout;
+use crate::ui::state::compare_window::{CompareLayout, CompareState, Listening};
 use crate::ui::state::{LoudscapeApp, Slot};
 use crate::ui::view_3d::{GAP, busy_badge};
 use crate::view::frame_view::FrameView;
@@ -46,6 +46,13 @@ impl LoudscapeApp {
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default()
         });
+        // The letter of the version beside A in the scene drawn (B, C...).
+        let (beside, matched) = state
+            .built_for
+            .map_or((Listening::B, false), |(_, version, matched)| {
+                (version, matched)
+            });
+        let letter = beside.letter();
         let ppp = painter.ctx().pixels_per_point();
         let mut readings = None;
         match state.layout {
@@ -69,7 +76,7 @@ impl LoudscapeApp {
                     ));
                     // Its title and the colour key of what it draws, as saved pictures carry.
                     let cloud = if side == 0 { &clouds.0 } else { &clouds.1 };
-                    let title = format!("{}: {}", ["A", "B"][side], names[side]);
+                    let title = format!("{}: {}", ['A', letter][side], names[side]);
                     let legend = crate::picture::compare::half_legend(cloud, settings, &title);
                     let labels = state.labels.as_ref().filter(|_| self.settings.show_box);
                     crate::ui::legends::paint_with_labels(
@@ -84,7 +91,7 @@ impl LoudscapeApp {
                         (pos.x - rects[side].min.x) * ppp,
                         (pos.y - rects[side].min.y) * ppp,
                     );
-                    readings = Some((pos, compare_readings(&clouds, side, view, px)));
+                    readings = Some((pos, compare_readings(&clouds, letter, side, view, px)));
                 }
             }
             CompareLayout::Difference => {
@@ -104,7 +111,7 @@ impl LoudscapeApp {
                 paint_difference(
                     painter,
                     rect,
-                    &format!("B - A: {} against {}", names[1], names[0]),
+                    &difference_title(state, beside, matched, &names),
                     state.difference.as_ref().map(|c| (c.measure, c.range)),
                 );
                 if let Some(copy) = &state.difference
@@ -129,4 +136,21 @@ impl LoudscapeApp {
         }
         true
     }
+}
+
+/// The difference's title: "C - A: c.wav against a.wav", and for the "matched" measure what
+/// was matched: "C - A matched (C -3.8 dB to match A): ...".
+fn difference_title(
+    state: &CompareState,
+    version: Listening,
+    matched: bool,
+    names: &[String; 2],
+) -> String {
+    let letter = version.letter();
+    let words = state
+        .alignment
+        .match_words(version)
+        .filter(|_| matched)
+        .map_or_else(String::new, |words| format!(" matched ({words})"));
+    format!("{letter} - A{words}: {} against {}", names[1], names[0])
 }

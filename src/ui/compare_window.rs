@@ -1,7 +1,7 @@
-//! The window's A/B compare: B loaded beside the Song slot's cloud (A), both moved onto the
-//! union of their axes and built into the compare's GPU scene, its grids when the view needs
-//! them, and the A/B audio switch (key B, or the panel's buttons) that keeps the playback
-//! position. What it keeps between frames ([`CompareState`]) and decides by itself is
+//! The window's compare: versions B, C... (up to 8 in all) loaded beside the Song slot's cloud
+//! (A), A and the version beside it moved onto the union of their axes and built into the
+//! compare's GPU scene, its grids when the view needs them, and the audio switch (key B steps
+//! A -> B -> C -> A, or the panel's buttons) that keeps the moment of the music. What it keeps between frames ([`CompareState`]) and decides by itself is
 //! `state/compare_window.rs`; the side panel's section is `compare_panel.rs`, the two viewports
 //! and read-outs `compare_view.rs`, and the GPU side the bridge's `bridge/compare.rs`.
 
@@ -87,23 +87,24 @@ fn decode_audio(cloud: &PointCloud) -> Receiver<Result<Track, PlaybackError>> {
 }
 
 impl LoudscapeApp {
-    /// Starts comparing the Song slot's cloud with `path` (the command line's --compare, the
-    /// panel's field or dialog, a drop with Shift held).
+    /// Compares the Song slot's cloud with `path` too (the command line's --compare, the
+    /// panel's field or dialog, a drop with Shift held): B first, then C, D... up to 8
+    /// versions in all.
     pub(super) fn compare_with(&mut self, path: PathBuf) {
         self.open.compare_path = path.display().to_string();
-        let mut state = CompareState::after(self.compare.as_ref(), path.clone());
-        state.receiver = Some(load_b(path, state.shared.clone()));
-        if self.listening_b() {
-            // B's track is the one playing: bring A back first (position kept).
-            self.listen(Listening::A);
+        let state = self.compare.get_or_insert_with(CompareState::empty);
+        match state.add(path.clone()) {
+            Ok(added) => {
+                let version = &mut state.versions[added.0 - 1];
+                version.receiver = Some(load_b(path, version.shared.clone()));
+            }
+            Err(e) => {
+                if state.is_empty() {
+                    self.compare = None;
+                }
+                self.messages.warn(format!("compare: {e}"));
+            }
         }
-        self.compare = Some(state);
-    }
-
-    fn listening_b(&self) -> bool {
-        self.compare
-            .as_ref()
-            .is_some_and(|c| c.listening == Listening::B)
     }
 
     /// Takes B when it has loaded, builds the GPU scene when A or B changed, the grids when the
@@ -120,22 +121,35 @@ impl LoudscapeApp {
             return;
         };
         // Either still on its way: come back for it.
-        let was_loading = state.receiver.is_some();
-        let loading = state.poll_load();
-        if was_loading
-            && !loading
-            && let Some(song) = &self.song
-        {
-            // What B's extractor found wrong in its input, in sight while the compare (with
-            // A) is: the loader wrote it on stderr only.
-            for line in state.b_warning_lines() {
-                self.messages.warn_about(&song.cloud.path, line);
+        let had_versions = !state.is_empty();
+        let (loading, loaded_now) = state.poll_load();
+        for &version in &loaded_now {
+            // What the version's extractor found wrong in its input, in sight while the
+            // compare (with A) is: the loader wrote it on stderr only.
+            if let Some(song) = &self.song {
+                for line in state.warning_lines(version) {
+                    self.messages.warn_about(&song.cloud.path, line);
+                }
+            }
+            // Its audio, for key B (A's own stays with the player).
+            if let Some(v) = state.versions.get_mut(version.0 - 1)
+                && let Some(cloud) = &v.loaded
+                && v.track.is_none()
+                && state.listening != version
+            {
+                v.decoding = Some(decode_audio(cloud));
             }
         }
-        if !loading && state.b_loaded.is_none() && state.cancelled() {
-            // Cancel on B's row: no compare, and nothing to call an error.
+        if state.is_empty() && state.dialog.is_none() {
+            // No version left (it failed, or Cancel on its row: nothing to call an error), or
+            // the dialog closed with none picked: no compare.
+            let error = state.error_to_tell();
             self.compare = None;
-            self.messages.info("compare: loading B cancelled");
+            match error {
+                Some(error) => self.messages.error(format!("compare: {error}")),
+                None if had_versions => self.messages.info("compare: loading cancelled"),
+                None => {}
+            }
             return;
         }
         let decoding = state.poll_decoding();
@@ -148,12 +162,18 @@ impl LoudscapeApp {
         let Some(render_state) = frame.wgpu_render_state() else {
             return;
         };
-        let (Some(song), Some(b)) = (self.song.as_ref(), state.b_loaded.clone()) else {
+        let (Some(song), Some(b)) = (self.song.as_ref(), state.beside_loaded()) else {
             return;
         };
+        let first_build = state.built_for.is_none_or(|(id, _, _)| id != song.id);
         if state.rebuild_for(song.id) {
-            // B on A's time when the alignment has come (compare_align.rs).
-            let b_aligned = crate::ui::compare_align::aligned_b(&state.alignment, &b);
+            // The version on A's time when the alignment has come (compare_align.rs).
+            let b_aligned = crate::ui::compare_align::aligned_b(
+                &state.alignment,
+                state.beside,
+                &b,
+                state.matched_shown(),
+            );
             match on_union_axes(&song.cloud, &b_aligned) {
                 Ok((a, b_moved)) => {
                     state.labels = Some(labels::axis_labels_for_box(
@@ -164,9 +184,16 @@ impl LoudscapeApp {
                     CompareResources::build(render_state, a.clone(), b_moved.clone());
                     state.clouds = Some(Arc::new((a, b_moved)));
                     state.error = None;
-                    if state.listening == Listening::A && state.other_track.is_none() {
-                        state.decoding = Some(decode_audio(&b));
-                    }
+                    // A log line, as loads are told: tests wait for it.
+                    eprintln!(
+                        "compare: A and {} shown{}",
+                        state.beside.letter(),
+                        if state.matched_shown() {
+                            " (matched)"
+                        } else {
+                            ""
+                        }
+                    );
                 }
                 Err(e) => {
                     state.clouds = None;
@@ -174,7 +201,10 @@ impl LoudscapeApp {
                     CompareResources::clear(render_state);
                 }
             }
-            self.motion.request_fit();
+            if first_build {
+                // One camera: another version beside A keeps the view where it is.
+                self.motion.request_fit();
+            }
         }
         // Grids built on a thread arrive here; the window keeps drawing meanwhile.
         if let Some((built, frames, took)) = state.poll_grid_build() {
@@ -225,6 +255,19 @@ impl LoudscapeApp {
         CompareResources::set_measure(render_state, state.measure);
         if state.difference_stale() {
             state.difference = CompareResources::read_difference(render_state);
+            if let Some(copy) = &state.difference {
+                // A log line, as loads are told: tests read the range.
+                eprintln!(
+                    "compare: difference read ({}{}, range {:.3})",
+                    copy.measure.name(),
+                    if state.matched_shown() {
+                        ", matched"
+                    } else {
+                        ""
+                    },
+                    copy.range
+                );
+            }
         }
     }
 
@@ -267,37 +310,62 @@ impl LoudscapeApp {
         Some(surfaces.status)
     }
 
-    /// Switches the heard song to `to`, at the same position, playing if it was.
+    /// Switches the heard version to `to`, at the same moment of the music, playing if it
+    /// was, at `to`'s matching gain; side by side then shows A and `to` (A and the last
+    /// version heard when `to` is A).
     pub(super) fn listen(&mut self, to: Listening) {
         let Some(state) = self.compare.as_mut() else {
             return;
         };
-        if state.listening == to {
+        let from_version = state.listening;
+        if from_version == to {
             return;
         }
-        let Some(track) = state.other_track.take() else {
+        let Some(track) = state.track_slot(to).and_then(Option::take) else {
             return;
         };
-        // The same moment of the music in B (aligned), at the side's matching gain.
+        // The same moment of the music in `to` (through each version's alignment to A).
         let mut from = None;
-        state.other_track = self.audio.swap_track_at(track, |t| {
+        let alignment = &state.alignment;
+        let previous = self.audio.swap_track_at(track, |t| {
             from = Some(t);
-            state.alignment.target_time(to, t)
+            alignment.target_time(from_version, to, t)
         });
+        if let Some(slot) = state.track_slot(from_version) {
+            *slot = previous;
+        }
         state.listening = to;
-        self.audio.set_gain_db(state.alignment.gain_db(to));
+        if to != Listening::A {
+            state.beside = to;
+        }
+        let gain = state.alignment.gain_db(to);
+        self.audio.set_gain_db(gain);
         // The window tells stderr, as it does of loads: a log, not a script's input.
         eprintln!(
-            "listening to {} at {:.3} s{}",
-            if to == Listening::A { "A" } else { "B" },
+            "listening to {} at {:.3} s{}; gain {gain:+.1} dB",
+            to.letter(),
             self.audio.position_s().unwrap_or(0.0),
-            crate::ui::compare_align::switch_words(&state.alignment, to, from)
+            crate::ui::compare_align::switch_words(&state.alignment, from_version, to, from)
         );
     }
 
-    /// The scripted `--press compare=off|side|difference` of tests: the compare's layout; and
-    /// `surface=mt|dc`, the surface method (as its radio buttons set it).
+    /// The scripted `--press compare=off|side|difference` of tests: the compare's layout;
+    /// `measure=density|level|matched`, the difference's measure; and `surface=mt|dc`, the
+    /// surface method (as the panel's buttons set them).
     pub(super) fn scripted_compare(&mut self, name: &str) -> bool {
+        if let Some(measure) = name.strip_prefix("measure=") {
+            let picked = match measure {
+                "matched" => None,
+                other => match DifferenceMeasure::parse(other) {
+                    Some(measure) => Some(measure),
+                    None => return false,
+                },
+            };
+            if let Some(state) = self.compare.as_mut() {
+                state.pick_measure(picked);
+            }
+            return true;
+        }
         if let Some(method) = name
             .strip_prefix("surface=")
             .and_then(crate::render::surface::SurfaceMethod::parse)
@@ -315,7 +383,7 @@ impl LoudscapeApp {
         true
     }
 
-    /// Key B: the other song, at the same position.
+    /// Key B: the next version (A -> B -> C -> A), at the same moment of the music.
     pub(super) fn compare_keys(&mut self, ctx: &egui::Context) {
         let Some(state) = self.compare.as_ref() else {
             return;
@@ -323,8 +391,10 @@ impl LoudscapeApp {
         if state.clouds.is_none() {
             return;
         }
-        if crate::ui::shortcuts::pressed(ctx, crate::ui::shortcuts::Action::SwapAb) {
-            self.listen(state.listening.other());
+        if crate::ui::shortcuts::pressed(ctx, crate::ui::shortcuts::Action::SwapAb)
+            && let Some(next) = state.next_heard()
+        {
+            self.listen(next);
             // The panel shows the side now heard (it was drawn before the key was read).
             ctx.request_repaint();
         }
@@ -342,7 +412,7 @@ mod tests {
     /// Polls `state` until B's load has finished (a minute at most).
     fn loaded(mut state: CompareState) -> CompareState {
         let start = Instant::now();
-        while state.poll_load() {
+        while state.poll_load().0 {
             assert!(start.elapsed().as_secs() < 60, "B never finished loading");
             std::thread::sleep(Duration::from_millis(5));
         }
@@ -351,7 +421,8 @@ mod tests {
 
     fn load(path: &Path) -> CompareState {
         let mut state = CompareState::new(path.to_path_buf());
-        state.receiver = Some(load_b(path.to_path_buf(), state.shared.clone()));
+        let shared = state.versions[0].shared.clone();
+        state.versions[0].receiver = Some(load_b(path.to_path_buf(), shared));
         loaded(state)
     }
 
@@ -364,7 +435,7 @@ mod tests {
         .unwrap();
         let state = load(&fixtures.join("song_v2.ply"));
         assert_eq!(state.error, None);
-        let b = state.b_loaded.expect("B loaded");
+        let b = state.beside_loaded().expect("B loaded");
         assert_eq!(Some(b.len() as u64), expected["point_count"].as_u64());
         assert_eq!(b.path, fixtures.join("song_v2.ply"));
         assert_eq!(state.built_for, None, "the scene is still to be built");
@@ -381,7 +452,7 @@ mod tests {
         std::fs::remove_file(&path).unwrap();
         let error = state.error.clone().expect("an error");
         assert!(error.contains(&path.display().to_string()), "{error}");
-        assert!(state.b_loaded.is_none() && !state.shown());
+        assert!(state.is_empty() && !state.shown());
     }
 
     #[test]
@@ -414,6 +485,11 @@ mod tests {
             Some(CompareLayout::Difference)
         );
         assert!(app.motion.fit_pending(), "the new layout is fitted");
+        assert!(app.scripted_compare("measure=matched"));
+        assert!(app.compare.as_ref().is_some_and(|c| c.matched));
+        assert!(app.scripted_compare("measure=level"));
+        assert!(app.compare.as_ref().is_some_and(|c| !c.matched));
+        assert!(!app.scripted_compare("measure=loudest"));
         assert!(!app.scripted_compare("compare=sideways"));
         assert!(!app.scripted_compare("Ctrl+S"));
     }

@@ -26,7 +26,7 @@ impl LoudscapeApp {
         !self.loading.is_empty()
             || self.busy.is_some()
             || self.video_export.running.is_some()
-            || self.compare.as_ref().is_some_and(|c| c.receiver.is_some())
+            || self.compare.as_ref().is_some_and(|c| c.loading())
             || self.messages.shown(self.shown_cloud()).next().is_some()
     }
 
@@ -160,13 +160,19 @@ impl LoudscapeApp {
                 row
             })
             .collect();
-        if let Some(state) = &self.compare
-            && state.receiver.is_some()
-        {
-            rows.push(ProgressRow::new(
-                format!("B: {}", file_name(&state.path)),
-                &state.shared,
-            ));
+        if let Some(state) = &self.compare {
+            for (i, version) in state.versions.iter().enumerate() {
+                if version.receiver.is_some() {
+                    rows.push(ProgressRow::new(
+                        format!(
+                            "{}: {}",
+                            crate::ui::state::compare_window::Listening(i + 1).letter(),
+                            file_name(&version.path)
+                        ),
+                        &version.shared,
+                    ));
+                }
+            }
         }
         rows
     }
@@ -273,7 +279,8 @@ mod tests {
     use crate::ui::app::WindowOptions;
     use crate::ui::state::compare_window::CompareState;
 
-    /// B of a compare shows its stage, share done and Cancel as A does (a spinner alone before).
+    /// Each version of a compare shows its stage, share done and Cancel as A does (a spinner
+    /// alone before).
     #[test]
     fn loading_b_has_a_row_like_a_load_of_a() {
         let mut app = LoudscapeApp::new(
@@ -286,13 +293,17 @@ mod tests {
         assert!(app.progress_rows().is_empty());
         let mut state = CompareState::new(PathBuf::from("music/b.ogg"));
         let (_sender, receiver) = std::sync::mpsc::channel();
-        state.receiver = Some(receiver);
+        state.versions[0].receiver = Some(receiver);
+        state.add(PathBuf::from("music/c.ogg")).unwrap();
+        let (_sender_c, receiver) = std::sync::mpsc::channel();
+        state.versions[1].receiver = Some(receiver);
         app.compare = Some(state);
         let rows = app.progress_rows();
-        assert_eq!(rows.len(), 1);
+        assert_eq!(rows.len(), 2);
         assert_eq!(rows[0].name, "B: b.ogg");
+        assert_eq!(rows[1].name, "C: c.ogg");
         assert_eq!(rows[0].stage(), Stage::Loading);
-        let shared = app.compare.as_ref().unwrap().shared.clone();
+        let shared = app.compare.as_ref().unwrap().versions[0].shared.clone();
         *shared.progress.lock().unwrap() = Some(crate::extract::Progress {
             stage: "spectrogram".into(),
             fraction: 0.42,
@@ -304,7 +315,12 @@ mod tests {
         );
         // Its Cancel reaches B's thread (the same flag the extractor watches).
         rows[0].shared.cancel.store(true, Ordering::Relaxed);
-        assert!(app.compare.as_ref().unwrap().cancelled());
+        assert!(
+            app.compare.as_ref().unwrap().versions[0]
+                .shared
+                .cancel
+                .load(Ordering::Relaxed)
+        );
         assert_eq!(app.progress_rows()[0].stage(), Stage::Cancelling);
     }
 

@@ -38,6 +38,14 @@ impl LoudscapeApp {
             .flatten()
             .map(|l| std::path::absolute(&l.cloud.path).unwrap_or_else(|_| l.cloud.path.clone()))
             .collect();
+        // The versions compared (loaded or loading), absolute: B first.
+        let compared: Vec<PathBuf> = self.compare.as_ref().map_or_else(Vec::new, |c| {
+            c.versions
+                .iter()
+                .filter(|v| v.loaded.is_some() || v.receiver.is_some())
+                .map(|v| std::path::absolute(&v.path).unwrap_or_else(|_| v.path.clone()))
+                .collect()
+        });
         Remembered {
             files,
             view: Some(self.settings.view),
@@ -53,11 +61,8 @@ impl LoudscapeApp {
                 .active()
                 .is_some()
                 .then(|| slot_name(self.active).to_string()),
-            compare: self
-                .compare
-                .as_ref()
-                .filter(|c| c.b_loaded.is_some() || c.receiver.is_some())
-                .map(|c| std::path::absolute(&c.path).unwrap_or_else(|_| c.path.clone())),
+            compare: compared.first().cloned(),
+            compare_more: compared.iter().skip(1).cloned().collect(),
             heard: self
                 .heard
                 .pending
@@ -154,8 +159,12 @@ impl LoudscapeApp {
                     }
                     _ => {}
                 }
-                if let Some(b) = r.compare.filter(|b| b.is_file() && !files.is_empty()) {
-                    self.compare_with(b);
+                if !files.is_empty() {
+                    for version in r.compare.into_iter().chain(r.compare_more) {
+                        if version.is_file() {
+                            self.compare_with(version);
+                        }
+                    }
                 }
             }
         }
@@ -221,12 +230,19 @@ mod tests {
             camera: Some(camera),
             active: Some("timeline".into()),
             compare: Some(b.clone()),
+            compare_more: vec![repo.join("data/no-such-c.ply"), song.clone()],
             heard: Some(key.clone()),
             ..Default::default()
         });
+        let compared = |app: &LoudscapeApp| -> Vec<std::path::PathBuf> {
+            app.compare.as_ref().map_or_else(Vec::new, |c| {
+                c.versions.iter().map(|v| v.path.clone()).collect()
+            })
+        };
         assert_eq!(
-            app.compare.as_ref().map(|c| c.path.clone()),
-            Some(b.clone())
+            compared(&app),
+            [b.clone(), song.clone()],
+            "B and the further versions that are there"
         );
         assert_eq!(
             app.heard.pending,
@@ -241,6 +257,7 @@ mod tests {
             Some(b.clone()),
             "remembered again while B loads"
         );
+        assert_eq!(again.compare_more, std::slice::from_ref(&song));
         assert_eq!(again.heard, Some(key));
         assert_eq!(again.active, None, "nothing shown yet");
 

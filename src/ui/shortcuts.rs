@@ -83,7 +83,7 @@ pub(super) const SHORTCUTS: &[Shortcut] = &[
         key: Key::B,
         modifiers: Modifiers::NONE,
         keys: "B",
-        what: "A/B compare: listen to the other song at the same position",
+        what: "compare: listen to the next version (A, B, C...) at the same moment of the music",
     },
     Shortcut {
         action: Action::Shortcuts,

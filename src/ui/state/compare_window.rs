@@ -1,11 +1,12 @@
-//! The window's A/B compare as it is kept between frames (the `compare` field of
-//! `LoudscapeApp`): B's path, its loading thread and loaded cloud, A and B moved onto the union
-//! axes, the layout (A only, side by side, difference), the difference measure, which song is
-//! heard and the other decoded track, the difference grid's CPU copy for read-outs, the axis
-//! labels and the compare dialog; and what the state decides by itself: what a finished load
-//! or decode leaves, which error to tell, when the scene is built again and the grids are
-//! needed, a new compare's layout, and the panel's choices. What the compare does with the
-//! window is `ui/compare_window.rs` (loading B, the GPU scene, key B), `ui/compare_panel.rs`
+//! The window's compare as it is kept between frames (the `compare` field of
+//! `LoudscapeApp`): the versions compared with A (B, C... up to 8 in all), each with its
+//! loading thread, loaded cloud and decoded track; A and the version shown beside it moved
+//! onto the union axes, the layout (A only, side by side, difference), the difference measure,
+//! which version is heard, the difference grid's CPU copy for read-outs, the axis labels and
+//! the compare dialog; and what the state decides by itself: what a finished load or decode
+//! leaves, which error to tell, when the scene is built again and the grids are needed, a
+//! version added, and the panel's choices. What the compare does with the window is
+//! `ui/compare_window.rs` (loading a version, the GPU scene, key B), `ui/compare_panel.rs`
 //! (the side panel's section) and `ui/compare_view.rs` (the two viewports and read-outs).
 
 use std::path::PathBuf;
@@ -33,27 +34,63 @@ pub(in crate::ui) enum CompareLayout {
     Difference,
 }
 
-/// Which song is heard (the two sides the alignment maps between).
-pub(in crate::ui) use super::alignment::Listening;
+/// Which version is heard (0 is A; the versions the alignment maps between).
+pub(in crate::ui) use super::alignment::{Listening, MAX_VERSIONS};
+
+/// One version compared with A: its file, its loading thread (whose stage and Cancel the
+/// window shows as A's), its cloud once loaded, and its decoded audio while another version
+/// plays.
+pub(in crate::ui) struct Version {
+    pub(in crate::ui) path: PathBuf,
+    pub(in crate::ui) receiver: Option<Receiver<Result<PointCloud, String>>>,
+    pub(in crate::ui) shared: Shared,
+    pub(in crate::ui) loaded: Option<Arc<PointCloud>>,
+    /// Its decoded song while not playing (taken by the player while it plays).
+    pub(in crate::ui) track: Option<Track>,
+    pub(in crate::ui) decoding: Option<Receiver<Result<Track, PlaybackError>>>,
+}
+
+impl Version {
+    pub(in crate::ui) fn new(path: PathBuf) -> Self {
+        Self {
+            path,
+            receiver: None,
+            shared: Shared::default(),
+            loaded: None,
+            track: None,
+            decoding: None,
+        }
+    }
+
+    /// The file's name as the user asked for it (for audio the cloud is a cache file).
+    pub(in crate::ui) fn name(&self) -> String {
+        self.path.file_name().map_or_else(
+            || self.path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
+    }
+}
 
 /// The window's compare state (one field of `LoudscapeApp`).
 pub(in crate::ui) struct CompareState {
-    pub(in crate::ui) path: PathBuf,
-    pub(in crate::ui) receiver: Option<Receiver<Result<PointCloud, String>>>,
-    /// What B's loading thread shares with the window: the extractor's stage and Cancel, shown
-    /// as A's are.
-    pub(in crate::ui) shared: Shared,
-    /// A and B on the union axes, as the GPU scene holds them (for hover and labels).
+    /// B, C...: the versions compared with A, in the order they were asked for.
+    pub(in crate::ui) versions: Vec<Version>,
+    /// The version drawn beside A (1 is B): the one heard, or the last one heard while A is.
+    pub(in crate::ui) beside: Listening,
+    /// A and the version beside it on the union axes, as the GPU scene holds them (for hover
+    /// and labels).
     pub(in crate::ui) clouds: Option<Arc<(PointCloud, PointCloud)>>,
-    pub(in crate::ui) b_loaded: Option<Arc<PointCloud>>,
-    /// The Song slot's cloud id the GPU scene was built for.
-    pub(in crate::ui) built_for: Option<u64>,
+    /// The Song slot's cloud id, the version beside A and whether its levels were matched to
+    /// A's loudness, as the GPU scene was built.
+    pub(in crate::ui) built_for: Option<(u64, Listening, bool)>,
     pub(in crate::ui) layout: CompareLayout,
     pub(in crate::ui) measure: DifferenceMeasure,
+    /// The difference's "matched" measure: level-weighted, with the version's levels shifted
+    /// by its matching gain against A (what remains is dynamics and tonal balance).
+    pub(in crate::ui) matched: bool,
     pub(in crate::ui) listening: Listening,
-    /// The decoded song not playing now (A's while B plays and the other way round).
-    pub(in crate::ui) other_track: Option<Track>,
-    pub(in crate::ui) decoding: Option<Receiver<Result<Track, PlaybackError>>>,
+    /// A's decoded song while another version plays.
+    pub(in crate::ui) a_track: Option<Track>,
     /// The difference's CPU copy for read-outs: the shown grid and the signed values.
     pub(in crate::ui) difference: Option<DifferenceCopy>,
     pub(in crate::ui) error: Option<String>,
@@ -105,19 +142,18 @@ pub(in crate::ui) struct DifferenceCopy {
 }
 
 impl CompareState {
-    pub(in crate::ui) fn new(path: PathBuf) -> Self {
+    /// A compare with no version yet (the dialog is open).
+    pub(in crate::ui) fn empty() -> Self {
         Self {
-            path,
-            receiver: None,
-            shared: Shared::default(),
+            versions: Vec::new(),
+            beside: Listening::B,
             clouds: None,
-            b_loaded: None,
             built_for: None,
             layout: CompareLayout::SideBySide,
             measure: DifferenceMeasure::Density,
+            matched: false,
             listening: Listening::A,
-            other_track: None,
-            decoding: None,
+            a_track: None,
             difference: None,
             error: None,
             error_told: None,
@@ -139,76 +175,187 @@ impl CompareState {
         self.layout == CompareLayout::SideBySide && self.clouds.is_some()
     }
 
-    /// A compare with `path` started while `old` was there: it keeps the old one's measure and
-    /// layout, "A only" turning to side by side (B was asked for to be seen).
-    pub(in crate::ui) fn after(old: Option<&CompareState>, path: PathBuf) -> Self {
-        let mut state = Self::new(path);
-        if let Some(old) = old {
-            state.layout = match old.layout {
-                CompareLayout::Off => CompareLayout::SideBySide,
-                other => other,
-            };
-            state.measure = old.measure;
-        }
+    /// A compare of A with the version at `path` (B).
+    #[cfg(test)]
+    pub(in crate::ui) fn new(path: PathBuf) -> Self {
+        let mut state = Self::empty();
+        state.versions.push(Version::new(path));
         state
     }
 
-    /// Takes B's cloud (or why it failed) once its load has finished; true while it loads.
-    pub(in crate::ui) fn poll_load(&mut self) -> bool {
-        let Some(receiver) = &self.receiver else {
-            return false;
-        };
-        match receiver.try_recv() {
-            Ok(Ok(cloud)) => {
-                self.b_loaded = Some(Arc::new(cloud));
-                // A new B: the scene is built again.
-                self.built_for = None;
+    /// Adds the version at `path` (C after B...); "A only" turns to side by side (it was asked
+    /// for to be seen). B stays beside A (the panel shows a version added by hand:
+    /// [`CompareState::show`]). Its index, or why not: a version already compared, or
+    /// [`MAX_VERSIONS`] reached.
+    pub(in crate::ui) fn add(&mut self, path: PathBuf) -> Result<Listening, String> {
+        if let Some(i) = self.versions.iter().position(|v| v.path == path) {
+            return Err(format!(
+                "{} is already compared (as {})",
+                path.display(),
+                Listening(i + 1).letter()
+            ));
+        }
+        if self.count() >= MAX_VERSIONS {
+            return Err(format!(
+                "{}: at most {MAX_VERSIONS} versions are compared at once",
+                path.display()
+            ));
+        }
+        self.versions.push(Version::new(path));
+        let added = Listening(self.versions.len());
+        if self.layout == CompareLayout::Off {
+            self.layout = CompareLayout::SideBySide;
+        }
+        Ok(added)
+    }
+
+    /// Shows `version` beside A, unless another version is heard (side by side shows A and
+    /// the version heard).
+    pub(in crate::ui) fn show(&mut self, version: Listening) {
+        if self.listening == Listening::A && self.version(version).is_some() {
+            self.beside = version;
+        }
+    }
+
+    /// The version `version` (1 is B; None for A or one not there).
+    pub(in crate::ui) fn version(&self, version: Listening) -> Option<&Version> {
+        version.0.checked_sub(1).and_then(|i| self.versions.get(i))
+    }
+
+    /// The versions, A included.
+    pub(in crate::ui) fn count(&self) -> usize {
+        self.versions.len() + 1
+    }
+
+    /// The version drawn beside A, when it has loaded.
+    pub(in crate::ui) fn beside_loaded(&self) -> Option<Arc<PointCloud>> {
+        self.version(self.beside)?.loaded.clone()
+    }
+
+    /// Whether any version still loads.
+    pub(in crate::ui) fn loading(&self) -> bool {
+        self.versions.iter().any(|v| v.receiver.is_some())
+    }
+
+    /// Takes each version's cloud (or why it failed) once its load has finished: a version
+    /// that failed is told as the compare's error and leaves the list (as does one whose load
+    /// was cancelled, without an error). Returns whether any still loads and the versions
+    /// that loaded now.
+    pub(in crate::ui) fn poll_load(&mut self) -> (bool, Vec<Listening>) {
+        let mut loaded_now = Vec::new();
+        let mut failed = Vec::new();
+        for (i, version) in self.versions.iter_mut().enumerate() {
+            let Some(receiver) = &version.receiver else {
+                continue;
+            };
+            match receiver.try_recv() {
+                Ok(Ok(cloud)) => {
+                    version.loaded = Some(Arc::new(cloud));
+                    loaded_now.push(Listening(i + 1));
+                }
+                Ok(Err(message)) => {
+                    failed.push(i);
+                    if !cancelled(&version.shared) {
+                        self.error = Some(message);
+                    }
+                }
+                Err(TryRecvError::Empty) => continue,
+                Err(TryRecvError::Disconnected) => {
+                    failed.push(i);
+                    self.error = Some(format!("{}: the loader stopped", version.path.display()));
+                }
             }
-            Ok(Err(message)) => self.error = Some(message),
-            Err(TryRecvError::Empty) => return true,
-            Err(TryRecvError::Disconnected) => {
-                self.error = Some(format!("{}: the loader stopped", self.path.display()));
+            version.receiver = None;
+        }
+        if loaded_now.contains(&self.beside) {
+            // The version beside A has come: the scene is built again.
+            self.built_for = None;
+        }
+        for &i in failed.iter().rev() {
+            self.remove(Listening(i + 1));
+            for v in &mut loaded_now {
+                if v.0 > i + 1 {
+                    v.0 -= 1;
+                }
             }
         }
-        self.receiver = None;
-        false
+        (self.loading(), loaded_now)
     }
 
-    /// Whether B's load was cancelled (its row's Cancel).
-    pub(in crate::ui) fn cancelled(&self) -> bool {
-        self.shared
-            .cancel
-            .load(std::sync::atomic::Ordering::Relaxed)
+    /// Drops `version` (one that did not load; never the one heard): the later versions move
+    /// up a letter, and the one beside A stays the same file where it can.
+    fn remove(&mut self, version: Listening) {
+        let Some(i) = version.0.checked_sub(1) else {
+            return;
+        };
+        if i >= self.versions.len() || self.listening == version {
+            return;
+        }
+        self.versions.remove(i);
+        if self.listening.0 > version.0 {
+            self.listening.0 -= 1;
+        }
+        if self.beside.0 > version.0 {
+            self.beside.0 -= 1;
+        } else if self.beside == version {
+            self.beside = Listening::B;
+            self.built_for = None;
+        }
+        // The nudges were of another list (the comparison is asked again, compare_align.rs).
+        self.alignment.nudges_s.clear();
     }
 
-    /// Takes B's decoded audio (or why it failed) once decoded; true while it decodes.
+    /// Whether nothing is left to compare (every version failed or was cancelled).
+    pub(in crate::ui) fn is_empty(&self) -> bool {
+        self.versions.is_empty()
+    }
+
+    /// Takes each version's decoded audio (or why it failed) once decoded; true while any
+    /// decodes.
     pub(in crate::ui) fn poll_decoding(&mut self) -> bool {
-        let Some(receiver) = &self.decoding else {
-            return false;
-        };
-        match receiver.try_recv() {
-            Ok(Ok(track)) => self.other_track = Some(track),
-            Ok(Err(e)) => self.error = Some(format!("B's audio: {e}")),
-            Err(TryRecvError::Empty) => return true,
-            Err(TryRecvError::Disconnected) => {}
+        let mut any = false;
+        for (i, version) in self.versions.iter_mut().enumerate() {
+            let Some(receiver) = &version.decoding else {
+                continue;
+            };
+            match receiver.try_recv() {
+                Ok(Ok(track)) => version.track = Some(track),
+                Ok(Err(e)) => {
+                    self.error = Some(format!("{}'s audio: {e}", Listening(i + 1).letter()));
+                }
+                Err(TryRecvError::Empty) => {
+                    any = true;
+                    continue;
+                }
+                Err(TryRecvError::Disconnected) => {}
+            }
+            version.decoding = None;
         }
-        self.decoding = None;
-        false
+        any
     }
 
-    /// What B's cloud says about its input, as the window tells it: `B NAME: MESSAGE` (NAME the
-    /// file asked for, as the status overlay names A's; a timeline's song where one is named).
-    pub(in crate::ui) fn b_warning_lines(&self) -> Vec<String> {
-        let Some(b) = &self.b_loaded else {
+    /// What `version`'s cloud says about its input, as the window tells it: `B NAME: MESSAGE`
+    /// (NAME the file asked for, as the status overlay names A's; a timeline's song where one
+    /// is named).
+    pub(in crate::ui) fn warning_lines(&self, version: Listening) -> Vec<String> {
+        let Some(v) = self.version(version) else {
             return Vec::new();
         };
-        let name = self.path.file_name().map_or_else(
-            || self.path.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        );
-        b.warnings()
+        let Some(cloud) = &v.loaded else {
+            return Vec::new();
+        };
+        let name = v.name();
+        cloud
+            .warnings()
             .iter()
-            .map(|w| format!("B {}: {}", w.path.as_deref().unwrap_or(&name), w.message))
+            .map(|w| {
+                format!(
+                    "{} {}: {}",
+                    version.letter(),
+                    w.path.as_deref().unwrap_or(&name),
+                    w.message
+                )
+            })
             .collect()
     }
 
@@ -221,13 +368,15 @@ impl CompareState {
         self.error.clone()
     }
 
-    /// Whether the GPU scene must be built for the Song slot's cloud `song_id` (B or A changed
-    /// since it was built); then it counts as built for it and the old difference is dropped.
+    /// Whether the GPU scene must be built for the Song slot's cloud `song_id` (A, or the
+    /// version beside it, changed since it was built); then it counts as built for them and
+    /// the old difference is dropped.
     pub(in crate::ui) fn rebuild_for(&mut self, song_id: u64) -> bool {
-        if self.built_for == Some(song_id) {
+        let key = (song_id, self.beside, self.matched_shown());
+        if self.built_for == Some(key) {
             return false;
         }
-        self.built_for = Some(song_id);
+        self.built_for = Some(key);
         self.difference = None;
         // A build for the old scene has nothing to give the new one.
         self.grid_build = None;
@@ -309,6 +458,21 @@ impl CompareState {
             }
     }
 
+    /// Whether the picture shows the version's levels matched to A's loudness: the "matched"
+    /// measure of the difference, once the comparison has a gain for it.
+    pub(in crate::ui) fn matched_shown(&self) -> bool {
+        self.matched
+            && self.layout == CompareLayout::Difference
+            && self.alignment.level_match_db(self.beside).is_some()
+    }
+
+    /// Picks the difference's measure: `Some(measure)`, or None for "matched" (level-weighted
+    /// with the version's levels matched to A's loudness).
+    pub(in crate::ui) fn pick_measure(&mut self, measure: Option<DifferenceMeasure>) {
+        self.matched = measure.is_none();
+        self.measure = measure.unwrap_or(DifferenceMeasure::ALL[1]);
+    }
+
     /// Whether the difference's CPU copy is missing or was read for another measure.
     pub(in crate::ui) fn difference_stale(&self) -> bool {
         self.difference
@@ -316,32 +480,67 @@ impl CompareState {
             .is_none_or(|d| d.measure != self.measure)
     }
 
-    /// Whether the panel's `side` button can be pressed: the side heard, or the other once its
-    /// audio is decoded.
+    /// Whether the panel's `side` button can be pressed: the version heard, or another once
+    /// its audio is decoded.
     pub(in crate::ui) fn can_listen(&self, side: Listening) -> bool {
-        self.other_track.is_some() || self.listening == side
+        self.listening == side
+            || if side == Listening::A {
+                self.a_track.is_some()
+            } else {
+                self.version(side).is_some_and(|v| v.track.is_some())
+            }
     }
 
-    /// The compare dialog opened: the view shows A alone until B is picked.
+    /// The version key B switches to: the next one (A after the last) whose audio is
+    /// decoded; None while none is.
+    pub(in crate::ui) fn next_heard(&self) -> Option<Listening> {
+        let count = self.count();
+        let mut next = self.listening;
+        for _ in 1..count {
+            next = next.next(count);
+            if self.can_listen(next) {
+                return Some(next);
+            }
+        }
+        None
+    }
+
+    /// Where the decoded track of `version` waits while another plays.
+    pub(in crate::ui) fn track_slot(&mut self, version: Listening) -> Option<&mut Option<Track>> {
+        match version.0.checked_sub(1) {
+            None => Some(&mut self.a_track),
+            Some(i) => self.versions.get_mut(i).map(|v| &mut v.track),
+        }
+    }
+
+    /// The compare dialog opened: with nothing compared yet the view shows A alone until a
+    /// version is picked.
     pub(in crate::ui) fn await_dialog(&mut self, receiver: Receiver<Option<Vec<PathBuf>>>) {
-        self.layout = CompareLayout::Off;
+        if self.clouds.is_none() {
+            self.layout = CompareLayout::Off;
+        }
         self.dialog = Some(receiver);
     }
 
-    /// The file picked in the compare dialog once it closed (`None`: nothing picked, or no
-    /// dialog); pending while it is open.
-    pub(in crate::ui) fn poll_dialog(&mut self) -> Poll<Option<PathBuf>> {
+    /// The files picked in the compare dialog once it closed (none: nothing picked, or no
+    /// dialog), each a version to add; pending while it is open.
+    pub(in crate::ui) fn poll_dialog(&mut self) -> Poll<Vec<PathBuf>> {
         let Some(receiver) = &self.dialog else {
-            return Poll::Ready(None);
+            return Poll::Ready(Vec::new());
         };
         let picked = match receiver.try_recv() {
-            Ok(picked) => picked.and_then(|paths| paths.into_iter().next()),
-            Err(TryRecvError::Disconnected) => None,
+            Ok(picked) => picked.unwrap_or_default(),
+            Err(TryRecvError::Disconnected) => Vec::new(),
             Err(TryRecvError::Empty) => return Poll::Pending,
         };
         self.dialog = None;
         Poll::Ready(picked)
     }
+}
+
+/// Whether a load was cancelled (its row's Cancel).
+fn cancelled(shared: &Shared) -> bool {
+    shared.cancel.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 impl CompareLayout {
@@ -363,304 +562,5 @@ pub(in crate::ui) fn typed_path(field: &str, entered: bool) -> Option<PathBuf> {
 }
 
 #[cfg(test)]
-mod tests {
-    use std::sync::mpsc::channel;
-
-    use super::*;
-    use crate::data::cloud::DataMode;
-
-    fn cloud(points: usize) -> PointCloud {
-        PointCloud::synthetic(
-            crate::data::synthetic::synthetic_song(points, 7),
-            DataMode::Song,
-        )
-    }
-
-    fn loading(
-        path: &str,
-    ) -> (
-        CompareState,
-        std::sync::mpsc::Sender<Result<PointCloud, String>>,
-    ) {
-        let mut state = CompareState::new(PathBuf::from(path));
-        let (sender, receiver) = channel();
-        state.receiver = Some(receiver);
-        (state, sender)
-    }
-
-    #[test]
-    fn a_finished_load_leaves_b_and_asks_for_a_new_scene() {
-        let (mut state, sender) = loading("b.ply");
-        state.built_for = Some(3);
-        assert!(state.poll_load(), "nothing sent yet: still loading");
-        assert!(state.receiver.is_some());
-        sender.send(Ok(cloud(50))).unwrap();
-        assert!(!state.poll_load());
-        assert!(state.receiver.is_none());
-        assert_eq!(state.b_loaded.as_ref().map(|b| b.len()), Some(50));
-        assert_eq!(
-            state.built_for, None,
-            "the scene is built again for the new B"
-        );
-        assert_eq!(state.error, None);
-        assert!(!state.poll_load(), "nothing more to take");
-    }
-
-    /// B's warnings (truncated, clipped...) are told as A's are, naming the file asked for
-    /// (for audio B's cloud is a cache file of no meaning to the user).
-    #[test]
-    fn bs_warnings_are_told_by_the_name_it_was_asked_by() {
-        let (mut state, sender) = loading("/music/b_louder.ogg");
-        assert!(state.b_warning_lines().is_empty(), "nothing loaded yet");
-        let mut b = cloud(50);
-        b.meta.warnings.push(crate::data::cloud::CloudWarning {
-            kind: "clipping".into(),
-            message: "clipped: 3 run(s)".into(),
-            path: None,
-        });
-        sender.send(Ok(b)).unwrap();
-        assert!(!state.poll_load());
-        assert_eq!(
-            state.b_warning_lines(),
-            ["B b_louder.ogg: clipped: 3 run(s)"]
-        );
-    }
-
-    #[test]
-    fn a_failed_or_abandoned_load_leaves_an_error_that_is_told_once() {
-        let (mut state, sender) = loading("b.ply");
-        sender
-            .send(Err("b.ply: not a loudscape cloud".into()))
-            .unwrap();
-        assert!(!state.poll_load());
-        assert!(state.b_loaded.is_none() && state.receiver.is_none());
-        assert_eq!(
-            state.error_to_tell().as_deref(),
-            Some("b.ply: not a loudscape cloud")
-        );
-        assert_eq!(state.error_to_tell(), None, "told once");
-
-        let (mut state, sender) = loading("gone.ogg");
-        drop(sender);
-        assert!(!state.poll_load());
-        assert_eq!(
-            state.error.as_deref(),
-            Some("gone.ogg: the loader stopped"),
-            "a loader that died names the file"
-        );
-        state.error = Some("another".into());
-        assert_eq!(state.error_to_tell().as_deref(), Some("another"));
-        state.error = None;
-        assert_eq!(state.error_to_tell(), None, "no error has nothing to tell");
-    }
-
-    #[test]
-    fn failed_audio_is_an_error_and_a_dropped_decoder_only_stops_waiting() {
-        let mut state = CompareState::new(PathBuf::from("b.ogg"));
-        let (sender, receiver) = channel();
-        state.decoding = Some(receiver);
-        assert!(state.poll_decoding());
-        sender
-            .send(Err(PlaybackError::Open {
-                path: PathBuf::from("b.ogg"),
-                reason: "truncated".into(),
-            }))
-            .unwrap();
-        assert!(!state.poll_decoding());
-        assert!(state.decoding.is_none() && state.other_track.is_none());
-        let error = state.error.clone().unwrap_or_default();
-        assert!(
-            error.starts_with("B's audio: b.ogg") && error.contains("truncated"),
-            "{error}"
-        );
-
-        let mut state = CompareState::new(PathBuf::from("b.ogg"));
-        let (sender, receiver) = channel::<Result<Track, PlaybackError>>();
-        state.decoding = Some(receiver);
-        drop(sender);
-        assert!(!state.poll_decoding());
-        assert!(state.decoding.is_none() && state.error.is_none());
-    }
-
-    #[test]
-    fn a_new_compare_keeps_the_measure_and_shows_b() {
-        let fresh = CompareState::after(None, PathBuf::from("b.ply"));
-        assert_eq!(fresh.layout, CompareLayout::SideBySide);
-        assert_eq!(fresh.measure, DifferenceMeasure::Density);
-        assert_eq!(fresh.path, PathBuf::from("b.ply"));
-
-        let mut old = CompareState::new(PathBuf::from("old.ply"));
-        old.layout = CompareLayout::Off;
-        old.measure = DifferenceMeasure::ALL[1];
-        let next = CompareState::after(Some(&old), PathBuf::from("b.ply"));
-        assert_eq!(
-            next.layout,
-            CompareLayout::SideBySide,
-            "A only turns to B beside it"
-        );
-        assert_eq!(next.measure, DifferenceMeasure::ALL[1]);
-        assert!(next.b_loaded.is_none() && next.clouds.is_none());
-
-        old.layout = CompareLayout::Difference;
-        let next = CompareState::after(Some(&old), PathBuf::from("b.ply"));
-        assert_eq!(next.layout, CompareLayout::Difference);
-    }
-
-    #[test]
-    fn the_scene_is_built_once_per_song_and_the_grids_only_where_drawn() {
-        let mut state = CompareState::new(PathBuf::from("b.ply"));
-        assert!(
-            !state.needs_grids(ViewKind::Volume),
-            "nothing to compare yet"
-        );
-        assert!(!state.shown() && !state.side_by_side());
-        state.clouds = Some(Arc::new((cloud(10), cloud(12))));
-        assert!(state.rebuild_for(1));
-        assert!(!state.rebuild_for(1), "built for this song already");
-        assert!(state.rebuild_for(2), "another song in A");
-
-        assert!(state.shown() && state.side_by_side());
-        assert!(!state.needs_grids(ViewKind::Points));
-        assert!(state.needs_grids(ViewKind::Volume));
-        assert!(state.needs_grids(ViewKind::Surface));
-        state.layout = CompareLayout::Difference;
-        assert!(state.needs_grids(ViewKind::Points));
-        assert!(state.shown() && !state.side_by_side());
-        state.layout = CompareLayout::Off;
-        assert!(!state.needs_grids(ViewKind::Volume));
-        assert!(!state.shown());
-    }
-
-    #[test]
-    fn grids_are_built_once_per_settings_and_a_failure_is_not_retried() {
-        let mut state = CompareState::new(PathBuf::from("b.ply"));
-        let voxels = VoxelSettings::default();
-        assert_eq!(state.grid_step(&voxels, true), GridStep::Ready);
-        assert_eq!(state.grid_step(&voxels, false), GridStep::Start);
-        let (sender, receiver) = channel();
-        state.building(voxels, receiver);
-        assert!(state.grids_building());
-        assert_eq!(state.grid_step(&voxels, false), GridStep::Wait);
-        assert_eq!(state.grid_step(&voxels, false), GridStep::Wait);
-        assert!(state.poll_grid_build().is_none(), "nothing sent yet");
-        assert_eq!(state.grid_build.as_ref().map(|b| b.frames), Some(2));
-        sender
-            .send(Err("b.ply: voxelizing: too large".into()))
-            .unwrap();
-        assert!(state.poll_grid_build().is_none());
-        assert!(!state.grids_building());
-        assert_eq!(state.error.as_deref(), Some("b.ply: voxelizing: too large"));
-        assert_eq!(
-            state.grid_step(&voxels, false),
-            GridStep::Failed,
-            "not started again every frame"
-        );
-        let mut other = voxels;
-        other.smoothing_sigma = Some(other.smoothing_for(crate::data::cloud::DataMode::Song) + 0.5);
-        assert_eq!(state.grid_step(&other, false), GridStep::Start);
-
-        // A build for other settings is dropped; a thread that died is an error.
-        let (sender, receiver) = channel();
-        state.building(voxels, receiver);
-        assert_eq!(state.grid_step(&other, false), GridStep::Start);
-        assert!(!state.grids_building());
-        drop(sender);
-        let (sender, receiver) = channel::<Result<BuiltGrids, String>>();
-        state.building(other, receiver);
-        drop(sender);
-        assert!(state.poll_grid_build().is_none());
-        assert!(
-            state
-                .error
-                .as_deref()
-                .is_some_and(|e| e.contains("stopped")),
-            "{:?}",
-            state.error
-        );
-
-        // A new scene drops the build of the old one.
-        let (_sender, receiver) = channel();
-        state.building(voxels, receiver);
-        assert!(state.rebuild_for(9));
-        assert!(!state.grids_building());
-    }
-
-    #[test]
-    fn the_difference_copy_is_read_again_for_another_measure() {
-        let mut state = CompareState::new(PathBuf::from("b.ply"));
-        assert!(state.difference_stale(), "none read yet");
-        state.difference = Some(DifferenceCopy {
-            shown: Field {
-                dims: glam::UVec3::ONE,
-                box_min: glam::Vec3::ZERO,
-                box_max: glam::Vec3::ONE,
-                density: vec![0.0],
-                hp_mean: vec![0.0],
-            },
-            difference: vec![0.0],
-            columns: vec![0.0],
-            measure: state.measure,
-            range: 1.0,
-        });
-        assert!(!state.difference_stale());
-        state.measure = DifferenceMeasure::ALL[1];
-        assert!(state.difference_stale());
-        state.measure = DifferenceMeasure::ALL[0];
-        state.built_for = Some(1);
-        assert!(state.rebuild_for(2));
-        assert!(
-            state.difference_stale(),
-            "a new scene drops the old difference"
-        );
-    }
-
-    #[test]
-    fn the_panel_starts_b_from_the_field_or_the_dialog() {
-        assert_eq!(typed_path("  b.ogg ", true), Some(PathBuf::from("b.ogg")));
-        assert_eq!(typed_path("b.ogg", false), None, "only on Enter");
-        assert_eq!(typed_path("   ", true), None, "nothing typed");
-
-        let mut state = CompareState::new(PathBuf::new());
-        assert_eq!(state.poll_dialog(), Poll::Ready(None), "no dialog");
-        let (sender, receiver) = channel();
-        state.await_dialog(receiver);
-        assert_eq!(state.layout, CompareLayout::Off, "A alone while picking");
-        assert_eq!(state.poll_dialog(), Poll::Pending);
-        sender
-            .send(Some(vec![PathBuf::from("b.ply"), PathBuf::from("c.ply")]))
-            .unwrap();
-        assert_eq!(
-            state.poll_dialog(),
-            Poll::Ready(Some(PathBuf::from("b.ply")))
-        );
-        assert!(state.dialog.is_none());
-
-        let (sender, receiver) = channel();
-        state.await_dialog(receiver);
-        sender.send(None).unwrap();
-        assert_eq!(state.poll_dialog(), Poll::Ready(None), "cancelled");
-    }
-
-    #[test]
-    fn the_panel_switches_sides_only_to_decoded_audio() {
-        let state = CompareState::new(PathBuf::from("b.ply"));
-        assert!(state.can_listen(Listening::A), "the side heard");
-        assert!(!state.can_listen(Listening::B), "B's audio not decoded");
-        assert_eq!(Listening::A.other(), Listening::B);
-        assert_eq!(Listening::B.other(), Listening::A);
-    }
-
-    #[test]
-    fn scripted_layouts_are_named_as_the_tests_press_them() {
-        assert_eq!(CompareLayout::named("off"), Some(CompareLayout::Off));
-        assert_eq!(
-            CompareLayout::named("side"),
-            Some(CompareLayout::SideBySide)
-        );
-        assert_eq!(
-            CompareLayout::named("difference"),
-            Some(CompareLayout::Difference)
-        );
-        assert_eq!(CompareLayout::named("sides"), None);
-    }
-}
+#[path = "compare_window_tests.rs"]
+mod tests;

@@ -1,5 +1,5 @@
 //! What the window remembers between runs (eframe's storage, under its app key): the files,
-//! the view, the camera, the settings, the compare's B and the "level as heard". The app's
+//! the view, the camera, the settings, the compare's versions and the "level as heard". The app's
 //! state holds the last copy handed to storage; `ui/persistence.rs` makes and applies it.
 
 use std::path::PathBuf;
@@ -32,9 +32,12 @@ pub struct Remembered {
     /// The slot shown: "song" or "timeline" (the camera is its).
     #[serde(default)]
     pub active: Option<String>,
-    /// B of the A/B compare (absolute), reopened with A.
+    /// B of the compare (absolute), reopened with A.
     #[serde(default)]
     pub compare: Option<PathBuf>,
+    /// The compare's further versions, C, D... (absolute), reopened after B.
+    #[serde(default)]
+    pub compare_more: Vec<PathBuf>,
     /// The "level as heard" preset of Timeline mode (`normalize::PRESETS` key).
     #[serde(default)]
     pub heard: Option<String>,

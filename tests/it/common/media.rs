@@ -58,10 +58,16 @@ pub fn write_wav(path: &Path, seconds: f32, rate: u32, song: fn(usize) -> f32) {
 /// The demo song 0.731 s later and 4 dB louder (as a remaster that starts later), as a float
 /// WAV at `path`: the release the alignment tests find again.
 pub fn delayed_louder_demo(path: &Path) {
+    demo_through(path, "adelay=731:all=1,volume=4dB");
+}
+
+/// The demo song through ffmpeg's audio `filter` (another release of it: `adelay`, `atrim`,
+/// `volume`), as a float WAV at `path`.
+pub fn demo_through(path: &Path, filter: &str) {
     let made = Command::new("ffmpeg")
         .args(["-v", "error", "-y", "-i"])
         .arg(repo().join("data/demo_song.flac"))
-        .args(["-af", "adelay=731:all=1,volume=4dB", "-c:a", "pcm_f32le"])
+        .args(["-af", filter, "-c:a", "pcm_f32le"])
         .arg(path)
         .output()
         .expect("this test needs ffmpeg");

@@ -10,7 +10,7 @@ mod media;
 pub use golden::{RASTER_EDGES, RAY_MARCH, assert_golden};
 pub use media::{
     chord_with_clicks, compare_render, compare_video, decode_audio, decode_frames,
-    delayed_louder_demo, extractor, half, write_wav,
+    delayed_louder_demo, demo_through, extractor, half, write_wav,
 };
 
 use std::ffi::OsStr;
