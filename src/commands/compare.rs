@@ -3,7 +3,8 @@
 //! (`loudscape-extract compare`, the one implementation of alignment and loudness); this command
 //! takes what the app takes (audio files, or song clouds whose recorded source it finds as
 //! playback does, checked against the cloud: `playback::checked_source`), checks the outputs
-//! before any work, and hands the extractor absolute paths.
+//! before any work, and hands the extractor absolute paths. A PNG sheet then gains a row of
+//! small multiples drawn by the app's own renderer (`compare_multiples.rs`).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -11,6 +12,7 @@ use std::process::Command;
 use anyhow::{Context, bail};
 use clap::Args;
 
+use loudscape::extract::align::Comparison;
 use loudscape::extract::locate;
 use loudscape::playback::SourceError;
 
@@ -25,9 +27,13 @@ pub struct CompareArgs {
     pub versions: Vec<PathBuf>,
 
     /// Write the sheet: aligned loudness curves, tonal balance at matched loudness, the table
-    /// (.png or .pdf).
+    /// (.png or .pdf); a PNG sheet also shows every version in the 3D view of --sheet-view.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+
+    /// The view of the sheet's small multiples: every version on shared axes, from one camera.
+    #[arg(long, value_enum, ignore_case = true, default_value = "points")]
+    pub sheet_view: loudscape::render::scene::ViewKind,
 
     /// Write the table as CSV, one row a version (.csv).
     #[arg(long)]
@@ -94,7 +100,13 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     if let Some(csv) = &args.csv {
         command.arg("--csv").arg(std::path::absolute(csv)?);
     }
-    if args.json {
+    // A PNG sheet's small multiples need the offsets: the JSON is read here too.
+    let multiples = args.output.as_ref().filter(|sheet| {
+        sheet
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    });
+    if args.json || multiples.is_some() {
         command.arg("--json");
     }
     if super::quiet() {
@@ -104,12 +116,30 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     for version in &audio {
         command.arg(std::path::absolute(version)?);
     }
-    let status = command
-        .status()
+    let output = command
+        .stderr(std::process::Stdio::inherit())
+        .output()
         .with_context(|| format!("cannot run {}", extractor.display()))?;
-    if !status.success() {
+    if !output.status.success() {
         // The extractor said why, on stderr, in one line.
-        bail!("the comparison failed ({status})");
+        bail!("the comparison failed ({})", output.status);
+    }
+    let json = String::from_utf8_lossy(&output.stdout);
+    if args.json {
+        print!("{json}");
+    }
+    if let Some(sheet) = multiples {
+        let comparison = Comparison::parse(&json).map_err(anyhow::Error::msg)?;
+        let width = image::image_dimensions(sheet)
+            .with_context(|| format!("{}: cannot read the sheet back", sheet.display()))?
+            .0;
+        let row = super::compare_multiples::render_row(
+            &args.versions,
+            &comparison,
+            args.sheet_view,
+            width,
+        )?;
+        super::compare_multiples::append_row(sheet, &row)?;
     }
     Ok(())
 }

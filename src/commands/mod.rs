@@ -7,6 +7,7 @@ pub mod bench_surface;
 pub mod bench_volume;
 pub mod compare;
 pub mod compare_align;
+pub mod compare_multiples;
 pub mod mesh;
 pub mod render;
 pub mod render_compare;

@@ -132,3 +132,69 @@ fn a_compare_video_follows_the_aligned_time() {
         "{share_plain} against {share}"
     );
 }
+
+/// Coloured (not grey) pixels of `image` in the columns `x0..x1` and rows from `y0` down.
+fn coloured(image: &image::RgbaImage, x0: u32, x1: u32, y0: u32) -> usize {
+    let mut count = 0;
+    for y in y0..image.height() {
+        for x in x0..x1.min(image.width()) {
+            let p = image.get_pixel(x, y);
+            let (max, min) = (p[0].max(p[1]).max(p[2]), p[0].min(p[1]).min(p[2]));
+            count += usize::from(max - min > 60);
+        }
+    }
+    count
+}
+
+/// `loudscape compare A B C -o sheet.png`: the extractor's sheet with a row of small multiples
+/// under it, one tile a version (three quarters as high as it is wide, the sheet's width
+/// shared), each drawn with data; the rest of the sheet is the extractor's, pixel for pixel.
+#[test]
+fn the_sheet_gains_a_row_of_small_multiples() {
+    let dir = common::fresh_dir("compare_sheet_multiples");
+    let b = dir.join("delayed_louder.wav");
+    common::delayed_louder_demo(&b);
+    let c = dir.join("earlier_louder.wav");
+    common::demo_through(&c, "atrim=start=0.4,asetpts=PTS-STARTPTS,volume=2dB");
+    let a = repo().join("data/demo_song.flac");
+    let sheet = dir.join("sheet.png");
+    let args: Vec<&OsStr> = vec![
+        "compare".as_ref(),
+        a.as_os_str(),
+        b.as_os_str(),
+        c.as_os_str(),
+        "-o".as_ref(),
+        sheet.as_os_str(),
+    ];
+    let output = common::loudscape_extracting(&args, &dir.join("cache"), &extractor());
+    assert_success(&output);
+    // The extractor's own sheet of the same versions.
+    let alone = dir.join("alone.png");
+    let made = std::process::Command::new(extractor())
+        .args(["compare", "-q", "-o"])
+        .arg(&alone)
+        .arg("--")
+        .args([&a, &b, &c])
+        .output()
+        .expect("run the extractor");
+    assert_success(&made);
+    let sheet = image::open(&sheet).unwrap().to_rgba8();
+    let alone = image::open(&alone).unwrap().to_rgba8();
+    let tile_width = alone.width() / 3;
+    assert_eq!(sheet.width(), alone.width());
+    assert_eq!(sheet.height(), alone.height() + tile_width * 3 / 4);
+    for y in (0..alone.height()).step_by(7) {
+        for x in (0..alone.width()).step_by(7) {
+            assert_eq!(sheet.get_pixel(x, y), alone.get_pixel(x, y), "({x}, {y})");
+        }
+    }
+    for tile in 0..3 {
+        let drawn = coloured(
+            &sheet,
+            tile * tile_width,
+            (tile + 1) * tile_width,
+            alone.height(),
+        );
+        assert!(drawn > 2_000, "tile {tile} holds {drawn} coloured pixels");
+    }
+}
