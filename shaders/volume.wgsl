@@ -186,25 +186,29 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     let min_value = params.skip.y;
     let min_step_opacity = params.skip.z;
     let unit_step = step == 1.0;
+    var t_brick_end = -1.0;
     for (var i = 0u; i < params.options.w && t < t_exit; i += 1u) {
         let u = origin + dir * t;
         // The fast path's one filtered sample: the gradient (xyz) and the density (w).
         var texel = vec4<f32>(0.0);
-        if (skipping) {
+        // Inside a brick already found to hold opacity, every sample is taken: the look-up is
+        // once per brick the ray crosses, not once a step.
+        if (skipping && t >= t_brick_end) {
             let brick = clamp(floor(u / brick_size), vec3<f32>(0.0), last_brick);
             let b = vec3<u32>(brick);
+            let far_side = select(brick, brick + 1.0, dir > vec3<f32>(0.0)) * brick_size;
+            let t_sides = select(vec3<f32>(3.0e38), (far_side - origin) * inv, dir != vec3<f32>(0.0));
+            let t_leave = min(min(t_sides.x, t_sides.y), t_sides.z);
             if (brick_max[b.x + params.bricks.x * (b.y + params.bricks.y * b.z)] < params.skip.x) {
                 // Every sample in this brick is transparent: step to the first sample past its
                 // far side (whole steps, so the samples after it are the full march's).
-                let far_side = select(brick, brick + 1.0, dir > vec3<f32>(0.0)) * brick_size;
-                let t_sides = select(vec3<f32>(3.0e38), (far_side - origin) * inv, dir != vec3<f32>(0.0));
-                let t_leave = min(min(t_sides.x, t_sides.y), t_sides.z);
                 let steps = max(ceil((t_leave - t) / step), 1.0);
                 let skipped = u32(min(steps, f32(params.options.w)));
                 t += f32(skipped) * step;
                 i += skipped - 1u;
                 continue;
             }
+            t_brick_end = t_leave;
         }
         var value: f32;
         if (gradient_texture_on) {
