@@ -188,6 +188,48 @@ pub fn align_in_time(b: &mut PointCloud, offset_s: f64) {
     x.ticks = None;
 }
 
+/// B's cloud moved onto A's time by a time map (an alignment of several segments: a cut, an
+/// added intro, another edit): each point at B's time `t` moves to A's time `first_time(t)`
+/// (`Alignment::first_time`, its own segment's offset), and the time axis becomes the span of
+/// the mapped times. Unlike [`align_in_time`] the points move, since one offset cannot say a
+/// cut; the time ticks, which name B's own seconds, are dropped. A cloud whose x axis is not
+/// time in seconds is left as it is.
+pub fn align_by_map(b: &mut PointCloud, first_time: impl Fn(f64) -> f64) {
+    let own = b.meta.axes.x.clone();
+    if own.unit != "s" || own.scale != AxisScale::Linear || own.is_degenerate() {
+        return;
+    }
+    let times: Vec<f64> = b
+        .points
+        .iter()
+        .map(|p| first_time(own.value_at(f64::from(p.position[0]))))
+        .collect();
+    let (mut lo, mut hi) = (first_time(own.min), first_time(own.max));
+    for &t in &times {
+        lo = lo.min(t);
+        hi = hi.max(t);
+    }
+    if hi <= lo {
+        return;
+    }
+    let mut axis = own;
+    axis.min = lo;
+    axis.max = hi;
+    axis.ticks = None;
+    let (mut x_min, mut x_max) = (f32::INFINITY, f32::NEG_INFINITY);
+    for (p, t) in b.points.iter_mut().zip(times) {
+        let x = axis.normalized_of(t) as f32;
+        p.position[0] = x;
+        x_min = x_min.min(x);
+        x_max = x_max.max(x);
+    }
+    if !b.points.is_empty() {
+        b.bounds.min.x = x_min;
+        b.bounds.max.x = x_max;
+    }
+    b.meta.axes.x = axis;
+}
+
 /// B's levels moved by `gain_db` (the matching gain that brings B to A's loudness): its y and
 /// scalar axes, where they are levels in dB, shifted by the gain, so after [`on_union_axes`]
 /// what differs is dynamics and spectral balance, not loudness (the difference view's
@@ -269,6 +311,40 @@ mod tests {
                 (x.value_at(f64::from(p.position[0])) - x.value_at(f64::from(q.position[0]))).abs()
             })
             .fold(0.0, f64::max)
+    }
+
+    /// B has 2 s of silence inserted at A's 10 s and starts 0.5 s later: one offset leaves
+    /// half of it 2 s off; the time map (its two segments) puts every point on A's.
+    #[test]
+    fn a_copy_with_an_edit_aligned_by_its_time_map_lies_on_a() {
+        let a = PointCloud::synthetic(
+            crate::data::synthetic::synthetic_song(20_000, 7),
+            crate::data::cloud::DataMode::Song,
+        );
+        let x = &a.meta.axes.x;
+        let cut = x.value_at(0.0);
+        let mut b = a.clone();
+        b.meta.axes.x.max = x.max + 2.5;
+        for p in &mut b.points {
+            let t = x.value_at(f64::from(p.position[0]));
+            let later = if t < cut { 0.5 } else { 2.5 };
+            p.position[0] = b.meta.axes.x.normalized_of(t + later) as f32;
+        }
+        let (a_one, b_one) = on_union_axes(&a, &aligned_in_time(&b, 0.5)).unwrap();
+        let one_offset = largest_time_gap(&a_one, &b_one);
+        assert!((one_offset - 2.0).abs() < 1e-3, "{one_offset}");
+        let mut mapped = b.clone();
+        align_by_map(
+            &mut mapped,
+            |t| {
+                if t < cut + 1.5 { t - 0.5 } else { t - 2.5 }
+            },
+        );
+        assert_eq!(mapped.meta.axes.x.ticks, None);
+        assert!(mapped.bounds.min.x >= -1.0 && mapped.bounds.max.x <= 1.0);
+        let (a_map, b_map) = on_union_axes(&a, &mapped).unwrap();
+        let gap = largest_time_gap(&a_map, &b_map);
+        assert!(gap < 1e-3, "{gap}");
     }
 
     #[test]

@@ -36,9 +36,9 @@ fn align_on_thread(versions: Vec<PathBuf>) -> Receiver<Result<Comparison, String
     receiver
 }
 
-/// `version`'s cloud with its time moved onto A's by the alignment and, `matched`, its levels
-/// by the gain that brings it to A's loudness (the cloud itself, not a copy, where neither
-/// applies).
+/// `version`'s cloud with its time moved onto A's by the alignment (through its time map's
+/// segments where it has several) and, `matched`, its levels by the gain that brings it to A's
+/// loudness (the cloud itself, not a copy, where neither applies).
 pub(super) fn aligned_b<'a>(
     alignment: &CompareAlignment,
     version: Listening,
@@ -51,8 +51,17 @@ pub(super) fn aligned_b<'a>(
         return Cow::Borrowed(b);
     }
     let mut moved = b.clone();
-    if let Some(offset) = offset {
-        crate::data::compare::align_in_time(&mut moved, offset);
+    // A time map of several segments (a cut, an edit) moves each point by its own segment's
+    // offset; one segment moves the time axis alone.
+    let map = alignment
+        .alignment(version)
+        .filter(|a| a.alignable && a.segments.len() > 1);
+    match (map, offset) {
+        (Some(map), _) => {
+            crate::data::compare::align_by_map(&mut moved, |t| map.first_time(t));
+        }
+        (None, Some(offset)) => crate::data::compare::align_in_time(&mut moved, offset),
+        (None, None) => {}
     }
     if let Some(gain) = gain {
         crate::data::compare::match_in_level(&mut moved, gain);
@@ -269,5 +278,49 @@ mod tests {
             aligned_b(&none, b, &cloud, true),
             Cow::Borrowed(_)
         ));
+    }
+
+    /// A version with an edit (two segments of the time map) is moved point by point, each by
+    /// its own segment's offset, not by the one overall offset.
+    #[test]
+    fn a_time_map_of_several_segments_moves_each_point_by_its_own() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/format/song_v2.ply");
+        let cloud = crate::data::cloud::load(&path).unwrap();
+        let x = cloud.meta.axes.x.clone();
+        let mid = (x.min + x.max) / 2.0;
+        // B has a tenth of its length inserted in the middle: the second segment is that later.
+        let gap = (x.max - x.min) / 10.0;
+        let json = format!(
+            r#"{{"match": "quietest", "versions": [
+            {{"path": "a.wav", "match_gain_db": 0.0,
+             "alignment": {{"alignable": true, "offset_s": 0.0, "confidence": 1.0}}}},
+            {{"path": "b.wav", "match_gain_db": 0.0,
+             "alignment": {{"alignable": true, "offset_s": 0.1, "confidence": 0.9,
+              "segments": [
+               {{"start_s": {lo}, "end_s": {mid}, "offset_s": 0.1, "correlation": 0.9}},
+               {{"start_s": {mid}, "end_s": {hi}, "offset_s": {late}, "correlation": 0.9}}]}}}}]}}"#,
+            lo = x.min,
+            hi = x.max,
+            late = 0.1 + gap,
+        );
+        let alignment = CompareAlignment {
+            comparison: Some(Comparison::parse(&json).unwrap()),
+            ..Default::default()
+        };
+        let moved = aligned_b(&alignment, Listening::B, &cloud, false);
+        let axis = &moved.meta.axes.x;
+        let (mut early, mut late) = (0, 0);
+        for (p, q) in cloud.points.iter().zip(&moved.points) {
+            let t_b = x.value_at(f64::from(p.position[0]));
+            let t_a = axis.value_at(f64::from(q.position[0]));
+            if t_b <= mid + 0.1 {
+                assert!((t_b - t_a - 0.1).abs() < 1e-3, "{t_b} -> {t_a}");
+                early += 1;
+            } else if t_b >= mid + 0.1 + gap {
+                assert!((t_b - t_a - 0.1 - gap).abs() < 1e-3, "{t_b} -> {t_a}");
+                late += 1;
+            }
+        }
+        assert!(early > 0 && late > 0, "{early} and {late} points checked");
     }
 }

@@ -246,7 +246,7 @@ fn the_matched_difference_moves_b_to_as_loudness() {
         line_starting(
             &lines,
             "compare: A and B shown (matched)",
-            Duration::from_secs(60),
+            Duration::from_secs(180),
             &mut seen,
         )
         .unwrap_or_else(|| panic!("B was never matched: {seen:#?}"));
