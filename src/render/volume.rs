@@ -12,8 +12,9 @@
 //!
 //! Two shortcuts that leave the picture as it was (tests/it/volume_skip.rs holds them to the full
 //! march): bricks whose largest density the transfer function maps to no opacity are stepped
-//! over in whole steps ([`skip_below`]), and the gradient is sampled from a texture computed once
-//! per grid instead of from six trilinear samples; both derived grids come from
+//! over in whole steps ([`skip_below`]), looked up once per brick a ray crosses; and the density
+//! and its gradient come from one filtered sample of a texture computed once per grid, instead of
+//! eight loads and six more trilinear samples; both derived grids come from
 //! [`crate::render::volume_grids`].
 
 use crate::render::gpu::frame::FrameBinding;
