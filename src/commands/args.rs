@@ -10,6 +10,7 @@ use anyhow::{Context, bail};
 use loudscape::data::cloud::PointCloud;
 use loudscape::render::grid::voxelize::{MAX_RESOLUTION, MAX_SMOOTHING_SIGMA, MIN_RESOLUTION};
 use loudscape::render::scene::ViewKind;
+use loudscape::view::camera::Camera;
 
 /// The demo song, the default input of commands that measure (`bench`).
 pub const DEMO_SONG: &str = "data/demo_song.ply";
@@ -197,6 +198,18 @@ pub fn parse_size(text: &str) -> anyhow::Result<(u32, u32)> {
         bail!("size '{text}' is out of range: each side must be 16 to 8192 pixels");
     }
     Ok((w, h))
+}
+
+/// `--size WxH` as clap parses it ([`parse_size`]'s message when it is not one).
+pub fn size_arg(text: &str) -> Result<(u32, u32), String> {
+    parse_size(text).map_err(|e| format!("{e:#}"))
+}
+
+/// `--camera AZ,EL,DIST` (render) or `--camera-at` (video) as clap parses it: the camera at
+/// those angles and distance ([`parse_camera`]'s message when it is not one).
+pub fn camera_arg(text: &str) -> Result<Camera, String> {
+    let (azimuth, elevation, distance) = parse_camera(text).map_err(|e| format!("{e:#}"))?;
+    Ok(Camera::from_angles(azimuth, elevation, distance))
 }
 
 /// Parses `AZ,EL,DIST` (degrees, degrees, distance in world units).

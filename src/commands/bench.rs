@@ -17,8 +17,8 @@ pub struct BenchArgs {
     #[arg(default_value = super::args::DEMO_SONG)]
     pub input: PathBuf,
     /// Frame size as WIDTHxHEIGHT (points and volume frames).
-    #[arg(long, default_value = "1280x720")]
-    pub size: String,
+    #[arg(long, default_value = "1280x720", value_parser = super::args::size_arg)]
+    pub size: (u32, u32),
     /// Frames per measurement.
     #[arg(long, default_value_t = 60)]
     pub frames: usize,
@@ -79,8 +79,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         }
     }
     let wants = |part: &str| args.only.is_empty() || args.only.iter().any(|p| p == part);
-    // A bad size fails first thing, not after minutes of other parts.
-    let size = super::args::parse_size(&args.size)?;
+    let size = args.size;
     if let Some(dir) = &args.fields_dir
         && !dir.is_dir()
     {
@@ -107,7 +106,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
 
 /// Load, first frame and points frame times on the song cloud.
 fn bench_points(args: &BenchArgs) -> anyhow::Result<()> {
-    let (width, height) = super::args::parse_size(&args.size)?;
+    let (width, height) = args.size;
     let process_start = Instant::now();
     let load_start = Instant::now();
     let cloud = super::args::load_cloud(&args.input)?;

@@ -21,8 +21,8 @@ use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
 use crate::commands::args::{
-    ViewChoice, check_iso, check_not_input, check_output, check_output_folder, check_range,
-    check_resolution, check_smoothing, load_cloud, parse_camera, parse_size,
+    ViewChoice, camera_arg, check_iso, check_not_input, check_output, check_output_folder,
+    check_range, check_resolution, check_smoothing, load_cloud, size_arg,
 };
 
 #[derive(clap::Args, Debug)]
@@ -33,11 +33,11 @@ pub struct RenderArgs {
     #[arg(long, value_enum, ignore_case = true, default_value_t = ViewChoice::Points)]
     pub view: ViewChoice,
     /// Camera as AZ,EL,DIST (degrees, degrees, world units); fitted to the data when omitted.
-    #[arg(long, allow_hyphen_values = true)]
-    pub camera: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_parser = camera_arg)]
+    pub camera: Option<Camera>,
     /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720")]
-    pub size: String,
+    #[arg(long, default_value = "1280x720", value_parser = size_arg)]
+    pub size: (u32, u32),
     #[command(flatten)]
     pub draw: DrawArgs,
     /// Draw the playhead plane at this time, in seconds into the song (a song cloud).
@@ -255,8 +255,8 @@ pub struct RenderDemoArgs {
     #[arg(long, default_value = "out")]
     pub out_dir: PathBuf,
     /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720")]
-    pub size: String,
+    #[arg(long, default_value = "1280x720", value_parser = size_arg)]
+    pub size: (u32, u32),
     #[command(flatten)]
     pub colours: ColourArgs,
     /// Clouds to render (.ply).
@@ -317,21 +317,12 @@ fn single_view(view: ViewChoice) -> anyhow::Result<ViewKind> {
     }
 }
 
-/// The camera of `--camera AZ,EL,DIST` (render) or `--camera-at` (video); None: fitted.
-pub fn camera_from(text: Option<&str>) -> anyhow::Result<Option<Camera>> {
-    text.map(|text| {
-        let (az, el, dist) = parse_camera(text)?;
-        Ok(Camera::from_angles(az, el, dist))
-    })
-    .transpose()
-}
-
 /// `loudscape render` of one cloud (with `--compare`, `render_compare::run_args` runs instead).
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     check_output(&args.output, &["png"], &[args.input.as_path()])?;
-    let size = parse_size(&args.size)?;
+    let size = args.size;
     let view = single_view(args.view)?;
-    let camera = camera_from(args.camera.as_deref())?;
+    let camera = args.camera;
     args.draw.check_point_size()?;
     args.draw.check_alignment()?;
     let iso_value = check_iso(args.draw.iso)?;
@@ -409,7 +400,7 @@ pub fn playhead_marker(cloud: &PointCloud, seconds: f64) -> anyhow::Result<Marke
 /// The settings and camera of a compare render: every option but --view, checked as for one
 /// cloud.
 pub fn compare_settings(args: &RenderArgs) -> anyhow::Result<(RenderSettings, Option<Camera>)> {
-    let camera = camera_from(args.camera.as_deref())?;
+    let camera = args.camera;
     args.draw.check_point_size()?;
     args.draw.check_alignment()?;
     let mut settings = RenderSettings::default();
@@ -442,7 +433,7 @@ pub fn prepare_grid(
 }
 
 pub fn run_demo(args: RenderDemoArgs) -> anyhow::Result<()> {
-    let size = parse_size(&args.size)?;
+    let size = args.size;
     let colours = args.colours.colours();
     // Every output is named up front and checked against every input, before any work.
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();

@@ -38,7 +38,7 @@ pub fn compare_view(
 /// common options checked as for one cloud ([`super::render::compare_settings`]).
 pub fn run_args(args: super::render::RenderArgs, compare: &std::path::Path) -> anyhow::Result<()> {
     super::args::check_output(&args.output, &["png"], &[args.input.as_path(), compare])?;
-    let size = super::args::parse_size(&args.size)?;
+    let size = args.size;
     let (settings, camera) = super::render::compare_settings(&args)?;
     run(&args, compare, settings, camera, size)
 }

@@ -24,8 +24,8 @@ use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
-use super::args::{ViewChoice, check_iso, check_output, load_cloud, parse_size};
-use super::render::{DrawArgs, camera_from, prepare_grid};
+use super::args::{ViewChoice, camera_arg, check_iso, check_output, load_cloud, size_arg};
+use super::render::{DrawArgs, prepare_grid};
 use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound, song_sound};
 
 /// The largest frame: 4K UHD (either way round).
@@ -47,11 +47,11 @@ pub struct VideoArgs {
     #[arg(long, value_enum, ignore_case = true, default_value_t = CameraMotion::Fixed)]
     pub camera: CameraMotion,
     /// The camera to start from, as AZ,EL,DIST (as `render --camera`); fitted when omitted.
-    #[arg(long, allow_hyphen_values = true)]
-    pub camera_at: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_parser = camera_arg)]
+    pub camera_at: Option<Camera>,
     /// Frame size as WIDTHxHEIGHT: even sides, at most 3840x2160 pixels.
-    #[arg(long, default_value = "1280x720")]
-    pub size: String,
+    #[arg(long, default_value = "1280x720", value_parser = size_arg)]
+    pub size: (u32, u32),
     /// Frames a second (1 to 120).
     #[arg(long, default_value_t = 30)]
     pub fps: u32,
@@ -208,7 +208,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     inputs.extend(args.draw.compare.as_deref());
     check_output(&args.output, &["mp4"], &inputs)?;
     super::video_encode::find_ffmpeg()?;
-    let size = parse_size(&args.size)?;
+    let size = args.size;
     check_video_size(size)?;
     if !(1..=120).contains(&args.fps) {
         bail!("--fps {} is out of range 1 to 120", args.fps);
@@ -218,7 +218,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     }
     let motion = args.camera;
     let progress_mode = args.progress;
-    let base_camera = camera_from(args.camera_at.as_deref())?;
+    let base_camera = args.camera_at;
     args.draw.check_point_size()?;
     args.draw.check_alignment()?;
     let compare_view = match &args.draw.compare {
