@@ -73,6 +73,9 @@ impl LoudscapeApp {
     /// Starts the comparison once every version has loaded (again when the list changed),
     /// takes its answer, and sets the heard version's gain (0 dB without a compare).
     pub(super) fn poll_alignment(&mut self, ctx: &egui::Context) {
+        // A's points so far while it is extracted are not its cloud yet (no source length to
+        // check its audio by): the comparison waits for the whole.
+        let previewing = self.previewing();
         let Some(state) = self.compare.as_mut() else {
             self.audio.set_gain_db(0.0);
             return;
@@ -81,6 +84,7 @@ impl LoudscapeApp {
             state.versions.iter().map(|v| v.loaded.as_deref()).collect();
         if let (Some(song), Some(clouds)) = (self.song.as_ref(), clouds)
             && !clouds.is_empty()
+            && !previewing
         {
             let mut asked: Vec<PathBuf> = vec![song.cloud.path.clone()];
             asked.extend(clouds.iter().map(|c| c.path.clone()));
