@@ -19,7 +19,8 @@
 
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry};
-use crate::render::gpu::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::gpu::pipeline::{DrawPipeline, depth_opaque, primitives};
+use crate::render::gpu::target::COLOR_FORMAT;
 use crate::render::grid::VoxelGrid;
 use crate::render::shaders;
 pub use crate::render::transfer::TransferPreset;
@@ -256,37 +257,27 @@ impl VolumePass {
             bind_group_layouts: &[Some(&frame.layout), Some(&grid_layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("volume::pipeline"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
+        let pipeline = DrawPipeline {
+            label: "volume::pipeline",
+            layout: &layout,
+            module: &module,
+            vertex_entry: "vs_main",
+            vertex_buffers: &[],
+            // Premultiplied colour over the cleared background.
+            target: wgpu::ColorTargetState {
+                format: COLOR_FORMAT,
+                blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                write_mask: wgpu::ColorWrites::ALL,
             },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
+            primitive: primitives(wgpu::PrimitiveTopology::TriangleList),
+            // Opaque geometry's depth writes, but a ray that never passes half opacity writes
+            // the far plane, which must pass over the cleared depth: less or equal.
+            depth: wgpu::DepthStencilState {
                 depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+                ..depth_opaque()
+            },
+        }
+        .build(device);
         // Clamped to the edge, as the march clamps its trilinear samples to the grid.
         let gradient_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("volume::gradient_sampler"),
