@@ -48,7 +48,8 @@ pub fn check_limits(limits: &wgpu::Limits) -> Result<(), String> {
 /// (timings fall back to wall time). On an adapter that is the CPU, also mappable vertex and
 /// index buffers: there every buffer is host memory, and the CPU surface extraction writes its
 /// mesh straight into the buffers it is drawn from (render/surface/cpu/; elsewhere it copies).
-/// No filterable float textures: the volume samples its storage buffer by hand.
+/// No optional texture feature either: the volume's density and gradient are an rgba16float
+/// texture, filterable in every WebGPU implementation (render/volume_grids.rs).
 pub fn wanted_features(adapter: &wgpu::Adapter) -> wgpu::Features {
     let mut optional =
         wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
