@@ -28,6 +28,7 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
         });
     }
     let mut found = None;
+    let mut map = None;
     let mut gain = None;
     if draw.align {
         let audio = |cloud: &PointCloud| {
@@ -40,6 +41,7 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
         let (first, version) = (&comparison.versions[0], &comparison.versions[1]);
         if version.alignment.alignable {
             found = Some(version.alignment.offset_s);
+            map = Some(version.alignment.clone());
         } else {
             let reason = version
                 .alignment
@@ -62,8 +64,10 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
         (found, nudge) => Some(found.unwrap_or(0.0) + nudge.unwrap_or(0.0)),
     };
     let mut cloud = b;
-    if let Some(offset) = offset {
-        align_in_time(&mut cloud, offset);
+    match (map, offset) {
+        (Some(map), _) => map.move_onto_first(&mut cloud, draw.offset.unwrap_or(0.0)),
+        (None, Some(offset)) => align_in_time(&mut cloud, offset),
+        (None, None) => {}
     }
     let matched = if draw.match_loudness { gain } else { None };
     if draw.match_loudness && matched.is_none() {
@@ -79,4 +83,64 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
         cloud,
         note: aligned_words(offset, matched),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loudscape::data::cloud::DataMode;
+    use loudscape::data::synthetic::synthetic_song;
+    use loudscape::extract::align::Alignment;
+
+    /// The time of every point of `cloud`, in seconds of its own axis.
+    fn times(cloud: &PointCloud) -> Vec<f64> {
+        let x = &cloud.meta.axes.x;
+        cloud
+            .points
+            .iter()
+            .map(|p| x.value_at(f64::from(p.position[0])))
+            .collect()
+    }
+
+    /// An alignment as the extractor writes it (`extract::align`'s JSON).
+    fn alignment(json: &str) -> Alignment {
+        serde_json::from_str(json).expect("an alignment")
+    }
+
+    /// A version with an edit (2 s more from its 10 s on, 0.5 s later before): `render` and
+    /// the sheet move each point by its own segment's offset, as the window does, and a nudge
+    /// moves every point by itself; one segment moves the time axis alone.
+    #[test]
+    fn a_version_with_an_edit_moves_by_its_segments_and_the_nudge() {
+        let b = PointCloud::synthetic(synthetic_song(5_000, 3), DataMode::Song);
+        let own = times(&b);
+        let map = alignment(
+            r#"{"alignable": true, "offset_s": 0.5, "confidence": 0.9, "segments": [
+                {"start_s": 0.0, "end_s": 9.5, "offset_s": 0.5, "correlation": 0.9},
+                {"start_s": 9.5, "end_s": 40.0, "offset_s": 2.5, "correlation": 0.9}]}"#,
+        );
+        for nudge in [0.0, 0.1] {
+            let mut moved = b.clone();
+            map.move_onto_first(&mut moved, nudge);
+            for (t_b, t_a) in own.iter().zip(times(&moved)) {
+                let expected = map.first_time(*t_b) - nudge;
+                assert!((t_a - expected).abs() < 1e-3, "{t_b} s went to {t_a} s");
+            }
+            // Both segments are in use: the points after the edit moved 2 s more.
+            let later = own.iter().zip(times(&moved)).filter(|(b, a)| *b - *a > 2.4);
+            assert!(later.count() > 100);
+        }
+        let one = alignment(r#"{"alignable": true, "offset_s": 0.731, "confidence": 0.9}"#);
+        let mut moved = b.clone();
+        one.move_onto_first(&mut moved, 0.0);
+        assert_eq!(
+            moved.points, b.points,
+            "one offset moves the axis, not the points"
+        );
+        assert!((b.meta.axes.x.min - moved.meta.axes.x.min - 0.731).abs() < 1e-9);
+        let unrelated = alignment(r#"{"alignable": false, "offset_s": 3.0, "confidence": 0.1}"#);
+        let mut kept = b.clone();
+        unrelated.move_onto_first(&mut kept, 0.0);
+        assert_eq!(kept.meta.axes.x, b.meta.axes.x);
+    }
 }

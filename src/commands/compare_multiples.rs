@@ -2,7 +2,8 @@
 //! extractor's sheet with every version drawn by the app's own renderer (the points view by
 //! default, `--sheet-view`), on shared axes and from one camera. Each version's cloud (a song
 //! cloud as given, or an audio file's, extracted and cached as `render` does) is moved onto A's
-//! time by the comparison's offset (`data::compare::align_in_time`), then all onto the union of
+//! time by the comparison's alignment (`Alignment::move_onto_first`: its time map's
+//! segments where it has several, else its one offset), then all onto the union of
 //! their axes (folded pairwise with `on_union_axes`), so the same moment of the music and the
 //! same level sit at the same place in every tile; the first tile's fitted view is every tile's.
 
@@ -10,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use loudscape::data::cloud::PointCloud;
-use loudscape::data::compare::{align_in_time, on_union_axes};
+use loudscape::data::compare::on_union_axes;
 use loudscape::extract::align::Comparison;
 use loudscape::picture::compare::half_overlay;
 use loudscape::render::gpu::context::GpuContext;
@@ -25,9 +26,7 @@ pub fn on_shared_axes(
     comparison: &Comparison,
 ) -> anyhow::Result<Vec<PointCloud>> {
     for (cloud, version) in clouds.iter_mut().zip(&comparison.versions).skip(1) {
-        if version.alignment.alignable {
-            align_in_time(cloud, version.alignment.offset_s);
-        }
+        version.alignment.move_onto_first(cloud, 0.0);
     }
     let Some(first) = clouds.first() else {
         return Ok(clouds);

@@ -33,6 +33,22 @@ pub struct Alignment {
 }
 
 impl Alignment {
+    /// `cloud` (this version's) moved onto the first version's time, `nudge_s` added to the
+    /// offset: through the time map's segments where it has several (a cut, an edit: each point
+    /// by its own segment's offset), else by the one offset (the time axis alone). Not
+    /// alignable: left as it is. The window, `render`/`video --compare --align` and the sheet's
+    /// small multiples all move a version this way.
+    pub fn move_onto_first(&self, cloud: &mut crate::data::cloud::PointCloud, nudge_s: f64) {
+        if !self.alignable {
+            return;
+        }
+        if self.segments.len() > 1 {
+            crate::data::compare::align_by_map(cloud, |t| self.first_time(t) - nudge_s);
+        } else {
+            crate::data::compare::align_in_time(cloud, self.offset_s + nudge_s);
+        }
+    }
+
     /// The version's time of the music that plays at `t_a` in the first version: the
     /// segment holding `t_a` (else the nearest one) gives the offset; `t_a` itself when the
     /// pair is not alignable.

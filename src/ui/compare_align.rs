@@ -52,16 +52,9 @@ pub(super) fn aligned_b<'a>(
     }
     let mut moved = b.clone();
     // A time map of several segments (a cut, an edit) moves each point by its own segment's
-    // offset; one segment moves the time axis alone.
-    let map = alignment
-        .alignment(version)
-        .filter(|a| a.alignable && a.segments.len() > 1);
-    match (map, offset) {
-        (Some(map), _) => {
-            crate::data::compare::align_by_map(&mut moved, |t| map.first_time(t));
-        }
-        (None, Some(offset)) => crate::data::compare::align_in_time(&mut moved, offset),
-        (None, None) => {}
+    // offset; one segment moves the time axis alone (the nudge is in the alignment already).
+    if let Some(alignment) = alignment.alignment(version) {
+        alignment.move_onto_first(&mut moved, 0.0);
     }
     if let Some(gain) = gain {
         crate::data::compare::match_in_level(&mut moved, gain);
