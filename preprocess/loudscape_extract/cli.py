@@ -15,6 +15,8 @@ from collections.abc import Sequence
 
 from loudscape_extract import export
 from loudscape_extract.audio import decode_audio
+from loudscape_extract.compare import MAX_VERSIONS, compare_versions
+from loudscape_extract.compare_sheet import summary_json, write_compare_csv, write_sheet
 from loudscape_extract.dynamics import HIGHPASS_HZ
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
@@ -658,11 +660,6 @@ def run_report(args: argparse.Namespace) -> int:
 
 def run_compare(args: argparse.Namespace) -> int:
     """The compare subcommand: decode, align, match; JSON on stdout, sheet and CSV files."""
-    # Imported here: scipy.signal (alignment, Welch spectra) costs every other command 0.6-0.8 s
-    # of start-up otherwise.
-    from loudscape_extract.compare import MAX_VERSIONS, compare_versions
-    from loudscape_extract.compare_sheet import summary_json, write_compare_csv, write_sheet
-
     if not 2 <= len(args.versions) <= MAX_VERSIONS:
         raise ExtractError(f"compare takes 2 to {MAX_VERSIONS} versions, got {len(args.versions)}")
     if args.output:
