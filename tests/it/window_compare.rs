@@ -24,7 +24,7 @@ fn switching_a_and_b_keeps_the_playback_position() {
     let _ = std::fs::remove_dir_all(&home);
     std::fs::create_dir_all(&home).unwrap();
     let song = repo.join("data/demo_song.ply");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+    let child = Command::new(env!("CARGO_BIN_EXE_loudscape"))
         .arg(&song)
         .arg("--compare")
         .arg(&song)
@@ -37,16 +37,15 @@ fn switching_a_and_b_keeps_the_playback_position() {
         .stdout(Stdio::null())
         .spawn()
         .expect("start loudscape");
-    let lines = common::stderr_lines(&mut child);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+    common::while_running(child, |child, lines| {
         // Its own window: the other window tests' run in the same process, on the same display.
-        let window = common::wait_for_window(&mut child).expect("no window");
+        let window = common::wait_for_window(child).expect("no window");
         let (side, at_b, _) =
-            switch_with_b(&window, &lines, Duration::from_secs(120)).expect("B never played");
+            switch_with_b(&window, lines, Duration::from_secs(120)).expect("B never played");
         assert_eq!(side, "B");
         assert!((at_b - 12.5).abs() < 0.01, "B starts at {at_b} s, not 12.5");
         let (side, at_a, _) =
-            switch_with_b(&window, &lines, Duration::from_secs(30)).expect("A never came back");
+            switch_with_b(&window, lines, Duration::from_secs(30)).expect("A never came back");
         assert_eq!(side, "A");
         assert!(
             (at_a - at_b).abs() < 0.01,
@@ -72,10 +71,5 @@ fn switching_a_and_b_keeps_the_playback_position() {
             let share = coloured as f64 / f64::from((to - from) * h);
             assert!(share > 0.02, "half {from}..{to} looks blank ({share:.3})");
         }
-    }));
-    let _ = child.kill();
-    let _ = child.wait();
-    if let Err(panic) = result {
-        std::panic::resume_unwind(panic);
-    }
+    });
 }

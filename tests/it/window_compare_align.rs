@@ -6,8 +6,22 @@
 
 use crate::common::{self, line_starting, switch_with_b, xdotool};
 
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+
+/// The window, its home, cache and extractor in `dir`, stderr piped (the lines the tests wait
+/// for); the caller adds the songs and the flags.
+fn compare_window(dir: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
+    common::home_in(&mut command, &dir.join("home"));
+    command
+        .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
+        .env("LOUDSCAPE_EXTRACT", common::extractor())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null());
+    command
+}
 
 #[test]
 fn key_b_switches_to_the_same_moment_of_an_aligned_release() {
@@ -17,31 +31,23 @@ fn key_b_switches_to_the_same_moment_of_an_aligned_release() {
         xdotool(&["version"]).is_some(),
         "this test needs xdotool to press keys in the window (apt-get install xdotool)"
     );
-    let repo = common::repo();
-    let extractor = common::extractor();
     let dir = common::fresh_dir("window_compare_align");
     let b = dir.join("delayed_louder.wav");
     common::delayed_louder_demo(&b);
-    let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
-    common::home_in(&mut command, &dir.join("home"));
-    let mut child = command
-        .arg(repo.join("data/demo_song.ply"))
+    let mut command = compare_window(&dir);
+    let child = command
+        .arg(common::repo().join("data/demo_song.ply"))
         .arg("--compare")
         .arg(&b)
         .arg("--seek")
         .arg("12.5")
-        .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
-        .env("LOUDSCAPE_EXTRACT", &extractor)
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
         .spawn()
         .expect("start loudscape");
-    let lines = common::stderr_lines(&mut child);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let window = common::wait_for_window(&mut child).expect("no window");
+    common::while_running(child, |child, lines| {
+        let window = common::wait_for_window(child).expect("no window");
         let mut seen = Vec::new();
         let aligned = line_starting(
-            &lines,
+            lines,
             "compare: aligned",
             Duration::from_secs(180),
             &mut seen,
@@ -50,21 +56,16 @@ fn key_b_switches_to_the_same_moment_of_an_aligned_release() {
         assert!(aligned.contains("B starts 0.731 s later"), "{aligned}");
         assert!(aligned.contains("B -4.0 dB"), "{aligned}");
         let (side, at_b, line) =
-            switch_with_b(&window, &lines, Duration::from_secs(60)).expect("B never played");
+            switch_with_b(&window, lines, Duration::from_secs(60)).expect("B never played");
         assert_eq!(side, "B");
         assert!((at_b - 13.231).abs() < 0.01, "{line}");
         assert!(line.contains("from A 12.500 s"), "{line}");
         common::screenshot_root(&dir.join("window_compare_align.png"));
         let (side, at_a, line) =
-            switch_with_b(&window, &lines, Duration::from_secs(60)).expect("A never came back");
+            switch_with_b(&window, lines, Duration::from_secs(60)).expect("A never came back");
         assert_eq!(side, "A");
         assert!((at_a - 12.5).abs() < 0.01, "{line}");
-    }));
-    let _ = child.kill();
-    let _ = child.wait();
-    if let Err(panic) = result {
-        std::panic::resume_unwind(panic);
-    }
+    });
 }
 
 /// The gain a switch line ends with: "listening to B at 13.231 s (...); gain -4.0 dB".
@@ -98,34 +99,26 @@ fn key_b_steps_through_three_versions_at_the_same_moment() {
         xdotool(&["version"]).is_some(),
         "this test needs xdotool to press keys in the window (apt-get install xdotool)"
     );
-    let repo = common::repo();
-    let extractor = common::extractor();
     let dir = common::fresh_dir("window_compare_three");
     let b = dir.join("delayed_louder.wav");
     common::delayed_louder_demo(&b);
     let c = dir.join("earlier_louder.wav");
     common::demo_through(&c, "atrim=start=0.4,asetpts=PTS-STARTPTS,volume=2dB");
-    let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
-    common::home_in(&mut command, &dir.join("home"));
-    let mut child = command
-        .arg(repo.join("data/demo_song.ply"))
+    let mut command = compare_window(&dir);
+    let child = command
+        .arg(common::repo().join("data/demo_song.ply"))
         .arg("--compare")
         .arg(&b)
         .arg(&c)
         .arg("--seek")
         .arg("12.5")
-        .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
-        .env("LOUDSCAPE_EXTRACT", &extractor)
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
         .spawn()
         .expect("start loudscape");
-    let lines = common::stderr_lines(&mut child);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let window = common::wait_for_window(&mut child).expect("no window");
+    common::while_running(child, |child, lines| {
+        let window = common::wait_for_window(child).expect("no window");
         let mut seen = Vec::new();
         let aligned = line_starting(
-            &lines,
+            lines,
             "compare: aligned",
             Duration::from_secs(240),
             &mut seen,
@@ -143,19 +136,19 @@ fn key_b_steps_through_three_versions_at_the_same_moment() {
             "{aligned}"
         );
         let (side, at_b, line) =
-            switch_with_b(&window, &lines, Duration::from_secs(60)).expect("B never played");
+            switch_with_b(&window, lines, Duration::from_secs(60)).expect("B never played");
         assert_eq!(side, "B", "{line}");
         assert!((at_b - 13.231).abs() < 0.01, "{line}");
         assert!((switch_gain(&line) + 4.0).abs() < 0.15, "{line}");
         let (side, at_c, line) =
-            switch_with_b(&window, &lines, Duration::from_secs(60)).expect("C never played");
+            switch_with_b(&window, lines, Duration::from_secs(60)).expect("C never played");
         assert_eq!(side, "C", "{line}");
         assert!((at_c - 12.1).abs() < 0.01, "{line}");
         assert!(line.contains("from B 13.231 s"), "{line}");
         assert!((switch_gain(&line) + 2.0).abs() < 0.15, "{line}");
         // Side by side: A and the version heard.
         line_starting(
-            &lines,
+            lines,
             "compare: A and C shown",
             Duration::from_secs(60),
             &mut seen,
@@ -163,16 +156,11 @@ fn key_b_steps_through_three_versions_at_the_same_moment() {
         .expect("C was never shown beside A");
         common::screenshot_root(&dir.join("window_compare_three.png"));
         let (side, at_a, line) =
-            switch_with_b(&window, &lines, Duration::from_secs(60)).expect("A never came back");
+            switch_with_b(&window, lines, Duration::from_secs(60)).expect("A never came back");
         assert_eq!(side, "A", "{line}");
         assert!((at_a - 12.5).abs() < 0.01, "{line}");
         assert!(switch_gain(&line).abs() < 0.15, "{line}");
-    }));
-    let _ = child.kill();
-    let _ = child.wait();
-    if let Err(panic) = result {
-        std::panic::resume_unwind(panic);
-    }
+    });
 }
 
 /// Pixels of the 3D view's middle (right of the side panel, above the strip) with a colour
@@ -208,15 +196,12 @@ fn difference_range(line: &str) -> f64 {
 fn the_matched_difference_moves_b_to_as_loudness() {
     let _screen = common::screen();
     common::assert_display();
-    let repo = common::repo();
-    let extractor = common::extractor();
     let dir = common::fresh_dir("window_compare_matched");
     let b = dir.join("delayed_louder.wav");
     common::delayed_louder_demo(&b);
-    let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
-    common::home_in(&mut command, &dir.join("home"));
-    let mut child = command
-        .arg(repo.join("data/demo_song.flac"))
+    let mut command = compare_window(&dir);
+    let child = command
+        .arg(common::repo().join("data/demo_song.flac"))
         .arg("--compare")
         .arg(&b)
         .args([
@@ -225,18 +210,13 @@ fn the_matched_difference_moves_b_to_as_loudness() {
             "--press",
             "measure=matched",
         ])
-        .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
-        .env("LOUDSCAPE_EXTRACT", &extractor)
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
         .spawn()
         .expect("start loudscape");
-    let lines = common::stderr_lines(&mut child);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        common::wait_for_window(&mut child).expect("no window");
+    common::while_running(child, |child, lines| {
+        common::wait_for_window(child).expect("no window");
         let mut seen = Vec::new();
         let aligned = line_starting(
-            &lines,
+            lines,
             "compare: aligned",
             Duration::from_secs(300),
             &mut seen,
@@ -244,14 +224,14 @@ fn the_matched_difference_moves_b_to_as_loudness() {
         .expect("the window never aligned A and B");
         assert!(aligned.contains("B -4.0 dB"), "{aligned}");
         line_starting(
-            &lines,
+            lines,
             "compare: A and B shown (matched)",
             Duration::from_secs(180),
             &mut seen,
         )
         .unwrap_or_else(|| panic!("B was never matched: {seen:#?}"));
         let matched = line_starting(
-            &lines,
+            lines,
             "compare: difference read (level, matched",
             Duration::from_secs(120),
             &mut seen,
@@ -284,10 +264,5 @@ fn the_matched_difference_moves_b_to_as_loudness() {
                 "the matched difference was never drawn ({tinted} tinted pixels)"
             );
         }
-    }));
-    let _ = child.kill();
-    let _ = child.wait();
-    if let Err(panic) = result {
-        std::panic::resume_unwind(panic);
-    }
+    });
 }

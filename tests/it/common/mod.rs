@@ -251,6 +251,19 @@ pub fn xdotool(args: &[&str]) -> Option<String> {
         .then(|| String::from_utf8_lossy(&output.stdout).trim().to_string())
 }
 
+/// Runs `test` on `child` (spawned with stderr piped) and its stderr lines; the child is killed
+/// and reaped whether `test` passes or panics, and then its panic goes on.
+pub fn while_running(mut child: Child, test: impl FnOnce(&mut Child, &Receiver<String>)) {
+    let lines = stderr_lines(&mut child);
+    let result =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| test(&mut child, &lines)));
+    let _ = child.kill();
+    let _ = child.wait();
+    if let Err(panic) = result {
+        std::panic::resume_unwind(panic);
+    }
+}
+
 /// `child`'s stderr (spawned piped) a line at a time, read on a thread of its own.
 pub fn stderr_lines(child: &mut Child) -> Receiver<String> {
     let (sender, lines) = channel();
