@@ -227,11 +227,14 @@ impl LoudscapeApp {
             self.busy = None;
         }
         if !state.needs_grids(self.settings.view) {
+            state.grids_pending = false;
             return;
         }
         let voxels = self.settings.voxels;
         let built = CompareResources::grids_match(render_state, &voxels);
-        match state.grid_step(&voxels, built) {
+        let step = state.grid_step(&voxels, built);
+        state.grids_pending = matches!(step, GridStep::Wait | GridStep::Start);
+        match step {
             GridStep::Ready => {}
             GridStep::Failed => return,
             GridStep::Wait => {
@@ -239,6 +242,7 @@ impl LoudscapeApp {
                 return;
             }
             GridStep::Start => {
+                ctx.request_repaint_after(Duration::from_millis(30));
                 let (Some(clouds), Some(measure)) = (
                     state.clouds.clone(),
                     CompareResources::measure(render_state),

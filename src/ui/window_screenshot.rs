@@ -28,7 +28,7 @@ impl LoudscapeApp {
             || self.previewing()
             || self.busy.is_some()
             || self.video_exporting()
-            || self.compare.as_ref().is_some_and(|c| c.loading());
+            || self.compare.as_ref().is_some_and(|c| c.settling());
         let Some(state) = self.screenshot.as_mut() else {
             return;
         };

@@ -100,6 +100,9 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) surface_told: Option<(SurfaceMethod, u32, u32, u32)>,
     /// The voxel settings whose grids failed to build (not tried again until they change).
     pub(in crate::ui) grids_failed: Option<VoxelSettings>,
+    /// Whether the view asked for still waits for its grids (a scene just rebuilt, a build
+    /// not yet started or running): a scripted screenshot waits for it.
+    pub(in crate::ui) grids_pending: bool,
     /// The error last told in the window's messages (each new one is told once).
     pub(in crate::ui) error_told: Option<String>,
     pub(in crate::ui) labels: Option<AxisLabels>,
@@ -159,6 +162,7 @@ impl CompareState {
             error_told: None,
             grid_build: None,
             grids_failed: None,
+            grids_pending: false,
             surface_told: None,
             labels: None,
             dialog: None,
@@ -421,6 +425,12 @@ impl CompareState {
     /// Whether grids are being built on a thread.
     pub(in crate::ui) fn grids_building(&self) -> bool {
         self.grid_build.is_some()
+    }
+
+    /// Whether what the compare shows is still on its way: a version loading, the alignment
+    /// (which moves the version beside A when it comes) or the grids the view asks for.
+    pub(in crate::ui) fn settling(&self) -> bool {
+        self.loading() || self.alignment.aligning() || self.grids_building() || self.grids_pending
     }
 
     /// The build's answer once it came, with the frames drawn while it ran and how long it
