@@ -26,8 +26,12 @@ struct VertexOut {
 };
 
 @vertex
-fn vs_main(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> VertexOut {
+fn vs_main(@builtin(vertex_index) vertex_index: u32) -> VertexOut {
     var out: VertexOut;
+    // Three vertices per point, not instanced: software rasterizers shade vertices in batches
+    // of 8 or 16 within a draw, but a three-vertex instance fills one batch with three.
+    let instance = vertex_index / 3u;
+    let vertex = vertex_index % 3u;
     let index = instance * params.stride;
     let base = index * 5u;
     let position = vec3<f32>(cloud[base], cloud[base + 1u], freq_view_z(cloud[base + 2u], index));

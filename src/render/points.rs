@@ -357,7 +357,7 @@ impl PointsPass {
         pass.set_bind_group(0, &frame.bind_group, &[]);
         for chunk in &points.chunks {
             pass.set_bind_group(1, &chunk.bind_group, &[]);
-            pass.draw(0..3, 0..chunk.count.div_ceil(stride));
+            pass.draw(0..3 * chunk.count.div_ceil(stride), 0..1);
         }
     }
 
@@ -379,7 +379,10 @@ impl PointsPass {
             let (a, b) = (range.start.max(chunk_start), range.end.min(chunk_end));
             if a < b {
                 pass.set_bind_group(1, &chunk.bind_group, &[]);
-                pass.draw(0..3, (a - chunk_start) as u32..(b - chunk_start) as u32);
+                pass.draw(
+                    3 * (a - chunk_start) as u32..3 * (b - chunk_start) as u32,
+                    0..1,
+                );
             }
             chunk_start = chunk_end;
         }
@@ -407,7 +410,7 @@ impl PointsPass {
             let instances = lod_instances(first.saturating_sub(chunk_start), count, stride);
             if !instances.is_empty() {
                 pass.set_bind_group(1, &chunk.lod_bind_group, &[]);
-                pass.draw(0..3, instances.start as u32..instances.end as u32);
+                pass.draw(3 * instances.start as u32..3 * instances.end as u32, 0..1);
             }
             chunk_start += count;
         }
