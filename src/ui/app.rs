@@ -252,7 +252,9 @@ impl eframe::App for LoudscapeApp {
         let surface = frame
             .wgpu_render_state()
             .zip(self.active().map(|l| l.id))
-            .map(|(render_state, id)| ViewResources::surface_status(render_state, id))
+            .and_then(|(render_state, id)| {
+                ViewResources::read(render_state, |r| r.surface_status(id))
+            })
             .unwrap_or_default();
         // The compare's two surfaces where it covers the view.
         let surface = self.compare_surface_status(frame).unwrap_or(surface);
@@ -270,7 +272,8 @@ impl eframe::App for LoudscapeApp {
         }
         self.refining = frame
             .wgpu_render_state()
-            .and_then(|render_state| ViewResources::refining(render_state, &ctx));
+            .and_then(|render_state| ViewResources::write(render_state, |r| r.refining(&ctx)))
+            .flatten();
         if self.refining.is_some() {
             // The next slice of the points (ui/progressive.rs).
             ctx.request_repaint();
@@ -359,7 +362,7 @@ impl eframe::App for LoudscapeApp {
             ctx.request_repaint();
         }
         if let Some(render_state) = frame.wgpu_render_state() {
-            self.clock.renders = ViewResources::renders(render_state);
+            self.clock.renders = ViewResources::read(render_state, |r| r.renders()).unwrap_or(0);
         }
     }
 }

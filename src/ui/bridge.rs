@@ -68,9 +68,14 @@ impl Offscreen {
     }
 }
 
-/// GPU state owned by the window, kept in egui_wgpu's callback resources.
+/// GPU state owned by the window, kept in egui_wgpu's callback resources. The window reaches it
+/// through [`ViewResources::read`] and [`ViewResources::write`] (one lock and one look-up of
+/// egui's type map for as much as a caller needs); the methods below are what it does there.
 pub struct ViewResources {
     pub renderer: Renderer,
+    /// The window's device and queue (egui_wgpu's), for uploads, grid builds and read-backs.
+    device: wgpu::Device,
+    queue: wgpu::Queue,
     offscreen: Offscreen,
     /// Uploaded clouds by the app's cloud id.
     pub scenes: HashMap<u64, SceneData>,
@@ -82,12 +87,35 @@ pub struct ViewResources {
     repaint: Option<egui::Context>,
 }
 
+/// Where the surface of one cloud stands on the GPU, as the scripted isovalue sweep reads it
+/// (`ui/iso_sweep.rs`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceProgress {
+    /// The isovalue of the surface on screen (None before the first).
+    pub shown_iso_value: Option<f32>,
+    /// Whether an extraction is under way on the worker (the window comes back for it).
+    pub extracting: bool,
+    /// Extractions installed so far: full surfaces and coarse ones of the level of detail.
+    pub installed: u64,
+    pub coarse_installed: u64,
+}
+
+/// A song's scene put on another frequency axis ([`ViewResources::set_freq_axis`]): the labels
+/// and the mapping the window keeps with the cloud.
+pub struct FreqAxisShown {
+    pub labels: crate::ui::labels::AxisLabels,
+    /// The mapping from stored to shown z (None: z as stored).
+    pub mapping: Option<crate::data::freq_axis::FreqMapping>,
+}
+
 impl ViewResources {
     pub fn install(render_state: &egui_wgpu::RenderState) {
         let device = &render_state.device;
         device.on_uncaptured_error(Arc::new(on_device_error));
         let resources = ViewResources {
             renderer: Renderer::new(device),
+            device: device.clone(),
+            queue: render_state.queue.clone(),
             offscreen: Offscreen::new(device, render_state.target_format),
             scenes: HashMap::new(),
             cache: FrameCache::default(),
@@ -101,24 +129,47 @@ impl ViewResources {
             .insert(resources);
     }
 
-    /// Uploads a cloud under `id`, replacing what was there.
-    pub fn upload(render_state: &egui_wgpu::RenderState, id: u64, cloud: &PointCloud) {
-        let mut renderer = render_state.renderer.write();
-        if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
-            // The old buffers go first, so two clouds' buffers never coexist.
-            resources.scenes.remove(&id);
-            let data = SceneData::upload(
-                &render_state.device,
-                &render_state.queue,
-                &resources.renderer,
-                cloud,
-            );
-            resources.scenes.insert(id, data);
-            resources.cache.invalidate_points();
-        }
+    /// Runs `f` with the window's GPU state under egui_wgpu's read lock. None before
+    /// [`ViewResources::install`].
+    pub fn read<T>(
+        render_state: &egui_wgpu::RenderState,
+        f: impl FnOnce(&ViewResources) -> T,
+    ) -> Option<T> {
+        let renderer = render_state.renderer.read();
+        renderer.callback_resources.get::<ViewResources>().map(f)
     }
 
-    /// Renders the cloud `id` offscreen at the view's size, labels included, for a screenshot.
+    /// Runs `f` with the window's GPU state under egui_wgpu's write lock. None before
+    /// [`ViewResources::install`].
+    pub fn write<T>(
+        render_state: &egui_wgpu::RenderState,
+        f: impl FnOnce(&mut ViewResources) -> T,
+    ) -> Option<T> {
+        let mut renderer = render_state.renderer.write();
+        renderer
+            .callback_resources
+            .get_mut::<ViewResources>()
+            .map(f)
+    }
+
+    /// Uploads a cloud under `id`, replacing what was there.
+    pub fn upload(&mut self, id: u64, cloud: &PointCloud) {
+        // The old buffers go first, so two clouds' buffers never coexist.
+        self.scenes.remove(&id);
+        let data = SceneData::upload(&self.device, &self.queue, &self.renderer, cloud);
+        self.scenes.insert(id, data);
+        self.cache.invalidate_points();
+    }
+
+    /// Drops cloud `id`'s scene.
+    pub fn remove(&mut self, id: u64) {
+        self.scenes.remove(&id);
+        self.cache.invalidate_points();
+    }
+
+    /// Renders the cloud `id` offscreen at the view's size, labels included, for a screenshot
+    /// (the axes and labels alone, with a renderer of its own, before the window's GPU state
+    /// is installed or without the cloud's scene).
     pub fn screenshot(
         render_state: &egui_wgpu::RenderState,
         id: u64,
@@ -131,33 +182,27 @@ impl ViewResources {
             device: render_state.device.clone(),
             queue: render_state.queue.clone(),
         };
-        let renderer = render_state.renderer.read();
-        let resources = renderer.callback_resources.get::<ViewResources>();
-        let scene = resources.and_then(|r| r.scenes.get(&id).map(|data| (r, data)));
-        match scene {
-            Some((r, data)) => crate::ui::screenshot::render_view(
+        let shot = Self::read(render_state, |r| {
+            let data = r.scenes.get(&id)?;
+            Some(crate::ui::screenshot::render_view(
                 &gpu,
                 &r.renderer,
                 Some((cloud, data)),
                 view,
                 settings,
-            ),
-            None => {
-                let renderer = Renderer::new(&gpu.device);
-                crate::ui::screenshot::render_view(&gpu, &renderer, None, view, settings)
-            }
-        }
+            ))
+        })
+        .flatten();
+        shot.unwrap_or_else(|| {
+            let renderer = Renderer::new(&gpu.device);
+            crate::ui::screenshot::render_view(&gpu, &renderer, None, view, settings)
+        })
     }
 
     /// The voxel grid of cloud `id` read back to the CPU (once per grid, for hover picking).
-    pub fn read_grid(
-        render_state: &egui_wgpu::RenderState,
-        id: u64,
-    ) -> Option<crate::data::field::Field> {
-        let renderer = render_state.renderer.read();
-        let resources = renderer.callback_resources.get::<ViewResources>()?;
-        let grid = resources.scenes.get(&id)?.grid.as_ref()?;
-        let (device, queue) = (&render_state.device, &render_state.queue);
+    pub fn read_grid(&self, id: u64) -> Option<crate::data::field::Field> {
+        let grid = self.scenes.get(&id)?.grid.as_ref()?;
+        let (device, queue) = (&self.device, &self.queue);
         let density = grid.read_field(device, queue, &grid.density).ok()?;
         let hp_mean = grid.read_field(device, queue, &grid.hp_mean).ok()?;
         Some(crate::data::field::Field {
@@ -170,34 +215,21 @@ impl ViewResources {
     }
 
     /// Builds cloud `id`'s voxel grid unless one with these settings exists. Returns whether it
-    /// was rebuilt (then any CPU copy of the old grid is stale).
+    /// was rebuilt (then any CPU copy of the old grid is stale); not for an unknown cloud.
     pub fn ensure_grid(
-        render_state: &egui_wgpu::RenderState,
+        &mut self,
         id: u64,
         cloud: &PointCloud,
         voxels: &crate::render::grid::voxelize::VoxelSettings,
     ) -> Result<bool, String> {
-        let mut renderer = render_state.renderer.write();
-        let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() else {
-            return Ok(false);
-        };
-        let ViewResources {
-            renderer, scenes, ..
-        } = resources;
-        let Some(data) = scenes.get_mut(&id) else {
+        let Some(data) = self.scenes.get_mut(&id) else {
             return Ok(false);
         };
         let rebuilt = data
-            .ensure_grid(
-                &render_state.device,
-                &render_state.queue,
-                renderer,
-                cloud,
-                voxels,
-            )
+            .ensure_grid(&self.device, &self.queue, &self.renderer, cloud, voxels)
             .map_err(|e| format!("{}: {e}", cloud.path.display()))?;
         if rebuilt {
-            resources.cache.invalidate();
+            self.cache.invalidate();
         }
         Ok(rebuilt)
     }
@@ -205,65 +237,71 @@ impl ViewResources {
     /// Where the surface of cloud `id` stands: the counts of its last extraction, an error to
     /// show, and whether an extraction is under way on the worker (the window comes back for
     /// it). Nothing extracted for an unknown cloud.
-    pub fn surface_status(render_state: &egui_wgpu::RenderState, id: u64) -> ExtractionStatus {
-        let renderer = render_state.renderer.read();
-        renderer
-            .callback_resources
-            .get::<ViewResources>()
-            .and_then(|r| r.scenes.get(&id))
+    pub fn surface_status(&self, id: u64) -> ExtractionStatus {
+        self.scenes
+            .get(&id)
             .map(|scene| scene.surface.status())
             .unwrap_or_default()
     }
 
-    /// Whether cloud `id` has a voxel grid built with these settings (no build needed).
+    /// Cloud `id`'s surface as the isovalue sweep follows it (None for an unknown cloud).
+    pub fn surface_progress(&self, id: u64) -> Option<SurfaceProgress> {
+        let surface = &self.scenes.get(&id)?.surface;
+        Some(SurfaceProgress {
+            shown_iso_value: surface.shown_iso_value(),
+            extracting: surface.needs_another_frame(),
+            installed: surface.installed(),
+            coarse_installed: surface.coarse_installed(),
+        })
+    }
+
+    /// Whether cloud `id` has a voxel grid built with these settings (no build needed; an
+    /// unknown cloud needs none).
     pub fn grid_matches(
-        render_state: &egui_wgpu::RenderState,
+        &self,
         id: u64,
         cloud: &PointCloud,
         voxels: &crate::render::grid::voxelize::VoxelSettings,
     ) -> bool {
-        let renderer = render_state.renderer.read();
-        renderer
-            .callback_resources
-            .get::<ViewResources>()
-            .and_then(|r| r.scenes.get(&id))
+        self.scenes
+            .get(&id)
             .is_none_or(|s| s.grid_matches(cloud, voxels))
     }
 
     /// Whether cloud `id` has a voxel grid on the GPU yet.
-    pub fn has_grid(render_state: &egui_wgpu::RenderState, id: u64) -> bool {
-        let renderer = render_state.renderer.read();
-        renderer
-            .callback_resources
-            .get::<ViewResources>()
-            .and_then(|r| r.scenes.get(&id))
-            .is_some_and(|s| s.grid.is_some())
+    pub fn has_grid(&self, id: u64) -> bool {
+        self.scenes.get(&id).is_some_and(|s| s.grid.is_some())
     }
 
-    pub fn remove(render_state: &egui_wgpu::RenderState, id: u64) {
-        let mut renderer = render_state.renderer.write();
-        if let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() {
-            resources.scenes.remove(&id);
-            resources.cache.invalidate_points();
-        }
+    /// Puts song `id`'s scene on the frequency axis `axis`: its labels and mapping, or the
+    /// reason it cannot (None for an unknown cloud).
+    pub fn set_freq_axis(
+        &mut self,
+        id: u64,
+        cloud: &PointCloud,
+        axis: crate::data::freq_axis::FreqAxis,
+    ) -> Option<Result<FreqAxisShown, String>> {
+        let data = self.scenes.get_mut(&id)?;
+        let result = data
+            .set_freq_axis(&self.device, &self.renderer, cloud, axis)
+            .map(|()| FreqAxisShown {
+                labels: crate::ui::labels::axis_labels(cloud, data),
+                mapping: data.freq.clone(),
+            });
+        self.cache.invalidate_points();
+        Some(result)
     }
 
     /// The fraction of the points drawn while a progressive render is under way.
     /// `ctx` is kept to ask for the next frame when a refinement starts in a frame's paint.
-    pub fn refining(render_state: &egui_wgpu::RenderState, ctx: &egui::Context) -> Option<f32> {
-        let mut renderer = render_state.renderer.write();
-        let resources = renderer.callback_resources.get_mut::<ViewResources>()?;
-        resources.repaint.get_or_insert_with(|| ctx.clone());
-        resources.progressive.refine.progress()
+    pub fn refining(&mut self, ctx: &egui::Context) -> Option<f32> {
+        self.repaint.get_or_insert_with(|| ctx.clone());
+        self.progressive.refine.progress()
     }
 
     /// Scene renders so far (for the frame read-out and the tests).
-    pub fn renders(render_state: &egui_wgpu::RenderState) -> u64 {
-        let renderer = render_state.renderer.read();
-        renderer
-            .callback_resources
-            .get::<ViewResources>()
-            .map_or(0, |r| r.cache.renders)
+    pub fn renders(&self) -> u64 {
+        self.cache.renders
     }
 }
 

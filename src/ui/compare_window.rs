@@ -181,7 +181,9 @@ impl LoudscapeApp {
                         glam::Vec3::splat(-1.0),
                         glam::Vec3::splat(1.0),
                     ));
-                    CompareResources::build(render_state, a.clone(), b_moved.clone());
+                    CompareResources::write(render_state, |compare, view| {
+                        compare.build(view, a.clone(), b_moved.clone())
+                    });
                     state.clouds = Some(Arc::new((a, b_moved)));
                     state.error = None;
                     // A log line, as loads are told: tests wait for it.
@@ -198,7 +200,7 @@ impl LoudscapeApp {
                 Err(e) => {
                     state.clouds = None;
                     state.error = Some(e.to_string());
-                    CompareResources::clear(render_state);
+                    CompareResources::write(render_state, |compare, _| compare.clear());
                 }
             }
             if first_build {
@@ -210,7 +212,9 @@ impl LoudscapeApp {
         if let Some((built, frames, took)) = state.poll_grid_build() {
             let dims = built.grids.dims;
             let installing = std::time::Instant::now();
-            CompareResources::install_grids(render_state, built);
+            CompareResources::write(render_state, |compare, view| {
+                compare.install_grids(view, built)
+            });
             state.difference = None;
             // A log line, as loads are told: tests read it (the frame count ends it).
             eprintln!(
@@ -231,7 +235,9 @@ impl LoudscapeApp {
             return;
         }
         let voxels = self.settings.voxels;
-        let built = CompareResources::grids_match(render_state, &voxels);
+        let built =
+            CompareResources::write(render_state, |compare, _| compare.grids_match(&voxels))
+                .unwrap_or(true);
         let step = state.grid_step(&voxels, built);
         state.grids_pending = matches!(step, GridStep::Wait | GridStep::Start);
         match step {
@@ -245,7 +251,7 @@ impl LoudscapeApp {
                 ctx.request_repaint_after(Duration::from_millis(30));
                 let (Some(clouds), Some(measure)) = (
                     state.clouds.clone(),
-                    CompareResources::measure(render_state),
+                    CompareResources::write(render_state, |compare, _| compare.measure()).flatten(),
                 ) else {
                     return;
                 };
@@ -256,9 +262,15 @@ impl LoudscapeApp {
                 return;
             }
         }
-        CompareResources::set_measure(render_state, state.measure);
-        if state.difference_stale() {
-            state.difference = CompareResources::read_difference(render_state);
+        // The measure shown and, when the read-outs' copy is stale, its read-back: one lock.
+        let stale = state.difference_stale();
+        let read = CompareResources::write(render_state, |compare, view| {
+            compare.set_measure(view, state.measure);
+            stale.then(|| compare.read_difference(view)).flatten()
+        })
+        .flatten();
+        if stale {
+            state.difference = read;
             if let Some(copy) = &state.difference {
                 // A log line, as loads are told: tests read the range.
                 eprintln!(
@@ -293,7 +305,10 @@ impl LoudscapeApp {
         }
         let render_state = frame.wgpu_render_state()?;
         let settings = self.settings.surface;
-        let Some(surfaces) = CompareResources::surface_status(render_state, &settings) else {
+        let Some(surfaces) =
+            CompareResources::write(render_state, |compare, _| compare.surface_status(&settings))
+                .flatten()
+        else {
             // Its grids are still coming: nothing extracted yet.
             return Some(ExtractionStatus::default());
         };

@@ -8,8 +8,7 @@ use std::sync::mpsc::channel;
 use eframe::egui;
 
 use crate::data::freq_axis::{FreqAxis, unsupported};
-use crate::ui::bridge::ViewResources;
-use crate::ui::labels;
+use crate::ui::bridge::{FreqAxisShown, ViewResources};
 use crate::ui::state::{LoudscapeApp, Slot};
 
 impl LoudscapeApp {
@@ -63,28 +62,14 @@ impl LoudscapeApp {
         if unsupported(&loaded.cloud.meta).is_some() || loaded.freq_axis == axis {
             return;
         }
-        let result = {
-            let mut renderer = render_state.renderer.write();
-            let Some(resources) = renderer.callback_resources.get_mut::<ViewResources>() else {
-                return;
-            };
-            let ViewResources {
-                renderer, scenes, ..
-            } = resources;
-            let Some(data) = scenes.get_mut(&loaded.id) else {
-                return;
-            };
-            let result = data
-                .set_freq_axis(&render_state.device, renderer, &loaded.cloud, axis)
-                .map(|()| {
-                    let labels = labels::axis_labels(&loaded.cloud, data);
-                    (labels, data.freq.clone())
-                });
-            resources.cache.invalidate_points();
-            result
+        let Some(result) = ViewResources::write(render_state, |r| {
+            r.set_freq_axis(loaded.id, &loaded.cloud, axis)
+        })
+        .flatten() else {
+            return;
         };
         match result {
-            Ok((labels, mapping)) => {
+            Ok(FreqAxisShown { labels, mapping }) => {
                 loaded.labels = labels;
                 loaded.freq_axis = axis;
                 loaded.freq = mapping.clone();

@@ -10,31 +10,9 @@
 
 use std::time::Instant;
 
-use eframe::egui_wgpu;
-
 use crate::render::scene::ViewKind;
-use crate::ui::bridge::ViewResources;
+use crate::ui::bridge::{SurfaceProgress, ViewResources};
 use crate::ui::state::LoudscapeApp;
-
-/// The active cloud's surface: (shown isovalue, extracting, installed extractions, installed
-/// coarse surfaces).
-fn surface_of(
-    render_state: &egui_wgpu::RenderState,
-    id: u64,
-) -> Option<(Option<f32>, bool, u64, u64)> {
-    let renderer = render_state.renderer.read();
-    let scene = renderer
-        .callback_resources
-        .get::<ViewResources>()?
-        .scenes
-        .get(&id)?;
-    Some((
-        scene.surface.shown_iso_value(),
-        scene.surface.needs_another_frame(),
-        scene.surface.installed(),
-        scene.surface.coarse_installed(),
-    ))
-}
 
 impl LoudscapeApp {
     /// One frame of the sweep; true once it is over (or there is none).
@@ -54,7 +32,13 @@ impl LoudscapeApp {
             self.settings.view = ViewKind::Surface;
             return false;
         }
-        let Some((shown, busy, installed, coarse)) = surface_of(render_state, id) else {
+        let Some(SurfaceProgress {
+            shown_iso_value: shown,
+            extracting: busy,
+            installed,
+            coarse_installed: coarse,
+        }) = ViewResources::read(render_state, |r| r.surface_progress(id)).flatten()
+        else {
             return false;
         };
         let now = Instant::now();

@@ -102,7 +102,7 @@ impl LoudscapeApp {
         self.motion.keep_camera_for_next_load();
         // the same file shifted, not a re-extraction: drop the shown copy first
         if let Some(old) = self.timeline.take() {
-            crate::ui::bridge::ViewResources::remove(render_state, old.id);
+            crate::ui::bridge::ViewResources::write(render_state, |r| r.remove(old.id));
         }
         self.install(render_state, cloud);
         self.selected_song = selected;

@@ -189,7 +189,7 @@ impl LoudscapeApp {
     /// what they replaced, with its camera.
     fn drop_preview(&mut self, render_state: &egui_wgpu::RenderState, shown: PreviewShown) {
         if let Some(old) = self.song.take() {
-            ViewResources::remove(render_state, old.id);
+            ViewResources::write(render_state, |r| r.remove(old.id));
         }
         self.hover = None;
         match shown.replaced {
@@ -243,9 +243,9 @@ impl LoudscapeApp {
             }
             let source = |c: &PointCloud| c.meta.source.as_ref().and_then(|s| s.open_path());
             same_audio = source(&old.cloud).is_some() && source(&old.cloud) == source(&cloud);
-            ViewResources::remove(render_state, old.id);
+            ViewResources::write(render_state, |r| r.remove(old.id));
         }
-        ViewResources::upload(render_state, id, &cloud);
+        ViewResources::write(render_state, |r| r.upload(id, &cloud));
         let (box_min, box_max) = crate::render::scene::data_box();
         let world_from_data = world_from_data(cloud.meta.mode);
         let labels = labels::axis_labels_for_box(&cloud, box_min, box_max);
@@ -330,8 +330,10 @@ impl LoudscapeApp {
         }
         // Building a grid blocks the window for a while on slow devices: say so first, and
         // build on the next frame, once the notice is on screen.
-        let needs_build =
-            !ViewResources::grid_matches(render_state, loaded.id, &loaded.cloud, &voxels);
+        let needs_build = ViewResources::read(render_state, |r| {
+            !r.grid_matches(loaded.id, &loaded.cloud, &voxels)
+        })
+        .unwrap_or(false);
         if needs_build && !self.busy_shown {
             self.busy = Some("building the voxel grid…".into());
             self.busy_shown = true;
@@ -342,15 +344,20 @@ impl LoudscapeApp {
         if std::mem::take(&mut self.busy_shown) {
             self.busy = None;
         }
-        let mut failure = None;
-        match ViewResources::ensure_grid(render_state, loaded.id, &loaded.cloud, &voxels) {
-            Ok(true) => loaded.cpu_grid = None,
-            Ok(false) => {}
-            Err(message) => failure = Some(message),
-        }
-        if loaded.cpu_grid.is_none() && ViewResources::has_grid(render_state, loaded.id) {
-            loaded.cpu_grid = ViewResources::read_grid(render_state, loaded.id);
-        }
+        // The build and the read-back for picking under one lock.
+        let failure = ViewResources::write(render_state, |r| {
+            let mut failure = None;
+            match r.ensure_grid(loaded.id, &loaded.cloud, &voxels) {
+                Ok(true) => loaded.cpu_grid = None,
+                Ok(false) => {}
+                Err(message) => failure = Some(message),
+            }
+            if loaded.cpu_grid.is_none() && r.has_grid(loaded.id) {
+                loaded.cpu_grid = r.read_grid(loaded.id);
+            }
+            failure
+        })
+        .flatten();
         if let Some(message) = failure {
             self.messages.error(message);
         }

@@ -247,7 +247,7 @@ fn compare_screenshot(
     size: (u32, u32),
     settings: &crate::render::scene::RenderSettings,
 ) -> anyhow::Result<image::RgbaImage> {
-    CompareResources::with(render_state, |compare, view| {
+    CompareResources::write(render_state, |compare, view| {
         let scene = compare
             .scene
             .as_mut()

@@ -36,8 +36,9 @@ pub struct CompareResources {
 }
 
 impl CompareResources {
-    /// Runs `f` with the compare's resources (made on first use) and the window's.
-    pub(in crate::ui) fn with<T>(
+    /// Runs `f` with the compare's resources (made on first use) and the window's, under one
+    /// write lock of egui_wgpu's renderer. None before the window's are installed.
+    pub(in crate::ui) fn write<T>(
         render_state: &egui_wgpu::RenderState,
         f: impl FnOnce(&mut CompareResources, &ViewResources) -> T,
     ) -> Option<T> {
@@ -63,62 +64,35 @@ impl CompareResources {
     }
 
     /// Uploads A and B (already on their union axes) as the compare's scene.
-    pub(in crate::ui) fn build(
-        render_state: &egui_wgpu::RenderState,
-        a: PointCloud,
-        b: PointCloud,
-    ) {
-        Self::with(render_state, |compare, view| {
-            compare.scene = Some(CompareScene::from_union(
-                &render_state.device,
-                &view.renderer,
-                a,
-                b,
-            ));
-            compare.revision += 1;
-        });
+    pub(in crate::ui) fn build(&mut self, view: &ViewResources, a: PointCloud, b: PointCloud) {
+        self.scene = Some(CompareScene::from_union(&view.device, &view.renderer, a, b));
+        self.revision += 1;
     }
 
-    pub(in crate::ui) fn clear(render_state: &egui_wgpu::RenderState) {
-        Self::with(render_state, |compare, _| {
-            compare.scene = None;
-            compare.revision += 1;
-        });
+    pub(in crate::ui) fn clear(&mut self) {
+        self.scene = None;
+        self.revision += 1;
     }
 
     /// Whether the scene's grids are built with `voxels` (or there is no scene to build for).
-    pub(in crate::ui) fn grids_match(
-        render_state: &egui_wgpu::RenderState,
-        voxels: &VoxelSettings,
-    ) -> bool {
-        Self::with(render_state, |compare, _| {
-            compare
-                .scene
-                .as_ref()
-                .is_none_or(|scene| scene.grids_built_for(voxels))
-        })
-        .unwrap_or(true)
+    pub(in crate::ui) fn grids_match(&self, voxels: &VoxelSettings) -> bool {
+        self.scene
+            .as_ref()
+            .is_none_or(|scene| scene.grids_built_for(voxels))
     }
 
-    /// What a build of the grids on a thread needs: the device, its queue, and the measure the
-    /// Difference view shows (None without a scene).
-    pub(in crate::ui) fn measure(
-        render_state: &egui_wgpu::RenderState,
-    ) -> Option<DifferenceMeasure> {
-        Self::with(render_state, |compare, _| {
-            compare.scene.as_ref().map(|scene| scene.measure())
-        })
-        .flatten()
+    /// The measure the Difference view shows, which a build of the grids on a thread needs
+    /// (None without a scene).
+    pub(in crate::ui) fn measure(&self) -> Option<DifferenceMeasure> {
+        self.scene.as_ref().map(|scene| scene.measure())
     }
 
     /// Installs grids built on a thread (`render::compare::build_grids`) in the scene.
-    pub(in crate::ui) fn install_grids(render_state: &egui_wgpu::RenderState, built: BuiltGrids) {
-        Self::with(render_state, |compare, view| {
-            if let Some(scene) = compare.scene.as_mut() {
-                scene.install_grids(&render_state.device, &view.renderer, built);
-                compare.revision += 1;
-            }
-        });
+    pub(in crate::ui) fn install_grids(&mut self, view: &ViewResources, built: BuiltGrids) {
+        if let Some(scene) = self.scene.as_mut() {
+            scene.install_grids(&view.device, &view.renderer, built);
+            self.revision += 1;
+        }
     }
 
     /// The surfaces of the two halves in the Surface view with `settings`: their status as
@@ -126,86 +100,69 @@ impl CompareResources {
     /// neither has one) and each half's triangles once the mesh on screen is the one
     /// `settings` ask of its grid. None without grids.
     pub(in crate::ui) fn surface_status(
-        render_state: &egui_wgpu::RenderState,
+        &self,
         settings: &SurfaceSettings,
     ) -> Option<CompareSurfaces> {
-        Self::with(render_state, |compare, _| {
-            let scene = compare.scene.as_ref()?;
-            let halves = [&scene.data_a, &scene.data_b];
-            let statuses = halves.map(|data| data.surface.status());
-            let shown = halves.map(|data| {
-                let grid = data.grid.as_ref()?;
-                data.surface
-                    .shows(grid, settings)
-                    .then(|| data.surface.counts().map(|c| c.triangles()))
-                    .flatten()
-            });
-            if halves.iter().any(|d| d.grid.is_none()) {
-                return None;
-            }
-            let [a, b] = statuses;
-            let larger =
-                if b.counts.map_or(0, |c| c.triangles()) > a.counts.map_or(0, |c| c.triangles()) {
-                    &b
-                } else {
-                    &a
-                };
-            Some(CompareSurfaces {
-                status: ExtractionStatus {
-                    counts: larger.counts,
-                    error: a.error.clone().or(b.error.clone()),
-                    extracting: a.extracting || b.extracting,
-                },
-                triangles: shown,
-            })
+        let scene = self.scene.as_ref()?;
+        let halves = [&scene.data_a, &scene.data_b];
+        let statuses = halves.map(|data| data.surface.status());
+        let shown = halves.map(|data| {
+            let grid = data.grid.as_ref()?;
+            data.surface
+                .shows(grid, settings)
+                .then(|| data.surface.counts().map(|c| c.triangles()))
+                .flatten()
+        });
+        if halves.iter().any(|d| d.grid.is_none()) {
+            return None;
+        }
+        let [a, b] = statuses;
+        let larger =
+            if b.counts.map_or(0, |c| c.triangles()) > a.counts.map_or(0, |c| c.triangles()) {
+                &b
+            } else {
+                &a
+            };
+        Some(CompareSurfaces {
+            status: ExtractionStatus {
+                counts: larger.counts,
+                error: a.error.clone().or(b.error.clone()),
+                extracting: a.extracting || b.extracting,
+            },
+            triangles: shown,
         })
-        .flatten()
     }
 
-    pub(in crate::ui) fn set_measure(
-        render_state: &egui_wgpu::RenderState,
-        measure: DifferenceMeasure,
-    ) {
-        Self::with(render_state, |compare, view| {
-            if let Some(scene) = compare.scene.as_mut()
-                && scene.grids.as_ref().is_some_and(|g| g.measure != measure)
-            {
-                scene.set_measure(
-                    &render_state.device,
-                    &render_state.queue,
-                    &view.renderer,
-                    measure,
-                );
-                compare.revision += 1;
-            }
-        });
+    /// Moves the Difference view to `measure` (once its grids are built).
+    pub(in crate::ui) fn set_measure(&mut self, view: &ViewResources, measure: DifferenceMeasure) {
+        if let Some(scene) = self.scene.as_mut()
+            && scene.grids.as_ref().is_some_and(|g| g.measure != measure)
+        {
+            scene.set_measure(&view.device, &view.queue, &view.renderer, measure);
+            self.revision += 1;
+        }
     }
 
     /// The difference grid read back for the read-outs.
-    pub(in crate::ui) fn read_difference(
-        render_state: &egui_wgpu::RenderState,
-    ) -> Option<DifferenceCopy> {
-        Self::with(render_state, |compare, _| {
-            let grids = compare.scene.as_ref()?.grids.as_ref()?;
-            let (device, queue) = (&render_state.device, &render_state.queue);
-            let shown = &grids.grids.shown;
-            let density = shown.read_field(device, queue, &shown.density).ok()?;
-            let hp_mean = shown.read_field(device, queue, &shown.hp_mean).ok()?;
-            Some(DifferenceCopy {
-                shown: Field {
-                    dims: shown.dims,
-                    box_min: shown.box_min,
-                    box_max: shown.box_max,
-                    density,
-                    hp_mean,
-                },
-                difference: grids.difference_cpu.clone(),
-                columns: grids.columns_cpu.clone(),
-                measure: grids.measure,
-                range: grids.range(),
-            })
+    pub(in crate::ui) fn read_difference(&self, view: &ViewResources) -> Option<DifferenceCopy> {
+        let grids = self.scene.as_ref()?.grids.as_ref()?;
+        let (device, queue) = (&view.device, &view.queue);
+        let shown = &grids.grids.shown;
+        let density = shown.read_field(device, queue, &shown.density).ok()?;
+        let hp_mean = shown.read_field(device, queue, &shown.hp_mean).ok()?;
+        Some(DifferenceCopy {
+            shown: Field {
+                dims: shown.dims,
+                box_min: shown.box_min,
+                box_max: shown.box_max,
+                density,
+                hp_mean,
+            },
+            difference: grids.difference_cpu.clone(),
+            columns: grids.columns_cpu.clone(),
+            measure: grids.measure,
+            range: grids.range(),
         })
-        .flatten()
     }
 }
 
