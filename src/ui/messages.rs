@@ -101,7 +101,7 @@ impl LoudscapeApp {
                 );
             });
         };
-        let open = self.messages.open && count.is_some();
+        let open = self.messages.is_open() && count.is_some();
         if open {
             egui::ScrollArea::vertical()
                 .max_height(status_max_height(window_height))
@@ -127,7 +127,7 @@ impl LoudscapeApp {
                     .on_hover_text("every message about what is shown")
                     .clicked()
                 {
-                    self.messages.open = !open;
+                    self.messages.set_open(!open);
                 }
                 if open && ui.small_button("dismiss all").clicked() {
                     clear = true;
@@ -387,7 +387,7 @@ mod tests {
         );
         assert!(!has(&texts, "warning: first.flac"), "collapsed: {texts:?}");
         assert!(has(&texts, "1 error, 2 warnings"), "{texts:?}");
-        app.messages.open = true;
+        app.messages.set_open(true);
         for _ in 0..3 {
             let (view, drawn) = frame(&mut app, &ctx);
             assert_eq!(view, empty, "the open list took room from the view");

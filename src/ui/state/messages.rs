@@ -51,7 +51,7 @@ pub(in crate::ui) struct Messages {
     /// What went to stderr (in unit tests: what would have), so nothing goes there twice.
     echoed: HashSet<(bool, String)>,
     /// The whole list is open (its button in the overlay); closed, the latest line and a count.
-    pub(in crate::ui) open: bool,
+    open: bool,
 }
 
 impl Messages {
@@ -167,6 +167,16 @@ impl Messages {
         .flatten()
         .collect();
         Some(parts.join(", "))
+    }
+
+    /// Whether the whole list is open.
+    pub(in crate::ui) fn is_open(&self) -> bool {
+        self.open
+    }
+
+    /// Opens or closes the whole list (its button in the overlay).
+    pub(in crate::ui) fn set_open(&mut self, open: bool) {
+        self.open = open;
     }
 
     /// Removes line `index` (its × button).
