@@ -137,14 +137,16 @@ impl LoudscapeApp {
                         .then(crate::ui::recent::default_store)
                         .flatten(),
                 ),
-                years: crate::ui::state::timeline_build::YearBook::load(
+                ..Default::default()
+            },
+            timeline_build: crate::ui::state::timeline_build::TimelineBuilder::new(
+                crate::ui::state::timeline_build::YearBook::load(
                     (persist || std::env::var_os("LOUDSCAPE_STATE_DIR").is_some())
                         .then(crate::ui::recent::default_store)
                         .flatten()
                         .map(|recent| recent.with_file_name("years.json")),
                 ),
-                ..Default::default()
-            },
+            ),
             scripted_presses: options.press,
             heard: crate::ui::normalize::heard_starting(options.normalize),
             deferred_events: Vec::new(),

@@ -23,7 +23,11 @@ pub const INITIAL_BUDGET: u64 = 200_000;
 /// 30 ms with a 100,000-point floor a 3.5 M-point song took 4.5-6 s to fill in on lavapipe, most
 /// of each ~0.13 s frame not the points (egui, the copy, the present); the sparse stand-in for
 /// the points not drawn yet keeps the picture whole meanwhile, so the slices can be longer.
-pub const TARGET_FRAME: Duration = Duration::from_millis(60);
+/// At 60 ms the frame's own cost (egui, the copy, the present: about 100 ms on lavapipe) held
+/// the budget at its floor, so half of each frame was not points and the same song took 4.8 s;
+/// at 150 ms it took 2.6 s (bench/bench_window.py, docs/PERFORMANCE.md). A frame this long is
+/// only taken at rest, where the picture is still: a drag or a hover is answered in the next.
+pub const TARGET_FRAME: Duration = Duration::from_millis(150);
 /// The budget never falls below the measured one: a frame slow for other reasons (egui, the
 /// composite, a loaded machine) must not shrink the slices to nothing (with a 20,000 floor a
 /// 4.4 M-point cloud needed about 20 s to fill in on lavapipe, most of each frame not points).

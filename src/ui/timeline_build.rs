@@ -7,7 +7,8 @@
 //! skips (the songs then placed in order, `--x-by order`); then the build, with a row a song
 //! as each finishes and Cancel. The finished timeline goes through the same loading slot as any
 //! cloud, so the old view stays until it is installed. What a build keeps between frames
-//! (`TimelineBuild`, the song rows, the years book) is `state/timeline_build.rs`.
+//! (`TimelineBuild`, the song rows, the years book) is owned by `state/timeline_build.rs`'s
+//! `TimelineBuilder`, the `timeline_build` field; this file changes it through its methods.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -91,11 +92,7 @@ impl LoudscapeApp {
                 });
             let _ = sender.send(result);
         });
-        self.open.timeline = Some(TimelineBuild::Listing {
-            inputs,
-            receiver,
-            shared,
-        });
+        self.timeline_build.listing(inputs, receiver, shared);
     }
 
     /// Builds the timeline of `songs` (years known), or in order, on the loading thread.
@@ -103,17 +100,13 @@ impl LoudscapeApp {
         let (sender, receiver) = channel();
         let shared = Shared::default();
         let thread_shared = shared.clone();
-        let rows = self.open.timeline_rows.clone();
-        if let Ok(mut rows) = rows.lock() {
-            *rows = SongRows::default();
-        }
         let what = describe(inputs);
         // A single folder names the build (and the recent files); several songs, a description.
         let label = match inputs {
             [folder] if folder.is_dir() => folder.clone(),
             _ => PathBuf::from(&what),
         };
-        self.open.building = Some(label.clone());
+        let rows = self.timeline_build.start_build(label.clone());
         std::thread::spawn(move || {
             let mut on_song = |line: Line| {
                 if let Line::SongDone {
@@ -179,7 +172,7 @@ impl LoudscapeApp {
     pub(super) fn timeline_build_panel(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
         let mut next = None;
-        match &mut self.open.timeline {
+        match self.timeline_build.step_mut() {
             None => {}
             Some(TimelineBuild::Listing {
                 inputs,
@@ -208,18 +201,17 @@ impl LoudscapeApp {
         match next {
             Some(Ok((inputs, songs))) => self.listed(inputs, songs),
             Some(Err(message)) => {
-                self.open.timeline = None;
+                self.timeline_build.end_step();
                 if !message.ends_with("cancelled") {
                     self.messages.error(message);
                 }
             }
             None => {}
         }
-        let rows = self.open.timeline_rows.lock().ok().map(|r| {
+        let rows = self.timeline_build.rows().map(|SongRows { total, rows }| {
             (
-                r.total,
-                r.rows
-                    .iter()
+                total,
+                rows.iter()
                     .map(|(p, f)| (name(p), f.clone()))
                     .collect::<Vec<_>>(),
             )
@@ -227,7 +219,7 @@ impl LoudscapeApp {
         let building = self
             .loading
             .iter()
-            .any(|l| Some(&l.path) == self.open.building.as_ref());
+            .any(|l| Some(&l.path) == self.timeline_build.building());
         if let Some((total, rows)) = rows.filter(|_| building) {
             ui.label(RichText::new(format!("Timeline: {} of {total} songs", rows.len())).small());
             for (song, failed) in rows.iter().rev().take(8) {
@@ -250,21 +242,17 @@ impl LoudscapeApp {
     fn listed(&mut self, inputs: Vec<PathBuf>, mut songs: Vec<SongTags>) {
         songs.retain(|s| s.tag_error.is_none());
         if songs.is_empty() {
-            self.open.timeline = None;
+            self.timeline_build.end_step();
             self.messages.error(format!(
                 "{}: no audio file to build a timeline of",
                 describe(&inputs)
             ));
             return;
         }
-        for song in &mut songs {
-            if song.year.is_none() {
-                song.year = self.open.years.get(&song.path);
-            }
-        }
+        self.timeline_build.fill_remembered_years(&mut songs);
         let missing: Vec<&SongTags> = songs.iter().filter(|s| s.year.is_none()).collect();
         if missing.is_empty() {
-            self.open.timeline = None;
+            self.timeline_build.end_step();
             self.build_timeline(&inputs, by_year(&songs));
             return;
         }
@@ -278,14 +266,7 @@ impl LoudscapeApp {
                 .collect::<Vec<_>>()
                 .join(", ")
         );
-        let typed = vec![String::new(); songs.len()];
-        self.open.timeline = Some(TimelineBuild::AskYears {
-            inputs,
-            songs,
-            typed,
-            focused: false,
-            enter_refused: false,
-        });
+        self.timeline_build.ask_years(inputs, songs);
     }
 
     /// The dialog listing the songs without a year.
@@ -296,7 +277,7 @@ impl LoudscapeApp {
             typed,
             focused,
             enter_refused,
-        }) = &mut self.open.timeline
+        }) = self.timeline_build.step_mut()
         else {
             return;
         };
@@ -396,7 +377,7 @@ impl LoudscapeApp {
         let songs = songs.clone();
         let typed = typed.clone();
         if cancelled {
-            self.open.timeline = None;
+            self.timeline_build.end_step();
             return;
         }
         match choice {
@@ -411,14 +392,14 @@ impl LoudscapeApp {
                         answered.push((song.path.clone(), year));
                     }
                 }
-                if let Err(message) = self.open.years.remember(&answered) {
+                if let Err(message) = self.timeline_build.remember_years(&answered) {
                     self.messages.error(message);
                 }
-                self.open.timeline = None;
+                self.timeline_build.end_step();
                 self.build_timeline(&inputs, by_year(&placed));
             }
             Some(false) => {
-                self.open.timeline = None;
+                self.timeline_build.end_step();
                 let paths = songs.iter().map(|s| s.path.clone()).collect();
                 self.build_timeline(&inputs, Placement::InOrder(paths));
             }
@@ -428,7 +409,7 @@ impl LoudscapeApp {
 
     /// Whether a timeline is on its way (the scripted screenshot waits for it).
     pub(super) fn timeline_listing(&self) -> bool {
-        matches!(self.open.timeline, Some(TimelineBuild::Listing { .. }))
+        self.timeline_build.is_listing()
     }
 }
 
@@ -456,11 +437,7 @@ fn describe(inputs: &[PathBuf]) -> String {
 impl LoudscapeApp {
     /// Scripted presses wait for the years dialog's field to have the keyboard.
     pub(super) fn scripted_input_ready(&self) -> bool {
-        match &self.open.timeline {
-            Some(TimelineBuild::Listing { .. }) => false,
-            Some(TimelineBuild::AskYears { focused, .. }) => *focused,
-            None => true,
-        }
+        self.timeline_build.input_ready()
     }
 }
 

@@ -17,7 +17,7 @@
 //! Nothing here imports a behaviour file: only the floors below (`audio.rs`, `labels.rs`,
 //! `recent.rs`, `strip.rs`, and the crate's data, view and render types), and within the
 //! folder only downward (this file imports its children; `open.rs` imports
-//! `extract_settings.rs` and `timeline_build.rs`, which imports `loading.rs`; `view_motion.rs`
+//! `extract_settings.rs`; `timeline_build.rs` imports `loading.rs`; `view_motion.rs`
 //! imports `slot.rs`; none imports this file). So each behaviour file sees the whole state without importing another for a type, and
 //! no import runs back up. A type's own plain methods (those that need no `LoudscapeApp`) and
 //! their tests sit with it here; its fields are open to `ui/` (`pub(in crate::ui)`), because
@@ -105,6 +105,9 @@ pub(super) struct LoudscapeApp {
     pub(super) needs_repaint: bool,
     /// The Open row (`open.rs`).
     pub(super) open: OpenPanel,
+    /// A timeline built from songs: the tags, the years dialog, the rows
+    /// (`timeline_build.rs`).
+    pub(super) timeline_build: timeline_build::TimelineBuilder,
     /// The frequency axis chosen for songs (`freq_axis.rs`).
     pub(super) freq_axis: crate::data::freq_axis::FreqAxis,
     /// The A/B compare with a second song (`compare_window.rs`).

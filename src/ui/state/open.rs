@@ -1,14 +1,13 @@
 //! The Open row's state (the `open` field of `LoudscapeApp`): the path field, the Open and Save
 //! dialogs while they are open and where the save dialog said to save, the recent files, the
-//! shortcuts overlay's switch, the extraction settings (`state/extract_settings.rs`) and a
-//! timeline on its way (`state/timeline_build.rs`). What the row does is `ui/open.rs`.
+//! shortcuts overlay's switch and the extraction settings (`state/extract_settings.rs`). What
+//! the row does is `ui/open.rs`.
 
 use std::path::PathBuf;
 use std::sync::mpsc::Receiver;
 
 use crate::ui::recent::RecentFiles;
 use crate::ui::state::extract_settings::ExtractChoices;
-use crate::ui::state::timeline_build::{Rows, TimelineBuild, YearBook};
 
 /// The Open row's state: its text field, the dialogs while they are open, the recent files,
 /// the extraction settings and the shortcuts overlay.
@@ -29,12 +28,4 @@ pub(in crate::ui) struct OpenPanel {
     /// The extraction settings for the next song opened, and those of the song shown
     /// (`extract_settings.rs`).
     pub(in crate::ui) extract: ExtractChoices,
-    /// A timeline on its way: tags being read, or the years dialog (`timeline_build.rs`).
-    pub(in crate::ui) timeline: Option<TimelineBuild>,
-    /// The songs of the timeline being built, a row each as they finish.
-    pub(in crate::ui) timeline_rows: Rows,
-    /// The loading row of the timeline being built.
-    pub(in crate::ui) building: Option<PathBuf>,
-    /// Years typed for songs whose tags lack one.
-    pub(in crate::ui) years: YearBook,
 }
