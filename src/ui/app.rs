@@ -114,14 +114,19 @@ impl LoudscapeApp {
                 requested: false,
                 done: Arc::new(AtomicBool::new(false)),
             }),
-            audio: AudioPanel::new(persist),
+            audio: {
+                let mut audio = AudioPanel::new(persist);
+                if let Some(seconds) = options.seek {
+                    audio.seek_when_loaded(seconds);
+                }
+                audio
+            },
             hover: None,
             hovered_song: None,
             selected_song: None,
             save_shot: SaveShot::default(),
             last_view: None,
             view_px: (1, 1),
-            audio_for: Vec::new(),
             persist,
             saved: None,
             surface: Default::default(),
@@ -153,7 +158,6 @@ impl LoudscapeApp {
             video_export: Default::default(),
             freq_axis: Default::default(),
             compare: None,
-            pending_seek: options.seek,
             strip: Default::default(),
         };
         let compare = options.compare.clone();
@@ -333,14 +337,14 @@ impl eframe::App for LoudscapeApp {
                 self.strip.sync(song.id, &song.cloud);
             }
             if self.strip.has_curves() && shows_strip(ctx.content_rect().height()) {
-                let (strip, audio) = (&self.strip, &mut self.audio);
-                egui::Panel::bottom("loudness_strip")
+                let time_s = self.audio.time_s().unwrap_or(0.0);
+                let clicked = egui::Panel::bottom("loudness_strip")
                     .frame(crate::ui::style::panel_frame(ui.style()))
-                    .show(ui, |ui| {
-                        if let Some(t) = strip.show(ui, audio.time_s().unwrap_or(0.0)) {
-                            audio.seek(t);
-                        }
-                    });
+                    .show(ui, |ui| self.strip.show(ui, time_s))
+                    .inner;
+                if let Some(t) = clicked {
+                    self.audio.seek(t);
+                }
             }
         }
         // Under the 3D view, above the transport bar: what the app is telling the user.

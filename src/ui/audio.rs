@@ -1,8 +1,10 @@
 //! The transport bar: plays the Song cloud's source audio, shows where the playhead is, seeks,
 //! loops a range, and says plainly when there is no device or the file cannot be found (with a
-//! path field to point at it instead).
+//! path field to point at it instead). [`AudioPanel`] owns the window's playback: the song in
+//! the player, a seek asked for before it is loaded (`--seek`), and the audio picked by hand
+//! for a cloud whose recorded source is elsewhere (remembered between runs).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
@@ -34,6 +36,11 @@ pub struct AudioPanel {
     track: Option<Track>,
     /// The gain (f64 bits) last told to the player's loaded song (a new load plays at 0 dB).
     gain_set: Option<u64>,
+    /// Where to put the playhead once a song is loaded (`--seek`).
+    pending_seek: Option<f64>,
+    /// The audio picked by hand for a cloud (absolute paths: cloud, audio), used instead of
+    /// the recorded source when the cloud is loaded again.
+    chosen: Vec<(PathBuf, PathBuf)>,
 }
 
 impl AudioPanel {
@@ -55,11 +62,65 @@ impl AudioPanel {
             no_device_said: false,
             track: None,
             gain_set: None,
+            pending_seek: None,
+            chosen: Vec::new(),
         }
     }
 
-    /// Finds and decodes the song of a freshly loaded Song cloud (on a worker thread).
-    pub fn load_for(&mut self, cloud: &PointCloud, remembered: Option<PathBuf>) {
+    /// Puts the playhead at `seconds` once a song is loaded (at once when one is).
+    pub fn seek_when_loaded(&mut self, seconds: f64) {
+        if self.player.loaded.is_some() {
+            self.seek(seconds);
+        } else {
+            self.pending_seek = Some(seconds);
+        }
+    }
+
+    /// The audio picked by hand for each cloud (absolute paths: cloud, audio), as remembered.
+    pub fn chosen(&self) -> &[(PathBuf, PathBuf)] {
+        &self.chosen
+    }
+
+    /// The audio picked by hand in an earlier run.
+    pub fn restore_chosen(&mut self, chosen: Vec<(PathBuf, PathBuf)>) {
+        self.chosen = chosen;
+    }
+
+    /// The audio picked by hand for the cloud at `cloud`.
+    fn chosen_for(&self, cloud: &Path) -> Option<PathBuf> {
+        let cloud = std::path::absolute(cloud).ok()?;
+        self.chosen
+            .iter()
+            .find(|(c, _)| c == &cloud)
+            .map(|(_, audio)| audio.clone())
+    }
+
+    /// Keeps the audio playing as the one picked for `cloud`, forgetting the choice when it
+    /// is the recorded source again.
+    pub fn remember_choice(&mut self, cloud: &PointCloud) {
+        let Some(track) = self.track_path() else {
+            return;
+        };
+        let cloud_path = std::path::absolute(&cloud.path).unwrap_or_default();
+        let track = std::path::absolute(&track).unwrap_or(track);
+        let recorded = playback::resolve_source(cloud)
+            .ok()
+            .and_then(|p| std::path::absolute(p).ok());
+        let entry = self.chosen.iter().position(|(c, _)| c == &cloud_path);
+        match (entry, recorded.as_ref() == Some(&track)) {
+            (Some(i), true) => {
+                self.chosen.remove(i);
+            }
+            (Some(i), false) => self.chosen[i].1 = track,
+            (None, false) => self.chosen.push((cloud_path, track)),
+            (None, true) => {}
+        }
+    }
+
+    /// Finds and decodes the song of a freshly loaded Song cloud (on a worker thread): the
+    /// audio picked for it by hand when that file is there, else its recorded source.
+    pub fn load_for(&mut self, cloud: &PointCloud) {
+        let remembered = self.chosen_for(&cloud.path);
         self.player.unload();
         self.gain_set = None;
         self.track = None;
@@ -118,6 +179,11 @@ impl AudioPanel {
                     self.source = Source::Failed("the audio decoder stopped".into());
                 }
             }
+        }
+        if self.player.loaded.is_some()
+            && let Some(seconds) = self.pending_seek.take()
+        {
+            self.seek(seconds);
         }
         if let (Some(loaded), Some(playhead)) = (self.player.loaded.as_ref(), &mut self.playhead) {
             self.time_s = playhead.time_s(loaded.transport.as_ref(), Instant::now());
@@ -307,5 +373,118 @@ struct NoBackend;
 impl playback::AudioBackend for NoBackend {
     fn open(&self) -> Result<Box<dyn playback::AudioOutput>, PlaybackError> {
         Err(PlaybackError::NoDevice("audio is off for this run".into()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+    use std::time::{Duration, Instant};
+
+    use super::*;
+
+    const RATE: u32 = 8_000;
+
+    /// A silent mono 16-bit WAV of `seconds` at 8 kHz.
+    fn silent_wav(path: &Path, seconds: u32) {
+        let data = vec![0u8; (RATE * seconds * 2) as usize];
+        let mut b = Vec::with_capacity(44 + data.len());
+        b.extend_from_slice(b"RIFF");
+        b.extend_from_slice(&(36 + data.len() as u32).to_le_bytes());
+        b.extend_from_slice(b"WAVEfmt ");
+        b.extend_from_slice(&16u32.to_le_bytes());
+        b.extend_from_slice(&1u16.to_le_bytes()); // PCM
+        b.extend_from_slice(&1u16.to_le_bytes()); // mono
+        b.extend_from_slice(&RATE.to_le_bytes());
+        b.extend_from_slice(&(RATE * 2).to_le_bytes());
+        b.extend_from_slice(&2u16.to_le_bytes());
+        b.extend_from_slice(&16u16.to_le_bytes());
+        b.extend_from_slice(b"data");
+        b.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        b.extend_from_slice(&data);
+        std::fs::write(path, b).expect("write wav");
+    }
+
+    /// Polls the panel until its song is loaded (the decode runs on a thread).
+    fn until_loaded(panel: &mut AudioPanel) {
+        let ctx = egui::Context::default();
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while panel.time_s().is_none() {
+            assert!(Instant::now() < deadline, "the song never loaded");
+            panel.poll(&ctx);
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("loudscape-audio-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    /// `--seek` is asked for before the song is decoded: the playhead goes there on the poll
+    /// that loads it; asked with a song loaded, at once.
+    #[test]
+    fn a_seek_asked_before_the_song_is_loaded_waits_for_it() {
+        let dir = temp_dir("seek");
+        let song = dir.join("song.wav");
+        silent_wav(&song, 4);
+        let mut panel = AudioPanel::new(false);
+        panel.seek_when_loaded(1.5);
+        assert_eq!(panel.position_s(), None);
+        panel.decode(song);
+        until_loaded(&mut panel);
+        assert_eq!(panel.position_s(), Some(1.5));
+        panel.seek_when_loaded(3.0);
+        assert_eq!(panel.position_s(), Some(3.0), "loaded: at once");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Audio picked by hand is what the cloud loads next time, until the recorded source is
+    /// picked again.
+    #[test]
+    fn the_audio_picked_for_a_cloud_is_remembered_until_it_is_the_recorded_one() {
+        let dir = temp_dir("chosen");
+        let (recorded, picked) = (dir.join("recorded.wav"), dir.join("picked.wav"));
+        silent_wav(&recorded, 1);
+        silent_wav(&picked, 1);
+        let mut cloud = PointCloud::synthetic(
+            crate::data::synthetic::synthetic_song(100, 3),
+            crate::data::cloud::DataMode::Song,
+        );
+        cloud.path = dir.join("song.ply");
+        cloud.meta.source = Some(crate::data::cloud::Source {
+            path: Some(recorded.display().to_string()),
+            ..Default::default()
+        });
+        let mut panel = AudioPanel::new(false);
+        panel.load_for(&cloud);
+        until_loaded(&mut panel);
+        panel.remember_choice(&cloud);
+        assert!(
+            panel.chosen().is_empty(),
+            "the recorded source is no choice"
+        );
+
+        panel.decode(picked.clone());
+        panel.player.unload();
+        until_loaded(&mut panel);
+        panel.remember_choice(&cloud);
+        assert_eq!(panel.chosen().len(), 1);
+        let mut again = AudioPanel::new(false);
+        again.restore_chosen(panel.chosen().to_vec());
+        again.load_for(&cloud);
+        assert_eq!(again.path_field, picked.display().to_string());
+
+        panel.decode(recorded.clone());
+        panel.player.unload();
+        until_loaded(&mut panel);
+        panel.remember_choice(&cloud);
+        assert!(
+            panel.chosen().is_empty(),
+            "forgotten when the recorded one is back"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

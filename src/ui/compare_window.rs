@@ -110,12 +110,6 @@ impl LoudscapeApp {
     /// Takes B when it has loaded, builds the GPU scene when A or B changed, the grids when the
     /// view needs them, and B's audio.
     pub(super) fn poll_compare(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
-        if let Some(seconds) = self.pending_seek
-            && self.audio.time_s().is_some()
-        {
-            self.audio.seek(seconds);
-            self.pending_seek = None;
-        }
         self.poll_alignment(ctx);
         let Some(state) = self.compare.as_mut() else {
             return;

@@ -55,7 +55,7 @@ impl LoudscapeApp {
             transfer: Some(self.settings.volume.preset.name().to_string()),
             hp_tint: Some(self.settings.volume.hp_tint),
             surface_method: Some(self.settings.surface.method.short_name().to_string()),
-            audio_for: self.audio_for.clone(),
+            audio_for: self.audio.chosen().to_vec(),
             colours: Some(self.settings.colours),
             active: self
                 .active()
@@ -138,7 +138,7 @@ impl LoudscapeApp {
             if let Some(colours) = r.colours {
                 self.settings.colours = colours;
             }
-            self.audio_for = r.audio_for;
+            self.audio.restore_chosen(r.audio_for);
             if self.heard.pending.is_none()
                 && let Some(choice) = r.heard.as_deref().and_then(Normalization::parse)
             {
@@ -171,26 +171,10 @@ impl LoudscapeApp {
         files
     }
 
-    /// Keeps the audio picked by hand for the song cloud, forgetting it when it is the
-    /// recorded source again.
+    /// Keeps the audio picked by hand for the song cloud (`AudioPanel::remember_choice`).
     pub(super) fn remember_audio_choice(&mut self) {
-        if let Some(track) = self.audio.track_path()
-            && let Some(song) = &self.song
-        {
-            let cloud = std::path::absolute(&song.cloud.path).unwrap_or_default();
-            let track = std::path::absolute(&track).unwrap_or(track);
-            let recorded = crate::playback::resolve_source(&song.cloud)
-                .ok()
-                .and_then(|p| std::path::absolute(p).ok());
-            let entry = self.audio_for.iter().position(|(c, _)| c == &cloud);
-            match (entry, recorded.as_ref() == Some(&track)) {
-                (Some(i), true) => {
-                    self.audio_for.remove(i);
-                }
-                (Some(i), false) => self.audio_for[i].1 = track,
-                (None, false) => self.audio_for.push((cloud, track)),
-                (None, true) => {}
-            }
+        if let Some(song) = &self.song {
+            self.audio.remember_choice(&song.cloud);
         }
     }
 }

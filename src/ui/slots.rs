@@ -265,14 +265,7 @@ impl LoudscapeApp {
         if slot == Slot::Song {
             // The growing cloud of a song already loaded its audio (the same source).
             if !(how == Install::Grown && same_audio) {
-                let remembered = self
-                    .audio_for
-                    .iter()
-                    .find(|(cloud, _)| {
-                        std::path::absolute(&loaded.cloud.path).is_ok_and(|p| &p == cloud)
-                    })
-                    .map(|(_, audio)| audio.clone());
-                self.audio.load_for(&loaded.cloud, remembered);
+                self.audio.load_for(&loaded.cloud);
             }
         } else {
             self.selected_song = None;

@@ -76,6 +76,8 @@ pub(super) struct LoudscapeApp {
     /// The frame number, the frames' pace and the scene renders (`frame_clock.rs`).
     pub(super) clock: frame_clock::FrameClock,
     pub(super) screenshot: Option<ScreenshotState>,
+    /// The playback: the song in the player, a seek waiting for it (`--seek`) and the audio
+    /// picked by hand for each cloud (`audio.rs`).
     pub(super) audio: AudioPanel,
     pub(super) hover: Option<(HoverKey, Hover)>,
     pub(super) hovered_song: Option<usize>,
@@ -85,7 +87,6 @@ pub(super) struct LoudscapeApp {
     pub(super) last_view: Option<FrameView>,
     /// The whole 3D view's size in pixels (both halves of a side-by-side compare).
     pub(super) view_px: (u32, u32),
-    pub(super) audio_for: Vec<(PathBuf, PathBuf)>,
     /// Whether to remember state (off for scripted screenshot runs).
     pub(super) persist: bool,
     /// What was last handed to eframe's storage (`persistence.rs` asks for a frame to save a
@@ -112,8 +113,6 @@ pub(super) struct LoudscapeApp {
     pub(super) freq_axis: crate::data::freq_axis::FreqAxis,
     /// The A/B compare with a second song (`compare_window.rs`).
     pub(super) compare: Option<CompareState>,
-    /// Where to put the playhead once the song's audio is ready (`--seek`).
-    pub(super) pending_seek: Option<f64>,
     /// The loudness strip under the Song view (`strip.rs`).
     pub(super) strip: crate::ui::strip::LoudnessStrip,
     /// Key presses a scripted run (`--press`, tests) still has to make (`shortcuts.rs`).
