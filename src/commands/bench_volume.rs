@@ -228,6 +228,27 @@ pub fn run(
                 .collect();
             println!("    passes (ms): {}", parts.join(", "));
         }
+        if renderer.voxelize.on_cpu() {
+            // What the app builds on this device instead: the same grid on the CPU's cores
+            // (voxelize_host.rs), with its upload, waited for.
+            let mut host_times = Vec::new();
+            for i in 0..=runs {
+                let start = Instant::now();
+                renderer.voxelize.voxelize(
+                    &gpu.device,
+                    &gpu.queue,
+                    &VoxelizeRequest::new(&cloud.points, resolution, sigma),
+                )?;
+                gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
+                if i > 0 {
+                    host_times.push(start.elapsed().as_secs_f64() * 1e3);
+                }
+            }
+            println!(
+                "    on the CPU's cores (what the app does on this device): {:.2} ms",
+                median(host_times)
+            );
+        }
     }
 
     // One volume frame of the song at the frame size, at rest (full quality) and moving.

@@ -318,6 +318,13 @@ pub fn build_grids(
             settings.smoothing_for(a.meta.mode),
         )
         .in_box(Some(shared_box));
+        if passes.voxelize.on_cpu() {
+            // Built on the CPU's cores and uploaded (voxelize_host.rs): nothing to wait for.
+            return passes
+                .voxelize
+                .voxelize(device, queue, &request)
+                .map_err(failed);
+        }
         let job = passes.voxelize.prepare(device, &request).map_err(failed)?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("compare::voxelize"),

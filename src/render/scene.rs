@@ -274,7 +274,8 @@ impl SceneData {
             sigma,
         )
         .mapped(mapping)
-        .in_box(mapping.map(|m| grid_box_mapped(&cloud.points, Some(m))));
+        .in_box(mapping.map(|m| grid_box_mapped(&cloud.points, Some(m))))
+        .with_host(&cloud.points);
         let (grid, stats) = renderer.voxelize.voxelize(device, queue, &request)?;
         self.volume = Some(VolumeGpu::new(device, &renderer.volume, &grid));
         self.grid = Some(grid);

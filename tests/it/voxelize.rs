@@ -20,15 +20,67 @@ struct Built {
     stats: VoxelStats,
 }
 
-fn build(gpu: &GpuContext, points: &[Point], resolution: u32, sigma: f32) -> Built {
+/// The grid of `points` built by the compute passes (`on_cpu` false) or by the CPU engine a
+/// device that is the CPU uses (true), whatever this device is.
+fn build(gpu: &GpuContext, points: &[Point], resolution: u32, sigma: f32, on_cpu: bool) -> Built {
+    build_request(
+        gpu,
+        &VoxelizeRequest::new(points, resolution, sigma),
+        on_cpu,
+    )
+}
+
+/// The grid of `points` by both engines, which must agree ([`assert_engines_agree`]): the
+/// compute passes' grid.
+fn build_both(gpu: &GpuContext, points: &[Point], resolution: u32, sigma: f32) -> Built {
+    let passes = build(gpu, points, resolution, sigma, false);
+    let cpu = build(gpu, points, resolution, sigma, true);
+    assert_engines_agree(&passes, &cpu, sigma > 0.0);
+    passes
+}
+
+/// The CPU engine builds the compute passes' grid: unsmoothed the same f32 operations on the
+/// same exact sums (equal to a few units in the last place of the division); smoothed, the
+/// Gaussian's f32 sums may be fused or ordered otherwise by the shader compiler (1e-5).
+fn assert_engines_agree(passes: &Built, cpu: &Built, smoothed: bool) {
+    let tolerance = if smoothed { 1e-5 } else { 1e-6 };
+    assert_eq!(passes.density.len(), cpu.density.len());
+    for (i, (a, b)) in passes.density.iter().zip(&cpu.density).enumerate() {
+        assert!(
+            (a - b).abs() <= tolerance,
+            "voxel {i}: density {a} by the compute passes, {b} by the CPU engine"
+        );
+    }
+    for (i, (a, b)) in passes.hp_mean.iter().zip(&cpu.hp_mean).enumerate() {
+        assert!(
+            (a - b).abs() <= 1e-6,
+            "voxel {i}: hp {a} by the compute passes, {b} by the CPU engine"
+        );
+    }
+    assert_eq!(
+        passes.stats.nonempty, cpu.stats.nonempty,
+        "non-empty voxels"
+    );
+    let (a, b) = (passes.stats.reference_sum, cpu.stats.reference_sum);
+    assert!(
+        (a - b).abs() <= a.abs() * 1e-5,
+        "reference sums {a} and {b}"
+    );
+    // A smoothed value within float rounding of the reference may clamp in one engine only.
+    let clamped = passes.stats.clamped.abs_diff(cpu.stats.clamped);
+    assert!(
+        clamped <= if smoothed { 2 } else { 0 },
+        "clamped voxels {} and {}",
+        passes.stats.clamped,
+        cpu.stats.clamped
+    );
+}
+
+fn build_request(gpu: &GpuContext, request: &VoxelizeRequest, on_cpu: bool) -> Built {
     let frame = FrameBinding::new(&gpu.device);
-    let pass = VoxelizePass::new(&gpu.device, &frame);
+    let pass = VoxelizePass::new(&gpu.device, &frame).with_cpu_engine(on_cpu);
     let (grid, stats) = pass
-        .voxelize(
-            &gpu.device,
-            &gpu.queue,
-            &VoxelizeRequest::new(points, resolution, sigma),
-        )
+        .voxelize(&gpu.device, &gpu.queue, request)
         .expect("voxelize");
     Built {
         density: grid
@@ -103,11 +155,25 @@ fn on_voxel_faces(points: &[Point], resolution: u32) -> Vec<Point> {
         .collect()
 }
 
-/// GPU and CPU agree: same voxels, sums within the fixed-point rounding, and the GPU's
-/// reference sum is the CPU's histogram percentile.
+/// Both engines (the compute passes and the CPU engine of CPU devices) agree with the f64
+/// reference: same voxels, sums within the fixed-point rounding, and the reference sum is the
+/// CPU's histogram percentile.
 fn assert_matches_reference(points: &[Point], resolution: u32, sigma: f32) {
     let gpu = common::gpu();
-    let built = build(&gpu, points, resolution, sigma);
+    for on_cpu in [false, true] {
+        eprintln!("engine: {}", if on_cpu { "cpu" } else { "gpu" });
+        assert_engine_matches_reference(&gpu, points, resolution, sigma, on_cpu);
+    }
+}
+
+fn assert_engine_matches_reference(
+    gpu: &GpuContext,
+    points: &[Point],
+    resolution: u32,
+    sigma: f32,
+    on_cpu: bool,
+) {
+    let built = build(gpu, points, resolution, sigma, on_cpu);
     let mut reference = ReferenceGrid::build(points, resolution);
     reference.smooth(sigma);
     let cpu_reference = reference_sum(reference.sums.iter().map(|&s| s as f32));
@@ -168,7 +234,7 @@ fn normalization_uses_a_high_percentile_so_one_hot_voxel_does_not_flatten_the_fi
         scalar: 1.0,
         hp: 0.5,
     }));
-    let built = build(&gpu, &points, 64, 0.0);
+    let built = build_both(&gpu, &points, 64, 0.0);
     let reference = ReferenceGrid::build(&points, 64);
     let mut sums: Vec<f64> = reference
         .sums
@@ -198,7 +264,7 @@ fn normalization_uses_a_high_percentile_so_one_hot_voxel_does_not_flatten_the_fi
 fn degenerate_clouds_give_sensible_grids() {
     let gpu = common::gpu();
     // Empty: all zero, hp 0.5.
-    let empty = build(&gpu, &[], 64, 0.7);
+    let empty = build_both(&gpu, &[], 64, 0.7);
     assert!(empty.density.iter().all(|&d| d == 0.0));
     assert!(empty.hp_mean.iter().all(|&h| h == 0.5));
     assert_eq!(empty.stats.nonempty, 0);
@@ -211,7 +277,7 @@ fn degenerate_clouds_give_sensible_grids() {
     }];
     let (min, max) = grid_box(&one);
     assert!((max - min).min_element() > 0.0);
-    let built = build(&gpu, &one, 64, 0.0);
+    let built = build_both(&gpu, &one, 64, 0.0);
     let lit: Vec<usize> = (0..built.density.len())
         .filter(|&i| built.density[i] > 0.0)
         .collect();
@@ -228,7 +294,7 @@ fn degenerate_clouds_give_sensible_grids() {
             hp: if i % 2 == 0 { 0.0 } else { 1.0 },
         })
         .collect();
-    let built = build(&gpu, &same, 64, 0.0);
+    let built = build_both(&gpu, &same, 64, 0.0);
     let lit: Vec<usize> = (0..built.density.len())
         .filter(|&i| built.density[i] > 0.0)
         .collect();
@@ -249,7 +315,7 @@ fn degenerate_clouds_give_sensible_grids() {
         .collect();
     let (min, max) = grid_box(&flat);
     assert!(max.y - min.y > 0.05 && (min.y + max.y) * 0.5 - 0.3 < 1e-6);
-    let built = build(&gpu, &flat, 64, 0.0);
+    let built = build_both(&gpu, &flat, 64, 0.0);
     assert!(built.density.iter().all(|d| (0.0..=1.0).contains(d)));
     assert!(built.density.iter().any(|&d| d > 0.5));
 
@@ -271,7 +337,7 @@ fn degenerate_clouds_give_sensible_grids() {
             hp: -0.2,
         },
     ];
-    let built = build(&gpu, &edges, 64, 0.0);
+    let built = build_both(&gpu, &edges, 64, 0.0);
     let reference = ReferenceGrid::build(&edges, 64);
     assert_eq!(reference.counts.iter().sum::<u32>(), 3);
     assert!(built.density.iter().all(|d| (0.0..=1.0).contains(d)));
@@ -314,7 +380,7 @@ fn clouds_over_2_pow_24_points_voxelize_exactly() {
     }
     let resolution = 64;
     let gpu = common::gpu();
-    let built = build(&gpu, &points, resolution, 0.0);
+    let built = build_both(&gpu, &points, resolution, 0.0);
     let (min, max) = grid_box(&points);
     let dims = glam::UVec3::splat(resolution);
     let per_unit = voxels_per_unit(dims, min, max);
@@ -431,4 +497,51 @@ fn a_request_builds_in_the_given_box_or_the_points_own() {
     assert_eq!(on_device.resolved_box(), own);
     let none = VoxelizeRequest::on_device([(&buffer, 0)], bounds, 64, 0.0);
     assert_eq!(none.resolved_box(), (Vec3::splat(-1.0), Vec3::splat(1.0)));
+}
+
+/// The CPU engine of CPU devices builds the compute passes' grid on the song's own shapes: the
+/// demo song on the log frequency axis (remapped z, the points the axis leaves out skipped), a
+/// resolution that is no multiple of four (padded fields), with and without smoothing, and from
+/// the points on the device with their host copy, as the window asks.
+#[test]
+fn the_cpu_engine_builds_the_compute_passes_grid() {
+    use loudscape::data::freq_axis::{FreqAxis, FreqMapping};
+    use loudscape::render::grid::voxelize_cpu::grid_box_mapped;
+    let gpu = common::gpu();
+    let cloud = common::demo_song();
+    let mapping = FreqMapping::new(&cloud.meta, FreqAxis::Log).expect("a song");
+    for (resolution, sigma) in [(65, 0.0), (65, 1.5), (128, 1.0)] {
+        let request = VoxelizeRequest::new(&cloud.points, resolution, sigma)
+            .mapped(Some(&mapping))
+            .in_box(Some(grid_box_mapped(&cloud.points, Some(&mapping))));
+        let passes = build_request(&gpu, &request, false);
+        let cpu = build_request(&gpu, &request, true);
+        assert_engines_agree(&passes, &cpu, sigma > 0.0);
+        assert!(passes.stats.nonempty > 1000, "the song fills voxels");
+    }
+    // The window's request: the points on the device, their host copy beside them.
+    let frame = FrameBinding::new(&gpu.device);
+    let points = loudscape::render::points::PointsPass::new(&gpu.device, &frame);
+    let on_device =
+        loudscape::render::points::PointsGpu::upload(&gpu.device, &points, &cloud.points, 1 << 20);
+    let bounds = (cloud.bounds.min, cloud.bounds.max);
+    let request = VoxelizeRequest::on_device(on_device.chunk_buffers(), bounds, 96, 1.0);
+    assert!(request.host_points().is_none(), "no host copy given");
+    let with_host = VoxelizeRequest::on_device(on_device.chunk_buffers(), bounds, 96, 1.0)
+        .with_host(&cloud.points);
+    assert_eq!(
+        with_host.host_points().map(<[Point]>::len),
+        Some(cloud.points.len())
+    );
+    let short = VoxelizeRequest::on_device(on_device.chunk_buffers(), bounds, 96, 1.0)
+        .with_host(&cloud.points[1..]);
+    assert!(
+        short.host_points().is_none(),
+        "a host copy of other points is not used"
+    );
+    assert_engines_agree(
+        &build_request(&gpu, &request, false),
+        &build_request(&gpu, &with_host, true),
+        true,
+    );
 }

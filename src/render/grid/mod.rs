@@ -12,6 +12,7 @@ pub mod downsample;
 pub mod reference;
 pub mod voxelize;
 pub mod voxelize_cpu;
+pub mod voxelize_host;
 
 use glam::{UVec3, Vec3};
 use wgpu::util::DeviceExt;
@@ -49,6 +50,14 @@ impl VoxelGrid {
         let n = (dims.x * dims.y * dims.z) as usize;
         assert_eq!(density.len(), n, "density has the wrong voxel count");
         assert_eq!(hp_mean.len(), n, "hp_mean has the wrong voxel count");
+        // Padded to whole groups of four voxels as the voxelize pass leaves its fields (the
+        // passes that read four voxels at a time bind them whole), the padding an empty voxel.
+        let padded = |field: &[f32], empty: f32| {
+            let mut padded = field.to_vec();
+            padded.resize(n.div_ceil(4) * 4, empty);
+            padded
+        };
+        let (density, hp_mean) = (&padded(density, 0.0)[..], &padded(hp_mean, 0.5)[..]);
         let usage = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;

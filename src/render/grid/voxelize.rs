@@ -35,6 +35,7 @@ use crate::render::grid::voxelize_cpu::{
     HISTOGRAM_BINS, HISTOGRAM_BINS_PER_OCTAVE, HISTOGRAM_LOG2_MIN, PERCENTILE, gaussian_weights,
     grid_box, grid_box_mapped, grid_box_of_bounds, voxels_per_unit,
 };
+use crate::render::grid::voxelize_host;
 use crate::render::shaders;
 
 /// Default grid resolution (voxels per side) for a song (paper 3.1).
@@ -204,6 +205,9 @@ pub struct VoxelizeRequest<'a> {
     /// `bounds` of device points). An A/B compare builds both grids in one box; points outside
     /// it count in the nearest border voxel.
     pub grid_box: Option<(Vec3, Vec3)>,
+    /// Points on the device, the same on the host ([`VoxelizeRequest::with_host`]): a device
+    /// that is the CPU builds the grid from these.
+    pub host: Option<&'a [Point]>,
 }
 
 impl<'a> VoxelizeRequest<'a> {
@@ -215,6 +219,7 @@ impl<'a> VoxelizeRequest<'a> {
             smoothing_sigma,
             mapping: None,
             grid_box: None,
+            host: None,
         }
     }
 
@@ -237,6 +242,23 @@ impl<'a> VoxelizeRequest<'a> {
     /// The same request in the box `grid_box` (`None`: the points' own).
     pub fn in_box(self, grid_box: Option<(Vec3, Vec3)>) -> Self {
         Self { grid_box, ..self }
+    }
+
+    /// The same request with the device's points also on the host (`points`, the cloud the
+    /// device's were uploaded from; ignored unless it holds as many).
+    pub fn with_host(self, points: &'a [Point]) -> Self {
+        Self {
+            host: Some(points),
+            ..self
+        }
+    }
+
+    /// The points on the host, when the request has them all.
+    pub fn host_points(&self) -> Option<&'a [Point]> {
+        match &self.points {
+            PointSource::Host(points) => Some(points),
+            PointSource::Device { .. } => self.host.filter(|h| h.len() == self.points.len()),
+        }
     }
 
     /// The same request on the frequency axis `mapping`.
@@ -395,6 +417,9 @@ pub struct VoxelizePass {
     percentile: wgpu::ComputePipeline,
     normalize: wgpu::ComputePipeline,
     frame_bind_group: wgpu::BindGroup,
+    /// Whether [`VoxelizePass::voxelize`] builds grids of host points on the CPU
+    /// (`voxelize_host.rs`): on a device that is the CPU.
+    on_cpu: bool,
 }
 
 const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
@@ -474,7 +499,19 @@ impl VoxelizePass {
             smooth_layout,
             resolve_layout,
             frame_bind_group: frame.bind_group.clone(),
+            on_cpu: device.adapter_info().device_type == wgpu::DeviceType::Cpu,
         }
+    }
+
+    /// Whether grids of host points are built on the CPU (a device that is the CPU).
+    pub fn on_cpu(&self) -> bool {
+        self.on_cpu
+    }
+
+    /// The same pass building grids on the CPU (`true`) or with the compute passes (`false`)
+    /// whatever the device (the tests compare the two).
+    pub fn with_cpu_engine(self, on_cpu: bool) -> Self {
+        Self { on_cpu, ..self }
     }
 
     /// Checks a resolution against the allowed range and this device's buffer limits.
@@ -773,13 +810,38 @@ impl VoxelizePass {
         }
     }
 
-    /// Builds the request's grid: upload, all passes, wait, statistics.
+    /// Builds the request's grid: upload, all passes, wait, statistics. On a device that is the
+    /// CPU, a request whose points are on the host is built on the CPU instead
+    /// (`voxelize_host.rs`: the same grid, many times sooner there) and uploaded.
     pub fn voxelize(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         request: &VoxelizeRequest,
     ) -> Result<(VoxelGrid, VoxelStats), VoxelizeError> {
+        if self.on_cpu
+            && let Some(points) = request.host_points()
+        {
+            request.check(device)?;
+            let dims = UVec3::splat(request.resolution);
+            let grid_box = request.resolved_box();
+            let built = voxelize_host::build(
+                points,
+                request.mapping,
+                dims,
+                grid_box,
+                request.smoothing_sigma,
+            );
+            let grid = VoxelGrid::from_fields(
+                device,
+                dims,
+                grid_box.0,
+                grid_box.1,
+                &built.density,
+                &built.hp_mean,
+            );
+            return Ok((grid, built.stats));
+        }
         let job = self.prepare(device, request)?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("voxelize::build"),
