@@ -95,9 +95,9 @@ impl LoudscapeApp {
                 match sources {
                     Ok(sources) => state.alignment.start(asked, align_on_thread(sources)),
                     Err(e) => {
-                        state.alignment.asked_for = Some(asked);
-                        state.alignment.comparison = None;
-                        state.alignment.error = Some(format!("nothing to align: {e}"));
+                        state
+                            .alignment
+                            .unavailable(asked, format!("nothing to align: {e}"));
                         self.messages.warn(format!(
                             "compare: versions not aligned (nothing to align: {e})"
                         ));
@@ -108,7 +108,7 @@ impl LoudscapeApp {
         match state.alignment.poll() {
             Some(true) => {
                 // The pictures again, with the version beside A on A's time.
-                state.built_for = None;
+                state.rebuild_scene();
                 let count = state.alignment.count();
                 let lines: Vec<String> = (1..count)
                     .filter_map(|i| state.alignment.offset_line(Listening(i)))
@@ -190,11 +190,17 @@ impl LoudscapeApp {
                 }
             });
         }
-        ui.checkbox(&mut alignment.match_loudness, "match loudness")
-            .on_hover_text("each version plays at the gain that brings it to the quietest one");
+        let mut match_loudness = alignment.match_loudness;
+        if ui
+            .checkbox(&mut match_loudness, "match loudness")
+            .on_hover_text("each version plays at the gain that brings it to the quietest one")
+            .changed()
+        {
+            alignment.set_match_loudness(match_loudness);
+        }
         if alignment.nudge_s(beside) != before {
             // The pictures again, with the version moved.
-            state.built_for = None;
+            state.rebuild_scene();
             ui.ctx().request_repaint();
         }
     }

@@ -103,7 +103,7 @@ impl LoudscapeApp {
                     .add(egui::Button::selectable(state.layout == layout, name))
                     .clicked()
                 {
-                    state.layout = layout;
+                    state.set_layout(layout);
                     // The view changes: draw it now (a build is announced first).
                     ui.ctx().request_repaint();
                     self.motion.request_fit();

@@ -31,7 +31,7 @@ impl LoudscapeApp {
         if self.active != Slot::Song {
             return false;
         }
-        let Some(state) = self.compare.as_mut() else {
+        let Some(state) = self.compare.as_ref() else {
             return false;
         };
         if !state.shown() {

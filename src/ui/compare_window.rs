@@ -94,10 +94,7 @@ impl LoudscapeApp {
         self.open.compare_path = path.display().to_string();
         let state = self.compare.get_or_insert_with(CompareState::empty);
         match state.add(path.clone()) {
-            Ok(added) => {
-                let version = &mut state.versions[added.0 - 1];
-                version.receiver = Some(load_b(path, version.shared.clone()));
-            }
+            Ok(added) => state.start_loading(added, |shared| load_b(path, shared)),
             Err(e) => {
                 if state.is_empty() {
                     self.compare = None;
@@ -126,13 +123,7 @@ impl LoudscapeApp {
                 }
             }
             // Its audio, for key B (A's own stays with the player).
-            if let Some(v) = state.versions.get_mut(version.0 - 1)
-                && let Some(cloud) = &v.loaded
-                && v.track.is_none()
-                && state.listening != version
-            {
-                v.decoding = Some(decode_audio(cloud));
-            }
+            state.decode_audio_of(version, decode_audio);
         }
         if state.is_empty() && state.dialog.is_none() {
             // No version left (it failed, or Cancel on its row: nothing to call an error), or
@@ -170,16 +161,15 @@ impl LoudscapeApp {
             );
             match on_union_axes(&song.cloud, &b_aligned) {
                 Ok((a, b_moved)) => {
-                    state.labels = Some(labels::axis_labels_for_box(
+                    let labels = labels::axis_labels_for_box(
                         &a,
                         glam::Vec3::splat(-1.0),
                         glam::Vec3::splat(1.0),
-                    ));
+                    );
                     CompareResources::write(render_state, |compare, view| {
                         compare.build(view, a.clone(), b_moved.clone())
                     });
-                    state.clouds = Some(Arc::new((a, b_moved)));
-                    state.error = None;
+                    state.scene_built(Arc::new((a, b_moved)), labels);
                     // A log line, as loads are told: tests wait for it.
                     eprintln!(
                         "compare: A and {} shown{}",
@@ -192,8 +182,7 @@ impl LoudscapeApp {
                     );
                 }
                 Err(e) => {
-                    state.clouds = None;
-                    state.error = Some(e.to_string());
+                    state.scene_failed(e.to_string());
                     CompareResources::write(render_state, |compare, _| compare.clear());
                 }
             }
@@ -209,7 +198,7 @@ impl LoudscapeApp {
             CompareResources::write(render_state, |compare, view| {
                 compare.install_grids(view, built)
             });
-            state.difference = None;
+            state.forget_difference();
             // A log line, as loads are told: tests read it (the frame count ends it).
             eprintln!(
                 "compare: grids built ({}x{}x{}) in {:.2} s, installed in {:.0} ms, while the \
@@ -225,7 +214,7 @@ impl LoudscapeApp {
             self.busy = None;
         }
         if !state.needs_grids(self.settings.view) {
-            state.grids_pending = false;
+            state.set_grids_pending(false);
             return;
         }
         let voxels = self.settings.voxels;
@@ -233,7 +222,7 @@ impl LoudscapeApp {
             CompareResources::write(render_state, |compare, _| compare.grids_match(&voxels))
                 .unwrap_or(true);
         let step = state.grid_step(&voxels, built);
-        state.grids_pending = matches!(step, GridStep::Wait | GridStep::Start);
+        state.set_grids_pending(matches!(step, GridStep::Wait | GridStep::Start));
         match step {
             GridStep::Ready => {}
             GridStep::Failed => return,
@@ -249,7 +238,7 @@ impl LoudscapeApp {
                 ) else {
                     return;
                 };
-                state.difference = None;
+                state.forget_difference();
                 state.building(voxels, build_grids(render_state, clouds, voxels, measure));
                 self.busy = Some(GRIDS_BUSY.into());
                 ctx.request_repaint_after(Duration::from_millis(30));
@@ -264,7 +253,7 @@ impl LoudscapeApp {
         })
         .flatten();
         if stale {
-            state.difference = read;
+            state.difference_read(read);
             if let Some(copy) = &state.difference {
                 // A log line, as loads are told: tests read the range.
                 eprintln!(
@@ -311,8 +300,7 @@ impl LoudscapeApp {
             && !surfaces.status.extracting
         {
             let told = (settings.method, settings.iso_value.to_bits(), a, b);
-            if state.surface_told != Some(told) {
-                state.surface_told = Some(told);
+            if state.tell_surfaces(told) {
                 eprintln!(
                     "compare surface: A {a} triangles, B {b} triangles ({}, isovalue {:.3})",
                     settings.method.name(),
@@ -334,7 +322,7 @@ impl LoudscapeApp {
         if from_version == to {
             return;
         }
-        let Some(track) = state.track_slot(to).and_then(Option::take) else {
+        let Some(track) = state.take_track(to) else {
             return;
         };
         // The same moment of the music in `to` (through each version's alignment to A).
@@ -344,13 +332,8 @@ impl LoudscapeApp {
             from = Some(t);
             alignment.target_time(from_version, to, t)
         });
-        if let Some(slot) = state.track_slot(from_version) {
-            *slot = previous;
-        }
-        state.listening = to;
-        if to != Listening::A {
-            state.beside = to;
-        }
+        state.put_track(from_version, previous);
+        state.heard(to);
         let gain = state.alignment.gain_db(to);
         self.audio.set_gain_db(gain);
         // The window tells stderr, as it does of loads: a log, not a script's input.
@@ -390,7 +373,7 @@ impl LoudscapeApp {
             return false;
         };
         if let Some(state) = self.compare.as_mut() {
-            state.layout = layout;
+            state.set_layout(layout);
             self.motion.request_fit();
         }
         true
@@ -434,8 +417,7 @@ mod tests {
 
     fn load(path: &Path) -> CompareState {
         let mut state = CompareState::new(path.to_path_buf());
-        let shared = state.versions[0].shared.clone();
-        state.versions[0].receiver = Some(load_b(path.to_path_buf(), shared));
+        state.start_loading(Listening::B, |shared| load_b(path.to_path_buf(), shared));
         loaded(state)
     }
 

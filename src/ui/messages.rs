@@ -293,10 +293,10 @@ mod tests {
         assert!(app.progress_rows().is_empty());
         let mut state = CompareState::new(PathBuf::from("music/b.ogg"));
         let (_sender, receiver) = std::sync::mpsc::channel();
-        state.versions[0].receiver = Some(receiver);
+        state.start_loading(crate::ui::state::compare_window::Listening::B, |_| receiver);
         state.add(PathBuf::from("music/c.ogg")).unwrap();
         let (_sender_c, receiver) = std::sync::mpsc::channel();
-        state.versions[1].receiver = Some(receiver);
+        state.start_loading(crate::ui::state::compare_window::Listening(2), |_| receiver);
         app.compare = Some(state);
         let rows = app.progress_rows();
         assert_eq!(rows.len(), 2);

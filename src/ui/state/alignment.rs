@@ -196,6 +196,19 @@ impl CompareAlignment {
         Some(format!("{} {gain:+.1} dB to match A", version.letter()))
     }
 
+    /// `versions` cannot be aligned (`reason`: a version without its audio): not asked again
+    /// for the same list.
+    pub(in crate::ui) fn unavailable(&mut self, versions: Vec<std::path::PathBuf>, reason: String) {
+        self.asked_for = Some(versions);
+        self.comparison = None;
+        self.error = Some(reason);
+    }
+
+    /// Plays each version at its matching gain, or each as it is (the panel's checkbox).
+    pub(in crate::ui) fn set_match_loudness(&mut self, on: bool) {
+        self.match_loudness = on;
+    }
+
     /// Moves `version`'s offset by `delta_s` (a nudge button).
     pub(in crate::ui) fn nudge(&mut self, version: Listening, delta_s: f64) {
         if self.nudges_s.len() <= version.0 {

@@ -213,6 +213,103 @@ impl CompareState {
         Ok(added)
     }
 
+    /// Shows the compare as `layout` (the panel's buttons, a scripted press).
+    pub(in crate::ui) fn set_layout(&mut self, layout: CompareLayout) {
+        self.layout = layout;
+    }
+
+    /// Version `version`'s cloud is loaded on a thread that answers on what `load` returns
+    /// (given the version's shared stage and Cancel).
+    pub(in crate::ui) fn start_loading(
+        &mut self,
+        version: Listening,
+        load: impl FnOnce(Shared) -> Receiver<Result<PointCloud, String>>,
+    ) {
+        if let Some(v) = version
+            .0
+            .checked_sub(1)
+            .and_then(|i| self.versions.get_mut(i))
+        {
+            v.receiver = Some(load(v.shared.clone()));
+        }
+    }
+
+    /// Decodes the audio of `version` (for key B) with `decode` when it has loaded, is not
+    /// heard and has no track yet.
+    pub(in crate::ui) fn decode_audio_of(
+        &mut self,
+        version: Listening,
+        decode: impl FnOnce(&PointCloud) -> Receiver<Result<Track, PlaybackError>>,
+    ) {
+        if self.listening == version {
+            return;
+        }
+        if let Some(v) = version
+            .0
+            .checked_sub(1)
+            .and_then(|i| self.versions.get_mut(i))
+            && let Some(cloud) = &v.loaded
+            && v.track.is_none()
+        {
+            v.decoding = Some(decode(cloud));
+        }
+    }
+
+    /// The GPU scene holds A and the version beside it as `clouds` (on the union axes), with
+    /// these axis labels.
+    pub(in crate::ui) fn scene_built(
+        &mut self,
+        clouds: Arc<(PointCloud, PointCloud)>,
+        labels: AxisLabels,
+    ) {
+        self.labels = Some(labels);
+        self.clouds = Some(clouds);
+        self.error = None;
+    }
+
+    /// The scene could not be built (`error`: the clouds have no union axes).
+    pub(in crate::ui) fn scene_failed(&mut self, error: String) {
+        self.clouds = None;
+        self.error = Some(error);
+    }
+
+    /// Builds the scene again on the next frame (an alignment came, a version was nudged).
+    pub(in crate::ui) fn rebuild_scene(&mut self) {
+        self.built_for = None;
+    }
+
+    /// The difference's CPU copy is stale (grids installed or a build started): read again.
+    pub(in crate::ui) fn forget_difference(&mut self) {
+        self.difference = None;
+    }
+
+    /// The difference's CPU copy read back for the read-outs (None: it could not be).
+    pub(in crate::ui) fn difference_read(&mut self, copy: Option<DifferenceCopy>) {
+        self.difference = copy;
+    }
+
+    /// Whether the view asked for still waits for its grids.
+    pub(in crate::ui) fn set_grids_pending(&mut self, pending: bool) {
+        self.grids_pending = pending;
+    }
+
+    /// Whether the surfaces `told` (method, isovalue bits, A's and B's triangles) are new to
+    /// stderr; they are kept as told.
+    pub(in crate::ui) fn tell_surfaces(&mut self, told: (SurfaceMethod, u32, u32, u32)) -> bool {
+        let new = self.surface_told != Some(told);
+        self.surface_told = Some(told);
+        new
+    }
+
+    /// `to` is heard now; side by side shows A and `to` (A and the last version heard when
+    /// `to` is A).
+    pub(in crate::ui) fn heard(&mut self, to: Listening) {
+        self.listening = to;
+        if to != Listening::A {
+            self.beside = to;
+        }
+    }
+
     /// Shows `version` beside A, unless another version is heard (side by side shows A and
     /// the version heard).
     pub(in crate::ui) fn show(&mut self, version: Listening) {
@@ -520,6 +617,18 @@ impl CompareState {
         match version.0.checked_sub(1) {
             None => Some(&mut self.a_track),
             Some(i) => self.versions.get_mut(i).map(|v| &mut v.track),
+        }
+    }
+
+    /// Takes `version`'s decoded song for the player (None when it has none yet).
+    pub(in crate::ui) fn take_track(&mut self, version: Listening) -> Option<Track> {
+        self.track_slot(version).and_then(Option::take)
+    }
+
+    /// Keeps `track`, the song the player gave back, as `version`'s.
+    pub(in crate::ui) fn put_track(&mut self, version: Listening, track: Option<Track>) {
+        if let Some(slot) = self.track_slot(version) {
+            *slot = track;
         }
     }
 

@@ -425,3 +425,73 @@ fn scripted_layouts_are_named_as_the_tests_press_them() {
     );
     assert_eq!(CompareLayout::named("sides"), None);
 }
+
+/// What the window does to the compare goes through its methods: key B's switch (the version
+/// heard is drawn beside A; A heard keeps the last one there), the tracks handed to the player
+/// and back, the surfaces told once, a version's audio decoded only once it has loaded and
+/// while it is not heard, and the scene built or failed.
+#[test]
+fn the_window_changes_the_compare_through_its_methods() {
+    let mut state = CompareState::new(PathBuf::from("b.ply"));
+    state.add(PathBuf::from("c.ply")).unwrap();
+    state.heard(Listening(2));
+    assert_eq!(
+        (state.listening, state.beside),
+        (Listening(2), Listening(2))
+    );
+    state.heard(Listening::A);
+    assert_eq!(
+        (state.listening, state.beside),
+        (Listening::A, Listening(2))
+    );
+
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.flac");
+    let track = || crate::playback::decode(&demo).unwrap();
+    state.put_track(Listening::B, Some(track()));
+    assert!(state.take_track(Listening::B).is_some());
+    assert!(
+        state.take_track(Listening::B).is_none(),
+        "taken by the player"
+    );
+    state.put_track(Listening(3), Some(track()));
+    assert!(
+        state.take_track(Listening(3)).is_none(),
+        "no version D: nothing kept"
+    );
+
+    let told = (SurfaceMethod::DualContouring, 0.5f32.to_bits(), 10, 12);
+    assert!(state.tell_surfaces(told));
+    assert!(!state.tell_surfaces(told), "told once");
+    assert!(state.tell_surfaces((SurfaceMethod::MarchingTetrahedra, told.1, 10, 12)));
+
+    let mut asked = 0;
+    state.decode_audio_of(Listening::B, |_| {
+        asked += 1;
+        channel().1
+    });
+    assert_eq!(asked, 0, "B has not loaded");
+    state.versions[0].loaded = Some(Arc::new(cloud(10)));
+    state.heard(Listening::B);
+    state.decode_audio_of(Listening::B, |_| {
+        asked += 1;
+        channel().1
+    });
+    assert_eq!(asked, 0, "B is heard: the player has its song");
+    state.heard(Listening::A);
+    state.decode_audio_of(Listening::B, |_| {
+        asked += 1;
+        channel().1
+    });
+    assert_eq!(asked, 1);
+    assert!(state.versions[0].decoding.is_some());
+
+    state.scene_failed("no union axes".into());
+    assert!(state.clouds.is_none() && state.error.is_some());
+    let a = cloud(10);
+    let labels =
+        crate::ui::labels::axis_labels_for_box(&a, glam::Vec3::splat(-1.0), glam::Vec3::ONE);
+    state.scene_built(Arc::new((a, cloud(10))), labels);
+    assert!(state.clouds.is_some() && state.labels.is_some() && state.error.is_none());
+    state.set_layout(CompareLayout::Difference);
+    assert_eq!(state.layout, CompareLayout::Difference);
+}
