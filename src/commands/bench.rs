@@ -36,9 +36,20 @@ pub struct BenchArgs {
     /// folder, for bench/bench_voxelize.py.
     #[arg(long)]
     pub export_points: Option<PathBuf>,
-    /// Measure only these parts: points, volume, surface (comma-separated); all when omitted.
-    #[arg(long, value_delimiter = ',')]
-    pub only: Vec<String>,
+    /// Measure only these parts (comma-separated); all when omitted.
+    #[arg(long, value_delimiter = ',', value_enum)]
+    pub only: Vec<BenchPart>,
+}
+
+/// A part of the benchmark (`--only`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchPart {
+    /// Load, first frame and points frames of the input cloud.
+    Points,
+    /// The voxel grid and volume frames of the input cloud.
+    Volume,
+    /// The isosurface extractions on the benchmark fields.
+    Surface,
 }
 
 /// The median and 90th percentile of `samples` (milliseconds).
@@ -72,23 +83,17 @@ fn timed_frame(
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    const PARTS: [&str; 3] = ["points", "volume", "surface"];
-    for part in &args.only {
-        if !PARTS.contains(&part.as_str()) {
-            anyhow::bail!("--only {part}: not one of {}", PARTS.join(", "));
-        }
-    }
-    let wants = |part: &str| args.only.is_empty() || args.only.iter().any(|p| p == part);
+    let wants = |part: BenchPart| args.only.is_empty() || args.only.contains(&part);
     let size = args.size;
     if let Some(dir) = &args.fields_dir
         && !dir.is_dir()
     {
         anyhow::bail!("{}: the folder does not exist", dir.display());
     }
-    if wants("points") {
+    if wants(BenchPart::Points) {
         bench_points(&args)?;
     }
-    if wants("volume") {
+    if wants(BenchPart::Volume) {
         super::bench_volume::run(
             &args.input,
             size,
@@ -97,7 +102,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             args.fields_dir.as_deref(),
         )?;
     }
-    if wants("surface") {
+    if wants(BenchPart::Surface) {
         let surfaces = super::bench_surface::run(args.runs, args.iso, args.fields_dir.as_deref())?;
         super::bench_surface::print_paper_comparison(&surfaces);
     }

@@ -1,5 +1,6 @@
 //! `loudscape bench --only volume`: the volume part measures the INPUT cloud (with its own grid
-//! resolution) at the `--size` frame, and a bad size fails with one line before any work.
+//! resolution) at the `--size` frame, and a bad size or an unknown part fails with one line
+//! before any work.
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -60,4 +61,20 @@ fn a_bad_size_fails_with_one_line_before_any_work() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
     assert!(stderr.contains("320by200"), "{stderr}");
+}
+
+/// `--only` takes the parts by name (clap's `ValueEnum`): an unknown one is a usage error
+/// (exit 2, one line naming it and the possible values) before any work.
+#[test]
+fn an_unknown_part_is_a_usage_error() {
+    let (output, stdout) = bench(&["--only", "points,lighting"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stdout.is_empty(), "work started: {stdout}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    for word in ["lighting", "points", "volume", "surface"] {
+        assert!(lines[0].contains(word), "no {word}: {}", lines[0]);
+    }
+    assert!(!stderr.contains("panicked"));
 }
