@@ -368,7 +368,8 @@ impl eframe::App for LoudscapeApp {
             ctx.request_repaint();
         }
         if let Some(render_state) = frame.wgpu_render_state() {
-            self.clock.renders = ViewResources::read(render_state, |r| r.renders()).unwrap_or(0);
+            self.clock
+                .rendered(ViewResources::read(render_state, |r| r.renders()).unwrap_or(0));
         }
     }
 }

@@ -34,6 +34,11 @@ impl FrameClock {
     pub(in crate::ui) fn ms(&self) -> f32 {
         self.ms
     }
+
+    /// The bridge has rendered the scene `renders` times so far.
+    pub(in crate::ui) fn rendered(&mut self, renders: u64) {
+        self.renders = renders;
+    }
 }
 
 #[cfg(test)]
