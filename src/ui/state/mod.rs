@@ -1,27 +1,31 @@
 //! What the window keeps between frames: [`LoudscapeApp`] and the types of its fields. This
 //! folder is the floor under the window's behaviour, which lives in `ui/`, one file a concern,
 //! each adding its methods to `LoudscapeApp`: `app.rs` (opening the window, one frame),
-//! `view_3d.rs` (the 3D view's steps), `slots.rs` (loading and installing clouds), `panels.rs` (the side panel), `hover.rs`
-//! (picking and markers), `persistence.rs` (what is remembered between runs),
-//! `window_screenshot.rs` (the two screenshot paths) and more. A concern with state of its own
-//! keeps it here under the same name: `open.rs` (the Open row, [`open::OpenPanel`]),
-//! `extract_settings.rs` (the extraction settings it holds), `timeline_build.rs` (a timeline
-//! on its way, the years typed), `compare_window.rs` (the A/B compare) and `iso_sweep.rs` (the
-//! scripted isovalue sweep); `loading.rs` is a load on its way and what its thread shares.
-//! State that owns its updates has a file of its own: `view_motion.rs` (the camera, its fit and
-//! motion), `surface_status.rs` (the surface's status and level of detail), `frame_clock.rs`
-//! (frame number, pace, renders) and `slot.rs` (which data slot).
+//! `view_3d.rs` (the 3D view's steps), `slots.rs` (loading and installing clouds), `panels.rs`
+//! (the side panel), `hover.rs` (picking and markers), `persistence.rs` (what is remembered
+//! between runs), `window_screenshot.rs` (the two screenshot paths) and more. A concern with
+//! state of its own keeps it here under the same name: `open.rs` (the Open row,
+//! [`open::OpenPanel`]), `extract_settings.rs` (the extraction settings it holds) and
+//! `iso_sweep.rs` (the scripted isovalue sweep); `loading.rs` is a load on its way and what its
+//! thread shares. State that owns its updates (the behaviour files change it through its
+//! methods, and read its fields) has a file of its own: `view_motion.rs` (the camera, its fit
+//! and motion), `surface_status.rs` (the surface's status and level of detail),
+//! `frame_clock.rs` (frame number, pace, renders), `messages.rs` (what the window tells the
+//! user), `timeline_build.rs` (a timeline on its way, the years typed: `TimelineBuilder`),
+//! `compare_window.rs` (the A/B compare, `CompareState`, with `alignment.rs`) and `slot.rs`
+//! (which data slot); the playback's owner is `ui/audio.rs`'s `AudioPanel`.
 //! This file holds `LoudscapeApp` and the small types of its other fields (a loaded cloud, the
 //! hover, the screenshot, the "Save PNG" panel).
 //!
 //! Nothing here imports a behaviour file: only the floors below (`audio.rs`, `labels.rs`,
 //! `recent.rs`, `strip.rs`, and the crate's data, view and render types), and within the
 //! folder only downward (this file imports its children; `open.rs` imports
-//! `extract_settings.rs`; `timeline_build.rs` imports `loading.rs`; `view_motion.rs`
-//! imports `slot.rs`; none imports this file). So each behaviour file sees the whole state without importing another for a type, and
-//! no import runs back up. A type's own plain methods (those that need no `LoudscapeApp`) and
-//! their tests sit with it here; its fields are open to `ui/` (`pub(in crate::ui)`), because
-//! the behaviour files read and write them.
+//! `extract_settings.rs`; `timeline_build.rs` imports `loading.rs`; `view_motion.rs` imports
+//! `slot.rs`; none imports this file). So each behaviour file sees the whole state without
+//! importing another for a type, and no import runs back up. A type's own plain methods (those
+//! that need no `LoudscapeApp`) and their tests sit with it here; its fields are open to `ui/`
+//! (`pub(in crate::ui)`) for the behaviour files to read, and to write where no owner type
+//! holds them yet (`python3 scripts/app_state_writes.py` lists those writes).
 
 use std::path::PathBuf;
 use std::sync::Arc;
