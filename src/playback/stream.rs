@@ -558,23 +558,7 @@ mod tests {
             std::process::id()
         ));
         std::fs::create_dir_all(&dir).expect("temp dir");
-        let data: Vec<u8> = (0..frames)
-            .flat_map(|i| ((i % 32_768) as i16).to_le_bytes())
-            .collect();
-        let mut b = Vec::with_capacity(44 + data.len());
-        b.extend_from_slice(b"RIFF");
-        b.extend_from_slice(&(36 + data.len() as u32).to_le_bytes());
-        b.extend_from_slice(b"WAVEfmt ");
-        b.extend_from_slice(&16u32.to_le_bytes());
-        b.extend_from_slice(&1u16.to_le_bytes()); // PCM
-        b.extend_from_slice(&1u16.to_le_bytes()); // mono
-        b.extend_from_slice(&RATE.to_le_bytes());
-        b.extend_from_slice(&(RATE * 2).to_le_bytes());
-        b.extend_from_slice(&2u16.to_le_bytes());
-        b.extend_from_slice(&16u16.to_le_bytes());
-        b.extend_from_slice(b"data");
-        b.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        b.extend_from_slice(&data);
+        let b = crate::playback::mono_wav_bytes(RATE, (0..frames).map(|i| (i % 32_768) as i16));
         let path = dir.join("ramp.wav");
         std::fs::write(&path, b).expect("write wav");
         (dir, path)

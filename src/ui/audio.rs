@@ -387,22 +387,9 @@ mod tests {
 
     /// A silent mono 16-bit WAV of `seconds` at 8 kHz.
     fn silent_wav(path: &Path, seconds: u32) {
-        let data = vec![0u8; (RATE * seconds * 2) as usize];
-        let mut b = Vec::with_capacity(44 + data.len());
-        b.extend_from_slice(b"RIFF");
-        b.extend_from_slice(&(36 + data.len() as u32).to_le_bytes());
-        b.extend_from_slice(b"WAVEfmt ");
-        b.extend_from_slice(&16u32.to_le_bytes());
-        b.extend_from_slice(&1u16.to_le_bytes()); // PCM
-        b.extend_from_slice(&1u16.to_le_bytes()); // mono
-        b.extend_from_slice(&RATE.to_le_bytes());
-        b.extend_from_slice(&(RATE * 2).to_le_bytes());
-        b.extend_from_slice(&2u16.to_le_bytes());
-        b.extend_from_slice(&16u16.to_le_bytes());
-        b.extend_from_slice(b"data");
-        b.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        b.extend_from_slice(&data);
-        std::fs::write(path, b).expect("write wav");
+        let samples = std::iter::repeat_n(0i16, (RATE * seconds) as usize);
+        let bytes = crate::playback::mono_wav_bytes(RATE, samples);
+        std::fs::write(path, bytes).expect("write wav");
     }
 
     /// Polls the panel until its song is loaded (the decode runs on a thread).
