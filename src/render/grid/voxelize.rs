@@ -31,6 +31,7 @@ use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry, whole_buffer_entries};
 use crate::render::gpu::readback::{ReadbackError, read_buffer};
 use crate::render::grid::VoxelGrid;
+pub use crate::render::grid::voxelize_cpu::{FIXED_POINT_SCALE, HP_FIXED_POINT_SCALE, VoxelStats};
 use crate::render::grid::voxelize_cpu::{
     HISTOGRAM_BINS, HISTOGRAM_BINS_PER_OCTAVE, HISTOGRAM_LOG2_MIN, PERCENTILE, gaussian_weights,
     grid_box, grid_box_mapped, grid_box_of_bounds, voxels_per_unit,
@@ -44,11 +45,6 @@ pub const SONG_RESOLUTION: u32 = 128;
 pub const TIMELINE_RESOLUTION: u32 = 224;
 pub const MIN_RESOLUTION: u32 = 64;
 pub const MAX_RESOLUTION: u32 = 384;
-/// Fixed-point units per 1.0 of scalar or hp. One point adds at most 2^20 to a 64-bit sum, so no
-/// cloud that fits a GPU buffer can overflow it; the rounding error is at most 2^-21 per point.
-pub const FIXED_POINT_SCALE: u32 = 1 << 20;
-/// Fixed-point units per 1.0 of hp, in a 64-bit sum of its own (the count has its own u32).
-pub const HP_FIXED_POINT_SCALE: u32 = 1 << 16;
 /// Most points per voxelization: the per-voxel count is a u32. A cloud this large would take
 /// 86 GB at 20 bytes a point, so no cloud a machine holds reaches it.
 pub const MAX_POINTS: usize = u32::MAX as usize;
@@ -145,18 +141,6 @@ pub enum VoxelizeError {
     TooManyPoints(usize),
     #[error("voxelization: {0}")]
     Readback(#[from] ReadbackError),
-}
-
-/// What the normalization found, read back after a build.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct VoxelStats {
-    /// Voxels with a positive (smoothed) loudness sum.
-    pub nonempty: u32,
-    /// The loudness sum that maps to density 1 (the 99th-percentile histogram bin's upper edge,
-    /// capped at the largest sum).
-    pub reference_sum: f32,
-    /// Voxels whose sum exceeded the reference and were clamped to 1.
-    pub clamped: u32,
 }
 
 /// Where a build's points come from.

@@ -9,6 +9,24 @@ use glam::{UVec3, Vec3};
 use crate::data::cloud::Point;
 use crate::data::freq_axis::FreqMapping;
 
+/// Fixed-point units per 1.0 of scalar or hp. One point adds at most 2^20 to a 64-bit sum, so no
+/// cloud that fits a GPU buffer can overflow it; the rounding error is at most 2^-21 per point.
+pub const FIXED_POINT_SCALE: u32 = 1 << 20;
+/// Fixed-point units per 1.0 of hp, in a 64-bit sum of its own (the count has its own u32).
+pub const HP_FIXED_POINT_SCALE: u32 = 1 << 16;
+
+/// What the normalization found, read back after a build.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelStats {
+    /// Voxels with a positive (smoothed) loudness sum.
+    pub nonempty: u32,
+    /// The loudness sum that maps to density 1 (the 99th-percentile histogram bin's upper edge,
+    /// capped at the largest sum).
+    pub reference_sum: f32,
+    /// Voxels whose sum exceeded the reference and were clamped to 1.
+    pub clamped: u32,
+}
+
 /// The density is normalized by this percentile of the voxels with a positive loudness sum.
 pub const PERCENTILE: f64 = 0.99;
 pub const HISTOGRAM_BINS: u32 = 1024;

@@ -17,9 +17,9 @@ use glam::{UVec3, Vec3};
 
 use crate::data::cloud::Point;
 use crate::data::freq_axis::FreqMapping;
-use crate::render::grid::voxelize::{FIXED_POINT_SCALE, HP_FIXED_POINT_SCALE, VoxelStats};
 use crate::render::grid::voxelize_cpu::{
-    gaussian_weights, reference_sum, voxel_of, voxels_per_unit,
+    FIXED_POINT_SCALE, HP_FIXED_POINT_SCALE, VoxelStats, gaussian_weights, reference_sum, voxel_of,
+    voxels_per_unit,
 };
 
 /// A grid built on the CPU: the normalized density and mean hp per voxel (the grid's layout,
