@@ -53,11 +53,20 @@ impl VoxelGrid {
         // Padded to whole groups of four voxels as the voxelize pass leaves its fields (the
         // passes that read four voxels at a time bind them whole), the padding an empty voxel.
         let padded = |field: &[f32], empty: f32| {
-            let mut padded = field.to_vec();
+            let mut padded = Vec::with_capacity(n.div_ceil(4) * 4);
+            padded.extend_from_slice(field);
             padded.resize(n.div_ceil(4) * 4, empty);
             padded
         };
-        let (density, hp_mean) = (&padded(density, 0.0)[..], &padded(hp_mean, 0.5)[..]);
+        let padding = !n.is_multiple_of(4);
+        let (density_padded, hp_padded);
+        let (density, hp_mean) = if padding {
+            density_padded = padded(density, 0.0);
+            hp_padded = padded(hp_mean, 0.5);
+            (&density_padded[..], &hp_padded[..])
+        } else {
+            (density, hp_mean)
+        };
         let usage = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;

@@ -42,10 +42,9 @@ pub fn build(
 ) -> HostGrid {
     let voxels = (dims.x * dims.y * dims.z) as usize;
     let per_unit = voxels_per_unit(dims, box_min, box_max);
-    // accumulate: exact 64-bit fixed-point sums and a count per voxel.
-    let mut loudness = vec![0u64; voxels];
-    let mut hp_sums = vec![0u64; voxels];
-    let mut counts = vec![0u32; voxels];
+    // accumulate: exact 64-bit fixed-point sums and a count per voxel, side by side so that a
+    // point touches one place in memory, not three.
+    let mut sums = vec![Sums::default(); voxels];
     for (index, point) in points.iter().enumerate() {
         let [x, y, z] = point.position;
         let z = match mapping {
@@ -61,39 +60,27 @@ pub fn build(
             continue;
         }
         let v = voxel_of(p, box_min, per_unit, dims);
-        let i = (v.x + dims.x * (v.y + dims.y * v.z)) as usize;
-        loudness[i] += fixed(point.scalar, FIXED_POINT_SCALE);
-        hp_sums[i] += fixed(point.hp, HP_FIXED_POINT_SCALE);
-        counts[i] += 1;
+        let voxel = &mut sums[(v.x + dims.x * (v.y + dims.y * v.z)) as usize];
+        voxel.loudness += fixed(point.scalar, FIXED_POINT_SCALE);
+        voxel.hp += fixed(point.hp, HP_FIXED_POINT_SCALE);
+        voxel.count += 1;
     }
     // resolve: the sums as f32 (the high word times 2^32 plus the low word, as the shader
     // converts them) and the mean hp (0.5 where a voxel holds no point).
     let as_f32 = |sum: u64, scale: u32| {
         ((sum >> 32) as u32 as f32 * 4_294_967_296.0 + sum as u32 as f32) / scale as f32
     };
-    let mut density: Vec<f32> = loudness
+    let (mut density, hp_mean): (Vec<f32>, Vec<f32>) = sums
         .iter()
-        .zip(&counts)
-        .map(|(&sum, &n)| {
-            if n == 0 {
-                0.0
-            } else {
-                as_f32(sum, FIXED_POINT_SCALE)
-            }
+        .map(|s| match s.count {
+            0 => (0.0, 0.5),
+            n => (
+                as_f32(s.loudness, FIXED_POINT_SCALE),
+                (as_f32(s.hp, HP_FIXED_POINT_SCALE) / n as f32).clamp(0.0, 1.0),
+            ),
         })
-        .collect();
-    let hp_mean: Vec<f32> = hp_sums
-        .iter()
-        .zip(&counts)
-        .map(|(&sum, &n)| {
-            if n == 0 {
-                0.5
-            } else {
-                (as_f32(sum, HP_FIXED_POINT_SCALE) / n as f32).clamp(0.0, 1.0)
-            }
-        })
-        .collect();
-    drop((loudness, hp_sums, counts));
+        .unzip();
+    drop(sums);
     if sigma > 0.0 {
         let weights = gaussian_weights(sigma);
         let mut scratch = vec![0.0f32; voxels];
@@ -122,14 +109,23 @@ pub fn build(
     }
 }
 
+/// One voxel's sums as `accumulate` keeps them: loudness and hp in fixed point, and the count.
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    loudness: u64,
+    hp: u64,
+    count: u32,
+}
+
 /// A value in [0, 1] as fixed-point units of `scale`, rounded half to even as WGSL's `round`.
 fn fixed(value: f32, scale: u32) -> u64 {
     (value.clamp(0.0, 1.0) * scale as f32).round_ties_even() as u64
 }
 
 /// One axis of the separable Gaussian, as `smooth_axis` in the shader: the weights of the
-/// offsets inside the grid, renormalized at its edges, summed in f32 from the lowest offset up.
-/// The slabs of constant z are shared among the cores.
+/// offsets inside the grid, renormalized at its edges, each voxel's sum taken in f32 from the
+/// lowest offset up (here a row of voxels at a time, the same operations per voxel in the same
+/// order). The slabs of constant z are shared among the cores.
 fn smooth_axis(input: &[f32], output: &mut [f32], dims: UVec3, axis: usize, weights: &[f32]) {
     let radius = weights.len() as i64 - 1;
     let (nx, ny) = (dims.x as usize, dims.y as usize);
@@ -141,11 +137,33 @@ fn smooth_axis(input: &[f32], output: &mut [f32], dims: UVec3, axis: usize, weig
     std::thread::scope(|scope| {
         for (part, out) in output.chunks_mut(slabs_per_thread * slab).enumerate() {
             scope.spawn(move || {
-                let first = part * slabs_per_thread * slab;
-                for (offset, value) in out.iter_mut().enumerate() {
-                    let voxel = first + offset;
-                    let here = [voxel % nx, (voxel / nx) % ny, voxel / slab][axis] as i64;
-                    let mut total = 0.0f32;
+                let first_row = part * slabs_per_thread * ny;
+                for (r, row) in out.chunks_mut(nx).enumerate() {
+                    let row_index = first_row + r;
+                    let start = (row_index * nx) as i64;
+                    if axis == 0 {
+                        for (i, value) in row.iter_mut().enumerate() {
+                            let (mut total, mut weight_sum) = (0.0f32, 0.0f32);
+                            for o in -radius..=radius {
+                                let at = i as i64 + o;
+                                if at < 0 || at >= extent {
+                                    continue;
+                                }
+                                let w = weights[o.unsigned_abs() as usize];
+                                total += w * input[(start + at) as usize];
+                                weight_sum += w;
+                            }
+                            *value = total / weight_sum.max(1e-12);
+                        }
+                        continue;
+                    }
+                    // Along y or z every voxel of the row has the same offsets inside the grid.
+                    let here = if axis == 1 {
+                        row_index % ny
+                    } else {
+                        row_index / ny
+                    } as i64;
+                    row.fill(0.0);
                     let mut weight_sum = 0.0f32;
                     for o in -radius..=radius {
                         let at = here + o;
@@ -153,10 +171,16 @@ fn smooth_axis(input: &[f32], output: &mut [f32], dims: UVec3, axis: usize, weig
                             continue;
                         }
                         let w = weights[o.unsigned_abs() as usize];
-                        total += w * input[(voxel as i64 + o * stride) as usize];
+                        let from = (start + o * stride) as usize;
+                        for (value, x) in row.iter_mut().zip(&input[from..from + nx]) {
+                            *value += w * x;
+                        }
                         weight_sum += w;
                     }
-                    *value = total / weight_sum.max(1e-12);
+                    let weight_sum = weight_sum.max(1e-12);
+                    for value in row.iter_mut() {
+                        *value /= weight_sum;
+                    }
                 }
             });
         }
