@@ -165,7 +165,7 @@ $(WEB_OUT)/loudscape_bg.wasm: $(WEB_SOURCES)
 	@command -v wasm-bindgen >/dev/null && wasm-bindgen --version | grep -q " $(WASM_BINDGEN_VERSION)$$" || \
 		{ echo "make web: needs wasm-bindgen $(WASM_BINDGEN_VERSION): cargo install wasm-bindgen-cli --version $(WASM_BINDGEN_VERSION)"; exit 1; }
 	$(CARGO) rustc --lib --crate-type cdylib --target wasm32-unknown-unknown --profile web
-	wasm-bindgen --target no-modules --no-typescript --out-dir $(WEB_OUT) \
+	wasm-bindgen --target no-modules --no-typescript --remove-name-section --remove-producers-section --out-dir $(WEB_OUT) \
 		$(WEB_TARGET_DIR)/wasm32-unknown-unknown/web/loudscape.wasm
 	touch $@
 

@@ -110,6 +110,7 @@ impl WebApp {
         crate::render::gpu::context::check_limits(&device.limits())
             .map_err(|reason| format!("the browser's GPU is too small for loudscape: {reason}"))?;
         device.on_uncaptured_error(Arc::new(|error| log::error!("wgpu error: {error}")));
+        cc.egui_ctx.set_theme(egui::Theme::Dark);
         let renderer = Renderer::new(device);
         let scene = SceneData::new(device, &renderer, &cloud);
         let world_from_data = scene.world_from_data;
@@ -236,7 +237,7 @@ fn hp_strip(ui: &mut egui::Ui, map: crate::render::colormap::HpColourMap) {
     }
     ui.horizontal(|ui| {
         ui.label(egui::RichText::new("percussive (0)").small());
-        ui.add_space(40.0);
+        ui.add_space(70.0);
         ui.label(egui::RichText::new("harmonic (1)").small());
     });
 }

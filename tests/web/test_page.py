@@ -1,0 +1,155 @@
+"""`loudscape page`: the song's web page in a real browser.
+
+Debian's chromium, headless, driven by Playwright (``executable_path``: Playwright downloads no
+browser here). SwiftShader gives the headless browser a WebGPU adapter on the CPU. The page is
+opened from a ``file://`` URL, as someone who was sent the file would open it. The binary is
+``$LOUDSCAPE_BIN`` (``make test-web`` builds it and the viewer's wasm, ``make web``).
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from playwright.sync_api import sync_playwright
+
+ROOT = Path(__file__).resolve().parents[2]
+SONG = ROOT / "data" / "demo_song.ply"
+BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape")).absolute()
+CHROMIUM = os.environ.get("LOUDSCAPE_CHROMIUM", "/usr/bin/chromium")
+# SwiftShader's WebGPU adapter; the Vulkan feature makes headless chromium composite the WebGPU
+# canvas into screenshots (without it the canvas shows blank, though the page draws).
+CHROMIUM_ARGS = [
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--enable-unsafe-webgpu",
+    "--enable-features=Vulkan",
+    "--use-vulkan=swiftshader",
+]
+# The issue's budget for a page without audio.
+PAGE_BUDGET_BYTES = 12_000_000
+# How long the browser may take to start the viewer and draw (software WebGPU on a small machine).
+DEADLINE_S = 120.0
+VIEWPORT = {"width": 1000, "height": 640}
+# Where the screenshots are kept for a look (make test-web prints the folder).
+SHOTS = ROOT / "tests" / "output" / "web"
+
+
+@pytest.fixture(scope="module")
+def page_file(tmp_path_factory) -> Path:
+    if not BINARY.is_file():
+        pytest.fail(f"{BINARY} does not exist: run `cargo build` (or set LOUDSCAPE_BIN)")
+    out = tmp_path_factory.mktemp("page") / "demo_song.html"
+    run = subprocess.run(
+        [str(BINARY), "page", str(SONG), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "wrote" in run.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not Path(CHROMIUM).is_file():
+        pytest.fail(f"{CHROMIUM} does not exist: install chromium (or set LOUDSCAPE_CHROMIUM)")
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(
+            executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
+        )
+        yield browser
+        browser.close()
+
+
+def _view_pixels(page) -> np.ndarray:
+    """The 3D view's part of the canvas (left of the legend panel) as RGB."""
+    png = page.locator("#loudscape-view").screenshot()
+    rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    return rgb[:, : rgb.shape[1] * 6 // 10]
+
+
+def _point_colours(rgb: np.ndarray) -> tuple[int, int]:
+    """Pixels of the warm (percussive) and of the cool (harmonic) end of the points' colours."""
+    r, b = rgb[..., 0], rgb[..., 2]
+    warm = int(np.count_nonzero((r > b + 60) & (r > 120)))
+    cool = int(np.count_nonzero((b > r + 60) & (b > 120)))
+    return warm, cool
+
+
+def _next_frames(page):
+    """Returns once the page has drawn two more animation frames."""
+    page.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+
+
+def _wait_for(predicate, what: str):
+    """Polls `predicate` until it returns something other than None, up to the deadline."""
+    deadline = time.monotonic() + DEADLINE_S
+    while True:
+        value = predicate()
+        if value is not None:
+            return value
+        if time.monotonic() > deadline:
+            pytest.fail(f"after {DEADLINE_S:.0f} s: {what}")
+        time.sleep(0.2)
+
+
+def test_the_page_stays_in_its_budget(page_file):
+    size = page_file.stat().st_size
+    print(f"\npage of {SONG.name}: {size / 1e6:.2f} MB (budget {PAGE_BUDGET_BYTES / 1e6:.0f} MB)")
+    assert size <= PAGE_BUDGET_BYTES
+    text = page_file.read_text()
+    # Self-contained: no file or address is fetched besides the page itself.
+    for ref in ('src="', "href=", "fetch("):
+        assert ref not in text.replace("fetch(module_or_path)", ""), ref
+
+
+def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    state = page.evaluate("document.body.dataset.state")
+    assert state == "running", page.inner_text("#message")
+
+    def coloured():
+        rgb = _view_pixels(page)
+        warm, cool = _point_colours(rgb)
+        return rgb if warm > 200 and cool > 200 else None
+
+    before = _wait_for(coloured, "the view never showed the points' warm and cool colours")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(before.astype(np.uint8)).save(SHOTS / "page_before_drag.png")
+    warm, cool = _point_colours(before)
+    print(f"\nwarm pixels {warm}, cool pixels {cool}")
+
+    box = page.locator("#loudscape-view").bounding_box()
+    x, y = box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.5
+    page.mouse.move(x, y)
+    page.mouse.down()
+    _next_frames(page)
+    for step in range(1, 11):
+        page.mouse.move(x + 20 * step, y + 4 * step)
+        _next_frames(page)
+    page.mouse.up()
+
+    def turned():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+        return (rgb, changed) if changed > 0.01 * rgb.shape[0] * rgb.shape[1] else None
+
+    after, changed = _wait_for(turned, "a drag over the view did not change the picture")
+    Image.fromarray(after.astype(np.uint8)).save(SHOTS / "page_after_drag.png")
+    print(f"pixels changed by the drag: {changed}")
+    assert min(_point_colours(after)) > 200, "the points left the view after the drag"
+    assert errors == [], errors
+    page.close()
