@@ -129,6 +129,7 @@ def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
     before = _wait_for(coloured, "the view never showed the points' warm and cool colours")
     SHOTS.mkdir(parents=True, exist_ok=True)
     Image.fromarray(before.astype(np.uint8)).save(SHOTS / "page_before_drag.png")
+    page.screenshot(path=SHOTS / "page.png")
     warm, cool = _point_colours(before)
     print(f"\nwarm pixels {warm}, cool pixels {cool}")
 
@@ -151,5 +152,59 @@ def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
     Image.fromarray(after.astype(np.uint8)).save(SHOTS / "page_after_drag.png")
     print(f"pixels changed by the drag: {changed}")
     assert min(_point_colours(after)) > 200, "the points left the view after the drag"
+
+    # R resets the camera and fits it again: the first picture comes back.
+    page.keyboard.press("r")
+
+    def reset():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+        return changed if changed < 0.001 * rgb.shape[0] * rgb.shape[1] else None
+
+    _wait_for(reset, "R did not bring back the first view")
     assert errors == [], errors
     page.close()
+
+
+def test_a_browser_without_webgpu_gets_a_message(browser, page_file):
+    page = browser.new_page(viewport=VIEWPORT)
+    page.add_init_script("Object.defineProperty(navigator, 'gpu', { value: undefined })")
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    assert page.evaluate("document.body.dataset.state") == "no-webgpu"
+    message = page.locator("#message")
+    assert message.is_visible()
+    assert "WebGPU" in message.inner_text()
+    page.close()
+
+
+def test_a_three_minute_song_is_thinned_into_the_budget(tmp_path):
+    """180 s at the demo song's density (points a second), random values (which pack worse
+    than music), written as a PLY without metadata."""
+    with SONG.open("rb") as f:
+        header = f.read(1 << 20).split(b"end_header\n")[0].decode("ascii", "replace")
+    demo_points = int(
+        next(x for x in header.splitlines() if x.startswith("element vertex")).split()[2]
+    )
+    count = demo_points * 6
+    rng = np.random.default_rng(38)
+    points = np.empty((count, 5), dtype="<f4")
+    points[:, :3] = rng.uniform(-1, 1, (count, 3))
+    points[:, 3:] = rng.uniform(0, 1, (count, 2))
+    ply = tmp_path / "three_minutes.ply"
+    with ply.open("wb") as f:
+        f.write(b"ply\nformat binary_little_endian 1.0\n")
+        f.write(f"element vertex {count}\n".encode())
+        for name in ("x", "y", "z", "scalar", "hp"):
+            f.write(f"property float {name}\n".encode())
+        f.write(b"end_header\n")
+        f.write(points.tobytes())
+    out = tmp_path / "three_minutes.html"
+    run = subprocess.run(
+        [str(BINARY), "page", str(ply), "-o", str(out)], capture_output=True, text=True, check=False
+    )
+    assert run.returncode == 0, run.stderr
+    size = out.stat().st_size
+    print(f"\npage of {count} points (3 minutes): {size / 1e6:.2f} MB; {run.stderr.strip()}")
+    assert size <= PAGE_BUDGET_BYTES
+    assert f"of the song's {count} points" in out.read_text()
