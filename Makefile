@@ -173,6 +173,7 @@ web: $(WEB_OUT)/loudscape_bg.wasm
 
 # The page in a real browser: Debian's chromium headless through Playwright (tests/web/).
 test-web: web venv
+	$(PY) -c "import playwright" 2>/dev/null || $(VENV)/bin/pip install -q --no-cache-dir playwright
 	$(CARGO) build --bin loudscape
 	LOUDSCAPE_BIN=$(WEB_TARGET_DIR)/debug/loudscape $(VENV)/bin/pytest -q tests/web
 
