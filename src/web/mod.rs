@@ -6,11 +6,13 @@
 //! one egui paint callback, as the window's (src/ui/bridge.rs): `prepare` renders the scene
 //! with [`Renderer::render`] into an offscreen target sized to the view, `paint` composites it
 //! into egui's frame. Drags orbit (primary) or pan (secondary), the wheel zooms, F fits and R
-//! resets, as in the window. A side panel holds the legend (the hp colours, the axes with their
+//! resets, as in the window; P and V (or the side panel) choose the Points or the Volume view.
+//! The Volume view's grid is built on the GPU by the window's voxelize pass when first shown. A side panel holds the legend (the hp colours, the axes with their
 //! units) and what the page thinned.
 //!
-//! WebGPU only: the points pass reads its points from storage buffers in the vertex shader,
-//! which WebGL2 does not have, so where the browser has no WebGPU the page says so instead.
+//! WebGPU only: the points pass reads its points from storage buffers in the vertex shader and
+//! the voxel grid is built by compute passes, neither of which WebGL2 has, so where the browser
+//! has no WebGPU the page says so instead.
 
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -23,7 +25,8 @@ use wasm_bindgen::prelude::*;
 use crate::data::cloud::PointCloud;
 use crate::render::composite::CompositePass;
 use crate::render::gpu::target::RenderTarget;
-use crate::render::scene::{RenderSettings, Renderer, SceneData};
+use crate::render::grid::voxelize::{VoxelizePass, VoxelizeRequest};
+use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
 
@@ -85,7 +88,10 @@ struct WebResources {
 
 /// The viewer: the camera, the settings and what the side panel says.
 struct WebApp {
+    render_state: egui_wgpu::RenderState,
     cloud: PointCloud,
+    /// Why the volume cannot be shown, once a build failed.
+    volume_error: Option<String>,
     note: String,
     camera: Camera,
     world_from_data: Mat4,
@@ -129,6 +135,8 @@ impl WebApp {
         let mut settings = RenderSettings::default();
         settings.points.size_px = crate::render::points::PointStyle::size_for(cloud.len());
         Ok(Self {
+            render_state: render_state.clone(),
+            volume_error: None,
             cloud,
             note,
             camera: Camera::default(),
@@ -140,7 +148,74 @@ impl WebApp {
         })
     }
 
-    fn side_panel(&self, ui: &mut egui::Ui) {
+    /// Builds the voxel grid the Volume view draws, once, on the GPU (the window's voxelize
+    /// pass; its statistics are not read back, as a page cannot wait for the GPU).
+    fn ensure_volume(&mut self) -> Result<(), String> {
+        let state = &self.render_state;
+        let mut renderer = state.renderer.write();
+        let Some(res) = renderer.callback_resources.get_mut::<WebResources>() else {
+            return Ok(());
+        };
+        if res.scene.grid.is_some() {
+            return Ok(());
+        }
+        let mode = self.cloud.meta.mode;
+        let voxels = &self.settings.voxels;
+        let request = VoxelizeRequest::on_device(
+            res.scene.points.chunk_buffers(),
+            (self.cloud.bounds.min, self.cloud.bounds.max),
+            voxels.resolution_for(mode),
+            voxels.smoothing_for(mode),
+        );
+        let job = res
+            .renderer
+            .voxelize
+            .prepare(&state.device, &request)
+            .map_err(|e| e.to_string())?;
+        let mut encoder = state
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("web::voxelize"),
+            });
+        res.renderer.voxelize.encode(&mut encoder, &job, None);
+        state.queue.submit([encoder.finish()]);
+        let grid = VoxelizePass::finish(job);
+        res.scene
+            .set_grid(&state.device, &res.renderer, grid, None, mode, voxels);
+        Ok(())
+    }
+
+    fn view_choice(&mut self, ui: &mut egui::Ui) {
+        let (points, volume) =
+            ui.input(|i| (i.key_pressed(egui::Key::P), i.key_pressed(egui::Key::V)));
+        if points {
+            self.settings.view = ViewKind::Points;
+        }
+        if volume {
+            self.settings.view = ViewKind::Volume;
+        }
+        ui.horizontal(|ui| {
+            ui.label("View:");
+            for view in [ViewKind::Points, ViewKind::Volume] {
+                ui.selectable_value(&mut self.settings.view, view, view.name());
+            }
+        });
+        if self.settings.view == ViewKind::Volume
+            && self.volume_error.is_none()
+            && let Err(error) = self.ensure_volume()
+        {
+            self.volume_error = Some(error);
+        }
+        if let Some(error) = &self.volume_error {
+            ui.colored_label(
+                egui::Color32::from_rgb(230, 120, 90),
+                format!("The volume cannot be shown: {error}"),
+            );
+            self.settings.view = ViewKind::Points;
+        }
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
         ui.heading(crate::annotate::legend::picture_name(&self.cloud));
         ui.label(format!("{} points", self.cloud.len()));
         if !self.note.is_empty() {
@@ -150,8 +225,18 @@ impl WebApp {
             ui.colored_label(egui::Color32::from_rgb(230, 180, 60), line);
         }
         ui.separator();
-        ui.label("Colour: harmonic-percussive ratio (hp)");
-        hp_strip(ui, self.settings.colours.hp);
+        self.view_choice(ui);
+        ui.separator();
+        if self.settings.view == ViewKind::Volume {
+            ui.label(format!(
+                "Volume: density of the points on a voxel grid, coloured and made opaque by \
+                 the {} transfer function",
+                self.settings.volume.preset.name()
+            ));
+        } else {
+            ui.label("Colour: harmonic-percussive ratio (hp)");
+            hp_strip(ui, self.settings.colours.hp);
+        }
         ui.separator();
         let axes = &self.cloud.meta.axes;
         egui::Grid::new("axes").show(ui, |ui| {
@@ -173,7 +258,8 @@ impl WebApp {
         ui.separator();
         ui.label(
             egui::RichText::new(
-                "Drag: orbit · right drag: pan · wheel: zoom · F: fit · R: reset view",
+                "Drag: orbit · right drag: pan · wheel: zoom · F: fit · R: reset view · P: points · \
+                 V: volume",
             )
             .small(),
         );

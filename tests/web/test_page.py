@@ -166,6 +166,38 @@ def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
     page.close()
 
 
+def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
+    """V shows the Volume view: the window's voxelize compute passes and ray march on WebGPU."""
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+
+    def coloured():
+        rgb = _view_pixels(page)
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    points = _wait_for(coloured, "the view never showed the points")
+    page.locator("#loudscape-view").focus()
+    page.keyboard.press("v")
+
+    def volume():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - points).sum(axis=2) > 30)
+        lit = np.count_nonzero(rgb.max(axis=2) > 100)
+        whole = rgb.shape[0] * rgb.shape[1]
+        return (rgb, changed, lit) if changed > 0.05 * whole and lit > 0.05 * whole else None
+
+    shown, changed, lit = _wait_for(volume, "V did not show a volume")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(shown.astype(np.uint8)).save(SHOTS / "page_volume.png")
+    print(f"\nvolume: {changed} pixels changed from the points, {lit} lit")
+    assert errors == [], errors
+    page.close()
+
+
 def test_a_browser_without_webgpu_gets_a_message(browser, page_file):
     page = browser.new_page(viewport=VIEWPORT)
     page.add_init_script("Object.defineProperty(navigator, 'gpu', { value: undefined })")
