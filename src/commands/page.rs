@@ -41,14 +41,14 @@ pub struct PageArgs {
     pub max_points: Option<usize>,
 }
 
-/// The folders searched for the viewer, in order: `$LOUDSCAPE_WEB_DIR`, `web/` beside the
-/// binary, and `target/web` of the source tree this binary was built from (where `make web`
-/// writes).
+/// The folders searched for the viewer: `$LOUDSCAPE_WEB_DIR` alone when it is set, else `web/`
+/// beside the binary, then `target/web` of the source tree this binary was built from (where
+/// `make web` writes).
 pub fn viewer_dirs() -> Vec<PathBuf> {
-    let mut dirs = Vec::new();
     if let Some(dir) = std::env::var_os("LOUDSCAPE_WEB_DIR") {
-        dirs.push(PathBuf::from(dir));
+        return vec![PathBuf::from(dir)];
     }
+    let mut dirs = Vec::new();
     if let Some(exe_dir) = std::env::current_exe()
         .ok()
         .and_then(|exe| exe.parent().map(Path::to_path_buf))
