@@ -71,7 +71,10 @@ def browser():
 
 def _view_pixels(page) -> np.ndarray:
     """The 3D view's part of the canvas (left of the legend panel) as RGB."""
-    png = page.locator("#loudscape-view").screenshot()
+    # A page screenshot clipped to the canvas: a locator's waits for the element to be
+    # "stable", which a slow software frame (the volume, on a loaded machine) can outlast.
+    box = page.locator("#loudscape-view").bounding_box()
+    png = page.screenshot(clip=box, timeout=DEADLINE_S * 1000)
     rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
     return rgb[:, : rgb.shape[1] * 6 // 10]
 
