@@ -7,7 +7,8 @@
 //! with [`Renderer::render`] into an offscreen target sized to the view, `paint` composites it
 //! into egui's frame. Drags orbit (primary) or pan (secondary), the wheel zooms, F fits and R
 //! resets, as in the window; P and V (or the side panel) choose the Points or the Volume view.
-//! The Volume view's grid is built on the GPU by the window's voxelize pass when first shown. A side panel holds the legend (the hp colours, the axes with their
+//! The Volume view's grid is built on the GPU by the window's voxelize pass when first shown.
+//! In the Points view at rest, the point under the cursor's values show in a tooltip. A side panel holds the legend (the hp colours, the axes with their
 //! units) and what the page thinned.
 //!
 //! WebGPU only: the points pass reads its points from storage buffers in the vertex shader and
@@ -305,6 +306,40 @@ impl WebApp {
     }
 }
 
+impl WebApp {
+    /// The Points view at rest: the values of the point under the cursor, with their units, in
+    /// a tooltip (the window's picking and read-out texts, `view::pick`).
+    fn hover_readout(&self, response: &egui::Response, view: &FrameView, scale: f32) {
+        if view.moving || self.settings.view != ViewKind::Points {
+            return;
+        }
+        let Some(pos) = response.hover_pos() else {
+            return;
+        };
+        let px = (pos - response.rect.min) * scale;
+        let Some(index) = crate::view::pick::pick_point(
+            &self.cloud.points,
+            view,
+            glam::Vec2::new(px.x, px.y),
+            6.0 * scale,
+            self.settings.points.min_scalar,
+        ) else {
+            return;
+        };
+        let readings =
+            crate::view::pick::point_readings(&self.cloud.meta.axes, &self.cloud.points[index]);
+        response.clone().on_hover_ui_at_pointer(|ui| {
+            egui::Grid::new("readout").show(ui, |ui| {
+                for reading in readings {
+                    ui.label(reading.name);
+                    ui.label(reading.value);
+                    ui.end_row();
+                }
+            });
+        });
+    }
+}
+
 /// The points' hp colours, percussive to harmonic.
 fn hp_strip(ui: &mut egui::Ui, map: crate::render::colormap::HpColourMap) {
     const STEPS: usize = 50;
@@ -357,6 +392,7 @@ impl eframe::App for WebApp {
                     frame_index: self.frame_index,
                     moving,
                 };
+                self.hover_readout(&response, &view, scale);
                 ui.painter().add(egui_wgpu::Callback::new_paint_callback(
                     rect,
                     ViewPaint {

@@ -201,6 +201,57 @@ def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
     page.close()
 
 
+def test_hovering_a_point_shows_its_values(browser, page_file):
+    """The read-out box opens at the cursor over a point (time, frequency, level, hp with their
+    units, as the window's), and not over the empty background."""
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+
+    def coloured():
+        rgb = _view_pixels(page)
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    before = _wait_for(coloured, "the view never showed the points")
+    box = page.locator("#loudscape-view").bounding_box()
+    h, w = before.shape[:2]
+
+    def region(rgb, x, y):
+        return rgb[y + 8 : min(y + 100, h), x + 8 : min(x + 200, w)]
+
+    def hover(x, y):
+        page.mouse.move(box["x"] + x, box["y"] + y)
+        _next_frames(page)
+        page.mouse.move(box["x"] + x + 1, box["y"] + y)
+        _next_frames(page)
+
+    # Over the empty background (the darkest corner of the view): nothing opens.
+    hover(10, 10)
+    _next_frames(page)
+    assert (
+        np.abs(region(_view_pixels(page), 10, 10) - region(before, 10, 10)).sum(axis=2).max() < 30
+    )
+
+    # Over a warm point in the middle of the cloud.
+    r, b = before[..., 0], before[..., 2]
+    ys, xs = np.nonzero((r > b + 60) & (r > 120))
+    middle = np.argmin((ys - ys.mean()) ** 2 + (xs - xs.mean()) ** 2)
+    x, y = int(xs[middle]), int(ys[middle])
+    hover(x, y)
+
+    def opened():
+        now = region(_view_pixels(page), x, y)
+        changed = np.count_nonzero(np.abs(now - region(before, x, y)).sum(axis=2) > 30)
+        return changed if changed > 0.3 * now.shape[0] * now.shape[1] else None
+
+    _wait_for(opened, f"no read-out opened over the point at ({x}, {y})")
+    page.screenshot(path=SHOTS / "page_hover.png")
+    assert errors == [], errors
+    page.close()
+
+
 def test_a_browser_without_webgpu_gets_a_message(browser, page_file):
     page = browser.new_page(viewport=VIEWPORT)
     page.add_init_script("Object.defineProperty(navigator, 'gpu', { value: undefined })")
