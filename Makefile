@@ -18,7 +18,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # processes were checked not to hold connections of their own.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24 -maxclients 2048 -noreset")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke fuzz-py demo clean bench-window bench-surface check-platforms test-wheel bench-peers
+.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke fuzz-py demo clean bench-window bench-surface check-platforms test-wheel bench-peers web test-web
 
 system:
 	@bash scripts/setup-system.sh
@@ -151,6 +151,31 @@ bench-peers: build venv real-music
 bench-window: venv real-music
 	$(CARGO) build --release
 	$(PY) bench/bench_window.py --loudscape target/release/loudscape $(if $(BEFORE),--vs $(BEFORE))
+
+# The web page's viewer (`loudscape page`, src/web/): the library built for wasm32 with the `web`
+# profile, then wasm-bindgen's glue, into target/web where `loudscape page` looks for it. Rebuilt
+# only when a source, a shader or the manifest changed. Needs the rustup target
+# wasm32-unknown-unknown and wasm-bindgen-cli of the version in Cargo.lock.
+WEB_OUT        := target/web
+WEB_TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
+WASM_BINDGEN_VERSION := $(shell sed -n '/^name = "wasm-bindgen"$$/{n;s/version = "\(.*\)"/\1/p}' Cargo.lock)
+WEB_SOURCES    := $(shell find src shaders -type f) Cargo.toml Cargo.lock
+
+$(WEB_OUT)/loudscape_bg.wasm: $(WEB_SOURCES)
+	@command -v wasm-bindgen >/dev/null && wasm-bindgen --version | grep -q " $(WASM_BINDGEN_VERSION)$$" || \
+		{ echo "make web: needs wasm-bindgen $(WASM_BINDGEN_VERSION): cargo install wasm-bindgen-cli --version $(WASM_BINDGEN_VERSION)"; exit 1; }
+	$(CARGO) rustc --lib --crate-type cdylib --target wasm32-unknown-unknown --profile web
+	wasm-bindgen --target no-modules --no-typescript --remove-name-section --remove-producers-section --out-dir $(WEB_OUT) \
+		$(WEB_TARGET_DIR)/wasm32-unknown-unknown/web/loudscape.wasm
+	touch $@
+
+web: $(WEB_OUT)/loudscape_bg.wasm
+
+# The page in a real browser: Debian's chromium headless through Playwright (tests/web/).
+test-web: web venv
+	$(PY) -c "import playwright" 2>/dev/null || $(VENV)/bin/pip install -q --no-cache-dir playwright
+	$(CARGO) build --bin loudscape
+	LOUDSCAPE_BIN=$(WEB_TARGET_DIR)/debug/loudscape $(VENV)/bin/pytest -q tests/web
 
 clean:
 	$(CARGO) clean

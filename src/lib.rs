@@ -45,13 +45,20 @@ macro_rules! command_line_names {
 
 pub mod annotate;
 pub mod data;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod extract;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod files;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod picture;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod playback;
 pub mod render;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod ui;
 pub mod view;
+#[cfg(target_arch = "wasm32")]
+pub mod web;
 
 /// The command-line name of a value of a closed vocabulary (`points`, `mt`, `spotify`), as the
 /// command line parses it: what the window writes when it hands its settings to a command.

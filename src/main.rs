@@ -74,6 +74,9 @@ enum Command {
     /// Compare 2 to 8 releases of a song, aligned in time and matched in loudness: a sheet,
     /// a CSV table or JSON (docs/COMPARE.md).
     Compare(commands::compare::CompareArgs),
+    /// Write one web page that shows a song in 3D in the browser (orbit, pan, zoom), the app's
+    /// own viewer built for the web; opens from the file system (`make web` builds the viewer).
+    Page(commands::page::PageArgs),
 }
 
 /// Longest error line printed (characters); longer ones are cut, with an ellipsis.
@@ -236,6 +239,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(args)) => commands::bench::run(args),
         Some(Command::Video(args)) => commands::video::run(*args),
         Some(Command::Compare(args)) => commands::compare::run(args),
+        Some(Command::Page(args)) => commands::page::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -44,7 +44,12 @@ pub struct PictureLegend {
 /// cloud cache, a name that says nothing) the folder its songs share ("music/"), or "songs" where
 /// they share none.
 pub fn timeline_name(cloud: &PointCloud) -> String {
-    timeline_name_in(cloud, &crate::extract::cache::dir())
+    #[cfg(not(target_arch = "wasm32"))]
+    let cache = crate::extract::cache::dir();
+    // A web page has no cloud cache: the file's own name.
+    #[cfg(target_arch = "wasm32")]
+    let cache = std::path::PathBuf::new();
+    timeline_name_in(cloud, &cache)
 }
 
 /// [`timeline_name`] with the cloud cache at `cache`.

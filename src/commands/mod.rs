@@ -9,6 +9,7 @@ pub mod compare;
 pub mod compare_align;
 pub mod compare_multiples;
 pub mod mesh;
+pub mod page;
 pub mod render;
 pub mod render_compare;
 pub mod video;

@@ -6,5 +6,7 @@ pub mod compare;
 pub mod field;
 pub mod freq_axis;
 pub mod normalize;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod npy;
+pub mod page_cloud;
 pub mod synthetic;

@@ -23,6 +23,7 @@ mod gpu_limits;
 mod layout;
 mod normalize_left_out;
 mod open_audio;
+mod page;
 mod pick;
 mod playback;
 mod reliability_cache;

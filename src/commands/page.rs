@@ -1,0 +1,196 @@
+//! `loudscape page SONG -o song.html`: one web page that shows the song in 3D in a browser, the
+//! app's own viewer built for the web (src/web/, `make web`).
+//!
+//! The page is one self-contained file: the viewer's wasm and its script glue, and the cloud
+//! thinned and quantized (`data::page_cloud`), both base64 in the page, so it opens from the file
+//! system as from any static host. The cloud is thinned so the page stays under
+//! [`PAGE_BUDGET_BYTES`]; the page says what was thinned. The wasm is found in the folder `make
+//! web` writes (see [`viewer_dirs`]).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::bail;
+use clap::Args;
+
+use crate::commands::args::{check_output, load_cloud};
+use loudscape::data::page_cloud;
+
+/// What a page may weigh, everything included: a 3-minute song's page without audio stays
+/// under 12 MB (issue 38).
+pub const PAGE_BUDGET_BYTES: usize = 12_000_000;
+/// The viewer's wasm and glue as `wasm-bindgen` names them.
+const WASM_FILE: &str = "loudscape_bg.wasm";
+const GLUE_FILE: &str = "loudscape.js";
+/// The page around the viewer.
+const TEMPLATE: &str = include_str!("page.html");
+/// Room left in the budget for the template, the metadata header and the names.
+const TEMPLATE_ROOM: usize = 256 * 1024;
+
+#[derive(Args, Debug)]
+pub struct PageArgs {
+    /// The song: a point cloud (.ply) or an audio file (extracted and cached, as `render` does).
+    pub input: PathBuf,
+
+    /// The page to write (.html); written whole or not at all.
+    #[arg(short, long)]
+    pub output: PathBuf,
+
+    /// Carry at most this many points (default: as many as the page's 12 MB allow).
+    #[arg(long)]
+    pub max_points: Option<usize>,
+}
+
+/// The folders searched for the viewer: `$LOUDSCAPE_WEB_DIR` alone when it is set, else `web/`
+/// beside the binary, then `target/web` of the source tree this binary was built from (where
+/// `make web` writes).
+pub fn viewer_dirs() -> Vec<PathBuf> {
+    if let Some(dir) = std::env::var_os("LOUDSCAPE_WEB_DIR") {
+        return vec![PathBuf::from(dir)];
+    }
+    let mut dirs = Vec::new();
+    if let Some(exe_dir) = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(Path::to_path_buf))
+    {
+        dirs.push(exe_dir.join("web"));
+    }
+    dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("target/web"));
+    dirs
+}
+
+/// The viewer's wasm and glue, from the first folder of [`viewer_dirs`] that holds both.
+fn read_viewer() -> anyhow::Result<(Vec<u8>, String)> {
+    let dirs = viewer_dirs();
+    for dir in &dirs {
+        let (wasm, glue) = (dir.join(WASM_FILE), dir.join(GLUE_FILE));
+        if wasm.is_file() && glue.is_file() {
+            let read = |path: &Path| {
+                std::fs::read(path)
+                    .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))
+            };
+            let glue_text = String::from_utf8(read(&glue)?)
+                .map_err(|_| anyhow::anyhow!("{}: not UTF-8 text", glue.display()))?;
+            return Ok((read(&wasm)?, glue_text));
+        }
+    }
+    let searched: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+    bail!(
+        "the web viewer is not built (no {WASM_FILE} in {}): run `make web` in the source tree",
+        searched.join(", ")
+    );
+}
+
+/// A JSON string literal safe inside a `<script>` element.
+fn script_string(text: &str) -> String {
+    serde_json::Value::from(text)
+        .to_string()
+        .replace('<', "\\u003c")
+}
+
+/// Base64 (standard alphabet, padded).
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// `bytes` gzipped (the page's script unpacks them with the browser's DecompressionStream).
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    encoder.write_all(bytes).expect("writing to memory");
+    encoder.finish().expect("writing to memory")
+}
+
+/// The most points a page can carry with `viewer_bytes` of packed viewer (wasm and glue),
+/// reckoned at 10 bytes a point before gzip (which takes off about a third) and 4/3 for base64.
+fn points_in_budget(viewer_bytes: usize) -> usize {
+    let left = PAGE_BUDGET_BYTES.saturating_sub(viewer_bytes * 4 / 3 + TEMPLATE_ROOM);
+    left * 3 / 4 / 10
+}
+
+pub fn run(args: PageArgs) -> anyhow::Result<()> {
+    check_output(&args.output, &["html", "htm"], &[args.input.as_path()])?;
+    if args.max_points == Some(0) {
+        bail!("--max-points must be at least 1");
+    }
+    let (wasm, glue) = read_viewer()?;
+    let cloud = load_cloud(&args.input)?;
+    let wasm = gzip(&wasm);
+    let budget = points_in_budget(wasm.len() + glue.len());
+    let max_points = args.max_points.unwrap_or(budget).min(budget).max(1);
+    let (data, thinning) = page_cloud::encode(&cloud, max_points);
+    let data = gzip(&data);
+    let name = cloud
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "song".into());
+    let note = if thinning.stride > 1 {
+        format!(
+            "This page carries {} of the song's {} points (every {}th), positions to 1/65535 \
+             of the box.",
+            thinning.kept, thinning.total, thinning.stride
+        )
+    } else {
+        "Every point of the song, positions to 1/65535 of the box.".to_string()
+    };
+    let title = loudscape::annotate::legend::picture_name(&cloud)
+        .replace('&', "&amp;")
+        .replace('<', "&lt;");
+    let page = TEMPLATE
+        .replace("__TITLE__", &title)
+        .replace("__NAME__", &script_string(&name))
+        .replace("__NOTE__", &script_string(&note))
+        .replace("__GLUE__", &glue)
+        .replace("__WASM__", &base64(&wasm))
+        .replace("__CLOUD__", &base64(&data));
+    crate::commands::write_atomically(&args.output, |out| Ok(out.write_all(page.as_bytes())?))?;
+    for line in cloud.warning_lines() {
+        eprintln!("warning: {line}");
+    }
+    crate::commands::wrote(
+        &args.output,
+        &format!(
+            "{:.1} MB, {} of {} points",
+            page.len() as f64 / 1e6,
+            thinning.kept,
+            thinning.total
+        ),
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_matches_the_standard_alphabet_and_padding() {
+        assert_eq!(base64(b""), "");
+        assert_eq!(base64(b"f"), "Zg==");
+        assert_eq!(base64(b"fo"), "Zm8=");
+        assert_eq!(base64(b"foo"), "Zm9v");
+        assert_eq!(base64(b"foobar\xff"), "Zm9vYmFy/w==");
+    }
+
+    #[test]
+    fn strings_cannot_close_the_script_they_sit_in() {
+        assert_eq!(script_string("a</script>\"b"), "\"a\\u003c/script>\\\"b\"");
+    }
+}

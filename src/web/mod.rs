@@ -1,0 +1,458 @@
+//! The web page's viewer (`loudscape page`, built by `make web`): the app's own render passes
+//! in eframe's web runner, on a canvas, from a cloud the page carries
+//! ([`crate::data::page_cloud`]).
+//!
+//! [`start`] is what the page's script calls with the canvas and the cloud's bytes. The view is
+//! one egui paint callback, as the window's (src/ui/bridge.rs): `prepare` renders the scene
+//! with [`Renderer::render`] into an offscreen target sized to the view, `paint` composites it
+//! into egui's frame. Drags orbit (primary) or pan (secondary), the wheel zooms, F fits and R
+//! resets, as in the window; P and V (or the side panel) choose the Points or the Volume view.
+//! The Volume view's grid is built on the GPU by the window's voxelize pass when first shown.
+//! In the Points view at rest, the point under the cursor's values show in a tooltip. A side panel holds the legend (the hp colours, the axes with their
+//! units) and what the page thinned.
+//!
+//! WebGPU only: the points pass reads its points from storage buffers in the vertex shader and
+//! the voxel grid is built by compute passes, neither of which WebGL2 has, so where the browser
+//! has no WebGPU the page says so instead.
+
+use std::cell::RefCell;
+use std::sync::Arc;
+
+use eframe::egui;
+use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor};
+use glam::{Mat4, Vec3};
+use wasm_bindgen::prelude::*;
+
+use crate::data::cloud::PointCloud;
+use crate::render::composite::CompositePass;
+use crate::render::gpu::target::RenderTarget;
+use crate::render::grid::voxelize::{VoxelizePass, VoxelizeRequest};
+use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use crate::view::camera::Camera;
+use crate::view::frame_view::FrameView;
+
+/// Wheel movement (points) per zoom step, as in the window.
+const SCROLL_PER_STEP: f32 = 50.0;
+
+thread_local! {
+    /// The running viewer: kept for the page's lifetime.
+    static RUNNER: RefCell<Option<eframe::WebRunner>> = const { RefCell::new(None) };
+}
+
+/// Starts the viewer on `canvas` with the page's cloud `data` (named `name` in messages);
+/// `note` says what the page thinned. Fails with one line (the page shows it) when the data
+/// cannot be read or the browser offers no WebGPU device.
+#[wasm_bindgen]
+pub async fn start(
+    canvas: web_sys::HtmlCanvasElement,
+    data: Vec<u8>,
+    name: String,
+    note: String,
+) -> Result<(), JsValue> {
+    eframe::WebLogger::init(log::LevelFilter::Warn).ok();
+    let cloud = crate::data::page_cloud::decode(&data, &name)
+        .map_err(|e| JsValue::from_str(&e.to_string()))?;
+    drop(data);
+
+    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.instance_descriptor.backends = wgpu::Backends::BROWSER_WEBGPU;
+    setup.device_descriptor = Arc::new(crate::render::gpu::context::device_descriptor);
+    let options = eframe::WebOptions {
+        wgpu_options: egui_wgpu::WgpuConfiguration {
+            wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let runner = eframe::WebRunner::new();
+    runner
+        .start(
+            canvas,
+            options,
+            Box::new(move |cc| {
+                let app = WebApp::new(cc, cloud, note)?;
+                Ok(Box::new(app))
+            }),
+        )
+        .await?;
+    RUNNER.with(|r| *r.borrow_mut() = Some(runner));
+    Ok(())
+}
+
+/// GPU state of the page, in egui_wgpu's callback resources.
+struct WebResources {
+    renderer: Renderer,
+    scene: SceneData,
+    target: Option<RenderTarget>,
+    composite: CompositePass,
+}
+
+/// The viewer: the camera, the settings and what the side panel says.
+struct WebApp {
+    render_state: egui_wgpu::RenderState,
+    cloud: PointCloud,
+    /// Why the volume cannot be shown, once a build failed.
+    volume_error: Option<String>,
+    note: String,
+    camera: Camera,
+    world_from_data: Mat4,
+    world_box: (Vec3, Vec3),
+    settings: RenderSettings,
+    /// The camera waits for a fit to the view's size (the first frame, R).
+    fit_pending: bool,
+    frame_index: u32,
+}
+
+impl WebApp {
+    fn new(
+        cc: &eframe::CreationContext<'_>,
+        cloud: PointCloud,
+        note: String,
+    ) -> Result<Self, String> {
+        let render_state = cc
+            .wgpu_render_state
+            .as_ref()
+            .ok_or("this browser offers no WebGPU device")?;
+        let device = &render_state.device;
+        crate::render::gpu::context::check_limits(&device.limits())
+            .map_err(|reason| format!("the browser's GPU is too small for loudscape: {reason}"))?;
+        device.on_uncaptured_error(Arc::new(|error| log::error!("wgpu error: {error}")));
+        cc.egui_ctx.set_theme(egui::Theme::Dark);
+        let renderer = Renderer::new(device);
+        let scene = SceneData::new(device, &renderer, &cloud);
+        let world_from_data = scene.world_from_data;
+        let world_box = scene.world_box();
+        let resources = WebResources {
+            composite: CompositePass::new(device, render_state.target_format),
+            renderer,
+            scene,
+            target: None,
+        };
+        render_state
+            .renderer
+            .write()
+            .callback_resources
+            .insert(resources);
+        let mut settings = RenderSettings::default();
+        settings.points.size_px = crate::render::points::PointStyle::size_for(cloud.len());
+        Ok(Self {
+            render_state: render_state.clone(),
+            volume_error: None,
+            cloud,
+            note,
+            camera: Camera::default(),
+            world_from_data,
+            world_box,
+            settings,
+            fit_pending: true,
+            frame_index: 0,
+        })
+    }
+
+    /// Builds the voxel grid the Volume view draws, once, on the GPU (the window's voxelize
+    /// pass; its statistics are not read back, as a page cannot wait for the GPU).
+    fn ensure_volume(&mut self) -> Result<(), String> {
+        let state = &self.render_state;
+        let mut renderer = state.renderer.write();
+        let Some(res) = renderer.callback_resources.get_mut::<WebResources>() else {
+            return Ok(());
+        };
+        if res.scene.grid.is_some() {
+            return Ok(());
+        }
+        let mode = self.cloud.meta.mode;
+        let voxels = &self.settings.voxels;
+        let request = VoxelizeRequest::on_device(
+            res.scene.points.chunk_buffers(),
+            (self.cloud.bounds.min, self.cloud.bounds.max),
+            voxels.resolution_for(mode),
+            voxels.smoothing_for(mode),
+        );
+        let job = res
+            .renderer
+            .voxelize
+            .prepare(&state.device, &request)
+            .map_err(|e| e.to_string())?;
+        let mut encoder = state
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("web::voxelize"),
+            });
+        res.renderer.voxelize.encode(&mut encoder, &job, None);
+        state.queue.submit([encoder.finish()]);
+        let grid = VoxelizePass::finish(job);
+        res.scene
+            .set_grid(&state.device, &res.renderer, grid, None, mode, voxels);
+        Ok(())
+    }
+
+    fn view_choice(&mut self, ui: &mut egui::Ui) {
+        let (points, volume) =
+            ui.input(|i| (i.key_pressed(egui::Key::P), i.key_pressed(egui::Key::V)));
+        if points {
+            self.settings.view = ViewKind::Points;
+        }
+        if volume {
+            self.settings.view = ViewKind::Volume;
+        }
+        ui.horizontal(|ui| {
+            ui.label("View:");
+            for view in [ViewKind::Points, ViewKind::Volume] {
+                ui.selectable_value(&mut self.settings.view, view, view.name());
+            }
+        });
+        if self.settings.view == ViewKind::Volume
+            && self.volume_error.is_none()
+            && let Err(error) = self.ensure_volume()
+        {
+            self.volume_error = Some(error);
+        }
+        if let Some(error) = &self.volume_error {
+            ui.colored_label(
+                egui::Color32::from_rgb(230, 120, 90),
+                format!("The volume cannot be shown: {error}"),
+            );
+            self.settings.view = ViewKind::Points;
+        }
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading(crate::annotate::legend::picture_name(&self.cloud));
+        ui.label(format!("{} points", self.cloud.len()));
+        if !self.note.is_empty() {
+            ui.label(egui::RichText::new(&self.note).small());
+        }
+        for line in self.cloud.warning_lines() {
+            ui.colored_label(egui::Color32::from_rgb(230, 180, 60), line);
+        }
+        ui.separator();
+        self.view_choice(ui);
+        ui.separator();
+        if self.settings.view == ViewKind::Volume {
+            ui.label(format!(
+                "Volume: density of the points on a voxel grid, coloured and made opaque by \
+                 the {} transfer function",
+                self.settings.volume.preset.name()
+            ));
+        } else {
+            ui.label("Colour: harmonic-percussive ratio (hp)");
+            hp_strip(ui, self.settings.colours.hp);
+        }
+        ui.separator();
+        let axes = &self.cloud.meta.axes;
+        egui::Grid::new("axes").show(ui, |ui| {
+            for (name, axis) in axes.named() {
+                let label = if axis.label.is_empty() {
+                    name
+                } else {
+                    &axis.label
+                };
+                ui.label(format!("{name}: {label}"));
+                ui.label(format!(
+                    "{} to {}",
+                    axis.format_value(axis.min),
+                    axis.format_value(axis.max)
+                ));
+                ui.end_row();
+            }
+        });
+        ui.separator();
+        ui.label(
+            egui::RichText::new(
+                "Drag: orbit · right drag: pan · wheel: zoom · F: fit · R: reset view · P: points · \
+                 V: volume",
+            )
+            .small(),
+        );
+    }
+
+    /// The camera input of a frame; whether the view moves.
+    fn camera_input(
+        &mut self,
+        ctx: &egui::Context,
+        response: &egui::Response,
+        aspect: f32,
+        height: f32,
+    ) -> bool {
+        let delta = response.drag_delta() * ctx.pixels_per_point();
+        let mut moving = false;
+        if response.dragged_by(egui::PointerButton::Primary) {
+            self.camera.orbit(delta.x, delta.y, height);
+            moving = true;
+        } else if response.dragged_by(egui::PointerButton::Secondary)
+            || response.dragged_by(egui::PointerButton::Middle)
+        {
+            self.camera.pan(delta.x, delta.y, height);
+            moving = true;
+        }
+        if response.hovered() {
+            let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.camera.zoom(scroll / SCROLL_PER_STEP);
+                moving = true;
+            }
+        }
+        let (fit, reset) =
+            ctx.input(|i| (i.key_pressed(egui::Key::F), i.key_pressed(egui::Key::R)));
+        if reset {
+            self.camera = Camera::default();
+        }
+        if fit || reset || self.fit_pending {
+            let (min, max) = self.world_box;
+            self.camera.fit(min, max, aspect);
+            self.fit_pending = false;
+        }
+        moving
+    }
+}
+
+impl WebApp {
+    /// The Points view at rest: the values of the point under the cursor, with their units, in
+    /// a tooltip (the window's picking and read-out texts, `view::pick`).
+    fn hover_readout(&self, response: &egui::Response, view: &FrameView, scale: f32) {
+        if view.moving || self.settings.view != ViewKind::Points {
+            return;
+        }
+        let Some(pos) = response.hover_pos() else {
+            return;
+        };
+        let px = (pos - response.rect.min) * scale;
+        let Some(index) = crate::view::pick::pick_point(
+            &self.cloud.points,
+            view,
+            glam::Vec2::new(px.x, px.y),
+            6.0 * scale,
+            self.settings.points.min_scalar,
+        ) else {
+            return;
+        };
+        let readings =
+            crate::view::pick::point_readings(&self.cloud.meta.axes, &self.cloud.points[index]);
+        response.clone().on_hover_ui_at_pointer(|ui| {
+            egui::Grid::new("readout").show(ui, |ui| {
+                for reading in readings {
+                    ui.label(reading.name);
+                    ui.label(reading.value);
+                    ui.end_row();
+                }
+            });
+        });
+    }
+}
+
+/// The points' hp colours, percussive to harmonic.
+fn hp_strip(ui: &mut egui::Ui, map: crate::render::colormap::HpColourMap) {
+    const STEPS: usize = 50;
+    let ramp = map.points();
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(200.0, 12.0), egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    for i in 0..STEPS {
+        let [r, g, b] = ramp.sample_u8(i as f32 / (STEPS - 1) as f32);
+        let x0 = rect.left() + rect.width() * i as f32 / STEPS as f32;
+        let x1 = rect.left() + rect.width() * (i + 1) as f32 / STEPS as f32;
+        painter.rect_filled(
+            egui::Rect::from_x_y_ranges(x0..=x1 + 0.5, rect.y_range()),
+            0.0,
+            egui::Color32::from_rgb(r, g, b),
+        );
+    }
+    ui.horizontal(|ui| {
+        ui.label(egui::RichText::new("percussive (0)").small());
+        ui.add_space(70.0);
+        ui.label(egui::RichText::new("harmonic (1)").small());
+    });
+}
+
+impl eframe::App for WebApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        egui::Panel::right("legend")
+            .resizable(false)
+            .show(ui, |ui| self.side_panel(ui));
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| {
+                let rect = ui.max_rect();
+                let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+                let scale = ctx.pixels_per_point();
+                let width = (rect.width() * scale).round().max(1.0) as u32;
+                let height = (rect.height() * scale).round().max(1.0) as u32;
+                let aspect = width as f32 / height as f32;
+                let moving = self.camera_input(&ctx, &response, aspect, height as f32);
+                if moving {
+                    // One more frame at rest, with every point.
+                    ctx.request_repaint();
+                }
+                self.frame_index = self.frame_index.wrapping_add(1);
+                let view = FrameView {
+                    camera: self.camera,
+                    world_from_data: self.world_from_data,
+                    width,
+                    height,
+                    frame_index: self.frame_index,
+                    moving,
+                };
+                self.hover_readout(&response, &view, scale);
+                ui.painter().add(egui_wgpu::Callback::new_paint_callback(
+                    rect,
+                    ViewPaint {
+                        view,
+                        settings: self.settings.clone(),
+                    },
+                ));
+            });
+    }
+}
+
+/// One frame of the view: rendered offscreen in `prepare`, composited in `paint`.
+struct ViewPaint {
+    view: FrameView,
+    settings: RenderSettings,
+}
+
+impl CallbackTrait for ViewPaint {
+    fn prepare(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        _screen: &ScreenDescriptor,
+        encoder: &mut wgpu::CommandEncoder,
+        resources: &mut CallbackResources,
+    ) -> Vec<wgpu::CommandBuffer> {
+        let Some(res) = resources.get_mut::<WebResources>() else {
+            return Vec::new();
+        };
+        let (width, height) = (self.view.width, self.view.height);
+        if !res
+            .target
+            .as_ref()
+            .is_some_and(|t| t.has_size(width, height))
+        {
+            let target = RenderTarget::new(device, width, height);
+            res.composite.set_source(device, &target);
+            res.target = Some(target);
+        }
+        if let Some(target) = &res.target {
+            res.renderer.render(
+                queue,
+                encoder,
+                target,
+                Some(&res.scene),
+                &self.view,
+                &self.settings,
+            );
+        }
+        Vec::new()
+    }
+
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        render_pass: &mut wgpu::RenderPass<'static>,
+        resources: &CallbackResources,
+    ) {
+        if let Some(res) = resources.get::<WebResources>() {
+            res.composite.draw(render_pass);
+        }
+    }
+}

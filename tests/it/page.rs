@@ -1,0 +1,131 @@
+//! `loudscape page`: the page holds the viewer and the cloud, packed as the page's script
+//! unpacks them (gzip in base64); a missing viewer and a wrong output type are one line each.
+//! A stand-in viewer (`$LOUDSCAPE_WEB_DIR`) keeps these tests free of the wasm build; the page in
+//! a browser is tests/web/test_page.py.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use crate::common;
+
+fn song() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply")
+}
+
+fn page(web_dir: &Path, args: &[&Path]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .arg("page")
+        .args(args)
+        .env("LOUDSCAPE_WEB_DIR", web_dir)
+        .output()
+        .expect("start loudscape")
+}
+
+/// The text of the `<script>` element with `id`.
+fn script<'a>(html: &'a str, id: &str) -> &'a str {
+    let open = format!("id=\"{id}\">");
+    let start = html.find(&open).expect(id) + open.len();
+    let end = start + html[start..].find("</script>").expect("script end");
+    &html[start..end]
+}
+
+fn unbase64(text: &str) -> Vec<u8> {
+    let value = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        b'/' => 63,
+        _ => panic!("not base64: {c}"),
+    };
+    let digits: Vec<u8> = text
+        .trim()
+        .bytes()
+        .filter(|&c| c != b'=')
+        .map(value)
+        .collect();
+    let mut out = Vec::new();
+    for group in digits.chunks(4) {
+        let n = group
+            .iter()
+            .enumerate()
+            .fold(0u32, |n, (i, &d)| n | (u32::from(d) << (18 - 6 * i)));
+        for i in 0..group.len() - 1 {
+            out.push((n >> (16 - 8 * i)) as u8);
+        }
+    }
+    out
+}
+
+fn gunzip(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(bytes)
+        .read_to_end(&mut out)
+        .expect("gzip");
+    out
+}
+
+#[test]
+fn the_page_carries_the_viewer_and_every_point_of_the_demo() {
+    let dir = common::fresh_dir("page_carries");
+    let web = dir.join("web");
+    std::fs::create_dir_all(&web).unwrap();
+    let wasm: Vec<u8> = (0..5000u32).map(|i| (i * 7 % 251) as u8).collect();
+    std::fs::write(web.join("loudscape_bg.wasm"), &wasm).unwrap();
+    std::fs::write(web.join("loudscape.js"), "let wasm_bindgen = 'glue';").unwrap();
+    let out = dir.join("demo.html");
+    let output = page(&web, &[&song(), Path::new("-o"), &out]);
+    common::assert_success(&output);
+    let html = std::fs::read_to_string(&out).unwrap();
+    assert!(html.contains("let wasm_bindgen = 'glue';"));
+    assert_eq!(gunzip(&unbase64(script(&html, "loudscape-wasm"))), wasm);
+    let data = gunzip(&unbase64(script(&html, "loudscape-cloud")));
+    let cloud = loudscape::data::page_cloud::decode(&data, "demo").expect("page data");
+    let original = loudscape::data::cloud::load(&song()).unwrap();
+    assert_eq!(cloud.len(), original.len(), "the demo fits whole");
+    assert_eq!(cloud.meta.axes, original.meta.axes);
+    assert!(html.contains("Every point of the song"));
+    // Nothing left beside the page.
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+
+    // --max-points thins, and the page says so.
+    let thin = dir.join("thin.html");
+    let output = page(
+        &web,
+        &[
+            &song(),
+            Path::new("-o"),
+            &thin,
+            Path::new("--max-points"),
+            Path::new("1000"),
+        ],
+    );
+    common::assert_success(&output);
+    let html = std::fs::read_to_string(&thin).unwrap();
+    let data = gunzip(&unbase64(script(&html, "loudscape-cloud")));
+    let cloud = loudscape::data::page_cloud::decode(&data, "demo").expect("page data");
+    assert!(cloud.len() <= 1000 && cloud.len() > 900, "{}", cloud.len());
+    assert!(html.contains(&format!("of the song's {} points", original.len())));
+}
+
+#[test]
+fn without_the_viewer_or_with_a_wrong_name_the_page_is_one_line() {
+    let dir = common::fresh_dir("page_refused");
+    let out = dir.join("song.html");
+    let output = page(&dir, &[&song(), Path::new("-o"), &out]);
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert_eq!(text.lines().count(), 1, "{text}");
+    assert!(text.contains("make web"), "{text}");
+    assert!(!out.exists());
+
+    let output = page(&dir, &[&song(), Path::new("-o"), &dir.join("song.png")]);
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(text.contains("supported: .html, .htm"), "{text}");
+}

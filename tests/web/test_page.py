@@ -1,0 +1,298 @@
+"""`loudscape page`: the song's web page in a real browser.
+
+Debian's chromium, headless, driven by Playwright (``executable_path``: Playwright downloads no
+browser here). SwiftShader gives the headless browser a WebGPU adapter on the CPU. The page is
+opened from a ``file://`` URL, as someone who was sent the file would open it. The binary is
+``$LOUDSCAPE_BIN`` (``make test-web`` builds it and the viewer's wasm, ``make web``).
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from playwright.sync_api import sync_playwright
+
+ROOT = Path(__file__).resolve().parents[2]
+SONG = ROOT / "data" / "demo_song.ply"
+BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape")).absolute()
+CHROMIUM = os.environ.get("LOUDSCAPE_CHROMIUM", "/usr/bin/chromium")
+# SwiftShader's WebGPU adapter; the Vulkan feature makes headless chromium composite the WebGPU
+# canvas into screenshots (without it the canvas shows blank, though the page draws).
+CHROMIUM_ARGS = [
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--enable-unsafe-webgpu",
+    "--enable-features=Vulkan",
+    "--use-vulkan=swiftshader",
+]
+# The issue's budget for a page without audio.
+PAGE_BUDGET_BYTES = 12_000_000
+# How long the browser may take to start the viewer and draw (software WebGPU on a small machine).
+DEADLINE_S = 120.0
+VIEWPORT = {"width": 1000, "height": 640}
+# Where the screenshots are kept for a look (make test-web prints the folder).
+SHOTS = ROOT / "tests" / "output" / "web"
+
+
+@pytest.fixture(scope="module")
+def page_file(tmp_path_factory) -> Path:
+    if not BINARY.is_file():
+        pytest.fail(f"{BINARY} does not exist: run `cargo build` (or set LOUDSCAPE_BIN)")
+    out = tmp_path_factory.mktemp("page") / "demo_song.html"
+    run = subprocess.run(
+        [str(BINARY), "page", str(SONG), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "wrote" in run.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not Path(CHROMIUM).is_file():
+        pytest.fail(f"{CHROMIUM} does not exist: install chromium (or set LOUDSCAPE_CHROMIUM)")
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(
+            executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
+        )
+        yield browser
+        browser.close()
+
+
+def _view_pixels(page) -> np.ndarray:
+    """The 3D view's part of the canvas (left of the legend panel) as RGB."""
+    # A page screenshot clipped to the canvas: a locator's waits for the element to be
+    # "stable", which a slow software frame (the volume, on a loaded machine) can outlast.
+    box = page.locator("#loudscape-view").bounding_box()
+    png = page.screenshot(clip=box, timeout=DEADLINE_S * 1000)
+    rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    return rgb[:, : rgb.shape[1] * 6 // 10]
+
+
+def _point_colours(rgb: np.ndarray) -> tuple[int, int]:
+    """Pixels of the warm (percussive) and of the cool (harmonic) end of the points' colours."""
+    r, b = rgb[..., 0], rgb[..., 2]
+    warm = int(np.count_nonzero((r > b + 60) & (r > 120)))
+    cool = int(np.count_nonzero((b > r + 60) & (b > 120)))
+    return warm, cool
+
+
+def _next_frames(page):
+    """Returns once the page has drawn two more animation frames."""
+    page.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+
+
+def _wait_for(predicate, what: str):
+    """Polls `predicate` until it returns something other than None, up to the deadline."""
+    deadline = time.monotonic() + DEADLINE_S
+    while True:
+        value = predicate()
+        if value is not None:
+            return value
+        if time.monotonic() > deadline:
+            pytest.fail(f"after {DEADLINE_S:.0f} s: {what}")
+        time.sleep(0.2)
+
+
+def test_the_page_stays_in_its_budget(page_file):
+    size = page_file.stat().st_size
+    print(f"\npage of {SONG.name}: {size / 1e6:.2f} MB (budget {PAGE_BUDGET_BYTES / 1e6:.0f} MB)")
+    assert size <= PAGE_BUDGET_BYTES
+    text = page_file.read_text()
+    # Self-contained: no file or address is fetched besides the page itself.
+    for ref in ('src="', "href=", "fetch("):
+        assert ref not in text.replace("fetch(module_or_path)", ""), ref
+
+
+def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    state = page.evaluate("document.body.dataset.state")
+    assert state == "running", page.inner_text("#message")
+
+    def coloured():
+        rgb = _view_pixels(page)
+        warm, cool = _point_colours(rgb)
+        return rgb if warm > 200 and cool > 200 else None
+
+    before = _wait_for(coloured, "the view never showed the points' warm and cool colours")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(before.astype(np.uint8)).save(SHOTS / "page_before_drag.png")
+    page.screenshot(path=SHOTS / "page.png")
+    warm, cool = _point_colours(before)
+    print(f"\nwarm pixels {warm}, cool pixels {cool}")
+
+    box = page.locator("#loudscape-view").bounding_box()
+    x, y = box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.5
+    page.mouse.move(x, y)
+    page.mouse.down()
+    _next_frames(page)
+    for step in range(1, 11):
+        page.mouse.move(x + 20 * step, y + 4 * step)
+        _next_frames(page)
+    page.mouse.up()
+
+    def turned():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+        return (rgb, changed) if changed > 0.01 * rgb.shape[0] * rgb.shape[1] else None
+
+    after, changed = _wait_for(turned, "a drag over the view did not change the picture")
+    Image.fromarray(after.astype(np.uint8)).save(SHOTS / "page_after_drag.png")
+    print(f"pixels changed by the drag: {changed}")
+    assert min(_point_colours(after)) > 200, "the points left the view after the drag"
+
+    # R resets the camera and fits it again: the first picture comes back. The pointer goes
+    # to the side panel first, so no hover read-out covers the view.
+    page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
+    page.keyboard.press("r")
+
+    def reset():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+        return changed if changed < 0.001 * rgb.shape[0] * rgb.shape[1] else None
+
+    _wait_for(reset, "R did not bring back the first view")
+    assert errors == [], errors
+    page.close()
+
+
+def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
+    """V shows the Volume view: the window's voxelize compute passes and ray march on WebGPU."""
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+
+    def coloured():
+        rgb = _view_pixels(page)
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    points = _wait_for(coloured, "the view never showed the points")
+    page.locator("#loudscape-view").focus()
+    page.keyboard.press("v")
+
+    def volume():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - points).sum(axis=2) > 30)
+        lit = np.count_nonzero(rgb.max(axis=2) > 100)
+        whole = rgb.shape[0] * rgb.shape[1]
+        return (rgb, changed, lit) if changed > 0.05 * whole and lit > 0.05 * whole else None
+
+    shown, changed, lit = _wait_for(volume, "V did not show a volume")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(shown.astype(np.uint8)).save(SHOTS / "page_volume.png")
+    print(f"\nvolume: {changed} pixels changed from the points, {lit} lit")
+    assert errors == [], errors
+    page.close()
+
+
+def test_hovering_a_point_shows_its_values(browser, page_file):
+    """The read-out box opens at the cursor over a point (time, frequency, level, hp with their
+    units, as the window's), and not over the empty background."""
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+
+    def coloured():
+        rgb = _view_pixels(page)
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    before = _wait_for(coloured, "the view never showed the points")
+    box = page.locator("#loudscape-view").bounding_box()
+    h, w = before.shape[:2]
+
+    def region(rgb, x, y):
+        return rgb[y + 8 : min(y + 100, h), x + 8 : min(x + 200, w)]
+
+    def hover(x, y):
+        page.mouse.move(box["x"] + x, box["y"] + y)
+        _next_frames(page)
+        page.mouse.move(box["x"] + x + 1, box["y"] + y)
+        _next_frames(page)
+
+    # Over the empty background (the darkest corner of the view): nothing opens.
+    hover(10, 10)
+    _next_frames(page)
+    assert (
+        np.abs(region(_view_pixels(page), 10, 10) - region(before, 10, 10)).sum(axis=2).max() < 30
+    )
+
+    # Over a warm point in the middle of the cloud.
+    r, b = before[..., 0], before[..., 2]
+    ys, xs = np.nonzero((r > b + 60) & (r > 120))
+    middle = np.argmin((ys - ys.mean()) ** 2 + (xs - xs.mean()) ** 2)
+    x, y = int(xs[middle]), int(ys[middle])
+    hover(x, y)
+
+    def opened():
+        now = region(_view_pixels(page), x, y)
+        changed = np.count_nonzero(np.abs(now - region(before, x, y)).sum(axis=2) > 30)
+        return changed if changed > 0.3 * now.shape[0] * now.shape[1] else None
+
+    _wait_for(opened, f"no read-out opened over the point at ({x}, {y})")
+    page.screenshot(path=SHOTS / "page_hover.png")
+    assert errors == [], errors
+    page.close()
+
+
+def test_a_browser_without_webgpu_gets_a_message(browser, page_file):
+    page = browser.new_page(viewport=VIEWPORT)
+    page.add_init_script("Object.defineProperty(navigator, 'gpu', { value: undefined })")
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    assert page.evaluate("document.body.dataset.state") == "no-webgpu"
+    message = page.locator("#message")
+    assert message.is_visible()
+    assert "WebGPU" in message.inner_text()
+    page.close()
+
+
+def test_a_three_minute_song_is_thinned_into_the_budget(tmp_path):
+    """180 s at the demo song's density (points a second), random values (which pack worse
+    than music), written as a PLY without metadata."""
+    with SONG.open("rb") as f:
+        header = f.read(1 << 20).split(b"end_header\n")[0].decode("ascii", "replace")
+    demo_points = int(
+        next(x for x in header.splitlines() if x.startswith("element vertex")).split()[2]
+    )
+    count = demo_points * 6
+    rng = np.random.default_rng(38)
+    points = np.empty((count, 5), dtype="<f4")
+    points[:, :3] = rng.uniform(-1, 1, (count, 3))
+    points[:, 3:] = rng.uniform(0, 1, (count, 2))
+    ply = tmp_path / "three_minutes.ply"
+    with ply.open("wb") as f:
+        f.write(b"ply\nformat binary_little_endian 1.0\n")
+        f.write(f"element vertex {count}\n".encode())
+        for name in ("x", "y", "z", "scalar", "hp"):
+            f.write(f"property float {name}\n".encode())
+        f.write(b"end_header\n")
+        f.write(points.tobytes())
+    out = tmp_path / "three_minutes.html"
+    run = subprocess.run(
+        [str(BINARY), "page", str(ply), "-o", str(out)], capture_output=True, text=True, check=False
+    )
+    assert run.returncode == 0, run.stderr
+    size = out.stat().st_size
+    print(f"\npage of {count} points (3 minutes): {size / 1e6:.2f} MB; {run.stderr.strip()}")
+    assert size <= PAGE_BUDGET_BYTES
+    assert f"of the song's {count} points" in out.read_text()
