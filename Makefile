@@ -59,8 +59,8 @@ test-rust: system venv
 	$(XVFB) $(CARGO) test window -- --test-threads=1
 
 lint-py: venv
-	$(VENV)/bin/ruff check preprocess bench tests/python
-	$(VENV)/bin/ruff format --check preprocess bench tests/python
+	$(VENV)/bin/ruff check preprocess bench tests/python tests/web
+	$(VENV)/bin/ruff format --check preprocess bench tests/python tests/web
 
 # Freely licensed game soundtracks from Debian packages (cached in data/real-music/) for
 # preprocess/tests/test_real_music.py; fails with one line if a download fails.

@@ -134,55 +134,61 @@ fn smooth_axis(input: &[f32], output: &mut [f32], dims: UVec3, axis: usize, weig
     let slab = nx * ny;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let slabs_per_thread = (dims.z as usize).div_ceil(threads).max(1);
-    std::thread::scope(|scope| {
-        for (part, out) in output.chunks_mut(slabs_per_thread * slab).enumerate() {
-            scope.spawn(move || {
-                let first_row = part * slabs_per_thread * ny;
-                for (r, row) in out.chunks_mut(nx).enumerate() {
-                    let row_index = first_row + r;
-                    let start = (row_index * nx) as i64;
-                    if axis == 0 {
-                        for (i, value) in row.iter_mut().enumerate() {
-                            let (mut total, mut weight_sum) = (0.0f32, 0.0f32);
-                            for o in -radius..=radius {
-                                let at = i as i64 + o;
-                                if at < 0 || at >= extent {
-                                    continue;
-                                }
-                                let w = weights[o.unsigned_abs() as usize];
-                                total += w * input[(start + at) as usize];
-                                weight_sum += w;
-                            }
-                            *value = total / weight_sum.max(1e-12);
-                        }
-                        continue;
-                    }
-                    // Along y or z every voxel of the row has the same offsets inside the grid.
-                    let here = if axis == 1 {
-                        row_index % ny
-                    } else {
-                        row_index / ny
-                    } as i64;
-                    row.fill(0.0);
-                    let mut weight_sum = 0.0f32;
+    let smooth_part = move |part: usize, out: &mut [f32]| {
+        let first_row = part * slabs_per_thread * ny;
+        for (r, row) in out.chunks_mut(nx).enumerate() {
+            let row_index = first_row + r;
+            let start = (row_index * nx) as i64;
+            if axis == 0 {
+                for (i, value) in row.iter_mut().enumerate() {
+                    let (mut total, mut weight_sum) = (0.0f32, 0.0f32);
                     for o in -radius..=radius {
-                        let at = here + o;
+                        let at = i as i64 + o;
                         if at < 0 || at >= extent {
                             continue;
                         }
                         let w = weights[o.unsigned_abs() as usize];
-                        let from = (start + o * stride) as usize;
-                        for (value, x) in row.iter_mut().zip(&input[from..from + nx]) {
-                            *value += w * x;
-                        }
+                        total += w * input[(start + at) as usize];
                         weight_sum += w;
                     }
-                    let weight_sum = weight_sum.max(1e-12);
-                    for value in row.iter_mut() {
-                        *value /= weight_sum;
-                    }
+                    *value = total / weight_sum.max(1e-12);
                 }
-            });
+                continue;
+            }
+            // Along y or z every voxel of the row has the same offsets inside the grid.
+            let here = if axis == 1 {
+                row_index % ny
+            } else {
+                row_index / ny
+            } as i64;
+            row.fill(0.0);
+            let mut weight_sum = 0.0f32;
+            for o in -radius..=radius {
+                let at = here + o;
+                if at < 0 || at >= extent {
+                    continue;
+                }
+                let w = weights[o.unsigned_abs() as usize];
+                let from = (start + o * stride) as usize;
+                for (value, x) in row.iter_mut().zip(&input[from..from + nx]) {
+                    *value += w * x;
+                }
+                weight_sum += w;
+            }
+            let weight_sum = weight_sum.max(1e-12);
+            for value in row.iter_mut() {
+                *value /= weight_sum;
+            }
+        }
+    };
+    if threads == 1 {
+        // One core (or none to spawn on, as in a web page): no thread.
+        smooth_part(0, output);
+        return;
+    }
+    std::thread::scope(|scope| {
+        for (part, out) in output.chunks_mut(slabs_per_thread * slab).enumerate() {
+            scope.spawn(move || smooth_part(part, out));
         }
     });
 }
