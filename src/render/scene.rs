@@ -453,6 +453,17 @@ impl Renderer {
             return;
         };
         match (settings.view, &data.volume) {
+            (ViewKind::Surface, _) if data.grid.is_some() && !data.surface.extracted_any() => {
+                // Until the grid's first surface comes (it is extracted in the background), the
+                // points' sparse subset stands in: an empty box said nothing of the song.
+                self.points.draw_lod_from(
+                    &mut pass,
+                    &self.frame,
+                    &data.points,
+                    &settings.points,
+                    0,
+                );
+            }
             (ViewKind::Surface, _) if data.grid.is_some() => {
                 self.surface.draw(
                     &mut pass,

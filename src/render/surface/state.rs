@@ -181,6 +181,13 @@ impl ExtractedSurface {
         self.lock().counts
     }
 
+    /// Whether any surface (full or coarse, or an extraction's error) was installed: before
+    /// the first, there is nothing to draw.
+    pub fn extracted_any(&self) -> bool {
+        let state = self.lock();
+        state.key.is_some() || state.coarse.is_some()
+    }
+
     /// True while an extraction runs in the background or its result waits to be installed:
     /// the window should come back (and show that it is busy).
     pub fn needs_another_frame(&self) -> bool {

@@ -153,3 +153,35 @@ fn the_window_path_keeps_a_coarse_surface_beside_the_full_one() {
         );
     }
 }
+
+/// Until the grid's first surface comes from the background extraction, the Surface view draws
+/// the points' sparse subset: the first frames after a switch to Surface used to show an empty
+/// box (about a second on a 3.5 M-point song on lavapipe).
+#[test]
+fn the_surface_view_shows_the_points_until_its_first_surface_comes() {
+    use loudscape::render::headless::render_image;
+    use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+    let gpu = common::gpu();
+    let renderer = Renderer::new(&gpu.device);
+    let cloud = common::demo_song();
+    let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
+    let settings = RenderSettings {
+        view: ViewKind::Surface,
+        show_box: false,
+        ..Default::default()
+    };
+    data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &cloud, &settings.voxels)
+        .expect("grid");
+    let view = common::view_of(&data, 320, 180);
+    let first = render_image(&gpu, &renderer, Some(&data), &view, &settings).expect("render");
+    assert!(
+        !data.surface.extracted_any(),
+        "the surface is installed by a later frame"
+    );
+    let covered = common::coverage(&first);
+    assert!(
+        covered > 0.01,
+        "the first Surface frame is empty ({:.2} % covered)",
+        covered * 100.0
+    );
+}
