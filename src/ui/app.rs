@@ -134,6 +134,7 @@ impl LoudscapeApp {
             iso_sweep,
             busy: None,
             busy_shown: false,
+            volume_hold: Default::default(),
             needs_repaint: false,
             open: crate::ui::state::open::OpenPanel {
                 // A scripted run keeps a recent list only where it is told to.
@@ -347,6 +348,8 @@ impl eframe::App for LoudscapeApp {
                 }
             }
         }
+        // A switch to Volume made in the panel: its notice goes up before the status is drawn.
+        self.step_volume_hold(&ctx);
         // Under the 3D view, above the transport bar: what the app is telling the user.
         self.status_area(ui);
         egui::CentralPanel::default()

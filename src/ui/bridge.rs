@@ -342,6 +342,9 @@ pub struct ViewCallback {
     pub view: FrameView,
     pub settings: RenderSettings,
     pub cloud_id: Option<u64>,
+    /// Draw nothing new this frame: the picture the target holds stays (a notice is put on
+    /// screen before a long render, `state/volume_hold.rs`). Not kept through a resize.
+    pub hold: bool,
 }
 
 /// What a bridge callback renders: the 3D view ([`ViewCallback`]) or a part of the compare
@@ -415,6 +418,8 @@ impl OffscreenJob for ViewCallback {
             .ensure_size(device, self.view.width, self.view.height)
         {
             res.cache.invalidate();
+        } else if self.hold {
+            return;
         }
         // A surface finished in the background: the scene shows it from this frame on.
         if let Some(data) = self.cloud_id.and_then(|id| res.scenes.get(&id))

@@ -16,6 +16,7 @@ use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::shortcuts::{self, Action};
 use crate::ui::state::view_motion::{CameraInput, Drag, FitBox};
+use crate::ui::state::volume_hold::DRAWING_THE_VOLUME;
 use crate::ui::state::{LoudscapeApp, Slot};
 use crate::view::frame_view::FrameView;
 
@@ -155,6 +156,27 @@ impl LoudscapeApp {
         }
     }
 
+    /// This frame's step of a switch to Volume (`state/volume_hold.rs`): its notice put up or
+    /// taken away, before the status area is drawn.
+    pub(super) fn step_volume_hold(&mut self, ctx: &egui::Context) {
+        if self.compare_covers_view() || self.active().is_none() {
+            self.volume_hold.forget();
+            return;
+        }
+        let step = self
+            .volume_hold
+            .step(self.settings.view, self.busy.is_none());
+        if step.announce {
+            self.busy = Some(DRAWING_THE_VOLUME.into());
+        }
+        if step.withdraw && self.busy.as_deref() == Some(DRAWING_THE_VOLUME) {
+            self.busy = None;
+        }
+        if self.volume_hold.pending() {
+            ctx.request_repaint();
+        }
+    }
+
     /// The scene's paint callback with this frame's markers and moving budget (a moving frame
     /// of the Volume and Surface views at a reduced resolution), or the compare's when it is
     /// shown. Returns whether the scene was drawn (the compare paints its own overlays).
@@ -186,6 +208,8 @@ impl LoudscapeApp {
             view: render_view,
             settings,
             cloud_id: self.active().map(|l| l.id),
+            // A switch to Volume: this frame keeps the picture under the notice, the next draws.
+            hold: self.volume_hold.holding(),
         };
         painter.add(paint_callback(rect, callback));
         true

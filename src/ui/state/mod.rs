@@ -56,6 +56,7 @@ pub(super) mod surface_status;
 pub(super) mod timeline_build;
 pub(super) mod video_export;
 pub(super) mod view_motion;
+pub(super) mod volume_hold;
 pub(super) mod written;
 
 use compare_window::CompareState;
@@ -102,6 +103,8 @@ pub(super) struct LoudscapeApp {
     pub(super) busy: Option<String>,
     /// The busy notice has been on screen for a frame: the work may start.
     pub(super) busy_shown: bool,
+    /// The first Volume frame after another view, announced a frame before it is drawn.
+    pub(super) volume_hold: volume_hold::VolumeHold,
     /// Progressive points: the fraction drawn while the view fills in (`ui/progressive.rs`).
     pub(super) refining: Option<f32>,
     /// The scripted isovalue sweep of a test run (`iso_sweep.rs`).
