@@ -95,8 +95,12 @@ fn grid_from_the_device_copy_equals_the_grid_from_the_host() {
     let voxels = VoxelSettings::default();
     let mut from_host = SceneData::new(&gpu.device, &renderer, &cloud);
     let resolution = voxels.resolution_for(DataMode::Song);
-    let (grid, stats) = renderer
-        .voxelize
+    // The compute passes from the host's points, as the device's copy is voxelized (a device
+    // that is the CPU would build the host's on the CPU: tests/it/voxelize.rs compares those).
+    let frame = loudscape::render::gpu::frame::FrameBinding::new(&gpu.device);
+    let passes = loudscape::render::grid::voxelize::VoxelizePass::new(&gpu.device, &frame)
+        .with_cpu_engine(false);
+    let (grid, stats) = passes
         .voxelize(
             &gpu.device,
             &gpu.queue,

@@ -10,6 +10,7 @@
 pub mod difference;
 pub mod downsample;
 pub mod reference;
+pub mod settings;
 pub mod voxelize;
 pub mod voxelize_cpu;
 pub mod voxelize_host;
