@@ -6,14 +6,18 @@
 //! one egui paint callback, as the window's (src/ui/bridge.rs): `prepare` renders the scene
 //! with [`Renderer::render`] into an offscreen target sized to the view, `paint` composites it
 //! into egui's frame. Drags orbit (primary) or pan (secondary), the wheel zooms, F fits and R
-//! resets, as in the window; P and V (or the side panel) choose the Points or the Volume view.
-//! The Volume view's grid is built on the GPU by the window's voxelize pass when first shown.
-//! In the Points view at rest, the point under the cursor's values show in a tooltip. A side panel holds the legend (the hp colours, the axes with their
-//! units) and what the page thinned.
+//! resets, as in the window; P, S and V (or the side panel) choose the Points, Surface or Volume
+//! view. The grid of the Volume and Surface views is built on the GPU by the window's voxelize
+//! pass when first shown; the Surface view's isosurface, at the side panel's isovalue, is
+//! extracted by the window's marching tetrahedra passes ([`surface`]). In the Points view at
+//! rest, the point under the cursor's values show in a tooltip. A side panel holds the legend
+//! (the hp colours, the axes with their units) and what the page thinned.
 //!
 //! WebGPU only: the points pass reads its points from storage buffers in the vertex shader and
 //! the voxel grid is built by compute passes, neither of which WebGL2 has, so where the browser
 //! has no WebGPU the page says so instead.
+
+mod surface;
 
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -28,6 +32,7 @@ use crate::render::composite::CompositePass;
 use crate::render::gpu::target::RenderTarget;
 use crate::render::grid::voxelize::{VoxelizePass, VoxelizeRequest};
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use crate::render::surface::SurfaceSettings;
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
 
@@ -65,12 +70,13 @@ pub async fn start(
         ..Default::default()
     };
     let runner = eframe::WebRunner::new();
+    let page_canvas = canvas.clone();
     runner
         .start(
             canvas,
             options,
             Box::new(move |cc| {
-                let app = WebApp::new(cc, cloud, note)?;
+                let app = WebApp::new(cc, cloud, note, page_canvas)?;
                 Ok(Box::new(app))
             }),
         )
@@ -85,14 +91,22 @@ struct WebResources {
     scene: SceneData,
     target: Option<RenderTarget>,
     composite: CompositePass,
+    surface: surface::WebSurface,
 }
 
 /// The viewer: the camera, the settings and what the side panel says.
 struct WebApp {
     render_state: egui_wgpu::RenderState,
     cloud: PointCloud,
-    /// Why the volume cannot be shown, once a build failed.
-    volume_error: Option<String>,
+    /// Why the grid (Volume and Surface views) cannot be built, once a build failed.
+    grid_error: Option<String>,
+    /// The surface drawn (it lags the slider while an extraction runs); None before the first.
+    drawn_surface: Option<SurfaceSettings>,
+    /// The Surface view's read-out: triangles, or why the surface is incomplete.
+    surface_status: String,
+    /// The page's canvas: the isovalue slider's rail is written on it (`data-iso-slider`, CSS
+    /// pixels from the canvas's corner: x,y,width,height), for scripts and tests.
+    canvas: web_sys::HtmlCanvasElement,
     note: String,
     camera: Camera,
     world_from_data: Mat4,
@@ -108,6 +122,7 @@ impl WebApp {
         cc: &eframe::CreationContext<'_>,
         cloud: PointCloud,
         note: String,
+        canvas: web_sys::HtmlCanvasElement,
     ) -> Result<Self, String> {
         let render_state = cc
             .wgpu_render_state
@@ -124,6 +139,7 @@ impl WebApp {
         let world_box = scene.world_box();
         let resources = WebResources {
             composite: CompositePass::new(device, render_state.target_format),
+            surface: surface::WebSurface::new(device),
             renderer,
             scene,
             target: None,
@@ -137,7 +153,10 @@ impl WebApp {
         settings.points.size_px = crate::render::points::PointStyle::size_for(cloud.len());
         Ok(Self {
             render_state: render_state.clone(),
-            volume_error: None,
+            grid_error: None,
+            drawn_surface: None,
+            surface_status: String::new(),
+            canvas,
             cloud,
             note,
             camera: Camera::default(),
@@ -149,9 +168,9 @@ impl WebApp {
         })
     }
 
-    /// Builds the voxel grid the Volume view draws, once, on the GPU (the window's voxelize
-    /// pass; its statistics are not read back, as a page cannot wait for the GPU).
-    fn ensure_volume(&mut self) -> Result<(), String> {
+    /// Builds the voxel grid the Volume and Surface views draw, once, on the GPU (the window's
+    /// voxelize pass; its statistics are not read back, as a page cannot wait for the GPU).
+    fn ensure_grid(&mut self) -> Result<(), String> {
         let state = &self.render_state;
         let mut renderer = state.renderer.write();
         let Some(res) = renderer.callback_resources.get_mut::<WebResources>() else {
@@ -183,34 +202,71 @@ impl WebApp {
         let grid = VoxelizePass::finish(job);
         res.scene
             .set_grid(&state.device, &res.renderer, grid, None, mode, voxels);
+        res.surface.reset();
+        self.drawn_surface = None;
         Ok(())
     }
 
+    /// The Surface view's frame: the surface of the slider's isovalue asked of the extraction
+    /// ([`surface::WebSurface::update`]); what is drawn is kept in `drawn_surface`. Returns
+    /// whether the page should come back for another frame (an extraction is under way).
+    fn update_surface(&mut self) -> bool {
+        let state = &self.render_state;
+        let mut renderer = state.renderer.write();
+        let Some(res) = renderer.callback_resources.get_mut::<WebResources>() else {
+            return false;
+        };
+        let Some(grid) = res.scene.grid.as_ref() else {
+            return false;
+        };
+        let (drawn, busy) = res.surface.update(
+            &state.device,
+            &state.queue,
+            grid,
+            &res.scene.surface,
+            self.settings.surface,
+        );
+        self.drawn_surface = drawn;
+        self.surface_status = match (&res.surface.error, res.surface.counts) {
+            (Some(error), _) => error.clone(),
+            (None, Some(counts)) if counts.found_nothing() => {
+                "no surface: every voxel is below the isovalue".to_string()
+            }
+            (None, Some(counts)) => format!("{} triangles", counts.triangles()),
+            (None, None) => "extracting…".to_string(),
+        };
+        busy || drawn != Some(self.settings.surface)
+    }
+
     fn view_choice(&mut self, ui: &mut egui::Ui) {
-        let (points, volume) =
-            ui.input(|i| (i.key_pressed(egui::Key::P), i.key_pressed(egui::Key::V)));
-        if points {
-            self.settings.view = ViewKind::Points;
-        }
-        if volume {
-            self.settings.view = ViewKind::Volume;
+        let keys = ui.input(|i| {
+            [
+                (i.key_pressed(egui::Key::P), ViewKind::Points),
+                (i.key_pressed(egui::Key::S), ViewKind::Surface),
+                (i.key_pressed(egui::Key::V), ViewKind::Volume),
+            ]
+        });
+        for (pressed, view) in keys {
+            if pressed {
+                self.settings.view = view;
+            }
         }
         ui.horizontal(|ui| {
             ui.label("View:");
-            for view in [ViewKind::Points, ViewKind::Volume] {
+            for view in [ViewKind::Points, ViewKind::Surface, ViewKind::Volume] {
                 ui.selectable_value(&mut self.settings.view, view, view.name());
             }
         });
-        if self.settings.view == ViewKind::Volume
-            && self.volume_error.is_none()
-            && let Err(error) = self.ensure_volume()
+        if self.settings.view != ViewKind::Points
+            && self.grid_error.is_none()
+            && let Err(error) = self.ensure_grid()
         {
-            self.volume_error = Some(error);
+            self.grid_error = Some(error);
         }
-        if let Some(error) = &self.volume_error {
+        if let Some(error) = &self.grid_error {
             ui.colored_label(
                 egui::Color32::from_rgb(230, 120, 90),
-                format!("The volume cannot be shown: {error}"),
+                format!("The voxel grid cannot be built: {error}"),
             );
             self.settings.view = ViewKind::Points;
         }
@@ -228,7 +284,9 @@ impl WebApp {
         ui.separator();
         self.view_choice(ui);
         ui.separator();
-        if self.settings.view == ViewKind::Volume {
+        if self.settings.view == ViewKind::Surface {
+            self.surface_controls(ui);
+        } else if self.settings.view == ViewKind::Volume {
             ui.label(format!(
                 "Volume: density of the points on a voxel grid, coloured and made opaque by \
                  the {} transfer function",
@@ -260,10 +318,32 @@ impl WebApp {
         ui.label(
             egui::RichText::new(
                 "Drag: orbit · right drag: pan · wheel: zoom · F: fit · R: reset view · P: points · \
-                 V: volume",
+                 S: surface · V: volume",
             )
             .small(),
         );
+    }
+
+    /// The Surface view's part of the side panel: the isovalue slider and what the surface
+    /// holds. The slider's place goes on the canvas (`data-iso-slider`).
+    fn surface_controls(&mut self, ui: &mut egui::Ui) {
+        ui.label(
+            "Surface: where the density of the points on a voxel grid crosses the isovalue \
+             (marching tetrahedra), coloured by hp",
+        );
+        let slider = ui.add(
+            egui::Slider::new(&mut self.settings.surface.iso_value, 0.01..=0.99).text("isovalue"),
+        );
+        // The rail is the first `slider_width` points of the widget (the value and the name
+        // follow it).
+        let r = slider.rect;
+        let rail = ui.spacing().slider_width;
+        let place = format!("{},{},{},{}", r.left(), r.top(), rail, r.height());
+        if self.canvas.get_attribute("data-iso-slider").as_deref() != Some(place.as_str()) {
+            self.canvas.set_attribute("data-iso-slider", &place).ok();
+        }
+        ui.label(egui::RichText::new(&self.surface_status).small());
+        hp_strip(ui, self.settings.colours.hp);
     }
 
     /// The camera input of a frame; whether the view moves.
@@ -393,12 +473,20 @@ impl eframe::App for WebApp {
                     moving,
                 };
                 self.hover_readout(&response, &view, scale);
+                let mut settings = self.settings.clone();
+                if settings.view == ViewKind::Surface && self.grid_error.is_none() {
+                    if self.update_surface() {
+                        ctx.request_repaint();
+                    }
+                    // The surface the mesh holds: the renderer starts no extraction of its own.
+                    match self.drawn_surface {
+                        Some(drawn) => settings.surface = drawn,
+                        None => settings.view = ViewKind::Points,
+                    }
+                }
                 ui.painter().add(egui_wgpu::Callback::new_paint_callback(
                     rect,
-                    ViewPaint {
-                        view,
-                        settings: self.settings.clone(),
-                    },
+                    ViewPaint { view, settings },
                 ));
             });
     }

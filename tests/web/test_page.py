@@ -296,3 +296,53 @@ def test_a_three_minute_song_is_thinned_into_the_budget(tmp_path):
     print(f"\npage of {count} points (3 minutes): {size / 1e6:.2f} MB; {run.stderr.strip()}")
     assert size <= PAGE_BUDGET_BYTES
     assert f"of the song's {count} points" in out.read_text()
+
+
+def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
+    """S shows the Surface view (the grid built by the voxelize passes, the isosurface by the
+    marching tetrahedra passes, on WebGPU); a click on the isovalue slider's rail changes it."""
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+
+    def coloured():
+        rgb = _view_pixels(page)
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    points = _wait_for(coloured, "the view never showed the points")
+    whole = points.shape[0] * points.shape[1]
+    page.locator("#loudscape-view").focus()
+    page.keyboard.press("s")
+
+    def differs_from(reference, share):
+        def check():
+            rgb = _view_pixels(page)
+            changed = np.count_nonzero(np.abs(rgb - reference).sum(axis=2) > 30)
+            lit = np.count_nonzero(rgb.max(axis=2) > 100)
+            return (rgb, changed) if changed > share * whole and lit > 0.02 * whole else None
+
+        return check
+
+    surface, changed = _wait_for(differs_from(points, 0.05), "S did not show a surface")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(surface.astype(np.uint8)).save(SHOTS / "page_surface.png")
+    print(f"\nsurface: {changed} pixels changed from the points")
+    # The surface is lit and hp-coloured: both ends of the palette are on it.
+    assert min(_point_colours(surface)) > 200, _point_colours(surface)
+
+    place = page.locator("#loudscape-view").get_attribute("data-iso-slider")
+    assert place, "the page did not say where the isovalue slider is"
+    x, y, width, height = (float(v) for v in place.split(","))
+    box = page.locator("#loudscape-view").bounding_box()
+    # From the default isovalue (0.5) down to about 0.1: a larger surface.
+    page.mouse.click(box["x"] + x + 0.1 * width, box["y"] + y + height / 2)
+    lower, changed = _wait_for(
+        differs_from(surface, 0.02), "the isovalue slider did not change the surface"
+    )
+    Image.fromarray(lower.astype(np.uint8)).save(SHOTS / "page_surface_lower.png")
+    print(f"isovalue lowered: {changed} pixels changed")
+    assert errors == [], errors
+    page.close()
