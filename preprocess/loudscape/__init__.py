@@ -8,6 +8,7 @@
     pixels = picture.to_numpy()                                # (H, W, 4) uint8
     cloud = loudscape.read_cloud("song.ply")                   # points and metadata
     loudscape.show(cloud)                                      # the window
+    loudscape.show("song.ply", inline=True)                    # the view in the cell
 
 Every picture is drawn by the ``loudscape render`` command (the binary installed with this
 package, or a checkout's ``target/`` build): there is no second renderer. Audio is extracted by
@@ -21,6 +22,7 @@ odd about an input (a truncated file, channels that cancel...) is raised as a
 
 from loudscape.api import Cloud, LoudscapeWarning, read_cloud, render, show
 from loudscape.binary import find_binary
+from loudscape.page import Page
 from loudscape.picture import Picture
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.version import __version__
@@ -29,6 +31,7 @@ __all__ = [
     "Cloud",
     "ExtractError",
     "LoudscapeWarning",
+    "Page",
     "Picture",
     "__version__",
     "find_binary",

@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from loudscape.binary import find_binary
+from loudscape.page import Page
 from loudscape.picture import Picture
 from loudscape_extract.errors import ExtractError
 from loudscape_extract.paths import check_regular_input
@@ -458,34 +459,63 @@ def render(
         return Picture(Path(output).read_bytes(), warnings=said)
 
 
-def show(source, *, view: str | None = None, metadata: dict | None = None, wait: bool = True):
-    """Open the loudscape window on ``source``.
+def show(
+    source,
+    *,
+    view: str | None = None,
+    metadata: dict | None = None,
+    wait: bool = True,
+    inline: bool = False,
+    timeout: float | None = None,
+):
+    """Open the loudscape window on ``source``, or with ``inline=True`` put the interactive
+    view in the notebook cell.
 
     Parameters
     ----------
     source : str, os.PathLike, Cloud, tuple or np.ndarray
         As for :func:`render`.
     view : {"points", "surface", "volume"}, optional
-        The view the window opens in.
+        The view the window opens in (the window only: the inline page opens in the points
+        view, and S, V and P switch).
     metadata : dict, optional
         Metadata for a bare points array.
     wait : bool
         Return when the window is closed (True), or at once with the running process.
+    inline : bool
+        Instead of the window, the song's web page (``loudscape page``: the app's viewer for
+        the web, with the cloud thinned to fit 12 MB), which Jupyter shows in the cell
+        without a server. Needs the viewer built (``make web`` in a checkout) and, to turn
+        the song, a browser with WebGPU.
+    timeout : float, optional
+        Seconds to wait for the binary to write the page (``inline`` only).
 
     Returns
     -------
-    subprocess.Popen or None
-        The window's process when ``wait`` is False.
+    Page, subprocess.Popen or None
+        The page when ``inline`` (shown by Jupyter; ``.html``, ``.save(path)``,
+        ``.warnings``); the window's process when ``wait`` is False.
 
     Raises
     ------
     ExtractError
         The one exception of the package: a bad argument (named, with its value), an
-        unreadable source, or the window's own error.
+        unreadable source, the window's own error, or (``inline``) the viewer not built
+        (the message says to run ``make web``).
     """
     if view is not None:
         _choice("view", view, VIEWS)
     _flag("wait", wait)
+    _flag("inline", inline)
+    if inline:
+        if view not in (None, "points"):
+            raise ExtractError(
+                f"view={view!r} is for the window; the inline page opens in the points view "
+                "(S: surface, V: volume, P: points)"
+            )
+        return _page(source, metadata=metadata, timeout=_timeout(timeout))
+    if timeout is not None:
+        raise ExtractError("timeout is for the inline page (inline=True)")
     binary = find_binary()
     folder = tempfile.mkdtemp(prefix="loudscape-show-")
     try:
@@ -502,6 +532,21 @@ def show(source, *, view: str | None = None, metadata: dict | None = None, wait:
         raise
     threading.Thread(target=lambda: (process.wait(), _remove(folder)), daemon=True).start()
     return process
+
+
+def _page(source, *, metadata: dict | None, timeout: float | None) -> Page:
+    """``loudscape page`` of ``source``, written to a temporary folder (removed on every
+    path) and read back."""
+    binary = find_binary()
+    with tempfile.TemporaryDirectory(prefix="loudscape-page-") as folder:
+        output = os.path.join(folder, "page.html")
+        name, label = _as_input(source, metadata, folder)
+        command = [str(binary), "--quiet", "page", f"--output={output}", "--", name]
+        stderr = _run(command, timeout=timeout)
+        said = _warnings(stderr, input_name=name, label=label)
+        for text in said:
+            warnings.warn(text, LoudscapeWarning, stacklevel=3)
+        return Page(Path(output).read_text(encoding="utf-8"), warnings=said)
 
 
 def _remove(folder: str) -> None:
