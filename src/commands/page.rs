@@ -5,7 +5,9 @@
 //! thinned and quantized (`data::page_cloud`), both base64 in the page, so it opens from the file
 //! system as from any static host. The cloud is thinned so the page stays under
 //! [`PAGE_BUDGET_BYTES`]; the page says what was thinned. The wasm is found in the folder `make
-//! web` writes (see [`viewer_dirs`]).
+//! web` writes (see [`viewer_dirs`]). With `--audio` the song's sound rides along ([`audio`]).
+
+mod audio;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -14,10 +16,12 @@ use anyhow::bail;
 use clap::Args;
 
 use crate::commands::args::{check_output, load_cloud};
+use loudscape::data::cloud::DataMode;
 use loudscape::data::page_cloud;
 
-/// What a page may weigh, everything included: a 3-minute song's page without audio stays
-/// under 12 MB (issue 38).
+/// What a page may weigh without its sound, everything included: a 3-minute song's page
+/// without audio stays under 12 MB, with audio under 20 MB ([`audio::AUDIO_BUDGET_BYTES`]
+/// more; issue 38).
 pub const PAGE_BUDGET_BYTES: usize = 12_000_000;
 /// The viewer's wasm and glue as `wasm-bindgen` names them.
 const WASM_FILE: &str = "loudscape_bg.wasm";
@@ -39,6 +43,12 @@ pub struct PageArgs {
     /// Carry at most this many points (default: as many as the page's 12 MB allow).
     #[arg(long)]
     pub max_points: Option<usize>,
+
+    /// Put the song's sound in the page (Opus, by ffmpeg), with play, a playhead and
+    /// click-to-seek: off by default, as publishing the page publishes the music. The sound is
+    /// the input when it is audio, else the cloud's source audio, checked against the cloud.
+    #[arg(long)]
+    pub audio: bool,
 }
 
 /// The folders searched for the viewer: `$LOUDSCAPE_WEB_DIR` alone when it is set, else `web/`
@@ -131,6 +141,20 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
     }
     let (wasm, glue) = read_viewer()?;
     let cloud = load_cloud(&args.input)?;
+    let sound = if args.audio {
+        if cloud.meta.mode == DataMode::Timeline {
+            bail!(
+                "{}: --audio is for a song; a timeline has no one sound",
+                args.input.display()
+            );
+        }
+        let source = audio::song_sound(&args.input, &cloud)?;
+        check_output(&args.output, &["html", "htm"], &[source.as_path()])?;
+        let duration = loudscape::playback::song_duration_s(&cloud);
+        Some((audio::encode(&source, duration)?, duration))
+    } else {
+        None
+    };
     let wasm = gzip(&wasm);
     let budget = points_in_budget(wasm.len() + glue.len());
     let max_points = args.max_points.unwrap_or(budget).min(budget).max(1);
@@ -158,8 +182,16 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
         .replace("__NAME__", &script_string(&name))
         .replace("__NOTE__", &script_string(&note))
         .replace("__GLUE__", &glue)
+        .replace(
+            "__DURATION__",
+            &format!("{}", sound.as_ref().map_or(0.0, |s| s.1)),
+        )
         .replace("__WASM__", &base64(&wasm))
-        .replace("__CLOUD__", &base64(&data));
+        .replace("__CLOUD__", &base64(&data))
+        .replace(
+            "__AUDIO__",
+            &sound.as_ref().map_or(String::new(), |s| base64(&s.0.webm)),
+        );
     crate::commands::write_atomically(&args.output, |out| Ok(out.write_all(page.as_bytes())?))?;
     for line in cloud.warning_lines() {
         eprintln!("warning: {line}");
@@ -167,10 +199,15 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
     crate::commands::wrote(
         &args.output,
         &format!(
-            "{:.1} MB, {} of {} points",
+            "{:.1} MB, {} of {} points{}",
             page.len() as f64 / 1e6,
             thinning.kept,
-            thinning.total
+            thinning.total,
+            sound.as_ref().map_or(String::new(), |(sound, _)| format!(
+                ", sound {:.1} MB at {} kbit/s",
+                sound.webm.len() as f64 / 1e6,
+                sound.kbps
+            ))
         ),
     );
     Ok(())

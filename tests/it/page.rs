@@ -129,3 +129,97 @@ fn without_the_viewer_or_with_a_wrong_name_the_page_is_one_line() {
     assert!(!output.status.success());
     assert!(text.contains("supported: .html, .htm"), "{text}");
 }
+
+/// A stand-in viewer in `dir`/web.
+fn stand_in_viewer(dir: &Path) -> PathBuf {
+    let web = dir.join("web");
+    std::fs::create_dir_all(&web).unwrap();
+    std::fs::write(web.join("loudscape_bg.wasm"), b"\0asm stand-in").unwrap();
+    std::fs::write(web.join("loudscape.js"), "let wasm_bindgen = 'glue';").unwrap();
+    web
+}
+
+#[test]
+fn with_audio_the_page_carries_the_songs_sound_as_opus() {
+    let dir = common::fresh_dir("page_audio");
+    let web = stand_in_viewer(&dir);
+    let scratch = dir.join("tmp");
+    std::fs::create_dir_all(&scratch).unwrap();
+    let out = dir.join("demo.html");
+    let output = Command::new(env!("CARGO_BIN_EXE_loudscape"))
+        .arg("page")
+        .arg(song())
+        .arg("-o")
+        .arg(&out)
+        .arg("--audio")
+        .env("LOUDSCAPE_WEB_DIR", &web)
+        .env("TMPDIR", &scratch)
+        .output()
+        .expect("start loudscape");
+    common::assert_success(&output);
+    let html = std::fs::read_to_string(&out).unwrap();
+    let sound = dir.join("sound.webm");
+    std::fs::write(&sound, unbase64(script(&html, "loudscape-audio"))).unwrap();
+    let probe = common::ffprobe(&sound);
+    assert_eq!(probe["streams"][0]["codec_name"], "opus", "{probe}");
+    assert!(
+        probe["format"]["format_name"]
+            .as_str()
+            .is_some_and(|f| f.contains("webm")),
+        "{probe}"
+    );
+    let source = common::repo().join("data/demo_song.flac");
+    let seconds = |p: &serde_json::Value| {
+        p["format"]["duration"]
+            .as_str()
+            .and_then(|d| d.parse::<f64>().ok())
+            .expect("duration")
+    };
+    let length = seconds(&common::ffprobe(&source));
+    assert!((seconds(&probe) - length).abs() < 0.05, "{probe}");
+    // The song's own sound: the decoded Opus follows the source sample by sample.
+    let heard = common::decode_audio(&sound, 8000);
+    let said = common::decode_audio(&source, 8000);
+    let n = heard.len().min(said.len());
+    let dot: f64 = (0..n)
+        .map(|i| f64::from(heard[i]) * f64::from(said[i]))
+        .sum();
+    let energy = |x: &[f32]| x[..n].iter().map(|&v| f64::from(v).powi(2)).sum::<f64>();
+    let correlation = dot / (energy(&heard) * energy(&said)).sqrt();
+    assert!(correlation > 0.95, "correlation {correlation:.3}");
+    // (The runtime folder every command makes there is not the page's.)
+    let left = common::names_in(&scratch);
+    assert!(
+        !left.iter().any(|n| n.starts_with("loudscape-page")),
+        "left behind: {left:?}"
+    );
+    assert!(String::from_utf8_lossy(&output.stderr).contains("kbit/s"));
+
+    // Without --audio (the default) the page holds no sound.
+    let silent = dir.join("silent.html");
+    common::assert_success(&page(&web, &[&song(), Path::new("-o"), &silent]));
+    let html = std::fs::read_to_string(&silent).unwrap();
+    assert_eq!(script(&html, "loudscape-audio").trim(), "");
+}
+
+#[test]
+fn audio_without_a_sound_to_carry_is_one_line() {
+    let dir = common::fresh_dir("page_audio_refused");
+    let web = stand_in_viewer(&dir);
+    // A song cloud that records no source audio.
+    let lonely = dir.join("lonely.ply");
+    common::write_song_cloud(&lonely, 2000, 1.0, serde_json::json!({}));
+    let timeline = common::repo().join("data/demo_timeline.ply");
+    for (input, says) in [
+        (lonely.as_path(), "leave out --audio"),
+        (timeline.as_path(), "--audio is for a song"),
+    ] {
+        let out = dir.join("page.html");
+        let output = page(&web, &[input, Path::new("-o"), &out, Path::new("--audio")]);
+        let text = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{text}");
+        assert_eq!(text.lines().count(), 1, "{text}");
+        assert!(text.contains(says), "{text}");
+        assert!(!out.exists());
+    }
+}

@@ -346,3 +346,56 @@ def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     print(f"isovalue lowered: {changed} pixels changed")
     assert errors == [], errors
     page.close()
+
+
+@pytest.fixture(scope="module")
+def audio_page_file(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("page_audio") / "demo_song_audio.html"
+    run = subprocess.run(
+        [str(BINARY), "page", str(SONG), "-o", str(out), "--audio"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    print(f"\n{run.stderr.strip()}")
+    return out
+
+
+def test_the_song_plays_with_a_playhead_and_seeks_where_clicked(browser, audio_page_file):
+    """--audio: the page plays the song's sound (Opus); the playhead follows it, and a click on
+    the bar plays from that point of the song."""
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(audio_page_file.as_uri())
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    assert page.locator("#player").is_visible()
+    page.wait_for_function(
+        "document.getElementById('loudscape-sound').readyState >= 1", timeout=DEADLINE_S * 1000
+    )
+    duration = page.evaluate("document.getElementById('loudscape-sound').duration")
+    assert 1.0 < duration < 600.0, duration
+    minutes, seconds = divmod(int(duration), 60)
+    assert page.inner_text("#clock") == f"0:00 / {minutes}:{seconds:02d}"
+
+    page.click("#play")
+    page.wait_for_function(
+        "document.getElementById('loudscape-sound').currentTime > 0.3", timeout=DEADLINE_S * 1000
+    )
+    assert page.inner_text("#play") == "Pause"
+    page.click("#play")
+    assert page.evaluate("document.getElementById('loudscape-sound').paused")
+    assert page.inner_text("#play") == "Play"
+
+    bar = page.locator("#bar").bounding_box()
+    page.mouse.click(bar["x"] + bar["width"] * 0.75, bar["y"] + bar["height"] / 2)
+    at = page.evaluate("document.getElementById('loudscape-sound').currentTime")
+    assert abs(at / duration - 0.75) < 0.02, (at, duration)
+    head = page.locator("#playhead").bounding_box()
+    assert abs((head["x"] + 1 - bar["x"]) / bar["width"] - 0.75) < 0.02
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=SHOTS / "page_audio.png")
+    assert errors == [], errors
+    page.close()
