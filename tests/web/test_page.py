@@ -315,6 +315,7 @@ def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     points = _wait_for(coloured, "the view never showed the points")
     whole = points.shape[0] * points.shape[1]
     page.locator("#loudscape-view").focus()
+    pressed = time.monotonic()
     page.keyboard.press("s")
 
     def differs_from(reference, share):
@@ -327,9 +328,10 @@ def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
         return check
 
     surface, changed = _wait_for(differs_from(points, 0.05), "S did not show a surface")
+    shown_s = time.monotonic() - pressed
     SHOTS.mkdir(parents=True, exist_ok=True)
     Image.fromarray(surface.astype(np.uint8)).save(SHOTS / "page_surface.png")
-    print(f"\nsurface: {changed} pixels changed from the points")
+    print(f"\nsurface: {changed} pixels changed from the points, seen {shown_s:.1f} s after S")
     # The surface is lit and hp-coloured: both ends of the palette are on it.
     assert min(_point_colours(surface)) > 200, _point_colours(surface)
 
@@ -338,12 +340,14 @@ def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     x, y, width, height = (float(v) for v in place.split(","))
     box = page.locator("#loudscape-view").bounding_box()
     # From the default isovalue (0.5) down to about 0.1: a larger surface.
+    clicked = time.monotonic()
     page.mouse.click(box["x"] + x + 0.1 * width, box["y"] + y + height / 2)
     lower, changed = _wait_for(
         differs_from(surface, 0.02), "the isovalue slider did not change the surface"
     )
+    changed_s = time.monotonic() - clicked
     Image.fromarray(lower.astype(np.uint8)).save(SHOTS / "page_surface_lower.png")
-    print(f"isovalue lowered: {changed} pixels changed")
+    print(f"isovalue lowered: {changed} pixels changed, seen {changed_s:.1f} s after the click")
     assert errors == [], errors
     page.close()
 
@@ -387,7 +391,10 @@ def test_the_song_plays_with_a_playhead_and_seeks_where_clicked(browser, audio_p
     assert page.inner_text("#play") == "Pause"
     page.click("#play")
     assert page.evaluate("document.getElementById('loudscape-sound').paused")
-    assert page.inner_text("#play") == "Play"
+    # The button says so when the pause event comes.
+    page.wait_for_function(
+        "document.getElementById('play').textContent === 'Play'", timeout=DEADLINE_S * 1000
+    )
 
     bar = page.locator("#bar").bounding_box()
     page.mouse.click(bar["x"] + bar["width"] * 0.75, bar["y"] + bar["height"] / 2)
@@ -397,5 +404,43 @@ def test_the_song_plays_with_a_playhead_and_seeks_where_clicked(browser, audio_p
     assert abs((head["x"] + 1 - bar["x"]) / bar["width"] - 0.75) < 0.02
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=SHOTS / "page_audio.png")
+    assert errors == [], errors
+    page.close()
+
+
+def test_the_notebook_cell_turns_the_song_in_its_iframe(browser, tmp_path, monkeypatch):
+    """``loudscape.show(song, inline=True)`` as a notebook shows it: the cell's HTML (the
+    page in an ``<iframe srcdoc>``) inside a host page; the viewer starts in the iframe and
+    draws the points."""
+    import loudscape
+
+    monkeypatch.setenv("LOUDSCAPE_BIN", str(BINARY))
+    cell = loudscape.show(SONG, inline=True)._repr_html_()
+    notebook = tmp_path / "notebook.html"
+    notebook.write_text(
+        "<!doctype html><html><body><h1>In [1]:</h1>"
+        f"<div class='output'>{cell}</div></body></html>",
+        encoding="utf-8",
+    )
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(notebook.as_uri())
+    frame = page.locator("iframe").element_handle().content_frame()
+    frame.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    assert frame.evaluate("document.body.dataset.state") == "running", frame.inner_text("#message")
+
+    def coloured():
+        box = page.locator("iframe").bounding_box()
+        png = page.screenshot(clip=box, timeout=DEADLINE_S * 1000)
+        rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+        rgb = rgb[:, : rgb.shape[1] * 6 // 10]
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    shown = _wait_for(coloured, "the iframe never showed the points")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(shown.astype(np.uint8)).save(SHOTS / "page_notebook_cell.png")
+    page.screenshot(path=SHOTS / "page_notebook.png")
     assert errors == [], errors
     page.close()
