@@ -107,8 +107,12 @@ impl LoudscapeApp {
         }
         match state.alignment.poll() {
             Some(true) => {
-                // The pictures again, with the version beside A on A's time.
-                state.rebuild_scene();
+                // The pictures again, with the version beside A on A's time; one not aligned
+                // is drawn as it was (its levels matched or not is the scene's own key), and
+                // building its scene again only held the window up.
+                if state.alignment.offset_s(state.beside).is_some() {
+                    state.rebuild_scene();
+                }
                 let count = state.alignment.count();
                 let lines: Vec<String> = (1..count)
                     .filter_map(|i| state.alignment.offset_line(Listening(i)))
@@ -144,65 +148,101 @@ impl LoudscapeApp {
         self.audio.set_gain_db(gain);
     }
 
-    /// The panel's alignment lines: "aligning the versions…", each version's offset and its
-    /// confidence (or why not aligned), "match loudness" and the nudge of the offset of the
-    /// version beside A.
+    /// The panel's alignment lines, the same rows from the moment the compare is shown to the
+    /// comparison's answer and after, so nothing below them moves when it comes (a click on a
+    /// view button went to the wrong row): a line a version ("aligning the versions…" while it
+    /// runs, its offset and confidence or why not aligned after, each cut to one line with the
+    /// whole on hover), the nudge of the version beside A (enabled once it is aligned) and
+    /// "match loudness".
     pub(super) fn alignment_controls(&mut self, ui: &mut egui::Ui) {
         let Some(state) = self.compare.as_mut() else {
             return;
         };
-        let alignment = &mut state.alignment;
-        if alignment.aligning() {
-            ui.horizontal(|ui| {
-                ui.spinner();
-                ui.label("aligning the versions…");
-            });
-            return;
-        }
-        if let Some(error) = &alignment.error {
-            ui.colored_label(
-                Color32::from_rgb(230, 180, 90),
-                format!("not aligned: {error}"),
-            );
-        }
-        if alignment.comparison.is_none() {
-            return;
-        }
-        for i in 1..alignment.count() {
-            if let Some(line) = alignment.offset_line(Listening(i)) {
-                ui.label(line);
-            }
-        }
+        let count = state.count();
         let beside = state.beside;
-        let before = alignment.nudge_s(beside);
-        if alignment.offset_s(beside).is_some() {
-            ui.horizontal_wrapped(|ui| {
-                ui.label(format!("nudge {}", beside.letter()));
-                for step in NUDGE_STEPS_S {
-                    let label = format!("{:+.0}", step * 1000.0);
-                    if ui
-                        .small_button(label)
-                        .on_hover_text("moves its offset against A by this many milliseconds")
-                        .clicked()
-                    {
-                        alignment.nudge(beside, step);
-                    }
+        let alignment = &mut state.alignment;
+        let height = ui.spacing().interact_size.y;
+        for i in 1..count {
+            let (text, colour) = alignment_line(alignment, Listening(i));
+            one_row(ui, height, |ui| {
+                if alignment.aligning() && i == 1 {
+                    ui.add(egui::Spinner::new().size(height));
                 }
+                let mut shown = egui::RichText::new(text.as_str());
+                if let Some(colour) = colour {
+                    shown = shown.color(colour);
+                }
+                ui.add(egui::Label::new(shown).truncate())
+                    .on_hover_text(text.as_str());
             });
         }
+        let before = alignment.nudge_s(beside);
+        let aligned = alignment.offset_s(beside).is_some();
+        one_row(ui, height, |ui| {
+            ui.add_enabled(
+                aligned,
+                egui::Label::new(format!("nudge {}", beside.letter())),
+            );
+            for step in NUDGE_STEPS_S {
+                let label = format!("{:+.0}", step * 1000.0);
+                if ui
+                    .add_enabled(aligned, egui::Button::new(label).small())
+                    .on_hover_text("moves its offset against A by this many milliseconds")
+                    .on_disabled_hover_text("once the versions are aligned")
+                    .clicked()
+                {
+                    alignment.nudge(beside, step);
+                }
+            }
+        });
         let mut match_loudness = alignment.match_loudness;
-        if ui
-            .checkbox(&mut match_loudness, "match loudness")
-            .on_hover_text("each version plays at the gain that brings it to the quietest one")
-            .changed()
-        {
-            alignment.set_match_loudness(match_loudness);
-        }
+        one_row(ui, height, |ui| {
+            if ui
+                .checkbox(&mut match_loudness, "match loudness")
+                .on_hover_text("each version plays at the gain that brings it to the quietest one")
+                .changed()
+            {
+                alignment.set_match_loudness(match_loudness);
+            }
+        });
         if alignment.nudge_s(beside) != before {
             // The pictures again, with the version moved.
             state.rebuild_scene();
             ui.ctx().request_repaint();
         }
+    }
+}
+
+/// One row of the alignment lines, `height` high whatever it holds.
+fn one_row(ui: &mut egui::Ui, height: f32, add: impl FnOnce(&mut egui::Ui)) {
+    ui.horizontal(|ui| {
+        ui.set_height(height);
+        add(ui);
+    });
+}
+
+/// `version`'s alignment line and its colour (a warning's when the comparison failed).
+fn alignment_line(alignment: &CompareAlignment, version: Listening) -> (String, Option<Color32>) {
+    let letter = version.letter();
+    if alignment.aligning() {
+        let text = if version == Listening::B {
+            "aligning the versions…".to_string()
+        } else {
+            format!("{letter}: aligning…")
+        };
+        return (text, None);
+    }
+    if let Some(line) = alignment.offset_line(version) {
+        return (line, None);
+    }
+    match &alignment.error {
+        Some(error) if version == Listening::B => (
+            format!("not aligned: {error}"),
+            Some(Color32::from_rgb(230, 180, 90)),
+        ),
+        Some(_) => (format!("{letter} not aligned"), None),
+        None if alignment.comparison.is_some() => (format!("{letter} not aligned"), None),
+        None => (format!("{letter}: aligned once the versions are in"), None),
     }
 }
 
@@ -229,6 +269,7 @@ pub(super) fn switch_words(
 #[cfg(test)]
 mod tests {
     use std::path::Path;
+    use std::sync::mpsc::channel;
 
     use super::*;
 
@@ -243,6 +284,127 @@ mod tests {
         {"path": "c.wav", "match_gain_db": 0.0,
          "alignment": {"alignable": true, "offset_s": 0.0, "confidence": 0.9,
                        "segments": []}}]}"#;
+
+    /// The compare section's height as the panel draws it (at the side panel's width) with
+    /// `state`.
+    fn section_height(state: crate::ui::state::compare_window::CompareState) -> f32 {
+        let mut app = LoudscapeApp::new(
+            crate::ui::app::WindowOptions {
+                screenshot: Some(std::env::temp_dir().join("loudscape-unit-never-written.png")),
+                ..Default::default()
+            },
+            None,
+        );
+        app.compare = Some(state);
+        let ctx = egui::Context::default();
+        let mut height = 0.0;
+        let mut output = ctx.run_ui(egui::RawInput::default(), |ui| {
+            ui.set_max_width(crate::ui::app::side_panel_width(1280.0));
+            let top = ui.cursor().min.y;
+            app.compare_controls(ui);
+            height = ui.cursor().min.y - top;
+        });
+        output.textures_delta.clear();
+        height
+    }
+
+    /// A compare of A and B shown, its alignment `step`ped.
+    fn compare_shown(
+        step: impl FnOnce(&mut CompareAlignment),
+    ) -> crate::ui::state::compare_window::CompareState {
+        let cloud = || {
+            PointCloud::synthetic(
+                crate::data::synthetic::synthetic_song(50, 7),
+                crate::data::cloud::DataMode::Song,
+            )
+        };
+        let mut state = crate::ui::state::compare_window::CompareState::new(PathBuf::from("b.ply"));
+        state.versions[0].loaded = Some(std::sync::Arc::new(cloud()));
+        state.clouds = Some(std::sync::Arc::new((cloud(), cloud())));
+        step(&mut state.alignment);
+        state
+    }
+
+    /// The comparison answering `json` for A and B.
+    fn answered(json: &'static str) -> impl FnOnce(&mut CompareAlignment) {
+        move |alignment| {
+            let (sender, receiver) = channel();
+            alignment.start(
+                vec![PathBuf::from("a.ply"), PathBuf::from("b.ply")],
+                receiver,
+            );
+            sender
+                .send(Comparison::parse(json).map_err(|e| e.to_string()))
+                .unwrap();
+            assert_eq!(alignment.poll(), Some(true), "{json}");
+        }
+    }
+
+    /// Nothing in the side panel moves when the comparison comes (or fails): the alignment
+    /// lines take the same rows before, while and after it runs; a long reason is cut to one
+    /// line (the panel moved down about 30 px, and a click aimed at Surface while "aligning the
+    /// versions…" was shown landed on another row).
+    #[test]
+    fn the_compare_section_keeps_its_height_while_the_versions_are_aligned() {
+        const ALIGNED: &str = r#"{"match": "quietest", "versions": [
+            {"path": "a.wav", "match_gain_db": -2.0,
+             "alignment": {"alignable": true, "offset_s": 0.0, "confidence": 1.0}},
+            {"path": "b.wav", "match_gain_db": -5.8,
+             "alignment": {"alignable": true, "offset_s": 0.731, "confidence": 0.86}}]}"#;
+        const UNRELATED: &str = r#"{"match": "quietest", "versions": [
+            {"path": "a.wav", "match_gain_db": 0.0,
+             "alignment": {"alignable": true, "offset_s": 0.0, "confidence": 1.0}},
+            {"path": "b.wav", "match_gain_db": -15.7,
+             "alignment": {"alignable": false, "offset_s": 0.0, "confidence": 0.0,
+              "reason": "the versions share no music: 0 % of A found in B (at least 40 % needed)"}}]}"#;
+        let aligning = section_height(compare_shown(|alignment| {
+            let (sender, receiver) = channel();
+            alignment.start(
+                vec![PathBuf::from("a.ply"), PathBuf::from("b.ply")],
+                receiver,
+            );
+            std::mem::forget(sender);
+        }));
+        assert!(aligning > 0.0);
+        for (what, height) in [
+            ("before it starts", section_height(compare_shown(|_| {}))),
+            ("aligned", section_height(compare_shown(answered(ALIGNED)))),
+            (
+                "not related",
+                section_height(compare_shown(answered(UNRELATED))),
+            ),
+            (
+                "failed",
+                section_height(compare_shown(|alignment| {
+                    let (sender, receiver) = channel();
+                    alignment.start(vec![PathBuf::from("a.ply")], receiver);
+                    sender
+                        .send(Err(
+                            "comparing failed: ModuleNotFoundError: No module named \
+                               'loudscape_extract' and a great deal more"
+                                .into(),
+                        ))
+                        .unwrap();
+                    assert_eq!(alignment.poll(), Some(false));
+                })),
+            ),
+            (
+                "nothing to align",
+                section_height(compare_shown(|alignment| {
+                    alignment.unavailable(
+                        vec![PathBuf::from("a.ply")],
+                        "nothing to align: b.ply names no audio file that is there".into(),
+                    )
+                })),
+            ),
+        ] {
+            assert_eq!(
+                height, aligning,
+                "{what}: the section is {height} px high, \
+                 {aligning} px while aligning"
+            );
+        }
+    }
 
     /// The difference's "matched" measure moves the version's level axes by the gain that
     /// brings it to A's loudness (its matching gain less A's), and says so.

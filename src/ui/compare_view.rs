@@ -65,13 +65,15 @@ impl LoudscapeApp {
                         egui::vec2(half, rect.height()),
                     ),
                 ];
+                // The points stand in until the grids come (the pictures held are kept).
+                let drawn = state.halves_settings(settings);
                 for (side, half_rect) in rects.into_iter().enumerate() {
                     painter.add(paint_callback(
                         half_rect,
                         CompareCallback {
                             side,
                             view: *render_view,
-                            settings: settings.clone(),
+                            settings: drawn.clone(),
                         },
                     ));
                     // Its title and the colour key of what it draws, as saved pictures carry.
@@ -129,10 +131,8 @@ impl LoudscapeApp {
             paint_readings(painter, rect, pos, &lines);
         }
         // What the halves wait for, as the normal view shows it.
-        if state.grids_building() {
-            busy_badge(painter, rect, "building the compare grids…");
-        } else if self.surface.busy {
-            busy_badge(painter, rect, "extracting surface…");
+        if let Some(waiting) = state.badge(self.surface.busy, self.busy.as_deref()) {
+            busy_badge(painter, rect, waiting);
         }
         true
     }

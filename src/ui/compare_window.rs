@@ -22,7 +22,9 @@ use crate::render::scene::ViewKind;
 use crate::render::surface::state::ExtractionStatus;
 use crate::ui::bridge::CompareResources;
 use crate::ui::labels;
-use crate::ui::state::compare_window::{CompareLayout, CompareState, GridStep, Listening};
+use crate::ui::state::compare_window::{
+    CompareLayout, CompareState, GRIDS_BUSY, GridStep, Listening,
+};
 use crate::ui::state::loading::Shared;
 use crate::ui::state::{LoudscapeApp, Slot};
 
@@ -39,9 +41,6 @@ fn load_b(path: PathBuf, shared: Shared) -> Receiver<Result<PointCloud, String>>
     });
     receiver
 }
-
-/// The status line while the compare's grids are built.
-const GRIDS_BUSY: &str = "building the compare grids…";
 
 /// Builds the compare's grids of `clouds` (A and B on their union axes) on a thread with
 /// passes of its own (their pipelines compiled there too), so the window keeps drawing.
@@ -108,6 +107,7 @@ impl LoudscapeApp {
     /// view needs them, and B's audio.
     pub(super) fn poll_compare(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
         self.poll_alignment(ctx);
+        let previewing = self.previewing();
         let Some(state) = self.compare.as_mut() else {
             return;
         };
@@ -186,8 +186,9 @@ impl LoudscapeApp {
                     CompareResources::write(render_state, |compare, _| compare.clear());
                 }
             }
-            if first_build {
-                // One camera: another version beside A keeps the view where it is.
+            // One camera: another version beside A keeps the view where it is, and a
+            // reopened window the camera it was left with.
+            if state.fit_scene(first_build, !previewing) {
                 self.motion.request_fit();
             }
         }
@@ -198,7 +199,7 @@ impl LoudscapeApp {
             CompareResources::write(render_state, |compare, view| {
                 compare.install_grids(view, built)
             });
-            state.forget_difference();
+            state.grids_installed();
             // A log line, as loads are told: tests read it (the frame count ends it).
             eprintln!(
                 "compare: grids built ({}x{}x{}) in {:.2} s, installed in {:.0} ms, while the \

@@ -165,6 +165,12 @@ impl LoudscapeApp {
                             self.compare_with(version);
                         }
                     }
+                    // The compare comes back where it was left, not fitted again.
+                    if r.camera.is_some()
+                        && let Some(state) = self.compare.as_mut()
+                    {
+                        state.camera_restored();
+                    }
                 }
             }
         }
@@ -209,7 +215,7 @@ mod tests {
         let key = crate::ui::normalize::PRESETS[1].key.to_string();
         let mut camera = crate::view::camera::Camera::default();
         camera.azimuth += 0.5;
-        let app = reopened(Remembered {
+        let mut app = reopened(Remembered {
             files: vec![song.clone(), timeline.clone()],
             camera: Some(camera),
             active: Some("timeline".into()),
@@ -235,6 +241,21 @@ mod tests {
         );
         assert_eq!(app.active, Slot::Timeline, "the slot it closed on");
         assert_eq!(app.motion.camera(), camera);
+        let mut state = app.compare.take().expect("a compare");
+        assert!(
+            !state.fit_scene(true, false),
+            "the compare's scene of A's points so far keeps the camera"
+        );
+        assert!(
+            !state.fit_scene(true, true),
+            "the scene of the whole of A keeps the camera too"
+        );
+        assert!(state.fit_scene(true, true), "another song in A is fitted");
+        assert!(
+            !state.fit_scene(false, true),
+            "another version beside A is not"
+        );
+        app.compare = Some(state);
         let again = app.remembered();
         assert_eq!(
             again.compare,
@@ -260,6 +281,10 @@ mod tests {
             }),
         );
         assert!(app.compare.is_none(), "B goes with the remembered A only");
+        let mut app = LoudscapeApp::new(options(Vec::new()), None);
+        app.compare_with(repo.join("data/fixture_song.ply"));
+        let state = app.compare.as_mut().expect("a compare");
+        assert!(state.fit_scene(true, true), "a new compare is fitted");
     }
     use crate::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 

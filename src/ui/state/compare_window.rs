@@ -20,10 +20,13 @@ use crate::playback::{PlaybackError, Track};
 use crate::render::compare::BuiltGrids;
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::grid::voxelize::VoxelSettings;
-use crate::render::scene::ViewKind;
+use crate::render::scene::{RenderSettings, ViewKind};
 use crate::render::surface::SurfaceMethod;
 use crate::ui::labels::AxisLabels;
 use crate::ui::state::loading::Shared;
+
+/// The status line while the compare's grids are built.
+pub(in crate::ui) const GRIDS_BUSY: &str = "building the compare grids…";
 
 /// How the compare is shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,6 +99,9 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) error: Option<String>,
     /// The grids being built on a thread, when they are.
     pub(in crate::ui) grid_build: Option<GridBuild>,
+    /// Whether the GPU scene holds grids (for some voxel settings): without them the halves
+    /// draw their points in every view.
+    pub(in crate::ui) has_grids: bool,
     /// The surfaces last told on stderr: method, isovalue bits, A's and B's triangles.
     pub(in crate::ui) surface_told: Option<(SurfaceMethod, u32, u32, u32)>,
     /// The voxel settings whose grids failed to build (not tried again until they change).
@@ -110,6 +116,9 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) dialog: Option<Receiver<Option<Vec<PathBuf>>>>,
     /// A and B aligned in time and matched in loudness (`state/alignment.rs`).
     pub(in crate::ui) alignment: super::alignment::CompareAlignment,
+    /// The camera came back with the compare (a reopened window): the scenes built while A
+    /// arrives keep it, as the window was left, instead of fitting the compare.
+    pub(in crate::ui) keep_camera: bool,
 }
 
 /// The compare's grids built on a thread (`render::compare::build_grids`): the voxel settings
@@ -161,12 +170,14 @@ impl CompareState {
             error: None,
             error_told: None,
             grid_build: None,
+            has_grids: false,
             grids_failed: None,
             grids_pending: false,
             surface_told: None,
             labels: None,
             dialog: None,
             alignment: Default::default(),
+            keep_camera: false,
         }
     }
 
@@ -270,7 +281,24 @@ impl CompareState {
     /// The scene could not be built (`error`: the clouds have no union axes).
     pub(in crate::ui) fn scene_failed(&mut self, error: String) {
         self.clouds = None;
+        self.has_grids = false;
         self.error = Some(error);
+    }
+
+    /// The window's camera was restored with this compare (a reopened window).
+    pub(in crate::ui) fn camera_restored(&mut self) {
+        self.keep_camera = true;
+    }
+
+    /// Whether the scene built now (`first`: the first for this song in A) is fitted: not
+    /// while a restored camera is kept, which lasts until the scene is built for the whole of
+    /// A (`whole`; its points so far stand in while it is extracted).
+    pub(in crate::ui) fn fit_scene(&mut self, first: bool, whole: bool) -> bool {
+        let fit = first && !self.keep_camera;
+        if whole {
+            self.keep_camera = false;
+        }
+        fit
     }
 
     /// Builds the scene again on the next frame (an alignment came, a version was nudged).
@@ -280,6 +308,13 @@ impl CompareState {
 
     /// The difference's CPU copy is stale (grids installed or a build started): read again.
     pub(in crate::ui) fn forget_difference(&mut self) {
+        self.difference = None;
+    }
+
+    /// The GPU scene holds the grids built on a thread now: the halves draw from them, and the
+    /// difference's CPU copy is read again.
+    pub(in crate::ui) fn grids_installed(&mut self) {
+        self.has_grids = true;
         self.difference = None;
     }
 
@@ -479,8 +514,10 @@ impl CompareState {
         }
         self.built_for = Some(key);
         self.difference = None;
-        // A build for the old scene has nothing to give the new one.
+        // A build for the old scene has nothing to give the new one, and the new scene has no
+        // grids yet.
         self.grid_build = None;
+        self.has_grids = false;
         self.grids_failed = None;
         true
     }
@@ -552,6 +589,37 @@ impl CompareState {
                 None
             }
         }
+    }
+
+    /// The settings the two halves are drawn with: `settings`, but the points' own while the
+    /// scene has no grids yet (in the Surface and Volume views the points stand in until the
+    /// grids come, and drawn as the Points view draws them the pictures the halves hold are
+    /// kept: a click on Surface does not draw every point of both versions again before the
+    /// window shows it).
+    pub(in crate::ui) fn halves_settings(&self, settings: &RenderSettings) -> RenderSettings {
+        let mut drawn = settings.clone();
+        if !self.has_grids {
+            drawn.view = ViewKind::Points;
+        }
+        drawn
+    }
+
+    /// What the compare's view says over its halves while they wait (`surface_busy`: a
+    /// surface is extracted), unless the status line (`status`) says it already: one notice in
+    /// one place.
+    pub(in crate::ui) fn badge(
+        &self,
+        surface_busy: bool,
+        status: Option<&str>,
+    ) -> Option<&'static str> {
+        let waiting = if self.grids_building() {
+            GRIDS_BUSY
+        } else if surface_busy {
+            "extracting surface…"
+        } else {
+            return None;
+        };
+        (status != Some(waiting)).then_some(waiting)
     }
 
     /// Whether what is shown draws from the voxel grids: the difference, or side by side in

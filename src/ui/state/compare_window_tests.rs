@@ -495,3 +495,68 @@ fn the_window_changes_the_compare_through_its_methods() {
     state.set_layout(CompareLayout::Difference);
     assert_eq!(state.layout, CompareLayout::Difference);
 }
+
+/// Until the scene has grids the halves are drawn with the points' settings whatever the view:
+/// the pictures they hold stay valid, so the frame of a click on Surface draws no point again
+/// (both versions' every point, seconds on a slow device) before the window shows the click.
+#[test]
+fn the_halves_keep_their_points_picture_until_the_grids_come() {
+    let mut state = CompareState::new(PathBuf::from("b.ply"));
+    state.clouds = Some(Arc::new((cloud(10), cloud(12))));
+    assert!(state.rebuild_for(1));
+    let points = RenderSettings::default();
+    assert_eq!(points.view, ViewKind::Points);
+    for view in [ViewKind::Surface, ViewKind::Volume] {
+        let asked = RenderSettings {
+            view,
+            ..points.clone()
+        };
+        assert_eq!(
+            state.halves_settings(&asked),
+            state.halves_settings(&points),
+            "{view:?} before the grids: the picture of the points is kept"
+        );
+        assert_eq!(asked.view, view, "the view asked for is left as it is");
+    }
+    state.grids_installed();
+    let surface = RenderSettings {
+        view: ViewKind::Surface,
+        ..points.clone()
+    };
+    assert_eq!(state.halves_settings(&surface).view, ViewKind::Surface);
+    assert_eq!(state.halves_settings(&points).view, ViewKind::Points);
+    // A new scene (another song in A) has no grids until they are built for it.
+    assert!(state.rebuild_for(2));
+    assert_eq!(state.halves_settings(&surface).view, ViewKind::Points);
+    state.grids_installed();
+    state.scene_failed("no union axes".into());
+    assert_eq!(state.halves_settings(&surface).view, ViewKind::Points);
+}
+
+/// "building the compare grids…" is said once: by the status line when it says it, by the
+/// view's badge otherwise (a reopened compare showed it in both places at once).
+#[test]
+fn the_grids_being_built_are_told_in_one_place() {
+    let mut state = CompareState::new(PathBuf::from("b.ply"));
+    assert_eq!(state.badge(false, None), None, "nothing to wait for");
+    let (_sender, receiver) = channel();
+    state.building(VoxelSettings::default(), receiver);
+    assert_eq!(
+        state.badge(false, Some(GRIDS_BUSY)),
+        None,
+        "the status line says it"
+    );
+    assert_eq!(
+        state.badge(true, Some(GRIDS_BUSY)),
+        None,
+        "the grids come before any surface"
+    );
+    assert_eq!(
+        state.badge(false, Some("drawing the volume…")),
+        Some(GRIDS_BUSY),
+        "the status line says something else"
+    );
+    assert_eq!(state.badge(false, None), Some(GRIDS_BUSY));
+    assert!(state.rebuild_for(1));
+    assert_eq!(state.badge(true, None), Some("extracting surface…"));
+}
