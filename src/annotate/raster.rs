@@ -12,76 +12,111 @@ use super::{Rect, Rgba, Shape, Text};
 /// Draws `shapes` (in points) over `image`, `pixels_per_point` pixels a point, clipped to it.
 /// Images wider or taller than 65535 pixels are left as they are.
 pub fn draw(image: &mut image::RgbaImage, shapes: &[Shape], pixels_per_point: f32) {
-    let (Ok(w), Ok(h)) = (u16::try_from(image.width()), u16::try_from(image.height())) else {
-        return;
-    };
-    if shapes.is_empty() || w == 0 || h == 0 {
-        return;
+    let (width, height) = image.dimensions();
+    if let Some(mut prepared) = Prepared::new(shapes, pixels_per_point, width, height) {
+        prepared.paint(image.as_mut());
     }
-    let ppp = f64::from(pixels_per_point.max(0.01));
-    let mut ctx = RenderContext::new(w, h);
-    for shape in shapes {
-        match shape {
-            Shape::Fill {
-                rect,
-                radius,
-                colour,
-            } => {
-                ctx.set_transform(Affine::scale(ppp));
-                ctx.set_paint(paint(*colour));
-                if *radius > 0.0 {
-                    let rounded = kurbo::RoundedRect::from_rect(k_rect(rect), f64::from(*radius));
-                    ctx.fill_path(&rounded.to_path(0.05));
-                } else {
-                    ctx.fill_rect(&k_rect(rect));
-                }
-            }
-            Shape::Frame {
-                rect,
-                width,
-                colour,
-            } => {
-                ctx.set_transform(Affine::scale(ppp));
-                ctx.set_paint(paint(*colour));
-                ctx.set_stroke(kurbo::Stroke::new(f64::from(*width)));
-                let half = width * 0.5;
-                ctx.stroke_rect(&k_rect(&rect.expand(half)));
-            }
-            Shape::Line {
-                points,
-                width,
-                colour,
-            } => {
-                let Some((first, rest)) = points.split_first() else {
-                    continue;
-                };
-                ctx.set_transform(Affine::scale(ppp));
-                ctx.set_paint(paint(*colour));
-                ctx.set_stroke(kurbo::Stroke::new(f64::from(*width)));
-                let mut path = BezPath::new();
-                path.move_to(point(*first));
-                for p in rest {
-                    path.line_to(point(*p));
-                }
-                ctx.stroke_path(&path);
-            }
-            Shape::Text(text) => draw_text(&mut ctx, text, ppp),
+}
+
+/// Shapes laid out and rasterized once for pictures of one size, painted over as many as
+/// wanted: a video whose labels stay put draws the same overlay on every frame, and paints it
+/// exactly as [`draw`] does without shaping its text again.
+pub struct Prepared {
+    ctx: RenderContext,
+    resources: Resources,
+    width: u16,
+    height: u16,
+}
+
+impl Prepared {
+    /// `None` where there is nothing to draw or the picture is wider or taller than 65535.
+    pub fn new(shapes: &[Shape], pixels_per_point: f32, width: u32, height: u32) -> Option<Self> {
+        let (Ok(w), Ok(h)) = (u16::try_from(width), u16::try_from(height)) else {
+            return None;
+        };
+        if shapes.is_empty() || w == 0 || h == 0 {
+            return None;
+        }
+        let ppp = f64::from(pixels_per_point.max(0.01));
+        let mut ctx = RenderContext::new(w, h);
+        for shape in shapes {
+            add_shape(&mut ctx, shape, ppp);
+        }
+        ctx.flush();
+        Some(Self {
+            ctx,
+            resources: Resources::new(),
+            width: w,
+            height: h,
+        })
+    }
+
+    /// Paints the shapes over `rgba`, an opaque picture of the prepared size as straight RGBA8
+    /// rows; a buffer of another length is left as it is.
+    pub fn paint(&mut self, rgba: &mut [u8]) {
+        // The image is opaque (a rendered picture), so its straight RGBA is also premultiplied.
+        let Some(target) = PixmapMut::new(self.width, self.height, rgba) else {
+            return;
+        };
+        let settings = RasterizerSettings {
+            composite_mode: CompositeMode::SrcOver,
+            ..RasterizerSettings::default()
+        };
+        self.ctx.render_with(target, &mut self.resources, settings);
+        // Source-over onto an opaque pixel is opaque, but the rasterizer's 8-bit arithmetic can
+        // round an edge pixel's alpha to 254 (a notebook's picture had translucent text edges).
+        for pixel in rgba.chunks_exact_mut(4) {
+            pixel[3] = 255;
         }
     }
-    ctx.flush();
-    // The image is opaque (a rendered picture), so its straight RGBA is also premultiplied.
-    let Some(target) = PixmapMut::new(w, h, image.as_mut()) else {
-        return;
-    };
-    let settings = RasterizerSettings {
-        composite_mode: CompositeMode::SrcOver,
-        ..RasterizerSettings::default()
-    };
-    ctx.render_with(target, &mut Resources::new(), settings);
-    // Source-over onto an opaque pixel is opaque, but the rasterizer's 8-bit arithmetic can
-    // round an edge pixel's alpha to 254 (a notebook's picture had translucent text edges).
-    for pixel in image.pixels_mut() {
-        pixel[3] = 255;
+}
+
+fn add_shape(ctx: &mut RenderContext, shape: &Shape, ppp: f64) {
+    match shape {
+        Shape::Fill {
+            rect,
+            radius,
+            colour,
+        } => {
+            ctx.set_transform(Affine::scale(ppp));
+            ctx.set_paint(paint(*colour));
+            if *radius > 0.0 {
+                let rounded = kurbo::RoundedRect::from_rect(k_rect(rect), f64::from(*radius));
+                ctx.fill_path(&rounded.to_path(0.05));
+            } else {
+                ctx.fill_rect(&k_rect(rect));
+            }
+        }
+        Shape::Frame {
+            rect,
+            width,
+            colour,
+        } => {
+            ctx.set_transform(Affine::scale(ppp));
+            ctx.set_paint(paint(*colour));
+            ctx.set_stroke(kurbo::Stroke::new(f64::from(*width)));
+            let half = width * 0.5;
+            ctx.stroke_rect(&k_rect(&rect.expand(half)));
+        }
+        Shape::Line {
+            points,
+            width,
+            colour,
+        } => {
+            let Some((first, rest)) = points.split_first() else {
+                return;
+            };
+            ctx.set_transform(Affine::scale(ppp));
+            ctx.set_paint(paint(*colour));
+            ctx.set_stroke(kurbo::Stroke::new(f64::from(*width)));
+            let mut path = BezPath::new();
+            path.move_to(point(*first));
+            for p in rest {
+                path.line_to(point(*p));
+            }
+            ctx.stroke_path(&path);
+        }
+        Shape::Text(text) => draw_text(ctx, text, ppp),
     }
 }
 

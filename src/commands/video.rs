@@ -12,12 +12,13 @@ use anyhow::{Context, bail};
 use glam::Vec3;
 use loudscape::annotate::axes::AxisLabels;
 use loudscape::annotate::legend::PictureLegend;
-use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT, x_of_time};
-use loudscape::annotate::{Annotation, Rect, raster};
+use loudscape::annotate::strip::{LoudnessStrip, STRIP_HEIGHT};
+use loudscape::annotate::{Annotation, Rect, Shape, raster};
 use loudscape::data::cloud::{DataMode, PointCloud};
 use loudscape::picture::compare::{CompareView, render_compare_image};
 use loudscape::render::compare::CompareScene;
 use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::target::{RenderTarget, TargetReader};
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
@@ -27,6 +28,7 @@ use loudscape::view::frame_view::FrameView;
 use super::args::{ViewChoice, camera_arg, check_iso, check_output, load_cloud, size_arg};
 use super::render::{DrawArgs, prepare_grid};
 use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound, song_sound};
+use super::video_frames::{self, Layout, Rendered, StripLayer};
 
 /// The largest frame: 4K UHD (either way round).
 pub const MAX_PIXELS: u64 = 3840 * 2160;
@@ -358,9 +360,6 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         fast,
         timeline,
     };
-    let strip_image = strip
-        .as_ref()
-        .map(|strip| render_strip(strip, size.0, strip_height));
     let spec = EncodeSpec {
         width: size.0,
         height: size.1,
@@ -369,29 +368,48 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         sound,
         crf: args.crf,
     };
-    let mut encoder = Encoder::start(&spec, &args.output)?;
-    let mut progress = Progress::new(progress_mode, frames);
+    let layout = Layout {
+        width: size.0,
+        view_height,
+        strip: strip.map(|strip| StripLayer {
+            image: render_strip(&strip, size.0, strip_height),
+            strip,
+        }),
+    };
+    let encoder = Encoder::start(&spec, &args.output)?;
+    let progress = Progress::new(progress_mode, frames);
     let base = base_camera;
-    let result = (|| -> anyhow::Result<()> {
+    // One target and staging buffer for every frame.
+    let target = RenderTarget::new(&gpu.device, size.0, view_height);
+    let reader = TargetReader::new(&gpu.device, &target);
+    let view_bytes = layout.view_bytes();
+    video_frames::run(layout, encoder, progress, |out| {
         for k in 0..frames {
-            let image = render_video_frame(&gpu, &renderer, &mut drawn, &plan, &settings, base, k)?;
-            let frame = match (&strip, &strip_image) {
-                (Some(strip), Some(strip_image)) => {
-                    let t = plan.start_s + k as f64 / f64::from(plan.fps);
-                    stack_with_strip(&image, strip_image, strip, t)
-                }
-                _ => image,
+            let Some(mut pixels) = out.buffer() else {
+                break;
             };
-            encoder.push(frame.as_raw())?;
-            progress.frame(k + 1);
+            let gpu_frame = GpuFrame {
+                gpu: &gpu,
+                renderer: &renderer,
+                target: &target,
+                reader: &reader,
+            };
+            let overlay = render_video_frame(
+                &gpu_frame,
+                &mut drawn,
+                &plan,
+                &settings,
+                base,
+                k,
+                &mut pixels[..view_bytes],
+            )?;
+            let t = plan.start_s + k as f64 / f64::from(plan.fps);
+            if !out.send(Rendered { pixels, overlay, t }) {
+                break;
+            }
         }
         Ok(())
-    })();
-    if let Err(e) = result {
-        progress.abandon();
-        return Err(e);
-    }
-    encoder.finish()?;
+    })?;
     let detail_text = format!(
         "{}x{}, {frames} frames at {} fps, {}{}",
         size.0,
@@ -404,16 +422,27 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Frame `k` of the video, without the strip.
+/// The GPU side of a video's frames, kept from frame to frame.
+struct GpuFrame<'a> {
+    gpu: &'a GpuContext,
+    renderer: &'a Renderer,
+    /// The view's size.
+    target: &'a RenderTarget,
+    reader: &'a TargetReader,
+}
+
+/// Frame `k` of the video, without the strip, into `out` (the view's RGBA rows); returns what
+/// is drawn over it (labels, legend, title), laid out in pixels.
 fn render_video_frame(
-    gpu: &GpuContext,
-    renderer: &Renderer,
+    frame: &GpuFrame,
     drawn: &mut Drawn,
     plan: &Plan,
     settings: &RenderSettings,
     base_camera: Option<Camera>,
     k: u64,
-) -> anyhow::Result<image::RgbaImage> {
+    out: &mut [u8],
+) -> anyhow::Result<Vec<Shape>> {
+    let (gpu, renderer) = (frame.gpu, frame.renderer);
     let elapsed = k as f64 / f64::from(plan.fps);
     let (w, h) = (plan.size.0, plan.view_height);
     let mut settings = settings.clone();
@@ -456,15 +485,17 @@ fn render_video_frame(
             let mut view = FrameView::at_rest(camera, data.world_from_data, w, h);
             view.moving = plan.fast;
             view.frame_index = k as u32;
-            let target = loudscape::render::headless::render_frame(
+            loudscape::render::headless::render_into(
                 gpu,
                 renderer,
                 Some(data),
                 &view,
                 &settings,
+                frame.target,
             );
-            let mut image = target
-                .read_rgba(&gpu.device, &gpu.queue)
+            frame
+                .reader
+                .read_into(&gpu.device, &gpu.queue, frame.target, out)
                 .context("reading a frame back from the GPU")?;
             let background = settings.colours.background;
             let rect = loudscape::picture::whole(w, h);
@@ -484,8 +515,7 @@ fn render_video_frame(
                 background,
                 over,
             );
-            raster::draw(&mut image, &overlay.shapes, 1.0);
-            Ok(image)
+            Ok(overlay.shapes)
         }
         Drawn::Compare {
             scene,
@@ -519,7 +549,7 @@ fn render_video_frame(
                     Some(motion.camera(base, elapsed, head_x))
                 }
             };
-            render_compare_image(
+            let image = render_compare_image(
                 gpu,
                 renderer,
                 scene,
@@ -529,7 +559,9 @@ fn render_video_frame(
                 &settings,
                 *labels,
                 note.as_deref(),
-            )
+            )?;
+            out.copy_from_slice(image.as_raw());
+            Ok(Vec::new())
         }
     }
 }
@@ -609,40 +641,6 @@ fn render_strip(strip: &LoudnessStrip, width: u32, height: u32) -> image::RgbaIm
     let mut image = image::RgbaImage::new(width, height);
     raster::draw(&mut image, &strip.layout(rect, None).shapes, ppp);
     image
-}
-
-/// The view over the strip, with the strip's playhead at `t` seconds.
-fn stack_with_strip(
-    view: &image::RgbaImage,
-    strip_image: &image::RgbaImage,
-    strip: &LoudnessStrip,
-    t: f64,
-) -> image::RgbaImage {
-    let (w, vh) = view.dimensions();
-    let sh = strip_image.height();
-    let mut frame = image::RgbaImage::new(w, vh + sh);
-    image::imageops::replace(&mut frame, view, 0, 0);
-    image::imageops::replace(&mut frame, strip_image, 0, i64::from(vh));
-    // The strip was painted in points, STRIP_HEIGHT tall; back to pixels.
-    let ppp = sh as f32 / STRIP_HEIGHT;
-    let rect = Rect::from_min_size([0.0, 0.0], [w as f32 / ppp, STRIP_HEIGHT]);
-    let plot = LoudnessStrip::plot_rect(rect);
-    let plot = Rect::from_min_max(
-        [plot.left() * ppp, plot.top() * ppp],
-        [plot.right() * ppp, plot.bottom() * ppp],
-    );
-    let x = x_of_time(t, plot.left(), plot.right(), strip.duration_s());
-    let half_width = 0.75 * ppp;
-    let (x0, x1) = (
-        (x - half_width).floor().max(0.0) as u32,
-        (x + half_width).ceil() as u32,
-    );
-    for px in x0..x1.min(w) {
-        for py in 0..(plot.bottom().ceil() as u32).min(sh) {
-            frame.put_pixel(px, vh + py, image::Rgba([255, 255, 255, 255]));
-        }
-    }
-    frame
 }
 
 #[cfg(test)]

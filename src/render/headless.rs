@@ -16,14 +16,26 @@ pub fn render_frame(
     settings: &RenderSettings,
 ) -> RenderTarget {
     let target = RenderTarget::new(&gpu.device, view.width, view.height);
+    render_into(gpu, renderer, data, view, settings, &target);
+    target
+}
+
+/// Renders one frame into `target` (of the view's size), kept from frame to frame.
+pub fn render_into(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    data: Option<&SceneData>,
+    view: &FrameView,
+    settings: &RenderSettings,
+    target: &RenderTarget,
+) {
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("headless::frame"),
         });
-    renderer.render(&gpu.queue, &mut encoder, &target, data, view, settings);
+    renderer.render(&gpu.queue, &mut encoder, target, data, view, settings);
     gpu.queue.submit([encoder.finish()]);
-    target
 }
 
 /// Renders one frame and reads it back.

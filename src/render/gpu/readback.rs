@@ -58,6 +58,18 @@ pub fn map_buffer(
     buffer: &wgpu::Buffer,
     what: &str,
 ) -> Result<Vec<u8>, ReadbackError> {
+    map_buffer_with(device, buffer, what, <[u8]>::to_vec)
+}
+
+/// Maps a MAP_READ buffer after the queue's work is done, hands its bytes to `read` and unmaps
+/// it, so a buffer read every frame is reused and its bytes copied once, where the caller
+/// wants them; `what` names the data in the error.
+pub fn map_buffer_with<R>(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    what: &str,
+    read: impl FnOnce(&[u8]) -> R,
+) -> Result<R, ReadbackError> {
     let failed = |reason: String| ReadbackError::Map {
         what: what.to_string(),
         reason,
@@ -74,10 +86,12 @@ pub fn map_buffer(
         .recv()
         .map_err(|e| failed(e.to_string()))?
         .map_err(|e| failed(e.to_string()))?;
-    let bytes = slice
-        .get_mapped_range()
-        .map_err(|e| failed(e.to_string()))?
-        .to_vec();
+    let out = {
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| failed(e.to_string()))?;
+        read(&bytes)
+    };
     buffer.unmap();
-    Ok(bytes)
+    Ok(out)
 }

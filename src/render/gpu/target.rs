@@ -4,7 +4,7 @@
 //! back to an RGBA image. Colours are gamma-encoded (`Rgba8Unorm`), as egui's are, so what the
 //! passes write is what lands on screen and in the PNG.
 
-use crate::render::gpu::readback::{ReadbackError, map_buffer};
+use crate::render::gpu::readback::{ReadbackError, map_buffer_with};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -75,25 +75,70 @@ impl RenderTarget {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<image::RgbaImage, ReadbackError> {
-        let unpadded = self.width * 4;
+        let mut pixels = vec![0; self.width as usize * self.height as usize * 4];
+        TargetReader::new(device, self).read_into(device, queue, self, &mut pixels)?;
+        image::RgbaImage::from_raw(self.width, self.height, pixels).ok_or_else(|| {
+            ReadbackError::Map {
+                what: "the rendered image".into(),
+                reason: "its size does not match the target's".into(),
+            }
+        })
+    }
+}
+
+/// A staging buffer that reads a target of one size back, kept from frame to frame (a video
+/// reads thousands of frames: a new buffer and image each time cost more than the copy).
+pub struct TargetReader {
+    buffer: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    padded_row: u32,
+}
+
+impl TargetReader {
+    pub fn new(device: &wgpu::Device, target: &RenderTarget) -> Self {
         let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let padded = unpadded.div_ceil(align) * align;
+        let padded_row = (target.width * 4).div_ceil(align) * align;
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("target::readback"),
-            size: u64::from(padded) * u64::from(self.height),
+            size: u64::from(padded_row) * u64::from(target.height),
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
+        Self {
+            buffer,
+            width: target.width,
+            height: target.height,
+            padded_row,
+        }
+    }
+
+    /// Copies `target`'s colour (of this reader's size) into `out` as tightly packed RGBA8
+    /// rows, top row first; `out` holds exactly width x height x 4 bytes.
+    pub fn read_into(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        target: &RenderTarget,
+        out: &mut [u8],
+    ) -> Result<(), ReadbackError> {
+        let row = self.width as usize * 4;
+        if !target.has_size(self.width, self.height) || out.len() != row * self.height as usize {
+            return Err(ReadbackError::Map {
+                what: "the rendered image".into(),
+                reason: "its size does not match the target's".into(),
+            });
+        }
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("target::readback"),
         });
         encoder.copy_texture_to_buffer(
-            self.color.as_image_copy(),
+            target.color.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
+                buffer: &self.buffer,
                 layout: wgpu::TexelCopyBufferLayout {
                     offset: 0,
-                    bytes_per_row: Some(padded),
+                    bytes_per_row: Some(self.padded_row),
                     rows_per_image: Some(self.height),
                 },
             },
@@ -104,15 +149,12 @@ impl RenderTarget {
             },
         );
         queue.submit([encoder.finish()]);
-        let bytes = map_buffer(device, &buffer, "the rendered image")?;
-        let mut pixels = Vec::with_capacity((unpadded * self.height) as usize);
-        for row in bytes.chunks_exact(padded as usize) {
-            pixels.extend_from_slice(&row[..unpadded as usize]);
-        }
-        image::RgbaImage::from_raw(self.width, self.height, pixels).ok_or_else(|| {
-            ReadbackError::Map {
-                what: "the rendered image".into(),
-                reason: "its size does not match the target's".into(),
+        map_buffer_with(device, &self.buffer, "the rendered image", |bytes| {
+            for (dst, src) in out
+                .chunks_exact_mut(row)
+                .zip(bytes.chunks_exact(self.padded_row as usize))
+            {
+                dst.copy_from_slice(&src[..row]);
             }
         })
     }
