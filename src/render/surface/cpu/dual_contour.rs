@@ -7,7 +7,7 @@
 //! six indices per quad it owns) and [`write()`] writes each cell row's vertices and quads,
 //! finding the vertices of the cells below it in y and z through those rows' maps.
 
-use glam::{IVec3, Vec3};
+use glam::{IVec3, Vec3, Vec3A};
 
 use crate::render::surface::buffers::MeshVertex;
 use wgpu::WriteOnly;
@@ -22,7 +22,7 @@ const QEF_BIAS: f32 = 0.5;
 
 /// The lower corner of cube edge e (0..11): edges 4a .. 4a + 3 run along axis a.
 #[inline]
-fn cube_edge_start(e: u32) -> u32 {
+const fn cube_edge_start(e: u32) -> u32 {
     let j = e & 3;
     match e >> 2 {
         0 => j << 1,
@@ -30,6 +30,26 @@ fn cube_edge_start(e: u32) -> u32 {
         _ => j,
     }
 }
+
+/// `CROSSED_EDGES[mask]`: bit e set when cube edge e (see [`cube_edge_start`]) joins an inside
+/// corner to an outside one.
+const CROSSED_EDGES: [u16; 256] = {
+    let mut table = [0u16; 256];
+    let mut mask = 0;
+    while mask < 256 {
+        let mut e = 0;
+        while e < 12 {
+            let ka = cube_edge_start(e);
+            let kb = ka | (1 << (e >> 2));
+            if (mask >> ka) & 1 != (mask >> kb) & 1 {
+                table[mask as usize] |= 1 << e;
+            }
+            e += 1;
+        }
+        mask += 1;
+    }
+    table
+};
 
 /// Bit a set when the edge from the cell's corner 0 along axis a crosses the isovalue and the
 /// four cells around it exist (`base` is the cell's lowest sample).
@@ -50,10 +70,13 @@ fn quad_edges(base: IVec3, mask: u32) -> u32 {
 
 /// Counts the dual contouring surface of `grid` at `iso` on `threads` threads.
 pub fn plan(grid: &CpuGrid, iso: f32, threads: usize, phases: &mut Phases) -> Plan {
-    Plan::new(grid, iso, threads, phases, |cx, cy, cz, mask| {
-        let base = CpuGrid::cell_sample(cx, cy, cz);
-        [1, 6 * quad_edges(base, mask).count_ones()]
-    })
+    Plan::new(grid, iso, threads, phases, cell_counts)
+}
+
+/// The vertices and indices active cell (cx, cy, cz) with corner mask `mask` writes.
+pub(super) fn cell_counts(cx: usize, cy: usize, cz: usize, mask: u32) -> [u32; 2] {
+    let base = CpuGrid::cell_sample(cx, cy, cz);
+    [1, 6 * quad_edges(base, mask).count_ones()]
 }
 
 /// Writes the surface `plan` counted into `vertices` and `indices` (see [`Plan::write`]).
@@ -70,14 +93,21 @@ pub fn write(
         threads,
         vertices,
         indices,
-        || -> [Vec<u32>; 4] { std::array::from_fn(|_| vec![0u32; width]) },
-        |maps, rows, row, vertices, indices| {
+        || -> ([Vec<u32>; 4], Option<usize>) { (std::array::from_fn(|_| vec![0u32; width]), None) },
+        |(maps, last_row), rows, row, vertices, indices| {
             let cells_y = rows.cells_y;
             let (cy, cz) = (row % cells_y, row / cells_y);
-            // The vertices of this row and of the rows one below in y, z and both.
+            // The vertices of this row and of the rows one below in y, z and both; after row
+            // (cy - 1, cz) the maps of (cy - 1, cz) and (cy - 1, cz - 1) are its maps 0 and 2.
+            let follows = cy > 0 && *last_row == Some(row - 1);
+            *last_row = Some(row);
+            if follows {
+                maps.swap(0, 1);
+                maps.swap(2, 3);
+            }
             for (k, map) in maps.iter_mut().enumerate() {
                 let (dy, dz) = (k & 1, k >> 1);
-                if cy < dy || cz < dz {
+                if cy < dy || cz < dz || (follows && dy == 1) {
                     continue;
                 }
                 let (y, z) = (cy - dy, cz - dz);
@@ -121,28 +151,33 @@ fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: 
     let strides = grid.strides();
     let h = grid.hp();
     let values = grid.corners(origin);
-    let gradients: [Vec3; 8] =
-        std::array::from_fn(|k| grid.corner_gradient(origin, &values, k as u32));
+    // In SIMD lanes (Vec3A): each lane's operations, and the dot products' order, are the
+    // scalar ones, so the values are the same.
+    let gradients: [Vec3A; 8] =
+        std::array::from_fn(|k| grid.corner_gradient(origin, &values, k as u32).into());
     let mut count = 0u32;
-    let (mut mass, mut normal_sum, mut b) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+    let (mut mass, mut normal_sum, mut b) = (Vec3A::ZERO, Vec3A::ZERO, Vec3A::ZERO);
     let (mut a00, mut a01, mut a02, mut a11, mut a12, mut a22) = (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for e in 0..12u32 {
+    // The crossed edges in increasing order, as the shader's loop over all twelve visits them
+    // (the same sums in the same order), without a branch per edge that the corner pattern
+    // decides.
+    let mut crossed = CROSSED_EDGES[mask as usize & 0xff];
+    while crossed != 0 {
+        let e = crossed.trailing_zeros();
+        crossed &= crossed - 1;
         let ka = cube_edge_start(e);
         let kb = ka | (1 << (e >> 2));
-        if (mask >> ka) & 1 == (mask >> kb) & 1 {
-            continue;
-        }
         let (va, vb) = (values[ka as usize], values[kb as usize]);
         let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-        let pa = corner_offset(ka);
-        let p = pa + (corner_offset(kb) - pa) * t;
+        let pa = Vec3A::from(corner_offset(ka));
+        let p = pa + (Vec3A::from(corner_offset(kb)) - pa) * t;
         let (ga, gb) = (gradients[ka as usize], gradients[kb as usize]);
         let g = ga + (gb - ga) * t;
         let length = g.length();
         let n = if length > 1e-20 {
             g / length
         } else {
-            Vec3::ZERO
+            Vec3A::ZERO
         };
         a00 += n.x * n.x;
         a01 += n.x * n.y;
@@ -157,7 +192,7 @@ fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: 
     }
     mass /= count.max(1) as f32;
     // (A + bias I) y = b - A mass, y = x - mass, solved by the adjugate.
-    let rhs = b - Vec3::new(
+    let rhs = b - Vec3A::new(
         a00 * mass.x + a01 * mass.y + a02 * mass.z,
         a01 * mass.x + a11 * mass.y + a12 * mass.z,
         a02 * mass.x + a12 * mass.y + a22 * mass.z,
@@ -174,30 +209,31 @@ fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: 
     let det = a00 * c00 + a01 * c01 + a02 * c02;
     let mut local = mass;
     if det.abs() > 1e-12 {
-        let y = Vec3::new(
+        let y = Vec3A::new(
             c00 * rhs.x + c01 * rhs.y + c02 * rhs.z,
             c01 * rhs.x + c11 * rhs.y + c12 * rhs.z,
             c02 * rhs.x + c12 * rhs.y + c22 * rhs.z,
         ) / det;
         local = mass + y;
     }
-    local = local.clamp(Vec3::ZERO, Vec3::ONE);
+    local = local.clamp(Vec3A::ZERO, Vec3A::ONE);
 
-    let mut gradient = Vec3::ZERO;
+    let mut gradient = Vec3A::ZERO;
     let (mut hp_sum, mut weight_sum) = (0.0f32, 0.0f32);
     for k in 0..8u32 {
-        let c = corner_offset(k);
-        let weights = c * local + (Vec3::ONE - c) * (Vec3::ONE - local);
+        let c = Vec3A::from(corner_offset(k));
+        let weights = c * local + (Vec3A::ONE - c) * (Vec3A::ONE - local);
         gradient += weights.x * weights.y * weights.z * gradients[k as usize];
         let w = values[k as usize].max(0.0);
         hp_sum += w * h[origin + corner_step(strides, k)];
         weight_sum += w;
     }
-    let mut normal = grid.outward_normal(gradient);
-    if normal == Vec3::ZERO {
-        normal = grid.outward_normal(normal_sum);
+    let mut normal = grid.outward_normal_a(gradient);
+    if normal == Vec3A::ZERO {
+        normal = grid.outward_normal_a(normal_sum);
     }
     let base = CpuGrid::cell_sample(cx, cy, cz).as_vec3();
+    let local = Vec3::from(local);
     MeshVertex {
         position: grid.data_position(base + local).to_array(),
         hp: weighted_hp(hp_sum, weight_sum),

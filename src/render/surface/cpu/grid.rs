@@ -1,6 +1,9 @@
 //! The grid as the CPU extraction reads it ([`CpuGrid`]), and the sweep over its cells that both
 //! methods share: which samples are inside ([`InsideBits`], 64 to a word) and, row by row, the
 //! cells whose corners straddle the isovalue with their corner masks ([`InsideBits::row_cells`]).
+//! As in flying edges' first pass, a sample row whose largest value (kept with the grid, so
+//! found once per grid rather than once per isovalue) is not above the isovalue is skipped by
+//! both, and so is a cell row whose four corner rows are all such rows.
 //!
 //! Reads: a grid's density and hp_mean as `f32` slices in the GPU layout (`i + dims.x * (j +
 //! dims.y * k)`). Writes: a copy padded by [`PAD`] samples on every side (density 0, hp 0.5, as
@@ -11,7 +14,7 @@
 //! (surfaces close at the grid's border), which is cell index `c + 1` (0 ..= dims) here. A *cell
 //! row* is the cells of one (y, z) along x.
 
-use glam::{IVec3, UVec3, Vec3};
+use glam::{IVec3, UVec3, Vec3, Vec3A};
 
 /// Samples of padding on each side: a cell's corners reach one sample past the grid and their
 /// central differences one more.
@@ -28,6 +31,10 @@ pub struct CpuGrid {
     sz: usize,
     density: Vec<f32>,
     hp: Vec<f32>,
+    /// The largest density of each padded row (y, z) at `y + sy * z`, padding included: a row
+    /// whose largest sample is not above the isovalue has no inside sample, so the sweeps skip
+    /// it (flying edges' first pass, computed once per grid rather than once per isovalue).
+    row_max: Vec<f32>,
 }
 
 impl CpuGrid {
@@ -53,6 +60,11 @@ impl CpuGrid {
                 padded_hp[to..to + n.x].copy_from_slice(&hp_mean[from..from + n.x]);
             }
         }
+        // `f32::max` passes over NaN, which is never inside either (`v > iso` is false).
+        let row_max = padded_density
+            .chunks_exact(sx)
+            .map(|row| row.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v)))
+            .collect();
         Self {
             dims,
             box_min,
@@ -62,12 +74,13 @@ impl CpuGrid {
             sz,
             density: padded_density,
             hp: padded_hp,
+            row_max,
         }
     }
 
-    /// Bytes held (both padded fields).
+    /// Bytes held (both padded fields and the row maxima).
     pub fn bytes(&self) -> usize {
-        (self.density.len() + self.hp.len()) * 4
+        (self.density.len() + self.hp.len() + self.row_max.len()) * 4
     }
 
     /// Index steps of one sample along x, y and z.
@@ -100,12 +113,15 @@ impl CpuGrid {
         IVec3::new(cx as i32 - 1, cy as i32 - 1, cz as i32 - 1)
     }
 
-    /// The central-difference gradient (grid units) at padded index `i`.
+    /// The central-difference gradient (grid units) at padded index `i`: six loads and no
+    /// branch, where [`CpuGrid::corner_gradient`] of a corner not known when compiling picks
+    /// its three loads by branches on the corner's bits (the same differences of the same
+    /// samples, so the same values).
     #[inline]
-    pub fn gradient(&self, i: usize) -> Vec3 {
+    pub fn gradient(&self, i: usize) -> Vec3A {
         let d = &self.density;
         let [_, sy, sz] = self.strides();
-        Vec3::new(
+        Vec3A::new(
             0.5 * (d[i + 1] - d[i - 1]),
             0.5 * (d[i + sy] - d[i - sy]),
             0.5 * (d[i + sz] - d[i - sz]),
@@ -142,10 +158,17 @@ impl CpuGrid {
     /// when the gradient vanishes (as `outward_normal` in shaders/surface/extraction.wgsl).
     #[inline]
     pub fn outward_normal(&self, grid_gradient: Vec3) -> Vec3 {
-        let g = grid_gradient / self.voxel_size;
+        self.outward_normal_a(grid_gradient.into()).into()
+    }
+
+    /// [`CpuGrid::outward_normal`] in SIMD lanes: each lane's operations are the scalar ones,
+    /// and the length sums x², y², z² in the same order, so the values are the same.
+    #[inline]
+    pub fn outward_normal_a(&self, grid_gradient: Vec3A) -> Vec3A {
+        let g = grid_gradient / Vec3A::from(self.voxel_size);
         let len = g.length();
         if len < 1e-20 {
-            return Vec3::ZERO;
+            return Vec3A::ZERO;
         }
         -g / len
     }
@@ -184,6 +207,8 @@ pub fn corner_step(strides: [usize; 3], k: u32) -> usize {
 /// padded grid at word `words * (y + sy * z)`.
 pub struct InsideBits {
     bits: Vec<u64>,
+    /// Whether padded row (y, z) has an inside sample (at `y + sy * z`).
+    occupied: Vec<bool>,
     words: usize,
     sy: usize,
     /// Cells along x (dims.x + 1).
@@ -196,12 +221,18 @@ impl InsideBits {
         let words = grid.sx.div_ceil(64);
         let rows = grid.rows();
         let mut bits = vec![0u64; words * rows];
+        let occupied: Vec<bool> = grid.row_max.iter().map(|&m| m > iso).collect();
         let per = rows.div_ceil(threads.max(1)).max(1);
         std::thread::scope(|scope| {
             for (chunk, out) in bits.chunks_mut(per * words).enumerate() {
                 let first_row = chunk * per;
+                let occupied = &occupied;
                 scope.spawn(move || {
                     for (r, row_bits) in out.chunks_mut(words).enumerate() {
+                        if !occupied[first_row + r] {
+                            // No sample above the isovalue: the bits stay zero.
+                            continue;
+                        }
                         let start = (first_row + r) * grid.sx;
                         let samples = &grid.density[start..start + grid.sx];
                         for (word, chunk) in row_bits.iter_mut().zip(samples.chunks(64)) {
@@ -216,6 +247,7 @@ impl InsideBits {
         });
         Self {
             bits,
+            occupied,
             words,
             sy: grid.sy,
             cells_x: grid.dims.x as usize + 1,
@@ -233,11 +265,12 @@ impl InsideBits {
     pub fn row_cells(&self, cy: usize, cz: usize, mut f: impl FnMut(usize, u32)) {
         // Corner row k (bit 0: +y, bit 1: +z) of cell row (cy, cz) is padded sample row
         // (cy + PAD - 1 + (k & 1), cz + PAD - 1 + (k >> 1)).
-        let row = |k: usize| {
-            let y = cy + PAD - 1 + (k & 1);
-            let z = cz + PAD - 1 + (k >> 1);
-            &self.bits[self.words * (y + self.sy * z)..][..self.words]
-        };
+        let index = |k: usize| (cy + PAD - 1 + (k & 1)) + self.sy * (cz + PAD - 1 + (k >> 1));
+        if !(0..4).any(|k| self.occupied[index(k)]) {
+            // All four corner rows outside: no cell of the row straddles the isovalue.
+            return;
+        }
+        let row = |k: usize| &self.bits[self.words * index(k)..][..self.words];
         let rows = [row(0), row(1), row(2), row(3)];
         for w in 0..self.cells_x.div_ceil(64) {
             // Cell index cx = 64w + j has its corners at padded samples cx + PAD - 1 (dx = 0)
@@ -356,7 +389,7 @@ mod tests {
             for k in 0..8 {
                 assert_eq!(
                     g.corner_gradient(origin, &values, k),
-                    g.gradient(origin + corner_step(strides, k)),
+                    Vec3::from(g.gradient(origin + corner_step(strides, k))),
                     "cell ({cx}, {cy}, {cz}) corner {k}"
                 );
             }

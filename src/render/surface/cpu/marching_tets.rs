@@ -8,7 +8,7 @@
 //! neighbouring cell through that row's map of first vertices. Deterministic: the output is the
 //! same whatever the number of threads.
 
-use glam::Vec3;
+use glam::Vec3A;
 
 use crate::render::surface::buffers::MeshVertex;
 use wgpu::WriteOnly;
@@ -52,11 +52,30 @@ struct Owner {
 pub fn plan(grid: &CpuGrid, iso: f32, threads: usize, phases: &mut Phases) -> Plan {
     let cases = case_table();
     Plan::new(grid, iso, threads, phases, |_, _, _, mask| {
-        [
-            owned_edges(mask).count_ones(),
-            3 * (cases[mask as usize * CASE_STRIDE] & 0xff),
-        ]
+        cell_counts(&cases, mask)
     })
+}
+
+/// The vertices and indices an active cell with corner mask `mask` writes.
+pub(super) fn cell_counts(cases: &[u32], mask: u32) -> [u32; 2] {
+    [
+        owned_edges(mask).count_ones(),
+        3 * (cases[mask as usize * CASE_STRIDE] & 0xff),
+    ]
+}
+
+/// Per cell mask, bit `lower | direction << 3` set when a triangle of the case in `cases` (see
+/// [`case_table`]) has a corner on the edge from corner `lower` along `direction`.
+fn used_edges(cases: &[u32]) -> Vec<u64> {
+    (0..256)
+        .map(|mask| {
+            let case = &cases[mask * CASE_STRIDE..][..CASE_STRIDE];
+            let count = (case[0] & 0xff) as usize;
+            case[1..1 + count].iter().fold(0u64, |used, &code| {
+                (0..3).fold(used, |used, c| used | 1 << ((code >> (6 * c)) & 0x3f))
+            })
+        })
+        .collect()
 }
 
 /// Writes the surface `plan` counted into `vertices` and `indices` (see [`Plan::write`]).
@@ -69,6 +88,7 @@ pub fn write(
     indices: WriteOnly<'_, [u8]>,
 ) {
     let cases = case_table();
+    let used_edges = used_edges(&cases);
     let width = plan.cells_x + 1;
     plan.write(
         threads,
@@ -77,8 +97,10 @@ pub fn write(
         || RowWriter {
             grid,
             cases: &cases,
+            used_edges: &used_edges,
             iso,
             maps: std::array::from_fn(|_| vec![Owner::default(); width]),
+            last_row: None,
         },
         |writer, rows, row, vertices, indices| writer.row(rows, row, vertices, indices),
     );
@@ -88,9 +110,13 @@ pub fn write(
 struct RowWriter<'a> {
     grid: &'a CpuGrid,
     cases: &'a [u32],
+    /// [`used_edges`] of `cases`.
+    used_edges: &'a [u64],
     iso: f32,
     /// The owners' maps of the rows (cy + (k & 1), cz + (k >> 1)), k = 0..4.
     maps: [Vec<Owner>; 4],
+    /// The cell row the maps were last made for.
+    last_row: Option<usize>,
 }
 
 impl RowWriter<'_> {
@@ -104,10 +130,17 @@ impl RowWriter<'_> {
         let (cells_y, cells_z) = (rows.cells_y, rows.cells_z);
         let (cy, cz) = (row % cells_y, row / cells_y);
         // The owner maps of this row and of the three rows above it (an edge's owner is the
-        // cell whose corner 0 is the edge's lower end: at most one step up in y and z).
+        // cell whose corner 0 is the edge's lower end: at most one step up in y and z). After
+        // row (cy - 1, cz) the maps of (cy, cz) and (cy, cz + 1) are its maps 1 and 3.
+        let follows = cy > 0 && self.last_row == Some(row - 1);
+        self.last_row = Some(row);
+        if follows {
+            self.maps.swap(0, 1);
+            self.maps.swap(2, 3);
+        }
         for k in 0..4 {
             let (y, z) = (cy + (k & 1), cz + (k >> 1));
-            if y >= cells_y || z >= cells_z {
+            if y >= cells_y || z >= cells_z || (follows && k & 1 == 0) {
                 continue;
             }
             let map = &mut self.maps[k];
@@ -124,36 +157,39 @@ impl RowWriter<'_> {
         let iso = self.iso;
         let maps = &self.maps;
         let cases = self.cases;
+        // `CpuGrid::data_position` in SIMD lanes (the same operations in the same order).
+        let (box_min, voxel_size) = (Vec3A::from(grid.box_min), Vec3A::from(grid.voxel_size));
         for (cx, mask) in rows.cells(cy, cz) {
             let origin = grid.cell_origin(cx, cy, cz);
             let owned = owned_edges(mask);
             if owned != 0 {
-                let base = CpuGrid::cell_sample(cx, cy, cz).as_vec3();
+                let base = Vec3A::from(CpuGrid::cell_sample(cx, cy, cz).as_vec3());
                 let values = grid.corners(origin);
                 let v0 = values[0];
-                let g0 = grid.corner_gradient(origin, &values, 0);
+                let g0 = grid.gradient(origin);
                 let h0 = h[origin];
                 let w0 = v0.max(0.0);
                 let inside0 = mask & 1 != 0;
                 let mut todo = owned;
                 while todo != 0 {
-                    let k = todo.trailing_zeros();
+                    let k = todo.trailing_zeros() & 7;
                     todo &= todo - 1;
-                    let offset = corner_offset(k);
+                    let offset = Vec3A::from(corner_offset(k));
                     let at = origin + corner_step(strides, k);
                     let vk = values[k as usize];
                     let hk = h[at];
                     let t = ((iso - v0) / (vk - v0)).clamp(0.0, 1.0);
-                    let gk = grid.corner_gradient(origin, &values, k);
-                    let mut normal = grid.outward_normal(g0 + (gk - g0) * t);
-                    if normal == Vec3::ZERO {
+                    let gk = grid.gradient(at);
+                    let mut normal = grid.outward_normal_a(g0 + (gk - g0) * t);
+                    if normal == Vec3A::ZERO {
                         // No gradient: the edge's own direction, from its inside end outward.
-                        let along = (offset * grid.voxel_size).normalize();
+                        let along = (offset * Vec3A::from(grid.voxel_size)).normalize();
                         normal = if inside0 { along } else { -along };
                     }
                     let wk = vk.max(0.0);
+                    let position = box_min + (base + offset * t + 0.5) * voxel_size;
                     vertices.push(MeshVertex {
-                        position: grid.data_position(base + offset * t).to_array(),
+                        position: position.to_array(),
                         hp: weighted_hp(w0 * h0 + wk * hk, w0 + wk),
                         normal: normal.to_array(),
                         pad: 0.0,
@@ -162,16 +198,24 @@ impl RowWriter<'_> {
             }
             let case = &cases[mask as usize * CASE_STRIDE..][..CASE_STRIDE];
             let count = (case[0] & 0xff) as usize;
+            // The vertex of each edge the cell's triangles use, found once through its owner's
+            // map entry (an edge is used by up to six triangle corners).
+            let mut vertex_of = [0u32; 64];
+            let mut todo = self.used_edges[mask as usize & 0xff];
+            while todo != 0 {
+                let edge = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let lower = edge & 7;
+                let owner = maps[(lower >> 1) & 3][cx + (lower & 1)];
+                vertex_of[edge] =
+                    owner.first + u32::from(BELOW[owner.owned as usize & 0xff][edge >> 3]);
+            }
             for &code in &case[1..1 + count] {
-                for corner in 0..3 {
-                    let edge = (code >> (6 * corner)) & 0x3f;
-                    let lower = edge & 7;
-                    let owner = maps[((lower >> 1) & 3) as usize][cx + (lower & 1) as usize];
-                    let direction = edge >> 3;
-                    indices.push(
-                        owner.first + u32::from(BELOW[owner.owned as usize][direction as usize]),
-                    );
-                }
+                indices.extend_from_slice(&[
+                    vertex_of[(code & 0x3f) as usize],
+                    vertex_of[((code >> 6) & 0x3f) as usize],
+                    vertex_of[((code >> 12) & 0x3f) as usize],
+                ]);
             }
         }
     }
