@@ -11,7 +11,8 @@
 //! pass when first shown; the Surface view's isosurface, at the side panel's isovalue, is
 //! extracted by the window's marching tetrahedra passes ([`surface`]). In the Points view at
 //! rest, the point under the cursor's values show in a tooltip. A side panel holds the legend
-//! (the hp colours, the axes with their units) and what the page thinned.
+//! (the hp colours, the axes with their units) and what the page thinned. A page with the
+//! song's sound moves the playhead plane through the song as it plays ([`set_playhead`]).
 //!
 //! WebGPU only: the points pass reads its points from storage buffers in the vertex shader and
 //! the voxel grid is built by compute passes, neither of which WebGL2 has, so where the browser
@@ -42,6 +43,25 @@ const SCROLL_PER_STEP: f32 = 50.0;
 thread_local! {
     /// The running viewer: kept for the page's lifetime.
     static RUNNER: RefCell<Option<eframe::WebRunner>> = const { RefCell::new(None) };
+    /// The viewer's context, for the page's script to ask for a frame.
+    static CONTEXT: RefCell<Option<egui::Context>> = const { RefCell::new(None) };
+    /// Where the song's sound is, in seconds (None: the page carries no sound).
+    static PLAYHEAD: std::cell::Cell<Option<f64>> = const { std::cell::Cell::new(None) };
+}
+
+/// The page's script tells where the song's sound is (seconds into the song) as it plays and
+/// when it is moved: the view draws the playhead plane there, as the window does.
+#[wasm_bindgen]
+pub fn set_playhead(seconds: f64) {
+    if !seconds.is_finite() {
+        return;
+    }
+    PLAYHEAD.with(|p| p.set(Some(seconds.max(0.0))));
+    CONTEXT.with(|c| {
+        if let Some(ctx) = c.borrow().as_ref() {
+            ctx.request_repaint();
+        }
+    });
 }
 
 /// Starts the viewer on `canvas` with the page's cloud `data` (named `name` in messages);
@@ -133,6 +153,7 @@ impl WebApp {
             .map_err(|reason| format!("the browser's GPU is too small for loudscape: {reason}"))?;
         device.on_uncaptured_error(Arc::new(|error| log::error!("wgpu error: {error}")));
         cc.egui_ctx.set_theme(egui::Theme::Dark);
+        CONTEXT.with(|c| *c.borrow_mut() = Some(cc.egui_ctx.clone()));
         let renderer = Renderer::new(device);
         let scene = SceneData::new(device, &renderer, &cloud);
         let world_from_data = scene.world_from_data;
@@ -474,6 +495,19 @@ impl eframe::App for WebApp {
                 };
                 self.hover_readout(&response, &view, scale);
                 let mut settings = self.settings.clone();
+                if let Some(seconds) = PLAYHEAD.with(std::cell::Cell::get)
+                    && self.cloud.meta.mode == crate::data::cloud::DataMode::Song
+                {
+                    // As playback::time_to_x, which the web build has not.
+                    let x = self
+                        .cloud
+                        .meta
+                        .axes
+                        .x
+                        .normalized_of(seconds)
+                        .clamp(-1.0, 1.0) as f32;
+                    settings.markers = vec![crate::render::markers::MarkerBox::playhead(x)];
+                }
                 if settings.view == ViewKind::Surface && self.grid_error.is_none() {
                     if self.update_surface() {
                         ctx.request_repaint();

@@ -369,8 +369,8 @@ def audio_page_file(tmp_path_factory) -> Path:
 
 
 def test_the_song_plays_with_a_playhead_and_seeks_where_clicked(browser, audio_page_file):
-    """--audio: the page plays the song's sound (Opus); the playhead follows it, and a click on
-    the bar plays from that point of the song."""
+    """--audio: the page plays the song's sound (Opus); the playhead follows it, on the bar and
+    as the plane in the view, and a click on the bar plays from that point of the song."""
     page = browser.new_page(viewport=VIEWPORT)
     errors: list[str] = []
     page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
@@ -398,12 +398,29 @@ def test_the_song_plays_with_a_playhead_and_seeks_where_clicked(browser, audio_p
         "document.getElementById('play').textContent === 'Play'", timeout=DEADLINE_S * 1000
     )
 
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+
+    def coloured():
+        rgb = _view_pixels(page)
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    near_start = _wait_for(coloured, "the view never showed the points")
     bar = page.locator("#bar").bounding_box()
     page.mouse.click(bar["x"] + bar["width"] * 0.75, bar["y"] + bar["height"] / 2)
     at = page.evaluate("document.getElementById('loudscape-sound').currentTime")
     assert abs(at / duration - 0.75) < 0.02, (at, duration)
     head = page.locator("#playhead").bounding_box()
     assert abs((head["x"] + 1 - bar["x"]) / bar["width"] - 0.75) < 0.02
+
+    # The playhead plane moved through the song in the view (above the player's bar).
+    def moved():
+        rgb = _view_pixels(page)
+        top = slice(0, int(rgb.shape[0] * 0.8))
+        changed = np.count_nonzero(np.abs(rgb[top] - near_start[top]).sum(axis=2) > 30)
+        return changed if changed > 500 else None
+
+    changed = _wait_for(moved, "the playhead plane did not move in the view")
+    print(f"\nthe playhead's move changed {changed} pixels of the view")
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=SHOTS / "page_audio.png")
     assert errors == [], errors
