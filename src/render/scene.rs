@@ -521,6 +521,36 @@ impl Renderer {
         }
     }
 
+    /// The volume of `data` at full quality in the rows `rows` of `target` alone (the pass's
+    /// scissor), over what the target holds there, or cleared first (`clear`: the whole
+    /// target, colour and depth); no box, no markers. Band by band, the target ends holding
+    /// what [`Renderer::render`]'s volume pass writes (`render/volume/progressive.rs`).
+    pub fn render_volume_band(
+        &self,
+        recording: Recording<'_>,
+        data: &SceneData,
+        view: &FrameView,
+        settings: &RenderSettings,
+        rows: std::ops::Range<u32>,
+        clear: bool,
+    ) {
+        let Recording {
+            queue,
+            encoder,
+            target,
+        } = recording;
+        if let Some(volume) = &data.volume {
+            self.volume
+                .prepare(queue, volume, &settings.volume, view.moving);
+        }
+        let mut pass = self.begin_frame(queue, encoder, target, view, settings, clear);
+        let rows = rows.start.min(target.height)..rows.end.min(target.height);
+        if let (Some(volume), false) = (&data.volume, rows.is_empty()) {
+            pass.set_scissor_rect(0, rows.start, target.width, rows.end - rows.start);
+            self.volume.draw(&mut pass, &self.frame, volume);
+        }
+    }
+
     /// The box and the markers of `settings` over what `target` holds (points drawn slice by
     /// slice, copied in): the last step of a progressive frame, redrawn alone when only the
     /// markers (the playhead) change. With `rest_from`, first the moving subset of the points

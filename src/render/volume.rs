@@ -17,6 +17,8 @@
 //! eight loads and six more trilinear samples; both derived grids come from
 //! [`crate::render::volume_grids`].
 
+pub mod progressive;
+
 use crate::render::gpu::frame::FrameBinding;
 use crate::render::gpu::layouts::{storage_entry, uniform_entry};
 use crate::render::gpu::pipeline::{DrawPipeline, depth_opaque, primitives};

@@ -83,6 +83,9 @@ pub struct ViewResources {
     pub cache: FrameCache,
     /// Large clouds at rest: drawn a slice a frame (`ui/progressive.rs`).
     pub progressive: crate::ui::progressive::ProgressivePoints,
+    /// The volume at rest: a coarse picture, then bands of full-quality rows a frame
+    /// (`render/volume/progressive.rs`).
+    pub volume_refine: crate::render::volume::progressive::ProgressiveVolume<RenderKey>,
     /// To ask for the next frame from `prepare` while the points fill in.
     repaint: Option<egui::Context>,
 }
@@ -120,6 +123,7 @@ impl ViewResources {
             scenes: HashMap::new(),
             cache: FrameCache::default(),
             progressive: Default::default(),
+            volume_refine: Default::default(),
             repaint: None,
         };
         render_state
@@ -292,11 +296,15 @@ impl ViewResources {
         Some(result)
     }
 
-    /// The fraction of the points drawn while a progressive render is under way.
-    /// `ctx` is kept to ask for the next frame when a refinement starts in a frame's paint.
+    /// The fraction of the points (or of the volume's rows) drawn while a progressive render
+    /// is under way. `ctx` is kept to ask for the next frame when a refinement starts in a
+    /// frame's paint.
     pub fn refining(&mut self, ctx: &egui::Context) -> Option<f32> {
         self.repaint.get_or_insert_with(|| ctx.clone());
-        self.progressive.refine.progress()
+        self.progressive
+            .refine
+            .progress()
+            .or(self.volume_refine.progress())
     }
 
     /// Scene renders so far (for the frame read-out and the tests).
@@ -342,9 +350,6 @@ pub struct ViewCallback {
     pub view: FrameView,
     pub settings: RenderSettings,
     pub cloud_id: Option<u64>,
-    /// Draw nothing new this frame: the picture the target holds stays (a notice is put on
-    /// screen before a long render, `state/volume_hold.rs`). Not kept through a resize.
-    pub hold: bool,
 }
 
 /// What a bridge callback renders: the 3D view ([`ViewCallback`]) or a part of the compare
@@ -418,8 +423,6 @@ impl OffscreenJob for ViewCallback {
             .ensure_size(device, self.view.width, self.view.height)
         {
             res.cache.invalidate();
-        } else if self.hold {
-            return;
         }
         // A surface finished in the background: the scene shows it from this frame on.
         if let Some(data) = self.cloud_id.and_then(|id| res.scenes.get(&id))
@@ -470,6 +473,37 @@ impl OffscreenJob for ViewCallback {
         // moving frame): the slices drawn so far are no longer on screen, and a refinement left
         // unfinished would keep the window asking for frames at rest.
         res.progressive.set_aside();
+        // At rest, the volume is drawn coarse first and then a band of rows a frame: the window
+        // answers within each frame instead of waiting seconds for one render on a slow device.
+        if let Some(data) = data
+            && !self.view.moving
+            && self.settings.view == crate::render::scene::ViewKind::Volume
+            && !crate::render::scene::draws_points_at_rest(&self.settings, data)
+        {
+            // The box and the markers are drawn over the volume every frame: a playhead moving
+            // during playback does not start the refinement over.
+            let mut volume_key = key.clone();
+            volume_key.settings.markers.clear();
+            volume_key.settings.show_box = false;
+            let complete = res.volume_refine.frame(
+                device,
+                queue,
+                encoder,
+                &res.renderer,
+                target,
+                data,
+                &volume_key,
+                &self.view,
+                &self.settings,
+                std::time::Instant::now(),
+            );
+            res.cache.finish(key, complete);
+            if !complete && let Some(ctx) = &res.repaint {
+                ctx.request_repaint();
+            }
+            return;
+        }
+        res.volume_refine.set_aside();
         res.renderer
             .render(queue, encoder, target, data, &self.view, &self.settings);
         // Complete even while a surface is extracted in the background: the last mesh is what

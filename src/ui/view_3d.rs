@@ -163,9 +163,11 @@ impl LoudscapeApp {
             self.volume_hold.forget();
             return;
         }
-        let step = self
-            .volume_hold
-            .step(self.settings.view, self.busy.is_none());
+        let step = self.volume_hold.step(
+            self.settings.view,
+            self.busy.is_none(),
+            self.refining.is_some(),
+        );
         if step.announce {
             self.busy = Some(DRAWING_THE_VOLUME.into());
         }
@@ -208,8 +210,6 @@ impl LoudscapeApp {
             view: render_view,
             settings,
             cloud_id: self.active().map(|l| l.id),
-            // A switch to Volume: this frame keeps the picture under the notice, the next draws.
-            hold: self.volume_hold.holding(),
         };
         painter.add(paint_callback(rect, callback));
         true
@@ -266,7 +266,12 @@ impl LoudscapeApp {
             busy_badge(painter, rect, "extracting surface…");
         } else if let Some(done) = self.refining {
             let percent = (done * 100.0).floor();
-            busy_badge(painter, rect, &format!("refining points… {percent:.0} %"));
+            let what = if self.settings.view == ViewKind::Volume {
+                "drawing the volume"
+            } else {
+                "refining points"
+            };
+            busy_badge(painter, rect, &format!("{what}… {percent:.0} %"));
         }
     }
 }

@@ -3,12 +3,17 @@
 
 use crate::common;
 
+use std::time::Instant;
+
 use loudscape::data::cloud::{DataMode, Point, PointCloud};
 use loudscape::data::synthetic::synthetic_song;
 use loudscape::render::gpu::context::GpuContext;
+use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::headless::render_image;
+use loudscape::render::markers::MarkerBox;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use loudscape::render::volume::TransferPreset;
+use loudscape::render::volume::progressive::{ProgressiveVolume, TARGET_FRAME};
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -199,4 +204,137 @@ fn degenerate_clouds_render_without_failing() {
         let image = render(&mut scene, &volume_settings(TransferPreset::Glacial), false);
         assert_eq!(image.dimensions(), SIZE, "{n} points");
     }
+}
+
+/// One progressive volume frame into `target`, submitted; whether the picture is complete.
+fn progressive_frame(
+    scene: &Scene,
+    progressive: &mut ProgressiveVolume<u32>,
+    target: &RenderTarget,
+    view: &FrameView,
+    settings: &RenderSettings,
+    now: Instant,
+) -> bool {
+    let gpu = &scene.gpu;
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    let complete = progressive.frame(
+        &gpu.device,
+        &gpu.queue,
+        &mut encoder,
+        &scene.renderer,
+        target,
+        &scene.data,
+        &1,
+        view,
+        settings,
+        now,
+    );
+    gpu.queue.submit([encoder.finish()]);
+    complete
+}
+
+/// The volume at rest drawn progressively (a coarse picture, then bands of full-quality rows)
+/// ends as the single full render, box and playhead included; on the way the first frame is
+/// the coarse picture, whole but not the full one, and a middle frame is the full render in the
+/// rows done (the box and markers aside) and the coarse picture below them.
+#[test]
+fn progressive_volume_starts_coarse_and_ends_as_the_single_render() {
+    let mut scene = song_scene();
+    let mut settings = volume_settings(TransferPreset::Classic);
+    settings.markers = vec![MarkerBox::playhead(0.4)];
+    let single = render(&mut scene, &settings, false);
+    assert!(
+        common::coverage(&single) > 0.1,
+        "the volume is nearly blank"
+    );
+    // The single render's view: the refinement's first frame (its jitter is every band's).
+    let mut view = view(&scene.data, false);
+    let target = RenderTarget::new(&scene.gpu.device, view.width, view.height);
+    let mut progressive = ProgressiveVolume::default();
+    progressive.schedule.rows = 37;
+    // Frames exactly on the target time: the rows per band stay.
+    let mut now = Instant::now();
+    assert!(!progressive_frame(
+        &scene,
+        &mut progressive,
+        &target,
+        &view,
+        &settings,
+        now
+    ));
+    let coarse = target
+        .read_rgba(&scene.gpu.device, &scene.gpu.queue)
+        .expect("read");
+    let (_, coarse_mean) = common::difference(&single, &coarse, 0);
+    let coverage = (common::coverage(&coarse), common::coverage(&single));
+    assert!(
+        coverage.0 > 0.7 * coverage.1,
+        "the coarse frame covers {} of the view, the full one {}",
+        coverage.0,
+        coverage.1
+    );
+    assert!(coarse_mean > 0.0, "the coarse frame is the full render");
+    let mut frames = 1;
+    let mut middle = None;
+    loop {
+        // Every frame has another index, as in the window; the bands keep the first one's.
+        view.frame_index += 1;
+        now += TARGET_FRAME;
+        let complete = progressive_frame(&scene, &mut progressive, &target, &view, &settings, now);
+        frames += 1;
+        if frames == 3 {
+            middle = Some(
+                target
+                    .read_rgba(&scene.gpu.device, &scene.gpu.queue)
+                    .expect("read"),
+            );
+        }
+        if complete {
+            break;
+        }
+        assert!(frames < 100, "never completes");
+    }
+    // 200 rows in bands of 37: a coarse frame and six bands.
+    assert_eq!(frames, 1 + SIZE.1.div_ceil(37) as usize);
+    assert_eq!(progressive.progress(), None);
+    let last = target
+        .read_rgba(&scene.gpu.device, &scene.gpu.queue)
+        .expect("read");
+    let (share, mean) = common::difference(&single, &last, 1);
+    assert!(
+        share == 0.0,
+        "the refined picture differs from the single render in {share} of pixels (mean {mean})"
+    );
+    // Two bands in (74 rows): above, the single render, box and playhead included; below, the
+    // coarse picture.
+    let middle = middle.expect("a middle frame");
+    let rows = |image: &image::RgbaImage, range: std::ops::Range<u32>| {
+        image::imageops::crop_imm(image, 0, range.start, SIZE.0, range.len() as u32).to_image()
+    };
+    let (_, below) = common::difference(&rows(&coarse, 80..200), &rows(&middle, 80..200), 0);
+    assert_eq!(below, 0.0, "below the bands the coarse picture stays");
+    let (above, _) = common::difference(&rows(&single, 0..74), &rows(&middle, 0..74), 1);
+    assert_eq!(
+        above, 0.0,
+        "the rows of the bands drawn are the single render's"
+    );
+    // Complete: another frame (a playhead moved) draws no band and stays the single render.
+    settings.markers = vec![MarkerBox::playhead(0.6)];
+    let moved = render(&mut scene, &settings, false);
+    now += TARGET_FRAME;
+    assert!(progressive_frame(
+        &scene,
+        &mut progressive,
+        &target,
+        &view,
+        &settings,
+        now
+    ));
+    let again = target
+        .read_rgba(&scene.gpu.device, &scene.gpu.queue)
+        .expect("read");
+    let (share, _) = common::difference(&moved, &again, 1);
+    assert_eq!(share, 0.0, "the playhead redrawn over the complete volume");
 }
