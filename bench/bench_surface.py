@@ -70,6 +70,14 @@ def vtk_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, int]
     return float(np.median(times)), triangles
 
 
+def vtk_threads() -> str:
+    """VTK's SMP backend and thread count (flying edges runs in parallel only with SMP on)."""
+    from vtkmodules.vtkCommonCore import vtkSMPTools
+
+    tools = vtkSMPTools()
+    return f"SMP backend {tools.GetBackend()}, {tools.GetEstimatedNumberOfThreads()} thread(s)"
+
+
 def load_average() -> str:
     """The 1-minute load average and the CPU count, for reading the figures."""
     if not hasattr(os, "getloadavg"):
@@ -110,6 +118,13 @@ def main() -> int:
         for match in re.finditer(pattern, done.stdout):
             name, method, engine, ms, tris, area = match.groups()
             ours[(name, method, engine)] = (float(ms), int(tris), float(area))
+        # The CPU engine on one thread, as VTK's flying edges runs without SMP (the PyPI build).
+        one_thread = {
+            (name, method): float(ms)
+            for name, method, ms in re.findall(
+                r"surface (\S+) (mt|dc) engine=cpu threads=1 median_ms=([\d.]+)", done.stdout
+            )
+        }
         print(f"\nscikit-image {args.runs} runs each, iso {args.iso}:")
         for npy in sorted(Path(tmp).glob("*.npy")):
             name = npy.stem
@@ -120,7 +135,10 @@ def main() -> int:
             if flying is None:
                 print("    VTK flying edges: not installed (pip install vtk)")
             else:
-                print(f"    VTK flying edges: {flying[0]:.1f} ms, {flying[1]} triangles")
+                print(
+                    f"    VTK flying edges: {flying[0]:.1f} ms, {flying[1]} triangles"
+                    f" ({vtk_threads()})"
+                )
             for method in ("mt", "dc"):
                 for engine in ("gpu", "cpu"):
                     if (name, method, engine) not in ours:
@@ -133,6 +151,10 @@ def main() -> int:
                         f" {ms / our_ms:.2f}x scikit-image's speed{versus_vtk},"
                         f" area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
                     )
+                if (name, method) in one_thread:
+                    our_ms = one_thread[(name, method)]
+                    versus_vtk = "" if flying is None else f", {our_ms / flying[0]:.2f}x VTK's time"
+                    print(f"    {method} (cpu engine, 1 thread): {our_ms:.1f} ms{versus_vtk}")
     # The ratio moves with the machine's load: llvmpipe's threads share the cores with any
     # other work, single-threaded scikit-image less so.
     print(f"load average after: {load_average()}")

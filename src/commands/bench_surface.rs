@@ -15,7 +15,9 @@ use loudscape::data::synthetic::song_like_field;
 use loudscape::render::gpu::context::GpuContext;
 use loudscape::render::gpu::frame::FrameBinding;
 use loudscape::render::grid::VoxelGrid;
-use loudscape::render::surface::cpu::{Phases, SurfaceEngine};
+use loudscape::render::surface::buffers::MeshVertex;
+use loudscape::render::surface::cpu::grid::CpuGrid;
+use loudscape::render::surface::cpu::{CpuExtraction, Phases, SurfaceEngine, default_threads};
 use loudscape::render::surface::pass::SurfacePass;
 use loudscape::render::surface::state::ExtractedSurface;
 use loudscape::render::surface::{SurfaceMethod, SurfaceSettings};
@@ -60,14 +62,16 @@ pub fn run(
         }
     );
     println!(
-        "  times: engine gpu: submit to read-back of the counts{}; engine cpu: extraction and \
-         upload into the GPU buffers, waited for (the grid is read back once per grid, timed \
-         apart), per phase: wall clock",
+        "  times: engine gpu: submit to read-back of the counts{}; engine cpu ({} threads): \
+         extraction and upload into the GPU buffers, waited for (the grid is read back once per \
+         grid, timed apart), per phase: wall clock; engine cpu threads=1: the same extraction \
+         on one thread into memory (no upload), as VTK's flying edges runs",
         if timed {
             ", per pass: GPU timestamps, in separate runs with each pass on its own"
         } else {
             " (no timestamp queries on this adapter: no per-pass times)"
-        }
+        },
+        default_threads()
     );
     let mut results = Vec::new();
     for (name, n) in [("song_128", 128u32), ("timeline_224", 224u32)] {
@@ -167,6 +171,15 @@ pub fn run(
                     ),
                     SurfaceEngine::Gpu => {}
                 }
+                if engine == SurfaceEngine::Cpu {
+                    let cpu_grid = CpuGrid::new(dims, Vec3::splat(-1.0), Vec3::ONE, &density, &hp);
+                    let (median_ms, laps) = one_thread(&cpu_grid, method, iso_value, runs);
+                    println!(
+                        "surface {name} {} engine=cpu threads=1 median_ms={median_ms:.2}",
+                        method.short_name()
+                    );
+                    println!("  per phase (ms, median): {laps}");
+                }
                 if engine == preferred {
                     results.push(SurfaceTiming {
                         field: name.to_string(),
@@ -180,6 +193,46 @@ pub fn run(
         }
     }
     Ok(results)
+}
+
+/// The median time (ms) of `runs` extractions of `grid` on one thread into memory (the
+/// output allocated and touched once beforehand, as the mapped buffers are), and the median of
+/// each phase.
+fn one_thread(grid: &CpuGrid, method: SurfaceMethod, iso: f32, runs: usize) -> (f64, String) {
+    let extraction = CpuExtraction {
+        grid,
+        method,
+        iso,
+        threads: 1,
+    };
+    let plan = extraction.plan(&mut Phases::default());
+    let mut vertices = vec![bytemuck::Zeroable::zeroed(); plan.vertices()];
+    let mut indices = vec![0u32; plan.indices()];
+    let mut times = Vec::with_capacity(runs);
+    let mut phases: Vec<(&str, Vec<f64>)> = Vec::new();
+    for _ in 0..runs {
+        let start = Instant::now();
+        let mut laps = Phases::default();
+        let plan = extraction.plan(&mut laps);
+        let written = Instant::now();
+        extraction.write(
+            &plan,
+            wgpu::WriteOnly::from(bytemuck::cast_slice_mut::<MeshVertex, u8>(&mut vertices)),
+            wgpu::WriteOnly::from(bytemuck::cast_slice_mut::<u32, u8>(&mut indices)),
+        );
+        laps.lap("vertices and triangles", written);
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+        phases.resize_with(laps.times.len(), || ("", Vec::new()));
+        for ((name, times), (lap, ms)) in phases.iter_mut().zip(laps.times) {
+            *name = lap;
+            times.push(ms);
+        }
+    }
+    let laps: Vec<String> = phases
+        .iter_mut()
+        .map(|(name, ms)| format!("{name} {:.2}", median(ms)))
+        .collect();
+    (median(&mut times), laps.join(", "))
 }
 
 /// The time of phase `name` in `phases` (0 when it is not there).

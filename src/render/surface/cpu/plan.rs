@@ -363,7 +363,7 @@ mod tests {
                 value
             }
         });
-        let mut noise = random(0x0ddb_a11);
+        let mut noise = random(0x00dd_ba11);
         let specks = grid(UVec3::new(131, 9, 12), |_, _, _| {
             let (keep, value) = (noise(), noise());
             if keep < 0.02 { value } else { 0.0 }
