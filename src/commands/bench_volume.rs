@@ -16,6 +16,7 @@ use loudscape::render::gpu::target::RenderTarget;
 use loudscape::render::gpu::timing::Timestamps;
 use loudscape::render::grid::voxelize::{MAX_PASSES, VoxelizeJob, VoxelizeRequest};
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::volume::progressive::{INITIAL_ROWS, ProgressiveVolume, TARGET_FRAME};
 use loudscape::render::volume::{BASE_OPACITY, VolumeSettings};
 use loudscape::render::volume_grids::VolumeGridsPass;
 use loudscape::view::camera::{Camera, FOV_Y_DEGREES};
@@ -313,6 +314,67 @@ pub fn run(
             medians[1],
         );
     }
+    progressive_volume(&gpu, &renderer, &data, &at_rest, &settings)?;
+    Ok(())
+}
+
+/// The window's volume at rest drawn progressively (`render/volume/progressive.rs`): the wall
+/// time of the coarse first frame and of each band frame (its bands of [`INITIAL_ROWS`], as the
+/// window starts; the rows are not adapted here), each submitted and waited for.
+fn progressive_volume(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    data: &SceneData,
+    view: &FrameView,
+    settings: &RenderSettings,
+) -> anyhow::Result<()> {
+    let target = RenderTarget::new(&gpu.device, view.width, view.height);
+    let mut progressive = ProgressiveVolume::<u32>::default();
+    let mut now = Instant::now();
+    let mut frame_ms = Vec::new();
+    loop {
+        let start = Instant::now();
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("bench::progressive_volume"),
+            });
+        let complete = progressive.frame(
+            &gpu.device,
+            &gpu.queue,
+            &mut encoder,
+            renderer,
+            &target,
+            data,
+            &0,
+            view,
+            settings,
+            now,
+        );
+        gpu.queue.submit([encoder.finish()]);
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .context("waiting for the GPU")?;
+        frame_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        // Frames on the target time: the rows per band stay as the window starts them.
+        now += TARGET_FRAME;
+        if complete {
+            break;
+        }
+    }
+    let coarse = frame_ms[0];
+    let bands = frame_ms[1..].to_vec();
+    let total: f64 = frame_ms.iter().sum();
+    let longest = bands.iter().copied().fold(0.0, f64::max);
+    println!(
+        "volume progressive {}x{} (at rest, shaded): first (coarse) frame {coarse:.1} ms, then {} \
+         bands of {INITIAL_ROWS} rows, median {:.1} ms, longest {longest:.1} ms; {total:.0} ms in \
+         all (wall time, each frame submitted and waited for)",
+        view.width,
+        view.height,
+        bands.len(),
+        median(bands.clone()),
+    );
     Ok(())
 }
 

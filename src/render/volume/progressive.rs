@@ -27,10 +27,11 @@ use crate::render::gpu::target::{COLOR_FORMAT, RenderTarget};
 use crate::render::scene::{Recording, RenderSettings, Renderer, SceneData};
 use crate::view::frame_view::FrameView;
 
-/// The coarse first frame is this many times smaller along each side: 1/16 of the pixels, with
-/// the moving step (2.5 voxels), about 1/40 of a full render (on lavapipe a 1600x1000 volume of
-/// 1.5-4 s becomes 40-100 ms).
-pub const COARSE_DIVISOR: u32 = 4;
+/// The coarse first frame is this many times smaller along each side: 1/25 of the pixels, with
+/// the moving step (2.5 voxels). At 4 (1/16 of the pixels) the first frame on real_5m.ply at
+/// 1600x1000 took 174 ms on lavapipe at load 7 (the full render 3.6 s), over the 150 ms aimed
+/// at; the copies, the upscale and the overlay are part of it (docs/PERFORMANCE.md).
+pub const COARSE_DIVISOR: u32 = 5;
 /// Rows in the first band before any measurement: on lavapipe a 1600x1000 volume costs about
 /// 1.5-4 ms a row (docs/PERFORMANCE.md), so 48 rows are 70-190 ms.
 pub const INITIAL_ROWS: u32 = 48;
