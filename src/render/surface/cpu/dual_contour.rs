@@ -153,8 +153,19 @@ fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: 
     let values = grid.corners(origin);
     // In SIMD lanes (Vec3A): each lane's operations, and the dot products' order, are the
     // scalar ones, so the values are the same.
-    let gradients: [Vec3A; 8] =
-        std::array::from_fn(|k| grid.corner_gradient(origin, &values, k as u32).into());
+    // Written out corner by corner: through `array::from_fn` each was a call that picked its
+    // loads by branches on the corner's bits (the same central differences either way).
+    let [sx, sy, sz] = strides;
+    let gradients: [Vec3A; 8] = [
+        grid.gradient(origin),
+        grid.gradient(origin + sx),
+        grid.gradient(origin + sy),
+        grid.gradient(origin + sx + sy),
+        grid.gradient(origin + sz),
+        grid.gradient(origin + sx + sz),
+        grid.gradient(origin + sy + sz),
+        grid.gradient(origin + sx + sy + sz),
+    ];
     let mut count = 0u32;
     let (mut mass, mut normal_sum, mut b) = (Vec3A::ZERO, Vec3A::ZERO, Vec3A::ZERO);
     let (mut a00, mut a01, mut a02, mut a11, mut a12, mut a22) = (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
