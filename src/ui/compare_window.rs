@@ -14,8 +14,10 @@ use eframe::egui;
 
 use crate::data::cloud::PointCloud;
 use crate::data::compare::on_union_axes;
+use crate::data::field::Field;
 use crate::playback::{self, PlaybackError, Track};
 use crate::render::compare::{BuiltGrids, OwnGridPasses};
+use crate::render::grid::VoxelGrid;
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::grid::voxelize::VoxelSettings;
 use crate::render::scene::ViewKind;
@@ -23,7 +25,7 @@ use crate::render::surface::state::ExtractionStatus;
 use crate::ui::bridge::CompareResources;
 use crate::ui::labels;
 use crate::ui::state::compare_window::{
-    CompareLayout, CompareState, GRIDS_BUSY, GridStep, Listening,
+    CompareLayout, CompareState, DifferenceCopy, GRIDS_BUSY, GridStep, Listening,
 };
 use crate::ui::state::loading::Shared;
 use crate::ui::state::{LoudscapeApp, Slot};
@@ -73,6 +75,79 @@ fn build_grids(
         log::warn!("no thread for the compare grids: {e}");
     }
     receiver
+}
+
+/// What the difference's read-back for the read-outs needs, taken from the scene under the
+/// renderer's lock: the shown grid's buffers and the CPU copies the build left.
+struct DifferenceJob {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    shown: VoxelGrid,
+    difference: Vec<f32>,
+    columns: Vec<f32>,
+    measure: DifferenceMeasure,
+    range: f32,
+}
+
+/// The scene's difference to read back (None without grids).
+fn difference_job(
+    compare: &CompareResources,
+    render_state: &eframe::egui_wgpu::RenderState,
+) -> Option<DifferenceJob> {
+    let grids = compare.scene.as_ref()?.grids.as_ref()?;
+    let shown = &grids.grids.shown;
+    Some(DifferenceJob {
+        device: render_state.device.clone(),
+        queue: render_state.queue.clone(),
+        shown: VoxelGrid {
+            dims: shown.dims,
+            box_min: shown.box_min,
+            box_max: shown.box_max,
+            density: shown.density.clone(),
+            hp_mean: shown.hp_mean.clone(),
+        },
+        difference: grids.difference_cpu.clone(),
+        columns: grids.columns_cpu.clone(),
+        measure: grids.measure,
+        range: grids.range(),
+    })
+}
+
+impl DifferenceJob {
+    /// Reads the shown grid back on a thread; None comes when it could not be.
+    fn spawn(self) -> Receiver<Option<DifferenceCopy>> {
+        let (sender, receiver) = channel();
+        let spawned = std::thread::Builder::new()
+            .name("compare-difference-read".into())
+            .spawn(move || {
+                let read = |buffer| self.shown.read_field(&self.device, &self.queue, buffer);
+                let copy = match (read(&self.shown.density), read(&self.shown.hp_mean)) {
+                    (Ok(density), Ok(hp_mean)) => Some(DifferenceCopy {
+                        shown: Field {
+                            dims: self.shown.dims,
+                            box_min: self.shown.box_min,
+                            box_max: self.shown.box_max,
+                            density,
+                            hp_mean,
+                        },
+                        difference: self.difference,
+                        columns: self.columns,
+                        measure: self.measure,
+                        range: self.range,
+                    }),
+                    (Err(e), _) | (_, Err(e)) => {
+                        log::warn!("the difference could not be read back: {e}");
+                        None
+                    }
+                };
+                let _ = sender.send(copy);
+            });
+        // No thread: the receiver's sender is gone, which the state takes as nothing read.
+        if let Err(e) = spawned {
+            log::warn!("no thread for the difference's read-back: {e}");
+        }
+        receiver
+    }
 }
 
 /// Decodes a cloud's source audio on a thread.
@@ -246,28 +321,31 @@ impl LoudscapeApp {
                 return;
             }
         }
-        // The measure shown and, when the read-outs' copy is stale, its read-back: one lock.
+        // The measure shown and, when the read-outs' copy is stale, its read-back started on a
+        // thread (the GPU's copy is waited for there): one lock.
         let stale = state.difference_stale();
-        let read = CompareResources::write(render_state, |compare, view| {
+        let job = CompareResources::write(render_state, |compare, view| {
             compare.set_measure(view, state.measure);
-            stale.then(|| compare.read_difference(view)).flatten()
+            stale
+                .then(|| difference_job(compare, render_state))
+                .flatten()
         })
         .flatten();
-        if stale {
-            state.difference_read(read);
-            if let Some(copy) = &state.difference {
-                // A log line, as loads are told: tests read the range.
-                eprintln!(
-                    "compare: difference read ({}{}, range {:.3})",
-                    copy.measure.name(),
-                    if state.matched_shown() {
-                        ", matched"
-                    } else {
-                        ""
-                    },
-                    copy.range
-                );
-            }
+        if let Some(job) = job {
+            state.reading_difference(job.spawn());
+        }
+        let matched = state.matched_shown();
+        if state.difference_reading.is_some() {
+            ctx.request_repaint_after(Duration::from_millis(30));
+        }
+        if let Some(copy) = state.poll_difference_read() {
+            // A log line, as loads are told: tests read the range.
+            eprintln!(
+                "compare: difference read ({}{}, range {:.3})",
+                copy.measure.name(),
+                if matched { ", matched" } else { "" },
+                copy.range
+            );
         }
     }
 

@@ -9,7 +9,6 @@ use eframe::egui_wgpu::{self, CallbackResources};
 
 use super::{Offscreen, OffscreenJob, Prepare, ViewResources};
 use crate::data::cloud::PointCloud;
-use crate::data::field::Field;
 use crate::render::compare::{BuiltGrids, CompareScene};
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::grid::voxelize::VoxelSettings;
@@ -17,7 +16,6 @@ use crate::render::scene::{RenderSettings, ViewKind};
 use crate::render::surface::SurfaceSettings;
 use crate::render::surface::state::ExtractionStatus;
 use crate::ui::frame_cache::{FrameCache, RenderKey};
-use crate::ui::state::compare_window::DifferenceCopy;
 use crate::view::frame_view::FrameView;
 
 /// One half's offscreen target and what it holds.
@@ -141,28 +139,6 @@ impl CompareResources {
             scene.set_measure(&view.device, &view.queue, &view.renderer, measure);
             self.revision += 1;
         }
-    }
-
-    /// The difference grid read back for the read-outs.
-    pub(in crate::ui) fn read_difference(&self, view: &ViewResources) -> Option<DifferenceCopy> {
-        let grids = self.scene.as_ref()?.grids.as_ref()?;
-        let (device, queue) = (&view.device, &view.queue);
-        let shown = &grids.grids.shown;
-        let density = shown.read_field(device, queue, &shown.density).ok()?;
-        let hp_mean = shown.read_field(device, queue, &shown.hp_mean).ok()?;
-        Some(DifferenceCopy {
-            shown: Field {
-                dims: shown.dims,
-                box_min: shown.box_min,
-                box_max: shown.box_max,
-                density,
-                hp_mean,
-            },
-            difference: grids.difference_cpu.clone(),
-            columns: grids.columns_cpu.clone(),
-            measure: grids.measure,
-            range: grids.range(),
-        })
     }
 }
 

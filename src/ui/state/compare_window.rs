@@ -28,6 +28,9 @@ use crate::ui::state::loading::Shared;
 /// The status line while the compare's grids are built.
 pub(in crate::ui) const GRIDS_BUSY: &str = "building the compare grids…";
 
+/// What the Difference view says while its read-outs' copy is read back.
+pub(in crate::ui) const DIFFERENCE_BUSY: &str = "reading the difference for the read-outs…";
+
 /// How the compare is shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(in crate::ui) enum CompareLayout {
@@ -96,6 +99,9 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) a_track: Option<Track>,
     /// The difference's CPU copy for read-outs: the shown grid and the signed values.
     pub(in crate::ui) difference: Option<DifferenceCopy>,
+    /// The difference's read-back running on a thread (the GPU's copy waited for there, not
+    /// in a frame), when it runs.
+    pub(in crate::ui) difference_reading: Option<Receiver<Option<DifferenceCopy>>>,
     pub(in crate::ui) error: Option<String>,
     /// The grids being built on a thread, when they are.
     pub(in crate::ui) grid_build: Option<GridBuild>,
@@ -167,6 +173,7 @@ impl CompareState {
             listening: Listening::A,
             a_track: None,
             difference: None,
+            difference_reading: None,
             error: None,
             error_told: None,
             grid_build: None,
@@ -309,18 +316,33 @@ impl CompareState {
     /// The difference's CPU copy is stale (grids installed or a build started): read again.
     pub(in crate::ui) fn forget_difference(&mut self) {
         self.difference = None;
+        self.difference_reading = None;
     }
 
     /// The GPU scene holds the grids built on a thread now: the halves draw from them, and the
     /// difference's CPU copy is read again.
     pub(in crate::ui) fn grids_installed(&mut self) {
         self.has_grids = true;
-        self.difference = None;
+        self.forget_difference();
     }
 
-    /// The difference's CPU copy read back for the read-outs (None: it could not be).
-    pub(in crate::ui) fn difference_read(&mut self, copy: Option<DifferenceCopy>) {
+    /// Waits for the difference's read-back on a thread that answers on `receiver`.
+    pub(in crate::ui) fn reading_difference(&mut self, receiver: Receiver<Option<DifferenceCopy>>) {
+        self.difference_reading = Some(receiver);
+    }
+
+    /// The read-back's answer once it came (`Some(None)`: it could not be read, or the thread
+    /// ended without answering); it is kept as the read-outs' copy.
+    pub(in crate::ui) fn poll_difference_read(&mut self) -> Option<&DifferenceCopy> {
+        let receiver = self.difference_reading.as_ref()?;
+        let copy = match receiver.try_recv() {
+            Ok(copy) => copy,
+            Err(TryRecvError::Empty) => return None,
+            Err(TryRecvError::Disconnected) => None,
+        };
+        self.difference_reading = None;
         self.difference = copy;
+        self.difference.as_ref()
     }
 
     /// Whether the view asked for still waits for its grids.
@@ -513,7 +535,7 @@ impl CompareState {
             return false;
         }
         self.built_for = Some(key);
-        self.difference = None;
+        self.forget_difference();
         // A build for the old scene has nothing to give the new one, and the new scene has no
         // grids yet.
         self.grid_build = None;
@@ -614,6 +636,9 @@ impl CompareState {
     ) -> Option<&'static str> {
         let waiting = if self.grids_building() {
             GRIDS_BUSY
+        } else if self.difference_reading.is_some() && self.layout == CompareLayout::Difference {
+            // The hover read-outs come with it.
+            DIFFERENCE_BUSY
         } else if surface_busy {
             "extracting surface…"
         } else {
@@ -648,11 +673,14 @@ impl CompareState {
         self.measure = measure.unwrap_or(DifferenceMeasure::ALL[1]);
     }
 
-    /// Whether the difference's CPU copy is missing or was read for another measure.
+    /// Whether the difference's CPU copy is missing or was read for another measure, and no
+    /// read-back runs (one for another measure is read again once it came).
     pub(in crate::ui) fn difference_stale(&self) -> bool {
-        self.difference
-            .as_ref()
-            .is_none_or(|d| d.measure != self.measure)
+        self.difference_reading.is_none()
+            && self
+                .difference
+                .as_ref()
+                .is_none_or(|d| d.measure != self.measure)
     }
 
     /// Whether the panel's `side` button can be pressed: the version heard, or another once

@@ -560,3 +560,63 @@ fn the_grids_being_built_are_told_in_one_place() {
     assert!(state.rebuild_for(1));
     assert_eq!(state.badge(true, None), Some("extracting surface…"));
 }
+
+/// The difference's read-back for the read-outs runs on a thread: the state waits for its
+/// answer, starts no second one meanwhile, says so in the Difference view, and drops it when
+/// the scene or its grids change.
+#[test]
+fn the_difference_is_read_back_off_the_window_thread() {
+    let copy = |measure| DifferenceCopy {
+        shown: Field {
+            dims: glam::UVec3::ONE,
+            box_min: glam::Vec3::ZERO,
+            box_max: glam::Vec3::ONE,
+            density: vec![0.0],
+            hp_mean: vec![0.0],
+        },
+        difference: vec![0.25],
+        columns: vec![0.0],
+        measure,
+        range: 0.5,
+    };
+    let mut state = CompareState::new(PathBuf::from("b.ply"));
+    state.layout = CompareLayout::Difference;
+    assert!(state.difference_stale());
+    let (sender, receiver) = channel();
+    state.reading_difference(receiver);
+    assert!(!state.difference_stale(), "one read-back at a time");
+    assert!(state.poll_difference_read().is_none(), "nothing came yet");
+    assert_eq!(state.badge(false, None), Some(DIFFERENCE_BUSY));
+    state.layout = CompareLayout::SideBySide;
+    assert_eq!(state.badge(false, None), None, "no read-outs shown there");
+    sender.send(Some(copy(state.measure))).unwrap();
+    assert_eq!(
+        state.poll_difference_read().map(|c| c.range),
+        Some(0.5),
+        "the copy came"
+    );
+    assert!(state.difference.is_some() && state.difference_reading.is_none());
+    assert!(!state.difference_stale());
+
+    // A read-back for the old measure is read again once it came.
+    let (sender, receiver) = channel();
+    state.forget_difference();
+    state.reading_difference(receiver);
+    let old = state.measure;
+    state.measure = DifferenceMeasure::ALL[1];
+    assert!(!state.difference_stale());
+    sender.send(Some(copy(old))).unwrap();
+    assert!(state.poll_difference_read().is_some());
+    assert!(state.difference_stale(), "read for another measure");
+
+    // New grids drop a read-back of the old ones; a thread gone answers nothing.
+    let (_sender, receiver) = channel();
+    state.reading_difference(receiver);
+    state.grids_installed();
+    assert!(state.difference_reading.is_none() && state.difference.is_none());
+    let (sender, receiver) = channel::<Option<DifferenceCopy>>();
+    state.reading_difference(receiver);
+    drop(sender);
+    assert!(state.poll_difference_read().is_none());
+    assert!(state.difference_reading.is_none(), "not waited for again");
+}
