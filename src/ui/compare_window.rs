@@ -263,7 +263,7 @@ impl LoudscapeApp {
             }
             // One camera: another version beside A keeps the view where it is, and a
             // reopened window the camera it was left with.
-            if state.fit_scene(first_build, !previewing) {
+            if state.fit_scene(first_build, !previewing, song.id) {
                 self.motion.request_fit();
             }
         }

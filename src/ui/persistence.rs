@@ -251,16 +251,23 @@ mod tests {
         assert_eq!(app.motion.camera(), camera);
         let mut state = app.compare.take().expect("a compare");
         assert!(
-            !state.fit_scene(true, false),
+            !state.fit_scene(true, false, 1),
             "the compare's scene of A's points so far keeps the camera"
         );
         assert!(
-            !state.fit_scene(true, true),
+            !state.fit_scene(true, true, 2),
             "the scene of the whole of A keeps the camera too"
         );
-        assert!(state.fit_scene(true, true), "another song in A is fitted");
         assert!(
-            !state.fit_scene(false, true),
+            !state.fit_scene(true, true, 2),
+            "and so does that scene built again (the alignment came after it)"
+        );
+        assert!(
+            state.fit_scene(true, true, 3),
+            "another song in A is fitted"
+        );
+        assert!(
+            !state.fit_scene(false, true, 3),
             "another version beside A is not"
         );
         app.compare = Some(state);
@@ -313,7 +320,7 @@ mod tests {
         let mut app = LoudscapeApp::new(options(Vec::new()), None);
         app.compare_with(repo.join("data/fixture_song.ply"));
         let state = app.compare.as_mut().expect("a compare");
-        assert!(state.fit_scene(true, true), "a new compare is fitted");
+        assert!(state.fit_scene(true, true, 1), "a new compare is fitted");
     }
     use crate::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 

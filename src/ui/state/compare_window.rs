@@ -123,8 +123,11 @@ pub(in crate::ui) struct CompareState {
     /// A and B aligned in time and matched in loudness (`state/alignment.rs`).
     pub(in crate::ui) alignment: super::alignment::CompareAlignment,
     /// The camera came back with the compare (a reopened window): the scenes built while A
-    /// arrives keep it, as the window was left, instead of fitting the compare.
+    /// arrives, and built again for the same A (the alignment coming, a nudge), keep it, as the
+    /// window was left, instead of fitting the compare.
     pub(in crate::ui) keep_camera: bool,
+    /// The whole A's song id the restored camera is kept for (set by its first scene).
+    kept_for: Option<u64>,
 }
 
 /// The compare's grids built on a thread (`render::compare::build_grids`): the voxel settings
@@ -185,6 +188,7 @@ impl CompareState {
             dialog: None,
             alignment: Default::default(),
             keep_camera: false,
+            kept_for: None,
         }
     }
 
@@ -297,15 +301,26 @@ impl CompareState {
         self.keep_camera = true;
     }
 
-    /// Whether the scene built now (`first`: the first for this song in A) is fitted: not
-    /// while a restored camera is kept, which lasts until the scene is built for the whole of
-    /// A (`whole`; its points so far stand in while it is extracted).
-    pub(in crate::ui) fn fit_scene(&mut self, first: bool, whole: bool) -> bool {
-        let fit = first && !self.keep_camera;
-        if whole {
-            self.keep_camera = false;
+    /// Whether the scene built now for A's song `song` (`first`: the first for it) is fitted:
+    /// not while a restored camera is kept, which lasts while A's points so far stand in (not
+    /// `whole`) and for every scene of the whole A that came first (built again when the
+    /// alignment comes, say), until another song is in A.
+    pub(in crate::ui) fn fit_scene(&mut self, first: bool, whole: bool, song: u64) -> bool {
+        if self.keep_camera {
+            match self.kept_for {
+                None if !whole => return false,
+                None => {
+                    self.kept_for = Some(song);
+                    return false;
+                }
+                Some(kept) if kept == song => return false,
+                Some(_) => {
+                    self.keep_camera = false;
+                    self.kept_for = None;
+                }
+            }
         }
-        fit
+        first
     }
 
     /// Builds the scene again on the next frame (an alignment came, a version was nudged).
