@@ -50,7 +50,6 @@ impl LoudscapeApp {
             files,
             view: Some(self.settings.view),
             camera: Some(self.motion.camera()),
-            view_heights: self.motion.heights(),
             iso_value: Some(self.settings.surface.iso_value),
             show_box: Some(self.settings.show_box),
             transfer: Some(self.settings.volume.preset.name().to_string()),
@@ -159,13 +158,6 @@ impl LoudscapeApp {
                         self.motion.restore(camera, files.len());
                     }
                     _ => {}
-                }
-                // The camera was framed for the view as it was left, not as the new window
-                // first draws it (without the strip, the camera came back closer).
-                if let (Some(_), Some(heights)) = (r.camera, r.view_heights)
-                    && !files.is_empty()
-                {
-                    self.motion.restore_heights(heights);
                 }
                 if !files.is_empty() {
                     for version in r.compare.into_iter().chain(r.compare_more) {
@@ -296,27 +288,6 @@ mod tests {
             }),
         );
         assert!(app.compare.is_none(), "B goes with the remembered A only");
-
-        // The camera comes back framed for the view it was left with: the new window's view is
-        // taller until the loudness strip comes, then as tall as it was.
-        let (left_view, window) = (560.0, 800.0);
-        let mut app = reopened(Remembered {
-            files: vec![repo.join("data/demo_song.ply")],
-            camera: Some(camera),
-            view_heights: Some((left_view, window)),
-            ..Default::default()
-        });
-        assert_eq!(app.remembered().view_heights, Some((left_view, window)));
-        for view in [700.0, 640.0, left_view] {
-            app.motion.size_view_within(1.6, None, Some((view, window)));
-        }
-        let back = app.motion.camera();
-        assert!(
-            (back.distance - camera.distance).abs() < 1e-4 * camera.distance,
-            "the camera left at {} comes back at {}",
-            camera.distance,
-            back.distance
-        );
         let mut app = LoudscapeApp::new(options(Vec::new()), None);
         app.compare_with(repo.join("data/fixture_song.ply"));
         let state = app.compare.as_mut().expect("a compare");

@@ -45,7 +45,6 @@ mod voxelize;
 mod window;
 mod window_compare;
 mod window_compare_align;
-mod window_compare_reopen;
 mod window_compare_save;
 mod window_compare_surface;
 mod window_heard;

@@ -14,10 +14,6 @@ pub struct Remembered {
     pub files: Vec<PathBuf>,
     pub view: Option<ViewKind>,
     pub camera: Option<Camera>,
-    /// The 3D view's and the window's heights (points) the camera was left with: a reopened
-    /// window keeps that framing while its view takes its size (the strip arriving).
-    #[serde(default)]
-    pub view_heights: Option<(f32, f32)>,
     pub iso_value: Option<f32>,
     pub show_box: Option<bool>,
     /// Transfer function preset name (Classic, Ember, Glacial) and the volume's hp tint.

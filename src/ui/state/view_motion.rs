@@ -130,17 +130,6 @@ impl ViewMotion {
         self.keep_camera_loads = loads;
     }
 
-    /// The view's and the window's heights the camera is framed for (to remember with it).
-    pub(in crate::ui) fn heights(&self) -> Option<(f32, f32)> {
-        self.heights
-    }
-
-    /// The heights a restored camera was framed for: the view's first sizes step it back or
-    /// closer from those, as any later change of the view's height does.
-    pub(in crate::ui) fn restore_heights(&mut self, heights: (f32, f32)) {
-        self.heights = Some(heights);
-    }
-
     /// As [`ViewMotion::restore`] for several files, the camera being `slot`'s (the slot shown
     /// when the window closed): its cloud takes the camera, another slot's cloud arriving
     /// first is installed unseen (it was shown for a second with the wrong camera).
