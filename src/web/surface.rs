@@ -21,11 +21,9 @@
 
 use std::sync::{Arc, Mutex};
 
-use crate::render::gpu::context::storage_binding_limit;
 use crate::render::grid::VoxelGrid;
-use crate::render::surface::buffers::{
-    COUNTERS_SIZE, MAX_MAPPED_VERTICES, MeshBuffers, MeshVertex,
-};
+use crate::render::surface::buffers::{COUNTERS_SIZE, MeshBuffers};
+use crate::render::surface::driver::grown_capacities;
 use crate::render::surface::marching_tets::MarchingTetsPass;
 use crate::render::surface::state::{CacheKey, ExtractedSurface};
 use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, SurfaceSettings};
@@ -196,7 +194,7 @@ impl WebSurface {
             self.error = None;
             return;
         }
-        match grown(device, &counts) {
+        match grown_capacities(device, &counts) {
             Ok((vertices, indices)) => {
                 log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
                 state.buffers = Some(MeshBuffers::new(device, vertices, indices));
@@ -208,39 +206,4 @@ impl WebSurface {
             Err(e) => self.error = Some(e.to_string()),
         }
     }
-}
-
-/// The room a surface of `counts` needs: the next powers of two, within what one buffer
-/// binding of `device` may hold.
-fn grown(device: &wgpu::Device, counts: &SurfaceCounts) -> Result<(u32, u32), SurfaceError> {
-    let limit = |size: u64| (storage_binding_limit(device) / size).min(u64::from(u32::MAX));
-    let grow = |needed: u32, capacity: u32, what: &'static str, limit: u64| {
-        if needed <= capacity {
-            return Ok(capacity);
-        }
-        let wanted = u64::from(needed).next_power_of_two().min(limit);
-        if wanted < u64::from(needed) {
-            return Err(SurfaceError::TooLarge {
-                what,
-                needed: u64::from(needed),
-                limit,
-            });
-        }
-        Ok(wanted as u32)
-    };
-    let vertex_limit = limit(std::mem::size_of::<MeshVertex>() as u64).min(MAX_MAPPED_VERTICES);
-    Ok((
-        grow(
-            counts.vertices_needed,
-            counts.vertex_capacity,
-            "vertices",
-            vertex_limit,
-        )?,
-        grow(
-            counts.indices_needed,
-            counts.index_capacity,
-            "indices",
-            limit(4),
-        )?,
-    ))
 }

@@ -54,12 +54,14 @@ fn element_limit(device: &wgpu::Device, element_size: u64) -> u64 {
     (storage_binding_limit(device) / element_size).min(u64::from(u32::MAX))
 }
 
-/// Grows the buffers to hold `counts`; an error when the device cannot.
-fn grow(
+/// The room a surface of `counts` needs (vertices, indices): the capacities it has when they
+/// suffice, else the next powers of two, within what one buffer binding of `device` may hold
+/// (and, for marching tetrahedra, what its cell map can address); an error when the device
+/// cannot. The window's driver and the web page's Surface view grow their buffers by it.
+pub fn grown_capacities(
     device: &wgpu::Device,
-    state: &mut SurfaceState,
     counts: &SurfaceCounts,
-) -> Result<(), SurfaceError> {
+) -> Result<(u32, u32), SurfaceError> {
     let grow_to = |needed: u32, capacity: u32, what: &'static str, size: u64, max: u64| {
         if needed <= capacity {
             return Ok(capacity);
@@ -94,6 +96,16 @@ fn grow(
         4,
         u64::MAX,
     )?;
+    Ok((vertices, indices))
+}
+
+/// Grows the buffers to hold `counts`; an error when the device cannot.
+fn grow(
+    device: &wgpu::Device,
+    state: &mut SurfaceState,
+    counts: &SurfaceCounts,
+) -> Result<(), SurfaceError> {
+    let (vertices, indices) = grown_capacities(device, counts)?;
     log::info!("surface buffers grow to {vertices} vertices, {indices} indices");
     state.buffers = Some(MeshBuffers::new(device, vertices, indices));
     state.key = None;
