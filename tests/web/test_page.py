@@ -104,6 +104,28 @@ def _wait_for(predicate, what: str):
         time.sleep(0.2)
 
 
+def _open(browser, url: str):
+    """A new page at `url` that collects its console errors and uncaught exceptions; returns
+    the page and that list once the viewer has left its loading state."""
+    page = browser.new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url)
+    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    return page, errors
+
+
+def _points_shown(page, what: str = "the view never showed the points") -> np.ndarray:
+    """The 3D view once it shows the points' warm and cool colours (polled to the deadline)."""
+
+    def coloured():
+        rgb = _view_pixels(page)
+        return rgb if min(_point_colours(rgb)) > 200 else None
+
+    return _wait_for(coloured, what)
+
+
 def test_the_page_stays_in_its_budget(page_file):
     size = page_file.stat().st_size
     print(f"\npage of {SONG.name}: {size / 1e6:.2f} MB (budget {PAGE_BUDGET_BYTES / 1e6:.0f} MB)")
@@ -115,21 +137,11 @@ def test_the_page_stays_in_its_budget(page_file):
 
 
 def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
-    page = browser.new_page(viewport=VIEWPORT)
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(page_file.as_uri())
-    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    page, errors = _open(browser, page_file.as_uri())
     state = page.evaluate("document.body.dataset.state")
     assert state == "running", page.inner_text("#message")
 
-    def coloured():
-        rgb = _view_pixels(page)
-        warm, cool = _point_colours(rgb)
-        return rgb if warm > 200 and cool > 200 else None
-
-    before = _wait_for(coloured, "the view never showed the points' warm and cool colours")
+    before = _points_shown(page, "the view never showed the points' warm and cool colours")
     SHOTS.mkdir(parents=True, exist_ok=True)
     Image.fromarray(before.astype(np.uint8)).save(SHOTS / "page_before_drag.png")
     page.screenshot(path=SHOTS / "page.png")
@@ -173,18 +185,9 @@ def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
 
 def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
     """V shows the Volume view: the window's voxelize compute passes and ray march on WebGPU."""
-    page = browser.new_page(viewport=VIEWPORT)
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(page_file.as_uri())
-    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    page, errors = _open(browser, page_file.as_uri())
 
-    def coloured():
-        rgb = _view_pixels(page)
-        return rgb if min(_point_colours(rgb)) > 200 else None
-
-    points = _wait_for(coloured, "the view never showed the points")
+    points = _points_shown(page)
     page.locator("#loudscape-view").focus()
     page.keyboard.press("v")
 
@@ -212,11 +215,7 @@ def test_hovering_a_point_shows_its_values(browser, page_file):
     page.goto(page_file.as_uri())
     page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
 
-    def coloured():
-        rgb = _view_pixels(page)
-        return rgb if min(_point_colours(rgb)) > 200 else None
-
-    before = _wait_for(coloured, "the view never showed the points")
+    before = _points_shown(page)
     box = page.locator("#loudscape-view").bounding_box()
     h, w = before.shape[:2]
 
@@ -301,18 +300,9 @@ def test_a_three_minute_song_is_thinned_into_the_budget(tmp_path):
 def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     """S shows the Surface view (the grid built by the voxelize passes, the isosurface by the
     marching tetrahedra passes, on WebGPU); a click on the isovalue slider's rail changes it."""
-    page = browser.new_page(viewport=VIEWPORT)
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(page_file.as_uri())
-    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    page, errors = _open(browser, page_file.as_uri())
 
-    def coloured():
-        rgb = _view_pixels(page)
-        return rgb if min(_point_colours(rgb)) > 200 else None
-
-    points = _wait_for(coloured, "the view never showed the points")
+    points = _points_shown(page)
     whole = points.shape[0] * points.shape[1]
     page.locator("#loudscape-view").focus()
     pressed = time.monotonic()
@@ -371,12 +361,7 @@ def audio_page_file(tmp_path_factory) -> Path:
 def test_the_song_plays_with_a_playhead_and_seeks_where_clicked(browser, audio_page_file):
     """--audio: the page plays the song's sound (Opus); the playhead follows it, on the bar and
     as the plane in the view, and a click on the bar plays from that point of the song."""
-    page = browser.new_page(viewport=VIEWPORT)
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(audio_page_file.as_uri())
-    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
+    page, errors = _open(browser, audio_page_file.as_uri())
     assert page.locator("#player").is_visible()
     page.wait_for_function(
         "document.getElementById('loudscape-sound').readyState >= 1", timeout=DEADLINE_S * 1000
@@ -398,13 +383,7 @@ def test_the_song_plays_with_a_playhead_and_seeks_where_clicked(browser, audio_p
         "document.getElementById('play').textContent === 'Play'", timeout=DEADLINE_S * 1000
     )
 
-    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
-
-    def coloured():
-        rgb = _view_pixels(page)
-        return rgb if min(_point_colours(rgb)) > 200 else None
-
-    near_start = _wait_for(coloured, "the view never showed the points")
+    near_start = _points_shown(page)
     bar = page.locator("#bar").bounding_box()
     page.mouse.click(bar["x"] + bar["width"] * 0.75, bar["y"] + bar["height"] / 2)
     at = page.evaluate("document.getElementById('loudscape-sound').currentTime")
