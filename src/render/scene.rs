@@ -326,7 +326,12 @@ impl SceneData {
 }
 
 /// The box around the data with the ticks of `axes`.
-fn box_lines(device: &wgpu::Device, axes: &Axes, box_min: Vec3, box_max: Vec3) -> LinesGpu {
+pub(crate) fn box_lines(
+    device: &wgpu::Device,
+    axes: &Axes,
+    box_min: Vec3,
+    box_max: Vec3,
+) -> LinesGpu {
     let tick_positions = |axis: &crate::data::axes::Axis| -> Vec<f32> {
         axis.ticks(8).iter().map(|t| t.at).collect()
     };
@@ -604,7 +609,7 @@ pub fn draws_points_at_rest(settings: &RenderSettings, data: &SceneData) -> bool
 
 /// The scene's render pass into `target`: cleared to the background (`clear`) or loading what the
 /// target holds.
-fn begin_main_pass<'e>(
+pub(crate) fn begin_main_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     target: &RenderTarget,
     clear: Option<wgpu::Color>,

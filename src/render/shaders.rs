@@ -7,6 +7,7 @@ pub const PALETTE: &str = include_str!("../../shaders/utils/palette.wgsl");
 pub const FREQ_AXIS: &str = include_str!("../../shaders/utils/freq_axis.wgsl");
 
 pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
+pub const POINTS_INSTANCED: &str = include_str!("../../shaders/points_instanced.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 pub const MARKERS: &str = include_str!("../../shaders/markers.wgsl");
@@ -19,6 +20,7 @@ pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
 pub const VOLUME_GRIDS: &str = include_str!("../../shaders/volume_grids.wgsl");
 pub const DIFFERENCE: &str = include_str!("../../shaders/grid/difference.wgsl");
 pub const DOWNSAMPLE: &str = include_str!("../../shaders/grid/downsample.wgsl");
+pub const VIDEO_YUV: &str = include_str!("../../shaders/video_yuv.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -27,6 +29,11 @@ pub fn compose(parts: &[&str]) -> String {
 
 pub fn points() -> String {
     compose(&[FRAME, PALETTE, FREQ_AXIS, POINTS])
+}
+
+/// The points without storage buffers (WebGL2): `render::points_instanced`.
+pub fn points_instanced() -> String {
+    compose(&[FRAME, PALETTE, POINTS_INSTANCED])
 }
 
 pub fn lines() -> String {
@@ -47,6 +54,10 @@ pub fn difference() -> String {
 
 pub fn downsample() -> String {
     DOWNSAMPLE.to_string()
+}
+
+pub fn video_yuv() -> String {
+    VIDEO_YUV.to_string()
 }
 
 pub fn volume() -> String {
@@ -77,6 +88,7 @@ pub fn surface_draw() -> String {
 pub fn all() -> Vec<(&'static str, String)> {
     vec![
         ("points", points()),
+        ("points_instanced", points_instanced()),
         ("lines", lines()),
         ("composite", composite()),
         ("markers", markers()),
@@ -88,6 +100,7 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("volume_grids", volume_grids()),
         ("difference", difference()),
         ("downsample", downsample()),
+        ("video_yuv", video_yuv()),
     ]
 }
 

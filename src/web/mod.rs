@@ -14,10 +14,12 @@
 //! (the hp colours, the axes with their units) and what the page thinned. A page with the
 //! song's sound moves the playhead plane through the song as it plays ([`set_playhead`]).
 //!
-//! WebGPU only: the points pass reads its points from storage buffers in the vertex shader and
-//! the voxel grid is built by compute passes, neither of which WebGL2 has, so where the browser
-//! has no WebGPU the page says so instead.
+//! WebGPU where the browser has it, WebGL2 otherwise. WebGL2 has no compute passes and no
+//! storage buffers: there the view is [`gl::PointsRenderer`] (the points as instances, the box
+//! and the playhead), and the Surface and Volume views are off, their buttons saying why.
+//! Where the browser has neither, the page's script says so before the viewer starts.
 
+mod gl;
 mod surface;
 
 use std::cell::RefCell;
@@ -66,7 +68,7 @@ pub fn set_playhead(seconds: f64) {
 
 /// Starts the viewer on `canvas` with the page's cloud `data` (named `name` in messages);
 /// `note` says what the page thinned. Fails with one line (the page shows it) when the data
-/// cannot be read or the browser offers no WebGPU device.
+/// cannot be read or the browser offers neither a WebGPU nor a WebGL2 device.
 #[wasm_bindgen]
 pub async fn start(
     canvas: web_sys::HtmlCanvasElement,
@@ -80,7 +82,8 @@ pub async fn start(
     drop(data);
 
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
-    setup.instance_descriptor.backends = wgpu::Backends::BROWSER_WEBGPU;
+    // WebGPU first; egui_wgpu drops it for WebGL2 where the browser offers no WebGPU adapter.
+    setup.instance_descriptor.backends = wgpu::Backends::BROWSER_WEBGPU | wgpu::Backends::GL;
     setup.device_descriptor = Arc::new(crate::render::gpu::context::device_descriptor);
     let options = eframe::WebOptions {
         wgpu_options: egui_wgpu::WgpuConfiguration {
@@ -107,19 +110,44 @@ pub async fn start(
 
 /// GPU state of the page, in egui_wgpu's callback resources.
 struct WebResources {
-    renderer: Renderer,
-    scene: SceneData,
+    drawing: Drawing,
     target: Option<RenderTarget>,
     composite: CompositePass,
-    surface: surface::WebSurface,
+}
+
+/// What draws the view: every pass of the window (WebGPU), or the Points view alone (WebGL2).
+enum Drawing {
+    Full {
+        renderer: Renderer,
+        scene: SceneData,
+        surface: surface::WebSurface,
+    },
+    PointsOnly(gl::PointsRenderer),
+}
+
+impl WebResources {
+    /// The window's passes and scene and the page's surface extraction, on WebGPU.
+    fn full(&mut self) -> Option<(&Renderer, &mut SceneData, &mut surface::WebSurface)> {
+        match &mut self.drawing {
+            Drawing::Full {
+                renderer,
+                scene,
+                surface,
+            } => Some((renderer, scene, surface)),
+            Drawing::PointsOnly(_) => None,
+        }
+    }
 }
 
 /// The viewer: the camera, the settings and what the side panel says.
 struct WebApp {
     render_state: egui_wgpu::RenderState,
     cloud: PointCloud,
-    /// Why the grid (Volume and Surface views) cannot be built, once a build failed.
+    /// Why the grid (Volume and Surface views) cannot be built: the adapter cannot (WebGL2),
+    /// or a build failed.
     grid_error: Option<String>,
+    /// The adapter runs every pass (WebGPU); else the Surface and Volume views are off.
+    full: bool,
     /// The surface drawn (it lags the slider while an extraction runs); None before the first.
     drawn_surface: Option<SurfaceSettings>,
     /// The Surface view's read-out: triangles, or why the surface is incomplete.
@@ -147,22 +175,31 @@ impl WebApp {
         let render_state = cc
             .wgpu_render_state
             .as_ref()
-            .ok_or("this browser offers no WebGPU device")?;
+            .ok_or("this browser offers neither a WebGPU nor a WebGL2 device")?;
         let device = &render_state.device;
-        crate::render::gpu::context::check_limits(&device.limits())
-            .map_err(|reason| format!("the browser's GPU is too small for loudscape: {reason}"))?;
+        let full = gl::full_view_or_reason(&render_state.adapter, &device.limits());
         device.on_uncaptured_error(Arc::new(|error| log::error!("wgpu error: {error}")));
         cc.egui_ctx.set_theme(egui::Theme::Dark);
         CONTEXT.with(|c| *c.borrow_mut() = Some(cc.egui_ctx.clone()));
-        let renderer = Renderer::new(device);
-        let scene = SceneData::new(device, &renderer, &cloud);
-        let world_from_data = scene.world_from_data;
-        let world_box = scene.world_box();
+        let mut settings = RenderSettings::default();
+        settings.points.size_px = crate::render::points::PointStyle::size_for(cloud.len());
+        let world_from_data = crate::render::scene::world_from_data(cloud.meta.mode);
+        let (box_min, box_max) = crate::render::scene::data_box();
+        let world_box = crate::render::scene::world_box(world_from_data, box_min, box_max);
+        let drawing = if full.is_ok() {
+            let renderer = Renderer::new(device);
+            let scene = SceneData::new(device, &renderer, &cloud);
+            Drawing::Full {
+                surface: surface::WebSurface::new(device),
+                renderer,
+                scene,
+            }
+        } else {
+            Drawing::PointsOnly(gl::PointsRenderer::new(device, &cloud, &settings.points))
+        };
         let resources = WebResources {
             composite: CompositePass::new(device, render_state.target_format),
-            surface: surface::WebSurface::new(device),
-            renderer,
-            scene,
+            drawing,
             target: None,
         };
         render_state
@@ -170,11 +207,10 @@ impl WebApp {
             .write()
             .callback_resources
             .insert(resources);
-        let mut settings = RenderSettings::default();
-        settings.points.size_px = crate::render::points::PointStyle::size_for(cloud.len());
         Ok(Self {
             render_state: render_state.clone(),
-            grid_error: None,
+            full: full.is_ok(),
+            grid_error: full.err(),
             drawn_surface: None,
             surface_status: String::new(),
             canvas,
@@ -194,22 +230,25 @@ impl WebApp {
     fn ensure_grid(&mut self) -> Result<(), String> {
         let state = &self.render_state;
         let mut renderer = state.renderer.write();
-        let Some(res) = renderer.callback_resources.get_mut::<WebResources>() else {
+        let Some((pass_set, scene, surface)) = renderer
+            .callback_resources
+            .get_mut::<WebResources>()
+            .and_then(WebResources::full)
+        else {
             return Ok(());
         };
-        if res.scene.grid.is_some() {
+        if scene.grid.is_some() {
             return Ok(());
         }
         let mode = self.cloud.meta.mode;
         let voxels = &self.settings.voxels;
         let request = VoxelizeRequest::on_device(
-            res.scene.points.chunk_buffers(),
+            scene.points.chunk_buffers(),
             (self.cloud.bounds.min, self.cloud.bounds.max),
             voxels.resolution_for(mode),
             voxels.smoothing_for(mode),
         );
-        let job = res
-            .renderer
+        let job = pass_set
             .voxelize
             .prepare(&state.device, &request)
             .map_err(|e| e.to_string())?;
@@ -218,12 +257,11 @@ impl WebApp {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("web::voxelize"),
             });
-        res.renderer.voxelize.encode(&mut encoder, &job, None);
+        pass_set.voxelize.encode(&mut encoder, &job, None);
         state.queue.submit([encoder.finish()]);
         let grid = VoxelizePass::finish(job);
-        res.scene
-            .set_grid(&state.device, &res.renderer, grid, None, mode, voxels);
-        res.surface.reset();
+        scene.set_grid(&state.device, pass_set, grid, None, mode, voxels);
+        surface.reset();
         self.drawn_surface = None;
         Ok(())
     }
@@ -234,21 +272,25 @@ impl WebApp {
     fn update_surface(&mut self) -> bool {
         let state = &self.render_state;
         let mut renderer = state.renderer.write();
-        let Some(res) = renderer.callback_resources.get_mut::<WebResources>() else {
+        let Some((_, scene, surface)) = renderer
+            .callback_resources
+            .get_mut::<WebResources>()
+            .and_then(WebResources::full)
+        else {
             return false;
         };
-        let Some(grid) = res.scene.grid.as_ref() else {
+        let Some(grid) = scene.grid.as_ref() else {
             return false;
         };
-        let (drawn, busy) = res.surface.update(
+        let (drawn, busy) = surface.update(
             &state.device,
             &state.queue,
             grid,
-            &res.scene.surface,
+            &scene.surface,
             self.settings.surface,
         );
         self.drawn_surface = drawn;
-        self.surface_status = match (&res.surface.error, res.surface.counts) {
+        self.surface_status = match (&surface.error, surface.counts) {
             (Some(error), _) => error.clone(),
             (None, Some(counts)) if counts.found_nothing() => {
                 "no surface: every voxel is below the isovalue".to_string()
@@ -268,16 +310,40 @@ impl WebApp {
             ]
         });
         for (pressed, view) in keys {
-            if pressed {
+            if pressed && (self.full || view == ViewKind::Points) {
                 self.settings.view = view;
             }
         }
         ui.horizontal(|ui| {
             ui.label("View:");
             for view in [ViewKind::Points, ViewKind::Surface, ViewKind::Volume] {
-                ui.selectable_value(&mut self.settings.view, view, view.name());
+                let on = self.full || view == ViewKind::Points;
+                let button = ui.add_enabled(
+                    on,
+                    egui::Button::selectable(self.settings.view == view, view.name()),
+                );
+                let button = match &self.grid_error {
+                    Some(reason) if !on => {
+                        button.on_disabled_hover_text(format!("Off in this browser: {reason}"))
+                    }
+                    _ => button,
+                };
+                if button.clicked() {
+                    self.settings.view = view;
+                }
             }
         });
+        if !self.full {
+            if let Some(reason) = &self.grid_error {
+                ui.label(
+                    egui::RichText::new(format!("Points only: {reason}."))
+                        .small()
+                        .color(egui::Color32::from_rgb(230, 180, 60)),
+                );
+            }
+            self.settings.view = ViewKind::Points;
+            return;
+        }
         if self.settings.view != ViewKind::Points
             && self.grid_error.is_none()
             && let Err(error) = self.ensure_grid()
@@ -554,15 +620,24 @@ impl CallbackTrait for ViewPaint {
             res.composite.set_source(device, &target);
             res.target = Some(target);
         }
-        if let Some(target) = &res.target {
-            res.renderer.render(
+        match (&res.target, &res.drawing) {
+            (
+                Some(target),
+                Drawing::Full {
+                    renderer, scene, ..
+                },
+            ) => renderer.render(
                 queue,
                 encoder,
                 target,
-                Some(&res.scene),
+                Some(scene),
                 &self.view,
                 &self.settings,
-            );
+            ),
+            (Some(target), Drawing::PointsOnly(points)) => {
+                points.render(queue, encoder, target, &self.view, &self.settings);
+            }
+            (None, _) => {}
         }
         Vec::new()
     }
