@@ -105,24 +105,29 @@ fuzz-py: venv
 	OPENBLAS_NUM_THREADS=1 PYTHONPATH=preprocess $(VENV)/bin/python preprocess/tests/fuzz_py.py --seconds $(FUZZ_PY_SECONDS)
 
 # macOS and Windows kept building: the code checked for both (all targets, warnings as errors) in
-# a target folder of its own, so the host build is left alone. The web page's viewer too: the
-# library checked for wasm32 (about 2 minutes; `make web` builds it and `make test-web` runs it in
-# a browser, which takes too long for `make test`). Needs rustup (downloads each target's
-# standard library once).
+# a target folder of its own, so the host build is left alone. The web page's viewer is built for
+# wasm32 by `make web` (warnings as errors too) and tested in a browser by `make test-web`, both
+# in `make test`. Needs rustup (downloads each target's standard library once).
 PLATFORMS ?= aarch64-apple-darwin x86_64-pc-windows-msvc
 check-platforms: system
-	rustup target add $(PLATFORMS) wasm32-unknown-unknown
+	rustup target add $(PLATFORMS)
 	for t in $(PLATFORMS); do \
 		RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check --all-targets --target $$t || exit 1; \
 	done
-	RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check --lib --target wasm32-unknown-unknown
 
-# The pip way: build the wheel (release build), install it into a fresh venv, render a song from it.
+# The pip way: build the wheel, install it into a fresh venv, render a song from it. pip builds
+# the app in release (about 6 minutes from clean); `make test` builds the wheel with the dev
+# profile instead (WHEEL_PROFILE=dev), which links the binary the Rust tests already built, so
+# the same packaging, install and render are tested without a second build of the whole
+# dependency tree (CI's time budget). No code differs between the two profiles (no
+# debug_assertions in src/).
+WHEEL_PROFILE ?= release
 test-wheel: system
-	bash scripts/test-wheel.sh $(PYTHON)
+	SETUPTOOLS_RUST_CARGO_PROFILE=$(WHEEL_PROFILE) bash scripts/test-wheel.sh $(PYTHON)
 
 test: system lint-rust lint-py test-rust test-py test-mesh fuzz-smoke
-test: check-platforms test-wheel
+test: check-platforms test-web test-wheel
+test: WHEEL_PROFILE = dev
 
 # Benchmarks, not part of `make test` (minutes each; figures in docs/PERFORMANCE.md).
 # 1,000 short songs cold (process pool, two-worker Dask LocalCluster) and the warm rebuild of a
@@ -156,28 +161,34 @@ bench-window: venv real-music
 	$(PY) bench/bench_window.py --loudscape target/release/loudscape $(if $(BEFORE),--vs $(BEFORE))
 
 # The web page's viewer (`loudscape page`, src/web/): the library built for wasm32 with the `web`
-# profile, then wasm-bindgen's glue, into target/web where `loudscape page` looks for it. Rebuilt
-# only when a source, a shader or the manifest changed. Needs the rustup target
-# wasm32-unknown-unknown and wasm-bindgen-cli of the version in Cargo.lock.
+# profile (warnings as errors), then wasm-bindgen's glue, into target/web where `loudscape page`
+# looks for it. Rebuilt only when a source, a shader or the manifest changed. The rustup target
+# is added, and wasm-bindgen's command line of the version in Cargo.lock (the glue must match
+# the library) is the one on PATH when it is that version, else built once into
+# target/tools/ (`cargo install`, a few minutes).
 WEB_OUT        := target/web
 WEB_TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
 WASM_BINDGEN_VERSION := $(shell sed -n '/^name = "wasm-bindgen"$$/{n;s/version = "\(.*\)"/\1/p}' Cargo.lock)
+WASM_BINDGEN_ROOT    := target/tools/wasm-bindgen-$(WASM_BINDGEN_VERSION)
+WASM_BINDGEN   := $(shell command -v wasm-bindgen >/dev/null 2>&1 && wasm-bindgen --version 2>/dev/null | grep -q " $(WASM_BINDGEN_VERSION)$$" && echo wasm-bindgen || echo $(WASM_BINDGEN_ROOT)/bin/wasm-bindgen)
 WEB_SOURCES    := $(shell find src shaders -type f) Cargo.toml Cargo.lock
 
-$(WEB_OUT)/loudscape_bg.wasm: $(WEB_SOURCES)
-	@command -v wasm-bindgen >/dev/null && wasm-bindgen --version | grep -q " $(WASM_BINDGEN_VERSION)$$" || \
-		{ echo "make web: needs wasm-bindgen $(WASM_BINDGEN_VERSION): cargo install wasm-bindgen-cli --version $(WASM_BINDGEN_VERSION)"; exit 1; }
-	$(CARGO) rustc --lib --crate-type cdylib --target wasm32-unknown-unknown --profile web
-	wasm-bindgen --target no-modules --no-typescript --remove-name-section --remove-producers-section --out-dir $(WEB_OUT) \
+$(WASM_BINDGEN_ROOT)/bin/wasm-bindgen:
+	$(CARGO) install -q wasm-bindgen-cli --version $(WASM_BINDGEN_VERSION) --root $(WASM_BINDGEN_ROOT)
+
+$(WEB_OUT)/loudscape_bg.wasm: $(WEB_SOURCES) | $(filter-out wasm-bindgen,$(WASM_BINDGEN))
+	@rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknown || rustup target add wasm32-unknown-unknown
+	$(CARGO) rustc --lib --crate-type cdylib --target wasm32-unknown-unknown --profile web -- -D warnings
+	$(WASM_BINDGEN) --target no-modules --no-typescript --remove-name-section --remove-producers-section --out-dir $(WEB_OUT) \
 		$(WEB_TARGET_DIR)/wasm32-unknown-unknown/web/loudscape.wasm
 	touch $@
 
-web: $(WEB_OUT)/loudscape_bg.wasm
+web: system $(WEB_OUT)/loudscape_bg.wasm
 
-# The page in a real browser: Debian's chromium headless through Playwright (tests/web/).
+# The page in a real browser: Debian's chromium headless (scripts/setup-system.sh installs it)
+# through Playwright (the venv's dev extras), on the binary the Rust tests use (as test-mesh).
 test-web: web venv
-	$(PY) -c "import playwright" 2>/dev/null || $(VENV)/bin/pip install -q --no-cache-dir playwright
-	$(CARGO) build --bin loudscape
+	$(CARGO) test --no-run -q
 	LOUDSCAPE_BIN=$(WEB_TARGET_DIR)/debug/loudscape $(VENV)/bin/pytest -q tests/web
 
 clean:

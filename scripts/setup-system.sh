@@ -34,6 +34,8 @@ declare -A need=(
   [mpv]=/usr/bin/mpv
   # The report tests read the PDF pages' text back with pdftotext.
   [poppler-utils]=/usr/bin/pdftotext
+  # The web page's browser tests (tests/web/) drive Debian's chromium, headless, through Playwright.
+  [chromium]=/usr/bin/chromium
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then

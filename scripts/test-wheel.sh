@@ -4,6 +4,8 @@
 # on PATH, an empty cloud cache, a folder outside the checkout) run `loudscape render` on an
 # audio file: the app must find `loudscape-extract` beside itself, extract and draw. The PNG must
 # exist, have the asked size and not be blank. Usage: scripts/test-wheel.sh [PYTHON]
+# SETUPTOOLS_RUST_CARGO_PROFILE=dev builds the app with cargo's dev profile instead of release
+# (`make test` does, to link the binary its Rust tests built).
 set -euo pipefail
 python=${1:-python3}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -15,7 +17,7 @@ start=$(date +%s)
 "$work/venv/bin/python" -m pip wheel -q --no-deps -w "$work/wheels" "$root"
 built=$(date +%s)
 wheel=$(ls "$work"/wheels/loudscape-*.whl)
-echo "test-wheel: built $(basename "$wheel") ($(du -h "$wheel" | cut -f1)) in $((built - start)) s"
+echo "test-wheel: built $(basename "$wheel") ($(du -h "$wheel" | cut -f1)), the app in cargo's ${SETUPTOOLS_RUST_CARGO_PROFILE:-release} profile, in $((built - start)) s"
 
 "$work/venv/bin/python" -m pip install -q "$wheel"
 installed=$(date +%s)
