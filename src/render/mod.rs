@@ -4,7 +4,6 @@
 //! mirror: [`gpu`] (device, targets, read-back, layouts, frame uniforms), [`grid`] (voxelize),
 //! [`surface`] (marching tetrahedra, dual contouring, the draw), [`points`], [`lines`],
 //! [`markers`], [`volume`] (with [`transfer`] and [`volume_grids`]), [`composite`]; [`shaders`] composes the WGSL;
-//! [`video_yuv`] turns a video's frames into the encoder's yuv420p;
 //! [`colormap`] holds the colour maps and background every pass reads (the palette uniform).
 
 pub mod colormap;
@@ -22,6 +21,5 @@ pub mod scene;
 pub mod shaders;
 pub mod surface;
 pub mod transfer;
-pub mod video_yuv;
 pub mod volume;
 pub mod volume_grids;

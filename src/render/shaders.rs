@@ -20,7 +20,6 @@ pub const VOLUME: &str = include_str!("../../shaders/volume.wgsl");
 pub const VOLUME_GRIDS: &str = include_str!("../../shaders/volume_grids.wgsl");
 pub const DIFFERENCE: &str = include_str!("../../shaders/grid/difference.wgsl");
 pub const DOWNSAMPLE: &str = include_str!("../../shaders/grid/downsample.wgsl");
-pub const VIDEO_YUV: &str = include_str!("../../shaders/video_yuv.wgsl");
 
 /// Concatenates helper sources and a pass's own source into one module.
 pub fn compose(parts: &[&str]) -> String {
@@ -54,10 +53,6 @@ pub fn difference() -> String {
 
 pub fn downsample() -> String {
     DOWNSAMPLE.to_string()
-}
-
-pub fn video_yuv() -> String {
-    VIDEO_YUV.to_string()
 }
 
 pub fn volume() -> String {
@@ -100,7 +95,6 @@ pub fn all() -> Vec<(&'static str, String)> {
         ("volume_grids", volume_grids()),
         ("difference", difference()),
         ("downsample", downsample()),
-        ("video_yuv", video_yuv()),
     ]
 }
 
