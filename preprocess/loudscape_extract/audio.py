@@ -31,6 +31,7 @@ __all__ = [
     "check_analysable",
     "check_decoded",
     "decode_audio",
+    "mix_rows_to_mono",
     "mix_to_mono",
     "read_blocks",
 ]
@@ -635,6 +636,39 @@ def mix_to_mono(samples: np.ndarray) -> np.ndarray:
     for channel in range(1, samples.shape[1]):
         mono += samples[:, channel]
     mono /= np.float32(samples.shape[1])
+    return mono
+
+
+def mix_rows_to_mono(channels: np.ndarray) -> np.ndarray:
+    """:func:`mix_to_mono` of the channels laid out as rows, bit for bit.
+
+    Parameters
+    ----------
+    channels : np.ndarray [shape=(n_channels, n_samples), dtype=float32]
+        One channel a row (C-contiguous rows: the sums run over contiguous memory, about
+        twice as fast as over the decoder's interleaved columns).
+
+    Returns
+    -------
+    mono : np.ndarray [shape=(n_samples,), dtype=float32]
+
+    Examples
+    --------
+    >>> samples = np.array([[0.5, -0.25], [1.0, 0.0]], dtype=np.float32)
+    >>> mix_rows_to_mono(samples.T.copy()).tolist()
+    [0.125, 0.5]
+    """
+    channels = np.asarray(channels, dtype=np.float32)
+    if channels.ndim != 2:
+        raise ExtractError(
+            f"channels must have shape (n_channels, n_samples), got {channels.shape}"
+        )
+    if channels.shape[0] == 1:
+        return channels[0].copy()
+    mono = np.add(channels[0], np.float32(0.0))
+    for row in channels[1:]:
+        mono += row
+    mono /= np.float32(channels.shape[0])
     return mono
 
 

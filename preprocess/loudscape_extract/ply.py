@@ -16,11 +16,15 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import errno
+import io
 import json
 import os
 import re
+import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
+from typing import BinaryIO
 
 import numpy as np
 
@@ -256,12 +260,15 @@ def _meta_from_lines(lines: Iterable[tuple[int, str]], name: str) -> dict:
 # --- writing -----------------------------------------------------------------------------------
 
 
-def write_atomically(path: str | os.PathLike, parts: Iterable[bytes | np.ndarray]) -> None:
+def write_atomically(
+    path: str | os.PathLike, parts: Iterable[bytes | np.ndarray | BinaryIO]
+) -> None:
     """Write ``parts`` in order to a temporary file beside ``path``, then ``os.replace`` it.
 
     An interrupted or failed write leaves no partial file at ``path``; the data is synced to
     the disk before the rename and the folder after it. Arrays are written as their bytes in
-    memory (C order). A full disk is reported as such (:func:`paths.write_failure`).
+    memory (C order); an open binary file, the rest of its bytes (copied by the kernel where
+    it can: :func:`copy_rest`). A full disk is reported as such (:func:`paths.write_failure`).
 
     Raises
     ------
@@ -284,8 +291,10 @@ def write_atomically(path: str | os.PathLike, parts: Iterable[bytes | np.ndarray
                 if isinstance(part, np.ndarray):
                     # Through Python's write (not tofile): a full disk is ENOSPC, not a count.
                     handle.write(np.ascontiguousarray(part).reshape(-1).view(np.uint8).data)
-                else:
+                elif isinstance(part, (bytes, bytearray, memoryview)):
                     handle.write(part)
+                else:
+                    copy_rest(part, handle)
             handle.flush()
             os.fsync(handle.fileno())  # the data is on disk before the name points at it
         os.chmod(handle.name, 0o666 & ~_umask())
@@ -297,6 +306,46 @@ def write_atomically(path: str | os.PathLike, parts: Iterable[bytes | np.ndarray
         if isinstance(exc, OSError):
             raise ExtractError(write_failure(exc, directory=directory), path=name) from exc
         raise
+
+
+#: What ``os.copy_file_range`` raises where the kernel cannot copy between the two files (other
+#: file systems, no such call, a file system that does not offer it): then through user space.
+_NO_KERNEL_COPY = {errno.EXDEV, errno.ENOSYS, errno.EINVAL, errno.EOPNOTSUPP, errno.ENOTSUP}
+
+
+def copy_rest(source: BinaryIO, target: BinaryIO) -> None:
+    """Append the rest of ``source`` (from its position) to ``target``, both open binary files.
+
+    On Linux ``os.copy_file_range`` copies inside the kernel (no read into Python and write
+    back: for a 100 MB Song body about half the CPU time and under half the wall time, and no
+    copy at all where the file system shares blocks); elsewhere, or where the kernel declines,
+    ``shutil.copyfileobj``. Errors other than those are raised (a full disk is ``ENOSPC``).
+    """
+    target.flush()
+    copy_range = getattr(os, "copy_file_range", None)
+    try:
+        source_fd, target_fd = source.fileno(), target.fileno()
+    except (AttributeError, io.UnsupportedOperation):  # in memory (io.BytesIO)
+        copy_range = None
+    if copy_range is not None:
+        # From the source's position by an explicit offset (its descriptor's own offset, which
+        # its buffer relies on, is left alone); onto the target at its descriptor's offset.
+        start = copied = source.tell()
+        try:
+            while step := copy_range(source_fd, target_fd, 1 << 30, copied):
+                copied += step
+        except OSError as exc:
+            if exc.errno not in _NO_KERNEL_COPY:
+                raise
+        else:
+            source.seek(copied)
+            target.seek(0, os.SEEK_END)  # the target's descriptor moved on under its buffer
+            return
+        # Declined: the rest through user space, from as far as the kernel got.
+        source.seek(copied)
+        if copied != start:
+            target.seek(0, os.SEEK_END)
+    shutil.copyfileobj(source, target, 1 << 22)
 
 
 def write_ply(

@@ -4,12 +4,14 @@ atomic PLY write."""
 from __future__ import annotations
 
 import contextlib
-import itertools
 import os
 import re
 import time
 import warnings
 from collections.abc import Callable, Iterator
+from typing import BinaryIO
+
+import numpy as np
 
 from loudscape_extract.contract import check_metadata, check_points
 from loudscape_extract.errors import ExtractError
@@ -41,7 +43,6 @@ POINTS_EVERY_S = 0.2
 #: STFT frames per block of the points pass at most (about 6 s at 44.1 kHz, hop 1024): the
 #: first points reach a reader soon; the points do not depend on it.
 POINTS_BLOCK_FRAMES = 256
-_COPY_BYTES = 1 << 22
 
 
 def body_file_path(output: str) -> str:
@@ -189,6 +190,7 @@ def extract_song(
                 hop_length=hop_length,
                 block_frames=min(block_frames, POINTS_BLOCK_FRAMES),
                 magnitude=levels.magnitude,
+                hpss_frames=block_frames,
             )
             made["rows"] = _write_body(body, blocks, plan=plan, output=output, points=points)
 
@@ -227,9 +229,8 @@ def extract_song(
         check_metadata(metadata, n_points=rows, path=output)
         say(f"writing {rows} points to {output}")
         header = encode_header(n_points=rows, metadata=metadata)
-        write_atomically(
-            output, itertools.chain([header], _body_chunks(body, rows=rows, output=output))
-        )
+        with _opened_body(body, rows=rows, output=output) as handle:
+            write_atomically(output, [header, handle])
     finally:
         with contextlib.suppress(OSError):  # already gone, or not ours (a folder)
             os.unlink(body)
@@ -275,7 +276,10 @@ def _write_body(
         with open(body, "wb") as handle:
             for frames_done, block in blocks:
                 check_points(block, path=output)
-                handle.write(block.astype("<f4", copy=False).tobytes())
+                # The rows' bytes as they lie in memory (no bytes copy of the block first).
+                handle.write(
+                    np.ascontiguousarray(block, dtype="<f4").reshape(-1).view(np.uint8).data
+                )
                 handle.flush()
                 rows += block.shape[0]
                 share = frames_done / plan.frames_total
@@ -289,21 +293,20 @@ def _write_body(
     return rows
 
 
-def _body_chunks(body: str, *, rows: int, output: str) -> Iterator[bytes]:
-    """The body file's bytes, a few MB at a time, after checking its length."""
+def _opened_body(body: str, *, rows: int, output: str) -> BinaryIO:
+    """The body file, open for reading, after checking its length (the caller closes it)."""
     try:
-        handle = open(body, "rb")  # noqa: SIM115 - closed below, after the last chunk
+        handle = open(body, "rb")  # noqa: SIM115 - the caller's with-block closes it
     except OSError as exc:
         raise ExtractError(f"cannot read the points back ({exc.strerror})", path=output) from exc
-    with handle:
-        size = os.fstat(handle.fileno()).st_size
-        if size != rows * ROW_BYTES:
-            raise ExtractError(
-                f"the points file holds {size} bytes, not {rows} rows of {ROW_BYTES}",
-                path=output,
-            )
-        while chunk := handle.read(_COPY_BYTES):
-            yield chunk
+    size = os.fstat(handle.fileno()).st_size
+    if size != rows * ROW_BYTES:
+        handle.close()
+        raise ExtractError(
+            f"the points file holds {size} bytes, not {rows} rows of {ROW_BYTES}",
+            path=output,
+        )
+    return handle
 
 
 def _warn(warn: Callable[[str], None] | None, text: str) -> None:

@@ -130,12 +130,20 @@ def spectral_blocks(
     hpss: bool = False,
     kernel_size: int = HPSS_KERNEL,
     magnitude: np.ndarray | None = None,
+    hpss_frames: int | None = None,
 ) -> Iterator[SpectralBlock]:
     """The mono mix's spectrogram block by block (see the module docs for HPSS's overlap).
 
     ``magnitude``, the whole track's magnitude spectrogram when a pass before kept it
     (:attr:`SpectralLevels.magnitude`), is sliced instead of computing the STFT again (the
     same values: each frame's transform does not depend on the frames beside it).
+
+    ``hpss_frames`` (default ``block_frames``; rounded down to a multiple of it, never
+    fewer): the frames transformed and median-filtered at a time, the blocks yielded (the
+    same as without it) being cut from them. Each span filters
+    half a kernel of neighbouring frames on each side as well, so small yielded blocks (Song
+    mode's points pass: 256 frames, about 12 % more harmonic medians) cost less over wider
+    spans; the values do not depend on either size.
 
     Yields
     ------
@@ -145,13 +153,14 @@ def spectral_blocks(
     """
     if block_frames < 1:
         raise ExtractError(f"block_frames must be >= 1, got {block_frames}")
+    span_frames = block_frames * max(1, (hpss_frames or block_frames) // block_frames)
     n_frames = frame_count(mono.shape[0], n_fft=n_fft, hop_length=hop_length)
     window = hann_window(n_fft).astype(np.float32)
     window_scaled = window * np.float32(2.0 / window.sum())
     context = kernel_size // 2 if hpss else 0
     whole = magnitude
-    for start in range(0, n_frames, block_frames):
-        stop = min(start + block_frames, n_frames)
+    for start in range(0, n_frames, span_frames):
+        stop = min(start + span_frames, n_frames)
         first, last = max(0, start - context), min(n_frames, stop + context)
         frames = _frames_of(mono, first, last, n_fft=n_fft, hop_length=hop_length)
         if whole is not None:
@@ -169,7 +178,18 @@ def spectral_blocks(
                 np.ascontiguousarray(harmonic), percussive, power=HPSS_POWER, margin=HPSS_MARGIN
             )
             hp = hp_ratio(magnitude, mask_h, mask_p)
-        yield SpectralBlock(start, stop, magnitude, decoded_peak, hp)
+        if stop - start <= block_frames:
+            yield SpectralBlock(start, stop, magnitude, decoded_peak, hp)
+            continue
+        for at in range(start, stop, block_frames):
+            part = slice(at - start, min(at + block_frames, stop) - start)
+            yield SpectralBlock(
+                at,
+                at + part.stop - part.start,
+                np.ascontiguousarray(magnitude[:, part]),
+                decoded_peak[part],
+                None if hp is None else np.ascontiguousarray(hp[:, part]),
+            )
 
 
 def level_range(magnitude: np.ndarray) -> dict[int, tuple[float, float]]:

@@ -126,12 +126,14 @@ def song_point_blocks(
     block_frames: int = DEFAULT_BLOCK_FRAMES,
     kernel_size: int = HPSS_KERNEL,
     magnitude: np.ndarray | None = None,
+    hpss_frames: int | None = None,
 ) -> Iterator[tuple[int, np.ndarray]]:
     """:func:`song_points` block by block: STFT and HPSS of the mono mix, the plan's mapping.
 
     ``magnitude``: the whole track's magnitude spectrogram when the level pass kept it
     (:attr:`~loudscape_extract.stream.SpectralLevels.magnitude`); otherwise it is computed
-    again block by block.
+    again block by block. ``hpss_frames``: the frames transformed and separated at a time
+    (:func:`~loudscape_extract.stream.spectral_blocks`; the points do not depend on it).
 
     Yields
     ------
@@ -156,6 +158,7 @@ def song_point_blocks(
         hpss=True,
         kernel_size=kernel_size,
         magnitude=magnitude,
+        hpss_frames=hpss_frames,
     ):
         kept = ~plan.silent[block.start : block.stop]
         if not kept.any():
