@@ -1,8 +1,9 @@
 // Points view without storage buffers (WebGL2, the web page's fallback): the discs of
-// points.wgsl, each point an instance of three vertices whose record (x, y, z, scalar, hp, the
-// PLY record as is) comes in as per-instance vertex attributes. z is drawn as stored: the
+// points.wgsl, three vertices a point (not instanced, as points.wgsl), each vertex reading its
+// point's record (x, y, z, scalar, hp, the PLY record as is, stored three times) as vertex
+// attributes. z is drawn as stored: the
 // frequency axis's per-bin table is a storage buffer, which this variant has not.
-// Keep PointStyleParams in sync with src/render/points_instanced.rs, and the disc (corners,
+// Keep PointStyleParams in sync with src/render/points_attributes.rs, and the disc (corners,
 // pixel size, hidden points, shading) in sync with vs_main and fs_main of points.wgsl.
 
 struct PointStyleParams {
@@ -23,7 +24,7 @@ struct VertexOut {
 
 @vertex
 fn vs_main(
-    @builtin(vertex_index) vertex: u32,
+    @builtin(vertex_index) vertex_index: u32,
     @location(0) position: vec3<f32>,
     // scalar, hp
     @location(1) values: vec2<f32>,
@@ -32,7 +33,7 @@ fn vs_main(
     let corners = array<vec2<f32>, 3>(
         vec2<f32>(0.0, 2.0), vec2<f32>(-1.7320508, -1.0), vec2<f32>(1.7320508, -1.0),
     );
-    let corner = corners[vertex];
+    let corner = corners[vertex_index % 3u];
     var clip = frame.clip_from_data * vec4<f32>(position, 1.0);
     let half_size = 0.5 * params.size_px * frame.viewport.zw * 2.0;
     clip = vec4<f32>(clip.xy + corner * half_size * clip.w, clip.zw);

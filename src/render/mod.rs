@@ -16,7 +16,7 @@ pub mod headless;
 pub mod lines;
 pub mod markers;
 pub mod points;
-pub mod points_instanced;
+pub mod points_attributes;
 pub mod scene;
 pub mod shaders;
 pub mod surface;

@@ -7,7 +7,7 @@ pub const PALETTE: &str = include_str!("../../shaders/utils/palette.wgsl");
 pub const FREQ_AXIS: &str = include_str!("../../shaders/utils/freq_axis.wgsl");
 
 pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
-pub const POINTS_INSTANCED: &str = include_str!("../../shaders/points_instanced.wgsl");
+pub const POINTS_ATTRIBUTES: &str = include_str!("../../shaders/points_attributes.wgsl");
 pub const LINES: &str = include_str!("../../shaders/lines.wgsl");
 pub const COMPOSITE: &str = include_str!("../../shaders/composite.wgsl");
 pub const MARKERS: &str = include_str!("../../shaders/markers.wgsl");
@@ -30,9 +30,9 @@ pub fn points() -> String {
     compose(&[FRAME, PALETTE, FREQ_AXIS, POINTS])
 }
 
-/// The points without storage buffers (WebGL2): `render::points_instanced`.
-pub fn points_instanced() -> String {
-    compose(&[FRAME, PALETTE, POINTS_INSTANCED])
+/// The points without storage buffers (WebGL2): `render::points_attributes`.
+pub fn points_attributes() -> String {
+    compose(&[FRAME, PALETTE, POINTS_ATTRIBUTES])
 }
 
 pub fn lines() -> String {
@@ -83,7 +83,7 @@ pub fn surface_draw() -> String {
 pub fn all() -> Vec<(&'static str, String)> {
     vec![
         ("points", points()),
-        ("points_instanced", points_instanced()),
+        ("points_attributes", points_attributes()),
         ("lines", lines()),
         ("composite", composite()),
         ("markers", markers()),

@@ -5,8 +5,8 @@
 //!
 //! Reads: the page's cloud and the frame's settings. Writes: the offscreen target the page
 //! composites, as [`Renderer::render`](crate::render::scene::Renderer::render) does for the
-//! Points view: the same frame uniforms and palette, the points as instances
-//! ([`crate::render::points_instanced`]: the same discs and colours from the same records), the
+//! Points view: the same frame uniforms and palette, the points as vertex attributes
+//! ([`crate::render::points_attributes`]: the same discs and colours from the same records), the
 //! box with its ticks and the playhead marker of the window's passes, which need no storage.
 
 use glam::Vec3;
@@ -18,7 +18,7 @@ use crate::render::gpu::target::RenderTarget;
 use crate::render::lines::{LinesGpu, LinesPass};
 use crate::render::markers::MarkersPass;
 use crate::render::points::PointStyle;
-use crate::render::points_instanced::{InstancedPointsGpu, InstancedPointsPass};
+use crate::render::points_attributes::{AttributePointsGpu, AttributePointsPass};
 use crate::render::scene::{RenderSettings, begin_main_pass, box_lines, data_box};
 use crate::view::frame_view::FrameView;
 
@@ -48,18 +48,18 @@ pub(super) fn full_view_or_reason(
 /// The Points view's passes and the cloud's buffers on a downlevel adapter.
 pub(super) struct PointsRenderer {
     frame: FrameBinding,
-    points_pass: InstancedPointsPass,
+    points_pass: AttributePointsPass,
     lines: LinesPass,
     markers: crate::render::markers::MarkersPass,
-    points: InstancedPointsGpu,
+    points: AttributePointsGpu,
     box_lines: LinesGpu,
 }
 
 impl PointsRenderer {
     pub(super) fn new(device: &wgpu::Device, cloud: &PointCloud, style: &PointStyle) -> Self {
         let frame = FrameBinding::new(device);
-        let points_pass = InstancedPointsPass::new(device, &frame);
-        let points = InstancedPointsGpu::upload(device, &points_pass, &cloud.points, style);
+        let points_pass = AttributePointsPass::new(device, &frame);
+        let points = AttributePointsGpu::upload(device, &points_pass, &cloud.points, style);
         let (box_min, box_max): (Vec3, Vec3) = data_box();
         Self {
             lines: LinesPass::new(device, &frame),

@@ -4,6 +4,9 @@ Debian's chromium, headless, driven by Playwright (``executable_path``: Playwrig
 browser here). SwiftShader gives the headless browser a WebGPU adapter on the CPU. The page is
 opened from a ``file://`` URL, as someone who was sent the file would open it. The binary is
 ``$LOUDSCAPE_BIN`` (``make test-web`` builds it and the viewer's wasm, ``make web``).
+
+Two more browsers: one without WebGPU (WebGL2 through SwiftShader's GLES: the page's Points
+view alone), and one with neither WebGPU nor WebGL2 (the page's message).
 """
 
 from __future__ import annotations
@@ -32,6 +35,20 @@ CHROMIUM_ARGS = [
     "--enable-features=Vulkan",
     "--use-vulkan=swiftshader",
 ]
+# No WebGPU: without --enable-unsafe-webgpu chromium's navigator.gpu offers no adapter on
+# SwiftShader (the test checks), and the feature is turned off besides. WebGL2 stays.
+WEBGL2_ARGS = [
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-features=WebGPU",
+]
+# Neither WebGPU nor WebGL (1 or 2).
+NO_GPU_ARGS = [*WEBGL2_ARGS, "--disable-webgl", "--disable-webgl2"]
+# What the browser offers the page: a WebGPU adapter, a WebGL2 context.
+OFFERS_JS = """async () => ({
+  webgpu: !!navigator.gpu && !!(await navigator.gpu.requestAdapter().catch(() => null)),
+  webgl2: !!document.createElement("canvas").getContext("webgl2"),
+})"""
 # The issue's budget for a page without audio.
 PAGE_BUDGET_BYTES = 12_000_000
 # How long the browser may take to start the viewer and draw (software WebGPU on a small machine).
@@ -58,15 +75,22 @@ def page_file(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def browser():
+def playwright():
     if not Path(CHROMIUM).is_file():
         pytest.fail(f"{CHROMIUM} does not exist: install chromium (or set LOUDSCAPE_CHROMIUM)")
     with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(
-            executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
-        )
-        yield browser
-        browser.close()
+        yield playwright
+
+
+def _launch(playwright, args: list[str]):
+    return playwright.chromium.launch(executable_path=CHROMIUM, headless=True, args=args)
+
+
+@pytest.fixture(scope="module")
+def browser(playwright):
+    browser = _launch(playwright, CHROMIUM_ARGS)
+    yield browser
+    browser.close()
 
 
 def _view_pixels(page) -> np.ndarray:
@@ -126,6 +150,64 @@ def _points_shown(page, what: str = "the view never showed the points") -> np.nd
     return _wait_for(coloured, what)
 
 
+def _drag_turns_the_view(page, before: np.ndarray) -> np.ndarray:
+    """Drags across the view; returns the picture once it differs from `before`."""
+    box = page.locator("#loudscape-view").bounding_box()
+    x, y = box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.5
+    page.mouse.move(x, y)
+    page.mouse.down()
+    _next_frames(page)
+    for step in range(1, 11):
+        page.mouse.move(x + 20 * step, y + 4 * step)
+        _next_frames(page)
+    page.mouse.up()
+
+    def turned():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+        return (rgb, changed) if changed > 0.01 * rgb.shape[0] * rgb.shape[1] else None
+
+    after, changed = _wait_for(turned, "a drag over the view did not change the picture")
+    print(f"pixels changed by the drag: {changed}")
+    return after
+
+
+def _hover_opens_a_readout(page, before: np.ndarray):
+    """Over the empty background nothing opens; over a warm point in the middle of the cloud
+    (in `before`, the view at rest) the read-out box opens at the cursor."""
+    box = page.locator("#loudscape-view").bounding_box()
+    h, w = before.shape[:2]
+
+    def region(rgb, x, y):
+        return rgb[y + 8 : min(y + 100, h), x + 8 : min(x + 200, w)]
+
+    def hover(x, y):
+        page.mouse.move(box["x"] + x, box["y"] + y)
+        _next_frames(page)
+        page.mouse.move(box["x"] + x + 1, box["y"] + y)
+        _next_frames(page)
+
+    # Over the empty background (the darkest corner of the view): nothing opens.
+    hover(10, 10)
+    _next_frames(page)
+    assert (
+        np.abs(region(_view_pixels(page), 10, 10) - region(before, 10, 10)).sum(axis=2).max() < 30
+    )
+
+    r, b = before[..., 0], before[..., 2]
+    ys, xs = np.nonzero((r > b + 60) & (r > 120))
+    middle = np.argmin((ys - ys.mean()) ** 2 + (xs - xs.mean()) ** 2)
+    x, y = int(xs[middle]), int(ys[middle])
+    hover(x, y)
+
+    def opened():
+        now = region(_view_pixels(page), x, y)
+        changed = np.count_nonzero(np.abs(now - region(before, x, y)).sum(axis=2) > 30)
+        return changed if changed > 0.3 * now.shape[0] * now.shape[1] else None
+
+    _wait_for(opened, f"no read-out opened over the point at ({x}, {y})")
+
+
 def test_the_page_stays_in_its_budget(page_file):
     size = page_file.stat().st_size
     print(f"\npage of {SONG.name}: {size / 1e6:.2f} MB (budget {PAGE_BUDGET_BYTES / 1e6:.0f} MB)")
@@ -148,28 +230,13 @@ def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
     warm, cool = _point_colours(before)
     print(f"\nwarm pixels {warm}, cool pixels {cool}")
 
-    box = page.locator("#loudscape-view").bounding_box()
-    x, y = box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.5
-    page.mouse.move(x, y)
-    page.mouse.down()
-    _next_frames(page)
-    for step in range(1, 11):
-        page.mouse.move(x + 20 * step, y + 4 * step)
-        _next_frames(page)
-    page.mouse.up()
-
-    def turned():
-        rgb = _view_pixels(page)
-        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
-        return (rgb, changed) if changed > 0.01 * rgb.shape[0] * rgb.shape[1] else None
-
-    after, changed = _wait_for(turned, "a drag over the view did not change the picture")
+    after = _drag_turns_the_view(page, before)
     Image.fromarray(after.astype(np.uint8)).save(SHOTS / "page_after_drag.png")
-    print(f"pixels changed by the drag: {changed}")
     assert min(_point_colours(after)) > 200, "the points left the view after the drag"
 
     # R resets the camera and fits it again: the first picture comes back. The pointer goes
     # to the side panel first, so no hover read-out covers the view.
+    box = page.locator("#loudscape-view").bounding_box()
     page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
     page.keyboard.press("r")
 
@@ -216,53 +283,61 @@ def test_hovering_a_point_shows_its_values(browser, page_file):
     page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
 
     before = _points_shown(page)
-    box = page.locator("#loudscape-view").bounding_box()
-    h, w = before.shape[:2]
-
-    def region(rgb, x, y):
-        return rgb[y + 8 : min(y + 100, h), x + 8 : min(x + 200, w)]
-
-    def hover(x, y):
-        page.mouse.move(box["x"] + x, box["y"] + y)
-        _next_frames(page)
-        page.mouse.move(box["x"] + x + 1, box["y"] + y)
-        _next_frames(page)
-
-    # Over the empty background (the darkest corner of the view): nothing opens.
-    hover(10, 10)
-    _next_frames(page)
-    assert (
-        np.abs(region(_view_pixels(page), 10, 10) - region(before, 10, 10)).sum(axis=2).max() < 30
-    )
-
-    # Over a warm point in the middle of the cloud.
-    r, b = before[..., 0], before[..., 2]
-    ys, xs = np.nonzero((r > b + 60) & (r > 120))
-    middle = np.argmin((ys - ys.mean()) ** 2 + (xs - xs.mean()) ** 2)
-    x, y = int(xs[middle]), int(ys[middle])
-    hover(x, y)
-
-    def opened():
-        now = region(_view_pixels(page), x, y)
-        changed = np.count_nonzero(np.abs(now - region(before, x, y)).sum(axis=2) > 30)
-        return changed if changed > 0.3 * now.shape[0] * now.shape[1] else None
-
-    _wait_for(opened, f"no read-out opened over the point at ({x}, {y})")
+    _hover_opens_a_readout(page, before)
     page.screenshot(path=SHOTS / "page_hover.png")
     assert errors == [], errors
     page.close()
 
 
-def test_a_browser_without_webgpu_gets_a_message(browser, page_file):
-    page = browser.new_page(viewport=VIEWPORT)
-    page.add_init_script("Object.defineProperty(navigator, 'gpu', { value: undefined })")
-    page.goto(page_file.as_uri())
-    page.wait_for_function("document.body.dataset.state !== 'loading'", timeout=DEADLINE_S * 1000)
-    assert page.evaluate("document.body.dataset.state") == "no-webgpu"
+def test_a_browser_without_webgpu_shows_the_points_on_webgl2(playwright, page_file):
+    """No WebGPU adapter, WebGL2 only: the points drawn with their hp colours, a drag turns
+    them, a hover shows the read-out, S (the Surface view, off on WebGL2) leaves the points."""
+    browser = _launch(playwright, WEBGL2_ARGS)
+    page, errors = _open(browser, page_file.as_uri())
+    assert page.evaluate(OFFERS_JS) == {"webgpu": False, "webgl2": True}
+    assert page.evaluate("document.body.dataset.state") == "running", page.inner_text("#message")
+
+    before = _points_shown(page, "WebGL2: the view never showed the points' warm and cool colours")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=SHOTS / "page_webgl2.png")
+    print(f"\nWebGL2: warm and cool pixels {_point_colours(before)}")
+    after = _drag_turns_the_view(page, before)
+    Image.fromarray(after.astype(np.uint8)).save(SHOTS / "page_webgl2_after_drag.png")
+    assert min(_point_colours(after)) > 200, "the points left the view after the drag"
+
+    # R brings back the first view (the pointer on the side panel, so no read-out covers it).
+    box = page.locator("#loudscape-view").bounding_box()
+    page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
+    page.keyboard.press("r")
+
+    def unchanged():
+        rgb = _view_pixels(page)
+        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+        return rgb if changed < 0.001 * rgb.shape[0] * rgb.shape[1] else None
+
+    rest = _wait_for(unchanged, "R did not bring back the first view")
+    _hover_opens_a_readout(page, rest)
+    page.screenshot(path=SHOTS / "page_webgl2_hover.png")
+
+    page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
+    page.keyboard.press("s")
+    _next_frames(page)
+    _next_frames(page)
+    assert unchanged() is not None, "S changed the view on WebGL2, where the surface is off"
+    assert errors == [], errors
+    browser.close()
+
+
+def test_a_browser_without_webgpu_and_webgl2_gets_a_message(playwright, page_file):
+    browser = _launch(playwright, NO_GPU_ARGS)
+    page, errors = _open(browser, page_file.as_uri())
+    assert page.evaluate(OFFERS_JS) == {"webgpu": False, "webgl2": False}
+    assert page.evaluate("document.body.dataset.state") == "no-gpu"
     message = page.locator("#message")
     assert message.is_visible()
-    assert "WebGPU" in message.inner_text()
-    page.close()
+    assert "WebGPU or WebGL2" in message.inner_text()
+    assert errors == [], errors
+    browser.close()
 
 
 def test_a_three_minute_song_is_thinned_into_the_budget(tmp_path):
