@@ -281,6 +281,10 @@ impl eframe::App for LoudscapeApp {
             .wgpu_render_state()
             .and_then(|render_state| ViewResources::write(render_state, |r| r.refining(&ctx)))
             .flatten();
+        // Where the compare covers the view, its halves' points are what fills in.
+        if self.compare_covers_view() {
+            self.refining = self.compare_refining(frame);
+        }
         if self.refining.is_some() {
             // The next slice of the points (ui/progressive.rs).
             ctx.request_repaint();

@@ -133,6 +133,10 @@ impl LoudscapeApp {
         // What the halves wait for, as the normal view shows it.
         if let Some(waiting) = state.badge(self.surface.busy, self.busy.as_deref()) {
             busy_badge(painter, rect, waiting);
+        } else if let Some(done) = self.refining {
+            // The halves' points filling in at rest (`ui/compare_refine.rs`).
+            let percent = (done * 100.0).floor();
+            busy_badge(painter, rect, &format!("refining points… {percent:.0} %"));
         }
         true
     }

@@ -354,6 +354,24 @@ impl LoudscapeApp {
         self.active == Slot::Song && self.compare.as_ref().is_some_and(|c| c.shown())
     }
 
+    /// The fraction of the compare halves' points drawn while they fill in at rest
+    /// (`ui/compare_refine.rs`); None when both are complete.
+    pub(super) fn compare_refining(&self, frame: &eframe::Frame) -> Option<f32> {
+        // The difference draws no halves: what they left unfinished is not on screen.
+        if !self.compare.as_ref().is_some_and(|c| c.side_by_side()) {
+            return None;
+        }
+        let render_state = frame.wgpu_render_state()?;
+        let (refining, finished) = CompareResources::write(render_state, |compare, _| {
+            (compare.refining(), compare.refine_finished())
+        })?;
+        if let Some((frames, most)) = finished {
+            // A log line, as loads are told: tests wait for it.
+            eprintln!("compare: points refined in {frames} frames, at most {most} points a frame");
+        }
+        refining
+    }
+
     /// The compare's two surfaces as one status, where the compare covers the Surface view
     /// (None elsewhere: the active cloud's surface is the one shown). When both halves show
     /// the surface asked for, says so once on stderr with their triangles (a log, as loads are

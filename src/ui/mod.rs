@@ -17,6 +17,7 @@ pub mod compare;
 mod compare_align;
 mod compare_panel;
 mod compare_readouts;
+pub mod compare_refine;
 pub mod compare_shot;
 mod compare_view;
 mod compare_window;

@@ -36,6 +36,17 @@ pub const MIN_BUDGET: u64 = INITIAL_BUDGET;
 /// hidden or waited for input): they do not adapt the budget.
 const MAX_MEASURED: Duration = Duration::from_millis(500);
 
+/// `budget` scaled towards [`TARGET_FRAME`] from one measured `frame` (at most halved or
+/// doubled, so one odd frame does not swing it; never below [`MIN_BUDGET`]). A frame of no
+/// time or longer than [`MAX_MEASURED`] is no measure: `budget` as it was.
+pub fn adapted(budget: u64, frame: Duration) -> u64 {
+    if frame.is_zero() || frame > MAX_MEASURED {
+        return budget;
+    }
+    let scale = (TARGET_FRAME.as_secs_f64() / frame.as_secs_f64()).clamp(0.5, 2.0);
+    ((budget as f64 * scale) as u64).max(MIN_BUDGET)
+}
+
 /// The slice scheduler of one view.
 #[derive(Debug)]
 pub struct Refine {
@@ -85,7 +96,21 @@ impl Refine {
     /// Whether a frame at rest showing `total` points goes the progressive way: the cloud is
     /// larger than one frame's budget, or a refinement of it is under way.
     pub fn wants(&self, total: u64) -> bool {
-        total > self.budget || (self.key.is_some() && self.total == total && !self.complete())
+        total > self.budget || self.under_way(total)
+    }
+
+    /// Whether a refinement of a cloud of `total` points is under way (started, not complete).
+    pub fn under_way(&self, total: u64) -> bool {
+        self.key.is_some() && self.total == total && !self.complete()
+    }
+
+    /// Points drawn into the points target and the cloud's total (none before a first slice).
+    pub fn drawn(&self) -> (u64, u64) {
+        if self.key.is_some() {
+            (self.next.min(self.total), self.total)
+        } else {
+            (0, 0)
+        }
     }
 
     /// The slice a frame of `key` (at rest, `total` points) draws into the points target now,
@@ -93,31 +118,56 @@ impl Refine {
     /// the target's (camera, size, style, cloud, GPU data) starts over from point 0; one that
     /// differs only in markers or the box continues. `now` is the frame's time.
     pub fn step(&mut self, key: &RenderKey, total: u64, now: Instant) -> Option<Range<u64>> {
+        if self.begin(key, total) {
+            return None;
+        }
+        if let Some(last) = self.last_slice {
+            self.budget = adapted(self.budget, now.saturating_duration_since(last));
+        }
+        let range = self.slice(self.budget);
+        self.last_slice = (!self.complete()).then_some(now);
+        Some(range)
+    }
+
+    /// As [`Refine::step`], with the slice's size given (`points`, at least one) by a budget
+    /// shared with other views ([`crate::ui::compare_refine`]) instead of this one's own.
+    pub fn step_granted(&mut self, key: &RenderKey, total: u64, points: u64) -> Option<Range<u64>> {
+        if self.begin(key, total) {
+            return None;
+        }
+        self.last_slice = None;
+        Some(self.slice(points.max(1)))
+    }
+
+    /// The points a frame of `key` (`total` points) still has to draw: all of them when the
+    /// target holds other points, none when it holds them all.
+    pub fn remaining(&self, key: &RenderKey, total: u64) -> u64 {
+        if self.holds(&points_key(key), total) {
+            total.saturating_sub(self.next)
+        } else {
+            total
+        }
+    }
+
+    /// Starts over when `key`'s points are not the ones the target holds or fills; true when
+    /// it holds them all already (no slice to draw).
+    fn begin(&mut self, key: &RenderKey, total: u64) -> bool {
         let points = points_key(key);
         if self.key.as_ref() != Some(&points) || self.total != total {
             self.key = Some(points);
             self.next = 0;
             self.total = total;
             self.last_slice = None;
-        } else if self.complete() {
-            return None;
-        } else if let Some(last) = self.last_slice {
-            self.adapt(now.saturating_duration_since(last));
+            return false;
         }
-        let range = self.next..(self.next + self.budget).min(total);
-        self.next = range.end;
-        self.last_slice = (!self.complete()).then_some(now);
-        Some(range)
+        self.complete()
     }
 
-    /// Scales the budget towards [`TARGET_FRAME`] from one measured frame (at most halving or
-    /// doubling it a frame, so one odd frame does not swing it).
-    fn adapt(&mut self, frame: Duration) {
-        if frame.is_zero() || frame > MAX_MEASURED {
-            return;
-        }
-        let scale = (TARGET_FRAME.as_secs_f64() / frame.as_secs_f64()).clamp(0.5, 2.0);
-        self.budget = ((self.budget as f64 * scale) as u64).max(MIN_BUDGET);
+    /// The next `points` points (fewer at the end of the cloud), marked drawn.
+    fn slice(&mut self, points: u64) -> Range<u64> {
+        let range = self.next..(self.next + points).min(self.total);
+        self.next = range.end;
+        range
     }
 
     /// All points of the current key are in the points target.
@@ -170,6 +220,14 @@ pub struct ProgressivePoints {
     /// The last picture to leave `kept`, reused as the next fresh target of its size.
     spare: Option<RenderTarget>,
 }
+
+/// The device, queue, frame encoder and renderer a progressive frame records with.
+pub type Gpu<'a, 'e> = (
+    &'a wgpu::Device,
+    &'a wgpu::Queue,
+    &'e mut wgpu::CommandEncoder,
+    &'a Renderer,
+);
 
 /// A completed points picture: the points key and count it holds.
 struct Kept {
@@ -253,12 +311,48 @@ impl ProgressivePoints {
         view: &FrameView,
         settings: &crate::render::scene::RenderSettings,
     ) -> bool {
+        let gpu = (device, queue, encoder, renderer);
+        self.record(gpu, target, data, key, view, settings, None)
+    }
+
+    /// As [`ProgressivePoints::frame`], the slice `points` long at most (a share of a budget
+    /// shared with other views, `ui/compare_refine.rs`) instead of this view's own budget.
+    #[allow(clippy::too_many_arguments)]
+    pub fn frame_granted(
+        &mut self,
+        gpu: Gpu<'_, '_>,
+        target: &RenderTarget,
+        data: &SceneData,
+        key: &RenderKey,
+        view: &FrameView,
+        settings: &crate::render::scene::RenderSettings,
+        points: u64,
+    ) -> bool {
+        self.record(gpu, target, data, key, view, settings, Some(points))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn record(
+        &mut self,
+        gpu: Gpu<'_, '_>,
+        target: &RenderTarget,
+        data: &SceneData,
+        key: &RenderKey,
+        view: &FrameView,
+        settings: &crate::render::scene::RenderSettings,
+        granted: Option<u64>,
+    ) -> bool {
+        let (device, queue, encoder, renderer) = gpu;
         let (w, h) = (target.width, target.height);
         self.target_for(device, key, data.points.total, w, h);
         let Some(points) = self.target.as_ref() else {
             return true;
         };
-        let slice = self.refine.step(key, data.points.total, Instant::now());
+        let total = data.points.total;
+        let slice = match granted {
+            Some(granted) => self.refine.step_granted(key, total, granted),
+            None => self.refine.step(key, total, Instant::now()),
+        };
         if let Some(range) = slice.clone() {
             // Only points go into the points target; the overlay is drawn into the view's.
             let mut bare = settings.clone();

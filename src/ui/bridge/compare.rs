@@ -15,6 +15,7 @@ use crate::render::grid::voxelize::VoxelSettings;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::render::surface::SurfaceSettings;
 use crate::render::surface::state::ExtractionStatus;
+use crate::ui::compare_refine::CompareRefine;
 use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::view::frame_view::FrameView;
 
@@ -31,6 +32,9 @@ pub struct CompareResources {
     halves: [Half; 3],
     /// Bumped when the scene or its grids change.
     revision: u64,
+    /// The halves' points at rest, a slice a frame within one shared budget
+    /// (`ui/compare_refine.rs`).
+    refine: CompareRefine,
 }
 
 impl CompareResources {
@@ -51,6 +55,7 @@ impl CompareResources {
                 scene: None,
                 halves: [half(), half(), half()],
                 revision: 0,
+                refine: CompareRefine::default(),
             });
         }
         let mut compare = resources.remove::<CompareResources>()?;
@@ -131,6 +136,16 @@ impl CompareResources {
         })
     }
 
+    /// The fraction of the halves' points drawn while they fill in (None when complete).
+    pub(in crate::ui) fn refining(&self) -> Option<f32> {
+        self.refine.progress()
+    }
+
+    /// The halves' last refinement, once complete: its frames and most points a frame.
+    pub(in crate::ui) fn refine_finished(&mut self) -> Option<(u32, u64)> {
+        self.refine.take_finished()
+    }
+
     /// Moves the Difference view to `measure` (once its grids are built).
     pub(in crate::ui) fn set_measure(&mut self, view: &ViewResources, measure: DifferenceMeasure) {
         if let Some(scene) = self.scene.as_mut()
@@ -166,6 +181,7 @@ impl OffscreenJob for CompareCallback {
                 scene,
                 halves,
                 revision,
+                refine,
             } = &mut compare;
             let half = &mut halves[self.side];
             if half
@@ -174,32 +190,66 @@ impl OffscreenJob for CompareCallback {
             {
                 half.cache.invalidate();
             }
-            let key = RenderKey::new(
-                &self.view,
-                &self.settings,
-                Some(self.side as u64),
-                *revision,
-            );
+            // Both halves' keys: they share one view and settings, and the budget.
+            let keys = [0, 1, 2]
+                .map(|side| RenderKey::new(&self.view, &self.settings, Some(side), *revision));
+            let key = keys[self.side].clone();
             let data = scene.as_ref().and_then(|s| match self.side {
                 0 => Some(&s.data_a),
                 1 => Some(&s.data_b),
                 _ => s.grids.as_ref().map(|g| &g.data),
             });
+            let totals = scene
+                .as_ref()
+                .map(|s| [s.data_a.points.total, s.data_b.points.total]);
             if let Some(target) = half.offscreen.target()
                 && half.cache.begin(&key)
             {
-                view_resources.renderer.render(
-                    gpu.queue,
-                    gpu.encoder,
-                    target,
-                    data,
-                    &self.view,
-                    &self.settings,
-                );
-                let pending = data.is_some_and(|d| {
-                    self.settings.view == ViewKind::Surface && d.surface.needs_another_frame()
-                });
-                half.cache.finish(key, !pending);
+                let progressive = if let (Some(data), Some(totals)) = (data, totals)
+                    && self.side < 2
+                    && !self.view.moving
+                    && crate::render::scene::draws_points_at_rest(&self.settings, data)
+                    && refine.wants(self.side, totals)
+                {
+                    // At rest, each half's points a slice a frame, the two within one frame's
+                    // budget; the window asks for the next frame until both are complete.
+                    let complete = refine.frame(
+                        self.side,
+                        (gpu.device, gpu.queue, gpu.encoder, &view_resources.renderer),
+                        target,
+                        data,
+                        [&keys[0], &keys[1]],
+                        totals,
+                        &self.view,
+                        &self.settings,
+                    );
+                    half.cache.finish(key.clone(), complete);
+                    if !complete && let Some(ctx) = &view_resources.repaint {
+                        ctx.request_repaint();
+                    }
+                    true
+                } else {
+                    false
+                };
+                if !progressive {
+                    // Moving, a surface or a volume, or clouds small enough for one frame: the
+                    // half drawn whole, and a refinement left unfinished forgotten.
+                    if self.side < 2 {
+                        refine.set_aside(self.side);
+                    }
+                    view_resources.renderer.render(
+                        gpu.queue,
+                        gpu.encoder,
+                        target,
+                        data,
+                        &self.view,
+                        &self.settings,
+                    );
+                    let pending = data.is_some_and(|d| {
+                        self.settings.view == ViewKind::Surface && d.surface.needs_another_frame()
+                    });
+                    half.cache.finish(key, !pending);
+                }
             }
         }
         resources.insert(compare);

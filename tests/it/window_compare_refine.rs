@@ -1,0 +1,92 @@
+//! The A/B compare's halves are drawn progressively at rest (`ui/compare_refine.rs`): with the
+//! demo song beside itself (two clouds of 147,750 points, more than one frame's budget) the
+//! halves fill in over several frames, the window saying so once both are complete; an orbit
+//! starts them over, and at the end both halves show the song. Needs a display (`make test`
+//! runs it under xvfb-run).
+
+use crate::common::{self, line_starting, xdotool};
+
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The frames and the most points a frame of a "compare: points refined in N frames, at most
+/// P points a frame" line.
+fn refined(line: &str) -> (u32, u64) {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let number = |after: &str| {
+        let at = words.iter().position(|w| *w == after).expect(line);
+        words[at + 1]
+            .trim_end_matches(',')
+            .parse::<u64>()
+            .expect(line)
+    };
+    (number("in") as u32, number("most"))
+}
+
+#[test]
+fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
+    let _screen = common::screen();
+    common::assert_display();
+    assert!(
+        xdotool(&["version"]).is_some(),
+        "this test needs xdotool to drag in the window (apt-get install xdotool)"
+    );
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let home = common::fresh_dir("window_compare_refine_home");
+    let song = repo.join("data/demo_song.ply");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
+    let child = common::home_in(&mut command, &home)
+        .arg(&song)
+        .arg("--compare")
+        .arg(&song)
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("start loudscape");
+    common::while_running(child, |child, lines| {
+        let window = common::wait_for_window(child).expect("no window");
+        let mut seen = Vec::new();
+        let prefix = "compare: points refined in ";
+        let line = line_starting(lines, prefix, Duration::from_secs(120), &mut seen)
+            .unwrap_or_else(|| panic!("the halves never completed:\n{}", seen.join("\n")));
+        let (frames, most) = refined(&line);
+        // 295,500 points against a first frame's budget of 200,000 (ui/progressive.rs): more
+        // than one frame, none of them drawing both clouds whole.
+        assert!(frames >= 2, "{line}");
+        assert!(most < 2 * 147_750, "{line}");
+
+        // An orbit: a drag across the view, made again until the halves refine anew (a press
+        // before the window laid out its view starts no drag).
+        let deadline = Instant::now() + Duration::from_secs(90);
+        let mut again = None;
+        while again.is_none() && Instant::now() < deadline {
+            xdotool(&["mousemove", "--window", &window, "700", "400"]);
+            xdotool(&["mousedown", "1"]);
+            for step in 1..=10 {
+                std::thread::sleep(Duration::from_millis(40));
+                let x = (700 + step * 25).to_string();
+                xdotool(&["mousemove", "--window", &window, &x, "400"]);
+            }
+            xdotool(&["mouseup", "1"]);
+            // Away from the view, so no read-out covers the points.
+            xdotool(&["mousemove", "--window", &window, "5", "5"]);
+            again = line_starting(lines, prefix, Duration::from_secs(20), &mut seen);
+        }
+        let again =
+            again.unwrap_or_else(|| panic!("no refinement after the orbit:\n{}", seen.join("\n")));
+        assert!(refined(&again).0 >= 1, "{again}");
+
+        // Complete: both halves of the 3D view (right of the side panel) show the song.
+        let shot = common::output_dir().join("window_compare_refine.png");
+        common::screenshot_root(&shot);
+        let image = image::open(&shot).unwrap().to_rgba8();
+        let (w, h) = image.dimensions();
+        let panel = 280;
+        let mid = panel + (w - panel) / 2;
+        for region in [[panel, 0, mid, h], [mid, 0, w, h]] {
+            let share = common::coloured_share(&image, region);
+            assert!(share > 0.02, "half {region:?} looks blank ({share:.3})");
+        }
+    });
+}
