@@ -4,9 +4,10 @@ Opens PAGE (a file written by `loudscape page`) from its file URL in Debian's ch
 SwiftShader's WebGPU (the flags of tests/web/test_page.py), waits for the viewer, then drags
 across the view in MOVES steps, each followed by the next animation frame, and prints the
 frames a second and the mean milliseconds a frame (Playwright's round trip included, so an
-upper bound on the page's own time).
+upper bound on the page's own time). With --webgl2, a chromium without WebGPU (the flags of
+tests/web/test_page.py's WebGL2 test): the page's WebGL2 Points view.
 
-    .venv/bin/python bench/web_orbit.py song.html [--moves 60]
+    .venv/bin/python bench/web_orbit.py song.html [--moves 60] [--webgl2]
 """
 
 from __future__ import annotations
@@ -25,6 +26,11 @@ CHROMIUM_ARGS = [
     "--enable-features=Vulkan",
     "--use-vulkan=swiftshader",
 ]
+WEBGL2_ARGS = [
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-features=WebGPU",
+]
 NEXT_FRAME = "new Promise(r => requestAnimationFrame(r))"
 
 
@@ -33,13 +39,16 @@ def main() -> int:
     parser.add_argument("page", type=Path)
     parser.add_argument("--moves", type=int, default=60)
     parser.add_argument("--chromium", default="/usr/bin/chromium")
+    parser.add_argument("--webgl2", action="store_true", help="a browser without WebGPU")
     args = parser.parse_args()
     if not args.page.is_file():
         print(f"{args.page}: no such file", file=sys.stderr)
         return 1
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(
-            executable_path=args.chromium, headless=True, args=CHROMIUM_ARGS
+            executable_path=args.chromium,
+            headless=True,
+            args=WEBGL2_ARGS if args.webgl2 else CHROMIUM_ARGS,
         )
         page = browser.new_page(viewport={"width": 1280, "height": 800})
         page.goto(args.page.resolve().as_uri())
@@ -63,8 +72,9 @@ def main() -> int:
         page.mouse.up()
         browser.close()
     fps = args.moves / elapsed
+    api = "WebGL2" if args.webgl2 else "WebGPU"
     print(
-        f"orbit in headless chromium (SwiftShader WebGPU), 1280x800: {args.moves} frames in "
+        f"orbit in headless chromium (SwiftShader {api}), 1280x800: {args.moves} frames in "
         f"{elapsed:.2f} s, {fps:.1f} fps, {1000 / fps:.0f} ms a frame"
     )
     return 0
