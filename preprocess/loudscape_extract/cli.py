@@ -22,6 +22,7 @@ from loudscape_extract.errors import ExtractError
 from loudscape_extract.interrupts import Terminated, sigterm_raises
 from loudscape_extract.loudness_csv import add_parser as add_loudness_parser
 from loudscape_extract.loudness_csv import run as run_loudness
+from loudscape_extract.memory import keep_freed_memory
 from loudscape_extract.messages import one_line
 from loudscape_extract.normalization import NORMALIZE_CHOICES, PRESETS
 from loudscape_extract.notices import warning_lines
@@ -702,6 +703,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command in ("song", "timeline") and args.hop > args.n_fft:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
+    if args.command in ("song", "timeline"):
+        keep_freed_memory()  # block after block of large arrays: reused, not zeroed again
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
     if getattr(args, "progress", "text") == "json":
         progress = JsonTimelineProgress() if args.command == "timeline" else JsonProgress()
