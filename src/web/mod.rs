@@ -324,7 +324,7 @@ impl WebApp {
                 );
                 let button = match &self.grid_error {
                     Some(reason) if !on => {
-                        button.on_disabled_hover_text(format!("Off in this browser: {reason}"))
+                        button.on_disabled_hover_text(format!("Off here: {reason}"))
                     }
                     _ => button,
                 };
