@@ -380,22 +380,44 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let encoder = Encoder::start(&spec, &args.output)?;
     let progress = Progress::new(progress_mode, frames);
     let base = base_camera;
-    // One target and staging buffer for every frame.
-    let target = RenderTarget::new(&gpu.device, size.0, view_height);
-    let reader = TargetReader::new(&gpu.device, &target);
+    // Two targets and staging buffers, used in turn for every frame: frame k is read back
+    // while frame k+1 draws.
+    let targets = [0, 1].map(|_| RenderTarget::new(&gpu.device, size.0, view_height));
+    let readers = targets
+        .each_ref()
+        .map(|target| TargetReader::new(&gpu.device, target));
     let view_bytes = layout.view_bytes();
     video_frames::run(layout, encoder, progress, |out| {
+        // The frame drawn last, still to be read back and handed on.
+        let mut pending: Option<Pending> = None;
+        // Reads `frame` back (where its copy is still on the GPU) and hands it on; false
+        // when the second stage has stopped.
+        let finish = |frame: Pending| -> anyhow::Result<bool> {
+            let Pending {
+                mut pixels,
+                overlay,
+                t,
+                copy,
+            } = frame;
+            if let Some((slot, index)) = copy {
+                readers[slot]
+                    .finish_into(&gpu.device, index, &mut pixels[..view_bytes])
+                    .context("reading a frame back from the GPU")?;
+            }
+            Ok(out.send(Rendered { pixels, overlay, t }))
+        };
         for k in 0..frames {
             let Some(mut pixels) = out.buffer() else {
                 break;
             };
+            let slot = (k % 2) as usize;
             let gpu_frame = GpuFrame {
                 gpu: &gpu,
                 renderer: &renderer,
-                target: &target,
-                reader: &reader,
+                target: &targets[slot],
+                reader: &readers[slot],
             };
-            let overlay = render_video_frame(
+            let (overlay, index) = render_video_frame(
                 &gpu_frame,
                 &mut drawn,
                 &plan,
@@ -405,9 +427,20 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
                 &mut pixels[..view_bytes],
             )?;
             let t = plan.start_s + k as f64 / f64::from(plan.fps);
-            if !out.send(Rendered { pixels, overlay, t }) {
-                break;
+            let drawn_now = Pending {
+                pixels,
+                overlay,
+                t,
+                copy: index.map(|index| (slot, index)),
+            };
+            if let Some(previous) = pending.replace(drawn_now)
+                && !finish(previous)?
+            {
+                return Ok(());
             }
+        }
+        if let Some(last) = pending.take() {
+            finish(last)?;
         }
         Ok(())
     })?;
@@ -437,6 +470,15 @@ fn keep_freed_memory() {
     }
 }
 
+/// A frame drawn, its read-back submitted (the reader's slot and the copy's submission) unless
+/// it was read already.
+struct Pending {
+    pixels: Vec<u8>,
+    overlay: Vec<Shape>,
+    t: f64,
+    copy: Option<(usize, wgpu::SubmissionIndex)>,
+}
+
 /// The GPU side of a video's frames, kept from frame to frame.
 struct GpuFrame<'a> {
     gpu: &'a GpuContext,
@@ -447,7 +489,8 @@ struct GpuFrame<'a> {
 }
 
 /// Frame `k` of the video, without the strip, into `out` (the view's RGBA rows); returns what
-/// is drawn over it (labels, legend, title), laid out in pixels.
+/// is drawn over it (labels, legend, title), laid out in pixels, and the submission of its
+/// read-back where it is still on the GPU (`TargetReader::finish_into` fills `out`).
 fn render_video_frame(
     frame: &GpuFrame,
     drawn: &mut Drawn,
@@ -456,7 +499,7 @@ fn render_video_frame(
     base_camera: Option<Camera>,
     k: u64,
     out: &mut [u8],
-) -> anyhow::Result<Vec<Shape>> {
+) -> anyhow::Result<(Vec<Shape>, Option<wgpu::SubmissionIndex>)> {
     let (gpu, renderer) = (frame.gpu, frame.renderer);
     let elapsed = k as f64 / f64::from(plan.fps);
     let (w, h) = (plan.size.0, plan.view_height);
@@ -508,9 +551,9 @@ fn render_video_frame(
                 &settings,
                 frame.target,
             );
-            frame
+            let copy = frame
                 .reader
-                .read_into(&gpu.device, &gpu.queue, frame.target, out)
+                .submit_copy(&gpu.device, &gpu.queue, frame.target)
                 .context("reading a frame back from the GPU")?;
             let background = settings.colours.background;
             let rect = loudscape::picture::whole(w, h);
@@ -530,7 +573,7 @@ fn render_video_frame(
                 background,
                 over,
             );
-            Ok(overlay.shapes)
+            Ok((overlay.shapes, Some(copy)))
         }
         Drawn::Compare {
             scene,
@@ -576,7 +619,7 @@ fn render_video_frame(
                 note.as_deref(),
             )?;
             out.copy_from_slice(image.as_raw());
-            Ok(Vec::new())
+            Ok((Vec::new(), None))
         }
     }
 }

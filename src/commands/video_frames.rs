@@ -1,11 +1,12 @@
 //! A video's frames from the GPU to ffmpeg, in two stages that overlap: the command's thread
-//! renders frame k+1 and reads it back while a second thread finishes frame k (the labels and
-//! legend over it, the loudness strip under it) and writes it to the encoder.
+//! renders frame k+1 and reads it back (two targets in turn: frame k+1 is read once frame k+2
+//! is submitted) while a second thread finishes frame k (the labels and legend over it, the
+//! loudness strip under it) and writes it to the encoder.
 //!
-//! Nothing is allocated per frame: the target and its staging buffer are the command's, and a
-//! few frame buffers go round between the stages. Labels that stay put (a still camera) are laid
-//! out and rasterized once ([`raster::Prepared`]) and painted over every frame, to the same
-//! pixels as drawing them afresh.
+//! Nothing is allocated per frame: the two targets and their staging buffers are the
+//! command's, and a few frame buffers go round between the stages. Labels that stay put (a still
+//! camera) are laid out and rasterized once ([`raster::Prepared`]) and painted over every frame,
+//! to the same pixels as drawing them afresh.
 
 use std::sync::mpsc::{Receiver, Sender, SyncSender, channel, sync_channel};
 
@@ -15,8 +16,9 @@ use loudscape::annotate::{Rect, Shape, raster};
 
 use super::video_encode::{Encoder, Progress};
 
-/// Frame buffers in flight: one being rendered, one being finished, one in the pipe's wait.
-const BUFFERS: usize = 3;
+/// Frame buffers in flight: one being rendered, one being read back, one being finished, one
+/// in the pipe's wait.
+const BUFFERS: usize = 4;
 
 /// The loudness strip under the view: its picture (without a playhead) and where its playhead
 /// goes.

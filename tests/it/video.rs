@@ -489,3 +489,69 @@ fn a_compare_frame_is_render_compare_with_the_playhead() {
     let (share, mean) = common::difference(&half(&frames[1]), &half(&render), 32);
     assert!(share < 0.001, "{share} of pixels differ (mean {mean})");
 }
+
+/// The video keeps two frames in flight: frame k's read-back is submitted, frame k+1 drawn into
+/// the other target, and only then is frame k read. Each reader must give back its own
+/// target's picture as it was when its copy was submitted, whatever was drawn after it.
+#[test]
+fn frames_in_flight_are_read_back_each_from_its_own_target() {
+    use loudscape::render::gpu::target::{RenderTarget, TargetReader};
+    let gpu = common::gpu();
+    let (w, h) = (70, 24);
+    let picture = |seed: u8| -> Vec<u8> {
+        (0..w * h)
+            .flat_map(|i| [seed, (i % 251) as u8, seed.wrapping_mul(i as u8), 255])
+            .collect()
+    };
+    let targets = [0, 1].map(|_| RenderTarget::new(&gpu.device, w, h));
+    let readers = targets
+        .each_ref()
+        .map(|target| TargetReader::new(&gpu.device, target));
+    let draw = |target: &RenderTarget, rgba: &[u8]| {
+        gpu.queue.write_texture(
+            target.color.as_image_copy(),
+            rgba,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * w),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    };
+    let mut pending = None;
+    for k in 0..5u8 {
+        let slot = usize::from(k % 2);
+        draw(&targets[slot], &picture(k));
+        let index = readers[slot]
+            .submit_copy(&gpu.device, &gpu.queue, &targets[slot])
+            .expect("submit the copy");
+        // Frame k drawn and its copy submitted; only now is frame k-1 read.
+        if let Some((previous, slot, index)) = pending.replace((k, slot, index)) {
+            let mut out = vec![0; (w * h * 4) as usize];
+            readers[slot]
+                .finish_into(&gpu.device, index, &mut out)
+                .expect("read back");
+            assert!(out == picture(previous), "frame {previous} read back wrong");
+        }
+    }
+    let (last, slot, index) = pending.expect("a last frame");
+    let mut out = vec![0; (w * h * 4) as usize];
+    readers[slot]
+        .finish_into(&gpu.device, index, &mut out)
+        .expect("read back");
+    assert!(out == picture(last), "frame {last} read back wrong");
+    // A buffer of the wrong size is refused, not written past.
+    let index = readers[0]
+        .submit_copy(&gpu.device, &gpu.queue, &targets[0])
+        .expect("submit the copy");
+    assert!(
+        readers[0]
+            .finish_into(&gpu.device, index, &mut [0; 16])
+            .is_err()
+    );
+}

@@ -70,6 +70,19 @@ pub fn map_buffer_with<R>(
     what: &str,
     read: impl FnOnce(&[u8]) -> R,
 ) -> Result<R, ReadbackError> {
+    map_buffer_after(device, buffer, None, what, read)
+}
+
+/// [`map_buffer_with`] waiting only for the submission `index` (the one that filled the
+/// buffer), not for work submitted after it: a video keeps the next frame drawing while it
+/// reads this one. `None` waits for everything submitted.
+pub fn map_buffer_after<R>(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    index: Option<wgpu::SubmissionIndex>,
+    what: &str,
+    read: impl FnOnce(&[u8]) -> R,
+) -> Result<R, ReadbackError> {
     let failed = |reason: String| ReadbackError::Map {
         what: what.to_string(),
         reason,
@@ -80,7 +93,10 @@ pub fn map_buffer_with<R>(
         let _ = sender.send(result);
     });
     device
-        .poll(wgpu::PollType::wait_indefinitely())
+        .poll(wgpu::PollType::Wait {
+            submission_index: index,
+            timeout: None,
+        })
         .map_err(|e| failed(e.to_string()))?;
     receiver
         .recv()

@@ -4,7 +4,7 @@
 //! back to an RGBA image. Colours are gamma-encoded (`Rgba8Unorm`), as egui's are, so what the
 //! passes write is what lands on screen and in the PNG.
 
-use crate::render::gpu::readback::{ReadbackError, map_buffer_with};
+use crate::render::gpu::readback::{ReadbackError, map_buffer_after, map_buffer_with};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -110,6 +110,84 @@ impl TargetReader {
             width: target.width,
             height: target.height,
             padded_row,
+        }
+    }
+
+    /// Submits the copy of `target`'s colour (of this reader's size) into the staging buffer
+    /// and returns at once with the submission's index; [`TargetReader::finish_into`] reads it.
+    /// Between the two the caller may submit more work (a video's next frame): with two
+    /// readers, frame k is read while frame k+1 draws.
+    pub fn submit_copy(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        target: &RenderTarget,
+    ) -> Result<wgpu::SubmissionIndex, ReadbackError> {
+        if !target.has_size(self.width, self.height) {
+            return Err(ReadbackError::Map {
+                what: "the rendered image".into(),
+                reason: "its size does not match the target's".into(),
+            });
+        }
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("target::readback"),
+        });
+        self.record_copy(&mut encoder, target);
+        Ok(queue.submit([encoder.finish()]))
+    }
+
+    /// Waits for the copy submitted as `index` ([`TargetReader::submit_copy`]), not for work
+    /// submitted after it, and writes it into `out` as tightly packed RGBA8 rows, top row
+    /// first; `out` holds exactly width x height x 4 bytes.
+    pub fn finish_into(
+        &self,
+        device: &wgpu::Device,
+        index: wgpu::SubmissionIndex,
+        out: &mut [u8],
+    ) -> Result<(), ReadbackError> {
+        let row = self.width as usize * 4;
+        if out.len() != row * self.height as usize {
+            return Err(ReadbackError::Map {
+                what: "the rendered image".into(),
+                reason: "its size does not match the target's".into(),
+            });
+        }
+        map_buffer_after(
+            device,
+            &self.buffer,
+            Some(index),
+            "the rendered image",
+            |bytes| self.unpad(bytes, out),
+        )
+    }
+
+    fn record_copy(&self, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget) {
+        encoder.copy_texture_to_buffer(
+            target.color.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded_row),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// The staging buffer's padded rows into `out`, packed.
+    fn unpad(&self, bytes: &[u8], out: &mut [u8]) {
+        let row = self.width as usize * 4;
+        for (dst, src) in out
+            .chunks_exact_mut(row)
+            .zip(bytes.chunks_exact(self.padded_row as usize))
+        {
+            dst.copy_from_slice(&src[..row]);
         }
     }
 
