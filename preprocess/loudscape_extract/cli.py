@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 from loudscape_extract import export
 from loudscape_extract.audio import decode_audio
+from loudscape_extract.blas_threads import one_blas_thread
 from loudscape_extract.compare import MAX_VERSIONS, compare_versions
 from loudscape_extract.compare_sheet import summary_json, write_compare_csv, write_sheet
 from loudscape_extract.dynamics import HIGHPASS_HZ
@@ -705,6 +706,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--hop {args.hop} is larger than --n-fft {args.n_fft}")
     if args.command in ("song", "timeline"):
         keep_freed_memory()  # block after block of large arrays: reused, not zeroed again
+        one_blas_thread()  # small products: no helper threads left spinning after each
     progress = Progress(enabled=not args.quiet and sys.stderr.isatty())
     if getattr(args, "progress", "text") == "json":
         progress = JsonTimelineProgress() if args.command == "timeline" else JsonProgress()

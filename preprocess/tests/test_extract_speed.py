@@ -187,3 +187,37 @@ def test_the_song_and_timeline_commands_keep_freed_memory(monkeypatch, tmp_path)
     assert calls == [1]
     assert cli.main(["export", str(tmp_path / "x.ply"), "-o", str(tmp_path / "x.vtp")]) == 1
     assert calls == [1]  # not for the other commands
+
+
+_BLAS_CHILD = """
+import ctypes, numpy as np
+from loudscape_extract.blas_threads import one_blas_thread
+paths = {l.split()[-1] for l in open("/proc/self/maps") if "openblas" in l.lower()}
+numpy_blas = ctypes.CDLL(next(p for p in sorted(paths) if "numpy" in p))
+before = numpy_blas.scipy_openblas_get_num_threads64_()
+count = one_blas_thread()
+print(before, count, numpy_blas.scipy_openblas_get_num_threads64_())
+"""
+
+
+def test_one_blas_thread_sets_numpys_openblas_to_one_thread():
+    done = subprocess.run(
+        [sys.executable, "-c", _BLAS_CHILD],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=dict(os.environ, OPENBLAS_NUM_THREADS="2"),  # as on a machine with two cores
+    )
+    before, count, after = (int(word) for word in done.stdout.split())
+    assert before == 2
+    assert count >= 1
+    assert after == 1
+
+
+def test_the_song_command_runs_blas_on_one_thread(monkeypatch, tmp_path):
+    from loudscape_extract import cli
+
+    calls = []
+    monkeypatch.setattr(cli, "one_blas_thread", lambda: calls.append(1) or 1)
+    assert cli.main(["song", str(tmp_path / "no.wav"), "-o", str(tmp_path / "x.ply")]) == 1
+    assert calls == [1]
