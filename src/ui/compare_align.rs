@@ -39,27 +39,55 @@ fn align_on_thread(versions: Vec<PathBuf>) -> Receiver<Result<Comparison, String
 /// `version`'s cloud with its time moved onto A's by the alignment (through its time map's
 /// segments where it has several) and, `matched`, its levels by the gain that brings it to A's
 /// loudness (the cloud itself, not a copy, where neither applies).
+/// The window does this on a thread ([`BMoves`], `compare_scene.rs`); the tests call it here.
+#[cfg(test)]
 pub(super) fn aligned_b<'a>(
     alignment: &CompareAlignment,
     version: Listening,
     b: &'a PointCloud,
     matched: bool,
 ) -> Cow<'a, PointCloud> {
-    let offset = alignment.offset_s(version);
-    let gain = alignment.level_match_db(version).filter(|_| matched);
-    if offset.is_none() && gain.is_none() {
-        return Cow::Borrowed(b);
+    BMoves::of(alignment, version, matched).apply(b)
+}
+
+/// What [`aligned_b`] reads of the alignment for one version, owned: the scene is prepared on
+/// a thread (`compare_scene.rs`).
+pub(super) struct BMoves {
+    /// Whether the version moves at all (aligned in time or matched in level).
+    moves: bool,
+    alignment: Option<crate::extract::align::Alignment>,
+    gain: Option<f64>,
+}
+
+impl BMoves {
+    pub(super) fn of(alignment: &CompareAlignment, version: Listening, matched: bool) -> Self {
+        let offset = alignment.offset_s(version);
+        let gain = alignment.level_match_db(version).filter(|_| matched);
+        let moves = offset.is_some() || gain.is_some();
+        Self {
+            moves,
+            alignment: moves.then(|| alignment.alignment(version)).flatten(),
+            gain,
+        }
     }
-    let mut moved = b.clone();
-    // A time map of several segments (a cut, an edit) moves each point by its own segment's
-    // offset; one segment moves the time axis alone (the nudge is in the alignment already).
-    if let Some(alignment) = alignment.alignment(version) {
-        alignment.move_onto_first(&mut moved, 0.0);
+
+    /// `b` moved (a copy), or `b` itself where nothing moves it.
+    pub(super) fn apply<'a>(&self, b: &'a PointCloud) -> Cow<'a, PointCloud> {
+        if !self.moves {
+            return Cow::Borrowed(b);
+        }
+        let mut moved = b.clone();
+        // A time map of several segments (a cut, an edit) moves each point by its own
+        // segment's offset; one segment moves the time axis alone (the nudge is in the
+        // alignment already).
+        if let Some(alignment) = &self.alignment {
+            alignment.move_onto_first(&mut moved, 0.0);
+        }
+        if let Some(gain) = self.gain {
+            crate::data::compare::match_in_level(&mut moved, gain);
+        }
+        Cow::Owned(moved)
     }
-    if let Some(gain) = gain {
-        crate::data::compare::match_in_level(&mut moved, gain);
-    }
-    Cow::Owned(moved)
 }
 
 impl LoudscapeApp {

@@ -133,6 +133,8 @@ impl LoudscapeApp {
         // What the halves wait for, as the normal view shows it.
         if let Some(waiting) = state.badge(self.surface.busy, self.busy.as_deref()) {
             busy_badge(painter, rect, waiting);
+        } else if state.scene_build.is_some() {
+            busy_badge(painter, rect, crate::ui::compare_scene::PREPARING);
         } else if let Some(done) = self.refining {
             // The halves' points filling in at rest (`ui/compare_refine.rs`).
             let percent = (done * 100.0).floor();

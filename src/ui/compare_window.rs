@@ -13,7 +13,6 @@ use std::time::Duration;
 use eframe::egui;
 
 use crate::data::cloud::PointCloud;
-use crate::data::compare::on_union_axes;
 use crate::data::field::Field;
 use crate::playback::{self, PlaybackError, Track};
 use crate::render::compare::{BuiltGrids, OwnGridPasses};
@@ -23,7 +22,6 @@ use crate::render::grid::voxelize::VoxelSettings;
 use crate::render::scene::ViewKind;
 use crate::render::surface::state::ExtractionStatus;
 use crate::ui::bridge::CompareResources;
-use crate::ui::labels;
 use crate::ui::state::compare_window::{
     CompareLayout, CompareState, DifferenceCopy, GRIDS_BUSY, GridStep, Listening,
 };
@@ -227,43 +225,57 @@ impl LoudscapeApp {
         };
         let first_build = state.built_for.is_none_or(|(id, _, _)| id != song.id);
         if state.rebuild_for(song.id) {
-            // The version on A's time when the alignment has come (compare_align.rs).
-            let b_aligned = crate::ui::compare_align::aligned_b(
+            // A and the version beside it (on A's time when the alignment has come, matched
+            // when asked) moved onto their union axes on a thread (compare_scene.rs); an older
+            // preparation's answer is not waited for.
+            state.scene_build = Some(crate::ui::compare_scene::start(
+                song.cloud.clone(),
+                b,
                 &state.alignment,
                 state.beside,
-                &b,
                 state.matched_shown(),
-            );
-            match on_union_axes(&song.cloud, &b_aligned) {
-                Ok((a, b_moved)) => {
-                    let labels = labels::axis_labels_for_box(
-                        &a,
-                        glam::Vec3::splat(-1.0),
-                        glam::Vec3::splat(1.0),
-                    );
+                first_build,
+            ));
+        }
+        if let Some(build) = &state.scene_build {
+            let Some(answer) = build.poll() else {
+                // The scene shown stays until the new one comes; no grids are built for it.
+                state.set_grids_pending(true);
+                ctx.request_repaint_after(Duration::from_millis(30));
+                return;
+            };
+            let first = build.first;
+            state.scene_build = None;
+            match answer {
+                Ok(prepared) => {
+                    let uploading = std::time::Instant::now();
+                    let (a, b_moved) = prepared.clouds;
                     CompareResources::write(render_state, |compare, view| {
                         compare.build(view, a.clone(), b_moved.clone())
                     });
-                    state.scene_built(Arc::new((a, b_moved)), labels);
+                    state.scene_built(Arc::new((a, b_moved)), prepared.labels);
                     // A log line, as loads are told: tests wait for it.
                     eprintln!(
-                        "compare: A and {} shown{}",
+                        "compare: A and {} shown{} (prepared in {:.0} ms on a thread, uploaded \
+                         in {:.0} ms)",
                         state.beside.letter(),
                         if state.matched_shown() {
                             " (matched)"
                         } else {
                             ""
-                        }
+                        },
+                        prepared.took.as_secs_f64() * 1000.0,
+                        uploading.elapsed().as_secs_f64() * 1000.0
                     );
                 }
                 Err(e) => {
-                    state.scene_failed(e.to_string());
+                    state.scene_failed(e);
                     CompareResources::write(render_state, |compare, _| compare.clear());
                 }
             }
             // One camera: another version beside A keeps the view where it is, and a
             // reopened window the camera it was left with.
-            if state.fit_scene(first_build, !previewing, song.id) {
+            if state.fit_scene(first, !previewing, song.id) {
                 self.motion.request_fit();
             }
         }

@@ -105,6 +105,8 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) error: Option<String>,
     /// The grids being built on a thread, when they are.
     pub(in crate::ui) grid_build: Option<GridBuild>,
+    /// The scene being prepared on a thread (`ui/compare_scene.rs`), when it is.
+    pub(in crate::ui) scene_build: Option<super::compare_scene::SceneBuild>,
     /// Whether the GPU scene holds grids (for some voxel settings): without them the halves
     /// draw their points in every view.
     pub(in crate::ui) has_grids: bool,
@@ -180,6 +182,7 @@ impl CompareState {
             error: None,
             error_told: None,
             grid_build: None,
+            scene_build: None,
             has_grids: false,
             grids_failed: None,
             grids_pending: false,

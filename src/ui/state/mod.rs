@@ -42,6 +42,7 @@ use crate::view::frame_view::FrameView;
 use crate::view::pick::Reading;
 
 pub(super) mod alignment;
+pub(super) mod compare_scene;
 pub(super) mod compare_window;
 pub(super) mod extract_settings;
 pub(super) mod frame_clock;
