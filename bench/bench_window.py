@@ -23,6 +23,10 @@ window paints through the X DAMAGE extension (bench/xdriver.py):
 Usage: python bench/bench_window.py [--loudscape target/release/loudscape] [--vs OTHER_BINARY]
 With --vs, the other binary runs each case right after ours (same load), and both columns print.
 
+With --compare B: each song is opened with `--compare B` (A/B side by side, the song as A); the
+settle case then also reports the longest frame from the release until the window goes quiet
+(each half's points refined at rest: bounded frames, or one long frame per half).
+
 With --open SONG (made from data/real-music when missing, --open-seconds long): the time from
 starting `loudscape SONG` (fresh cache) to the first frame whose 3D view shows points, and to
 the log line that the whole cloud was extracted, --runs times (PYTHONPATH reaches the
@@ -33,6 +37,7 @@ The ~5 M-point song is extracted once from data/real-music (see --big) with loud
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import os
 import shutil
@@ -55,6 +60,9 @@ VIEW = (PANEL_W, 0, WIDTH - PANEL_W, HEIGHT - TRANSPORT_H)  # x, y, w, h
 CENTER = (VIEW[0] + VIEW[2] // 2, VIEW[1] + VIEW[3] // 2)
 # Hover spots, offsets from the view's centre (inside the demo's and the big song's data box).
 HOVER_SPOTS = [(-150, -60), (130, 50), (-60, 100), (170, -90), (10, 10), (-220, 30)]
+# How long the window paints nothing before it counts as quiet (--quiet-seconds: longer than
+# its longest frame, or a frame still being drawn is taken for quiet).
+QUIET_S = 1.5
 BUDGETS = {"orbit_demo": 20.0, "orbit_big": 10.0, "hover_ms": 100.0, "iso": 10.0}
 
 
@@ -68,6 +76,8 @@ class CaseResult:
     iso_rate: list[float] = field(default_factory=list)
     settle_s: list[float] = field(default_factory=list)
     return_s: list[float] = field(default_factory=list)
+    # The longest gap between painted frames from the release of a settle drag to quiet.
+    settle_frame_ms: list[float] = field(default_factory=list)
     note: str = ""
 
 
@@ -145,14 +155,21 @@ def orbit(x: XDriver, seconds: float) -> float:
 
 
 def until_quiet(x: XDriver, since: float) -> float:
-    """Seconds from `since` to the last frame painted before the window went quiet (1.5 s)."""
-    x.wait_quiet(1.5, 300)
+    """Seconds from `since` to the last frame painted before the window went quiet."""
+    x.wait_quiet(QUIET_S, 300)
     frames = [t for t in x.frames if t > since]
     return frames[-1] - since if frames else 0.0
 
 
-def settle(x: XDriver, direction: int) -> float:
-    """A one-second drag that ends elsewhere; seconds from the release to full density."""
+def longest_frame_ms(x: XDriver, since: float) -> float:
+    """The longest time between `since` and the frames painted after it, in ms."""
+    times = [since] + [t for t in x.frames if t > since]
+    return 1000.0 * max((b - a for a, b in itertools.pairwise(times)), default=0.0)
+
+
+def settle(x: XDriver, direction: int, result: CaseResult | None = None) -> float:
+    """A one-second drag that ends elsewhere; seconds from the release to full density (and
+    into `result`, the longest frame meanwhile)."""
     cx, cy = CENTER
     x.move(cx - 60 * direction, cy)
     x.pump_until(time.monotonic() + 0.2)
@@ -160,7 +177,11 @@ def settle(x: XDriver, direction: int) -> float:
     for i in range(60):
         x.move(int(cx - 60 * direction + 2 * direction * i), cy)
         x.pump_until(start + (i + 1) / 60.0)
-    return until_quiet(x, x.button(False))
+    released = x.button(False)
+    seconds = until_quiet(x, released)
+    if result is not None:
+        result.settle_frame_ms.append(longest_frame_ms(x, released))
+    return seconds
 
 
 def key_return(x: XDriver, display: str, wid: int) -> float:
@@ -365,9 +386,10 @@ def run_case(binary: Path, ply: Path, view: str, args, display: str, tag: str) -
     with tempfile.TemporaryDirectory(prefix="bench-window-") as home:
         env = private_env(home, display)
         log = open(Path(home) / "log.txt", "w")
-        proc = subprocess.Popen(
-            [str(binary), str(ply), "--view", view], env=env, stdout=log, stderr=log
-        )
+        command = [str(binary), str(ply), "--view", view]
+        if args.compare:
+            command += ["--compare", str(args.compare)]
+        proc = subprocess.Popen(command, env=env, stdout=log, stderr=log)
         try:
             wid = find_window(display, proc, 60)
             size_window(wid, env)
@@ -382,20 +404,20 @@ def run_case(binary: Path, ply: Path, view: str, args, display: str, tag: str) -
             # Warm-up: pipelines, the moving resolution's steps, views still being built.
             for _ in range(2):
                 orbit(x, 2.0)
-                x.wait_quiet(4.0, 120)
+                x.wait_quiet(max(4.0, QUIET_S), 120)
             for _ in range(args.runs):
                 result.orbit_fps.append(orbit(x, args.orbit_seconds))
-                x.wait_quiet(1.5, 120)
+                x.wait_quiet(QUIET_S, 120)
             if view == "points" and args.settle:
                 for i in range(args.runs):
-                    x.wait_quiet(1.5, 120)
-                    result.settle_s.append(settle(x, 1 if i % 2 == 0 else -1))
+                    x.wait_quiet(QUIET_S, 120)
+                    result.settle_s.append(settle(x, 1 if i % 2 == 0 else -1, result))
                     result.return_s.append(key_return(x, display, wid))
             last = CENTER
             for dx, dy in HOVER_SPOTS[: args.hovers]:
                 spot = (CENTER[0] + dx, CENTER[1] + dy)
                 for _ in range(3):
-                    x.wait_quiet(1.0, 120)
+                    x.wait_quiet(min(1.0, QUIET_S), 120)
                     ms = hover(x, spot, last, args.hover_timeout)
                     last = spot
                     if ms != "scene":
@@ -414,7 +436,7 @@ def run_case(binary: Path, ply: Path, view: str, args, display: str, tag: str) -
             if view == "surface" and args.iso and ply == args.demo:
                 for _ in range(args.runs):
                     x.move(*CENTER)
-                    x.wait_quiet(1.5, 120)
+                    x.wait_quiet(QUIET_S, 120)
                     try:
                         result.iso_rate.append(iso_sweep(x, args.iso_slider, args.iso_seconds))
                     except RuntimeError as e:
@@ -552,6 +574,9 @@ def open_song(args) -> int:
         print(f"making {audio}: {args.open_seconds:.0f} s of data/real-music ...", flush=True)
         real_music_song(audio, args.open_seconds)
     binaries = [("ours", args.loudscape)] + ([("vs", args.vs)] if args.vs else [])
+    if args.compare and not args.compare.is_file():
+        print(f"{args.compare}: no such file (--compare)", file=sys.stderr)
+        return 1
     print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs", flush=True)
     xvfb, display = start_xvfb()
     times: dict[str, list[tuple[float, float]]] = {name: [] for name, _ in binaries}
@@ -583,6 +608,7 @@ def case_line(r: CaseResult) -> str:
         line += f"; iso updates/s {fmt(r.iso_rate)}"
     if r.settle_s:
         line += f"; settle s {fmt(r.settle_s, 2)}; return s {fmt(r.return_s, 2)}"
+        line += f"; longest settle frame ms {fmt(r.settle_frame_ms, 0)}"
     return line + (f"; {r.note}" if r.note else "")
 
 
@@ -595,6 +621,7 @@ def fmt(values: list[float], digits: int = 1) -> str:
 
 
 def main() -> int:
+    global QUIET_S
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--loudscape", type=Path, default=Path("target/release/loudscape"))
     parser.add_argument(
@@ -624,6 +651,15 @@ def main() -> int:
     )
     parser.add_argument("--shots", type=Path, help="save screenshots of each case to this folder")
     parser.add_argument(
+        "--compare", type=Path, help="open each song with --compare THIS (A/B side by side)"
+    )
+    parser.add_argument(
+        "--quiet-seconds",
+        type=float,
+        default=QUIET_S,
+        help="no frame painted this long: the window is quiet (longer than its longest frame)",
+    )
+    parser.add_argument(
         "--open",
         type=Path,
         help="instead: time to the first points and to the whole cloud of this song, opened "
@@ -640,6 +676,7 @@ def main() -> int:
         "--extractor", type=Path, default=Path(".venv/bin/loudscape-extract"), help="for --open"
     )
     args = parser.parse_args()
+    QUIET_S = args.quiet_seconds
     for binary in [args.loudscape] + ([args.vs] if args.vs else []):
         if not binary.is_file():
             print(f"{binary}: no such binary (cargo build --release)", file=sys.stderr)
@@ -717,20 +754,21 @@ def print_table(results, binaries, files, args) -> None:
     ]
     print("| isovalue sweep, demo | >= 10 updates/s | " + " | ".join(row) + " |")
     for label, _ in files:
-        for what, attr in (
-            ("settle after an orbit", "settle_s"),
-            ("return to the view", "return_s"),
+        for what, attr, unit, aim in (
+            ("settle after an orbit", "settle_s", "s", "a few s"),
+            ("return to the view", "return_s", "s", "a few s"),
+            ("longest frame of the settle", "settle_frame_ms", "ms", "-"),
         ):
             row = [
                 cell(
                     med(getattr(results.get((n, label, "points"), CaseResult()), attr)),
-                    "s",
+                    unit,
                     lambda v: True,
                 )
                 for n in names
             ]
             if any(c != "-" for c in row):
-                print(f"| {what}, points, {label} | a few s | " + " | ".join(row) + " |")
+                print(f"| {what}, points, {label} | {aim} | " + " | ".join(row) + " |")
 
 
 if __name__ == "__main__":
