@@ -165,15 +165,7 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "song".into());
-    let note = if thinning.stride > 1 {
-        format!(
-            "This page carries {} of the song's {} points (every {}th), positions to 1/65535 \
-             of the box.",
-            thinning.kept, thinning.total, thinning.stride
-        )
-    } else {
-        "Every point of the song, positions to 1/65535 of the box.".to_string()
-    };
+    let note = thinning_note(&thinning, cloud.meta.mode);
     let title = loudscape::annotate::legend::picture_name(&cloud)
         .replace('&', "&amp;")
         .replace('<', "&lt;");
@@ -213,6 +205,37 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// What the page says it carries: every point, or which of them, of the song or the timeline.
+fn thinning_note(thinning: &page_cloud::Thinning, mode: DataMode) -> String {
+    let whole = match mode {
+        DataMode::Timeline => "timeline",
+        _ => "song",
+    };
+    if thinning.stride > 1 {
+        format!(
+            "This page carries {} of the {whole}'s {} points (every {}), positions to 1/65535 \
+             of the box.",
+            thinning.kept,
+            thinning.total,
+            ordinal(thinning.stride)
+        )
+    } else {
+        format!("Every point of the {whole}, positions to 1/65535 of the box.")
+    }
+}
+
+/// "2nd", "3rd", "11th", "21st": the k of "every k-th point".
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -224,6 +247,37 @@ mod tests {
         assert_eq!(base64(b"fo"), "Zm8=");
         assert_eq!(base64(b"foo"), "Zm9v");
         assert_eq!(base64(b"foobar\xff"), "Zm9vYmFy/w==");
+    }
+
+    #[test]
+    fn the_note_names_what_was_thinned_in_english() {
+        let thinned = page_cloud::Thinning {
+            total: 10,
+            kept: 5,
+            stride: 2,
+        };
+        assert_eq!(
+            thinning_note(&thinned, DataMode::Timeline),
+            "This page carries 5 of the timeline's 10 points (every 2nd), positions to \
+             1/65535 of the box."
+        );
+        let whole = page_cloud::Thinning {
+            total: 10,
+            kept: 10,
+            stride: 1,
+        };
+        assert!(thinning_note(&whole, DataMode::Song).starts_with("Every point of the song,"));
+        let ordinals: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 101, 111]
+            .into_iter()
+            .map(ordinal)
+            .collect();
+        assert_eq!(
+            ordinals,
+            [
+                "1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "23rd",
+                "101st", "111th"
+            ]
+        );
     }
 
     #[test]

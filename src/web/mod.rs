@@ -160,8 +160,11 @@ struct WebApp {
     world_from_data: Mat4,
     world_box: (Vec3, Vec3),
     settings: RenderSettings,
-    /// The camera waits for a fit to the view's size (the first frame, R).
-    fit_pending: bool,
+    /// The view's aspect ratio the camera was last fitted at, while the camera follows the view's
+    /// shape (from the start, and after F or R, until the user turns, pans or zooms): the side
+    /// panel settles its width over the first frames and the browser window can be resized, and a
+    /// fit to the first frame's wider view cut a long timeline's box at the left. NaN: fit now.
+    follow_fit: Option<f32>,
     frame_index: u32,
 }
 
@@ -220,7 +223,7 @@ impl WebApp {
             world_from_data,
             world_box,
             settings,
-            fit_pending: true,
+            follow_fit: Some(f32::NAN),
             frame_index: 0,
         })
     }
@@ -464,10 +467,13 @@ impl WebApp {
         if reset {
             self.camera = Camera::default();
         }
-        if fit || reset || self.fit_pending {
-            let (min, max) = self.world_box;
-            self.camera.fit(min, max, aspect);
-            self.fit_pending = false;
+        self.follow_fit = next_fit(self.follow_fit, moving, fit || reset);
+        if let Some(fitted) = self.follow_fit {
+            if fitted != aspect {
+                let (min, max) = self.world_box;
+                self.camera.fit(min, max, aspect);
+                self.follow_fit = Some(aspect);
+            }
         }
         moving
     }
@@ -504,6 +510,18 @@ impl WebApp {
                 }
             });
         });
+    }
+}
+
+/// Whether the camera follows the view's shape after this frame's input (see
+/// `WebApp::follow_fit`): F or R start following (and fit at once), the user's own move stops it.
+fn next_fit(follow: Option<f32>, user_moved: bool, fit_asked: bool) -> Option<f32> {
+    if fit_asked {
+        Some(f32::NAN)
+    } else if user_moved {
+        None
+    } else {
+        follow
     }
 }
 

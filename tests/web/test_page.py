@@ -24,6 +24,7 @@ from playwright.sync_api import sync_playwright
 
 ROOT = Path(__file__).resolve().parents[2]
 SONG = ROOT / "data" / "demo_song.ply"
+TIMELINE = ROOT / "data" / "demo_timeline.ply"
 BINARY = Path(os.environ.get("LOUDSCAPE_BIN", ROOT / "target" / "debug" / "loudscape")).absolute()
 CHROMIUM = os.environ.get("LOUDSCAPE_CHROMIUM", "/usr/bin/chromium")
 # SwiftShader's WebGPU adapter; the Vulkan feature makes headless chromium composite the WebGPU
@@ -338,6 +339,45 @@ def test_a_browser_without_webgpu_and_webgl2_gets_a_message(playwright, page_fil
     assert "WebGPU or WebGL2" in message.inner_text()
     assert errors == [], errors
     browser.close()
+
+
+def _longest_run(flags: np.ndarray) -> int:
+    """The longest run of True in a 1-D array."""
+    padded = np.concatenate(([0], flags.astype(np.int8), [0]))
+    edges = np.flatnonzero(np.diff(padded))
+    return int((edges[1::2] - edges[::2]).max(initial=0))
+
+
+def test_a_timeline_page_shows_its_whole_box(browser, tmp_path):
+    """A timeline's box is long: the camera is fitted to the view the side panel leaves (the
+    panel settles its width after the first frame), so no line of the box runs out of the
+    view's left, top or bottom edge (a tick's end may touch it: the fit is to the box); and the
+    page speaks of a timeline."""
+    out = tmp_path / "timeline.html"
+    run = subprocess.run(
+        [str(BINARY), "page", str(TIMELINE), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "Every point of the timeline" in out.read_text()
+    page, errors = _open(browser, out.as_uri())
+
+    def framed():
+        rgb = _view_pixels(page)
+        if _point_colours(rgb)[1] < 200:
+            return None
+        lit = rgb.max(axis=2) > 60
+        # Lines along each edge strip (columns at the left, rows at the top and bottom).
+        strips = [lit[:, :3].T, lit[:3, :], lit[-3:, :]]
+        return rgb if max(_longest_run(line) for s in strips for line in s) <= 3 else None
+
+    rgb = _wait_for(framed, "the timeline's box or points touch the view's edge")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(rgb.astype(np.uint8)).save(SHOTS / "page_timeline.png")
+    assert not errors, errors
+    page.close()
 
 
 def test_a_three_minute_song_is_thinned_into_the_budget(tmp_path):
