@@ -182,6 +182,7 @@ def test_the_song_and_timeline_commands_keep_freed_memory(monkeypatch, tmp_path)
 
     calls = []
     monkeypatch.setattr(cli, "keep_freed_memory", lambda: calls.append(1) or True)
+    monkeypatch.setattr(cli, "one_blas_thread", lambda: 0)  # not this process's BLAS
     missing = str(tmp_path / "missing.wav")
     assert cli.main(["song", missing, "-o", str(tmp_path / "x.ply"), "--quiet"]) == 1
     assert calls == [1]
@@ -219,5 +220,6 @@ def test_the_song_command_runs_blas_on_one_thread(monkeypatch, tmp_path):
 
     calls = []
     monkeypatch.setattr(cli, "one_blas_thread", lambda: calls.append(1) or 1)
+    monkeypatch.setattr(cli, "keep_freed_memory", lambda: True)  # nor its allocator
     assert cli.main(["song", str(tmp_path / "no.wav"), "-o", str(tmp_path / "x.ply")]) == 1
     assert calls == [1]
