@@ -4,7 +4,7 @@
 //! back to an RGBA image. Colours are gamma-encoded (`Rgba8Unorm`), as egui's are, so what the
 //! passes write is what lands on screen and in the PNG.
 
-use crate::render::gpu::readback::{ReadbackError, map_buffer_after, map_buffer_with};
+use crate::render::gpu::readback::{ReadbackError, map_buffer_after};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -200,40 +200,13 @@ impl TargetReader {
         target: &RenderTarget,
         out: &mut [u8],
     ) -> Result<(), ReadbackError> {
-        let row = self.width as usize * 4;
-        if !target.has_size(self.width, self.height) || out.len() != row * self.height as usize {
+        if out.len() != self.width as usize * 4 * self.height as usize {
             return Err(ReadbackError::Map {
                 what: "the rendered image".into(),
                 reason: "its size does not match the target's".into(),
             });
         }
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("target::readback"),
-        });
-        encoder.copy_texture_to_buffer(
-            target.color.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(self.padded_row),
-                    rows_per_image: Some(self.height),
-                },
-            },
-            wgpu::Extent3d {
-                width: self.width,
-                height: self.height,
-                depth_or_array_layers: 1,
-            },
-        );
-        queue.submit([encoder.finish()]);
-        map_buffer_with(device, &self.buffer, "the rendered image", |bytes| {
-            for (dst, src) in out
-                .chunks_exact_mut(row)
-                .zip(bytes.chunks_exact(self.padded_row as usize))
-            {
-                dst.copy_from_slice(&src[..row]);
-            }
-        })
+        let index = self.submit_copy(device, queue, target)?;
+        self.finish_into(device, index, out)
     }
 }
