@@ -19,15 +19,8 @@ struct PointParams {
 // Per STFT bin: the view's z range its points are spread over (shaders/utils/freq_axis.wgsl).
 @group(1) @binding(2) var<storage, read> freq_table: array<vec2<f32>>;
 
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) corner: vec2<f32>,
-    @location(1) color: vec3<f32>,
-};
-
 @vertex
-fn vs_main(@builtin(vertex_index) vertex_index: u32) -> VertexOut {
-    var out: VertexOut;
+fn vs_main(@builtin(vertex_index) vertex_index: u32) -> DiscVertex {
     // Three vertices per point, not instanced: software rasterizers shade vertices in batches
     // of 8 or 16 within a draw, but a three-vertex instance fills one batch with three.
     let instance = vertex_index / 3u;
@@ -37,32 +30,14 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32) -> VertexOut {
     let position = vec3<f32>(cloud[base], cloud[base + 1u], freq_view_z(cloud[base + 2u], index));
     let scalar = cloud[base + 3u];
     let hp = cloud[base + 4u];
-    // One triangle around the unit disc (three vertices per point, not six: vertex work
-    // dominates on software rasterizers).
-    let corners = array<vec2<f32>, 3>(
-        vec2<f32>(0.0, 2.0), vec2<f32>(-1.7320508, -1.0), vec2<f32>(1.7320508, -1.0),
-    );
-    let corner = corners[vertex];
-    var clip = frame.clip_from_data * vec4<f32>(position, 1.0);
-    // Offset in pixels, scaled back into clip space so the disc keeps its pixel size.
-    let half_size = 0.5 * params.size_px * frame.viewport.zw * 2.0;
-    clip = vec4<f32>(clip.xy + corner * half_size * clip.w, clip.zw);
-    if (scalar < params.min_scalar || index >= params.count || position.z > 2.0) {
-        clip = vec4<f32>(0.0, 0.0, -2.0, 1.0);
-    }
-    out.clip = clip;
-    out.corner = corner;
-    out.color = hp_palette(hp);
-    return out;
+    let hidden = scalar < params.min_scalar || index >= params.count || position.z > 2.0;
+    return disc_vertex(position, vertex, params.size_px, hp_palette(hp), hidden);
 }
 
 @fragment
-fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let r2 = dot(in.corner, in.corner);
-    if (r2 > 1.0) {
+fn fs_main(in: DiscVertex) -> @location(0) vec4<f32> {
+    if (!disc_inside(in.corner)) {
         discard;
     }
-    // A little shading toward the rim so dense clouds keep their depth.
-    let shade = 1.0 - 0.25 * r2;
-    return vec4<f32>(in.color * shade, 1.0);
+    return disc_colour(in.corner, in.color);
 }

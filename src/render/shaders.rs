@@ -5,6 +5,7 @@
 pub const FRAME: &str = include_str!("../../shaders/utils/frame.wgsl");
 pub const PALETTE: &str = include_str!("../../shaders/utils/palette.wgsl");
 pub const FREQ_AXIS: &str = include_str!("../../shaders/utils/freq_axis.wgsl");
+pub const POINT_DISC: &str = include_str!("../../shaders/utils/point_disc.wgsl");
 
 pub const POINTS: &str = include_str!("../../shaders/points.wgsl");
 pub const POINTS_ATTRIBUTES: &str = include_str!("../../shaders/points_attributes.wgsl");
@@ -27,12 +28,12 @@ pub fn compose(parts: &[&str]) -> String {
 }
 
 pub fn points() -> String {
-    compose(&[FRAME, PALETTE, FREQ_AXIS, POINTS])
+    compose(&[FRAME, PALETTE, FREQ_AXIS, POINT_DISC, POINTS])
 }
 
 /// The points without storage buffers (WebGL2): `render::points_attributes`.
 pub fn points_attributes() -> String {
-    compose(&[FRAME, PALETTE, POINTS_ATTRIBUTES])
+    compose(&[FRAME, PALETTE, POINT_DISC, POINTS_ATTRIBUTES])
 }
 
 pub fn lines() -> String {
