@@ -173,6 +173,26 @@ def _drag_turns_the_view(page, before: np.ndarray) -> np.ndarray:
     return after
 
 
+def _pointer_to_panel(page):
+    """The pointer onto the side panel, so no hover read-out covers the view."""
+    box = page.locator("#loudscape-view").bounding_box()
+    page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
+
+
+def _unchanged(page, before: np.ndarray) -> np.ndarray | None:
+    """The view when it shows `before` again (under 0.1 % of its pixels changed), else None."""
+    rgb = _view_pixels(page)
+    changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+    return rgb if changed < 0.001 * rgb.shape[0] * rgb.shape[1] else None
+
+
+def _reset_brings_back(page, before: np.ndarray) -> np.ndarray:
+    """R resets the camera and fits it again: the first picture, `before`, comes back."""
+    _pointer_to_panel(page)
+    page.keyboard.press("r")
+    return _wait_for(lambda: _unchanged(page, before), "R did not bring back the first view")
+
+
 def _hover_opens_a_readout(page, before: np.ndarray):
     """Over the empty background nothing opens; over a warm point in the middle of the cloud
     (in `before`, the view at rest) the read-out box opens at the cursor."""
@@ -235,18 +255,7 @@ def test_the_song_shows_and_turns_from_a_file_url(browser, page_file):
     Image.fromarray(after.astype(np.uint8)).save(SHOTS / "page_after_drag.png")
     assert min(_point_colours(after)) > 200, "the points left the view after the drag"
 
-    # R resets the camera and fits it again: the first picture comes back. The pointer goes
-    # to the side panel first, so no hover read-out covers the view.
-    box = page.locator("#loudscape-view").bounding_box()
-    page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
-    page.keyboard.press("r")
-
-    def reset():
-        rgb = _view_pixels(page)
-        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
-        return changed if changed < 0.001 * rgb.shape[0] * rgb.shape[1] else None
-
-    _wait_for(reset, "R did not bring back the first view")
+    _reset_brings_back(page, before)
     assert errors == [], errors
     page.close()
 
@@ -306,25 +315,17 @@ def test_a_browser_without_webgpu_shows_the_points_on_webgl2(playwright, page_fi
     Image.fromarray(after.astype(np.uint8)).save(SHOTS / "page_webgl2_after_drag.png")
     assert min(_point_colours(after)) > 200, "the points left the view after the drag"
 
-    # R brings back the first view (the pointer on the side panel, so no read-out covers it).
-    box = page.locator("#loudscape-view").bounding_box()
-    page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
-    page.keyboard.press("r")
-
-    def unchanged():
-        rgb = _view_pixels(page)
-        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
-        return rgb if changed < 0.001 * rgb.shape[0] * rgb.shape[1] else None
-
-    rest = _wait_for(unchanged, "R did not bring back the first view")
+    rest = _reset_brings_back(page, before)
     _hover_opens_a_readout(page, rest)
     page.screenshot(path=SHOTS / "page_webgl2_hover.png")
 
-    page.mouse.move(box["x"] + box["width"] * 0.9, box["y"] + box["height"] * 0.9)
+    _pointer_to_panel(page)
     page.keyboard.press("s")
     _next_frames(page)
     _next_frames(page)
-    assert unchanged() is not None, "S changed the view on WebGL2, where the surface is off"
+    assert _unchanged(page, before) is not None, (
+        "S changed the view on WebGL2, where the surface is off"
+    )
     assert errors == [], errors
     browser.close()
 
