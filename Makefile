@@ -45,8 +45,8 @@ run: build venv
 	fi
 
 lint-rust:
-	$(CARGO) fmt --check
-	$(CARGO) clippy --all-targets -- -D warnings
+	$(CARGO) fmt --all --check
+	$(CARGO) clippy --workspace --all-targets -- -D warnings
 
 # Xvfb runs with -noreset: by default it resets whenever its last client leaves, and a window
 # opened during the reset failed with "Failed to open connection to X server" (the window tests
@@ -57,6 +57,7 @@ lint-rust:
 test-rust: system venv
 	$(XVFB) $(CARGO) test -- --skip window
 	$(XVFB) $(CARGO) test window -- --test-threads=1
+	$(CARGO) test -q -p loudscape-shader-msl
 
 lint-py: venv
 	$(VENV)/bin/ruff check preprocess bench tests/python tests/web

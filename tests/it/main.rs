@@ -34,7 +34,6 @@ mod reliability_cache_shared;
 mod reliability_loader;
 mod render_points;
 mod screenshot;
-mod shaders_msl;
 mod source_checked;
 mod surface;
 mod text_scripts;

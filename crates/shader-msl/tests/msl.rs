@@ -7,7 +7,7 @@ use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 #[test]
 fn every_shader_translates_to_msl() {
-    let shaders = loudscape::render::shaders::all();
+    let shaders = loudscape_shader_msl::shaders::all();
     let mut translated_entry_points = Vec::new();
     for (name, source) in shaders {
         let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| {
@@ -43,7 +43,10 @@ fn every_shader_translates_to_msl() {
     }
     // Every entry point written in shaders/ reached the MSL writer through some module: a
     // shader file left out of `shaders::all()` would otherwise never be translated.
-    let written = entry_points_in_shader_files(std::path::Path::new("shaders"));
+    let written = entry_points_in_shader_files(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shaders"
+    )));
     assert!(
         written.len() >= 11,
         "expected the entry points of shaders/, found {written:?}"
