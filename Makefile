@@ -60,8 +60,8 @@ test-rust: system venv
 	$(CARGO) test -q -p loudscape-shader-msl
 
 lint-py: venv
-	$(VENV)/bin/ruff check preprocess bench tests/python tests/web
-	$(VENV)/bin/ruff format --check preprocess bench tests/python tests/web
+	$(VENV)/bin/ruff check preprocess bench tests/python tests/web docs
+	$(VENV)/bin/ruff format --check preprocess bench tests/python tests/web docs
 
 # Freely licensed game soundtracks from Debian packages (cached in data/real-music/) for
 # preprocess/tests/test_real_music.py; fails with one line if a download fails.
