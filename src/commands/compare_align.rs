@@ -5,6 +5,7 @@
 //! (`extract::align::compare_audio`, docs/COMPARE.md "Releases"); `--offset` alone needs no
 //! audio, and with `--align` it is added to the offset found (a nudge).
 
+use anyhow::bail;
 use loudscape::data::cloud::PointCloud;
 use loudscape::data::compare::{align_in_time, aligned_words, match_in_level};
 use loudscape::extract::align::compare_audio;
@@ -17,20 +18,72 @@ pub struct AlignedB {
     pub cloud: PointCloud,
     /// "B aligned +0.731 s, -3.8 dB to match A"; None when B is drawn as it is.
     pub note: Option<String>,
+    /// B's offset against A in seconds (found and nudged), where B was moved in time.
+    pub offset_s: Option<f64>,
+    /// The gain B's levels were moved by, in dB, where they were matched to A's.
+    pub gain_db: Option<f64>,
+}
+
+/// What is asked of B: `--align`, `--offset SECONDS`, `--match-loudness` (of `render`, `video`
+/// and `page`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AlignAsk {
+    pub align: bool,
+    pub offset: Option<f64>,
+    pub match_loudness: bool,
+}
+
+impl AlignAsk {
+    /// The flags of `render` and `video`.
+    pub fn of(draw: &DrawArgs) -> Self {
+        Self {
+            align: draw.align,
+            offset: draw.offset,
+            match_loudness: draw.match_loudness,
+        }
+    }
+
+    /// Checks the flags before any work: `--match-loudness` needs the comparison (`--align`),
+    /// and none of them means anything without `--compare` (`compared`: B is given); an offset
+    /// is a finite number of seconds.
+    pub fn check(&self, compared: bool) -> anyhow::Result<()> {
+        let asked = self.align || self.offset.is_some() || self.match_loudness;
+        if asked && !compared {
+            bail!("--align, --offset and --match-loudness need a second cloud: --compare B");
+        }
+        if self.match_loudness && !self.align {
+            bail!(
+                "--match-loudness needs --align (the matching gain comes from comparing the audio)"
+            );
+        }
+        if let Some(offset) = self.offset
+            && (!offset.is_finite() || offset.abs() > 3600.0)
+        {
+            bail!("--offset {offset} is not a number of seconds between -3600 and 3600");
+        }
+        Ok(())
+    }
 }
 
 /// B moved as `draw` asks (see the module's words); `a` and `b` are the loaded clouds.
 pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result<AlignedB> {
-    if !draw.align && draw.offset.is_none() {
+    align_b_as(a, b, AlignAsk::of(draw))
+}
+
+/// B moved as `ask` says (see the module's words); `a` and `b` are the loaded clouds.
+pub fn align_b_as(a: &PointCloud, b: PointCloud, ask: AlignAsk) -> anyhow::Result<AlignedB> {
+    if !ask.align && ask.offset.is_none() {
         return Ok(AlignedB {
             cloud: b,
             note: None,
+            offset_s: None,
+            gain_db: None,
         });
     }
     let mut found = None;
     let mut map = None;
     let mut gain = None;
-    if draw.align {
+    if ask.align {
         let audio = |cloud: &PointCloud| {
             checked_source(cloud).map_err(|e| {
                 anyhow::anyhow!("{}: --align needs its audio: {e}", cloud.path.display())
@@ -59,18 +112,18 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
             gain = Some(gain_b - gain_a);
         }
     }
-    let offset = match (found, draw.offset) {
+    let offset = match (found, ask.offset) {
         (None, None) => None,
         (found, nudge) => Some(found.unwrap_or(0.0) + nudge.unwrap_or(0.0)),
     };
     let mut cloud = b;
     match (map, offset) {
-        (Some(map), _) => map.move_onto_first(&mut cloud, draw.offset.unwrap_or(0.0)),
+        (Some(map), _) => map.move_onto_first(&mut cloud, ask.offset.unwrap_or(0.0)),
         (None, Some(offset)) => align_in_time(&mut cloud, offset),
         (None, None) => {}
     }
-    let matched = if draw.match_loudness { gain } else { None };
-    if draw.match_loudness && matched.is_none() {
+    let matched = if ask.match_loudness { gain } else { None };
+    if ask.match_loudness && matched.is_none() {
         eprintln!(
             "warning: {}: no integrated loudness to match (silence?); levels drawn as they are",
             cloud.path.display()
@@ -82,6 +135,8 @@ pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result
     Ok(AlignedB {
         cloud,
         note: aligned_words(offset, matched),
+        offset_s: offset,
+        gain_db: matched,
     })
 }
 

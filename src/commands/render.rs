@@ -108,22 +108,7 @@ impl DrawArgs {
     /// Checks the flags before any work: `--match-loudness` needs the comparison (`--align`), and
     /// none of them means anything without `--compare`; an offset is a finite number of seconds.
     pub fn check_alignment(&self) -> anyhow::Result<()> {
-        let draw = self;
-        let asked = draw.align || draw.offset.is_some() || draw.match_loudness;
-        if asked && draw.compare.is_none() {
-            bail!("--align, --offset and --match-loudness need a second cloud: --compare B");
-        }
-        if draw.match_loudness && !draw.align {
-            bail!(
-                "--match-loudness needs --align (the matching gain comes from comparing the audio)"
-            );
-        }
-        if let Some(offset) = draw.offset
-            && (!offset.is_finite() || offset.abs() > 3600.0)
-        {
-            bail!("--offset {offset} is not a number of seconds between -3600 and 3600");
-        }
-        Ok(())
+        super::compare_align::AlignAsk::of(self).check(self.compare.is_some())
     }
 
     /// Refuses a `--point-size` outside 0.5 to 64 pixels.

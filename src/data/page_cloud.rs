@@ -35,6 +35,19 @@ fn dequantize(q: u16, min: f32, max: f32) -> f32 {
     min + (max - min) * (q as f32 / STEPS)
 }
 
+/// `axes` as the metadata's `axes` object.
+fn axes_value(axes: &crate::data::axes::Axes) -> Value {
+    let object = axes
+        .named()
+        .into_iter()
+        .map(|(name, axis)| {
+            let value = serde_json::to_value(axis).expect("an axis is plain data");
+            (name.to_string(), value)
+        })
+        .collect();
+    Value::Object(object)
+}
+
 /// The page's bytes of `cloud`, at most `max_points` points (at least one).
 pub fn encode(cloud: &PointCloud, max_points: usize) -> (Vec<u8>, Thinning) {
     let total = cloud.points.len();
@@ -45,6 +58,11 @@ pub fn encode(cloud: &PointCloud, max_points: usize) -> (Vec<u8>, Thinning) {
             let mut object = object.clone();
             if object.contains_key("point_count") {
                 object.insert("point_count".into(), Value::from(kept.len() as u64));
+            }
+            // The axes the points are on: the file's, or the union of an A/B compare's
+            // (`data::compare::on_union_axes`), which the raw metadata does not know.
+            if object.contains_key("axes") {
+                object.insert("axes".into(), axes_value(&cloud.meta.axes));
             }
             Some(Value::Object(object))
         }
@@ -151,6 +169,21 @@ mod tests {
         }
         // A 10-byte record a point, half the PLY's 20.
         assert!(bytes.len() < song.len() * 20 / 2);
+    }
+
+    /// A cloud moved onto other axes (an A/B compare's union) carries those axes, not the
+    /// file's.
+    #[test]
+    fn a_cloud_on_other_axes_carries_them() {
+        let song = song();
+        let mut louder = song.clone();
+        louder.meta.axes.y.min += 6.0;
+        louder.meta.axes.y.max += 6.0;
+        let (a, _) = crate::data::compare::on_union_axes(&song, &louder).expect("one mode");
+        assert_ne!(a.meta.axes, song.meta.axes);
+        let (bytes, _) = encode(&a, a.len());
+        let back = decode(&bytes, "a").expect("decodes");
+        assert_eq!(back.meta.axes, a.meta.axes);
     }
 
     #[test]
