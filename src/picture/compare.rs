@@ -16,6 +16,8 @@ use crate::render::volume::{TransferPreset, VolumeSettings};
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
 
+use super::{PendingPicture, Wait};
+
 /// Pixels between the two halves of a compare picture.
 pub const GAP: u32 = 4;
 
@@ -80,11 +82,14 @@ fn view_for(
     }
 }
 
-/// One half (or the whole) of a compare picture: the scene, then labels and a title.
+/// One half (or the whole) of a compare picture into `picture` at `x`: the scene rendered and
+/// its copy submitted, with the labels and a title to draw over it once read.
 #[allow(clippy::too_many_arguments)]
 fn render_one(
     gpu: &GpuContext,
     renderer: &Renderer,
+    picture: &mut PendingPicture,
+    x: u32,
     cloud: &PointCloud,
     data: &SceneData,
     view: &FrameView,
@@ -92,12 +97,11 @@ fn render_one(
     labels_on: bool,
     title: &str,
     legend: Option<(DifferenceMeasure, f32)>,
-) -> anyhow::Result<image::RgbaImage> {
+) -> anyhow::Result<()> {
     let target = render_frame(gpu, renderer, Some(data), view, settings);
-    let mut image = target.read_rgba(&gpu.device, &gpu.queue)?;
     let shapes = half_overlay(cloud, data, view, settings, labels_on, title, legend);
-    crate::annotate::raster::draw(&mut image, &shapes.shapes, 1.0);
-    Ok(image)
+    picture.add(gpu, &target, x, shapes)?;
+    Ok(())
 }
 
 /// What is drawn over one half (or the whole) of a compare picture of `view`: the axis labels
@@ -156,6 +160,26 @@ pub fn render_compare_image(
     labels_on: bool,
     note: Option<&str>,
 ) -> anyhow::Result<image::RgbaImage> {
+    let picture = submit_compare_image(
+        gpu, renderer, scene, what, camera, size, base, labels_on, note,
+    )?;
+    Ok(picture.finish(&gpu.device, Wait::Blocking)?)
+}
+
+/// [`render_compare_image`] up to the GPU: the halves (or the difference) rendered and their
+/// read-backs submitted, finished by [`PendingPicture::finish`] where the caller waits best.
+#[allow(clippy::too_many_arguments)]
+pub fn submit_compare_image(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    scene: &mut CompareScene,
+    what: CompareView,
+    camera: Option<Camera>,
+    size: (u32, u32),
+    base: &RenderSettings,
+    labels_on: bool,
+    note: Option<&str>,
+) -> anyhow::Result<PendingPicture> {
     // The note before the file names, which are elided first when the title is too long.
     let (b_title, difference_title) = match note {
         Some(note) => (format!("{note}: "), format!("B - A, {note}: ")),
@@ -193,9 +217,12 @@ pub fn render_compare_image(
             }
             // One camera for both: the boxes are the same, so A's fitted view is B's.
             let frame = view_for(camera, &scene.data_a, half, size.1, 2.0);
-            let left = render_one(
+            let mut picture = PendingPicture::new(size.0, size.1, image::Rgba([90, 96, 110, 255]));
+            render_one(
                 gpu,
                 renderer,
+                &mut picture,
+                0,
                 &scene.a,
                 &scene.data_a,
                 &frame,
@@ -204,9 +231,11 @@ pub fn render_compare_image(
                 &format!("A: {name_a}"),
                 None,
             )?;
-            let right = render_one(
+            render_one(
                 gpu,
                 renderer,
+                &mut picture,
+                half + GAP,
                 &scene.b,
                 &scene.data_b,
                 &frame,
@@ -215,11 +244,7 @@ pub fn render_compare_image(
                 &format!("{b_title}{name_b}"),
                 None,
             )?;
-            let mut image =
-                image::RgbaImage::from_pixel(size.0, size.1, image::Rgba([90, 96, 110, 255]));
-            image::imageops::replace(&mut image, &left, 0, 0);
-            image::imageops::replace(&mut image, &right, i64::from(half + GAP), 0);
-            Ok(image)
+            Ok(picture)
         }
         CompareView::Difference(measure) => {
             scene.set_measure(&gpu.device, &gpu.queue, renderer, measure);
@@ -229,9 +254,12 @@ pub fn render_compare_image(
                 .context("the difference grid was not built")?;
             let settings = difference_settings(base);
             let frame = view_for(camera, &grids.data, size.0, size.1, 1.0);
+            let mut picture = PendingPicture::new(size.0, size.1, image::Rgba([0; 4]));
             render_one(
                 gpu,
                 renderer,
+                &mut picture,
+                0,
                 &scene.a,
                 &grids.data,
                 &frame,
@@ -239,7 +267,8 @@ pub fn render_compare_image(
                 labels_on,
                 &format!("{difference_title}{name_b} against {name_a}"),
                 Some((measure, grids.range())),
-            )
+            )?;
+            Ok(picture)
         }
     }
 }

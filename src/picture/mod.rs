@@ -34,6 +34,18 @@ pub fn render_view(
     view: &FrameView,
     settings: &RenderSettings,
 ) -> Result<image::RgbaImage, ScreenshotError> {
+    submit_view(gpu, renderer, scene, view, settings)?.finish(&gpu.device, Wait::Blocking)
+}
+
+/// [`render_view`] up to the GPU: the view rendered and its read-back submitted, with the
+/// labels and the legend to draw over it once read ([`PendingPicture::finish`]).
+pub fn submit_view(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    scene: Option<(&PointCloud, &SceneData)>,
+    view: &FrameView,
+    settings: &RenderSettings,
+) -> Result<PendingPicture, ScreenshotError> {
     let mut view = *view;
     view.moving = false;
     let target = crate::render::headless::render_frame(
@@ -43,15 +55,130 @@ pub fn render_view(
         &view,
         settings,
     );
-    let mut image = target.read_rgba(&gpu.device, &gpu.queue)?;
-    if let Some((cloud, data)) = scene {
-        let overlay = Overlay {
-            labels: settings.show_box,
-            legend: true,
-        };
-        draw_overlay(&mut image, &view, cloud, data, settings, overlay);
+    let shapes = match scene {
+        Some((cloud, data)) => {
+            let what = Overlay {
+                labels: settings.show_box,
+                legend: true,
+            };
+            overlay(&view, cloud, data, settings, what)
+        }
+        None => Annotation::default(),
+    };
+    let mut picture = PendingPicture::new(target.width, target.height, image::Rgba([0; 4]));
+    picture.add(gpu, &target, 0, shapes)?;
+    Ok(picture)
+}
+
+/// A picture rendered on the GPU whose read-back copies are submitted but not waited for:
+/// [`PendingPicture::finish`] waits for them (on any thread), draws each part's overlay on the
+/// CPU and puts the parts side by side. Every picture here is one, finished at once; the
+/// window's Save PNG finishes it on a thread, so the window keeps drawing meanwhile.
+pub struct PendingPicture {
+    width: u32,
+    height: u32,
+    /// What shows where no part lies (the compare's gap).
+    background: image::Rgba<u8>,
+    parts: Vec<PendingPart>,
+}
+
+/// One rendered target of a [`PendingPicture`], its copy in flight.
+struct PendingPart {
+    reader: crate::render::gpu::target::TargetReader,
+    index: wgpu::SubmissionIndex,
+    width: u32,
+    height: u32,
+    /// Its left edge in the picture.
+    x: u32,
+    overlay: Annotation,
+}
+
+/// How [`PendingPicture::finish`] waits for the GPU.
+pub enum Wait {
+    /// A blocking poll of the device (a command, a test).
+    Blocking,
+    /// Polling without blocking the device, a millisecond apart, with its queue: from a thread
+    /// beside a window, whose frames' submissions a blocking wait would hold up.
+    Polling(wgpu::Queue),
+}
+
+impl PendingPicture {
+    /// A `width` x `height` picture without parts yet, `background` where none lies.
+    pub fn new(width: u32, height: u32, background: image::Rgba<u8>) -> Self {
+        Self {
+            width,
+            height,
+            background,
+            parts: Vec::new(),
+        }
     }
-    Ok(image)
+
+    /// Submits the copy of `target` (rendered and submitted) into the picture at `x`, with
+    /// `overlay` to draw over it once read.
+    pub fn add(
+        &mut self,
+        gpu: &GpuContext,
+        target: &crate::render::gpu::target::RenderTarget,
+        x: u32,
+        overlay: Annotation,
+    ) -> Result<(), ScreenshotError> {
+        let reader = crate::render::gpu::target::TargetReader::new(&gpu.device, target);
+        let index = reader.submit_copy(&gpu.device, &gpu.queue, target)?;
+        self.parts.push(PendingPart {
+            reader,
+            index,
+            width: target.width,
+            height: target.height,
+            x,
+            overlay,
+        });
+        Ok(())
+    }
+
+    /// The picture's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Waits for the copies, draws each part's overlay and returns the picture.
+    pub fn finish(
+        self,
+        device: &wgpu::Device,
+        wait: Wait,
+    ) -> Result<image::RgbaImage, ScreenshotError> {
+        if let Wait::Polling(queue) = &wait {
+            crate::render::surface::driver::wait_polling(device, queue).map_err(|e| {
+                crate::render::gpu::readback::ReadbackError::Map {
+                    what: "the rendered image".into(),
+                    reason: e.to_string(),
+                }
+            })?;
+        }
+        let whole_part =
+            |p: &PendingPart| p.x == 0 && (p.width, p.height) == (self.width, self.height);
+        let mut picture = None;
+        let single = self.parts.len() == 1 && whole_part(&self.parts[0]);
+        for part in self.parts {
+            let mut pixels = vec![0; part.width as usize * part.height as usize * 4];
+            part.reader.finish_into(device, part.index, &mut pixels)?;
+            let mut image = image::RgbaImage::from_raw(part.width, part.height, pixels)
+                .ok_or_else(|| crate::render::gpu::readback::ReadbackError::Map {
+                    what: "the rendered image".into(),
+                    reason: "its size does not match the target's".into(),
+                })?;
+            crate::annotate::raster::draw(&mut image, &part.overlay.shapes, 1.0);
+            if single {
+                return Ok(image);
+            }
+            let whole = picture.get_or_insert_with(|| {
+                image::RgbaImage::from_pixel(self.width, self.height, self.background)
+            });
+            image::imageops::replace(whole, &image, i64::from(part.x), 0);
+        }
+        Ok(picture.unwrap_or_else(|| {
+            image::RgbaImage::from_pixel(self.width, self.height, self.background)
+        }))
+    }
 }
 
 /// What is drawn over a headless picture.

@@ -359,8 +359,10 @@ impl eframe::App for LoudscapeApp {
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.view_3d(ui));
+        // A save under way first: the frame that starts one is not counted as drawn meanwhile.
+        self.poll_picture_save(&ctx);
         if std::mem::take(&mut self.save_shot.requested) {
-            self.save_screenshot(frame);
+            self.save_screenshot(&ctx, frame);
         }
         self.remember_audio_choice();
         self.ask_to_save(&ctx, frame);

@@ -171,16 +171,17 @@ impl ViewResources {
         self.cache.invalidate_points();
     }
 
-    /// Renders the cloud `id` offscreen at the view's size, labels included, for a screenshot
-    /// (the axes and labels alone, with a renderer of its own, before the window's GPU state
-    /// is installed or without the cloud's scene).
+    /// Renders the cloud `id` offscreen at the view's size and submits its read-back, labels
+    /// to draw over it once read (`PendingPicture::finish`), for a screenshot (the axes and
+    /// labels alone, with a renderer of its own, before the window's GPU state is installed
+    /// or without the cloud's scene).
     pub fn screenshot(
         render_state: &egui_wgpu::RenderState,
         id: u64,
         cloud: &PointCloud,
         view: &FrameView,
         settings: &RenderSettings,
-    ) -> Result<image::RgbaImage, crate::ui::screenshot::ScreenshotError> {
+    ) -> Result<crate::picture::PendingPicture, crate::ui::screenshot::ScreenshotError> {
         let gpu = crate::render::gpu::context::GpuContext {
             adapter: render_state.adapter.clone(),
             device: render_state.device.clone(),
@@ -188,7 +189,7 @@ impl ViewResources {
         };
         let shot = Self::read(render_state, |r| {
             let data = r.scenes.get(&id)?;
-            Some(crate::ui::screenshot::render_view(
+            Some(crate::picture::submit_view(
                 &gpu,
                 &r.renderer,
                 Some((cloud, data)),
@@ -199,7 +200,7 @@ impl ViewResources {
         .flatten();
         shot.unwrap_or_else(|| {
             let renderer = Renderer::new(&gpu.device);
-            crate::ui::screenshot::render_view(&gpu, &renderer, None, view, settings)
+            crate::picture::submit_view(&gpu, &renderer, None, view, settings)
         })
     }
 

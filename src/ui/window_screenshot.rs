@@ -1,20 +1,25 @@
 //! The window's two screenshot paths: "Save PNG" (the 3D view rendered offscreen at the
-//! 3D view's or a chosen size, through [`crate::ui::screenshot::render_view`], labels included)
+//! 3D view's or a chosen size, through `picture::submit_view`, labels included)
 //! and the scripted `--screenshot` of the whole window (egui's own, for tests), which closes the
 //! window once saved. Save PNG writes only to a `.png` name (a video's name in the field saves
 //! nothing and says why) and never over a file this window did not save in this run: a file
 //! already there that it did not make is kept, the PNG goes to `name-2.png` beside it, and the
-//! status line says so (`state/written.rs`).
+//! status line says so (`state/written.rs`). The frame of the click renders the picture and
+//! submits its read-back; a thread waits for the copy, draws the labels and writes the PNG
+//! (`state/picture_save.rs`), the status saying "saving …" and then "saved …", so a large
+//! picture or a cloud of millions of points never holds the window.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 
 use eframe::egui::{self, RichText};
 
+use crate::picture::{PendingPicture, Wait};
 use crate::ui::bridge::CompareResources;
 use crate::ui::bridge::ViewResources;
-use crate::ui::compare_shot::{CompareView, render_compare_image};
+use crate::ui::compare_shot::{CompareView, submit_compare_image};
 use crate::ui::state::compare_window::CompareLayout;
+use crate::ui::state::picture_save::PictureSave;
 use crate::ui::state::written;
 use crate::ui::state::{LoudscapeApp, Slot};
 
@@ -28,6 +33,7 @@ impl LoudscapeApp {
             || self.previewing()
             || self.busy.is_some()
             || self.video_exporting()
+            || self.saving_picture()
             || self.compare.as_ref().is_some_and(|c| c.settling());
         let Some(state) = self.screenshot.as_mut() else {
             return;
@@ -108,12 +114,19 @@ impl LoudscapeApp {
     }
 
     /// Renders the current view offscreen (window size or the chosen size) and saves it.
-    pub(super) fn save_screenshot(&mut self, frame: &eframe::Frame) {
+    pub(super) fn save_screenshot(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
         let (Some(render_state), Some(mut view)) = (frame.wgpu_render_state(), self.last_view)
         else {
             return;
         };
         if self.active().is_none() {
+            return;
+        }
+        if let Some(save) = &self.save_shot.saving {
+            self.messages.error(format!(
+                "Save PNG: still saving {}: nothing else saved until it is written",
+                save.path.display()
+            ));
             return;
         }
         if self.save_shot.custom_size {
@@ -157,7 +170,9 @@ impl LoudscapeApp {
         let Some(loaded) = self.active() else {
             return;
         };
-        let result = match self.compare_shown_as() {
+        // Rendered and its read-back submitted in this frame; a thread waits for the copy,
+        // draws the labels, encodes and writes (the window keeps drawing meanwhile).
+        let submitted = match self.compare_shown_as() {
             // The compare the view shows: both halves, or the difference picture, labelled.
             Some(what) => {
                 // The whole view (both halves), or the chosen size.
@@ -167,41 +182,85 @@ impl LoudscapeApp {
                     self.view_px
                 };
                 compare_screenshot(render_state, what, view.camera, size, &settings)
-                    .and_then(|image| Ok(crate::ui::screenshot::save_png(&image, &path)?))
-                    .map(|()| size)
                     .map_err(|e| format!("{}: {e:#}", path.display()))
             }
             None => {
                 ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
-                    .and_then(|image| crate::ui::screenshot::save_png(&image, &path))
-                    .map(|()| (view.width, view.height))
                     .map_err(|e| e.to_string())
             }
         };
-        match result {
+        let picture = match submitted {
+            Ok(picture) => picture,
+            Err(e) => {
+                self.messages.error(e);
+                return;
+            }
+        };
+        let mut notes = String::new();
+        if renamed {
+            notes += &format!(
+                "; {} exists and this window did not save it, so it is kept",
+                wanted.display()
+            );
+        }
+        if no_dialog {
+            notes += &format!("; {}", crate::ui::open::NO_DIALOG);
+        }
+        // The full path: a bare name lands in the folder the window was started from.
+        let shown = std::path::absolute(&path).unwrap_or_else(|_| path.clone());
+        self.messages.info(format!("saving {}…", shown.display()));
+        let device = render_state.device.clone();
+        let queue = render_state.queue.clone();
+        let to = path.clone();
+        self.save_shot.saving = Some(PictureSave::start(path, notes, move || {
+            let size = picture.size();
+            let image = picture
+                .finish(&device, Wait::Polling(queue))
+                .map_err(|e| format!("{}: {e}", to.display()))?;
+            crate::ui::screenshot::save_png(&image, &to).map_err(|e| e.to_string())?;
+            Ok(size)
+        }));
+        ctx.request_repaint();
+    }
+
+    /// Whether a Save PNG is being read back or written.
+    pub(super) fn saving_picture(&self) -> bool {
+        self.save_shot.saving.is_some()
+    }
+
+    /// Once a frame: the Save PNG under way, told when it is done ("saved …").
+    pub(super) fn poll_picture_save(&mut self, ctx: &egui::Context) {
+        let Some(save) = self.save_shot.saving.as_mut() else {
+            return;
+        };
+        let Some(finished) = save.poll() else {
+            ctx.request_repaint_after(std::time::Duration::from_millis(30));
+            return;
+        };
+        let Some(save) = self.save_shot.saving.take() else {
+            return;
+        };
+        match finished.saved {
             Ok((width, height)) => {
-                self.save_shot.made.record(&path);
-                // The full path: a bare name lands in the folder the window was started from.
-                let shown = std::path::absolute(&path).unwrap_or(path);
-                let mut notes = String::new();
-                if renamed {
-                    notes += &format!(
-                        "; {} exists and this window did not save it, so it is kept",
-                        wanted.display()
-                    );
-                }
-                if no_dialog {
-                    notes += &format!("; {}", crate::ui::open::NO_DIALOG);
-                }
+                self.save_shot.made.record(&save.path);
+                let shown = std::path::absolute(&save.path).unwrap_or(save.path.clone());
                 self.messages.info(format!(
-                    "saved {} ({}×{}){notes}",
+                    "saved {} ({}×{}){}",
                     shown.display(),
                     width,
                     height,
+                    save.notes
                 ));
+                // A log line, as loads are told: tests read the frames.
+                eprintln!(
+                    "picture: saved in {:.0} ms on a thread, while the window drew {} frames",
+                    finished.took.as_secs_f64() * 1000.0,
+                    finished.frames
+                );
             }
             Err(e) => self.messages.error(e),
         }
+        ctx.request_repaint();
     }
 
     /// The scripted `--press shot-size=WxH` of tests: Save PNG at that size; `shot-path=PATH`
@@ -246,7 +305,7 @@ fn compare_screenshot(
     camera: crate::view::camera::Camera,
     size: (u32, u32),
     settings: &crate::render::scene::RenderSettings,
-) -> anyhow::Result<image::RgbaImage> {
+) -> anyhow::Result<PendingPicture> {
     CompareResources::write(render_state, |compare, view| {
         let scene = compare
             .scene
@@ -257,7 +316,7 @@ fn compare_screenshot(
             device: render_state.device.clone(),
             queue: render_state.queue.clone(),
         };
-        render_compare_image(
+        submit_compare_image(
             &gpu,
             &view.renderer,
             scene,

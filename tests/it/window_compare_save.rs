@@ -1,6 +1,7 @@
 //! Save PNG while comparing saves what the view shows: in side by side both halves (A, the
-//! gap, B), in the difference view the difference picture, not A alone. Needs a display
-//! (`make test` runs it under xvfb-run).
+//! gap, B), in the difference view the difference picture, not A alone; the picture is read
+//! back, encoded and written on a thread while the window goes on drawing frames. Needs a
+//! display (`make test` runs it under xvfb-run).
 
 use crate::common;
 
@@ -8,8 +9,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Runs the window on the demo song compared with itself, presses `press`, and
-/// returns the one PNG Ctrl+S saved (no dialog can open: it lands in the current folder).
-fn save(dir: &Path, press: &[&str]) -> image::RgbaImage {
+/// returns the one PNG Ctrl+S saved (no dialog can open: it lands in the current folder) and
+/// what the window wrote on stderr.
+fn save(dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap();
@@ -37,10 +39,25 @@ fn save(dir: &Path, press: &[&str]) -> image::RgbaImage {
         .collect();
     assert_eq!(saved.len(), 1, "one PNG saved: {saved:?}\n{err}");
     assert!(
-        err.contains(&format!("saved {}", saved[0].display())),
-        "the window says where: {err}"
+        err.contains(&format!("saving {}…", saved[0].display()))
+            && err.contains(&format!("saved {}", saved[0].display())),
+        "the window says where, first while it saves: {err}"
     );
-    image::open(&saved[0]).unwrap().to_rgba8()
+    (image::open(&saved[0]).unwrap().to_rgba8(), err)
+}
+
+/// The frames the window drew while the picture was saved, from its log line
+/// ("picture: saved in T ms on a thread, while the window drew N frames").
+fn frames_while_saving(err: &str) -> u32 {
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("picture: saved in "))
+        .unwrap_or_else(|| panic!("no line saying how the picture was saved: {err}"));
+    line.split_whitespace()
+        .rev()
+        .nth(1)
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no frame count in {line:?}"))
 }
 
 #[test]
@@ -51,12 +68,19 @@ fn save_png_while_comparing_saves_what_the_view_shows() {
         "this test needs a display: run it under xvfb-run"
     );
     let out = common::output_dir();
-    let side = save(
+    // A large picture: its read-back, labels and PNG take several of the window's frames, which
+    // go on meanwhile (the frame of Ctrl+S is not counted).
+    let (side, err) = save(
         &out.join("compare_save_side"),
-        &["shot-size=900x500", "compare=side", "Ctrl+S"],
+        &["shot-size=2400x1500", "compare=side", "Ctrl+S"],
+    );
+    let frames = frames_while_saving(&err);
+    assert!(
+        frames >= 1,
+        "the window drew no frame while the picture was saved: {err}"
     );
     let (w, h) = side.dimensions();
-    assert_eq!((w, h), (900, 500), "the chosen size");
+    assert_eq!((w, h), (2400, 1500), "the chosen size");
     // The gap between the halves, in the compare picture's gap colour, runs down the middle.
     let gap = loudscape::ui::compare_shot::GAP;
     let half = (w - gap) / 2;
@@ -70,15 +94,22 @@ fn save_png_while_comparing_saves_what_the_view_shows() {
         gap_rows as f64 > 0.95 * f64::from(h),
         "no gap between two halves in the {w}x{h} picture ({gap_rows} rows)"
     );
+    // Both halves hold the song's points, read back whole.
+    for region in [[0, 0, half, h], [half + gap, 0, w, h]] {
+        let share = common::coloured_share(&side, region);
+        assert!(share > 0.01, "half {region:?} looks blank ({share:.3})");
+    }
 
-    let difference = save(
+    let (difference, _) = save(
         &out.join("compare_save_difference"),
         &["shot-size=900x500", "compare=difference", "Ctrl+S"],
     );
-    let only_a = save(
+    let (only_a, err) = save(
         &out.join("compare_save_off"),
         &["shot-size=900x500", "compare=off", "Ctrl+S"],
     );
+    // The single view's Save PNG goes the same way.
+    frames_while_saving(&err);
     assert_eq!(difference.dimensions(), only_a.dimensions());
     let (share, _) = common::difference(&difference, &only_a, 40);
     assert!(

@@ -51,6 +51,7 @@ pub(super) mod iso_sweep;
 pub(super) mod loading;
 pub(super) mod messages;
 pub(super) mod open;
+pub(super) mod picture_save;
 pub(super) mod remembered;
 mod slot;
 pub(super) mod surface_status;
@@ -190,6 +191,8 @@ pub(super) struct SaveShot {
     pub(super) requested: bool,
     /// The PNGs saved in this run: only these are written again under their own name.
     pub(super) made: written::MadeHere,
+    /// The PNG being read back and written on a thread.
+    pub(super) saving: Option<picture_save::PictureSave>,
 }
 
 impl Default for SaveShot {
@@ -200,6 +203,7 @@ impl Default for SaveShot {
             size: [1920, 1080],
             requested: false,
             made: written::MadeHere::default(),
+            saving: None,
         }
     }
 }
