@@ -385,7 +385,7 @@ fn extract_on_cpu(
         }
     };
     let mut phases = Phases::default();
-    let started = std::time::Instant::now();
+    let started = cpu::Instant::now();
     let key = CacheKey::new(grid, settings);
     let cpu_grid = methods.cpu_grids.get(device, queue, grid, &key, map)?;
     phases.lap("grid", started);
@@ -418,7 +418,7 @@ fn extract_on_cpu(
     } else {
         grow(device, state, &wanted)
     };
-    let started = std::time::Instant::now();
+    let started = cpu::Instant::now();
     let buffers = state
         .buffers
         .get_or_insert_with(|| MeshBuffers::new(device, v, i));
@@ -433,7 +433,7 @@ fn extract_on_cpu(
         cpu::write_from_memory(queue, buffers, extraction.mesh(&plan), plan.active_cells);
     }
     phases.lap("vertices and triangles", started);
-    let started = std::time::Instant::now();
+    let started = cpu::Instant::now();
     let counts = SurfaceCounts {
         vertex_capacity: buffers.vertex_capacity,
         index_capacity: buffers.index_capacity,

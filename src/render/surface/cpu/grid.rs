@@ -223,26 +223,23 @@ impl InsideBits {
         let mut bits = vec![0u64; words * rows];
         let occupied: Vec<bool> = grid.row_max.iter().map(|&m| m > iso).collect();
         let per = rows.div_ceil(threads.max(1)).max(1);
-        std::thread::scope(|scope| {
-            for (chunk, out) in bits.chunks_mut(per * words).enumerate() {
-                let first_row = chunk * per;
-                let occupied = &occupied;
-                scope.spawn(move || {
-                    for (r, row_bits) in out.chunks_mut(words).enumerate() {
-                        if !occupied[first_row + r] {
-                            // No sample above the isovalue: the bits stay zero.
-                            continue;
-                        }
-                        let start = (first_row + r) * grid.sx;
-                        let samples = &grid.density[start..start + grid.sx];
-                        for (word, chunk) in row_bits.iter_mut().zip(samples.chunks(64)) {
-                            *word = chunk
-                                .iter()
-                                .enumerate()
-                                .fold(0u64, |w, (i, &v)| w | (u64::from(v > iso) << i));
-                        }
-                    }
-                });
+        let parts: Vec<_> = bits.chunks_mut(per * words).enumerate().collect();
+        let occupied_rows = &occupied;
+        super::for_each_part(parts, |(chunk, out)| {
+            let first_row = chunk * per;
+            for (r, row_bits) in out.chunks_mut(words).enumerate() {
+                if !occupied_rows[first_row + r] {
+                    // No sample above the isovalue: the bits stay zero.
+                    continue;
+                }
+                let start = (first_row + r) * grid.sx;
+                let samples = &grid.density[start..start + grid.sx];
+                for (word, chunk) in row_bits.iter_mut().zip(samples.chunks(64)) {
+                    *word = chunk
+                        .iter()
+                        .enumerate()
+                        .fold(0u64, |w, (i, &v)| w | (u64::from(v > iso) << i));
+                }
             }
         });
         Self {

@@ -16,9 +16,10 @@
 //! know which engine ran. On a CPU adapter the mesh buffers are host memory that can be mapped
 //! (`wanted_features`), and every thread writes its share of the mesh straight into them;
 //! elsewhere (the engine pinned on a GPU) the mesh is built in memory and written through the
-//! queue. Files: [`grid`] (the padded grid, the inside
-//! bits and the cell sweep), [`plan`] (counting the output and writing it on all threads, both
-//! methods' skeleton), [`marching_tets`], [`dual_contour`].
+//! queue. On wasm32 (the web page on WebGL2, src/web/gl_surface.rs) it runs serially, on the
+//! page's one thread ([`for_each_part`]), timed by the browser's clock. Files: [`grid`] (the
+//! padded grid, the inside bits and the cell sweep), [`plan`] (counting the output and writing
+//! it on all threads, both methods' skeleton), [`marching_tets`], [`dual_contour`].
 
 pub mod dual_contour;
 pub mod grid;
@@ -26,7 +27,6 @@ pub mod marching_tets;
 pub mod plan;
 
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
 
 use bytemuck::Zeroable;
 
@@ -38,6 +38,40 @@ use crate::render::surface::{SurfaceError, SurfaceMethod};
 use grid::CpuGrid;
 use plan::Plan;
 use wgpu::WriteOnly;
+
+/// The clock of [`Phases`]: std's natively; on wasm32, where std's panics, the browser's
+/// (`performance.now()`, through web_time).
+#[cfg(not(target_arch = "wasm32"))]
+pub use std::time::Instant;
+#[cfg(target_arch = "wasm32")]
+pub use web_time::Instant;
+
+/// Runs `work` on each of `parts` and gives back their results in order: each part on a scoped
+/// thread of its own; where there is one part, or on wasm32 always (a web page has no threads:
+/// `std::thread::scope` panics there), [`in_turn`] on the calling thread. The engine's sweeps
+/// share out their rows through this, so one thread (what [`default_threads`] is on wasm32) is
+/// the serial path, with the same output.
+pub fn for_each_part<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync) -> Vec<R> {
+    if cfg!(target_arch = "wasm32") || parts.len() <= 1 {
+        return in_turn(parts, work);
+    }
+    std::thread::scope(|scope| {
+        let work = &work;
+        let workers: Vec<_> = parts
+            .into_iter()
+            .map(|part| scope.spawn(move || work(part)))
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| w.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
+/// [`for_each_part`]'s serial path: each part after the other, on the calling thread.
+pub fn in_turn<P, R>(parts: Vec<P>, work: impl Fn(P) -> R) -> Vec<R> {
+    parts.into_iter().map(work).collect()
+}
 
 /// Where the surface is extracted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,8 +164,12 @@ impl CpuExtraction<'_> {
     }
 }
 
-/// The threads a CPU extraction runs on: every core (at most 16).
+/// The threads a CPU extraction runs on: every core (at most 16); one on wasm32 (a web page
+/// has none to spawn: [`for_each_part`]).
 pub fn default_threads() -> usize {
+    if cfg!(target_arch = "wasm32") {
+        return 1;
+    }
     std::thread::available_parallelism().map_or(1, |n| n.get().min(16))
 }
 
@@ -311,4 +349,60 @@ pub(crate) fn write_from_memory(
         active_cells,
         index_count,
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{UVec3, Vec3};
+
+    use super::*;
+
+    /// The serial path, wasm32's (one thread: every part in turn on the calling thread, no
+    /// thread spawned), writes the same mesh byte for byte as the threaded one, for both
+    /// methods at isovalues low and high on the song-like field.
+    #[test]
+    fn the_serial_path_gives_the_threaded_mesh() {
+        let caller = std::thread::current().id();
+        let ran_on = |parts: Vec<u32>| for_each_part(parts, |_| std::thread::current().id());
+        assert_eq!(
+            ran_on(vec![7]),
+            vec![caller],
+            "one part ran on another thread"
+        );
+        assert!(
+            ran_on(vec![1, 2, 3]).iter().all(|&id| id != caller),
+            "the parts did not run on threads of their own"
+        );
+        assert_eq!(in_turn(vec![1, 2, 3], |p| p * 10), vec![10, 20, 30]);
+
+        let dims = UVec3::new(64, 57, 49);
+        let (density, hp) = crate::data::synthetic::song_like_field(dims);
+        let grid = CpuGrid::new(dims, Vec3::splat(-1.0), Vec3::ONE, &density, &hp);
+        let mut triangles = 0;
+        for method in SurfaceMethod::ALL {
+            for iso in [0.2, 0.5] {
+                let mesh = |threads| {
+                    let extraction = CpuExtraction {
+                        grid: &grid,
+                        method,
+                        iso,
+                        threads,
+                    };
+                    let plan = extraction.plan(&mut Phases::default());
+                    extraction.mesh(&plan)
+                };
+                let (serial_vertices, serial_indices) = mesh(1);
+                let (threaded_vertices, threaded_indices) = mesh(4);
+                let at = format!("{} at {iso}", method.name());
+                assert!(
+                    bytemuck::cast_slice::<_, u8>(&serial_vertices)
+                        == bytemuck::cast_slice::<_, u8>(&threaded_vertices),
+                    "{at}: vertices"
+                );
+                assert_eq!(serial_indices, threaded_indices, "{at}: indices");
+                triangles += serial_indices.len() / 3;
+            }
+        }
+        assert!(triangles > 10_000, "only {triangles} triangles compared");
+    }
 }

@@ -6,13 +6,12 @@
 //! from a small buffer that stays in cache.
 
 use std::ops::Range;
-use std::time::Instant;
 
 use wgpu::WriteOnly;
 
 use crate::render::surface::buffers::MeshVertex;
-use crate::render::surface::cpu::Phases;
 use crate::render::surface::cpu::grid::{CpuGrid, InsideBits, balanced_ranges};
+use crate::render::surface::cpu::{Instant, Phases, for_each_part};
 
 /// Vertices a thread gathers before it copies them out (and a quarter as many indices' worth
 /// of bytes).
@@ -73,33 +72,21 @@ impl Plan {
         let rows = cells_y * cells_z;
         let mut counts = vec![[0u32; 3]; rows];
         let per = rows.div_ceil(threads.max(1)).max(1);
-        let chunk_cells: Vec<Vec<u32>> = std::thread::scope(|scope| {
-            let workers: Vec<_> = counts
-                .chunks_mut(per)
-                .enumerate()
-                .map(|(chunk, out)| {
-                    let (bits, count) = (&bits, &count);
-                    scope.spawn(move || {
-                        let mut cells = Vec::new();
-                        for (r, c) in out.iter_mut().enumerate() {
-                            let row = chunk * per + r;
-                            let (cy, cz) = (row % cells_y, row / cells_y);
-                            bits.row_cells(cy, cz, |cx, mask| {
-                                let [v, i] = count(cx, cy, cz, mask);
-                                c[0] += v;
-                                c[1] += i;
-                                c[2] += 1;
-                                cells.push((cx as u32) << 8 | mask);
-                            });
-                        }
-                        cells
-                    })
-                })
-                .collect();
-            workers
-                .into_iter()
-                .map(|w| w.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                .collect()
+        let parts: Vec<_> = counts.chunks_mut(per).enumerate().collect();
+        let chunk_cells = for_each_part(parts, |(chunk, out)| {
+            let mut cells = Vec::new();
+            for (r, c) in out.iter_mut().enumerate() {
+                let row = chunk * per + r;
+                let (cy, cz) = (row % cells_y, row / cells_y);
+                bits.row_cells(cy, cz, |cx, mask| {
+                    let [v, i] = count(cx, cy, cz, mask);
+                    c[0] += v;
+                    c[1] += i;
+                    c[2] += 1;
+                    cells.push((cx as u32) << 8 | mask);
+                });
+            }
+            cells
         });
         let plan = Self::assemble(
             bits.cells_x(),
@@ -187,30 +174,29 @@ impl Plan {
         let ranges = balanced_ranges(self.row_active.len(), threads, |r| {
             u64::from(self.row_active[r])
         });
-        std::thread::scope(|scope| {
-            let (mut vertex_rest, mut index_rest) = (vertices, indices);
-            for range in ranges {
-                let v_bytes = self.span(&self.vertex_start, &range) * vertex_size;
-                let i_bytes = self.span(&self.index_start, &range) * 4;
-                let (vertex_out, vertex_tail) = vertex_rest.split_at(v_bytes);
-                let (index_out, index_tail) = index_rest.split_at(i_bytes);
-                (vertex_rest, index_rest) = (vertex_tail, index_tail);
-                let (rows, make_state, row) = (&rows, &make_state, &row);
-                let share = Share(vertex_out, index_out);
-                scope.spawn(move || {
-                    let (vertex_out, index_out) = share.into_parts();
-                    let mut state = make_state();
-                    let mut out = Batches::new(vertex_out, index_out);
-                    for r in range {
-                        row(&mut state, rows, r, &mut out.vertices, &mut out.indices);
-                        if out.vertices.len() >= BATCH || out.indices.len() >= 4 * BATCH {
-                            out.flush();
-                        }
-                    }
+        let (mut vertex_rest, mut index_rest) = (vertices, indices);
+        let mut shares = Vec::with_capacity(ranges.len());
+        for range in ranges {
+            let v_bytes = self.span(&self.vertex_start, &range) * vertex_size;
+            let i_bytes = self.span(&self.index_start, &range) * 4;
+            let (vertex_out, vertex_tail) = vertex_rest.split_at(v_bytes);
+            let (index_out, index_tail) = index_rest.split_at(i_bytes);
+            (vertex_rest, index_rest) = (vertex_tail, index_tail);
+            shares.push((range, Share(vertex_out, index_out)));
+        }
+        let rows = &rows;
+        for_each_part(shares, |(range, share)| {
+            let (vertex_out, index_out) = share.into_parts();
+            let mut state = make_state();
+            let mut out = Batches::new(vertex_out, index_out);
+            for r in range {
+                row(&mut state, rows, r, &mut out.vertices, &mut out.indices);
+                if out.vertices.len() >= BATCH || out.indices.len() >= 4 * BATCH {
                     out.flush();
-                    out.assert_full();
-                });
+                }
             }
+            out.flush();
+            out.assert_full();
         });
     }
 
