@@ -4,10 +4,19 @@
 // trilinear filtering, and the derived grids of shaders/volume_grids.wgsl: each brick's largest
 // density, to step over bricks the transfer function leaves transparent (landing on the same
 // samples the full march takes), and a texture of the density gradient and the density, sampled
-// once per step with the sampler's filtering (the full march is kept for the tests). Writes premultiplied colour (blended over the cleared background) and the
-// depth where the ray's opacity first passes one half, so box lines behind dense volume hide.
+// once per step with the sampler's filtering (the full march is kept for the tests). Writes
+// premultiplied colour (blended over the cleared background) and the depth where the ray's
+// opacity first passes one half, so box lines behind dense volume hide.
 // Keep VolumeParams in sync with src/render/volume.rs and `transfer` with src/render/transfer.rs;
 // colours come from shaders/utils/palette.wgsl.
+
+// The variant this pipeline runs. src/render/volume.rs (VolumeVariant::source) compiles one
+// pipeline per combination by rewriting these three lines, so that each compiled march holds only
+// its own work: lavapipe runs both sides of every branch under a lane mask, even a branch no lane
+// takes, so a uniform `if` would leave the other variants' loads in every step.
+const FULL_MARCH: bool = false;
+const SHADING: bool = true;
+const HP_TINT: bool = false;
 
 struct VolumeParams {
     // Grid size in voxels (w unused).
@@ -15,16 +24,15 @@ struct VolumeParams {
     // Grid box in data space (w unused).
     box_min: vec4<f32>,
     box_max: vec4<f32>,
-    // x: preset (0 Classic, 1 Ember, 2 Glacial), y: hp tint on, z: gradient shading on,
-    // w: most steps per ray.
+    // x: preset (0 Classic, 1 Ember, 2 Glacial), y, z unused (the variant's HP_TINT and
+    // SHADING), w: most steps per ray.
     options: vec4<u32>,
     // x: density scale, y: opacity scale times the opacity per voxel at alpha 1, z: step in
     // voxels, w: emission gain.
     controls: vec4<f32>,
     // Bricks per axis of brick_max; w: brick size in voxels.
     bricks: vec4<u32>,
-    // x: skip bricks on, y: density and gradient from the gradient texture on (both off: the
-    // full march, kept as the reference the tests compare with).
+    // Unused (the variant's FULL_MARCH).
     modes: vec4<u32>,
     // x: bricks whose largest density is below this are transparent, y: the smallest scaled
     // density a sample must pass to count, z: the smallest opacity per step (w unused).
@@ -166,8 +174,6 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     }
 
     let preset = params.options.x;
-    let tint = params.options.y != 0u;
-    let shading = params.options.z != 0u;
     let density_scale = params.controls.x;
     let step = params.controls.z;
     let opacity = params.controls.y;
@@ -178,9 +184,8 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     var t = t_enter + step * hash(vec2<u32>(in.position.xy), frame.flags.x);
     var color = vec3<f32>(0.0);
     var alpha = 0.0;
-    var depth = 1.0;
-    let skipping = params.modes.x != 0u;
-    let gradient_texture_on = params.modes.y != 0u;
+    // Where the opacity first passes one half (the depth written), negative until it does.
+    var t_half = -1.0;
     let brick_size = f32(params.bricks.w);
     let last_brick = vec3<f32>(params.bricks.xyz) - 1.0;
     let min_value = params.skip.y;
@@ -193,7 +198,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         var texel = vec4<f32>(0.0);
         // Inside a brick already found to hold opacity, every sample is taken: the look-up is
         // once per brick the ray crosses, not once a step.
-        if (skipping && t >= t_brick_end) {
+        if (!FULL_MARCH && t >= t_brick_end) {
             let brick = clamp(floor(u / brick_size), vec3<f32>(0.0), last_brick);
             let b = vec3<u32>(brick);
             let far_side = select(brick, brick + 1.0, dir > vec3<f32>(0.0)) * brick_size;
@@ -211,7 +216,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
             t_brick_end = t_leave;
         }
         var value: f32;
-        if (gradient_texture_on) {
+        if (!FULL_MARCH) {
             texel = textureSampleLevel(gradient_texture, gradient_sampler, u / dims, 0.0);
             value = texel.w * density_scale;
         } else {
@@ -228,17 +233,17 @@ fn fs_main(in: VertexOut) -> FragmentOut {
             }
             if (a > min_step_opacity) {
                 var rgb = sample.rgb;
-                if (tint) {
+                if (HP_TINT) {
                     // The points' palette, brighter where denser.
                     let tinted = hp_palette(weighted_hp(corners(u))) * (0.45 + 0.65 * clamp(value, 0.0, 1.0));
                     rgb = mix(rgb, tinted, 0.85);
                 }
-                if (shading && a > 0.01) {
+                if (SHADING && a > 0.01) {
                     // Central differences in voxel space; the normal in data space. The texture
                     // holds them at the voxel centres, and filtering them is differencing two
                     // filtered samples (the full march's six samples).
                     var gv: vec3<f32>;
-                    if (gradient_texture_on) {
+                    if (!FULL_MARCH) {
                         gv = texel.xyz;
                     } else {
                         gv = vec3<f32>(
@@ -263,10 +268,8 @@ fn fs_main(in: VertexOut) -> FragmentOut {
                 // colour is laid on as paint (gain 1).
                 color += (1.0 - alpha) * a * rgb * gain;
                 alpha += (1.0 - alpha) * a;
-                if (alpha > 0.5 && depth >= 1.0) {
-                    let data = params.box_min.xyz + u / per_unit;
-                    let clip = frame.clip_from_data * vec4<f32>(data, 1.0);
-                    depth = clamp(clip.z / clip.w, 0.0, 1.0);
+                if (alpha > 0.5 && t_half < 0.0) {
+                    t_half = t;
                 }
                 if (alpha > 0.99) {
                     break;
@@ -276,6 +279,11 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         t += step;
     }
     out.color = vec4<f32>(color, alpha);
-    out.depth = depth;
+    out.depth = 1.0;
+    if (t_half >= 0.0) {
+        let data = params.box_min.xyz + (origin + dir * t_half) / per_unit;
+        let clip = frame.clip_from_data * vec4<f32>(data, 1.0);
+        out.depth = clamp(clip.z / clip.w, 0.0, 1.0);
+    }
     return out;
 }

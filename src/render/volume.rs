@@ -16,6 +16,11 @@
 //! and its gradient come from one filtered sample of a texture computed once per grid, instead of
 //! eight loads and six more trilinear samples; both derived grids come from
 //! [`crate::render::volume_grids`].
+//!
+//! One pipeline per [`VolumeVariant`] (full march or not, shading, hp tint), each compiled from
+//! the shader with its variant's constants, built on first use: lavapipe runs both sides of a
+//! branch under a lane mask, so one shader branching on uniforms paid every variant's loads in
+//! every step.
 
 pub mod progressive;
 
@@ -45,13 +50,13 @@ struct VolumeParams {
     dims: [u32; 4],
     box_min: [f32; 4],
     box_max: [f32; 4],
-    /// x: preset, y: hp tint, z: shading, w: most steps.
+    /// x: preset, w: most steps (y, z unused: the variant's).
     options: [u32; 4],
     /// x: density scale, y: opacity scale times base opacity, z: step in voxels, w: emission.
     controls: [f32; 4],
     /// xyz: bricks per axis, w: brick size in voxels.
     bricks: [u32; 4],
-    /// x: skip transparent bricks, y: gradient from the texture (both 0: the full march).
+    /// Unused (the variant's full march).
     modes: [u32; 4],
     /// x: [`skip_below`], y: [`MIN_DENSITY`], z: [`MIN_STEP_OPACITY`].
     skip: [f32; 4],
@@ -124,6 +129,75 @@ impl VolumeSettings {
     }
 }
 
+/// What a volume pipeline's shader is compiled for (the constants at the top of
+/// shaders/volume.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct VolumeVariant {
+    /// Every step sampled and gradients from six samples (`FULL_MARCH`).
+    pub full_march: bool,
+    /// Lit by the density gradient (`SHADING`).
+    pub shading: bool,
+    /// Coloured by the mean hp (`HP_TINT`).
+    pub hp_tint: bool,
+}
+
+impl VolumeVariant {
+    /// Every variant, in the order of [`Self::index`].
+    pub const ALL: [VolumeVariant; 8] = {
+        let mut all = [VolumeVariant {
+            full_march: false,
+            shading: false,
+            hp_tint: false,
+        }; 8];
+        let mut i = 0;
+        while i < 8 {
+            all[i] = VolumeVariant {
+                full_march: i & 1 != 0,
+                shading: i & 2 != 0,
+                hp_tint: i & 4 != 0,
+            };
+            i += 1;
+        }
+        all
+    };
+
+    pub fn of(settings: &VolumeSettings) -> Self {
+        Self {
+            full_march: settings.full_march,
+            shading: settings.shading,
+            hp_tint: settings.hp_tint,
+        }
+    }
+
+    fn index(self) -> usize {
+        usize::from(self.full_march)
+            | usize::from(self.shading) << 1
+            | usize::from(self.hp_tint) << 2
+    }
+
+    /// The composed volume shader with this variant's constants in place of the defaults that
+    /// shaders/volume.wgsl declares ([`VARIANT_DEFAULTS`]; a unit test holds the two together).
+    pub fn source(self) -> String {
+        let mut source = shaders::volume();
+        for ((name, default), value) in
+            VARIANT_DEFAULTS
+                .into_iter()
+                .zip([self.full_march, self.shading, self.hp_tint])
+        {
+            source = source.replace(
+                &format!("const {name}: bool = {default};"),
+                &format!("const {name}: bool = {value};"),
+            );
+        }
+        source
+    }
+}
+
+/// The variant's constants as shaders/volume.wgsl declares them, in the order of
+/// [`VolumeVariant`]'s fields.
+const VARIANT_DEFAULTS: [(&str, bool); 3] =
+    [("FULL_MARCH", false), ("SHADING", true), ("HP_TINT", false)];
+
 /// Whether a sample of scaled density `value` adds to its pixel, as the shader decides it
 /// (keep in sync with the march in shaders/volume.wgsl).
 fn sample_counts(preset: TransferPreset, value: f32, opacity: f32, step: f32) -> bool {
@@ -160,6 +234,8 @@ pub fn skip_below(settings: &VolumeSettings, step: f32) -> f32 {
 /// A grid bound for drawing, built when the grid is (not per frame).
 pub struct VolumeGpu {
     params: wgpu::Buffer,
+    /// The pipeline of the variant the last [`VolumePass::prepare`] asked for.
+    pipeline: std::sync::Mutex<Option<wgpu::RenderPipeline>>,
     bind_group: wgpu::BindGroup,
     grids: VolumeGrids,
     dims: glam::UVec3,
@@ -208,6 +284,7 @@ impl VolumeGpu {
         });
         Self {
             params,
+            pipeline: std::sync::Mutex::new(None),
             bind_group,
             grids,
             dims: grid.dims,
@@ -219,7 +296,11 @@ impl VolumeGpu {
 
 /// The ray-marching pipeline, built once.
 pub struct VolumePass {
-    pipeline: wgpu::RenderPipeline,
+    device: wgpu::Device,
+    layout: wgpu::PipelineLayout,
+    /// One pipeline per [`VolumeVariant`] (by its index), built on first use: each is a shader
+    /// compile, which lavapipe does in LLVM.
+    pipelines: std::sync::Mutex<[Option<wgpu::RenderPipeline>; 8]>,
     grid_layout: wgpu::BindGroupLayout,
     grids: VolumeGridsPass,
     gradient_sampler: wgpu::Sampler,
@@ -227,7 +308,6 @@ pub struct VolumePass {
 
 impl VolumePass {
     pub fn new(device: &wgpu::Device, frame: &FrameBinding) -> Self {
-        let module = shaders::module(device, "volume", &shaders::volume());
         let storage = |binding| storage_entry(binding, wgpu::ShaderStages::FRAGMENT, true);
         let grid_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("volume::grid_layout"),
@@ -259,27 +339,6 @@ impl VolumePass {
             bind_group_layouts: &[Some(&frame.layout), Some(&grid_layout)],
             immediate_size: 0,
         });
-        let pipeline = DrawPipeline {
-            label: "volume::pipeline",
-            layout: &layout,
-            module: &module,
-            vertex_entry: "vs_main",
-            vertex_buffers: &[],
-            // Premultiplied colour over the cleared background.
-            target: wgpu::ColorTargetState {
-                format: COLOR_FORMAT,
-                blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-                write_mask: wgpu::ColorWrites::ALL,
-            },
-            primitive: primitives(wgpu::PrimitiveTopology::TriangleList),
-            // Opaque geometry's depth writes, but a ray that never passes half opacity writes
-            // the far plane, which must pass over the cleared depth: less or equal.
-            depth: wgpu::DepthStencilState {
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                ..depth_opaque()
-            },
-        }
-        .build(device);
         // Clamped to the edge, as the march clamps its trilinear samples to the grid.
         let gradient_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("volume::gradient_sampler"),
@@ -291,14 +350,52 @@ impl VolumePass {
             ..Default::default()
         });
         Self {
-            pipeline,
+            device: device.clone(),
+            layout,
+            pipelines: std::sync::Mutex::new(Default::default()),
             grid_layout,
             grids: VolumeGridsPass::new(device),
             gradient_sampler,
         }
     }
 
-    /// Writes this frame's parameters, and on a grid's first frame submits the commands that
+    /// The pipeline of `variant`, compiled the first time it is asked for.
+    fn pipeline(&self, variant: VolumeVariant) -> wgpu::RenderPipeline {
+        let mut pipelines = self
+            .pipelines
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        pipelines[variant.index()]
+            .get_or_insert_with(|| {
+                let module = shaders::module(&self.device, "volume", &variant.source());
+                DrawPipeline {
+                    label: "volume::pipeline",
+                    layout: &self.layout,
+                    module: &module,
+                    vertex_entry: "vs_main",
+                    vertex_buffers: &[],
+                    // Premultiplied colour over the cleared background.
+                    target: wgpu::ColorTargetState {
+                        format: COLOR_FORMAT,
+                        blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    },
+                    primitive: primitives(wgpu::PrimitiveTopology::TriangleList),
+                    // Opaque geometry's depth writes, but a ray that never passes half opacity
+                    // writes the far plane, which must pass over the cleared depth: less or
+                    // equal.
+                    depth: wgpu::DepthStencilState {
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        ..depth_opaque()
+                    },
+                }
+                .build(&self.device)
+            })
+            .clone()
+    }
+
+    /// Writes this frame's parameters, picks the pipeline of the settings' variant (compiling
+    /// it on first use), and on a grid's first frame submits the commands that
     /// build its derived grids; call before the render pass that draws.
     pub fn prepare(
         &self,
@@ -308,8 +405,12 @@ impl VolumePass {
         moving: bool,
     ) {
         volume.grids.submit_once(queue);
+        *volume
+            .pipeline
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) =
+            Some(self.pipeline(VolumeVariant::of(settings)));
         let step = settings.step(moving);
-        let fast = !settings.full_march;
         let diagonal = volume.dims.as_vec3().length();
         let params = VolumeParams {
             dims: volume.dims.extend(0).into(),
@@ -317,8 +418,8 @@ impl VolumePass {
             box_max: volume.box_max.extend(0.0).into(),
             options: [
                 settings.preset.index(),
-                u32::from(settings.hp_tint),
-                u32::from(settings.shading),
+                0,
+                0,
                 (diagonal / step).ceil() as u32 + 2,
             ],
             controls: [
@@ -328,7 +429,7 @@ impl VolumePass {
                 EMISSION_GAIN,
             ],
             bricks: volume.grids.bricks.extend(BRICK).into(),
-            modes: [u32::from(fast), u32::from(fast), 0, 0],
+            modes: [0; 4],
             skip: [
                 skip_below(settings, step),
                 MIN_DENSITY,
@@ -339,8 +440,17 @@ impl VolumePass {
         queue.write_buffer(&volume.params, 0, bytemuck::bytes_of(&params));
     }
 
+    /// Draws with the pipeline [`Self::prepare`] picked for `volume`; nothing before a prepare.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &FrameBinding, volume: &VolumeGpu) {
-        pass.set_pipeline(&self.pipeline);
+        let pipeline = volume
+            .pipeline
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .clone();
+        let Some(pipeline) = pipeline else {
+            return;
+        };
+        pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &frame.bind_group, &[]);
         pass.set_bind_group(1, &volume.bind_group, &[]);
         pass.draw(0..3, 0..1);
@@ -350,6 +460,35 @@ impl VolumePass {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each variant's shader declares its own constants, once each: a rename in
+    /// shaders/volume.wgsl that the replacement misses would compile every variant alike.
+    #[test]
+    fn each_variant_compiles_its_own_constants() {
+        let plain = shaders::volume();
+        for (name, default) in VARIANT_DEFAULTS {
+            let line = format!("const {name}: bool = {default};");
+            assert_eq!(
+                plain.matches(&line).count(),
+                1,
+                "shaders/volume.wgsl: `{line}`"
+            );
+        }
+        let mut indices = std::collections::HashSet::new();
+        for variant in VolumeVariant::ALL {
+            assert!(indices.insert(variant.index()), "{variant:?}: index taken");
+            let source = variant.source();
+            for (name, value) in [
+                ("FULL_MARCH", variant.full_march),
+                ("SHADING", variant.shading),
+                ("HP_TINT", variant.hp_tint),
+            ] {
+                let line = format!("const {name}: bool = {value};");
+                assert_eq!(source.matches(&line).count(), 1, "{variant:?}: `{line}`");
+                assert!(!source.contains(&format!("const {name}: bool = {};", !value)));
+            }
+        }
+    }
 
     /// No density under the threshold counts, and just above it (past the 1 % margin) one does.
     #[test]

@@ -14,12 +14,14 @@
 //! (the hp colours, the axes with their units) and what the page thinned. A page with the
 //! song's sound moves the playhead plane through the song as it plays ([`set_playhead`]).
 //!
-//! WebGPU where the browser has it, WebGL2 otherwise. WebGL2 has no compute passes and no
-//! storage buffers: there the view is [`gl::PointsRenderer`] (the points as instances, the box
-//! and the playhead), and the Surface and Volume views are off, their buttons saying why.
+//! WebGPU where the browser has it, WebGL2 otherwise. WebGL2 has no compute passes, no storage
+//! buffers and no indirect draws: there the view is [`gl::GlRenderer`] (the points as instances,
+//! the box and the playhead), the Surface view's grid and isosurface are made on the CPU
+//! ([`gl_surface`]), and the Volume view is off, its button saying why.
 //! Where the browser has neither, the page's script says so before the viewer starts.
 
 mod gl;
+mod gl_surface;
 mod surface;
 
 use std::cell::RefCell;
@@ -115,14 +117,15 @@ struct WebResources {
     composite: CompositePass,
 }
 
-/// What draws the view: every pass of the window (WebGPU), or the Points view alone (WebGL2).
+/// What draws the view: every pass of the window (WebGPU), or the Points and Surface views
+/// (WebGL2).
 enum Drawing {
     Full {
         renderer: Renderer,
         scene: SceneData,
         surface: surface::WebSurface,
     },
-    PointsOnly(gl::PointsRenderer),
+    Downlevel(gl::GlRenderer),
 }
 
 impl WebResources {
@@ -134,7 +137,15 @@ impl WebResources {
                 scene,
                 surface,
             } => Some((renderer, scene, surface)),
-            Drawing::PointsOnly(_) => None,
+            Drawing::Downlevel(_) => None,
+        }
+    }
+
+    /// The Surface view's CPU extraction, on WebGL2.
+    fn gl_surface(&mut self) -> Option<&mut gl_surface::GlSurface> {
+        match &mut self.drawing {
+            Drawing::Downlevel(gl) => Some(&mut gl.surface),
+            Drawing::Full { .. } => None,
         }
     }
 }
@@ -143,10 +154,11 @@ impl WebResources {
 struct WebApp {
     render_state: egui_wgpu::RenderState,
     cloud: PointCloud,
-    /// Why the grid (Volume and Surface views) cannot be built: the adapter cannot (WebGL2),
-    /// or a build failed.
+    /// Why the grid (Volume and Surface views) cannot be built on the GPU: the adapter cannot
+    /// (WebGL2: the Surface view's is built on the CPU, the Volume view is off), or a build
+    /// failed.
     grid_error: Option<String>,
-    /// The adapter runs every pass (WebGPU); else the Surface and Volume views are off.
+    /// The adapter runs every pass (WebGPU); else the Volume view is off.
     full: bool,
     /// The surface drawn (it lags the slider while an extraction runs); None before the first.
     drawn_surface: Option<SurfaceSettings>,
@@ -198,7 +210,7 @@ impl WebApp {
                 scene,
             }
         } else {
-            Drawing::PointsOnly(gl::PointsRenderer::new(device, &cloud, &settings.points))
+            Drawing::Downlevel(gl::GlRenderer::new(device, &cloud, &settings.points))
         };
         let resources = WebResources {
             composite: CompositePass::new(device, render_state.target_format),
@@ -273,6 +285,9 @@ impl WebApp {
     /// ([`surface::WebSurface::update`]); what is drawn is kept in `drawn_surface`. Returns
     /// whether the page should come back for another frame (an extraction is under way).
     fn update_surface(&mut self) -> bool {
+        if !self.full {
+            return self.update_gl_surface();
+        }
         let state = &self.render_state;
         let mut renderer = state.renderer.write();
         let Some((_, scene, surface)) = renderer
@@ -313,14 +328,14 @@ impl WebApp {
             ]
         });
         for (pressed, view) in keys {
-            if pressed && (self.full || view == ViewKind::Points) {
+            if pressed && (self.full || view != ViewKind::Volume) {
                 self.settings.view = view;
             }
         }
         ui.horizontal(|ui| {
             ui.label("View:");
             for view in [ViewKind::Points, ViewKind::Surface, ViewKind::Volume] {
-                let on = self.full || view == ViewKind::Points;
+                let on = self.full || view != ViewKind::Volume;
                 let button = ui.add_enabled(
                     on,
                     egui::Button::selectable(self.settings.view == view, view.name()),
@@ -339,12 +354,14 @@ impl WebApp {
         if !self.full {
             if let Some(reason) = &self.grid_error {
                 ui.label(
-                    egui::RichText::new(format!("Points only: {reason}."))
+                    egui::RichText::new(format!("No volume: {reason}."))
                         .small()
                         .color(egui::Color32::from_rgb(230, 180, 60)),
                 );
             }
-            self.settings.view = ViewKind::Points;
+            if self.settings.view == ViewKind::Volume {
+                self.settings.view = ViewKind::Points;
+            }
             return;
         }
         if self.settings.view != ViewKind::Points
@@ -592,7 +609,7 @@ impl eframe::App for WebApp {
                         .clamp(-1.0, 1.0) as f32;
                     settings.markers = vec![crate::render::markers::MarkerBox::playhead(x)];
                 }
-                if settings.view == ViewKind::Surface && self.grid_error.is_none() {
+                if settings.view == ViewKind::Surface && (self.grid_error.is_none() || !self.full) {
                     if self.update_surface() {
                         ctx.request_repaint();
                     }
@@ -652,8 +669,8 @@ impl CallbackTrait for ViewPaint {
                 &self.view,
                 &self.settings,
             ),
-            (Some(target), Drawing::PointsOnly(points)) => {
-                points.render(queue, encoder, target, &self.view, &self.settings);
+            (Some(target), Drawing::Downlevel(gl)) => {
+                gl.render(queue, encoder, target, &self.view, &self.settings);
             }
             (None, _) => {}
         }

@@ -16,8 +16,9 @@
 //! more room than the buffers had, they grow and it is extracted again.
 //!
 //! Why not the CPU engine (src/render/surface/cpu/), as the window uses on a software adapter:
-//! it runs on `std::thread::scope` and times its phases with `std::time::Instant`, and both
-//! panic on wasm32-unknown-unknown.
+//! a page has no threads, so there it runs serially on the page's one thread, within the frame,
+//! and a real GPU extracts many times sooner. It serves WebGL2, which has no compute passes
+//! ([`super::gl_surface`]).
 
 use std::sync::{Arc, Mutex};
 

@@ -51,17 +51,24 @@ fn skipping_and_the_gradient_texture_keep_the_demo_volume() {
     data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &cloud, &base.voxels)
         .expect("voxelize the demo");
     let view = common::view_of(&data, SIZE.0, SIZE.1);
+    // Every preset shaded and unshaded, a dense Ember and hp tint: each is a pipeline of its own
+    // (render/volume.rs's VolumeVariant), compiled from the shader with its constants.
     let cases = [
-        ("classic_shaded", TransferPreset::Classic, true, 1.0),
-        ("classic_unshaded", TransferPreset::Classic, false, 1.0),
-        ("glacial_shaded", TransferPreset::Glacial, true, 1.0),
-        ("ember_dense_shaded", TransferPreset::Ember, true, 3.0),
+        ("classic_shaded", TransferPreset::Classic, true, 1.0, false),
+        ("classic_unshaded", TransferPreset::Classic, false, 1.0, false),
+        ("ember_shaded", TransferPreset::Ember, true, 1.0, false),
+        ("ember_unshaded", TransferPreset::Ember, false, 1.0, false),
+        ("glacial_shaded", TransferPreset::Glacial, true, 1.0, false),
+        ("glacial_unshaded", TransferPreset::Glacial, false, 1.0, false),
+        ("ember_dense_shaded", TransferPreset::Ember, true, 3.0, false),
+        ("classic_tint_shaded", TransferPreset::Classic, true, 1.0, true),
     ];
-    for (name, preset, shading, density_scale) in cases {
+    for (name, preset, shading, density_scale, hp_tint) in cases {
         let mut settings = base.clone();
         settings.volume.preset = preset;
         settings.volume.shading = shading;
         settings.volume.density_scale = density_scale;
+        settings.volume.hp_tint = hp_tint;
         let fast = render_image(&gpu, &renderer, Some(&data), &view, &settings).expect("render");
         settings.volume.full_march = true;
         let full = render_image(&gpu, &renderer, Some(&data), &view, &settings).expect("render");

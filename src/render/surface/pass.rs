@@ -187,11 +187,7 @@ impl SurfacePass {
         grid: Option<&VoxelGrid>,
         settings: &SurfaceSettings,
     ) {
-        let style = SurfaceStyle {
-            lit: u32::from(settings.lit),
-            pad: [0; 3],
-        };
-        queue.write_buffer(&self.style, 0, bytemuck::bytes_of(&style));
+        self.write_style(queue, settings);
         surface.install_finished();
         let Some(grid) = grid else {
             return;
@@ -251,6 +247,16 @@ impl SurfacePass {
                 surface.install_finished();
             }
         }
+    }
+
+    /// Writes the draw's style (lit or flat) from `settings`: [`SurfacePass::prepare`] does,
+    /// and whoever draws with [`SurfacePass::draw_mesh`] calls it before the render pass.
+    pub fn write_style(&self, queue: &wgpu::Queue, settings: &SurfaceSettings) {
+        let style = SurfaceStyle {
+            lit: u32::from(settings.lit),
+            pad: [0; 3],
+        };
+        queue.write_buffer(&self.style, 0, bytemuck::bytes_of(&style));
     }
 
     /// Extracts the surface and waits for it, growing the buffers until it fits (headless
@@ -388,11 +394,41 @@ impl SurfacePass {
         let Some(buffers) = buffers else {
             return;
         };
+        self.bind(pass, frame, &buffers.vertices, &buffers.indices);
+        pass.draw_indexed_indirect(&buffers.indirect, INDEXED_ARGS_OFFSET);
+    }
+
+    /// Draws the first `index_count` indices of a mesh held in plain vertex and index buffers
+    /// ([`MeshVertex`] records, `u32` indices) with an ordinary indexed draw: where the device
+    /// has no indirect draws nor storage buffers (the web page on WebGL2, whose surface the CPU
+    /// extracts: src/web/gl_surface.rs). The same pipeline, so the same look.
+    pub fn draw_mesh(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameBinding,
+        vertices: &wgpu::Buffer,
+        indices: &wgpu::Buffer,
+        index_count: u32,
+    ) {
+        if index_count == 0 {
+            return;
+        }
+        self.bind(pass, frame, vertices, indices);
+        pass.draw_indexed(0..index_count, 0, 0..1);
+    }
+
+    /// The pipeline, the frame's and the style's bind groups and the mesh's buffers.
+    fn bind(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameBinding,
+        vertices: &wgpu::Buffer,
+        indices: &wgpu::Buffer,
+    ) {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &frame.bind_group, &[]);
         pass.set_bind_group(1, &self.style_bind_group, &[]);
-        pass.set_vertex_buffer(0, buffers.vertices.slice(..));
-        pass.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed_indirect(&buffers.indirect, INDEXED_ARGS_OFFSET);
+        pass.set_vertex_buffer(0, vertices.slice(..));
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
     }
 }
