@@ -8,10 +8,13 @@ voxel, the same number of samples per ray (VTK's sample distance is chosen so th
 over all covered rays equal loudscape's: one per voxel of ray length in voxel space), shaded
 and unshaded. Then it alternates runs: ``loudscape bench --only volume`` and VTK's frames, and
 prints the medians of each and the ratios (loudscape's time over VTK's), with the load average.
+With ``--baseline OTHER_BINARY``, each round also runs that build's ``bench`` (alternated with the
+first), and the table gains its figures and the ratio of the two (A/B, first over baseline).
 
 Usage (from the repository root; VTK comes from the development venv, as for ``make test-mesh``)::
 
     .venv/bin/python bench/peers_volume.py --loudscape target/release/loudscape --rounds 3
+    .venv/bin/python bench/peers_volume.py --loudscape new/loudscape --baseline old/loudscape
 """
 
 from __future__ import annotations
@@ -178,6 +181,9 @@ def loudscape_frames(binary: Path, song: Path, runs: int, fields_dir: Path | Non
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--loudscape", type=Path, default=Path("target/release/loudscape"))
+    parser.add_argument(
+        "--baseline", type=Path, help="another build, alternated with --loudscape (A/B)"
+    )
     parser.add_argument("--song", type=Path, default=Path("data/demo_song.ply"))
     parser.add_argument("--rounds", type=int, default=3, help="alternations (default 3)")
     parser.add_argument("--runs", type=int, default=5, help="frames per measurement")
@@ -185,8 +191,8 @@ def main(argv: list[str] | None = None) -> int:
     # SIGTERM unwinds like Ctrl-C, so the scratch folder is removed either way.
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     try:
-        for path in (args.loudscape, args.song):
-            if not path.is_file():
+        for path in (args.loudscape, args.song, args.baseline):
+            if path is not None and not path.is_file():
                 raise PeerError(f"{path}: no such file")
         if args.rounds < 1 or args.runs < 1:
             raise PeerError("--rounds and --runs must be at least 1")
@@ -217,9 +223,12 @@ def main(argv: list[str] | None = None) -> int:
             for shading in ("shaded", "unshaded")
         }
         theirs = []
+        baseline = []
         for round_index in range(args.rounds):
             if round_index > 0:
                 ours.append(loudscape_frames(args.loudscape, args.song, args.runs, None))
+            if args.baseline is not None:
+                baseline.append(loudscape_frames(args.baseline, args.song, args.runs, None))
             theirs.append(
                 {shading: vtk_median_ms(*scenes[shading], args.runs) for shading in scenes}
             )
@@ -231,16 +240,25 @@ def main(argv: list[str] | None = None) -> int:
         f"load average {load_start[0]:.2f} at the start, {load_end[0]:.2f} at the end; "
         f"{args.rounds} rounds alternated, medians of the rounds' medians of {args.runs} frames"
     )
-    print("| frame | loudscape | full march | VTK fixed-point ray caster | ratio (time) |")
-    print("|---|---|---|---|---|")
+    header = "| frame | loudscape | full march | VTK fixed-point ray caster | ratio (time) |"
+    rule = "|---|---|---|---|---|"
+    if baseline:
+        header += f" baseline ({args.baseline.name}) | baseline / VTK | A/B (time) |"
+        rule += "---|---|---|"
+    print(header)
+    print(rule)
     for shading in ("shaded", "unshaded"):
         fast = statistics.median(run[(shading, "fast")] for run in ours)
         full = statistics.median(run[(shading, "full")] for run in ours)
         peer = statistics.median(run[shading] for run in theirs)
-        print(
+        row = (
             f"| {shading} | {fast:.0f} ms | {full:.0f} ms | {peer:.0f} ms | "
             f"{fast / peer:.2f}x (full march {full / peer:.2f}x) |"
         )
+        if baseline:
+            old = statistics.median(run[(shading, "fast")] for run in baseline)
+            row += f" {old:.0f} ms | {old / peer:.2f}x | {fast / old:.2f} |"
+        print(row)
     return 0
 
 
