@@ -55,13 +55,37 @@ fn skipping_and_the_gradient_texture_keep_the_demo_volume() {
     // (render/volume.rs's VolumeVariant), compiled from the shader with its constants.
     let cases = [
         ("classic_shaded", TransferPreset::Classic, true, 1.0, false),
-        ("classic_unshaded", TransferPreset::Classic, false, 1.0, false),
+        (
+            "classic_unshaded",
+            TransferPreset::Classic,
+            false,
+            1.0,
+            false,
+        ),
         ("ember_shaded", TransferPreset::Ember, true, 1.0, false),
         ("ember_unshaded", TransferPreset::Ember, false, 1.0, false),
         ("glacial_shaded", TransferPreset::Glacial, true, 1.0, false),
-        ("glacial_unshaded", TransferPreset::Glacial, false, 1.0, false),
-        ("ember_dense_shaded", TransferPreset::Ember, true, 3.0, false),
-        ("classic_tint_shaded", TransferPreset::Classic, true, 1.0, true),
+        (
+            "glacial_unshaded",
+            TransferPreset::Glacial,
+            false,
+            1.0,
+            false,
+        ),
+        (
+            "ember_dense_shaded",
+            TransferPreset::Ember,
+            true,
+            3.0,
+            false,
+        ),
+        (
+            "classic_tint_shaded",
+            TransferPreset::Classic,
+            true,
+            1.0,
+            true,
+        ),
     ];
     for (name, preset, shading, density_scale, hp_tint) in cases {
         let mut settings = base.clone();
