@@ -8,6 +8,7 @@
 //! web` writes (see [`viewer_dirs`]). With `--audio` the song's sound rides along ([`audio`]).
 
 mod audio;
+mod compare;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -16,6 +17,7 @@ use anyhow::bail;
 use clap::Args;
 
 use crate::commands::args::{check_output, load_cloud};
+use crate::commands::compare_align::AlignAsk;
 use loudscape::data::cloud::DataMode;
 use loudscape::data::page_cloud;
 
@@ -49,6 +51,25 @@ pub struct PageArgs {
     /// the input when it is audio, else the cloud's source audio, checked against the cloud.
     #[arg(long)]
     pub audio: bool,
+
+    /// A second song (B) shown beside the first (A), as the window's Compare view: both on one
+    /// set of axes, one camera. Not with a timeline, nor with --audio.
+    #[arg(long)]
+    pub compare: Option<PathBuf>,
+
+    /// With --compare: B moved onto A's time by the offset found in their audio (as `render
+    /// --compare --align`).
+    #[arg(long)]
+    pub align: bool,
+
+    /// With --compare: B's offset against A in seconds (positive: B's music comes later),
+    /// added to the one --align finds.
+    #[arg(long, allow_hyphen_values = true)]
+    pub offset: Option<f64>,
+
+    /// With --compare and --align: B's levels moved by the gain that matches its loudness to A's.
+    #[arg(long)]
+    pub match_loudness: bool,
 }
 
 /// The folders searched for the viewer: `$LOUDSCAPE_WEB_DIR` alone when it is set, else `web/`
@@ -135,12 +156,29 @@ fn points_in_budget(viewer_bytes: usize) -> usize {
 }
 
 pub fn run(args: PageArgs) -> anyhow::Result<()> {
-    check_output(&args.output, &["html", "htm"], &[args.input.as_path()])?;
+    let mut inputs = vec![args.input.as_path()];
+    inputs.extend(args.compare.as_deref());
+    check_output(&args.output, &["html", "htm"], &inputs)?;
     if args.max_points == Some(0) {
         bail!("--max-points must be at least 1");
     }
+    let ask = AlignAsk {
+        align: args.align,
+        offset: args.offset,
+        match_loudness: args.match_loudness,
+    };
+    ask.check(args.compare.is_some())?;
+    if args.compare.is_some() && args.audio {
+        bail!(
+            "--audio is for one song's page: a compare's page carries no sound (make A's page \
+             without --compare to share its sound)"
+        );
+    }
     let (wasm, glue) = read_viewer()?;
     let cloud = load_cloud(&args.input)?;
+    if let Some(b) = &args.compare {
+        return run_compare(&args, b, ask, cloud, wasm, glue);
+    }
     let sound = if args.audio {
         if cloud.meta.mode == DataMode::Timeline {
             bail!(
@@ -160,19 +198,16 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
     let max_points = args.max_points.unwrap_or(budget).min(budget).max(1);
     let (data, thinning) = page_cloud::encode(&cloud, max_points);
     let data = gzip(&data);
-    let name = cloud
-        .path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "song".into());
+    let name = file_name(&cloud);
     let note = thinning_note(&thinning, cloud.meta.mode);
-    let title = loudscape::annotate::legend::picture_name(&cloud)
-        .replace('&', "&amp;")
-        .replace('<', "&lt;");
+    let title = html_text(&loudscape::annotate::legend::picture_name(&cloud));
     let page = TEMPLATE
         .replace("__TITLE__", &title)
         .replace("__NAME__", &script_string(&name))
         .replace("__NOTE__", &script_string(&note))
+        .replace("__COMPARE__", "")
+        .replace("__COMPARE_NAME__", "\"\"")
+        .replace("__LABELS__", "[]")
         .replace("__GLUE__", &glue)
         .replace(
             "__DURATION__",
@@ -203,6 +238,83 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
         ),
     );
     Ok(())
+}
+
+/// The page of `A --compare B` (checked by [`run`]; `cloud_a` loaded): B loaded, moved onto A
+/// as `ask` says, both on their union axes, thinned into the budget together.
+fn run_compare(
+    args: &PageArgs,
+    b_path: &Path,
+    ask: AlignAsk,
+    cloud_a: loudscape::data::cloud::PointCloud,
+    wasm: Vec<u8>,
+    glue: String,
+) -> anyhow::Result<()> {
+    let cloud_b = load_cloud(b_path)?;
+    compare::check_songs(&cloud_a, &cloud_b)?;
+    let aligned = crate::commands::compare_align::align_b_as(&cloud_a, cloud_b, ask)?;
+    let wasm = gzip(&wasm);
+    let budget = points_in_budget(wasm.len() + glue.len());
+    let max_points = args.max_points.unwrap_or(budget).min(budget).max(2);
+    let names = [file_name(&cloud_a), file_name(&aligned.cloud)];
+    let page = compare::compare_page(
+        &cloud_a,
+        &aligned.cloud,
+        [&names[0], &names[1]],
+        aligned.offset_s,
+        aligned.gain_db,
+        max_points,
+    )?;
+    let title = html_text(&format!("Compare {} with {}", names[0], names[1]));
+    let labels = serde_json::Value::from(page.labels.to_vec())
+        .to_string()
+        .replace('<', "\\u003c");
+    let html = TEMPLATE
+        .replace("__TITLE__", &title)
+        .replace("__NAME__", &script_string(&names[0]))
+        .replace("__NOTE__", &script_string(&page.note))
+        .replace("__COMPARE_NAME__", &script_string(&names[1]))
+        .replace("__LABELS__", &labels)
+        .replace("__GLUE__", &glue)
+        .replace("__DURATION__", "0")
+        .replace("__WASM__", &base64(&wasm))
+        .replace("__CLOUD__", &base64(&gzip(&page.data[0])))
+        .replace("__COMPARE__", &base64(&gzip(&page.data[1])))
+        .replace("__AUDIO__", "");
+    crate::commands::write_atomically(&args.output, |out| Ok(out.write_all(html.as_bytes())?))?;
+    for cloud in [&cloud_a, &aligned.cloud] {
+        for line in cloud.warning_lines() {
+            eprintln!("warning: {line}");
+        }
+    }
+    let [a, b] = &page.thinning;
+    crate::commands::wrote(
+        &args.output,
+        &format!(
+            "{:.1} MB, compare: A {} of {} points, B {} of {} points{}",
+            html.len() as f64 / 1e6,
+            a.kept,
+            a.total,
+            b.kept,
+            b.total,
+            aligned.note.map(|n| format!(", {n}")).unwrap_or_default()
+        ),
+    );
+    Ok(())
+}
+
+/// The cloud's file name, as the page names it.
+fn file_name(cloud: &loudscape::data::cloud::PointCloud) -> String {
+    cloud
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "song".into())
+}
+
+/// `text` safe as HTML text.
+fn html_text(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;")
 }
 
 /// What the page says it carries: every point, or which of them, of the song or the timeline.

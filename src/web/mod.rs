@@ -20,6 +20,7 @@
 //! ([`gl_surface`]), and the Volume view is off, its button saying why.
 //! Where the browser has neither, the page's script says so before the viewer starts.
 
+mod compare;
 mod gl;
 mod gl_surface;
 mod surface;
@@ -82,24 +83,12 @@ pub async fn start(
     let cloud = crate::data::page_cloud::decode(&data, &name)
         .map_err(|e| JsValue::from_str(&e.to_string()))?;
     drop(data);
-
-    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
-    // WebGPU first; egui_wgpu drops it for WebGL2 where the browser offers no WebGPU adapter.
-    setup.instance_descriptor.backends = wgpu::Backends::BROWSER_WEBGPU | wgpu::Backends::GL;
-    setup.device_descriptor = Arc::new(crate::render::gpu::context::device_descriptor);
-    let options = eframe::WebOptions {
-        wgpu_options: egui_wgpu::WgpuConfiguration {
-            wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
     let runner = eframe::WebRunner::new();
     let page_canvas = canvas.clone();
     runner
         .start(
             canvas,
-            options,
+            web_options(),
             Box::new(move |cc| {
                 let app = WebApp::new(cc, cloud, note, page_canvas)?;
                 Ok(Box::new(app))
@@ -108,6 +97,21 @@ pub async fn start(
         .await?;
     RUNNER.with(|r| *r.borrow_mut() = Some(runner));
     Ok(())
+}
+
+/// The web runner's options: WebGPU first; egui_wgpu drops it for WebGL2 where the browser
+/// offers no WebGPU adapter.
+fn web_options() -> eframe::WebOptions {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.instance_descriptor.backends = wgpu::Backends::BROWSER_WEBGPU | wgpu::Backends::GL;
+    setup.device_descriptor = Arc::new(crate::render::gpu::context::device_descriptor);
+    eframe::WebOptions {
+        wgpu_options: egui_wgpu::WgpuConfiguration {
+            wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup),
+            ..Default::default()
+        },
+        ..Default::default()
+    }
 }
 
 /// GPU state of the page, in egui_wgpu's callback resources.
@@ -404,23 +408,7 @@ impl WebApp {
             hp_strip(ui, self.settings.colours.hp);
         }
         ui.separator();
-        let axes = &self.cloud.meta.axes;
-        egui::Grid::new("axes").show(ui, |ui| {
-            for (name, axis) in axes.named() {
-                let label = if axis.label.is_empty() {
-                    name
-                } else {
-                    &axis.label
-                };
-                ui.label(format!("{name}: {label}"));
-                ui.label(format!(
-                    "{} to {}",
-                    axis.format_value(axis.min),
-                    axis.format_value(axis.max)
-                ));
-                ui.end_row();
-            }
-        });
+        axes_legend(ui, &self.cloud.meta.axes);
         ui.separator();
         ui.label(
             egui::RichText::new(
@@ -461,38 +449,15 @@ impl WebApp {
         aspect: f32,
         height: f32,
     ) -> bool {
-        let delta = response.drag_delta() * ctx.pixels_per_point();
-        let mut moving = false;
-        if response.dragged_by(egui::PointerButton::Primary) {
-            self.camera.orbit(delta.x, delta.y, height);
-            moving = true;
-        } else if response.dragged_by(egui::PointerButton::Secondary)
-            || response.dragged_by(egui::PointerButton::Middle)
-        {
-            self.camera.pan(delta.x, delta.y, height);
-            moving = true;
-        }
-        if response.hovered() {
-            let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
-                self.camera.zoom(scroll / SCROLL_PER_STEP);
-                moving = true;
-            }
-        }
-        let (fit, reset) =
-            ctx.input(|i| (i.key_pressed(egui::Key::F), i.key_pressed(egui::Key::R)));
-        if reset {
-            self.camera = Camera::default();
-        }
-        self.follow_fit = next_fit(self.follow_fit, moving, fit || reset);
-        if let Some(fitted) = self.follow_fit {
-            if fitted != aspect {
-                let (min, max) = self.world_box;
-                self.camera.fit(min, max, aspect);
-                self.follow_fit = Some(aspect);
-            }
-        }
-        moving
+        camera_input(
+            &mut self.camera,
+            &mut self.follow_fit,
+            self.world_box,
+            ctx,
+            response,
+            aspect,
+            height,
+        )
     }
 }
 
@@ -503,31 +468,121 @@ impl WebApp {
         if view.moving || self.settings.view != ViewKind::Points {
             return;
         }
-        let Some(pos) = response.hover_pos() else {
-            return;
-        };
-        let px = (pos - response.rect.min) * scale;
-        let Some(index) = crate::view::pick::pick_point(
-            &self.cloud.points,
+        point_readout(
+            response,
+            response.rect,
             view,
-            glam::Vec2::new(px.x, px.y),
-            6.0 * scale,
+            scale,
+            &self.cloud,
             self.settings.points.min_scalar,
-        ) else {
-            return;
-        };
-        let readings =
-            crate::view::pick::point_readings(&self.cloud.meta.axes, &self.cloud.points[index]);
-        response.clone().on_hover_ui_at_pointer(|ui| {
-            egui::Grid::new("readout").show(ui, |ui| {
-                for reading in readings {
-                    ui.label(reading.name);
-                    ui.label(reading.value);
-                    ui.end_row();
-                }
-            });
-        });
+            None,
+        );
     }
+}
+
+/// The camera input of a frame (orbit, pan, zoom, F, R; `follow_fit`: see
+/// `WebApp::follow_fit`), the camera fitted to `world_box` while it follows; whether the view
+/// moves.
+fn camera_input(
+    camera: &mut Camera,
+    follow_fit: &mut Option<f32>,
+    world_box: (Vec3, Vec3),
+    ctx: &egui::Context,
+    response: &egui::Response,
+    aspect: f32,
+    height: f32,
+) -> bool {
+    let delta = response.drag_delta() * ctx.pixels_per_point();
+    let mut moving = false;
+    if response.dragged_by(egui::PointerButton::Primary) {
+        camera.orbit(delta.x, delta.y, height);
+        moving = true;
+    } else if response.dragged_by(egui::PointerButton::Secondary)
+        || response.dragged_by(egui::PointerButton::Middle)
+    {
+        camera.pan(delta.x, delta.y, height);
+        moving = true;
+    }
+    if response.hovered() {
+        let scroll = ctx.input(|i| i.smooth_scroll_delta.y);
+        if scroll != 0.0 {
+            camera.zoom(scroll / SCROLL_PER_STEP);
+            moving = true;
+        }
+    }
+    let (fit, reset) = ctx.input(|i| (i.key_pressed(egui::Key::F), i.key_pressed(egui::Key::R)));
+    if reset {
+        *camera = Camera::default();
+    }
+    *follow_fit = next_fit(*follow_fit, moving, fit || reset);
+    if let Some(fitted) = *follow_fit
+        && fitted != aspect
+    {
+        let (min, max) = world_box;
+        camera.fit(min, max, aspect);
+        *follow_fit = Some(aspect);
+    }
+    moving
+}
+
+/// The legend of the axes: each one's name, label and range in its units.
+fn axes_legend(ui: &mut egui::Ui, axes: &crate::data::axes::Axes) {
+    egui::Grid::new("axes").show(ui, |ui| {
+        for (name, axis) in axes.named() {
+            let label = if axis.label.is_empty() {
+                name
+            } else {
+                &axis.label
+            };
+            ui.label(format!("{name}: {label}"));
+            ui.label(format!(
+                "{} to {}",
+                axis.format_value(axis.min),
+                axis.format_value(axis.max)
+            ));
+            ui.end_row();
+        }
+    });
+}
+
+/// The values of `cloud`'s point under the cursor in `rect` (the view `view` draws there), with
+/// their units, in a tooltip headed `title` where given (the window's picking and read-out
+/// texts, `view::pick`).
+fn point_readout(
+    response: &egui::Response,
+    rect: egui::Rect,
+    view: &FrameView,
+    scale: f32,
+    cloud: &PointCloud,
+    min_scalar: f32,
+    title: Option<&str>,
+) {
+    let Some(pos) = response.hover_pos().filter(|pos| rect.contains(*pos)) else {
+        return;
+    };
+    let px = (pos - rect.min) * scale;
+    let Some(index) = crate::view::pick::pick_point(
+        &cloud.points,
+        view,
+        glam::Vec2::new(px.x, px.y),
+        6.0 * scale,
+        min_scalar,
+    ) else {
+        return;
+    };
+    let readings = crate::view::pick::point_readings(&cloud.meta.axes, &cloud.points[index]);
+    response.clone().on_hover_ui_at_pointer(|ui| {
+        if let Some(title) = title {
+            ui.strong(title);
+        }
+        egui::Grid::new("readout").show(ui, |ui| {
+            for reading in readings {
+                ui.label(reading.name);
+                ui.label(reading.value);
+                ui.end_row();
+            }
+        });
+    });
 }
 
 /// Whether the camera follows the view's shape after this frame's input (see

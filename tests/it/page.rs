@@ -223,3 +223,108 @@ fn audio_without_a_sound_to_carry_is_one_line() {
         assert!(!out.exists());
     }
 }
+
+/// The demo with its time 0.5 s later and its levels 6 dB louder (its axes' ends moved, the
+/// points as they are), written to `path`: another version of it, as a file.
+fn later_and_louder_demo(path: &Path) {
+    let demo = loudscape::data::cloud::load(&song()).unwrap();
+    let mut meta = demo.meta.raw.clone();
+    for (axis, by) in [("x", 0.5), ("y", 6.0), ("scalar", 6.0)] {
+        let axis = &mut meta["axes"][axis];
+        for end in ["min", "max"] {
+            axis[end] = serde_json::json!(axis[end].as_f64().unwrap() + by);
+        }
+        axis.as_object_mut().unwrap().remove("ticks");
+    }
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    loudscape::data::cloud::write(&mut file, &demo.points, Some(&meta)).unwrap();
+}
+
+/// `page A --compare B --offset 0.5`: both clouds in the page on the union of their axes (B
+/// moved back onto A's time, 6 dB above it), each half's label with B's offset, the title and
+/// the note saying it is a compare and what it carries of each.
+#[test]
+fn a_compare_page_carries_both_clouds_on_their_union_axes() {
+    let dir = common::fresh_dir("page_compare");
+    let web = stand_in_viewer(&dir);
+    let b = dir.join("later.ply");
+    later_and_louder_demo(&b);
+    let out = dir.join("ab.html");
+    let output = page(
+        &web,
+        &[
+            &song(),
+            Path::new("--compare"),
+            &b,
+            Path::new("--offset"),
+            Path::new("0.5"),
+            Path::new("-o"),
+            &out,
+        ],
+    );
+    common::assert_success(&output);
+    let said = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        said.contains("compare: A 147750 of 147750 points"),
+        "{said}"
+    );
+    let html = std::fs::read_to_string(&out).unwrap();
+    let decode = |id: &str| {
+        let data = gunzip(&unbase64(script(&html, id)));
+        loudscape::data::page_cloud::decode(&data, id).expect("page data")
+    };
+    let (a, b) = (decode("loudscape-cloud"), decode("loudscape-compare"));
+    let demo = loudscape::data::cloud::load(&song()).unwrap();
+    assert_eq!((a.len(), b.len()), (demo.len(), demo.len()));
+    assert_eq!(a.meta.axes, b.meta.axes, "one set of axes");
+    let (axes, own) = (&a.meta.axes, &demo.meta.axes);
+    assert!((axes.x.min - own.x.min).abs() < 1e-6 && (axes.x.max - own.x.max).abs() < 1e-6);
+    assert!((axes.y.max - own.y.max - 6.0).abs() < 1e-6);
+    assert!((axes.y.min - own.y.min).abs() < 1e-6);
+    // The same points, B's 6 dB up the union's level axis: a tenth of its 66 dB.
+    let rise = b.points[1000].position[1] - a.points[1000].position[1];
+    assert!((rise - 2.0 * 6.0 / 66.0).abs() < 1e-3, "{rise}");
+    assert!(
+        html.contains("<title>Compare demo_song.ply with later.ply"),
+        "the title"
+    );
+    assert!(html.contains(r#"["A: demo_song.ply","B: later.ply, +0.50 s"]"#));
+    assert!(html.contains("This page carries A: every point; B: every point;"));
+}
+
+/// What a compare page cannot be is one line and no page: a timeline on either side, --audio,
+/// --offset without --compare.
+#[test]
+fn a_compare_page_refuses_a_timeline_and_audio_in_one_line() {
+    let dir = common::fresh_dir("page_compare_refused");
+    let web = stand_in_viewer(&dir);
+    let timeline = common::repo().join("data/demo_timeline.ply");
+    let out = dir.join("ab.html");
+    let (song, o, c) = (song(), Path::new("-o"), Path::new("--compare"));
+    let cases: [(Vec<&Path>, &str); 4] = [
+        (
+            vec![&song, c, &timeline, o, &out],
+            "demo_timeline.ply: --compare is for two songs, and this is a timeline",
+        ),
+        (
+            vec![&timeline, c, &song, o, &out],
+            "demo_timeline.ply: --compare is for two songs, and this is a timeline",
+        ),
+        (
+            vec![&song, c, &song, o, &out, Path::new("--audio")],
+            "--audio is for one song's page",
+        ),
+        (
+            vec![&song, o, &out, Path::new("--offset"), Path::new("1")],
+            "need a second cloud: --compare B",
+        ),
+    ];
+    for (args, says) in cases {
+        let output = page(&web, &args);
+        let text = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{text}");
+        assert_eq!(text.lines().count(), 1, "{text}");
+        assert!(text.contains(says), "{text}");
+        assert!(!out.exists());
+    }
+}

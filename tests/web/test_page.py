@@ -558,3 +558,110 @@ def test_the_notebook_cell_turns_the_song_in_its_iframe(browser, tmp_path, monke
     page.screenshot(path=SHOTS / "page_notebook.png")
     assert errors == [], errors
     page.close()
+
+
+@pytest.fixture(scope="module")
+def compare_page_file(tmp_path_factory) -> Path:
+    """``page A --compare B --offset 0.5``: A the demo, B the demo 0.5 s later and 6 dB louder
+    (its axes' ends moved, its points as they are), written by the extractor's writer; 30,000
+    points of each (a software frame of both whole is slow on a loaded machine)."""
+    from loudscape_extract.ply import read_ply, write_ply
+
+    folder = tmp_path_factory.mktemp("compare")
+    points, meta = read_ply(SONG)
+    for axis, by in (("x", 0.5), ("y", 6.0), ("scalar", 6.0)):
+        meta["axes"][axis]["min"] += by
+        meta["axes"][axis]["max"] += by
+        meta["axes"][axis].pop("ticks", None)
+    later = folder / "later.ply"
+    write_ply(later, points=points, metadata=meta)
+    out = folder / "ab.html"
+    run = subprocess.run(
+        [
+            str(BINARY),
+            "page",
+            str(SONG),
+            "--compare",
+            str(later),
+            "--offset",
+            "0.5",
+            "--max-points",
+            "60000",
+            "-o",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "compare: A 29550 of 147750 points, B 29550 of 147750 points" in run.stderr
+    return out
+
+
+def _compare_halves(page) -> list[np.ndarray] | None:
+    """A's and B's halves of the view as RGB, from the places the viewer writes on the canvas
+    (``data-compare-halves``); None before it has."""
+    places = page.locator("#loudscape-view").get_attribute("data-compare-halves")
+    if not places:
+        return None
+    box = page.locator("#loudscape-view").bounding_box()
+    png = page.screenshot(clip=box, timeout=DEADLINE_S * 1000)
+    rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    halves = []
+    for place in places.split(";"):
+        x, y, w, h = (round(float(v)) for v in place.split(","))
+        halves.append(rgb[y : y + h, x : x + w])
+    return halves
+
+
+@pytest.mark.parametrize("device", ["webgpu", "webgl2"])
+def test_the_compare_page_shows_a_and_b_side_by_side_and_turns_both(
+    playwright, browser, compare_page_file, device
+):
+    """A left, B right, each with the points' warm and cool colours, on WebGPU and on WebGL2;
+    a drag over A's half turns both halves (one camera); no console errors."""
+    own = _launch(playwright, WEBGL2_ARGS) if device == "webgl2" else None
+    page, errors = _open(own or browser, compare_page_file.as_uri())
+    assert page.evaluate(OFFERS_JS)["webgpu"] == (device == "webgpu")
+    assert page.evaluate("document.body.dataset.state") == "running", page.inner_text("#message")
+
+    def both_coloured():
+        halves = _compare_halves(page)
+        if halves is None or min(min(_point_colours(h)) for h in halves) <= 200:
+            return None
+        return halves
+
+    before = _wait_for(both_coloured, f"{device}: the halves never both showed the points")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=SHOTS / f"page_compare_{device}.png")
+    print(
+        f"\n{device}: warm and cool pixels, A {_point_colours(before[0])}, B "
+        f"{_point_colours(before[1])}"
+    )
+
+    box = page.locator("#loudscape-view").bounding_box()
+    x, y = box["x"] + box["width"] * 0.15, box["y"] + box["height"] * 0.5
+    page.mouse.move(x, y)
+    page.mouse.down()
+    _next_frames(page)
+    for step in range(1, 11):
+        page.mouse.move(x + 12 * step, y + 4 * step)
+        _next_frames(page)
+    page.mouse.up()
+
+    def both_turned():
+        halves = _compare_halves(page)
+        changed = [
+            np.count_nonzero(np.abs(now - then).sum(axis=2) > 30) / now[..., 0].size
+            for now, then in zip(halves, before, strict=True)
+        ]
+        return changed if min(changed) > 0.01 else None
+
+    changed = _wait_for(both_turned, f"{device}: a drag over A did not turn both halves")
+    print(f"{device}: share of pixels changed by the drag, A {changed[0]:.3f}, B {changed[1]:.3f}")
+    page.screenshot(path=SHOTS / f"page_compare_{device}_after_drag.png")
+    assert errors == [], errors
+    page.close()
+    if own:
+        own.close()
