@@ -6,7 +6,8 @@ opened from a ``file://`` URL, as someone who was sent the file would open it. T
 ``$LOUDSCAPE_BIN`` (``make test-web`` builds it and the viewer's wasm, ``make web``).
 
 Two more browsers: one without WebGPU (WebGL2 through SwiftShader's GLES: the page's Points
-view alone), and one with neither WebGPU nor WebGL2 (the page's message).
+view, and its Surface view made on the CPU), and one with neither WebGPU nor WebGL2 (the
+page's message).
 """
 
 from __future__ import annotations
@@ -299,11 +300,18 @@ def test_hovering_a_point_shows_its_values(browser, page_file):
     page.close()
 
 
-def test_a_browser_without_webgpu_shows_the_points_on_webgl2(playwright, page_file):
-    """No WebGPU adapter, WebGL2 only: the points drawn with their hp colours, a drag turns
-    them, a hover shows the read-out, S (the Surface view, off on WebGL2) leaves the points."""
+@pytest.fixture(scope="module")
+def webgl2_browser(playwright):
+    """A browser without WebGPU: WebGL2 only."""
     browser = _launch(playwright, WEBGL2_ARGS)
-    page, errors = _open(browser, page_file.as_uri())
+    yield browser
+    browser.close()
+
+
+def test_a_browser_without_webgpu_shows_the_points_on_webgl2(webgl2_browser, page_file):
+    """No WebGPU adapter, WebGL2 only: the points drawn with their hp colours, a drag turns
+    them, a hover shows the read-out."""
+    page, errors = _open(webgl2_browser, page_file.as_uri())
     assert page.evaluate(OFFERS_JS) == {"webgpu": False, "webgl2": True}
     assert page.evaluate("document.body.dataset.state") == "running", page.inner_text("#message")
 
@@ -318,16 +326,83 @@ def test_a_browser_without_webgpu_shows_the_points_on_webgl2(playwright, page_fi
     rest = _reset_brings_back(page, before)
     _hover_opens_a_readout(page, rest)
     page.screenshot(path=SHOTS / "page_webgl2_hover.png")
+    assert errors == [], errors
+    page.close()
+
+
+def _surface_colours(rgb: np.ndarray) -> tuple[int, int]:
+    """Pixels of the surface's light neutral (its warm-to-cool map's middle, lit: a warm white)
+    and of the points' red (their five-stop palette's percussive end, redder than the
+    surface's warm end)."""
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    neutral = int(np.count_nonzero((b > 120) & (r > b + 8) & (r < b + 60) & (g > b)))
+    points_red = int(np.count_nonzero((r > 120) & (g * 100 < 27 * r)))
+    return neutral, points_red
+
+
+def _surface_timing(page) -> tuple[float, float, int] | None:
+    """The page's `data-surface-timing` on WebGL2: milliseconds of the grid's build and of the
+    last extraction, and its triangles (None before the first surface)."""
+    timing = page.locator("#loudscape-view").get_attribute("data-surface-timing")
+    if not timing:
+        return None
+    grid_ms, extract_ms, triangles = timing.split(",")
+    return float(grid_ms), float(extract_ms), int(triangles)
+
+
+def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
+    """No WebGPU: S shows the Surface view, its grid and isosurface made on the CPU in the page
+    (voxelize's CPU mirror, the CPU engine's marching tetrahedra on one thread), drawn with the
+    surface's colours where the points' were; a click on the isovalue slider extracts another
+    surface and changes the picture; no console errors."""
+    page, errors = _open(webgl2_browser, page_file.as_uri())
+    points = _points_shown(page)
+    neutral, red = _surface_colours(points)
+    assert red > 5000 and neutral < 2000, (neutral, red)
 
     _pointer_to_panel(page)
     page.keyboard.press("s")
-    _next_frames(page)
-    _next_frames(page)
-    assert _unchanged(page, before) is not None, (
-        "S changed the view on WebGL2, where the surface is off"
+
+    def surface_shown():
+        rgb = _view_pixels(page)
+        neutral, red = _surface_colours(rgb)
+        timing = _surface_timing(page)
+        return (rgb, timing) if timing and neutral > 5000 and red < 500 else None
+
+    surface, (grid_ms, first_ms, first_triangles) = _wait_for(
+        surface_shown, "WebGL2: S did not show the surface's colours in place of the points"
     )
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(surface.astype(np.uint8)).save(SHOTS / "page_webgl2_surface.png")
+    print(
+        f"\nWebGL2 surface: grid {grid_ms:.0f} ms, {first_triangles} triangles in {first_ms:.0f} ms"
+        f" (surface colours {_surface_colours(surface)})"
+    )
+
+    place = page.locator("#loudscape-view").get_attribute("data-iso-slider")
+    assert place, "the page did not say where the isovalue slider is"
+    x, y, width, height = (float(v) for v in place.split(","))
+    box = page.locator("#loudscape-view").bounding_box()
+    # From the default isovalue (0.5) to near the high end: a smaller surface.
+    page.mouse.click(box["x"] + x + 0.8 * width, box["y"] + y + height / 2)
+    _pointer_to_panel(page)
+
+    def changed():
+        timing = _surface_timing(page)
+        if timing is None or timing[2] == first_triangles:
+            return None
+        rgb = _view_pixels(page)
+        moved = np.count_nonzero(np.abs(rgb - surface).sum(axis=2) > 30)
+        return (rgb, timing, moved) if moved > 0.01 * rgb.shape[0] * rgb.shape[1] else None
+
+    higher, (_, ms, triangles), moved = _wait_for(
+        changed, "WebGL2: the isovalue slider did not change the surface"
+    )
+    Image.fromarray(higher.astype(np.uint8)).save(SHOTS / "page_webgl2_surface_higher.png")
+    print(f"isovalue raised: {triangles} triangles in {ms:.0f} ms, {moved} pixels changed")
+    assert triangles < first_triangles
     assert errors == [], errors
-    browser.close()
+    page.close()
 
 
 def test_a_browser_without_webgpu_and_webgl2_gets_a_message(playwright, page_file):
