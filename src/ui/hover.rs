@@ -8,10 +8,7 @@ use crate::render::markers::MarkerBox;
 use crate::render::scene::ViewKind;
 use crate::ui::state::{Hover, HoverKey, LoudscapeApp, Slot};
 use crate::view::frame_view::FrameView;
-use crate::view::pick::{self, Reading};
-
-/// Density at which a hover ray stops in the Volume view.
-pub(super) const VOLUME_PICK_DENSITY: f32 = 0.1;
+use crate::view::pick::{self, Reading, VOLUME_PICK_DENSITY};
 
 impl LoudscapeApp {
     /// The playhead plane, the loop range and the hovered or selected timeline song.
@@ -119,52 +116,31 @@ impl LoudscapeApp {
                 } else {
                     VOLUME_PICK_DENSITY
                 };
-                if let Some(hit) = loaded
-                    .cpu_grid
-                    .as_ref()
-                    .and_then(|g| g.pick(origin, dir, threshold))
-                {
-                    hover.readings = pick::voxel_readings(shown_axes, &hit);
-                    hover.x = Some(hit.position.x);
-                }
+                (hover.readings, hover.x) = pick::grid_readout(
+                    loaded.cpu_grid.as_ref(),
+                    shown_axes,
+                    origin,
+                    dir,
+                    threshold,
+                );
             }
         }
-        if hover.x.is_none()
-            && let Some((t, _)) =
-                pick::ray_box(origin, dir, glam::Vec3::splat(-1.0), glam::Vec3::ONE)
-        {
-            let p = origin + dir * t;
-            hover.x = Some(p.x.clamp(-1.0, 1.0));
-            let first = pick::position_readings(shown_axes, p);
-            hover.readings = first.into_iter().take(1).collect();
+        if hover.x.is_none() {
+            (hover.readings, hover.x) = pick::box_readout(shown_axes, origin, dir);
         }
         self.hovered_song = match (self.active, hover.x) {
             (Slot::Timeline, Some(x)) => pick::song_at(&cloud.meta.songs, x),
             _ => None,
         };
-        if let (Slot::Timeline, Some(x)) = (self.active, hover.x) {
-            // The year from the song spans, not the axis's linear map (see timeline_year).
-            let year = pick::timeline_year(axes, &cloud.meta.songs, x);
-            let name = year.as_ref().map_or_else(
-                || pick::timeline_year(axes, &[], x).map(|r| r.name),
-                |r| Some(r.name.clone()),
-            );
-            if let Some(at) = hover
-                .readings
-                .iter()
-                .position(|r| Some(&r.name) == name.as_ref())
-            {
-                match year {
-                    Some(year) => hover.readings[at] = year,
-                    None => {
-                        hover.readings.remove(at);
-                    }
-                }
-            }
-        }
-        if cloud.meta.mode == crate::data::cloud::DataMode::Song {
-            name_bin_level(&mut hover.readings);
-        }
+        // The year from the song spans, not the axis's linear map (see timeline_year); a
+        // song's level is a bin level.
+        pick::name_readings(
+            &mut hover.readings,
+            axes,
+            cloud.meta.mode,
+            &cloud.meta.songs,
+            hover.x,
+        );
         if let Some(song) = self.hovered_song.and_then(|i| cloud.meta.songs.get(i)) {
             hover.readings.insert(
                 0,
@@ -274,34 +250,8 @@ fn readout_layout(
     (min, galley)
 }
 
-/// Song mode's y is the level of one STFT bin (a spectrum, dB re a full-scale sine), not a
-/// loudness: its read-out says so, as the axis title does ("bin level").
-fn name_bin_level(readings: &mut [Reading]) {
-    for reading in readings.iter_mut().filter(|r| r.name == "level") {
-        reading.name = "bin level".into();
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    #[test]
-    fn a_songs_level_reads_as_bin_level() {
-        let mut readings = vec![
-            super::Reading {
-                name: "time".into(),
-                value: "1.0 s".into(),
-            },
-            super::Reading {
-                name: "level".into(),
-                value: "-23.4 dB".into(),
-            },
-        ];
-        super::name_bin_level(&mut readings);
-        assert_eq!(readings[0].name, "time");
-        assert_eq!(readings[1].name, "bin level");
-        assert_eq!(readings[1].value, "-23.4 dB");
-    }
-
     use super::*;
 
     /// A read-out longer than the view (a 10,000-song timeline's long title, the cursor near the

@@ -8,7 +8,7 @@
 use glam::{UVec3, Vec2, Vec3, Vec4Swizzles};
 
 use crate::data::axes::{Axes, Axis, note_name};
-use crate::data::cloud::{Point, SongInfo};
+use crate::data::cloud::{DataMode, Point, SongInfo};
 use crate::data::field::Field;
 use crate::view::frame_view::FrameView;
 
@@ -185,6 +185,79 @@ pub fn timeline_year(axes: &Axes, songs: &[SongInfo], x: f32) -> Option<Reading>
         });
     }
     Some(reading_at(&axes.x, "year", axes.x.value_at(f64::from(x))))
+}
+
+/// Density at which a hover ray stops in the Volume view (the Surface view's stops at its
+/// isovalue).
+pub const VOLUME_PICK_DENSITY: f32 = 0.1;
+
+/// The read-out of the Surface or the Volume view under the ray (`origin`, `dir`, data space)
+/// and the x it reads at: the first voxel of `field` at or above `threshold`, in `axes`' units
+/// ([`voxel_readings`]); where the ray meets none (or no grid is there yet), the first axis's
+/// value where it enters the data box; nothing where it misses the box. The window's hover
+/// (src/ui/hover.rs) and the web page's read-out both call it.
+pub fn grid_readout(
+    field: Option<&Field>,
+    axes: &Axes,
+    origin: Vec3,
+    dir: Vec3,
+    threshold: f32,
+) -> (Vec<Reading>, Option<f32>) {
+    if let Some(hit) = field.and_then(|f| f.pick(origin, dir, threshold)) {
+        return (voxel_readings(axes, &hit), Some(hit.position.x));
+    }
+    box_readout(axes, origin, dir)
+}
+
+/// Where the ray enters the data box: the first axis's value there and its x (nothing where it
+/// misses the box).
+pub fn box_readout(axes: &Axes, origin: Vec3, dir: Vec3) -> (Vec<Reading>, Option<f32>) {
+    match ray_box(origin, dir, Vec3::splat(-1.0), Vec3::ONE) {
+        Some((t, _)) => {
+            let p = origin + dir * t;
+            let first = position_readings(axes, p);
+            (
+                first.into_iter().take(1).collect(),
+                Some(p.x.clamp(-1.0, 1.0)),
+            )
+        }
+        None => (Vec::new(), None),
+    }
+}
+
+/// The read-out's last touches, by the data's mode: on a timeline the year at `x` comes from
+/// the song spans ([`timeline_year`]), and is dropped between songs; a song's y is the level of
+/// one STFT bin, not a loudness, and says so ("bin level", as the axis title does).
+pub fn name_readings(
+    readings: &mut Vec<Reading>,
+    axes: &Axes,
+    mode: DataMode,
+    songs: &[SongInfo],
+    x: Option<f32>,
+) {
+    match (mode, x) {
+        (DataMode::Timeline, Some(x)) => {
+            let year = timeline_year(axes, songs, x);
+            let name = year.as_ref().map_or_else(
+                || timeline_year(axes, &[], x).map(|r| r.name),
+                |r| Some(r.name.clone()),
+            );
+            if let Some(at) = readings.iter().position(|r| Some(&r.name) == name.as_ref()) {
+                match year {
+                    Some(year) => readings[at] = year,
+                    None => {
+                        readings.remove(at);
+                    }
+                }
+            }
+        }
+        (DataMode::Song, _) => {
+            for reading in readings.iter_mut().filter(|r| r.name == "level") {
+                reading.name = "bin level".into();
+            }
+        }
+        _ => {}
+    }
 }
 
 /// The timeline song whose span `[x_min, x_max]` (normalized) holds `x`.

@@ -12,21 +12,23 @@
 //! How: the grid is built once, the first frame after the Surface view is chosen, by
 //! [`voxelize_host::build`] (the voxelize pass's arithmetic step by step: the grid the GPU
 //! builds, tests/it/voxelize.rs compares the two) in the box the WebGPU page's grid has. Each
-//! new isovalue is then extracted by the CPU engine's marching tetrahedra ([`CpuExtraction`] on
-//! one thread: a page has no threads to spawn), the same surface as the GPU passes
-//! (tests/it/surface/cpu_engine.rs), and uploaded. It runs within the frame: a dragged slider
+//! new isovalue or method is then extracted by the CPU engine's marching tetrahedra or dual
+//! contouring ([`CpuExtraction`] on one thread: a page has no threads to spawn), the same
+//! surface as the GPU passes (tests/it/surface/cpu_engine.rs), and uploaded. The grid is kept
+//! as a [`Field`] too, for the read-out under the cursor. It runs within the frame: a dragged slider
 //! extracts the value it is at once a frame, never a backlog.
 
 use glam::UVec3;
 
 use crate::data::cloud::PointCloud;
+use crate::data::field::Field;
 use crate::render::grid::settings::VoxelSettings;
 use crate::render::grid::voxelize_cpu::grid_box_of_bounds;
 use crate::render::grid::voxelize_host;
+use crate::render::surface::SurfaceSettings;
 use crate::render::surface::buffers::MeshVertex;
 use crate::render::surface::cpu::grid::CpuGrid;
 use crate::render::surface::cpu::{CpuExtraction, Instant, Phases};
-use crate::render::surface::{SurfaceMethod, SurfaceSettings};
 
 use super::WebApp;
 
@@ -58,7 +60,8 @@ impl GlSurface {
     /// Builds the grid of `cloud` with `voxels`' resolution and smoothing for its mode, on the
     /// CPU, as the voxelize pass builds it on the GPU (the same box: the points' bounds,
     /// padded).
-    fn build_grid(&mut self, cloud: &PointCloud, voxels: &VoxelSettings) {
+    /// Returns the grid as a [`Field`], for the read-out's picking.
+    fn build_grid(&mut self, cloud: &PointCloud, voxels: &VoxelSettings) -> Field {
         let started = Instant::now();
         let mode = cloud.meta.mode;
         let dims = UVec3::splat(voxels.resolution_for(mode));
@@ -79,20 +82,23 @@ impl GlSurface {
         ));
         self.grid_ms = started.elapsed().as_secs_f64() * 1e3;
         self.extracted = None;
+        Field {
+            dims,
+            box_min,
+            box_max,
+            density: built.density,
+            hp_mean: built.hp_mean,
+        }
     }
 
-    /// Extracts the surface of `wanted` (marching tetrahedra, as the WebGPU page) unless the
-    /// buffers hold it, and uploads it. Returns the surface's triangles.
+    /// Extracts the surface of `wanted` (its method: marching tetrahedra or dual contouring, as
+    /// on WebGPU) unless the buffers hold it, and uploads it. Returns the surface's triangles.
     fn extract(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         wanted: SurfaceSettings,
     ) -> Option<usize> {
-        let wanted = SurfaceSettings {
-            method: SurfaceMethod::MarchingTetrahedra,
-            ..wanted
-        };
         let grid = self.grid.as_ref()?;
         if self.extracted == Some(wanted) {
             return Some(self.index_count as usize / 3);
@@ -173,7 +179,7 @@ impl WebApp {
                 self.surface_status = "building the voxel grid on the CPU…".to_string();
                 return true;
             }
-            surface.build_grid(&self.cloud, &self.settings.voxels);
+            self.field = Some(surface.build_grid(&self.cloud, &self.settings.voxels));
         }
         let Some(triangles) = surface.extract(&state.device, &state.queue, self.settings.surface)
         else {

@@ -168,6 +168,11 @@ struct WebApp {
     drawn_surface: Option<SurfaceSettings>,
     /// The Surface view's read-out: triangles, or why the surface is incomplete.
     surface_status: String,
+    /// The grid on the CPU, for the read-out over the Surface and Volume views (the window's
+    /// picking, `view::pick`): built there on WebGL2, read back from the GPU on WebGPU.
+    field: Option<crate::data::field::Field>,
+    /// The grid's read-back while the browser has not mapped it (WebGPU).
+    field_readback: Option<surface::GridReadback>,
     /// The page's canvas: the isovalue slider's rail is written on it (`data-iso-slider`, CSS
     /// pixels from the canvas's corner: x,y,width,height), for scripts and tests.
     canvas: web_sys::HtmlCanvasElement,
@@ -232,6 +237,8 @@ impl WebApp {
             grid_error: full.err(),
             drawn_surface: None,
             surface_status: String::new(),
+            field: None,
+            field_readback: None,
             canvas,
             cloud,
             note,
@@ -279,6 +286,11 @@ impl WebApp {
         pass_set.voxelize.encode(&mut encoder, &job, None);
         state.queue.submit([encoder.finish()]);
         let grid = VoxelizePass::finish(job);
+        self.field_readback = Some(surface::GridReadback::start(
+            &state.device,
+            &state.queue,
+            &grid,
+        ));
         scene.set_grid(&state.device, pass_set, grid, None, mode, voxels);
         surface.reset();
         self.drawn_surface = None;
@@ -422,10 +434,35 @@ impl WebApp {
     /// The Surface view's part of the side panel: the isovalue slider and what the surface
     /// holds. The slider's place goes on the canvas (`data-iso-slider`).
     fn surface_controls(&mut self, ui: &mut egui::Ui) {
+        use crate::render::surface::SurfaceMethod;
         ui.label(
-            "Surface: where the density of the points on a voxel grid crosses the isovalue \
-             (marching tetrahedra), coloured by hp",
+            "Surface: where the density of the points on a voxel grid crosses the isovalue, \
+             coloured by hp",
         );
+        // The method chooser, as the window's; each button's place goes on the canvas
+        // (`data-surface-method`: "mt:x,y,width,height;dc:…").
+        let mut places = Vec::new();
+        ui.horizontal_wrapped(|ui| {
+            for method in SurfaceMethod::ALL {
+                let button =
+                    ui.selectable_value(&mut self.settings.surface.method, method, method.name());
+                let r = button.rect;
+                places.push(format!(
+                    "{}:{},{},{},{}",
+                    method.short_name(),
+                    r.left(),
+                    r.top(),
+                    r.width(),
+                    r.height()
+                ));
+            }
+        });
+        let places = places.join(";");
+        if self.canvas.get_attribute("data-surface-method").as_deref() != Some(places.as_str()) {
+            self.canvas
+                .set_attribute("data-surface-method", &places)
+                .ok();
+        }
         let slider = ui.add(
             egui::Slider::new(&mut self.settings.surface.iso_value, 0.01..=0.99).text("isovalue"),
         );
@@ -462,21 +499,82 @@ impl WebApp {
 }
 
 impl WebApp {
-    /// The Points view at rest: the values of the point under the cursor, with their units, in
-    /// a tooltip (the window's picking and read-out texts, `view::pick`).
+    /// Takes the grid's read-back once the browser has mapped it. Returns whether the page
+    /// should come back for another frame (it has not yet).
+    fn collect_field(&mut self) -> bool {
+        let Some(readback) = &self.field_readback else {
+            return false;
+        };
+        match readback.take() {
+            None => return true,
+            Some(Ok(field)) => self.field = Some(field),
+            Some(Err(e)) => log::warn!("the grid did not come back for the read-out: {e}"),
+        }
+        self.field_readback = None;
+        false
+    }
+
+    /// The view at rest: what is under the cursor, with its units, in a tooltip (the window's
+    /// picking and read-out texts, `view::pick`): the point in the Points view; in the Surface
+    /// and Volume views, the first voxel along the cursor's ray at the isovalue (or the volume's
+    /// pick density), or the time where the ray enters the box while the grid is not on the
+    /// CPU. The text goes on the canvas too (`data-readout`: "name: value" lines), for scripts
+    /// and tests.
     fn hover_readout(&self, response: &egui::Response, view: &FrameView, scale: f32) {
-        if view.moving || self.settings.view != ViewKind::Points {
+        if view.moving {
             return;
         }
-        point_readout(
-            response,
-            response.rect,
-            view,
-            scale,
-            &self.cloud,
-            self.settings.points.min_scalar,
-            None,
+        let shown = match self.settings.view {
+            ViewKind::Points => point_readout(
+                response,
+                response.rect,
+                view,
+                scale,
+                &self.cloud,
+                self.settings.points.min_scalar,
+                None,
+            ),
+            ViewKind::Surface | ViewKind::Volume => self.grid_readout(response, view, scale),
+        };
+        let text = shown
+            .iter()
+            .map(|r| format!("{}: {}", r.name, r.value))
+            .collect::<Vec<_>>()
+            .join("\n");
+        if self.canvas.get_attribute("data-readout").as_deref() != Some(text.as_str()) {
+            self.canvas.set_attribute("data-readout", &text).ok();
+        }
+    }
+
+    /// The Surface and Volume views' read-out (see [`Self::hover_readout`]); the readings shown.
+    fn grid_readout(
+        &self,
+        response: &egui::Response,
+        view: &FrameView,
+        scale: f32,
+    ) -> Vec<crate::view::pick::Reading> {
+        use crate::view::pick;
+        let Some(pos) = response.hover_pos() else {
+            return Vec::new();
+        };
+        let px = (pos - response.rect.min) * scale;
+        let (origin, dir) = pick::cursor_ray(view, glam::Vec2::new(px.x, px.y));
+        let threshold = match self.settings.view {
+            ViewKind::Surface => self.settings.surface.iso_value,
+            _ => pick::VOLUME_PICK_DENSITY,
+        };
+        let axes = &self.cloud.meta.axes;
+        let (mut readings, x) =
+            pick::grid_readout(self.field.as_ref(), axes, origin, dir, threshold);
+        pick::name_readings(
+            &mut readings,
+            axes,
+            self.cloud.meta.mode,
+            &self.cloud.meta.songs,
+            x,
         );
+        show_readings(response, &readings, None);
+        readings
     }
 }
 
@@ -547,7 +645,7 @@ fn axes_legend(ui: &mut egui::Ui, axes: &crate::data::axes::Axes) {
 
 /// The values of `cloud`'s point under the cursor in `rect` (the view `view` draws there), with
 /// their units, in a tooltip headed `title` where given (the window's picking and read-out
-/// texts, `view::pick`).
+/// texts, `view::pick`). Returns the readings shown.
 fn point_readout(
     response: &egui::Response,
     rect: egui::Rect,
@@ -556,9 +654,9 @@ fn point_readout(
     cloud: &PointCloud,
     min_scalar: f32,
     title: Option<&str>,
-) {
+) -> Vec<crate::view::pick::Reading> {
     let Some(pos) = response.hover_pos().filter(|pos| rect.contains(*pos)) else {
-        return;
+        return Vec::new();
     };
     let px = (pos - rect.min) * scale;
     let Some(index) = crate::view::pick::pick_point(
@@ -568,17 +666,37 @@ fn point_readout(
         6.0 * scale,
         min_scalar,
     ) else {
-        return;
+        return Vec::new();
     };
-    let readings = crate::view::pick::point_readings(&cloud.meta.axes, &cloud.points[index]);
+    let mut readings = crate::view::pick::point_readings(&cloud.meta.axes, &cloud.points[index]);
+    crate::view::pick::name_readings(
+        &mut readings,
+        &cloud.meta.axes,
+        cloud.meta.mode,
+        &cloud.meta.songs,
+        Some(cloud.points[index].position[0]),
+    );
+    show_readings(response, &readings, title);
+    readings
+}
+
+/// `readings` in a tooltip at the pointer, headed `title` where given (nothing when empty).
+fn show_readings(
+    response: &egui::Response,
+    readings: &[crate::view::pick::Reading],
+    title: Option<&str>,
+) {
+    if readings.is_empty() {
+        return;
+    }
     response.clone().on_hover_ui_at_pointer(|ui| {
         if let Some(title) = title {
             ui.strong(title);
         }
         egui::Grid::new("readout").show(ui, |ui| {
             for reading in readings {
-                ui.label(reading.name);
-                ui.label(reading.value);
+                ui.label(&reading.name);
+                ui.label(&reading.value);
                 ui.end_row();
             }
         });
@@ -649,6 +767,9 @@ impl eframe::App for WebApp {
                     frame_index: self.frame_index,
                     moving,
                 };
+                if self.collect_field() {
+                    ctx.request_repaint();
+                }
                 self.hover_readout(&response, &view, scale);
                 let mut settings = self.settings.clone();
                 if let Some(seconds) = PLAYHEAD.with(std::cell::Cell::get)

@@ -3,7 +3,8 @@
 //! (src/render/surface/marching_tets.rs) into the surface's mesh buffers and drawn by the
 //! window's surface draw pass, without ever waiting for the GPU.
 //!
-//! Reads: the cloud's [`VoxelGrid`] (built on the GPU for the Volume and Surface views).
+//! Reads: the cloud's [`VoxelGrid`] (built on the GPU for the Volume and Surface views) and
+//! the side panel's method (the window's marching tetrahedra or dual contouring passes).
 //! Writes: the mesh buffers of the scene's [`ExtractedSurface`] and its cache key, so
 //! [`Renderer::render`](crate::render::scene::Renderer::render) draws that mesh and starts no
 //! extraction of its own (the window's background thread, which a page has not).
@@ -15,6 +16,10 @@
 //! the value it is at whenever the last one is done, never a backlog. When a surface needed
 //! more room than the buffers had, they grow and it is extracted again.
 //!
+//! [`GridReadback`] brings the grid's density and mean hp back once after its build, as the
+//! window reads its grid back for hover picking (`view::pick`'s ray against the grid): the
+//! read-out over the Surface and Volume views.
+//!
 //! Why not the CPU engine (src/render/surface/cpu/), as the window uses on a software adapter:
 //! a page has no threads, so there it runs serially on the page's one thread, within the frame,
 //! and a real GPU extracts many times sooner. It serves WebGL2, which has no compute passes
@@ -22,9 +27,11 @@
 
 use std::sync::{Arc, Mutex};
 
+use crate::data::field::Field;
 use crate::render::grid::VoxelGrid;
 use crate::render::surface::buffers::{COUNTERS_SIZE, MeshBuffers};
 use crate::render::surface::driver::grown_capacities;
+use crate::render::surface::dual_contour::DualContourPass;
 use crate::render::surface::marching_tets::MarchingTetsPass;
 use crate::render::surface::state::{CacheKey, ExtractedSurface};
 use crate::render::surface::{SurfaceCounts, SurfaceError, SurfaceMethod, SurfaceSettings};
@@ -46,7 +53,8 @@ struct InFlight {
 
 /// The page's surface extraction (see the module's header).
 pub(super) struct WebSurface {
-    pass: MarchingTetsPass,
+    marching_tets: MarchingTetsPass,
+    dual_contour: DualContourPass,
     in_flight: Option<InFlight>,
     /// The surface the mesh buffers hold (or will once the GPU is done): what is drawn.
     submitted: Option<SurfaceSettings>,
@@ -59,7 +67,8 @@ pub(super) struct WebSurface {
 impl WebSurface {
     pub(super) fn new(device: &wgpu::Device) -> Self {
         Self {
-            pass: MarchingTetsPass::new(device),
+            marching_tets: MarchingTetsPass::new(device),
+            dual_contour: DualContourPass::new(device),
             in_flight: None,
             submitted: None,
             counts: None,
@@ -102,10 +111,6 @@ impl WebSurface {
         surface: &ExtractedSurface,
         settings: SurfaceSettings,
     ) {
-        let settings = SurfaceSettings {
-            method: SurfaceMethod::MarchingTetrahedra,
-            ..settings
-        };
         let mut state = surface.lock();
         let (v, i) = INITIAL_CAPACITY;
         let buffers = state
@@ -115,7 +120,10 @@ impl WebSurface {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("web::surface_extract"),
         });
-        let (pipelines, extra) = self.pass.extraction();
+        let (pipelines, extra) = match settings.method {
+            SurfaceMethod::MarchingTetrahedra => self.marching_tets.extraction(),
+            SurfaceMethod::DualContouring => self.dual_contour.extraction(),
+        };
         pipelines.record(
             device,
             queue,
@@ -206,5 +214,68 @@ impl WebSurface {
             // The truncated surface stays on screen, with the reason beside it.
             Err(e) => self.error = Some(e.to_string()),
         }
+    }
+}
+
+/// The grid's density and mean hp on their way back to the CPU, for the read-out.
+pub(super) struct GridReadback {
+    staging: wgpu::Buffer,
+    arrived: Arrival,
+    grid: (glam::UVec3, glam::Vec3, glam::Vec3),
+}
+
+impl GridReadback {
+    /// Copies `grid`'s two fields into one mappable buffer and asks for it.
+    pub(super) fn start(device: &wgpu::Device, queue: &wgpu::Queue, grid: &VoxelGrid) -> Self {
+        let size = grid.voxel_count() * 4;
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("web::grid_readback"),
+            size: 2 * size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("web::grid_readback"),
+        });
+        encoder.copy_buffer_to_buffer(&grid.density, 0, &staging, 0, size);
+        encoder.copy_buffer_to_buffer(&grid.hp_mean, 0, &staging, size, size);
+        queue.submit([encoder.finish()]);
+        let arrived: Arrival = Arc::default();
+        let slot = arrived.clone();
+        staging.map_async(wgpu::MapMode::Read, .., move |result| {
+            let result = result.map_err(|e| e.to_string());
+            *slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(result);
+        });
+        Self {
+            staging,
+            arrived,
+            grid: (grid.dims, grid.box_min, grid.box_max),
+        }
+    }
+
+    /// The grid as a [`Field`] once the browser has mapped it (None: not yet); Err says why it
+    /// cannot come back.
+    pub(super) fn take(&self) -> Option<Result<Field, String>> {
+        let result = self
+            .arrived
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take()?;
+        Some(result.and_then(|()| {
+            let view = self
+                .staging
+                .get_mapped_range(..)
+                .map_err(|e| e.to_string())?;
+            let values: &[f32] = bytemuck::try_cast_slice(&view).map_err(|e| e.to_string())?;
+            let (density, hp_mean) = values.split_at(values.len() / 2);
+            let (dims, box_min, box_max) = self.grid;
+            Ok(Field {
+                dims,
+                box_min,
+                box_max,
+                density: density.to_vec(),
+                hp_mean: hp_mean.to_vec(),
+            })
+        }))
     }
 }

@@ -230,3 +230,98 @@ fn the_timeline_year_comes_from_the_song_spans() {
     // Without spans, the axis's own map is all there is.
     assert!(timeline_year(&axes, &[], 0.0).is_some());
 }
+
+/// The Surface and Volume views' read-out, shared by the window and the web page: over a dense
+/// voxel its position in the axes' units, its density and mean hp, and the x it reads at; where
+/// the ray meets no dense voxel (or no grid is there yet), the time where it enters the box;
+/// nothing where it misses the box.
+#[test]
+fn the_grid_readout_reads_the_first_dense_voxel_or_the_box() {
+    use loudscape::view::pick::grid_readout;
+    let cloud = grid_cloud();
+    let axes = &cloud.meta.axes;
+    let mut density = vec![0.0f32; 64];
+    let mut hp = vec![0.5f32; 64];
+    let idx = (1 + 4 * (2 + 4 * 2)) as usize;
+    density[idx] = 0.8;
+    hp[idx] = 0.9;
+    let field = Field {
+        dims: UVec3::splat(4),
+        box_min: Vec3::splat(-1.0),
+        box_max: Vec3::splat(1.0),
+        density,
+        hp_mean: hp,
+    };
+    let text = |readings: &[loudscape::view::pick::Reading]| {
+        readings
+            .iter()
+            .map(|r| format!("{}: {}", r.name, r.value))
+            .collect::<Vec<_>>()
+    };
+    let origin = Vec3::new(-3.0, 0.25, 0.25);
+    let (readings, x) = grid_readout(Some(&field), axes, origin, Vec3::X, 0.5);
+    assert_eq!(x, Some(-0.25));
+    let lines = text(&readings);
+    assert_eq!(lines.len(), 5, "{lines:?}");
+    assert!(
+        lines[0].starts_with("time: ") && lines[0].ends_with(" s"),
+        "{lines:?}"
+    );
+    assert!(lines[1].contains("Hz"), "{lines:?}");
+    assert!(lines[2].contains("dB"), "{lines:?}");
+    assert_eq!(lines[3], "density: 0.800");
+    assert_eq!(lines[4], "mean hp: 0.90 (harmonic)");
+
+    // Above every voxel, or no grid yet: the time where the ray enters the box (x = -1).
+    for field in [Some(&field), None] {
+        let (readings, x) = grid_readout(field, axes, origin, Vec3::X, 0.9);
+        assert_eq!(x, Some(-1.0));
+        let lines = text(&readings);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        assert!(lines[0].starts_with("time: "), "{lines:?}");
+    }
+    // Beside the box: nothing.
+    let (readings, x) = grid_readout(Some(&field), axes, Vec3::new(-3.0, 2.0, 0.0), Vec3::X, 0.5);
+    assert!(readings.is_empty() && x.is_none());
+}
+
+/// The read-out's names by mode: a song's level is a bin level; a timeline's year comes from
+/// its song spans (and goes between songs).
+#[test]
+fn readings_are_named_by_the_datas_mode() {
+    use loudscape::data::axes::{Axes, Axis};
+    use loudscape::view::pick::{Reading, name_readings};
+    let reading = |name: &str, value: &str| Reading {
+        name: name.into(),
+        value: value.into(),
+    };
+    let cloud = grid_cloud();
+    let mut readings = vec![reading("time", "1.0 s"), reading("level", "-23.4 dB")];
+    name_readings(
+        &mut readings,
+        &cloud.meta.axes,
+        DataMode::Song,
+        &[],
+        Some(0.0),
+    );
+    assert_eq!(readings[0].name, "time");
+    assert_eq!(readings[1], reading("bin level", "-23.4 dB"));
+
+    let axes = Axes {
+        x: Axis::linear("year", "year", 1980.0, 2010.0),
+        ..Axes::generic([(-1.0, 1.0); 3])
+    };
+    let songs = vec![SongInfo {
+        year: Some(2005),
+        x_min: Some(-1.0),
+        x_max: Some(0.0),
+        ..Default::default()
+    }];
+    let mut on_song = vec![reading("year", "1987"), reading("level", "-9 dB")];
+    name_readings(&mut on_song, &axes, DataMode::Timeline, &songs, Some(-0.5));
+    assert_eq!(on_song[0], reading("year", "2005"));
+    assert_eq!(on_song[1].name, "level", "a timeline's level is a loudness");
+    let mut between = vec![reading("year", "2000"), reading("level", "-9 dB")];
+    name_readings(&mut between, &axes, DataMode::Timeline, &songs, Some(0.5));
+    assert_eq!(between, vec![reading("level", "-9 dB")]);
+}

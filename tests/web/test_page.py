@@ -230,6 +230,45 @@ def _hover_opens_a_readout(page, before: np.ndarray):
     _wait_for(opened, f"no read-out opened over the point at ({x}, {y})")
 
 
+def _readout_over_the_grid(page, shown: np.ndarray, what: str) -> str:
+    """Hovers the lit pixel of `shown` (the Surface or Volume view at rest) nearest the middle
+    of its lit part; returns the read-out's text (the canvas's `data-readout`) once it reads a
+    voxel there: its density and mean hp, and its place in the axes' units."""
+    box = page.locator("#loudscape-view").bounding_box()
+    ys, xs = np.nonzero(shown.max(axis=2) > 100)
+    middle = np.argmin((ys - ys.mean()) ** 2 + (xs - xs.mean()) ** 2)
+    x, y = box["x"] + int(xs[middle]), box["y"] + int(ys[middle])
+
+    def read():
+        page.mouse.move(x, y)
+        _next_frames(page)
+        page.mouse.move(x + 1, y)
+        _next_frames(page)
+        text = page.locator("#loudscape-view").get_attribute("data-readout") or ""
+        return text if "density: " in text else None
+
+    text = _wait_for(read, f"{what}: no read-out of a voxel under the cursor")
+    print(f"{what} read-out: {text!r}")
+    # And the read-out's box opens at the cursor.
+    cx, cy = int(xs[middle]), int(ys[middle])
+    h, w = shown.shape[:2]
+
+    def opened():
+        now = _view_pixels(page)[cy + 8 : min(cy + 100, h), cx + 8 : min(cx + 200, w)]
+        then = shown[cy + 8 : min(cy + 100, h), cx + 8 : min(cx + 200, w)]
+        changed = np.count_nonzero(np.abs(now - then).sum(axis=2) > 30)
+        return changed if changed > 0.3 * now.shape[0] * now.shape[1] else None
+
+    _wait_for(opened, f"{what}: the read-out's box did not open at the cursor")
+    lines = dict(line.split(": ", 1) for line in text.splitlines())
+    assert lines["time"].endswith(" s"), lines
+    assert "Hz" in lines["frequency"], lines
+    assert lines["bin level"].endswith(" dB"), lines
+    assert float(lines["density"]) > 0.0, lines
+    assert "(" in lines["mean hp"], lines
+    return text
+
+
 def test_the_page_stays_in_its_budget(page_file):
     size = page_file.stat().st_size
     print(f"\npage of {SONG.name}: {size / 1e6:.2f} MB (budget {PAGE_BUDGET_BYTES / 1e6:.0f} MB)")
@@ -280,6 +319,11 @@ def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
     SHOTS.mkdir(parents=True, exist_ok=True)
     Image.fromarray(shown.astype(np.uint8)).save(SHOTS / "page_volume.png")
     print(f"\nvolume: {changed} pixels changed from the points, {lit} lit")
+    # The read-out over the volume: the first voxel along the cursor's ray at the window's pick
+    # density, from the grid read back from the GPU.
+    readout = _readout_over_the_grid(page, shown, "Volume")
+    page.screenshot(path=SHOTS / "page_volume_hover.png")
+    assert float(dict(x.split(": ", 1) for x in readout.splitlines())["density"]) >= 0.1
     assert errors == [], errors
     page.close()
 
@@ -401,6 +445,35 @@ def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
     Image.fromarray(higher.astype(np.uint8)).save(SHOTS / "page_webgl2_surface_higher.png")
     print(f"isovalue raised: {triangles} triangles in {ms:.0f} ms, {moved} pixels changed")
     assert triangles < first_triangles
+
+    # Dual contouring, chosen as in the window: another mesh (one vertex a cell, two triangles
+    # a crossing edge) and another picture of the same isovalue.
+    methods = dict(
+        part.split(":")
+        for part in page.locator("#loudscape-view").get_attribute("data-surface-method").split(";")
+    )
+    x, y, width, height = (float(v) for v in methods["dc"].split(","))
+    page.mouse.click(box["x"] + x + width / 2, box["y"] + y + height / 2)
+    _pointer_to_panel(page)
+
+    def dual_contoured():
+        timing = _surface_timing(page)
+        if timing is None or timing[2] == triangles:
+            return None
+        rgb = _view_pixels(page)
+        moved = np.count_nonzero(np.abs(rgb - higher).sum(axis=2) > 30)
+        return (rgb, timing, moved) if moved > 0.002 * rgb.shape[0] * rgb.shape[1] else None
+
+    dual, (_, dc_ms, dc_triangles), moved = _wait_for(
+        dual_contoured, "WebGL2: dual contouring did not change the surface"
+    )
+    Image.fromarray(dual.astype(np.uint8)).save(SHOTS / "page_webgl2_surface_dc.png")
+    print(f"dual contouring: {dc_triangles} triangles in {dc_ms:.0f} ms, {moved} pixels changed")
+
+    # The read-out over the surface, from the grid built in the page.
+    readout = _readout_over_the_grid(page, dual, "WebGL2 surface")
+    page.screenshot(path=SHOTS / "page_webgl2_surface_hover.png")
+    assert float(dict(x.split(": ", 1) for x in readout.splitlines())["density"]) >= 0.7
     assert errors == [], errors
     page.close()
 
@@ -515,6 +588,9 @@ def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     print(f"\nsurface: {changed} pixels changed from the points, seen {shown_s:.1f} s after S")
     # The surface is lit and hp-coloured: both ends of the palette are on it.
     assert min(_point_colours(surface)) > 200, _point_colours(surface)
+    # The read-out over the surface: the first voxel at the isovalue along the cursor's ray.
+    readout = _readout_over_the_grid(page, surface, "WebGPU surface")
+    assert float(dict(x.split(": ", 1) for x in readout.splitlines())["density"]) >= 0.5
 
     place = page.locator("#loudscape-view").get_attribute("data-iso-slider")
     assert place, "the page did not say where the isovalue slider is"
