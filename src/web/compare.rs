@@ -15,10 +15,17 @@
 //! canvas (`data-compare-halves`, CSS pixels from its corner: `x,y,width,height` of A, `;`, of
 //! B) for scripts and tests.
 //!
-//! Points view only: Surface and Volume would need both grids in one box and on one scale (as
-//! `render --compare --compare-as` and the window build them, reading the reference sums back,
-//! which a page cannot wait for); each half on its own scale would make equal loudness look
-//! unequal. Their buttons say so.
+//! Surface (and, on WebGPU, Volume): both grids are built on the CPU in one box and on one
+//! scale ([`voxelize_host::build_on_one_scale`]: the box and the scale the window's compare
+//! builds on the GPU, where it reads the reference sums back, which a page cannot wait for), the
+//! first frame after the view is chosen; each half on its own scale would make equal loudness
+//! look unequal. On WebGPU each grid is uploaded into its half's scene, whose surface the
+//! page's marching tetrahedra or dual contouring passes extract ([`super::surface`]) and whose
+//! volume the ray march draws; on WebGL2 each half's surface is extracted by the CPU engine
+//! ([`super::gl_surface`]) and the Volume view is off. One isovalue slider and one method serve
+//! both halves. The canvas says the grids' build and the extractions
+//! (`data-surface-timing`: milliseconds of both grids, of the last extraction of A and of B,
+//! and A's and B's triangles).
 
 use std::sync::Arc;
 
@@ -28,16 +35,17 @@ use glam::{Mat4, Vec3};
 use wasm_bindgen::prelude::*;
 
 use super::gl;
+use super::surface::WebSurface;
 use crate::data::cloud::PointCloud;
 use crate::render::composite::CompositePass;
 use crate::render::gpu::target::RenderTarget;
+use crate::render::grid::VoxelGrid;
+use crate::render::grid::voxelize_host;
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use crate::render::surface::SurfaceSettings;
+use crate::render::surface::cpu::Instant;
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
-
-/// Why the compare page has no Surface or Volume view.
-const POINTS_ONLY: &str = "the compare page shows points: a surface or a volume of A beside B \
-    needs both grids on one scale, which the window and `render --compare --compare-as` build";
 
 /// Starts the compare viewer on `canvas` with A's and B's page data (`names` in messages),
 /// each half labelled (`label_a`, `label_b`); `note` says what the page thinned. Fails with one
@@ -76,13 +84,15 @@ pub async fn start_compare(
     Ok(())
 }
 
-/// What draws the halves: the window's passes (WebGPU), or the Points view alone (WebGL2).
+/// What draws the halves: the window's passes (WebGPU), or the Points and Surface views
+/// (WebGL2).
 enum HalvesDrawing {
     Full {
         renderer: Renderer,
         scenes: [SceneData; 2],
+        surfaces: [WebSurface; 2],
     },
-    PointsOnly([gl::GlRenderer; 2]),
+    Downlevel([gl::GlRenderer; 2]),
 }
 
 /// One half's offscreen target and its composite into the view.
@@ -109,6 +119,15 @@ struct CompareApp {
     world_box: (Vec3, Vec3),
     settings: RenderSettings,
     frame_index: u32,
+    render_state: eframe::egui_wgpu::RenderState,
+    /// The adapter runs every pass (WebGPU); else the Volume view is off, for this reason.
+    volume_off: Option<String>,
+    /// Milliseconds of both grids' build (None: not built yet).
+    grid_ms: Option<f64>,
+    /// The surface each half draws (it lags the slider while an extraction runs).
+    drawn_surface: [Option<SurfaceSettings>; 2],
+    /// What the surfaces hold, or what is under way.
+    surface_status: String,
 }
 
 impl CompareApp {
@@ -139,9 +158,13 @@ impl CompareApp {
             let scenes = clouds
                 .each_ref()
                 .map(|cloud| SceneData::new(device, &renderer, cloud));
-            HalvesDrawing::Full { renderer, scenes }
+            HalvesDrawing::Full {
+                surfaces: [WebSurface::new(device), WebSurface::new(device)],
+                renderer,
+                scenes,
+            }
         } else {
-            HalvesDrawing::PointsOnly(
+            HalvesDrawing::Downlevel(
                 clouds
                     .each_ref()
                     .map(|cloud| gl::GlRenderer::new(device, cloud, &settings.points)),
@@ -171,7 +194,152 @@ impl CompareApp {
             world_box,
             settings,
             frame_index: 0,
+            render_state: render_state.clone(),
+            volume_off: full.err(),
+            grid_ms: None,
+            drawn_surface: [None; 2],
+            surface_status: String::new(),
         })
+    }
+
+    /// Builds both grids on the CPU in one box and on one scale, and gives each half its own
+    /// (see the module's header).
+    fn build_grids(&mut self) {
+        let started = Instant::now();
+        let mode = self.clouds[0].meta.mode;
+        let voxels = &self.settings.voxels;
+        let dims = glam::UVec3::splat(voxels.resolution_for(mode));
+        let (grids, (box_min, box_max)) = voxelize_host::build_on_one_scale(
+            &self.clouds[0].points,
+            &self.clouds[1].points,
+            dims,
+            voxels.smoothing_for(mode),
+        );
+        let grid_ms = started.elapsed().as_secs_f64() * 1e3;
+        let state = &self.render_state;
+        let mut renderer = state.renderer.write();
+        let Some(res) = renderer.callback_resources.get_mut::<CompareResources>() else {
+            return;
+        };
+        match &mut res.drawing {
+            HalvesDrawing::Full {
+                renderer,
+                scenes,
+                surfaces,
+            } => {
+                for ((scene, surface), grid) in scenes.iter_mut().zip(surfaces).zip(&grids) {
+                    let grid = VoxelGrid::from_fields(
+                        &state.device,
+                        dims,
+                        box_min,
+                        box_max,
+                        &grid.density,
+                        &grid.hp_mean,
+                    );
+                    scene.set_grid(&state.device, renderer, grid, None, mode, voxels);
+                    surface.reset();
+                }
+            }
+            HalvesDrawing::Downlevel(halves) => {
+                for (half, grid) in halves.iter_mut().zip(grids) {
+                    let field = crate::data::field::Field {
+                        dims,
+                        box_min,
+                        box_max,
+                        density: grid.density,
+                        hp_mean: grid.hp_mean,
+                    };
+                    half.surface.set_grid(&field, grid_ms);
+                }
+            }
+        }
+        self.grid_ms = Some(grid_ms);
+        self.drawn_surface = [None; 2];
+    }
+
+    /// Builds both grids unless they are built, the frame after the one that says so. Returns
+    /// whether the page should come back for another frame (to build them).
+    fn ensure_grids(&mut self) -> bool {
+        if self.grid_ms.is_some() {
+            return false;
+        }
+        if self.surface_status.is_empty() {
+            // Shown for a frame before the grids' build holds the page.
+            self.surface_status = "building both voxel grids on the CPU…".to_string();
+            return true;
+        }
+        self.build_grids();
+        false
+    }
+
+    /// The Surface view's frame: both grids built the first frame after the view is chosen (the
+    /// frame before says so), then each half's surface of the slider's isovalue and method
+    /// asked of its extraction. Returns whether the page should come back for another frame.
+    fn update_surfaces(&mut self) -> bool {
+        if self.ensure_grids() {
+            return true;
+        }
+        let wanted = self.settings.surface;
+        let state = &self.render_state;
+        let mut renderer = state.renderer.write();
+        let Some(res) = renderer.callback_resources.get_mut::<CompareResources>() else {
+            return false;
+        };
+        let mut again = false;
+        let mut parts = Vec::new();
+        let mut timing = vec![format!("{:.1}", self.grid_ms.unwrap_or(0.0))];
+        let mut triangles = Vec::new();
+        match &mut res.drawing {
+            HalvesDrawing::Full {
+                scenes, surfaces, ..
+            } => {
+                for (side, (scene, surface)) in scenes.iter().zip(surfaces).enumerate() {
+                    let Some(grid) = scene.grid.as_ref() else {
+                        continue;
+                    };
+                    let (drawn, busy) =
+                        surface.update(&state.device, &state.queue, grid, &scene.surface, wanted);
+                    self.drawn_surface[side] = drawn;
+                    again |= busy || drawn != Some(wanted);
+                    let count = surface.counts.map(|c| c.triangles());
+                    triangles.push(count.map_or(String::new(), |c| c.to_string()));
+                    timing.push(String::new());
+                    parts.push(match (&surface.error, count) {
+                        (Some(error), _) => error.clone(),
+                        (None, Some(count)) => format!("{count} triangles"),
+                        (None, None) => "extracting…".to_string(),
+                    });
+                }
+            }
+            HalvesDrawing::Downlevel(halves) => {
+                for (side, half) in halves.iter_mut().enumerate() {
+                    let count = half.surface.extract(&state.device, &state.queue, wanted);
+                    self.drawn_surface[side] = count.map(|_| wanted);
+                    triangles.push(count.map_or(String::new(), |c| c.to_string()));
+                    timing.push(format!("{:.1}", half.surface.extract_ms));
+                    parts.push(match count {
+                        Some(count) => {
+                            format!("{count} triangles in {:.0} ms", half.surface.extract_ms)
+                        }
+                        None => "no grid".to_string(),
+                    });
+                }
+            }
+        }
+        self.surface_status = format!(
+            "Grids built on the CPU in {:.0} ms. A: {}; B: {}",
+            self.grid_ms.unwrap_or(0.0),
+            parts.first().map_or("", String::as_str),
+            parts.get(1).map_or("", String::as_str),
+        );
+        timing.extend(triangles);
+        let timing = timing.join(",");
+        if self.canvas.get_attribute("data-surface-timing").as_deref() != Some(timing.as_str()) {
+            self.canvas
+                .set_attribute("data-surface-timing", &timing)
+                .ok();
+        }
+        again
     }
 
     fn side_panel(&mut self, ui: &mut egui::Ui) {
@@ -192,29 +360,72 @@ impl CompareApp {
             }
         }
         ui.separator();
+        let keys = ui.input(|i| {
+            [
+                (i.key_pressed(egui::Key::P), ViewKind::Points),
+                (i.key_pressed(egui::Key::S), ViewKind::Surface),
+                (i.key_pressed(egui::Key::V), ViewKind::Volume),
+            ]
+        });
+        for (pressed, view) in keys {
+            if pressed && (self.volume_off.is_none() || view != ViewKind::Volume) {
+                self.settings.view = view;
+            }
+        }
         ui.horizontal(|ui| {
             ui.label("View:");
             for view in [ViewKind::Points, ViewKind::Surface, ViewKind::Volume] {
-                let on = view == ViewKind::Points;
+                let on = self.volume_off.is_none() || view != ViewKind::Volume;
                 let button = ui.add_enabled(
                     on,
                     egui::Button::selectable(self.settings.view == view, view.name()),
                 );
-                if !on {
-                    button.on_disabled_hover_text(format!("Off here: {POINTS_ONLY}"));
+                let button = match &self.volume_off {
+                    Some(reason) if !on => {
+                        button.on_disabled_hover_text(format!("Off here: {reason}"))
+                    }
+                    _ => button,
+                };
+                if button.clicked() {
+                    self.settings.view = view;
                 }
             }
         });
         ui.separator();
-        ui.label("Colour: harmonic-percussive ratio (hp)");
-        super::hp_strip(ui, self.settings.colours.hp);
+        match self.settings.view {
+            ViewKind::Surface => {
+                ui.label(
+                    "Surface: where the density of the points on a voxel grid crosses the \
+                     isovalue, coloured by hp; both grids in one box and on one scale",
+                );
+                super::surface_method_and_isovalue(ui, &mut self.settings.surface, &self.canvas);
+                ui.label(egui::RichText::new(&self.surface_status).small());
+            }
+            ViewKind::Volume => {
+                ui.label(format!(
+                    "Volume: density of the points on a voxel grid, both on one scale, coloured \
+                     and made opaque by the {} transfer function",
+                    self.settings.volume.preset.name()
+                ));
+                if self.grid_ms.is_none() {
+                    ui.label(egui::RichText::new(&self.surface_status).small());
+                }
+            }
+            ViewKind::Points => {
+                ui.label("Colour: harmonic-percussive ratio (hp)");
+            }
+        }
+        if self.settings.view != ViewKind::Volume {
+            super::hp_strip(ui, self.settings.colours.hp);
+        }
         ui.separator();
         ui.label("Axes of both halves (the union of A's and B's):");
         super::axes_legend(ui, &self.clouds[0].meta.axes);
         ui.separator();
         ui.label(
             egui::RichText::new(
-                "Drag: orbit both · right drag: pan · wheel: zoom · F: fit · R: reset view",
+                "Drag: orbit both · right drag: pan · wheel: zoom · F: fit · R: reset view · P: \
+                 points · S: surface · V: volume",
             )
             .small(),
         );
@@ -297,14 +508,30 @@ impl eframe::App for CompareApp {
                         );
                     }
                 }
+                let shown = self.settings.view;
+                if shown == ViewKind::Volume && self.ensure_grids() {
+                    ctx.request_repaint();
+                }
+                if shown == ViewKind::Surface && self.update_surfaces() {
+                    ctx.request_repaint();
+                }
                 let painter = ui.painter();
                 for (side, half) in halves.iter().enumerate() {
+                    let mut settings = self.settings.clone();
+                    match (shown, self.drawn_surface[side]) {
+                        (ViewKind::Surface, Some(drawn)) => settings.surface = drawn,
+                        (ViewKind::Surface, None) => settings.view = ViewKind::Points,
+                        (ViewKind::Volume, _) if self.grid_ms.is_none() => {
+                            settings.view = ViewKind::Points;
+                        }
+                        _ => {}
+                    }
                     painter.add(egui_wgpu::Callback::new_paint_callback(
                         *half,
                         HalfPaint {
                             side,
                             view,
-                            settings: self.settings.clone(),
+                            settings,
                         },
                     ));
                     painter.text(
@@ -359,7 +586,9 @@ impl CallbackTrait for HalfPaint {
             return Vec::new();
         };
         match &res.drawing {
-            HalvesDrawing::Full { renderer, scenes } => renderer.render(
+            HalvesDrawing::Full {
+                renderer, scenes, ..
+            } => renderer.render(
                 queue,
                 encoder,
                 target,
@@ -367,7 +596,7 @@ impl CallbackTrait for HalfPaint {
                 &self.view,
                 &self.settings,
             ),
-            HalvesDrawing::PointsOnly(points) => {
+            HalvesDrawing::Downlevel(points) => {
                 points[self.side].render(queue, encoder, target, &self.view, &self.settings);
             }
         }

@@ -44,7 +44,7 @@ pub(super) struct GlSurface {
     extracted: Option<SurfaceSettings>,
     /// Milliseconds of the grid's build and of the last extraction.
     grid_ms: f64,
-    extract_ms: f64,
+    pub(super) extract_ms: f64,
 }
 
 impl GlSurface {
@@ -91,9 +91,23 @@ impl GlSurface {
         }
     }
 
+    /// Takes a grid built elsewhere (the compare page's, on one scale with its other half's),
+    /// built in `grid_ms` milliseconds.
+    pub(super) fn set_grid(&mut self, field: &Field, grid_ms: f64) {
+        self.grid = Some(CpuGrid::new(
+            field.dims,
+            field.box_min,
+            field.box_max,
+            &field.density,
+            &field.hp_mean,
+        ));
+        self.grid_ms = grid_ms;
+        self.extracted = None;
+    }
+
     /// Extracts the surface of `wanted` (its method: marching tetrahedra or dual contouring, as
     /// on WebGPU) unless the buffers hold it, and uploads it. Returns the surface's triangles.
-    fn extract(
+    pub(super) fn extract(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,

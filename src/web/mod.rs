@@ -431,49 +431,14 @@ impl WebApp {
         );
     }
 
-    /// The Surface view's part of the side panel: the isovalue slider and what the surface
-    /// holds. The slider's place goes on the canvas (`data-iso-slider`).
+    /// The Surface view's part of the side panel: the method, the isovalue slider
+    /// ([`surface_method_and_isovalue`]) and what the surface holds.
     fn surface_controls(&mut self, ui: &mut egui::Ui) {
-        use crate::render::surface::SurfaceMethod;
         ui.label(
             "Surface: where the density of the points on a voxel grid crosses the isovalue, \
              coloured by hp",
         );
-        // The method chooser, as the window's; each button's place goes on the canvas
-        // (`data-surface-method`: "mt:x,y,width,height;dc:…").
-        let mut places = Vec::new();
-        ui.horizontal_wrapped(|ui| {
-            for method in SurfaceMethod::ALL {
-                let button =
-                    ui.selectable_value(&mut self.settings.surface.method, method, method.name());
-                let r = button.rect;
-                places.push(format!(
-                    "{}:{},{},{},{}",
-                    method.short_name(),
-                    r.left(),
-                    r.top(),
-                    r.width(),
-                    r.height()
-                ));
-            }
-        });
-        let places = places.join(";");
-        if self.canvas.get_attribute("data-surface-method").as_deref() != Some(places.as_str()) {
-            self.canvas
-                .set_attribute("data-surface-method", &places)
-                .ok();
-        }
-        let slider = ui.add(
-            egui::Slider::new(&mut self.settings.surface.iso_value, 0.01..=0.99).text("isovalue"),
-        );
-        // The rail is the first `slider_width` points of the widget (the value and the name
-        // follow it).
-        let r = slider.rect;
-        let rail = ui.spacing().slider_width;
-        let place = format!("{},{},{},{}", r.left(), r.top(), rail, r.height());
-        if self.canvas.get_attribute("data-iso-slider").as_deref() != Some(place.as_str()) {
-            self.canvas.set_attribute("data-iso-slider", &place).ok();
-        }
+        surface_method_and_isovalue(ui, &mut self.settings.surface, &self.canvas);
         ui.label(egui::RichText::new(&self.surface_status).small());
         hp_strip(ui, self.settings.colours.hp);
     }
@@ -575,6 +540,48 @@ impl WebApp {
         );
         show_readings(response, &readings, None);
         readings
+    }
+}
+
+/// The surface's method chooser (as the window's) and isovalue slider. Their places go on
+/// `canvas`, for scripts and tests: each method button's (`data-surface-method`:
+/// "mt:x,y,width,height;dc:…") and the slider's rail (`data-iso-slider`: x,y,width,height), CSS
+/// pixels from the canvas's corner.
+fn surface_method_and_isovalue(
+    ui: &mut egui::Ui,
+    surface: &mut SurfaceSettings,
+    canvas: &web_sys::HtmlCanvasElement,
+) {
+    use crate::render::surface::SurfaceMethod;
+    let mut places = Vec::new();
+    ui.horizontal_wrapped(|ui| {
+        for method in SurfaceMethod::ALL {
+            let r = ui
+                .selectable_value(&mut surface.method, method, method.name())
+                .rect;
+            places.push(format!(
+                "{}:{},{},{},{}",
+                method.short_name(),
+                r.left(),
+                r.top(),
+                r.width(),
+                r.height()
+            ));
+        }
+    });
+    let slider = ui.add(egui::Slider::new(&mut surface.iso_value, 0.01..=0.99).text("isovalue"));
+    // The rail is the first `slider_width` points of the widget (the value and the name follow
+    // it).
+    let r = slider.rect;
+    let rail = ui.spacing().slider_width;
+    let slider_place = format!("{},{},{},{}", r.left(), r.top(), rail, r.height());
+    for (name, place) in [
+        ("data-surface-method", places.join(";")),
+        ("data-iso-slider", slider_place),
+    ] {
+        if canvas.get_attribute(name).as_deref() != Some(place.as_str()) {
+            canvas.set_attribute(name, &place).ok();
+        }
     }
 }
 

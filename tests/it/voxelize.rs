@@ -545,3 +545,55 @@ fn the_cpu_engine_builds_the_compute_passes_grid() {
         true,
     );
 }
+
+/// An A/B compare's grids built on the CPU (the web page's compare): in one box (the union of
+/// the two clouds' grid boxes) and on one scale. B is A quieter by half (every scalar halved)
+/// and shifted along x: on one scale its densities are half A's shifted ones (each grid on its
+/// own scale would make them equal), and A's grid is A's own in that box.
+#[test]
+fn compare_grids_share_one_box_and_one_scale() {
+    use loudscape::render::grid::voxelize_host::{build, build_on_one_scale};
+    let dims = glam::UVec3::splat(24);
+    let a: Vec<Point> = random_cloud(38, 4000)
+        .into_iter()
+        .map(|p| Point {
+            position: [p.position[0] * 0.5 - 0.4, p.position[1], p.position[2]],
+            ..p
+        })
+        .collect();
+    let b: Vec<Point> = a
+        .iter()
+        .map(|p| Point {
+            position: [p.position[0] + 0.8, p.position[1], p.position[2]],
+            scalar: p.scalar * 0.5,
+            ..*p
+        })
+        .collect();
+    let (box_a_min, box_a_max) = grid_box(&a);
+    let ([grid_a, grid_b], (box_min, box_max)) = build_on_one_scale(&a, &b, dims, 0.0);
+    let (box_b_min, box_b_max) = grid_box(&b);
+    assert_eq!(box_min, box_a_min.min(box_b_min));
+    assert_eq!(box_max, box_a_max.max(box_b_max));
+    let alone = build(&a, None, dims, (box_min, box_max), 0.0);
+    assert_eq!(
+        grid_a.density, alone.density,
+        "A is on its own (the larger) scale"
+    );
+    assert_eq!(grid_a.hp_mean, alone.hp_mean);
+
+    let a_sum: f64 = grid_a.density.iter().map(|&d| f64::from(d)).sum();
+    let b_sum: f64 = grid_b.density.iter().map(|&d| f64::from(d)).sum();
+    let ratio = b_sum / a_sum;
+    println!("B's densities sum to {ratio:.3} of A's");
+    assert!(
+        (ratio - 0.5).abs() < 0.05,
+        "B's densities sum to {ratio} of A's, not half"
+    );
+    let b_alone = build(&b, None, dims, (box_min, box_max), 0.0);
+    let b_own: f64 = b_alone.density.iter().map(|&d| f64::from(d)).sum();
+    println!("on its own scale: {:.3} of A's", b_own / a_sum);
+    assert!(
+        (b_own / a_sum - 1.0).abs() < 0.1,
+        "each on its own scale they look equal"
+    );
+}

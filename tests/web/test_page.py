@@ -771,7 +771,8 @@ def test_the_compare_page_shows_a_and_b_side_by_side_and_turns_both(
     playwright, browser, compare_page_file, device
 ):
     """A left, B right, each with the points' warm and cool colours, on WebGPU and on WebGL2;
-    a drag over A's half turns both halves (one camera); no console errors."""
+    a drag over A's half turns both halves (one camera); S shows both halves' surfaces (their
+    grids on one scale), and V their volumes on WebGPU; no console errors."""
     own = _launch(playwright, WEBGL2_ARGS) if device == "webgl2" else None
     page, errors = _open(own or browser, compare_page_file.as_uri())
     assert page.evaluate(OFFERS_JS)["webgpu"] == (device == "webgpu")
@@ -812,6 +813,54 @@ def test_the_compare_page_shows_a_and_b_side_by_side_and_turns_both(
     changed = _wait_for(both_turned, f"{device}: a drag over A did not turn both halves")
     print(f"{device}: share of pixels changed by the drag, A {changed[0]:.3f}, B {changed[1]:.3f}")
     page.screenshot(path=SHOTS / f"page_compare_{device}_after_drag.png")
+
+    # S: both grids built in the page in one box and on one scale, each half's surface drawn in
+    # the surface's colours where its points were.
+    turned = _compare_halves(page)
+    _pointer_to_panel(page)
+    page.keyboard.press("s")
+
+    def both_surfaces():
+        timing = page.locator("#loudscape-view").get_attribute("data-surface-timing") or ""
+        fields = timing.split(",")
+        if len(fields) != 5 or not all(fields[3:]):
+            return None
+        halves = _compare_halves(page)
+        neutral = [_surface_colours(h)[0] for h in halves]
+        moved = [
+            np.count_nonzero(np.abs(now - then).sum(axis=2) > 30) / now[..., 0].size
+            for now, then in zip(halves, turned, strict=True)
+        ]
+        if min(neutral) < 1000 or min(moved) < 0.03:
+            return None
+        return fields, neutral, moved
+
+    fields, neutral, moved = _wait_for(
+        both_surfaces, f"{device}: S did not show both halves' surfaces"
+    )
+    page.screenshot(path=SHOTS / f"page_compare_{device}_surface.png")
+    print(
+        f"{device} surfaces: grids {float(fields[0]):.0f} ms, triangles A {fields[3]}, B "
+        f"{fields[4]}; extraction ms {fields[1] or '-'}, {fields[2] or '-'}; neutral {neutral}, "
+        f"moved {moved[0]:.3f}, {moved[1]:.3f}"
+    )
+    if device == "webgpu":
+        # V: the volume of each half's grid (WebGL2 has no volume).
+        surfaces = _compare_halves(page)
+        page.keyboard.press("v")
+
+        def both_volumes():
+            halves = _compare_halves(page)
+            moved = [
+                np.count_nonzero(np.abs(now - then).sum(axis=2) > 30) / now[..., 0].size
+                for now, then in zip(halves, surfaces, strict=True)
+            ]
+            lit = [np.count_nonzero(h.max(axis=2) > 100) / h[..., 0].size for h in halves]
+            return (moved, lit) if min(moved) > 0.05 and min(lit) > 0.05 else None
+
+        moved, lit = _wait_for(both_volumes, "webgpu: V did not show both halves' volumes")
+        page.screenshot(path=SHOTS / "page_compare_webgpu_volume.png")
+        print(f"volumes: moved {moved[0]:.3f}, {moved[1]:.3f}; lit {lit[0]:.3f}, {lit[1]:.3f}")
     assert errors == [], errors
     page.close()
     if own:

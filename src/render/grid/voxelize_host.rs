@@ -109,6 +109,33 @@ pub fn build(
     }
 }
 
+/// The grids of an A/B compare's two clouds (`a` and `b`, already on one set of axes), as
+/// [`build`] makes each, in one box (the union of their grid boxes, as the window's compare:
+/// voxel (i, j, k) is the same place in both) and on one scale (each density times its
+/// [`shared_scales`] factor onto the larger reference sum, the CPU mirror of the difference
+/// pass's `rescale`: a density means the same loudness sum in A as in B). Returns the grids and
+/// their box.
+///
+/// [`shared_scales`]: super::difference::shared_scales
+pub fn build_on_one_scale(
+    a: &[Point],
+    b: &[Point],
+    dims: UVec3,
+    sigma: f32,
+) -> ([HostGrid; 2], (Vec3, Vec3)) {
+    let (min_a, max_a) = super::voxelize_cpu::grid_box(a);
+    let (min_b, max_b) = super::voxelize_cpu::grid_box(b);
+    let grid_box = (min_a.min(min_b), max_a.max(max_b));
+    let mut grids = [a, b].map(|points| build(points, None, dims, grid_box, sigma));
+    let (scale_a, scale_b) = super::difference::shared_scales(&grids[0].stats, &grids[1].stats);
+    for (grid, scale) in grids.iter_mut().zip([scale_a, scale_b]) {
+        if scale != 1.0 {
+            grid.density.iter_mut().for_each(|d| *d *= scale);
+        }
+    }
+    (grids, grid_box)
+}
+
 /// One voxel's sums as `accumulate` keeps them: loudness and hp in fixed point, and the count.
 #[derive(Clone, Copy, Default)]
 struct Sums {
