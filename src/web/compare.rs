@@ -313,7 +313,10 @@ impl CompareApp {
             }
             HalvesDrawing::Downlevel(halves) => {
                 for (side, half) in halves.iter_mut().enumerate() {
-                    let count = half.surface.extract(&state.device, &state.queue, wanted);
+                    let count = half
+                        .surface
+                        .extract(&state.device, &state.queue, wanted, false)
+                        .map(|(count, _)| count);
                     self.drawn_surface[side] = count.map(|_| wanted);
                     triangles.push(count.map_or(String::new(), |c| c.to_string()));
                     timing.push(format!("{:.1}", half.surface.extract_ms));
@@ -398,7 +401,11 @@ impl CompareApp {
                     "Surface: where the density of the points on a voxel grid crosses the \
                      isovalue, coloured by hp; both grids in one box and on one scale",
                 );
-                super::surface_method_and_isovalue(ui, &mut self.settings.surface, &self.canvas);
+                let _ = super::surface_method_and_isovalue(
+                    ui,
+                    &mut self.settings.surface,
+                    &self.canvas,
+                );
                 ui.label(egui::RichText::new(&self.surface_status).small());
             }
             ViewKind::Volume => {

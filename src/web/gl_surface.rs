@@ -15,13 +15,17 @@
 //! new isovalue or method is then extracted by the CPU engine's marching tetrahedra or dual
 //! contouring ([`CpuExtraction`] on one thread: a page has no threads to spawn), the same
 //! surface as the GPU passes (tests/it/surface/cpu_engine.rs), and uploaded. The grid is kept
-//! as a [`Field`] too, for the read-out under the cursor. It runs within the frame: a dragged slider
-//! extracts the value it is at once a frame, never a backlog.
+//! as a [`Field`] too, for the read-out under the cursor. It runs within the frame: a dragged
+//! slider extracts the value it is at once a frame, never a backlog, and from the coarse grid
+//! (the window's level of detail, src/render/surface/lod.rs: downsampled twice, 32^3 for a
+//! song) where the full grid's extraction is slower than a moving frame's budget; at rest, the
+//! full.
 
 use glam::UVec3;
 
 use crate::data::cloud::PointCloud;
 use crate::data::field::Field;
+use crate::render::grid::downsample::reference_downsample;
 use crate::render::grid::settings::VoxelSettings;
 use crate::render::grid::voxelize_cpu::grid_box_of_bounds;
 use crate::render::grid::voxelize_host;
@@ -29,6 +33,7 @@ use crate::render::surface::SurfaceSettings;
 use crate::render::surface::buffers::MeshVertex;
 use crate::render::surface::cpu::grid::CpuGrid;
 use crate::render::surface::cpu::{CpuExtraction, Instant, Phases};
+use crate::render::surface::lod::{self, COARSE_LEVELS, Level, SurfaceDetail};
 
 use super::WebApp;
 
@@ -36,15 +41,19 @@ use super::WebApp;
 #[derive(Default)]
 pub(super) struct GlSurface {
     grid: Option<CpuGrid>,
+    /// The grid downsampled [`COARSE_LEVELS`] times (the window's coarse level of detail).
+    coarse: Option<CpuGrid>,
     /// The mesh: [`MeshVertex`] records and `u32` indices, grown as surfaces need.
     vertices: Option<wgpu::Buffer>,
     indices: Option<wgpu::Buffer>,
     index_count: u32,
-    /// The surface the buffers hold.
-    extracted: Option<SurfaceSettings>,
-    /// Milliseconds of the grid's build and of the last extraction.
+    /// The surface the buffers hold, and from which grid.
+    extracted: Option<(SurfaceSettings, Level)>,
+    /// Milliseconds of the grid's build, of the last extraction and of the last one of the
+    /// full grid.
     grid_ms: f64,
     pub(super) extract_ms: f64,
+    full_ms: f64,
 }
 
 impl GlSurface {
@@ -73,50 +82,65 @@ impl GlSurface {
             (box_min, box_max),
             voxels.smoothing_for(mode),
         );
-        self.grid = Some(CpuGrid::new(
-            dims,
-            box_min,
-            box_max,
-            &built.density,
-            &built.hp_mean,
-        ));
-        self.grid_ms = started.elapsed().as_secs_f64() * 1e3;
-        self.extracted = None;
-        Field {
+        let field = Field {
             dims,
             box_min,
             box_max,
             density: built.density,
             hp_mean: built.hp_mean,
-        }
+        };
+        self.set_grid(&field, started.elapsed().as_secs_f64() * 1e3);
+        field
     }
 
     /// Takes a grid built elsewhere (the compare page's, on one scale with its other half's),
     /// built in `grid_ms` milliseconds.
+    /// Its coarse grid is made here too (the window's downsampling, its CPU mirror).
     pub(super) fn set_grid(&mut self, field: &Field, grid_ms: f64) {
+        let (box_min, box_max) = (field.box_min, field.box_max);
         self.grid = Some(CpuGrid::new(
             field.dims,
-            field.box_min,
-            field.box_max,
+            box_min,
+            box_max,
             &field.density,
             &field.hp_mean,
         ));
+        let mut coarse = reference_downsample(field.dims, &field.density, &field.hp_mean);
+        for _ in 1..COARSE_LEVELS {
+            coarse = reference_downsample(coarse.0, &coarse.1, &coarse.2);
+        }
+        let (dims, density, hp_mean) = coarse;
+        self.coarse = Some(CpuGrid::new(dims, box_min, box_max, &density, &hp_mean));
         self.grid_ms = grid_ms;
         self.extracted = None;
+        self.full_ms = 0.0;
     }
 
     /// Extracts the surface of `wanted` (its method: marching tetrahedra or dual contouring, as
-    /// on WebGPU) unless the buffers hold it, and uploads it. Returns the surface's triangles.
+    /// on WebGPU) unless the buffers hold it, and uploads it. While the isovalue slider is
+    /// `dragging`, from the coarse grid where the last extraction of the full one took longer
+    /// than a moving frame's budget (the window's rule, [`lod::detail_for`]), so the slider
+    /// follows the pointer; at rest from the full grid. Returns the surface's triangles and the
+    /// grid it came from.
     pub(super) fn extract(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         wanted: SurfaceSettings,
-    ) -> Option<usize> {
-        let grid = self.grid.as_ref()?;
-        if self.extracted == Some(wanted) {
-            return Some(self.index_count as usize / 3);
+        dragging: bool,
+    ) -> Option<(usize, Level)> {
+        let too_slow = self.full_ms > f64::from(lod::MOVING_FRAME_MS);
+        let level = match lod::detail_for(too_slow, false, dragging, false) {
+            SurfaceDetail::CoarseUntilFull | SurfaceDetail::Coarse => Level::Coarse,
+            SurfaceDetail::Full => Level::Full,
+        };
+        if self.extracted == Some((wanted, level)) {
+            return Some((self.index_count as usize / 3, level));
         }
+        let grid = match level {
+            Level::Full => self.grid.as_ref()?,
+            Level::Coarse => self.coarse.as_ref()?,
+        };
         let started = Instant::now();
         let extraction = CpuExtraction {
             grid,
@@ -143,9 +167,12 @@ impl GlSurface {
             bytemuck::cast_slice::<u32, u8>(&indices),
         );
         self.index_count = u32::try_from(indices.len()).unwrap_or(u32::MAX);
-        self.extracted = Some(wanted);
+        self.extracted = Some((wanted, level));
         self.extract_ms = started.elapsed().as_secs_f64() * 1e3;
-        Some(indices.len() / 3)
+        if level == Level::Full {
+            self.full_ms = self.extract_ms;
+        }
+        Some((indices.len() / 3, level))
     }
 }
 
@@ -195,21 +222,34 @@ impl WebApp {
             }
             self.field = Some(surface.build_grid(&self.cloud, &self.settings.voxels));
         }
-        let Some(triangles) = surface.extract(&state.device, &state.queue, self.settings.surface)
-        else {
+        let Some((triangles, level)) = surface.extract(
+            &state.device,
+            &state.queue,
+            self.settings.surface,
+            self.iso_dragging,
+        ) else {
             return false;
         };
-        self.drawn_surface = surface.extracted;
+        self.drawn_surface = surface.extracted.map(|(settings, _)| settings);
         self.surface_status = if triangles == 0 {
             "no surface: every voxel is below the isovalue".to_string()
         } else {
             format!(
-                "{triangles} triangles, extracted on the CPU in {:.0} ms",
+                "{triangles} triangles{}, extracted on the CPU in {:.0} ms",
+                if level == Level::Coarse {
+                    " (coarse while the slider moves)"
+                } else {
+                    ""
+                },
                 surface.extract_ms
             )
         };
+        let level = match level {
+            Level::Full => "full",
+            Level::Coarse => "coarse",
+        };
         let timing = format!(
-            "{:.1},{:.1},{triangles}",
+            "{:.1},{:.1},{triangles},{level}",
             surface.grid_ms, surface.extract_ms
         );
         if self.canvas.get_attribute("data-surface-timing").as_deref() != Some(timing.as_str()) {

@@ -171,6 +171,8 @@ struct WebApp {
     /// The grid on the CPU, for the read-out over the Surface and Volume views (the window's
     /// picking, `view::pick`): built there on WebGL2, read back from the GPU on WebGPU.
     field: Option<crate::data::field::Field>,
+    /// The isovalue slider is being dragged (WebGL2 extracts the coarse grid meanwhile).
+    iso_dragging: bool,
     /// The grid's read-back while the browser has not mapped it (WebGPU).
     field_readback: Option<surface::GridReadback>,
     /// The page's canvas: the isovalue slider's rail is written on it (`data-iso-slider`, CSS
@@ -238,6 +240,7 @@ impl WebApp {
             drawn_surface: None,
             surface_status: String::new(),
             field: None,
+            iso_dragging: false,
             field_readback: None,
             canvas,
             cloud,
@@ -438,7 +441,8 @@ impl WebApp {
             "Surface: where the density of the points on a voxel grid crosses the isovalue, \
              coloured by hp",
         );
-        surface_method_and_isovalue(ui, &mut self.settings.surface, &self.canvas);
+        self.iso_dragging =
+            surface_method_and_isovalue(ui, &mut self.settings.surface, &self.canvas);
         ui.label(egui::RichText::new(&self.surface_status).small());
         hp_strip(ui, self.settings.colours.hp);
     }
@@ -546,12 +550,12 @@ impl WebApp {
 /// The surface's method chooser (as the window's) and isovalue slider. Their places go on
 /// `canvas`, for scripts and tests: each method button's (`data-surface-method`:
 /// "mt:x,y,width,height;dc:…") and the slider's rail (`data-iso-slider`: x,y,width,height), CSS
-/// pixels from the canvas's corner.
+/// pixels from the canvas's corner. Returns whether the slider is being dragged.
 fn surface_method_and_isovalue(
     ui: &mut egui::Ui,
     surface: &mut SurfaceSettings,
     canvas: &web_sys::HtmlCanvasElement,
-) {
+) -> bool {
     use crate::render::surface::SurfaceMethod;
     let mut places = Vec::new();
     ui.horizontal_wrapped(|ui| {
@@ -583,6 +587,7 @@ fn surface_method_and_isovalue(
             canvas.set_attribute(name, &place).ok();
         }
     }
+    slider.dragged()
 }
 
 /// The camera input of a frame (orbit, pan, zoom, F, R; `follow_fit`: see

@@ -384,14 +384,15 @@ def _surface_colours(rgb: np.ndarray) -> tuple[int, int]:
     return neutral, points_red
 
 
-def _surface_timing(page) -> tuple[float, float, int] | None:
+def _surface_timing(page) -> tuple[float, float, int, str] | None:
     """The page's `data-surface-timing` on WebGL2: milliseconds of the grid's build and of the
-    last extraction, and its triangles (None before the first surface)."""
+    last extraction, its triangles and its grid ("full", or "coarse" while the slider is
+    dragged); None before the first surface."""
     timing = page.locator("#loudscape-view").get_attribute("data-surface-timing")
     if not timing:
         return None
-    grid_ms, extract_ms, triangles = timing.split(",")
-    return float(grid_ms), float(extract_ms), int(triangles)
+    grid_ms, extract_ms, triangles, level = timing.split(",")
+    return float(grid_ms), float(extract_ms), int(triangles), level
 
 
 def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
@@ -413,7 +414,7 @@ def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
         timing = _surface_timing(page)
         return (rgb, timing) if timing and neutral > 5000 and red < 500 else None
 
-    surface, (grid_ms, first_ms, first_triangles) = _wait_for(
+    surface, (grid_ms, first_ms, first_triangles, _) = _wait_for(
         surface_shown, "WebGL2: S did not show the surface's colours in place of the points"
     )
     SHOTS.mkdir(parents=True, exist_ok=True)
@@ -427,19 +428,40 @@ def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
     assert place, "the page did not say where the isovalue slider is"
     x, y, width, height = (float(v) for v in place.split(","))
     box = page.locator("#loudscape-view").bounding_box()
-    # From the default isovalue (0.5) to near the high end: a smaller surface.
-    page.mouse.click(box["x"] + x + 0.8 * width, box["y"] + y + height / 2)
+    # The slider dragged from the default isovalue (0.5) to near the high end: while it moves,
+    # the coarse grid's surface (the full one's extraction took longer than a moving frame);
+    # once let go, the full grid's, a smaller surface than the first.
+    knob = box["x"] + x + width * (0.5 - 0.01) / 0.98
+    rail_y = box["y"] + y + height / 2
+    page.mouse.move(knob, rail_y)
+    page.mouse.down()
+    for step in range(1, 6):
+        page.mouse.move(knob + step * 0.06 * width, rail_y)
+        _next_frames(page)
+
+    def coarse():
+        timing = _surface_timing(page)
+        return timing if timing and timing[3] == "coarse" else None
+
+    _, coarse_ms, coarse_triangles, _ = _wait_for(
+        coarse, "WebGL2: no coarse surface while the slider was dragged"
+    )
+    Image.fromarray(_view_pixels(page).astype(np.uint8)).save(
+        SHOTS / "page_webgl2_surface_dragging.png"
+    )
+    print(f"while dragging: {coarse_triangles} triangles (coarse grid) in {coarse_ms:.0f} ms")
+    page.mouse.up()
     _pointer_to_panel(page)
 
     def changed():
         timing = _surface_timing(page)
-        if timing is None or timing[2] == first_triangles:
+        if timing is None or timing[2] == first_triangles or timing[3] != "full":
             return None
         rgb = _view_pixels(page)
         moved = np.count_nonzero(np.abs(rgb - surface).sum(axis=2) > 30)
         return (rgb, timing, moved) if moved > 0.01 * rgb.shape[0] * rgb.shape[1] else None
 
-    higher, (_, ms, triangles), moved = _wait_for(
+    higher, (_, ms, triangles, _), moved = _wait_for(
         changed, "WebGL2: the isovalue slider did not change the surface"
     )
     Image.fromarray(higher.astype(np.uint8)).save(SHOTS / "page_webgl2_surface_higher.png")
@@ -464,7 +486,7 @@ def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
         moved = np.count_nonzero(np.abs(rgb - higher).sum(axis=2) > 30)
         return (rgb, timing, moved) if moved > 0.002 * rgb.shape[0] * rgb.shape[1] else None
 
-    dual, (_, dc_ms, dc_triangles), moved = _wait_for(
+    dual, (_, dc_ms, dc_triangles, _), moved = _wait_for(
         dual_contoured, "WebGL2: dual contouring did not change the surface"
     )
     Image.fromarray(dual.astype(np.uint8)).save(SHOTS / "page_webgl2_surface_dc.png")
