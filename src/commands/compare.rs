@@ -91,7 +91,8 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         .iter()
         .map(|p| audio_of(p))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let extractor = locate::extractor().map_err(anyhow::Error::msg)?;
+    let extractor =
+        locate::extractor().map_err(|looked| anyhow::anyhow!(locate::not_found(&looked)))?;
     let mut command = Command::new(&extractor);
     command.arg("compare").arg("--match").arg(&args.matched_to);
     if let Some(sheet) = &args.output {

@@ -256,7 +256,7 @@ fn run_compare(
     let wasm = gzip(&wasm);
     let budget = points_in_budget(wasm.len() + glue.len());
     let max_points = args.max_points.unwrap_or(budget).min(budget).max(2);
-    let names = [file_name(&cloud_a), file_name(&aligned.cloud)];
+    let names = version_names(&args.input, b_path);
     let page = compare::compare_page(
         &cloud_a,
         &aligned.cloud,
@@ -301,6 +301,27 @@ fn run_compare(
         ),
     );
     Ok(())
+}
+
+/// A and B named as the user gave them: an audio file's cloud comes from the cache under a
+/// hashed name, which says nothing on the page. Two versions of one file name in different
+/// folders are told apart by their folders ("master/song.flac", "remaster/song.flac").
+fn version_names(a: &Path, b: &Path) -> [String; 2] {
+    let name = |path: &Path, parts: usize| {
+        let names: Vec<String> = path
+            .components()
+            .rev()
+            .take(parts)
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect();
+        names.into_iter().rev().collect::<Vec<_>>().join("/")
+    };
+    let (short_a, short_b) = (name(a, 1), name(b, 1));
+    if short_a == short_b {
+        [name(a, 2), name(b, 2)]
+    } else {
+        [short_a, short_b]
+    }
 }
 
 /// The cloud's file name, as the page names it.
@@ -351,6 +372,23 @@ fn ordinal(n: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn compare_versions_are_named_as_given_and_told_apart_by_folder() {
+        let names = version_names(Path::new("in/master.flac"), Path::new("vinyl.wav"));
+        assert_eq!(names, ["master.flac".to_string(), "vinyl.wav".to_string()]);
+        let names = version_names(
+            Path::new("music/master/song.flac"),
+            Path::new("music/remaster/song.flac"),
+        );
+        assert_eq!(
+            names,
+            [
+                "master/song.flac".to_string(),
+                "remaster/song.flac".to_string()
+            ]
+        );
+    }
 
     #[test]
     fn base64_matches_the_standard_alphabet_and_padding() {

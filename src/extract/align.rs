@@ -139,7 +139,7 @@ impl Comparison {
 /// Runs `loudscape-extract compare VERSIONS --json -q [--match M]` and reads its answer.
 /// The versions are audio files (a cloud's source, [`crate::playback::checked_source`]).
 pub fn compare_audio(versions: &[PathBuf], matched_to: &str) -> Result<Comparison, String> {
-    let extractor = locate::extractor()?;
+    let extractor = locate::extractor().map_err(|looked| locate::not_found(&looked))?;
     let mut command = Command::new(&extractor);
     command.arg("compare").arg("--json").arg("-q");
     command.arg("--match").arg(matched_to);

@@ -51,6 +51,15 @@ fn places_in(exe_dir: Option<&Path>, cwd: Option<&Path>) -> Vec<PathBuf> {
     places
 }
 
+/// What to tell the user when the extractor is missing: where it was looked for (`looked`, the
+/// error of [`extractor`]) and how to install it.
+pub fn not_found(looked: &str) -> String {
+    format!(
+        "the extractor loudscape-extract was not found (looked in: {looked}); install it with \
+         `make venv` (or: python3 -m venv .venv && .venv/bin/pip install -e ./preprocess)"
+    )
+}
+
 /// The extractor to run, or (as the error) a short list of where it was looked for.
 pub fn extractor() -> Result<PathBuf, String> {
     if let Some(explicit) = std::env::var_os("LOUDSCAPE_EXTRACT").filter(|p| !p.is_empty()) {

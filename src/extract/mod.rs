@@ -82,9 +82,8 @@ pub struct Progress {
 #[derive(Debug, Error)]
 pub enum ExtractError {
     #[error(
-        "{audio}: this is not a .ply cloud, so it was taken for audio, but the extractor \
-         loudscape-extract was not found (looked in: {looked}); install it with `make venv` \
-         (or: python3 -m venv .venv && .venv/bin/pip install -e ./preprocess)"
+        "{audio}: this is not a .ply cloud, so it was taken for audio, but {}",
+        locate::not_found(.looked)
     )]
     NotFound { audio: PathBuf, looked: String },
     #[error("{path}: {reason}")]

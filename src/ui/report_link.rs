@@ -167,7 +167,7 @@ pub fn report_button(ui: &mut egui::Ui, cloud: &PointCloud) {
     let extractor = match crate::extract::locate::extractor() {
         Ok(path) => path,
         Err(tried) => {
-            job.result = Some(Err(format!("loudscape-extract not found ({tried})")));
+            job.result = Some(Err(crate::extract::locate::not_found(&tried)));
             return;
         }
     };

@@ -198,3 +198,43 @@ fn the_sheet_gains_a_row_of_small_multiples() {
         assert!(drawn > 2_000, "tile {tile} holds {drawn} coloured pixels");
     }
 }
+
+/// `--align` needs the extractor (it finds B's offset from both songs' audio); where it is
+/// missing, `render`, `video` and `page` each say so in one line with how to install it, and
+/// write nothing (the page said only where it had looked: "beside the loudscape binary, …").
+#[test]
+fn align_without_the_extractor_says_how_to_install_it() {
+    let dir = common::fresh_dir("align_no_extractor");
+    let song = repo().join("data/demo_song.ply");
+    for (command, out) in [
+        ("render", "ab.png"),
+        ("video", "ab.mp4"),
+        ("page", "ab.html"),
+    ] {
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_loudscape"))
+            .arg(command)
+            .arg(&song)
+            .arg("--compare")
+            .arg(&song)
+            .args(if command == "page" {
+                &["--align"][..]
+            } else {
+                &["--align", "--view", "compare"][..]
+            })
+            .arg("-o")
+            .arg(dir.join(out))
+            .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
+            .env("LOUDSCAPE_EXTRACT", dir.join("no-extractor"))
+            .output()
+            .expect("start loudscape");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{command}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{command}: {stderr}");
+        assert!(
+            stderr.contains("the extractor loudscape-extract was not found")
+                && stderr.contains("install it with `make venv`"),
+            "{command}: {stderr}"
+        );
+        assert!(!dir.join(out).exists(), "{command}");
+    }
+}
