@@ -8,9 +8,11 @@
 //! into egui's frame. Drags orbit (primary) or pan (secondary), the wheel zooms, F fits and R
 //! resets, as in the window; P, S and V (or the side panel) choose the Points, Surface or Volume
 //! view. The grid of the Volume and Surface views is built on the GPU by the window's voxelize
-//! pass when first shown; the Surface view's isosurface, at the side panel's isovalue, is
-//! extracted by the window's marching tetrahedra passes ([`surface`]). In the Points view at
-//! rest, the point under the cursor's values show in a tooltip. A side panel holds the legend
+//! pass when first shown; the Surface view's isosurface, at the side panel's method and
+//! isovalue, is extracted by the window's marching tetrahedra or dual contouring passes
+//! ([`surface`]). At rest, what is under the cursor shows in a tooltip with its units, as in the
+//! window (`view::pick`): the point in the Points view, the first voxel along the cursor's ray
+//! in the Surface and Volume views (on a CPU copy of the grid). A side panel holds the legend
 //! (the hp colours, the axes with their units) and what the page thinned. A page with the
 //! song's sound moves the playhead plane through the song as it plays ([`set_playhead`]).
 //!
