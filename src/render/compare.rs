@@ -22,6 +22,7 @@ use crate::render::grid::voxelize::{
     VoxelSettings, VoxelStats, VoxelizeError, VoxelizePass, VoxelizeRequest,
 };
 use crate::render::grid::voxelize_cpu::grid_box;
+use crate::render::points::{PointBuffers, PointsGpu};
 use crate::render::scene::{Renderer, SceneData};
 use crate::render::surface::driver::wait_polling;
 
@@ -86,8 +87,23 @@ impl CompareScene {
         a: PointCloud,
         b: PointCloud,
     ) -> Self {
-        let data_a = SceneData::new(device, renderer, &a);
-        let data_b = SceneData::new(device, renderer, &b);
+        let buffers = [&a, &b]
+            .map(|cloud| PointsGpu::buffers(device, &cloud.points, PointsGpu::chunk_limit(device)));
+        Self::from_buffers(device, renderer, a, b, buffers)
+    }
+
+    /// As [`CompareScene::from_union`], A's and B's point buffers made beforehand
+    /// (`PointsGpu::buffers` with `PointsGpu::chunk_limit`, on a thread beside the window).
+    pub fn from_buffers(
+        device: &wgpu::Device,
+        renderer: &Renderer,
+        a: PointCloud,
+        b: PointCloud,
+        buffers: [PointBuffers; 2],
+    ) -> Self {
+        let [buffers_a, buffers_b] = buffers;
+        let data_a = SceneData::from_buffers(device, renderer, &a, buffers_a);
+        let data_b = SceneData::from_buffers(device, renderer, &b, buffers_b);
         Self {
             a,
             b,

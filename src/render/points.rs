@@ -67,6 +67,13 @@ struct Chunk {
     points: wgpu::Buffer,
 }
 
+/// A cloud's point buffers, filled, in chunks of `per_chunk` points ([`PointsGpu::buffers`]).
+pub struct PointBuffers {
+    chunks: Vec<(wgpu::Buffer, u32)>,
+    per_chunk: usize,
+    total: u64,
+}
+
 /// A cloud's points on the GPU.
 pub struct PointsGpu {
     chunks: Vec<Chunk>,
@@ -88,13 +95,7 @@ impl PointsGpu {
         points: &[Point],
         max_chunk_bytes: u64,
     ) -> Self {
-        Self::upload_with(pass, device, points, max_chunk_bytes, |label, slice| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytemuck::cast_slice(slice),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            })
-        })
+        Self::from_buffers(device, pass, Self::buffers(device, points, max_chunk_bytes))
     }
 
     /// As [`PointsGpu::upload`], but the points travel in pieces of at most `staging_bytes`
@@ -174,10 +175,50 @@ impl PointsGpu {
         mut make_buffer: impl FnMut(&str, &[Point]) -> wgpu::Buffer,
     ) -> Self {
         let per_chunk = (max_chunk_bytes / POINT_BYTES as u64).max(1) as usize;
+        let buffers = PointBuffers {
+            chunks: points
+                .chunks(per_chunk)
+                .enumerate()
+                .map(|(i, slice)| {
+                    let label = format!("points::cloud_chunk_{i}");
+                    (make_buffer(&label, slice), slice.len() as u32)
+                })
+                .collect(),
+            per_chunk,
+            total: points.len() as u64,
+        };
+        Self::from_buffers(device, pass, buffers)
+    }
+
+    /// The point buffers of [`PointsGpu::upload`] alone, made and filled without the pass:
+    /// what a thread beside the window can do ([`PointsGpu::from_buffers`] does the rest, a
+    /// few small buffers and bind groups). The same buffers as [`PointsGpu::upload`]'s.
+    pub fn buffers(device: &wgpu::Device, points: &[Point], max_chunk_bytes: u64) -> PointBuffers {
+        let per_chunk = (max_chunk_bytes / POINT_BYTES as u64).max(1) as usize;
+        PointBuffers {
+            chunks: points
+                .chunks(per_chunk)
+                .enumerate()
+                .map(|(i, slice)| {
+                    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(&format!("points::cloud_chunk_{i}")),
+                        contents: bytemuck::cast_slice(slice),
+                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                    });
+                    (buffer, slice.len() as u32)
+                })
+                .collect(),
+            per_chunk,
+            total: points.len() as u64,
+        }
+    }
+
+    /// The cloud drawn from `buffers` ([`PointsGpu::buffers`]): each chunk's parameters and
+    /// bind groups.
+    pub fn from_buffers(device: &wgpu::Device, pass: &PointsPass, buffers: PointBuffers) -> Self {
         let freq_table = freq_table_buffer(device, &[crate::data::freq_axis::HIDDEN]);
         let mut chunks = Vec::new();
-        for (i, slice) in points.chunks(per_chunk).enumerate() {
-            let points_buffer = make_buffer(&format!("points::cloud_chunk_{i}"), slice);
+        for (i, (points_buffer, count)) in buffers.chunks.into_iter().enumerate() {
             let params_buffer = |label: &str| {
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(&format!("points::{label}_{i}")),
@@ -192,8 +233,8 @@ impl PointsGpu {
             let lod_bind_group =
                 cloud_bind_group(device, pass, i, &points_buffer, &lod_params, &freq_table);
             chunks.push(Chunk {
-                count: slice.len() as u32,
-                first: (i * per_chunk) as u32,
+                count,
+                first: (i * buffers.per_chunk) as u32,
                 params,
                 bind_group,
                 lod_params,
@@ -203,7 +244,7 @@ impl PointsGpu {
         }
         Self {
             chunks,
-            total: points.len() as u64,
+            total: buffers.total,
             freq: FreqParams::IDENTITY,
             freq_table,
         }

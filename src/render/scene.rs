@@ -148,6 +148,18 @@ impl SceneData {
         Self::with_points(device, cloud, points)
     }
 
+    /// As [`SceneData::new`], the points' buffers made beforehand (on another thread,
+    /// `PointsGpu::buffers` of `cloud`'s points with [`PointsGpu::chunk_limit`]).
+    pub fn from_buffers(
+        device: &wgpu::Device,
+        renderer: &Renderer,
+        cloud: &PointCloud,
+        buffers: crate::render::points::PointBuffers,
+    ) -> Self {
+        let points = PointsGpu::from_buffers(device, &renderer.points, buffers);
+        Self::with_points(device, cloud, points)
+    }
+
     /// As [`SceneData::new`], the points sent through the queue in pieces of
     /// [`UPLOAD_STAGING_BYTES`] (see `PointsGpu::upload_bounded`): what the window and the
     /// `render` command use, so a cloud's upload costs the host one piece of staging, not a

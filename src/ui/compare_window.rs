@@ -229,6 +229,7 @@ impl LoudscapeApp {
             // when asked) moved onto their union axes on a thread (compare_scene.rs); an older
             // preparation's answer is not waited for.
             state.scene_build = Some(crate::ui::compare_scene::start(
+                render_state.device.clone(),
                 song.cloud.clone(),
                 b,
                 &state.alignment,
@@ -250,14 +251,23 @@ impl LoudscapeApp {
                 Ok(prepared) => {
                     let uploading = std::time::Instant::now();
                     let (a, b_moved) = prepared.clouds;
-                    CompareResources::write(render_state, |compare, view| {
-                        compare.build(view, a.clone(), b_moved.clone())
-                    });
-                    state.scene_built(Arc::new((a, b_moved)), prepared.labels);
+                    let buffers = prepared.buffers;
+                    // The old scene goes on the thread that made the new one.
+                    let old = CompareResources::write(render_state, |compare, view| {
+                        compare.build(view, a, b_moved, buffers)
+                    })
+                    .flatten();
+                    let old_clouds = state.clouds.take();
+                    state.scene_built(prepared.shared, prepared.labels);
+                    // Freeing the scene shown before (two copies of every point) is no work for
+                    // this frame either.
+                    let _ = std::thread::Builder::new()
+                        .name("compare-scene-drop".into())
+                        .spawn(move || drop((old, old_clouds)));
                     // A log line, as loads are told: tests wait for it.
                     eprintln!(
-                        "compare: A and {} shown{} (prepared in {:.0} ms on a thread, uploaded \
-                         in {:.0} ms)",
+                        "compare: A and {} shown{} (prepared and uploaded in {:.0} ms on a \
+                         thread, installed in {:.0} ms)",
                         state.beside.letter(),
                         if state.matched_shown() {
                             " (matched)"

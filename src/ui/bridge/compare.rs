@@ -12,6 +12,7 @@ use crate::data::cloud::PointCloud;
 use crate::render::compare::{BuiltGrids, CompareScene};
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::grid::voxelize::VoxelSettings;
+use crate::render::points::PointBuffers;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::render::surface::SurfaceSettings;
 use crate::render::surface::state::ExtractionStatus;
@@ -66,10 +67,19 @@ impl CompareResources {
         result
     }
 
-    /// Uploads A and B (already on their union axes) as the compare's scene.
-    pub(in crate::ui) fn build(&mut self, view: &ViewResources, a: PointCloud, b: PointCloud) {
-        self.scene = Some(CompareScene::from_union(&view.device, &view.renderer, a, b));
+    /// Makes A and B (already on their union axes, their point buffers filled on a thread)
+    /// the compare's scene; returns the scene it replaces, for the caller to drop where it
+    /// costs the window nothing.
+    pub(in crate::ui) fn build(
+        &mut self,
+        view: &ViewResources,
+        a: PointCloud,
+        b: PointCloud,
+        buffers: [PointBuffers; 2],
+    ) -> Option<CompareScene> {
+        let scene = CompareScene::from_buffers(&view.device, &view.renderer, a, b, buffers);
         self.revision += 1;
+        self.scene.replace(scene)
     }
 
     pub(in crate::ui) fn clear(&mut self) {

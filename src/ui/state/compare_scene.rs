@@ -1,15 +1,22 @@
 //! The compare's scene being prepared on a thread (`ui/compare_scene.rs` starts it): where the
 //! prepared clouds come, and whether it is the first scene of this A.
 
+use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::Duration;
 
 use crate::data::cloud::PointCloud;
+use crate::render::points::PointBuffers;
 use crate::ui::labels::AxisLabels;
 
 /// A and the version beside it on their union axes, with the labels of that box.
 pub(in crate::ui) struct Prepared {
+    /// The scene's own (`CompareScene` owns its clouds).
     pub(in crate::ui) clouds: (PointCloud, PointCloud),
+    /// The same, the copy the window keeps (hover read-outs, grids built on a thread).
+    pub(in crate::ui) shared: Arc<(PointCloud, PointCloud)>,
+    /// A's and B's point buffers on the GPU, filled.
+    pub(in crate::ui) buffers: [PointBuffers; 2],
     pub(in crate::ui) labels: AxisLabels,
     /// How long the thread took.
     pub(in crate::ui) took: Duration,
