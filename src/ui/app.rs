@@ -122,6 +122,7 @@ impl LoudscapeApp {
                 audio
             },
             hover: None,
+            compare_hover: Default::default(),
             hovered_song: None,
             selected_song: None,
             save_shot: SaveShot::default(),

@@ -7,7 +7,7 @@ use eframe::egui;
 use crate::render::scene::RenderSettings;
 use crate::ui::bridge::{CompareCallback, paint_callback};
 use crate::ui::compare::paint_difference;
-use crate::ui::compare_readouts::{compare_readings, difference_readings};
+use crate::ui::compare_readouts::{CompareHoverKey, compare_readings, difference_readings};
 use crate::ui::compare_shot::difference_settings;
 use crate::ui::hover::paint_readings;
 use crate::ui::labels;
@@ -93,7 +93,17 @@ impl LoudscapeApp {
                         (pos.x - rects[side].min.x) * ppp,
                         (pos.y - rects[side].min.y) * ppp,
                     );
-                    readings = Some((pos, compare_readings(&clouds, letter, side, view, px)));
+                    let key = CompareHoverKey {
+                        side,
+                        px,
+                        camera: view.camera,
+                        size: (view.width, view.height),
+                        letter,
+                    };
+                    let found = self.compare_hover.readings(&clouds, key, || {
+                        compare_readings(&clouds, letter, side, view, px)
+                    });
+                    readings = Some((pos, found));
                 }
             }
             CompareLayout::Difference => {

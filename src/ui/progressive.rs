@@ -40,11 +40,17 @@ const MAX_MEASURED: Duration = Duration::from_millis(500);
 /// doubled, so one odd frame does not swing it; never below [`MIN_BUDGET`]). A frame of no
 /// time or longer than [`MAX_MEASURED`] is no measure: `budget` as it was.
 pub fn adapted(budget: u64, frame: Duration) -> u64 {
+    adapted_towards(budget, frame, TARGET_FRAME, MIN_BUDGET)
+}
+
+/// [`adapted`] towards the frame time `target`, never below `floor` (the A/B compare's, whose
+/// frames cost more besides their points: `ui/compare_refine.rs`).
+pub fn adapted_towards(budget: u64, frame: Duration, target: Duration, floor: u64) -> u64 {
     if frame.is_zero() || frame > MAX_MEASURED {
         return budget;
     }
-    let scale = (TARGET_FRAME.as_secs_f64() / frame.as_secs_f64()).clamp(0.5, 2.0);
-    ((budget as f64 * scale) as u64).max(MIN_BUDGET)
+    let scale = (target.as_secs_f64() / frame.as_secs_f64()).clamp(0.5, 2.0);
+    ((budget as f64 * scale) as u64).max(floor)
 }
 
 /// The slice scheduler of one view.

@@ -87,6 +87,8 @@ pub(super) struct LoudscapeApp {
     /// picked by hand for each cloud (`audio.rs`).
     pub(super) audio: AudioPanel,
     pub(super) hover: Option<(HoverKey, Hover)>,
+    /// The compare's side-by-side read-outs, worked out once a cursor spot and camera.
+    pub(super) compare_hover: crate::ui::compare_readouts::CompareHover,
     pub(super) hovered_song: Option<usize>,
     pub(super) selected_song: Option<usize>,
     /// The "Save PNG" panel.
