@@ -585,7 +585,8 @@ def test_a_three_minute_song_is_thinned_into_the_budget(tmp_path):
 
 def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     """S shows the Surface view (the grid built by the voxelize passes, the isosurface by the
-    marching tetrahedra passes, on WebGPU); a click on the isovalue slider's rail changes it."""
+    marching tetrahedra passes, on WebGPU); the read-out over it; a click on the isovalue
+    slider's rail changes it, and so does dual contouring."""
     page, errors = _open(browser, page_file.as_uri())
 
     points = _points_shown(page)
@@ -629,6 +630,20 @@ def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     Image.fromarray(lower.astype(np.uint8)).save(SHOTS / "page_surface_lower.png")
     page.screenshot(path=SHOTS / "page_surface_panel.png")
     print(f"isovalue lowered: {changed} pixels changed, seen {changed_s:.1f} s after the click")
+
+    # Dual contouring, by the window's compute passes: another picture of the same isovalue.
+    methods = dict(
+        part.split(":")
+        for part in page.locator("#loudscape-view").get_attribute("data-surface-method").split(";")
+    )
+    x, y, width, height = (float(v) for v in methods["dc"].split(","))
+    page.mouse.click(box["x"] + x + width / 2, box["y"] + y + height / 2)
+    _pointer_to_panel(page)
+    dual, changed = _wait_for(
+        differs_from(lower, 0.01), "dual contouring did not change the surface"
+    )
+    Image.fromarray(dual.astype(np.uint8)).save(SHOTS / "page_surface_dc.png")
+    print(f"dual contouring: {changed} pixels changed")
     assert errors == [], errors
     page.close()
 
