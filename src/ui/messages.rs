@@ -46,7 +46,9 @@ impl LoudscapeApp {
             .stroke(ui.visuals().window_stroke)
             .corner_radius(4.0)
             .inner_margin(6.0);
-        egui::Area::new(egui::Id::unique("status-overlay"))
+        let id = egui::Id::unique("status-overlay");
+        let before = ui.ctx().memory(|m| m.area_rect(id)).map(|r| r.size());
+        let shown = egui::Area::new(id)
             .order(egui::Order::Foreground)
             // At once, at full colour: a warning fading in was half-drawn in the first frames
             // (and in a screenshot taken then).
@@ -69,6 +71,13 @@ impl LoudscapeApp {
                     self.message_lines(ui, window_height);
                 });
             });
+        // The area is placed (bottom right) and clipped by last frame's size: in the frame its
+        // content grows (the list opened, a line more) it would hang past the view's bottom,
+        // cut, and the window paints no other frame until something changes. Lay it out again.
+        if before.is_some_and(|size| size != shown.response.rect.size()) {
+            ui.ctx().request_discard("the status area changed size");
+            ui.ctx().request_repaint();
+        }
     }
 
     /// The messages of the status area: closed, the latest line and the count of all with the
@@ -103,8 +112,11 @@ impl LoudscapeApp {
         };
         let open = self.messages.is_open() && count.is_some();
         if open {
+            // Its height does not depend on the room the area had last frame (min and max).
+            let height = status_max_height(window_height);
             egui::ScrollArea::vertical()
-                .max_height(status_max_height(window_height))
+                .max_height(height)
+                .min_scrolled_height(height)
                 .stick_to_bottom(true)
                 .show(ui, |ui| {
                     for entry in shown {
@@ -397,6 +409,71 @@ mod tests {
             has(&texts, "warning: first.flac") && has(&texts, "warning: second.flac"),
             "the open list: {texts:?}"
         );
+    }
+
+    /// The list opened stays whole in the view, its buttons included, from the frame of the
+    /// click: that frame placed it by the closed box's size, past the view's bottom, its
+    /// buttons under the loudness strip, and the window painted nothing after it.
+    #[test]
+    fn the_open_list_stays_inside_the_view() {
+        let mut app = app();
+        let ctx = egui::Context::default();
+        for i in 0..4 {
+            app.messages.warn(&format!(
+                "song{i}.ogg: clipped: 14292 run(s) of 3 or more consecutive samples at or beyond \
+                 full scale (229236 samples in runs, the first at 0.796 s)"
+            ));
+        }
+        let size = egui::vec2(1000.0, 700.0);
+        let mut output = egui::FullOutput::default();
+        // Closed for a few frames, then opened: the frame of the click is the one a user sees
+        // (the window paints no other until something changes).
+        for opened in [false, false, false, true] {
+            app.messages.set_open(opened);
+            output = ctx.run_ui(
+                egui::RawInput {
+                    screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, size)),
+                    ..Default::default()
+                },
+                |ui| {
+                    egui::Panel::left("controls")
+                        .exact_size(270.0)
+                        .show(ui, |ui| ui.label("controls"));
+                    egui::Panel::bottom("strip")
+                        .exact_size(120.0)
+                        .show(ui, |ui| ui.label("strip"));
+                    app.status_area(ui);
+                    egui::CentralPanel::default().show(ui, |_| {});
+                },
+            );
+            output.textures_delta.clear();
+        }
+        let view_bottom = 700.0 - 120.0;
+        let texts: Vec<_> = output
+            .shapes
+            .iter()
+            .filter_map(|clipped| match &clipped.shape {
+                egui::Shape::Text(text) => Some((
+                    text.galley.text().to_string(),
+                    clipped.clip_rect,
+                    clipped.shape.visual_bounding_rect(),
+                )),
+                _ => None,
+            })
+            .collect();
+        let buttons: Vec<_> = texts
+            .iter()
+            .filter(|(text, ..)| ["hide the list", "dismiss all"].contains(&text.as_str()))
+            .map(|&(_, clip, rect)| (clip, rect))
+            .collect();
+        assert_eq!(buttons.len(), 2, "both buttons drawn: {texts:?}");
+        for (clip, rect) in buttons {
+            assert!(
+                rect.bottom() <= view_bottom && clip.contains_rect(rect),
+                "a button of the list at {rect:?} (clipped to {clip:?}) is not whole above the \
+                 strip at {view_bottom}"
+            );
+        }
     }
 
     #[test]
