@@ -419,7 +419,7 @@ mod tests {
         let mut app = app();
         let ctx = egui::Context::default();
         for i in 0..4 {
-            app.messages.warn(&format!(
+            app.messages.warn(format!(
                 "song{i}.ogg: clipped: 14292 run(s) of 3 or more consecutive samples at or beyond \
                  full scale (229236 samples in runs, the first at 0.796 s)"
             ));
