@@ -346,9 +346,16 @@ mod tests {
         )
     }
 
-    /// One frame of the side panel, the status area and the central panel: the central
-    /// panel's rect (the 3D view's) and the texts drawn.
-    fn frame(app: &mut LoudscapeApp, ctx: &egui::Context) -> (egui::Rect, Vec<String>) {
+    /// A text drawn: its text, clip rect and rect.
+    type Drawn = (String, egui::Rect, egui::Rect);
+
+    /// One frame of the side panel, a loudness strip `strip` points high (if any), the status
+    /// area and the central panel: the central panel's rect (the 3D view's) and the texts drawn.
+    fn frame_with(
+        app: &mut LoudscapeApp,
+        ctx: &egui::Context,
+        strip: Option<f32>,
+    ) -> (egui::Rect, Vec<Drawn>) {
         let size = egui::vec2(1000.0, 700.0);
         let mut view = egui::Rect::NOTHING;
         let mut output = ctx.run_ui(
@@ -360,6 +367,11 @@ mod tests {
                 egui::Panel::left("controls")
                     .exact_size(270.0)
                     .show(ui, |ui| ui.label("controls"));
+                if let Some(height) = strip {
+                    egui::Panel::bottom("strip")
+                        .exact_size(height)
+                        .show(ui, |ui| ui.label("strip"));
+                }
                 app.status_area(ui);
                 egui::CentralPanel::default().show(ui, |ui| view = ui.max_rect());
             },
@@ -369,11 +381,21 @@ mod tests {
             .shapes
             .iter()
             .filter_map(|clipped| match &clipped.shape {
-                egui::Shape::Text(text) => Some(text.galley.text().to_string()),
+                egui::Shape::Text(text) => Some((
+                    text.galley.text().to_string(),
+                    clipped.clip_rect,
+                    clipped.shape.visual_bounding_rect(),
+                )),
                 _ => None,
             })
             .collect();
         (view, texts)
+    }
+
+    /// [`frame_with`] without a strip, the texts alone.
+    fn frame(app: &mut LoudscapeApp, ctx: &egui::Context) -> (egui::Rect, Vec<String>) {
+        let (view, texts) = frame_with(app, ctx, None);
+        (view, texts.into_iter().map(|(text, ..)| text).collect())
     }
 
     /// Messages come and go over the view, not under it: the view keeps its size (the picture
@@ -424,43 +446,15 @@ mod tests {
                  full scale (229236 samples in runs, the first at 0.796 s)"
             ));
         }
-        let size = egui::vec2(1000.0, 700.0);
-        let mut output = egui::FullOutput::default();
         // Closed for a few frames, then opened: the frame of the click is the one a user sees
         // (the window paints no other until something changes).
+        let mut texts = Vec::new();
+        let mut view = egui::Rect::NOTHING;
         for opened in [false, false, false, true] {
             app.messages.set_open(opened);
-            output = ctx.run_ui(
-                egui::RawInput {
-                    screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, size)),
-                    ..Default::default()
-                },
-                |ui| {
-                    egui::Panel::left("controls")
-                        .exact_size(270.0)
-                        .show(ui, |ui| ui.label("controls"));
-                    egui::Panel::bottom("strip")
-                        .exact_size(120.0)
-                        .show(ui, |ui| ui.label("strip"));
-                    app.status_area(ui);
-                    egui::CentralPanel::default().show(ui, |_| {});
-                },
-            );
-            output.textures_delta.clear();
+            (view, texts) = frame_with(&mut app, &ctx, Some(120.0));
         }
-        let view_bottom = 700.0 - 120.0;
-        let texts: Vec<_> = output
-            .shapes
-            .iter()
-            .filter_map(|clipped| match &clipped.shape {
-                egui::Shape::Text(text) => Some((
-                    text.galley.text().to_string(),
-                    clipped.clip_rect,
-                    clipped.shape.visual_bounding_rect(),
-                )),
-                _ => None,
-            })
-            .collect();
+        let view_bottom = view.bottom();
         let buttons: Vec<_> = texts
             .iter()
             .filter(|(text, ..)| ["hide the list", "dismiss all"].contains(&text.as_str()))
