@@ -219,10 +219,8 @@ pub fn run(args: PageArgs) -> anyhow::Result<()> {
             "__AUDIO__",
             &sound.as_ref().map_or(String::new(), |s| base64(&s.0.webm)),
         );
+    // The cloud's warnings were said when it was loaded (`load_cloud`), once.
     crate::commands::write_atomically(&args.output, |out| Ok(out.write_all(page.as_bytes())?))?;
-    for line in cloud.warning_lines() {
-        eprintln!("warning: {line}");
-    }
     crate::commands::wrote(
         &args.output,
         &format!(
@@ -282,11 +280,6 @@ fn run_compare(
         .replace("__COMPARE__", &base64(&gzip(&page.data[1])))
         .replace("__AUDIO__", "");
     crate::commands::write_atomically(&args.output, |out| Ok(out.write_all(html.as_bytes())?))?;
-    for cloud in [&cloud_a, &aligned.cloud] {
-        for line in cloud.warning_lines() {
-            eprintln!("warning: {line}");
-        }
-    }
     let [a, b] = &page.thinning;
     crate::commands::wrote(
         &args.output,

@@ -328,3 +328,40 @@ fn a_compare_page_refuses_a_timeline_and_audio_in_one_line() {
         assert!(!out.exists());
     }
 }
+
+/// A cloud's warnings are said once each, as loading says them ("warning: FILE: MESSAGE"),
+/// for a page and a compare page alike: the page said them a second time, as
+/// "warning: warning: FILE: MESSAGE".
+#[test]
+fn a_pages_warnings_are_said_once() {
+    let dir = common::fresh_dir("page_warnings_once");
+    let web = stand_in_viewer(&dir);
+    let message = "decoded 1.49 s of the 4.00 s the file promises";
+    let warned = dir.join("warned.ply");
+    common::write_song_cloud(
+        &warned,
+        2000,
+        37.0,
+        serde_json::json!({ "warnings": [{"kind": "truncated", "message": message}] }),
+    );
+    let other = dir.join("other.ply");
+    common::write_song_cloud(&other, 2000, 11.0, serde_json::json!({}));
+    for (args, name) in [
+        (vec![warned.as_path()], "one.html"),
+        (
+            vec![warned.as_path(), Path::new("--compare"), other.as_path()],
+            "two.html",
+        ),
+    ] {
+        let out = dir.join(name);
+        let mut args = args;
+        args.extend([Path::new("-o"), out.as_path()]);
+        let output = page(&web, &args);
+        let text = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{name}: {text}");
+        let said: Vec<&str> = text.lines().filter(|l| l.contains(message)).collect();
+        assert_eq!(said.len(), 1, "{name}: said {} times:\n{text}", said.len());
+        assert!(said[0].starts_with("warning: "), "{name}: {text}");
+        assert!(!text.contains("warning: warning"), "{name}: {text}");
+    }
+}
