@@ -414,6 +414,7 @@ impl CompareApp {
                      and made opaque by the {} transfer function",
                     self.settings.volume.preset.name()
                 ));
+                super::volume_controls(ui, &mut self.settings.volume, &self.canvas);
                 if self.grid_ms.is_none() {
                     ui.label(egui::RichText::new(&self.surface_status).small());
                 }

@@ -420,6 +420,7 @@ impl WebApp {
                  the {} transfer function",
                 self.settings.volume.preset.name()
             ));
+            volume_controls(ui, &mut self.settings.volume, &self.canvas);
         } else {
             ui.label("Colour: harmonic-percussive ratio (hp)");
             hp_strip(ui, self.settings.colours.hp);
@@ -549,6 +550,48 @@ impl WebApp {
     }
 }
 
+/// The Volume view's controls, as the window's: the transfer function (Classic, Ember,
+/// Glacial), shading and hp tint. The preset buttons' places go on `canvas`, for scripts and
+/// tests (`data-volume-transfer`: "classic:x,y,width,height;ember:…", CSS pixels from the
+/// canvas's corner).
+fn volume_controls(
+    ui: &mut egui::Ui,
+    volume: &mut crate::render::volume::VolumeSettings,
+    canvas: &web_sys::HtmlCanvasElement,
+) {
+    use crate::render::transfer::TransferPreset;
+    let mut places = Vec::new();
+    ui.horizontal_wrapped(|ui| {
+        for preset in TransferPreset::ALL {
+            let r = ui
+                .selectable_value(&mut volume.preset, preset, preset.name())
+                .rect;
+            places.push(format!(
+                "{}:{},{},{},{}",
+                preset.name().to_lowercase(),
+                r.left(),
+                r.top(),
+                r.width(),
+                r.height()
+            ));
+        }
+    });
+    ui.horizontal_wrapped(|ui| {
+        ui.checkbox(&mut volume.shading, "shading")
+            .on_hover_text("Lit by the density's gradient");
+        ui.checkbox(&mut volume.hp_tint, "hp tint")
+            .on_hover_text("Coloured by mean hp: red percussive to blue harmonic");
+    });
+    set_place(canvas, "data-volume-transfer", &places.join(";"));
+}
+
+/// Sets the canvas's attribute `name` to `value` where it differs (widget places for scripts).
+fn set_place(canvas: &web_sys::HtmlCanvasElement, name: &str, value: &str) {
+    if canvas.get_attribute(name).as_deref() != Some(value) {
+        canvas.set_attribute(name, value).ok();
+    }
+}
+
 /// The surface's method chooser (as the window's) and isovalue slider. Their places go on
 /// `canvas`, for scripts and tests: each method button's (`data-surface-method`:
 /// "mt:x,y,width,height;dc:…") and the slider's rail (`data-iso-slider`: x,y,width,height), CSS
@@ -581,14 +624,8 @@ fn surface_method_and_isovalue(
     let r = slider.rect;
     let rail = ui.spacing().slider_width;
     let slider_place = format!("{},{},{},{}", r.left(), r.top(), rail, r.height());
-    for (name, place) in [
-        ("data-surface-method", places.join(";")),
-        ("data-iso-slider", slider_place),
-    ] {
-        if canvas.get_attribute(name).as_deref() != Some(place.as_str()) {
-            canvas.set_attribute(name, &place).ok();
-        }
-    }
+    set_place(canvas, "data-surface-method", &places.join(";"));
+    set_place(canvas, "data-iso-slider", &slider_place);
     slider.dragged()
 }
 

@@ -324,6 +324,26 @@ def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
     readout = _readout_over_the_grid(page, shown, "Volume")
     page.screenshot(path=SHOTS / "page_volume_hover.png")
     assert float(dict(x.split(": ", 1) for x in readout.splitlines())["density"]) >= 0.1
+
+    # The transfer functions, chosen as in the window: Ember draws the same grid in its colours.
+    presets = dict(
+        part.split(":")
+        for part in page.locator("#loudscape-view").get_attribute("data-volume-transfer").split(";")
+    )
+    assert sorted(presets) == ["classic", "ember", "glacial"], presets
+    box = page.locator("#loudscape-view").bounding_box()
+    x, y, width, height = (float(v) for v in presets["ember"].split(","))
+    page.mouse.click(box["x"] + x + width / 2, box["y"] + y + height / 2)
+    _pointer_to_panel(page)
+
+    def recoloured():
+        rgb = _view_pixels(page)
+        moved = np.count_nonzero(np.abs(rgb - shown).sum(axis=2) > 30)
+        return (rgb, moved) if moved > 0.05 * rgb.shape[0] * rgb.shape[1] else None
+
+    ember, moved = _wait_for(recoloured, "Ember did not recolour the volume")
+    Image.fromarray(ember.astype(np.uint8)).save(SHOTS / "page_volume_ember.png")
+    print(f"Ember: {moved} pixels changed")
     assert errors == [], errors
     page.close()
 
