@@ -192,6 +192,10 @@ impl LoudscapeApp {
     }
 }
 
+/// The scripted press (`--press when-drawn`) that holds the presses after it until the view has
+/// drawn its scene complete (every point of a large cloud).
+const WHEN_DRAWN: &str = "when-drawn";
+
 impl eframe::App for LoudscapeApp {
     /// The frame is cleared to the panels' colour, which the panels then leave unpainted
     /// ([`crate::ui::style::panel_frame`]).
@@ -214,7 +218,17 @@ impl eframe::App for LoudscapeApp {
             && self.scripted_input_ready()
             && compare_ready
         {
-            for name in std::mem::take(&mut self.scripted_presses) {
+            let mut presses = std::mem::take(&mut self.scripted_presses).into_iter();
+            while let Some(name) = presses.next() {
+                // The presses after `when-drawn` wait for the view at full detail.
+                if name == WHEN_DRAWN {
+                    if !self.save_shot.view_drawn {
+                        self.scripted_presses = std::iter::once(name).chain(presses).collect();
+                        ctx.request_repaint();
+                        break;
+                    }
+                    continue;
+                }
                 if self.scripted_setting(&name)
                     || self.scripted_compare(&name)
                     || self.scripted_shot_size(&name)
@@ -286,6 +300,7 @@ impl eframe::App for LoudscapeApp {
         if self.compare_covers_view() {
             self.refining = self.compare_refining(frame);
         }
+        self.note_view_drawn(frame);
         if self.refining.is_some() {
             // The next slice of the points (ui/progressive.rs).
             ctx.request_repaint();

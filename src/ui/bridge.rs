@@ -204,6 +204,56 @@ impl ViewResources {
         })
     }
 
+    /// Save PNG's quick way: when the view's target holds, complete, the Points view of cloud
+    /// `id` that a render of `view` with `settings` draws (at rest, at the view's size, no
+    /// refinement under way), its read-back is submitted with the labels to draw over it, and
+    /// no point is drawn again. `None` when the target holds anything else (then the picture is
+    /// rendered: [`ViewResources::screenshot`]). The same pixels either way: the slices of a
+    /// progressive frame end as the single pass (tests/it/big_clouds.rs).
+    pub fn shown_picture(
+        render_state: &egui_wgpu::RenderState,
+        id: u64,
+        cloud: &PointCloud,
+        view: &FrameView,
+        settings: &RenderSettings,
+    ) -> Option<Result<crate::picture::PendingPicture, crate::ui::screenshot::ScreenshotError>>
+    {
+        if settings.view != crate::render::scene::ViewKind::Points {
+            return None;
+        }
+        let gpu = crate::render::gpu::context::GpuContext {
+            adapter: render_state.adapter.clone(),
+            device: render_state.device.clone(),
+            queue: render_state.queue.clone(),
+        };
+        Self::read(render_state, |r| {
+            let held = r.cache.holds()?;
+            let mut at_rest = *view;
+            at_rest.moving = false;
+            let mut wanted = RenderKey::new(&at_rest, settings, Some(id), r.cache.revision)
+                .with_points_revision(r.cache.points_revision);
+            // Only a moving frame draws fewer points; this one is at rest.
+            wanted.settings.points.max_points_moving = held.settings.points.max_points_moving;
+            if *held != wanted {
+                return None;
+            }
+            let data = r.scenes.get(&id)?;
+            let target = r.offscreen.target()?;
+            let what = crate::picture::Overlay {
+                labels: settings.show_box,
+                legend: true,
+            };
+            let shapes = crate::picture::overlay(&at_rest, cloud, data, settings, what);
+            let mut picture = crate::picture::PendingPicture::new(
+                target.width,
+                target.height,
+                image::Rgba([0; 4]),
+            );
+            Some(picture.add(&gpu, target, 0, shapes).map(|()| picture))
+        })
+        .flatten()
+    }
+
     /// The voxel grid of cloud `id` read back to the CPU (once per grid, for hover picking).
     pub fn read_grid(&self, id: u64) -> Option<crate::data::field::Field> {
         let grid = self.scenes.get(&id)?.grid.as_ref()?;

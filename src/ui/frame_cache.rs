@@ -80,6 +80,12 @@ impl FrameCache {
         self.last = complete.then_some(key);
     }
 
+    /// The key of the scene the target holds complete (none while a progressive render is
+    /// under way, or after an invalidation).
+    pub fn holds(&self) -> Option<&RenderKey> {
+        self.last.as_ref()
+    }
+
     /// Forgets what the target holds (its size or contents changed outside a render).
     pub fn invalidate(&mut self) {
         self.last = None;

@@ -4,8 +4,11 @@
 //! window once saved. Save PNG writes only to a `.png` name (a video's name in the field saves
 //! nothing and says why) and never over a file this window did not save in this run: a file
 //! already there that it did not make is kept, the PNG goes to `name-2.png` beside it, and the
-//! status line says so (`state/written.rs`). The frame of the click renders the picture and
-//! submits its read-back; a thread waits for the copy, draws the labels and writes the PNG
+//! status line says so (`state/written.rs`). At the view's size in the Points view, once the
+//! view has drawn every point (`ui/progressive.rs`), the frame of the click only copies the
+//! view's own picture (`ViewResources::shown_picture`): a song of millions of points is not
+//! drawn again in that frame, which held the window for seconds on a software GPU. Otherwise it
+//! renders the picture. Either way it submits the read-back; a thread waits for the copy, draws the labels and writes the PNG
 //! (`state/picture_save.rs`), the status saying "saving …" and then "saved …", so a large
 //! picture or a cloud of millions of points never holds the window.
 
@@ -172,6 +175,7 @@ impl LoudscapeApp {
         };
         // Rendered and its read-back submitted in this frame; a thread waits for the copy,
         // draws the labels, encodes and writes (the window keeps drawing meanwhile).
+        let mut from_view = false;
         let submitted = match self.compare_shown_as() {
             // The compare the view shows: both halves, or the difference picture, labelled.
             Some(what) => {
@@ -184,8 +188,31 @@ impl LoudscapeApp {
                 compare_screenshot(render_state, what, view.camera, size, &settings)
                     .map_err(|e| format!("{}: {e:#}", path.display()))
             }
+            // The view's own picture when it shows this one complete (a copy, not seconds of
+            // points drawn again in this frame); else rendered.
             None => {
-                ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
+                let shown = (!self.save_shot.custom_size)
+                    .then(|| {
+                        ViewResources::shown_picture(
+                            render_state,
+                            loaded.id,
+                            &loaded.cloud,
+                            &view,
+                            &settings,
+                        )
+                    })
+                    .flatten();
+                from_view = shown.is_some();
+                shown
+                    .unwrap_or_else(|| {
+                        ViewResources::screenshot(
+                            render_state,
+                            loaded.id,
+                            &loaded.cloud,
+                            &view,
+                            &settings,
+                        )
+                    })
                     .map_err(|e| e.to_string())
             }
         };
@@ -212,15 +239,29 @@ impl LoudscapeApp {
         let device = render_state.device.clone();
         let queue = render_state.queue.clone();
         let to = path.clone();
-        self.save_shot.saving = Some(PictureSave::start(path, notes, move || {
+        let mut save = PictureSave::start(path, notes, move || {
             let size = picture.size();
             let image = picture
                 .finish(&device, Wait::Polling(queue))
                 .map_err(|e| format!("{}: {e}", to.display()))?;
             crate::ui::screenshot::save_png(&image, &to).map_err(|e| e.to_string())?;
             Ok(size)
-        }));
+        });
+        save.from_view = from_view;
+        self.save_shot.saving = Some(save);
         ctx.request_repaint();
+    }
+
+    /// Notes whether the view held its scene complete after the last frame (no refinement
+    /// under way), for the scripted `when-drawn` press.
+    pub(super) fn note_view_drawn(&mut self, frame: &eframe::Frame) {
+        let holds = frame
+            .wgpu_render_state()
+            .and_then(|render_state| {
+                ViewResources::read(render_state, |r| r.cache.holds().is_some())
+            })
+            .unwrap_or(false);
+        self.save_shot.view_drawn = holds && self.refining.is_none() && self.active().is_some();
     }
 
     /// Whether a Save PNG is being read back or written.
@@ -253,8 +294,13 @@ impl LoudscapeApp {
                 ));
                 // A log line, as loads are told: tests read the frames.
                 eprintln!(
-                    "picture: saved in {:.0} ms on a thread, while the window drew {} frames",
+                    "picture: saved in {:.0} ms on a thread ({}), while the window drew {} frames",
                     finished.took.as_secs_f64() * 1000.0,
+                    if save.from_view {
+                        "the view's picture, copied"
+                    } else {
+                        "rendered for the picture"
+                    },
                     finished.frames
                 );
             }

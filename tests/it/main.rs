@@ -54,6 +54,7 @@ mod window_open_audio;
 mod window_open_music;
 mod window_persist;
 mod window_responsive;
+mod window_save_big;
 mod window_save_safety;
 mod window_stream;
 mod window_strip;

@@ -195,6 +195,9 @@ pub(super) struct SaveShot {
     pub(super) made: written::MadeHere,
     /// The PNG being read back and written on a thread.
     pub(super) saving: Option<picture_save::PictureSave>,
+    /// The view held its scene complete last frame (every point drawn): the scripted
+    /// `--press when-drawn` of tests holds the presses after it until then.
+    pub(super) view_drawn: bool,
 }
 
 impl Default for SaveShot {
@@ -206,6 +209,7 @@ impl Default for SaveShot {
             requested: false,
             made: written::MadeHere::default(),
             saving: None,
+            view_drawn: false,
         }
     }
 }

@@ -23,6 +23,8 @@ pub(in crate::ui) struct PictureSave {
     started: Instant,
     /// Frames the window drew while the thread worked.
     frames: u32,
+    /// Whether the picture is a copy of the view's own (not rendered again for the save).
+    pub(in crate::ui) from_view: bool,
 }
 
 /// A finished save: its result, how long it took and the frames drawn meanwhile.
@@ -60,6 +62,7 @@ impl PictureSave {
             notes,
             started: Instant::now(),
             frames: 0,
+            from_view: false,
         }
     }
 

@@ -1,0 +1,126 @@
+//! Save PNG of a large cloud at full detail does not draw its points again: the window copies
+//! the view's own picture (`ViewResources::shown_picture`) in the frame of Ctrl+S, where
+//! drawing 1.5 M points on a software GPU held the window for seconds, and a thread reads it
+//! back, draws the labels and writes the PNG while the window goes on drawing frames. The PNG
+//! is the picture that rendering it again at the same size gives. Needs a display (`make test`
+//! runs it under xvfb-run).
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Points in the synthetic song: several frames' budget of progressive points
+/// (`ui/progressive.rs`), so the view fills in over frames before Ctrl+S.
+const POINTS: usize = 1_500_000;
+
+/// A song cloud of `count` synthetic points (`data::synthetic::synthetic_song`) at `path`.
+fn write_song(path: &Path, count: usize) {
+    let points = loudscape::data::synthetic::synthetic_song(count, 5);
+    let axis = |label: &str, unit: &str, min: f64, max: f64| serde_json::json!({"label": label, "unit": unit, "min": min, "max": max, "scale": "linear"});
+    let meta = serde_json::json!({
+        "format_version": loudscape::data::cloud::FORMAT_VERSION,
+        "mode": "song",
+        "point_count": points.len(),
+        "axes": {
+            "x": axis("time", "s", 0.0, 29.953741),
+            "y": axis("level", "dB", -65.018802, -5.018802),
+            "z": axis("frequency", "Hz", 0.0, 11025.0),
+            "scalar": axis("A-weighted level", "dB", -114.0, 0.0),
+            "hp": axis("harmonic-percussive ratio", "", 0.0, 1.0),
+        },
+    });
+    let mut file = Vec::new();
+    loudscape::data::cloud::write(&mut file, &points, Some(&meta)).unwrap();
+    std::fs::write(path, file).unwrap();
+}
+
+/// Runs the window on `song` in `dir`, presses `press` once every point is drawn, and returns
+/// the one PNG Ctrl+S saved there (no dialog can open) and the window's "picture: saved" line.
+fn save(song: &Path, dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
+    common::home_in(&mut command, dir)
+        .current_dir(dir)
+        .env("DBUS_SESSION_BUS_ADDRESS", "")
+        .env("PATH", "/usr/bin/false-folder-without-zenity")
+        .arg(song)
+        .arg("--screenshot")
+        .arg(dir.join("window.png"));
+    let mut presses = vec!["when-drawn"];
+    presses.extend_from_slice(press);
+    let err = common::run_pressing(&mut command, &presses);
+    let saved: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("loudscape-"))
+        })
+        .collect();
+    assert_eq!(saved.len(), 1, "one PNG saved: {saved:?}\n{err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("picture: saved in "))
+        .unwrap_or_else(|| panic!("no line saying how the picture was saved: {err}"))
+        .to_string();
+    (image::open(&saved[0]).unwrap().to_rgba8(), line)
+}
+
+/// The frames the window drew while the picture was saved ("… while the window drew N
+/// frames").
+fn frames_while_saving(line: &str) -> u32 {
+    line.split_whitespace()
+        .rev()
+        .nth(1)
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no frame count in {line:?}"))
+}
+
+#[test]
+fn save_png_of_a_big_cloud_copies_the_view_and_equals_a_fresh_render() {
+    let _screen = common::screen();
+    common::assert_display();
+    let home = common::fresh_dir("window_save_big");
+    let song = home.join("synthetic_1m5.ply");
+    write_song(&song, POINTS);
+
+    // At the view's size (the default): the view's picture, copied.
+    let copied_dir = home.join("copied");
+    std::fs::create_dir_all(&copied_dir).unwrap();
+    let (copied, line) = save(&song, &copied_dir, &["Ctrl+S"]);
+    assert!(
+        line.contains("(the view's picture, copied)"),
+        "the points were drawn again for the picture: {line}"
+    );
+    // The copy is read back and written on the thread (often within the frame after it).
+    println!("copied: {line}, {} frames", frames_while_saving(&line));
+    assert!(
+        common::coverage(&copied) > 0.05,
+        "the copied picture looks blank"
+    );
+
+    // The same size chosen in the panel: rendered again, the way every save went before.
+    let (w, h) = copied.dimensions();
+    let rendered_dir = home.join("rendered");
+    std::fs::create_dir_all(&rendered_dir).unwrap();
+    let size = format!("shot-size={w}x{h}");
+    let (rendered, line) = save(&song, &rendered_dir, &[&size, "Ctrl+S"]);
+    println!("rendered: {line}");
+    assert!(line.contains("(rendered for the picture)"), "{line}");
+    assert_eq!(rendered.dimensions(), (w, h));
+    // The same pixels: the slices of the view end as the single pass, the labels are drawn
+    // by the same code on the CPU.
+    let (share, _) = common::difference(&copied, &rendered, 0);
+    if share > 0.0 {
+        let _ = copied.save(home.join("copied.png"));
+        let _ = rendered.save(home.join("rendered.png"));
+    }
+    assert_eq!(
+        share,
+        0.0,
+        "the copied picture differs from a fresh render in {:.3}% of pixels (both in {})",
+        share * 100.0,
+        home.display()
+    );
+}
