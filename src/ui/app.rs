@@ -102,6 +102,7 @@ impl LoudscapeApp {
             song: None,
             timeline: None,
             active: Slot::Song,
+            first_shown: Default::default(),
             settings: RenderSettings::default(),
             motion: Default::default(),
             loading: Vec::new(),

@@ -104,7 +104,7 @@ impl LoudscapeApp {
         if let Some(old) = self.timeline.take() {
             crate::ui::bridge::ViewResources::write(render_state, |r| r.remove(old.id));
         }
-        self.install(render_state, cloud);
+        self.replace(render_state, cloud);
         self.selected_song = selected;
         self.heard = Heard {
             preset: choice,

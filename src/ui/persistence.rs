@@ -85,19 +85,16 @@ impl LoudscapeApp {
         }
     }
 
-    /// A load failed while the window was reopened: the slot it waited for may be the one that
-    /// failed, so the other slot's cloud is shown (fitted) if nothing else is.
-    pub(super) fn restore_failed(&mut self) {
-        if !self.motion.abandon_restore() || self.active().is_some() {
+    /// The load of `path` failed. Of files opened together, the one it hid may now be shown
+    /// (fitted: a remembered camera was the failed one's slot's).
+    pub(super) fn first_shown_failed(&mut self, path: &std::path::Path) {
+        let Some(slot) = self.first_shown.failed(path) else {
             return;
-        }
-        let other = match self.active {
-            Slot::Song => Slot::Timeline,
-            Slot::Timeline => Slot::Song,
         };
-        if self.slot(other).is_some() {
-            self.motion.cloud_installed(self.active, other);
-            self.active = other;
+        if self.slot(slot).is_some() && (self.active != slot || self.active().is_none()) {
+            self.motion.abandon_restore();
+            self.motion.cloud_installed(self.active, slot);
+            self.active = slot;
         }
     }
 
@@ -108,6 +105,7 @@ impl LoudscapeApp {
         mut files: Vec<PathBuf>,
         remembered: Option<Remembered>,
     ) -> Vec<PathBuf> {
+        let mut prefer = None;
         if let Some(r) = remembered {
             if let Some(view) = r.view {
                 self.settings.view = view;
@@ -151,8 +149,10 @@ impl LoudscapeApp {
                 let active = r.active.as_deref().and_then(slot_named);
                 match (r.camera, active) {
                     (Some(camera), Some(slot)) if files.len() > 1 => {
+                        // Its cloud takes the camera; the other slot's waits unseen.
                         self.active = slot;
-                        self.motion.restore_for(camera, slot);
+                        self.motion.restore(camera, 1);
+                        prefer = Some(slot);
                     }
                     (Some(camera), _) if !files.is_empty() => {
                         self.motion.restore(camera, files.len());
@@ -174,6 +174,8 @@ impl LoudscapeApp {
                 }
             }
         }
+        // Several files: the slot shown first is decided by them, not by the last load in.
+        self.first_shown = crate::ui::state::first_shown::FirstShown::new(&files, prefer);
         files
     }
 
@@ -293,6 +295,78 @@ mod tests {
         let state = app.compare.as_mut().expect("a compare");
         assert!(state.fit_scene(true, true, 1), "a new compare is fitted");
     }
+
+    /// The cloud of `path` came in `slot` (what `poll_loading` does once it is on the GPU).
+    fn came(app: &mut LoudscapeApp, path: &std::path::Path, slot: Slot) {
+        let how = app.arrival(path, slot);
+        app.show_installed(slot, how);
+    }
+
+    #[test]
+    fn the_slot_shown_first_does_not_depend_on_which_load_ends_last() {
+        let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let song = repo.join("data/demo_song.ply");
+        let timeline = repo.join("data/demo_timeline.ply");
+        let mut camera = crate::view::camera::Camera::default();
+        camera.azimuth += 0.5;
+        let orders = [
+            [(&song, Slot::Song), (&timeline, Slot::Timeline)],
+            [(&timeline, Slot::Timeline), (&song, Slot::Song)],
+        ];
+        for order in &orders {
+            // Reopened on the timeline: it comes back, with its camera.
+            let mut app = reopened(Remembered {
+                files: vec![song.clone(), timeline.clone()],
+                camera: Some(camera),
+                active: Some("timeline".into()),
+                ..Default::default()
+            });
+            for (path, slot) in order {
+                came(&mut app, path, *slot);
+            }
+            assert_eq!(app.active, Slot::Timeline, "reopened, loads in {order:?}");
+            assert_eq!(
+                app.motion.camera(),
+                camera,
+                "its camera, loads in {order:?}"
+            );
+            // `loudscape song.ply timeline.ply`: the first named.
+            let mut app = LoudscapeApp::new(options(vec![song.clone(), timeline.clone()]), None);
+            for (path, slot) in order {
+                came(&mut app, path, *slot);
+            }
+            assert_eq!(
+                app.active,
+                Slot::Song,
+                "song named first, loads in {order:?}"
+            );
+            let mut app = LoudscapeApp::new(options(vec![timeline.clone(), song.clone()]), None);
+            for (path, slot) in order {
+                came(&mut app, path, *slot);
+            }
+            assert_eq!(
+                app.active,
+                Slot::Timeline,
+                "timeline first, loads in {order:?}"
+            );
+            // A cloud opened later by hand is shown.
+            came(&mut app, &repo.join("data/fixture_song.ply"), Slot::Song);
+            assert_eq!(app.active, Slot::Song, "opened by hand");
+        }
+        // Reopened on the timeline, whose load fails before the song's ends: the song is
+        // shown fitted, not with the timeline's camera.
+        let mut app = reopened(Remembered {
+            files: vec![song.clone(), timeline.clone()],
+            camera: Some(camera),
+            active: Some("timeline".into()),
+            ..Default::default()
+        });
+        app.first_shown_failed(&timeline);
+        came(&mut app, &song, Slot::Song);
+        assert_eq!(app.active, Slot::Song);
+        assert!(app.motion.fit_pending(), "fitted");
+    }
+
     use crate::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};
 
     #[test]

@@ -78,6 +78,7 @@ impl LoudscapeApp {
             match result {
                 Ok(cloud) => {
                     self.opened(&path, &cloud);
+                    let how = self.arrival(&path, Slot::for_mode(cloud.meta.mode));
                     // What the extractor found wrong in the input, in sight (also in the
                     // side panel under the metrics).
                     let file = path.file_name().map_or_else(
@@ -100,14 +101,14 @@ impl LoudscapeApp {
                             );
                             self.install_as(render_state, cloud, Install::Grown);
                         }
-                        None => self.install(render_state, cloud),
+                        None => self.install_as(render_state, cloud, how),
                     }
                 }
                 Err(message) => {
                     if let Some(shown) = preview {
                         self.drop_preview(render_state, shown);
                     }
-                    self.restore_failed();
+                    self.first_shown_failed(&path);
                     if message.contains(&path.display().to_string()) {
                         self.messages.error(message);
                     } else {
@@ -157,8 +158,12 @@ impl LoudscapeApp {
             };
             let how = if grown.is_some() {
                 Install::Grown
-            } else {
+            } else if self.first_shown.would_show(&loading.path, Slot::Song) {
                 Install::New
+            } else {
+                // Of files opened together, another is shown first: its whole cloud comes
+                // unseen.
+                continue;
             };
             self.install_as(render_state, cloud, how);
             let id = self.next_id - 1;
@@ -215,8 +220,33 @@ impl LoudscapeApp {
         })
     }
 
+    /// How the loaded cloud of `path`, in `slot`, is installed: of files opened together, the
+    /// one decided comes in sight (with the remembered camera if that is its slot's, else
+    /// fitted), the others unseen.
+    pub(super) fn arrival(&mut self, path: &std::path::Path, slot: Slot) -> Install {
+        let restoring = self.first_shown.restoring();
+        if !self.first_shown.arrived(path, slot) {
+            return Install::Unseen;
+        }
+        if restoring.is_some_and(|r| r != slot) {
+            self.motion.abandon_restore();
+        }
+        Install::New
+    }
+
     pub(super) fn install(&mut self, render_state: &egui_wgpu::RenderState, cloud: PointCloud) {
         self.install_as(render_state, cloud, Install::New);
+    }
+
+    /// Shows `cloud` in place of its slot's (the same file, shifted to a level as heard): the
+    /// slot in sight stays the one in sight, and a cloud waiting unseen stays unseen.
+    pub(super) fn replace(&mut self, render_state: &egui_wgpu::RenderState, cloud: PointCloud) {
+        if self.active == Slot::for_mode(cloud.meta.mode) {
+            self.install_as(render_state, cloud, Install::New);
+        } else {
+            self.install_as(render_state, cloud, Install::Unseen);
+            self.motion.forget_kept_load();
+        }
     }
 
     /// Shows `cloud` in its slot. [`Install::Grown`] replaces the growing cloud of the same
@@ -276,12 +306,20 @@ impl LoudscapeApp {
             Slot::Song => self.song = Some(loaded),
             Slot::Timeline => self.timeline = Some(loaded),
         }
+        self.show_installed(slot, how);
+    }
+
+    /// A cloud was installed in `slot`: which slot is in sight, and the camera.
+    pub(super) fn show_installed(&mut self, slot: Slot, how: Install) {
         if how == Install::Grown {
             // Fitted once, to the axes the growing cloud already had.
             return;
         }
-        if self.motion.waits_behind_restore(slot) {
-            // Reopened: the slot shown when the window closed comes first, with its camera.
+        if how == Install::Unseen {
+            // Another of the files opened together is shown first (`first_shown.rs`).
+            if self.active == slot {
+                self.active = slot.other();
+            }
             return;
         }
         // A new cloud in this slot starts from its own fitted camera, not another slot's.
@@ -359,10 +397,13 @@ impl LoudscapeApp {
 
 /// How [`LoudscapeApp::install_as`] shows a cloud.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Install {
+pub(super) enum Install {
     /// A cloud new to its slot: the camera is fitted (or the remembered one kept), its audio
     /// loaded.
     New,
+    /// A cloud new to its slot that is not shown: another of the files opened together is
+    /// shown first, or the level as heard was applied to the slot not in sight.
+    Unseen,
     /// More of the song the slot shows while it is extracted, or its whole cloud at the end:
     /// the camera and the audio stay.
     Grown,

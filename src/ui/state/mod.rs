@@ -45,6 +45,7 @@ pub(super) mod alignment;
 pub(super) mod compare_scene;
 pub(super) mod compare_window;
 pub(super) mod extract_settings;
+pub(super) mod first_shown;
 pub(super) mod frame_clock;
 pub(super) mod heard;
 pub(super) mod iso_sweep;
@@ -73,6 +74,8 @@ pub(super) struct LoudscapeApp {
     pub(super) song: Option<Loaded>,
     pub(super) timeline: Option<Loaded>,
     pub(super) active: Slot,
+    /// Of files opened together, which is shown first (`first_shown.rs`).
+    pub(super) first_shown: first_shown::FirstShown,
     pub(super) settings: RenderSettings,
     /// The camera, its fit and its motion (`view_motion.rs`).
     pub(super) motion: view_motion::ViewMotion,

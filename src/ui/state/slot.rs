@@ -16,6 +16,13 @@ impl Slot {
             DataMode::Song | DataMode::Generic => Slot::Song,
         }
     }
+    /// The other slot.
+    pub(in crate::ui) fn other(self) -> Self {
+        match self {
+            Slot::Song => Slot::Timeline,
+            Slot::Timeline => Slot::Song,
+        }
+    }
     pub(in crate::ui) fn name(self) -> &'static str {
         match self {
             Slot::Song => "Song",

@@ -76,9 +76,6 @@ pub(in crate::ui) struct ViewMotion {
     slot_cameras: [Option<Camera>; 2],
     /// Loads that keep the camera instead of fitting (a remembered view, a re-extraction).
     keep_camera_loads: usize,
-    /// Reopened with the remembered camera of this slot: a cloud of the other slot arriving
-    /// first waits unseen ([`ViewMotion::waits_behind_restore`]).
-    restoring: Option<Slot>,
     /// Per view (Points, Surface, Volume): the moving resolution's divisor per side.
     moving_divisor: [u32; 3],
     /// Points the Points view draws while moving, following the device's pace.
@@ -96,7 +93,6 @@ impl Default for ViewMotion {
             last_motion: None,
             slot_cameras: [None, None],
             keep_camera_loads: 0,
-            restoring: None,
             moving_divisor: [1; 3],
             moving_points: PointStyle::default().max_points_moving,
         }
@@ -130,35 +126,15 @@ impl ViewMotion {
         self.keep_camera_loads = loads;
     }
 
-    /// As [`ViewMotion::restore`] for several files, the camera being `slot`'s (the slot shown
-    /// when the window closed): its cloud takes the camera, another slot's cloud arriving
-    /// first is installed unseen (it was shown for a second with the wrong camera).
-    pub(in crate::ui) fn restore_for(&mut self, camera: Camera, slot: Slot) {
-        self.restore(camera, 1);
-        self.restoring = Some(slot);
-    }
-
-    /// Whether a cloud arriving in `slot` waits unseen behind the restored slot's cloud; the
-    /// restored slot's own ends the wait.
-    pub(in crate::ui) fn waits_behind_restore(&mut self, slot: Slot) -> bool {
-        match self.restoring {
-            Some(restoring) if restoring != slot => true,
-            Some(_) => {
-                self.restoring = None;
-                false
-            }
-            None => false,
-        }
-    }
-
-    /// The restored slot's cloud is not coming (its load failed): nothing waits for it, and
-    /// its camera is not kept for another cloud.
-    pub(in crate::ui) fn abandon_restore(&mut self) -> bool {
-        if self.restoring.take().is_none() {
-            return false;
-        }
+    /// The remembered camera is not for the clouds that come (its slot's load failed): the
+    /// next load is fitted.
+    pub(in crate::ui) fn abandon_restore(&mut self) {
         self.keep_camera_loads = 0;
-        true
+    }
+
+    /// A load that was to keep the camera was installed unseen: it keeps nothing.
+    pub(in crate::ui) fn forget_kept_load(&mut self) {
+        self.keep_camera_loads = self.keep_camera_loads.saturating_sub(1);
     }
 
     /// The next load keeps the camera (the same data, seen the same way).
@@ -459,40 +435,28 @@ mod tests {
     }
 
     #[test]
-    fn a_reopened_window_shows_the_slot_it_closed_on_first() {
+    fn a_restored_camera_is_kept_by_its_load_and_abandoned_when_it_fails() {
         let mut camera = Camera::default();
         camera.azimuth += 0.7;
         let mut motion = ViewMotion::default();
-        motion.restore_for(camera, Slot::Song);
-        assert!(
-            motion.waits_behind_restore(Slot::Timeline),
-            "the timeline arrived first: it waits unseen"
-        );
-        assert_eq!(motion.camera(), camera, "not taken by the timeline");
-        assert!(!motion.waits_behind_restore(Slot::Song));
+        motion.restore(camera, 1);
         motion.cloud_installed(Slot::Song, Slot::Song);
         assert_eq!(
             motion.camera(),
             camera,
             "the song comes back as it was left"
         );
-        assert!(
-            !motion.waits_behind_restore(Slot::Timeline),
-            "the wait is over"
-        );
         motion.cloud_installed(Slot::Song, Slot::Song);
         assert!(motion.fit_pending(), "a later cloud is fitted");
 
         let mut motion = ViewMotion::default();
-        motion.restore_for(camera, Slot::Song);
-        assert!(motion.abandon_restore(), "the song failed to load");
-        assert!(!motion.waits_behind_restore(Slot::Timeline));
+        motion.restore(camera, 1);
+        motion.abandon_restore();
         motion.cloud_installed(Slot::Song, Slot::Timeline);
         assert!(
             motion.fit_pending(),
             "the timeline is fitted, not given the song's camera"
         );
-        assert!(!motion.abandon_restore());
     }
 
     #[test]
