@@ -50,6 +50,7 @@ impl LoudscapeApp {
             files,
             view: Some(self.settings.view),
             camera: Some(self.motion.camera()),
+            view_heights: self.motion.heights(),
             iso_value: Some(self.settings.surface.iso_value),
             show_box: Some(self.settings.show_box),
             transfer: Some(self.settings.volume.preset.name().to_string()),
@@ -158,6 +159,12 @@ impl LoudscapeApp {
                         self.motion.restore(camera, files.len());
                     }
                     _ => {}
+                }
+                if !files.is_empty()
+                    && r.camera.is_some()
+                    && let Some(heights) = r.view_heights
+                {
+                    self.motion.restore_heights(heights);
                 }
                 if !files.is_empty() {
                     for version in r.compare.into_iter().chain(r.compare_more) {
@@ -365,6 +372,33 @@ mod tests {
         came(&mut app, &song, Slot::Song);
         assert_eq!(app.active, Slot::Song);
         assert!(app.motion.fit_pending(), "fitted");
+    }
+
+    #[test]
+    fn a_reopened_camera_keeps_its_framing_when_the_strip_comes_after_the_first_frames() {
+        let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut camera = crate::view::camera::Camera::default();
+        camera.azimuth += 0.5;
+        // Closed with the loudness strip under a 590-point view in an 800-point window.
+        let mut app = reopened(Remembered {
+            files: vec![repo.join("data/demo_song.ply")],
+            camera: Some(camera),
+            view_heights: Some((590.0, 800.0)),
+            ..Default::default()
+        });
+        // Reopened: the first frames have no strip yet (700 points), then it comes.
+        for view in [700.0, 700.0, 590.0] {
+            app.motion
+                .size_view_within(1200.0 / view, None, Some((view, 800.0)));
+        }
+        let back = app.motion.camera();
+        assert!(
+            (back.distance - camera.distance).abs() < 1e-4 * camera.distance,
+            "closer or farther than at close: {} against {}",
+            back.distance,
+            camera.distance
+        );
+        assert_eq!(app.remembered().view_heights, Some((590.0, 800.0)));
     }
 
     use crate::render::colormap::{Background, Colours, DensityColourMap, HpColourMap};

@@ -14,6 +14,9 @@ pub struct Remembered {
     pub files: Vec<PathBuf>,
     pub view: Option<ViewKind>,
     pub camera: Option<Camera>,
+    /// The 3D view's height and the window's (points) the camera was left at: a reopened
+    /// window whose loudness strip comes after its first frames keeps the same framing.
+    pub view_heights: Option<(f32, f32)>,
     pub iso_value: Option<f32>,
     pub show_box: Option<bool>,
     /// Transfer function preset name (Classic, Ember, Glacial) and the volume's hp tint.

@@ -137,6 +137,18 @@ impl ViewMotion {
         self.keep_camera_loads = self.keep_camera_loads.saturating_sub(1);
     }
 
+    /// The view's height and the window's (points) when last drawn, where known.
+    pub(in crate::ui) fn heights(&self) -> Option<(f32, f32)> {
+        self.heights
+    }
+
+    /// The view's and the window's heights a restored camera was left at: the first frames
+    /// of a view of another height (the loudness strip not there yet) keep its framing, as a
+    /// resize of the view does ([`ViewMotion::size_view_within`]).
+    pub(in crate::ui) fn restore_heights(&mut self, heights: (f32, f32)) {
+        self.heights = Some(heights);
+    }
+
     /// The next load keeps the camera (the same data, seen the same way).
     pub(in crate::ui) fn keep_camera_for_next_load(&mut self) {
         self.keep_camera_loads += 1;
