@@ -1,9 +1,8 @@
 //! Save PNG under way: the picture was rendered (or copied from the view's own, complete one)
 //! and its read-back submitted in the frame of the click (`ui/window_screenshot.rs`); a thread
 //! waits for the GPU's copy, draws the labels, encodes the PNG and writes it, while the window
-//! keeps drawing frames. One save at a time; the window
-//! waits for it before it closes (the thread is joined when the save is dropped), so a PNG is
-//! never left half written.
+//! keeps drawing frames. One save at a time; the window waits for it before it closes (the
+//! thread is joined when the save is dropped), so a PNG is never left half written.
 
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
