@@ -65,6 +65,16 @@ impl AlignAsk {
     }
 }
 
+// Here rather than in render.rs beside DrawArgs, so that render.rs does not import this file,
+// which imports DrawArgs from it.
+impl DrawArgs {
+    /// Checks the flags before any work: `--match-loudness` needs the comparison (`--align`), and
+    /// none of them means anything without `--compare`; an offset is a finite number of seconds.
+    pub fn check_alignment(&self) -> anyhow::Result<()> {
+        AlignAsk::of(self).check(self.compare.is_some())
+    }
+}
+
 /// B moved as `draw` asks (see the module's words); `a` and `b` are the loaded clouds.
 pub fn align_b(a: &PointCloud, b: PointCloud, draw: &DrawArgs) -> anyhow::Result<AlignedB> {
     align_b_as(a, b, AlignAsk::of(draw))

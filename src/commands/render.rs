@@ -105,12 +105,6 @@ pub struct DrawArgs {
 }
 
 impl DrawArgs {
-    /// Checks the flags before any work: `--match-loudness` needs the comparison (`--align`), and
-    /// none of them means anything without `--compare`; an offset is a finite number of seconds.
-    pub fn check_alignment(&self) -> anyhow::Result<()> {
-        super::compare_align::AlignAsk::of(self).check(self.compare.is_some())
-    }
-
     /// Refuses a `--point-size` outside 0.5 to 64 pixels.
     pub fn check_point_size(&self) -> anyhow::Result<()> {
         if let Some(size) = self.point_size

@@ -35,6 +35,7 @@ use crate::render::gpu::layouts::{storage_entry, uniform_entry, whole_buffer_ent
 use crate::render::gpu::readback::ReadbackError;
 use crate::render::grid::VoxelGrid;
 use crate::render::grid::voxelize::VoxelStats;
+pub use crate::render::grid::voxelize_cpu::shared_scales;
 use crate::render::shaders;
 
 /// A voxel counts as part of a song (for the level measure's view) above this shared-scale
@@ -106,18 +107,6 @@ pub enum DifferenceError {
     Mismatch { a_dims: String, b_dims: String },
     #[error("difference: {0}")]
     Readback(#[from] ReadbackError),
-}
-
-/// The shared scale: each grid's factor onto the larger reference sum, `(scale_a, scale_b)`.
-pub fn shared_scales(stats_a: &VoxelStats, stats_b: &VoxelStats) -> (f32, f32) {
-    let shared = stats_a.reference_sum.max(stats_b.reference_sum);
-    if shared.is_nan() || shared <= 0.0 {
-        return (1.0, 1.0);
-    }
-    (
-        stats_a.reference_sum / shared,
-        stats_b.reference_sum / shared,
-    )
 }
 
 /// The level weight of voxel row `j` of `ny`. Keep in sync with `level_weight` in difference.wgsl.

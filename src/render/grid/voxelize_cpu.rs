@@ -27,6 +27,19 @@ pub struct VoxelStats {
     pub clamped: u32,
 }
 
+/// The shared scale of two grids compared: each grid's factor onto the larger reference sum,
+/// `(scale_a, scale_b)` (the difference pass on the GPU, the page's compare grids on the CPU).
+pub fn shared_scales(stats_a: &VoxelStats, stats_b: &VoxelStats) -> (f32, f32) {
+    let shared = stats_a.reference_sum.max(stats_b.reference_sum);
+    if shared.is_nan() || shared <= 0.0 {
+        return (1.0, 1.0);
+    }
+    (
+        stats_a.reference_sum / shared,
+        stats_b.reference_sum / shared,
+    )
+}
+
 /// The density is normalized by this percentile of the voxels with a positive loudness sum.
 pub const PERCENTILE: f64 = 0.99;
 pub const HISTOGRAM_BINS: u32 = 1024;

@@ -116,7 +116,7 @@ pub fn build(
 /// pass's `rescale`: a density means the same loudness sum in A as in B). Returns the grids and
 /// their box.
 ///
-/// [`shared_scales`]: super::difference::shared_scales
+/// [`shared_scales`]: super::voxelize_cpu::shared_scales
 pub fn build_on_one_scale(
     a: &[Point],
     b: &[Point],
@@ -127,7 +127,7 @@ pub fn build_on_one_scale(
     let (min_b, max_b) = super::voxelize_cpu::grid_box(b);
     let grid_box = (min_a.min(min_b), max_a.max(max_b));
     let mut grids = [a, b].map(|points| build(points, None, dims, grid_box, sigma));
-    let (scale_a, scale_b) = super::difference::shared_scales(&grids[0].stats, &grids[1].stats);
+    let (scale_a, scale_b) = super::voxelize_cpu::shared_scales(&grids[0].stats, &grids[1].stats);
     for (grid, scale) in grids.iter_mut().zip([scale_a, scale_b]) {
         if scale != 1.0 {
             grid.density.iter_mut().for_each(|d| *d *= scale);
