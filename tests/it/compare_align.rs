@@ -206,6 +206,11 @@ fn the_sheet_gains_a_row_of_small_multiples() {
 fn align_without_the_extractor_says_how_to_install_it() {
     let dir = common::fresh_dir("align_no_extractor");
     let song = repo().join("data/demo_song.ply");
+    // A stand-in web viewer, so the page gets as far as the alignment without `make web`.
+    let web = dir.join("web");
+    std::fs::create_dir_all(&web).unwrap();
+    std::fs::write(web.join("loudscape_bg.wasm"), b"\0asm stand-in").unwrap();
+    std::fs::write(web.join("loudscape.js"), "let wasm_bindgen = 'glue';").unwrap();
     for (command, out) in [
         ("render", "ab.png"),
         ("video", "ab.mp4"),
@@ -225,6 +230,7 @@ fn align_without_the_extractor_says_how_to_install_it() {
             .arg(dir.join(out))
             .env("LOUDSCAPE_CACHE_DIR", dir.join("cache"))
             .env("LOUDSCAPE_EXTRACT", dir.join("no-extractor"))
+            .env("LOUDSCAPE_WEB_DIR", &web)
             .output()
             .expect("start loudscape");
         let stderr = String::from_utf8_lossy(&output.stderr);
