@@ -113,6 +113,11 @@ def _point_colours(rgb: np.ndarray) -> tuple[int, int]:
     return warm, cool
 
 
+def _pixels_changed(rgb: np.ndarray, before: np.ndarray) -> int:
+    """Pixels of `rgb` that differ from `before` by more than 30 in their summed channels."""
+    return int(np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30))
+
+
 def _next_frames(page):
     """Returns once the page has drawn two more animation frames."""
     page.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
@@ -166,7 +171,7 @@ def _drag_turns_the_view(page, before: np.ndarray) -> np.ndarray:
 
     def turned():
         rgb = _view_pixels(page)
-        changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+        changed = _pixels_changed(rgb, before)
         return (rgb, changed) if changed > 0.01 * rgb.shape[0] * rgb.shape[1] else None
 
     after, changed = _wait_for(turned, "a drag over the view did not change the picture")
@@ -183,7 +188,7 @@ def _pointer_to_panel(page):
 def _unchanged(page, before: np.ndarray) -> np.ndarray | None:
     """The view when it shows `before` again (under 0.1 % of its pixels changed), else None."""
     rgb = _view_pixels(page)
-    changed = np.count_nonzero(np.abs(rgb - before).sum(axis=2) > 30)
+    changed = _pixels_changed(rgb, before)
     return rgb if changed < 0.001 * rgb.shape[0] * rgb.shape[1] else None
 
 
@@ -310,7 +315,7 @@ def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
 
     def volume():
         rgb = _view_pixels(page)
-        changed = np.count_nonzero(np.abs(rgb - points).sum(axis=2) > 30)
+        changed = _pixels_changed(rgb, points)
         lit = np.count_nonzero(rgb.max(axis=2) > 100)
         whole = rgb.shape[0] * rgb.shape[1]
         return (rgb, changed, lit) if changed > 0.05 * whole and lit > 0.05 * whole else None
@@ -338,7 +343,7 @@ def test_the_volume_view_builds_its_grid_in_the_browser(browser, page_file):
 
     def recoloured():
         rgb = _view_pixels(page)
-        moved = np.count_nonzero(np.abs(rgb - shown).sum(axis=2) > 30)
+        moved = _pixels_changed(rgb, shown)
         return (rgb, moved) if moved > 0.05 * rgb.shape[0] * rgb.shape[1] else None
 
     ember, moved = _wait_for(recoloured, "Ember did not recolour the volume")
@@ -478,7 +483,7 @@ def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
         if timing is None or timing[2] == first_triangles or timing[3] != "full":
             return None
         rgb = _view_pixels(page)
-        moved = np.count_nonzero(np.abs(rgb - surface).sum(axis=2) > 30)
+        moved = _pixels_changed(rgb, surface)
         return (rgb, timing, moved) if moved > 0.01 * rgb.shape[0] * rgb.shape[1] else None
 
     higher, (_, ms, triangles, _), moved = _wait_for(
@@ -503,7 +508,7 @@ def test_the_surface_view_on_webgl2(webgl2_browser, page_file):
         if timing is None or timing[2] == triangles:
             return None
         rgb = _view_pixels(page)
-        moved = np.count_nonzero(np.abs(rgb - higher).sum(axis=2) > 30)
+        moved = _pixels_changed(rgb, higher)
         return (rgb, timing, moved) if moved > 0.002 * rgb.shape[0] * rgb.shape[1] else None
 
     dual, (_, dc_ms, dc_triangles, _), moved = _wait_for(
@@ -618,7 +623,7 @@ def test_the_surface_view_and_its_isovalue_slider(browser, page_file):
     def differs_from(reference, share):
         def check():
             rgb = _view_pixels(page)
-            changed = np.count_nonzero(np.abs(rgb - reference).sum(axis=2) > 30)
+            changed = _pixels_changed(rgb, reference)
             lit = np.count_nonzero(rgb.max(axis=2) > 100)
             return (rgb, changed) if changed > share * whole and lit > 0.02 * whole else None
 
