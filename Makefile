@@ -69,15 +69,19 @@ real-music:
 	@bash scripts/fetch-real-music.sh data/real-music
 
 # The tests, and the `>>>` examples in the docstrings of both packages (they run as written).
+# The Python suites run in PYTEST_JOBS processes (pytest-xdist), each test file in one of them,
+# so a file's module fixtures are built once; PYTEST_JOBS=0 runs them in this process.
+PYTEST_JOBS ?= auto
+PYTEST_PARALLEL = $(if $(filter 0,$(PYTEST_JOBS)),,-n $(PYTEST_JOBS) --dist loadfile)
 test-py: venv real-music
-	$(VENV)/bin/pytest -q preprocess/tests
+	$(VENV)/bin/pytest -q $(PYTEST_PARALLEL) preprocess/tests
 	$(VENV)/bin/pytest -q --doctest-modules preprocess/loudscape_extract preprocess/loudscape
 
 # The app's isosurfaces against scikit-image, through the `loudscape` binary (the one the Rust
 # tests use: `cargo build` would rebuild with other features).
 test-mesh: system venv
 	$(CARGO) test --no-run -q
-	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
+	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q $(PYTEST_PARALLEL) tests/python
 
 # The fuzzers (docs/RELIABILITY.md): examples/fuzz_ply.rs mutates PLY bytes against the loader,
 # its metadata parser and the axes/read-outs; examples/fuzz_formats.rs builds version-2
@@ -106,15 +110,14 @@ fuzz-py: venv
 	OPENBLAS_NUM_THREADS=1 PYTHONPATH=preprocess $(VENV)/bin/python preprocess/tests/fuzz_py.py --seconds $(FUZZ_PY_SECONDS)
 
 # macOS and Windows kept building: the code checked for both (all targets, warnings as errors) in
-# a target folder of its own, so the host build is left alone. The web page's viewer is built for
+# a target folder of its own, so the host build is left alone; one cargo run for both targets,
+# so the build scripts and proc-macros they share are compiled once. The web page's viewer is built for
 # wasm32 by `make web` (warnings as errors too) and tested in a browser by `make test-web`, both
 # in `make test`. Needs rustup (downloads each target's standard library once).
 PLATFORMS ?= aarch64-apple-darwin x86_64-pc-windows-msvc
 check-platforms: system
 	rustup target add $(PLATFORMS)
-	for t in $(PLATFORMS); do \
-		RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check --all-targets --target $$t || exit 1; \
-	done
+	RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check --all-targets $(addprefix --target ,$(PLATFORMS))
 
 # The pip way: build the wheel, install it into a fresh venv, render a song from it. pip builds
 # the app in release (about 6 minutes from clean); `make test` builds the wheel with the dev
