@@ -50,10 +50,60 @@ pub fn fitted_title(title: &str, width: f32) -> (String, f32) {
         }
         size -= 1.0;
     }
+    // Cut, but the unit kept: "momentary lou… (LUFS)" says what the ticks count.
+    if let (name, Some(unit)) = split_unit(title) {
+        let room = width - super::font::measure(&format!(" {unit}"), MIN_TITLE_SIZE)[0];
+        if room >= super::font::measure("ab…", MIN_TITLE_SIZE)[0] {
+            let name = super::font::fit_text(&short_name(name), MIN_TITLE_SIZE, room);
+            return (format!("{name} {unit}"), MIN_TITLE_SIZE);
+        }
+    }
     (
         super::font::fit_text(title, MIN_TITLE_SIZE, width),
         MIN_TITLE_SIZE,
     )
+}
+
+/// A title's name and its unit, the last parenthesised part ("(LUFS)"), where it has one.
+fn split_unit(title: &str) -> (&str, Option<&str>) {
+    match title.rfind(" (") {
+        Some(at) if title.ends_with(')') && at > 0 => (&title[..at], Some(&title[at + 1..])),
+        _ => (title, None),
+    }
+}
+
+/// A title's name without its parenthesised parts and what follows its first comma
+/// ("momentary loudness (BS.1770, 400 ms), as heard on Spotify" -> "momentary loudness").
+fn short_name(name: &str) -> String {
+    let mut short = String::new();
+    let mut depth = 0u32;
+    for c in name.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth = depth.saturating_sub(1),
+            ',' if depth == 0 => break,
+            _ if depth == 0 => short.push(c),
+            _ => {}
+        }
+    }
+    let short = short.split_whitespace().collect::<Vec<_>>().join(" ");
+    if short.is_empty() {
+        name.to_string()
+    } else {
+        short
+    }
+}
+
+/// `title` shortened to its name and unit, where that is shorter: "momentary loudness
+/// (BS.1770, 400 ms) (LUFS)" -> "momentary loudness (LUFS)".
+pub fn abbreviated_title(title: &str) -> Option<String> {
+    let (name, unit) = split_unit(title);
+    let short = short_name(name);
+    let short = match unit {
+        Some(unit) => format!("{short} {unit}"),
+        None => short,
+    };
+    (short.len() < title.len()).then_some(short)
 }
 
 /// A tick label or an axis title, placed along one axis of the box.
@@ -349,9 +399,8 @@ fn place_title(
     let (offset, anchor) = tick_offset(axis);
     let at = [pos[0] + offset[0] * 3.0, pos[1] + offset[1] * 3.0];
     // A title wider than the view is drawn smaller, or cut, to stay inside it.
-    let (title, size) = fitted_title(title, rect.width() - 2.0 * TITLE_MARGIN);
-    let title = title.as_str();
-    let text = Text::new(title, at, anchor, size, colour);
+    let (fitted, size) = fitted_title(title, rect.width() - 2.0 * TITLE_MARGIN);
+    let text = Text::new(fitted, at, anchor, size, colour);
     if axis != 1 {
         // Below its ticks where that stays in the picture; else where it was (the ticks it
         // covers make way).
@@ -363,29 +412,68 @@ fn place_title(
         let dy = (rect.bottom() - TITLE_MARGIN - text.rect.bottom()).min(0.0);
         return text.moved(0.0, dy);
     }
-    let beside = clear_of(text, ticks, -1.0, 0.0);
-    if beside.rect.left() >= rect.left() + TITLE_MARGIN && !meets(&beside.rect, occupied) {
-        return beside;
+    // Left of the ticks, else above the axis's top end; where neither has room for the whole
+    // title, its name and unit alone ("momentary loudness (LUFS)") are tried there too, and
+    // stand in the picture in the last resort: they cover less of it.
+    let short = abbreviated_title(title).map(|short| {
+        let (short, size) = fitted_title(&short, rect.width() - 2.0 * TITLE_MARGIN);
+        Text::new(short, at, anchor, size, colour)
+    });
+    let mut last = text.clone();
+    for text in std::iter::once(text).chain(short) {
+        if let Some(placed) = beside_or_above(text.clone(), ticks, rect, occupied, top_end) {
+            return placed;
+        }
+        last = text;
     }
-    // No room left of the ticks: above the axis's top end, clear of its top tick.
-    if let Some(end) = top_end {
-        let above = Text::new(
-            title,
-            [end[0], end[1] - 10.0],
-            Anchor::CENTER_BOTTOM,
-            size,
-            colour,
-        );
-        let above = clear_of(within_width(above, rect), ticks, 0.0, -1.0);
-        if above.rect.top() >= rect.top() + TITLE_MARGIN && !meets(&above.rect, occupied) {
-            return above;
+    let beside = clear_of(last, ticks, -1.0, 0.0);
+    let inside = within_width(beside.clone(), rect);
+    if meets(&inside.rect, occupied) {
+        // Under what it meets (the legend, at the top), where that stays in the picture.
+        let under = occupied
+            .iter()
+            .filter(|o| o.expand(2.0).intersects(&inside.rect))
+            .map(|o| o.bottom())
+            .fold(inside.rect.top(), f32::max);
+        let moved = inside
+            .clone()
+            .moved(0.0, under + 2.0 + TITLE_GAP - inside.rect.top());
+        if moved.rect.bottom() <= rect.bottom() - TITLE_MARGIN && !meets(&moved.rect, occupied) {
+            return moved;
+        }
+        if beside.rect.left() >= rect.left() + TITLE_MARGIN {
+            return beside;
         }
     }
-    let inside = within_width(beside.clone(), rect);
-    if meets(&inside.rect, occupied) && beside.rect.left() >= rect.left() + TITLE_MARGIN {
-        return beside;
-    }
     inside
+}
+
+/// The level axis's title `text` left of its axis's tick labels `ticks`, else above the axis's
+/// top end `top_end` clear of its top tick, where either stays in `rect` clear of `occupied`.
+fn beside_or_above(
+    text: Text,
+    ticks: &[Text],
+    rect: Rect,
+    occupied: &[Rect],
+    top_end: Option<[f32; 2]>,
+) -> Option<Text> {
+    let (size, colour) = (text.size, text.colour);
+    let title = text.text.clone();
+    let beside = clear_of(text, ticks, -1.0, 0.0);
+    if beside.rect.left() >= rect.left() + TITLE_MARGIN && !meets(&beside.rect, occupied) {
+        return Some(beside);
+    }
+    let end = top_end?;
+    let above = Text::new(
+        title,
+        [end[0], end[1] - 10.0],
+        Anchor::CENTER_BOTTOM,
+        size,
+        colour,
+    );
+    let above = clear_of(within_width(above, rect), ticks, 0.0, -1.0);
+    (above.rect.top() >= rect.top() + TITLE_MARGIN && !meets(&above.rect, occupied))
+        .then_some(above)
 }
 
 /// How the y axis of `mode` is titled in pictures, with its reference: an older timeline's

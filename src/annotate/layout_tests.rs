@@ -158,14 +158,8 @@ fn long_titles_stay_inside_the_view() {
             let rect = Rect::from_min_size([0.0, 0.0], [w as f32, h as f32]);
             let out = axes::layout(rect, &view, &labels, Background::Dark);
             let texts: Vec<&Text> = out.texts().collect();
-            let is_title = |t: &Text| {
-                titles.iter().any(|title| {
-                    *title == t.text
-                        || t.text
-                            .strip_suffix('…')
-                            .is_some_and(|kept| title.starts_with(kept))
-                })
-            };
+            // Whole, shortened to name and unit, or cut: every text that is no tick label.
+            let is_title = |t: &Text| !labels.labels.iter().any(|l| !l.title && l.text == t.text);
             for t in texts.iter().filter(|t| is_title(t)) {
                 assert!(
                     t.rect.left() >= margin
@@ -200,8 +194,12 @@ fn long_titles_stay_inside_the_view() {
     assert_eq!(text, level_title);
     assert!((axes::MIN_TITLE_SIZE..axes::TITLE_SIZE).contains(&size));
     assert!(crate::annotate::font::measure(&text, size)[0] <= full * 0.8);
+    // Cut, its unit kept.
     let (text, size) = axes::fitted_title(&level_title, 100.0);
-    assert!(text.ends_with('…') && size == axes::MIN_TITLE_SIZE);
+    assert!(
+        text.ends_with("… (LUFS)") && size == axes::MIN_TITLE_SIZE,
+        "{text}"
+    );
     assert!(crate::annotate::font::measure(&text, size)[0] <= 100.0);
 }
 
@@ -258,4 +256,69 @@ fn no_label_is_cut_by_the_views_edge() {
             "{file}: ticks are still drawn ({ticks_drawn})"
         );
     }
+}
+
+/// At a 500x400 window (the view about 300x300 beside the side panel, less under the loudness
+/// strip) the timeline's level title, "momentary loudness (BS.1770, 400 ms) (LUFS)", had no
+/// room beside its ticks nor above its axis under the legend, and was cut or left out: it now
+/// keeps its name and unit there ("momentary loudness (LUFS)"), whole, inside the view and
+/// clear of the legend and of every other label.
+#[test]
+fn a_small_timeline_view_keeps_its_level_title_with_its_unit() {
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let cloud = crate::data::cloud::load(&repo.join("data/demo_timeline.ply")).unwrap();
+    let labels = axes::axis_labels_for_box(&cloud, Vec3::splat(-1.0), Vec3::splat(1.0));
+    let transform = world_from_data(cloud.meta.mode);
+    let bounds = world_box(transform, Vec3::splat(-1.0), Vec3::splat(1.0));
+    let picture = legend::picture_legend(&cloud, &RenderSettings::default());
+    let margin = axes::TITLE_MARGIN - 0.5;
+    for (w, h) in [(300, 300), (290, 280), (300, 240), (280, 200)] {
+        for azimuth in [-35.0f32, -60.0, 20.0] {
+            let camera = Camera {
+                azimuth: azimuth.to_radians(),
+                ..Camera::default()
+            };
+            let view = FrameView::fitted(camera, transform, bounds, w, h);
+            let rect = Rect::from_min_size([0.0, 0.0], [w as f32, h as f32]);
+            let out = crate::annotate::overlay::labels_and_legend(
+                rect,
+                &view,
+                Some(&labels),
+                Background::Dark,
+                legend::layout(rect, &picture),
+            );
+            let texts: Vec<&Text> = out.texts().collect();
+            let level = texts
+                .iter()
+                .find(|t| t.text.starts_with("momentary loudness"))
+                .unwrap_or_else(|| panic!("{w}x{h} at {azimuth}: no level title"));
+            assert!(
+                level.text.ends_with(" (LUFS)") && !level.text.contains('…'),
+                "{w}x{h} at {azimuth}: '{}' is cut or lost its unit",
+                level.text
+            );
+            assert!(
+                level.rect.left() >= margin
+                    && level.rect.right() <= w as f32 - margin
+                    && level.rect.top() >= margin
+                    && level.rect.bottom() <= h as f32 - margin,
+                "{w}x{h} at {azimuth}: '{}' reaches the view's edge ({:?})",
+                level.text,
+                level.rect
+            );
+            for other in texts.iter().filter(|t| !std::ptr::eq(**t, *level)) {
+                assert!(
+                    !other.rect.intersects(&level.rect),
+                    "{w}x{h} at {azimuth}: '{}' covers '{}'",
+                    level.text,
+                    other.text
+                );
+            }
+        }
+    }
+    assert_eq!(
+        axes::abbreviated_title("momentary loudness (BS.1770, 400 ms) (LUFS)").as_deref(),
+        Some("momentary loudness (LUFS)")
+    );
+    assert_eq!(axes::abbreviated_title("bin level (dB re FS sine)"), None);
 }

@@ -470,9 +470,12 @@ impl Renderer {
             return;
         };
         match (settings.view, &data.volume) {
-            (ViewKind::Surface, _) if data.grid.is_some() && !data.surface.extracted_any() => {
+            (ViewKind::Surface, _)
+                if data.grid.is_some() && !data.surface.ready_for(settings.surface_detail) =>
+            {
                 // Until the grid's first surface comes (it is extracted in the background), the
-                // points' sparse subset stands in: an empty box said nothing of the song.
+                // points' sparse subset stands in: an empty box said nothing of the song, and the
+                // coarse mesh that comes first is a pale slab (at rest the full one is waited for).
                 self.points.draw_lod_from(
                     &mut pass,
                     &self.frame,

@@ -320,10 +320,18 @@ impl LoudscapeApp {
             CompareResources::write(render_state, |compare, _| compare.grids_match(&voxels))
                 .unwrap_or(true);
         let step = state.grid_step(&voxels, built);
-        state.set_grids_pending(matches!(step, GridStep::Wait | GridStep::Start));
+        state.set_grids_pending(step != GridStep::Ready && step != GridStep::Failed);
         match step {
             GridStep::Ready => {}
             GridStep::Failed => return,
+            GridStep::Align => {
+                // The points stand in, and the status line says the grids are on their way.
+                if self.busy.is_none() {
+                    self.busy = Some(GRIDS_BUSY.into());
+                }
+                ctx.request_repaint_after(Duration::from_millis(30));
+                return;
+            }
             GridStep::Wait => {
                 ctx.request_repaint_after(Duration::from_millis(30));
                 return;

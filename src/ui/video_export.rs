@@ -313,15 +313,20 @@ impl LoudscapeApp {
         self.start_video_export(path);
     }
 
-    /// The shown song's name (its audio file's stem), or the cloud's.
+    /// The shown song's name (its audio file's stem), the timeline's as its legend names it,
+    /// or the cloud's.
     fn export_stem(&self) -> String {
         let Some(loaded) = self.active() else {
             return "loudscape".into();
         };
-        let from = if loaded.cloud.meta.mode == DataMode::Song {
-            crate::playback::resolve_source(&loaded.cloud).unwrap_or(loaded.cloud.path.clone())
-        } else {
-            loaded.cloud.path.clone()
+        let from = match loaded.cloud.meta.mode {
+            DataMode::Song => {
+                crate::playback::resolve_source(&loaded.cloud).unwrap_or(loaded.cloud.path.clone())
+            }
+            DataMode::Timeline => {
+                return crate::ui::state::video_export::timeline_video_stem(&loaded.cloud);
+            }
+            _ => loaded.cloud.path.clone(),
         };
         from.file_stem()
             .map(|s| s.to_string_lossy().into_owned())

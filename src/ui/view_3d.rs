@@ -16,7 +16,6 @@ use crate::ui::hover::paint_readings;
 use crate::ui::labels;
 use crate::ui::shortcuts::{self, Action};
 use crate::ui::state::view_motion::{CameraInput, Drag, FitBox};
-use crate::ui::state::volume_hold::DRAWING_THE_VOLUME;
 use crate::ui::state::{LoudscapeApp, Slot};
 use crate::view::frame_view::FrameView;
 
@@ -156,24 +155,18 @@ impl LoudscapeApp {
         }
     }
 
-    /// This frame's step of a switch to Volume (`state/volume_hold.rs`): its notice put up or
-    /// taken away, before the status area is drawn.
+    /// This frame's step of a switch to Volume (`state/volume_hold.rs`): its notice in the
+    /// view's corner put up or taken away.
     pub(super) fn step_volume_hold(&mut self, ctx: &egui::Context) {
         if self.compare_covers_view() || self.active().is_none() {
             self.volume_hold.forget();
             return;
         }
-        let step = self.volume_hold.step(
+        self.volume_hold.step(
             self.settings.view,
             self.busy.is_none(),
             self.refining.is_some(),
         );
-        if step.announce {
-            self.busy = Some(DRAWING_THE_VOLUME.into());
-        }
-        if step.withdraw && self.busy.as_deref() == Some(DRAWING_THE_VOLUME) {
-            self.busy = None;
-        }
         if self.volume_hold.pending() {
             ctx.request_repaint();
         }
@@ -264,14 +257,11 @@ impl LoudscapeApp {
         }
         if surface.busy {
             busy_badge(painter, rect, "extracting surface…");
+        } else if let Some(drawing) = self.volume_hold.corner(self.settings.view, self.refining) {
+            busy_badge(painter, rect, &drawing);
         } else if let Some(done) = self.refining {
             let percent = (done * 100.0).floor();
-            let what = if self.settings.view == ViewKind::Volume {
-                "drawing the volume"
-            } else {
-                "refining points"
-            };
-            busy_badge(painter, rect, &format!("{what}… {percent:.0} %"));
+            busy_badge(painter, rect, &format!("refining points… {percent:.0} %"));
         }
     }
 }

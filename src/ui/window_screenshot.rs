@@ -35,6 +35,7 @@ impl LoudscapeApp {
             || self.reextracting()
             || self.previewing()
             || self.busy.is_some()
+            || self.volume_hold.pending()
             || self.video_exporting()
             || self.saving_picture()
             || self.compare.as_ref().is_some_and(|c| c.settling());

@@ -23,7 +23,7 @@ pub const MOVING_FRAME_MS: f32 = 45.0;
 /// Which mesh a frame of the Surface view asks for.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SurfaceDetail {
-    /// The full surface (the coarse one only before there is a full one).
+    /// The full surface (before there is one, the renderer draws the points).
     #[default]
     Full,
     /// The coarse surface (the camera moves on a slow device).

@@ -188,6 +188,16 @@ impl ExtractedSurface {
         state.key.is_some() || state.coarse.is_some()
     }
 
+    /// Whether a frame asking for `detail` has a mesh of this surface to draw: the full one
+    /// (or the error that came instead), or the coarse one where the detail asks for it (the
+    /// camera moves, or the isovalue is dragged, on a slow device). Before that the points stand
+    /// in: the coarse mesh of a song's first surface is a pale slab, shown for seconds while the
+    /// full one was extracted (the two halves of a compare wait for one worker).
+    pub fn ready_for(&self, detail: SurfaceDetail) -> bool {
+        let state = self.lock();
+        state.key.is_some() || (detail != SurfaceDetail::Full && state.coarse.is_some())
+    }
+
     /// True while an extraction runs in the background or its result waits to be installed:
     /// the window should come back (and show that it is busy).
     pub fn needs_another_frame(&self) -> bool {
@@ -286,5 +296,65 @@ impl ExtractedSurface {
     /// The isovalue of the surface on screen (None before the first extraction).
     pub fn shown_iso_value(&self) -> Option<f32> {
         self.lock().key.as_ref().map(|k| f32::from_bits(k.iso_bits))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::gpu::context::GpuContext;
+
+    /// A first surface at rest waits for its full mesh (the points stand in); the coarse one
+    /// that comes before it is drawn only where the detail asks for it.
+    #[test]
+    fn a_first_surface_at_rest_waits_for_its_full_mesh() {
+        let gpu = GpuContext::new_headless().expect("a GPU adapter (lavapipe will do)");
+        let buffer = |label| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 64,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let grid = VoxelGrid {
+            dims: UVec3::splat(2),
+            box_min: glam::Vec3::ZERO,
+            box_max: glam::Vec3::ONE,
+            density: buffer("density"),
+            hp_mean: buffer("hp_mean"),
+        };
+        let key = CacheKey::new(&grid, &SurfaceSettings::default());
+        let finished = || Finished {
+            key: key.clone(),
+            buffers: Some(MeshBuffers::new(&gpu.device, 16, 48)),
+            counts: None,
+            error: None,
+        };
+        let surface = ExtractedSurface::new();
+        let details = [
+            SurfaceDetail::Full,
+            SurfaceDetail::Coarse,
+            SurfaceDetail::CoarseUntilFull,
+        ];
+        assert!(
+            details.iter().all(|d| !surface.ready_for(*d)),
+            "nothing yet"
+        );
+        surface.mailbox.post_coarse(finished());
+        assert!(surface.install_finished());
+        assert!(surface.extracted_any());
+        assert!(
+            !surface.ready_for(SurfaceDetail::Full),
+            "the coarse mesh alone: the points stand in at rest"
+        );
+        assert!(surface.ready_for(SurfaceDetail::Coarse));
+        assert!(surface.ready_for(SurfaceDetail::CoarseUntilFull));
+        surface.mailbox.post(finished());
+        assert!(surface.install_finished());
+        assert!(
+            details.iter().all(|d| surface.ready_for(*d)),
+            "the full mesh"
+        );
     }
 }

@@ -17,7 +17,6 @@ use std::task::Poll;
 use crate::data::cloud::PointCloud;
 use crate::data::field::Field;
 use crate::playback::{PlaybackError, Track};
-use crate::render::compare::BuiltGrids;
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::grid::voxelize::VoxelSettings;
 use crate::render::scene::{RenderSettings, ViewKind};
@@ -42,6 +41,7 @@ pub(in crate::ui) enum CompareLayout {
 
 /// Which version is heard (0 is A; the versions the alignment maps between).
 pub(in crate::ui) use super::alignment::{Listening, MAX_VERSIONS};
+pub(in crate::ui) use super::compare_grids::{GridBuild, GridStep};
 
 /// One version compared with A: its file, its loading thread (whose stage and Cancel the
 /// window shows as A's), its cloud once loaded, and its decoded audio while another version
@@ -130,28 +130,6 @@ pub(in crate::ui) struct CompareState {
     pub(in crate::ui) keep_camera: bool,
     /// The whole A's song id the restored camera is kept for (set by its first scene).
     kept_for: Option<u64>,
-}
-
-/// The compare's grids built on a thread (`render::compare::build_grids`): the voxel settings
-/// they are built with, where the answer comes, and the frames the window drew meanwhile.
-pub(in crate::ui) struct GridBuild {
-    pub(in crate::ui) voxels: VoxelSettings,
-    pub(in crate::ui) receiver: Receiver<Result<BuiltGrids, String>>,
-    pub(in crate::ui) frames: u32,
-    pub(in crate::ui) started: std::time::Instant,
-}
-
-/// What a frame does about the compare's grids ([`CompareState::grid_step`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(in crate::ui) enum GridStep {
-    /// Built for the settings shown: draw them.
-    Ready,
-    /// None for these settings and none coming: start a build.
-    Start,
-    /// A build for these settings runs: come back.
-    Wait,
-    /// The build for these settings failed (its error is told): nothing to do.
-    Failed,
 }
 
 /// The difference's CPU copy for read-outs: the shown grid, the signed values per voxel and per
@@ -562,73 +540,10 @@ impl CompareState {
         true
     }
 
-    /// What this frame does about the grids, `built` saying whether the scene has them for
-    /// `voxels`: a build for other settings is dropped (its answer is not waited for).
-    pub(in crate::ui) fn grid_step(&mut self, voxels: &VoxelSettings, built: bool) -> GridStep {
-        if built {
-            return GridStep::Ready;
-        }
-        if let Some(build) = &mut self.grid_build {
-            if build.voxels == *voxels {
-                build.frames += 1;
-                return GridStep::Wait;
-            }
-            self.grid_build = None;
-        }
-        if self.grids_failed == Some(*voxels) {
-            return GridStep::Failed;
-        }
-        GridStep::Start
-    }
-
-    /// Waits for a build started on a thread with `voxels`.
-    pub(in crate::ui) fn building(
-        &mut self,
-        voxels: VoxelSettings,
-        receiver: Receiver<Result<BuiltGrids, String>>,
-    ) {
-        self.grids_failed = None;
-        self.grid_build = Some(GridBuild {
-            voxels,
-            receiver,
-            frames: 0,
-            started: std::time::Instant::now(),
-        });
-    }
-
-    /// Whether grids are being built on a thread.
-    pub(in crate::ui) fn grids_building(&self) -> bool {
-        self.grid_build.is_some()
-    }
-
     /// Whether what the compare shows is still on its way: a version loading, the alignment
     /// (which moves the version beside A when it comes) or the grids the view asks for.
     pub(in crate::ui) fn settling(&self) -> bool {
         self.loading() || self.alignment.aligning() || self.grids_building() || self.grids_pending
-    }
-
-    /// The build's answer once it came, with the frames drawn while it ran and how long it
-    /// took; a failure (or a
-    /// thread that ended without answering) is kept as the compare's error and not tried again
-    /// for the same settings.
-    pub(in crate::ui) fn poll_grid_build(
-        &mut self,
-    ) -> Option<(BuiltGrids, u32, std::time::Duration)> {
-        let build = self.grid_build.as_ref()?;
-        let answer = match build.receiver.try_recv() {
-            Ok(answer) => answer,
-            Err(TryRecvError::Empty) => return None,
-            Err(TryRecvError::Disconnected) => Err("the compare grids' build stopped".into()),
-        };
-        let build = self.grid_build.take()?;
-        match answer {
-            Ok(built) => Some((built, build.frames, build.started.elapsed())),
-            Err(message) => {
-                self.grids_failed = Some(build.voxels);
-                self.error = Some(message);
-                None
-            }
-        }
     }
 
     /// The settings the two halves are drawn with: `settings`, but the points' own while the

@@ -5,6 +5,7 @@ use std::sync::mpsc::channel;
 
 use super::*;
 use crate::data::cloud::DataMode;
+use crate::render::compare::BuiltGrids;
 
 fn cloud(points: usize) -> PointCloud {
     PointCloud::synthetic(
@@ -619,4 +620,36 @@ fn the_difference_is_read_back_off_the_window_thread() {
     drop(sender);
     assert!(state.poll_difference_read().is_none());
     assert!(state.difference_reading.is_none(), "not waited for again");
+}
+
+/// The grids wait for the versions' alignment: it moves the version beside A when it comes
+/// and the scene is built again, so grids built before it were built twice (a reopened compare
+/// in the Surface view built both grids once for B as it was and again for B aligned). The
+/// points stand in meanwhile.
+#[test]
+fn the_grids_are_built_once_the_alignment_came() {
+    let mut state = CompareState::new(PathBuf::from("b.ply"));
+    state.clouds = Some(Arc::new((cloud(10), cloud(12))));
+    assert!(state.rebuild_for(1));
+    let voxels = VoxelSettings::default();
+    let (sender, receiver) = channel();
+    state
+        .alignment
+        .start(vec!["a.wav".into(), "b.wav".into()], receiver);
+    assert_eq!(state.grid_step(&voxels, false), GridStep::Align);
+    assert_eq!(state.grid_step(&voxels, false), GridStep::Align);
+    assert!(!state.grids_building());
+    assert_eq!(
+        state.grid_step(&voxels, true),
+        GridStep::Ready,
+        "grids built already are drawn"
+    );
+    sender.send(Err("no audio".into())).unwrap();
+    assert_eq!(state.alignment.poll(), Some(false));
+    assert_eq!(state.grid_step(&voxels, false), GridStep::Start);
+
+    // A version still loading starts a comparison of its own when it has loaded.
+    let _loading = adding(&mut state, "c.ply");
+    assert!(state.loading());
+    assert_eq!(state.grid_step(&voxels, false), GridStep::Align);
 }

@@ -12,7 +12,8 @@
 //! and motion), `surface_status.rs` (the surface's status and level of detail),
 //! `frame_clock.rs` (frame number, pace, renders), `messages.rs` (what the window tells the
 //! user), `timeline_build.rs` (a timeline on its way, the years typed: `TimelineBuilder`),
-//! `compare_window.rs` (the A/B compare, `CompareState`, with `alignment.rs`) and `slot.rs`
+//! `compare_window.rs` (the A/B compare, `CompareState`, with `alignment.rs` and
+//! `compare_grids.rs`) and `slot.rs`
 //! (which data slot); the playback's owner is `ui/audio.rs`'s `AudioPanel`.
 //! This file holds `LoudscapeApp` and the small types of its other fields (a loaded cloud, the
 //! hover, the screenshot, the "Save PNG" panel).
@@ -42,6 +43,7 @@ use crate::view::frame_view::FrameView;
 use crate::view::pick::Reading;
 
 pub(super) mod alignment;
+pub(super) mod compare_grids;
 pub(super) mod compare_scene;
 pub(super) mod compare_window;
 pub(super) mod extract_settings;

@@ -95,9 +95,41 @@ pub(in crate::ui) struct VideoExport {
     pub(in crate::ui) cancel_at_start: bool,
 }
 
+/// The name a timeline's video gets unless one is typed (without its extension): the one its
+/// legend shows, so a timeline built in the window from a folder is named by that folder (its
+/// file in the cloud cache is named by a hash, which said nothing), else its file's stem.
+pub(in crate::ui) fn timeline_video_stem(cloud: &crate::data::cloud::PointCloud) -> String {
+    let name = crate::annotate::legend::timeline_name(cloud);
+    match name.strip_suffix('/') {
+        // A folder: its whole name ("Vol. 2" keeps its dot).
+        Some(folder) => folder.to_string(),
+        None => std::path::Path::new(&name)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or(name),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A timeline built in the window from a folder is exported as that folder's name, not as
+    /// its cache file's hash; a timeline file opened from elsewhere keeps its own name.
+    #[test]
+    fn a_folder_timeline_s_video_is_named_by_its_folder() {
+        let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut cloud = crate::data::cloud::load(&repo.join("data/demo_timeline.ply")).unwrap();
+        assert_eq!(timeline_video_stem(&cloud), "demo_timeline");
+        for (i, song) in cloud.meta.songs.iter_mut().enumerate() {
+            song.path = Some(format!("/music/Vol. 2/disc {}/song{i}.flac", i % 2));
+            song.path_bytes = None;
+        }
+        cloud.path = crate::extract::cache::dir().join("timeline-41b95712d880b9b1.ply");
+        assert_eq!(timeline_video_stem(&cloud), "Vol. 2");
+        cloud.path = std::path::PathBuf::from("/somewhere/timeline-41b95712d880b9b1.ply");
+        assert_eq!(timeline_video_stem(&cloud), "timeline-41b95712d880b9b1");
+    }
 
     #[test]
     fn progress_lines_are_read_and_other_lines_ignored() {

@@ -3,13 +3,14 @@
 //! A volume's first picture at rest is seconds of rendering on a slow device (about 1.5-4 s at
 //! 1600x1000 on lavapipe). It is drawn progressively (`render/volume/progressive.rs`): a coarse
 //! picture in the frame of the switch, then a band of full-quality rows a frame, the window
-//! answering in between. The status says "drawing the volume…" from the frame of the switch
-//! until the refinement is complete (the view's badge shows how far it is); leaving the view
-//! takes it away too.
+//! answering in between. The view's corner says "drawing the volume… N %" from the frame of the
+//! switch until the refinement is complete, and only there (the status area said it too, a
+//! second notice of the same work; the points' "refining points… N %" is the corner's alone);
+//! leaving the view takes it away.
 
 use crate::render::scene::ViewKind;
 
-/// The notice shown while the first volume picture is drawn.
+/// The notice shown while a volume picture is drawn.
 pub const DRAWING_THE_VOLUME: &str = "drawing the volume…";
 
 /// What one frame does about the notice.
@@ -57,6 +58,21 @@ impl VolumeHold {
         HoldStep::default()
     }
 
+    /// What the view's corner says in `view`, `refining` being the share of the progressive
+    /// picture drawn (None when it is complete): how far the volume is drawn, from the frame of
+    /// a switch (0 % before its first band) and while any later picture refines; nothing in
+    /// another view.
+    pub fn corner(&self, view: ViewKind, refining: Option<f32>) -> Option<String> {
+        if view != ViewKind::Volume {
+            return None;
+        }
+        let done = refining.or(self.announced.then_some(0.0))?;
+        Some(format!(
+            "{DRAWING_THE_VOLUME} {:.0} %",
+            (done * 100.0).floor()
+        ))
+    }
+
     /// Whether the notice is up (the window must come back to take it away).
     pub fn pending(&self) -> bool {
         self.announced
@@ -97,6 +113,34 @@ mod tests {
         );
         // An orbit and back refines again, but it is no switch: no notice (the badge shows it).
         assert_eq!(hold.step(ViewKind::Volume, true, true), HoldStep::default());
+    }
+
+    /// The volume's progress is said once, in the view's corner: from the frame of the
+    /// switch, before the first band, until the picture is complete.
+    #[test]
+    fn the_corner_says_how_far_the_volume_is_drawn() {
+        let mut hold = VolumeHold::default();
+        hold.step(ViewKind::Points, true, false);
+        assert_eq!(
+            hold.corner(ViewKind::Points, Some(0.5)),
+            None,
+            "the points' own"
+        );
+        hold.step(ViewKind::Volume, true, false);
+        assert_eq!(
+            hold.corner(ViewKind::Volume, None).as_deref(),
+            Some("drawing the volume… 0 %"),
+            "the frame of the switch"
+        );
+        hold.step(ViewKind::Volume, true, true);
+        assert_eq!(
+            hold.corner(ViewKind::Volume, Some(0.427)).as_deref(),
+            Some("drawing the volume… 42 %")
+        );
+        hold.step(ViewKind::Volume, true, false);
+        assert_eq!(hold.corner(ViewKind::Volume, None), None, "complete");
+        // An orbit and back refines again: said there too.
+        assert!(hold.corner(ViewKind::Volume, Some(0.1)).is_some());
     }
 
     #[test]
