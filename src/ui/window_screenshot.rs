@@ -23,6 +23,7 @@ use crate::ui::bridge::ViewResources;
 use crate::ui::compare_shot::{CompareView, submit_compare_image};
 use crate::ui::state::compare_window::CompareLayout;
 use crate::ui::state::picture_save::PictureSave;
+use crate::ui::state::save_wait::{SaveWait, WaitStep};
 use crate::ui::state::written;
 use crate::ui::state::{LoudscapeApp, Slot};
 
@@ -125,10 +126,15 @@ impl LoudscapeApp {
         if self.active().is_none() {
             return;
         }
-        if let Some(save) = &self.save_shot.saving {
+        let under_way = (self.save_shot.saving.as_ref().map(|s| &s.path)).or(self
+            .save_shot
+            .waiting
+            .as_ref()
+            .map(|w| &w.path));
+        if let Some(path) = under_way {
             self.messages.error(format!(
                 "Save PNG: still saving {}: nothing else saved until it is written",
-                save.path.display()
+                path.display()
             ));
             return;
         }
@@ -168,15 +174,39 @@ impl LoudscapeApp {
         } else {
             written::target(&wanted, &self.save_shot.made)
         };
-        let mut settings = self.settings.clone();
-        settings.markers = self.markers();
+        let mut notes = String::new();
+        if renamed {
+            notes += &format!(
+                "; {} exists and this window did not save it, so it is kept",
+                wanted.display()
+            );
+        }
+        if no_dialog {
+            notes += &format!("; {}", crate::ui::open::NO_DIALOG);
+        }
         let Some(loaded) = self.active() else {
             return;
         };
+        let what = self.compare_shown_as();
+        if what.is_none() && !self.save_shot.custom_size {
+            // At the view's size: the view's own picture once it is complete, waited for
+            // while it fills in (nothing drawn again for the picture in this frame).
+            self.save_shot.waiting = Some(SaveWait::new(path.clone(), notes, loaded.id));
+            self.step_save_wait(ctx, frame);
+            if self.save_shot.waiting.is_some() {
+                let shown = std::path::absolute(&path).unwrap_or(path);
+                self.messages.info(format!(
+                    "saving {}… (waiting for the view to fill in)",
+                    shown.display()
+                ));
+            }
+            return;
+        }
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
         // Rendered and its read-back submitted in this frame; a thread waits for the copy,
         // draws the labels, encodes and writes (the window keeps drawing meanwhile).
-        let mut from_view = false;
-        let submitted = match self.compare_shown_as() {
+        let submitted = match what {
             // The compare the view shows: both halves, or the difference picture, labelled.
             Some(what) => {
                 // The whole view (both halves), or the chosen size.
@@ -188,51 +218,107 @@ impl LoudscapeApp {
                 compare_screenshot(render_state, what, view.camera, size, &settings)
                     .map_err(|e| format!("{}: {e:#}", path.display()))
             }
-            // The view's own picture when it shows this one complete (a copy, not seconds of
-            // points drawn again in this frame); else rendered.
+            // A chosen size: rendered.
             None => {
-                let shown = (!self.save_shot.custom_size)
-                    .then(|| {
-                        ViewResources::shown_picture(
-                            render_state,
-                            loaded.id,
-                            &loaded.cloud,
-                            &view,
-                            &settings,
-                        )
-                    })
-                    .flatten();
-                from_view = shown.is_some();
-                shown
-                    .unwrap_or_else(|| {
-                        ViewResources::screenshot(
-                            render_state,
-                            loaded.id,
-                            &loaded.cloud,
-                            &view,
-                            &settings,
-                        )
-                    })
+                ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
                     .map_err(|e| e.to_string())
             }
         };
-        let picture = match submitted {
-            Ok(picture) => picture,
-            Err(e) => {
-                self.messages.error(e);
-                return;
+        match submitted {
+            Ok(picture) => self.start_save(ctx, render_state, path, notes, picture, None),
+            Err(e) => self.messages.error(e),
+        }
+    }
+
+    /// Once a frame while a save waits for the view (`state/save_wait.rs`), and in the frame
+    /// of the click: the view's picture copied once it holds it complete, and its save
+    /// started; else the wait goes on (the view fills in, moves or waits for a surface), or,
+    /// the view still without giving it, the picture is rendered. Another cloud or the
+    /// compare shown meanwhile ends the wait with nothing saved.
+    pub(super) fn step_save_wait(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
+        let Some(wait) = self.save_shot.waiting.as_ref() else {
+            return;
+        };
+        let (Some(render_state), Some(view)) = (frame.wgpu_render_state(), self.last_view) else {
+            return;
+        };
+        let same_cloud = self.active().is_some_and(|l| l.id == wait.cloud);
+        let Some(loaded) = self
+            .active()
+            .filter(|_| same_cloud && self.compare_shown_as().is_none())
+        else {
+            if let Some(wait) = self.save_shot.waiting.take() {
+                self.messages.error(format!(
+                    "Save PNG: the view showed something else before it filled in: nothing \
+                     saved to {}",
+                    wait.path.display()
+                ));
+            }
+            return;
+        };
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
+        let settling = self.refining.is_some()
+            || view.moving
+            || self.surface.busy
+            || self.volume_hold.pending()
+            || self.busy.is_some();
+        let shown =
+            ViewResources::shown_picture(render_state, loaded.id, &loaded.cloud, &view, &settings);
+        let (submitted, from_view) = match shown {
+            Some(shown) => (shown, true),
+            None => {
+                let step = self.save_shot.waiting.as_mut().map(|w| w.step(settling));
+                if step != Some(WaitStep::Render) {
+                    ctx.request_repaint();
+                    return;
+                }
+                let Some(loaded) = self.active() else {
+                    return;
+                };
+                let rendered = ViewResources::screenshot(
+                    render_state,
+                    loaded.id,
+                    &loaded.cloud,
+                    &view,
+                    &settings,
+                );
+                (rendered, false)
             }
         };
-        let mut notes = String::new();
-        if renamed {
-            notes += &format!(
-                "; {} exists and this window did not save it, so it is kept",
-                wanted.display()
-            );
+        let Some(wait) = self.save_shot.waiting.take() else {
+            return;
+        };
+        match submitted {
+            Ok(picture) => {
+                let waited = Some((wait.since, wait.frames, from_view));
+                self.start_save(ctx, render_state, wait.path, wait.notes, picture, waited);
+            }
+            Err(e) => self.messages.error(e.to_string()),
         }
-        if no_dialog {
-            notes += &format!("; {}", crate::ui::open::NO_DIALOG);
-        }
+    }
+
+    /// Once a frame: a save waiting for the view, a frame more.
+    pub(super) fn poll_save_wait(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
+        let Some(wait) = self.save_shot.waiting.as_mut() else {
+            return;
+        };
+        wait.frame_drawn();
+        self.step_save_wait(ctx, frame);
+    }
+
+    /// Starts the thread that reads `picture` back, draws its labels and writes it to `path`
+    /// ("saving …"). `waited`: when the save waited for the view, since when, the frames
+    /// drawn meanwhile and whether the picture is the view's own.
+    fn start_save(
+        &mut self,
+        ctx: &egui::Context,
+        render_state: &eframe::egui_wgpu::RenderState,
+        path: PathBuf,
+        notes: String,
+        picture: PendingPicture,
+        waited: Option<(std::time::Instant, u32, bool)>,
+    ) {
         // The full path: a bare name lands in the folder the window was started from.
         let shown = std::path::absolute(&path).unwrap_or_else(|_| path.clone());
         self.messages.info(format!("saving {}…", shown.display()));
@@ -247,7 +333,10 @@ impl LoudscapeApp {
             crate::ui::screenshot::save_png(&image, &to).map_err(|e| e.to_string())?;
             Ok(size)
         });
-        save.from_view = from_view;
+        if let Some((since, frames, from_view)) = waited {
+            save = save.waited_since(since, frames);
+            save.from_view = from_view;
+        }
         self.save_shot.saving = Some(save);
         ctx.request_repaint();
     }
@@ -264,9 +353,9 @@ impl LoudscapeApp {
         self.save_shot.view_drawn = holds && self.refining.is_none() && self.active().is_some();
     }
 
-    /// Whether a Save PNG is being read back or written.
+    /// Whether a Save PNG waits for the view or is being read back or written.
     pub(super) fn saving_picture(&self) -> bool {
-        self.save_shot.saving.is_some()
+        self.save_shot.saving.is_some() || self.save_shot.waiting.is_some()
     }
 
     /// Once a frame: the Save PNG under way, told when it is done ("saved …").
@@ -294,12 +383,18 @@ impl LoudscapeApp {
                 ));
                 // A log line, as loads are told: tests read the frames.
                 eprintln!(
-                    "picture: saved in {:.0} ms on a thread ({}), while the window drew {} frames",
+                    "picture: saved in {:.0} ms on a thread ({}{}), while the window drew {} \
+                     frames",
                     finished.took.as_secs_f64() * 1000.0,
                     if save.from_view {
                         "the view's picture, copied"
                     } else {
                         "rendered for the picture"
+                    },
+                    if save.waited > 0 {
+                        format!("; waited {} frames for the view to fill in", save.waited)
+                    } else {
+                        String::new()
                     },
                     finished.frames
                 );

@@ -25,6 +25,9 @@ pub(in crate::ui) struct PictureSave {
     frames: u32,
     /// Whether the picture is a copy of the view's own (not rendered again for the save).
     pub(in crate::ui) from_view: bool,
+    /// Frames the save waited for the view to fill in before its picture was taken
+    /// (`save_wait.rs`); they are counted among the frames drawn meanwhile.
+    pub(in crate::ui) waited: u32,
 }
 
 /// A finished save: its result, how long it took and the frames drawn meanwhile.
@@ -63,7 +66,17 @@ impl PictureSave {
             started: Instant::now(),
             frames: 0,
             from_view: false,
+            waited: 0,
         }
+    }
+
+    /// The save began `frames` frames before, at `since`, waiting for the view: its time and
+    /// its frames count from the click.
+    pub(in crate::ui) fn waited_since(mut self, since: Instant, frames: u32) -> Self {
+        self.started = since;
+        self.frames = frames;
+        self.waited = frames;
+        self
     }
 
     /// Called once a frame: None while the thread works (the frame is counted), then what it
