@@ -15,7 +15,7 @@ use std::process::Command;
 const POINTS: usize = 1_500_000;
 
 /// A song cloud of `count` synthetic points (`data::synthetic::synthetic_song`) at `path`.
-fn write_song(path: &Path, count: usize) {
+pub(crate) fn write_song(path: &Path, count: usize) {
     let points = loudscape::data::synthetic::synthetic_song(count, 5);
     let axis = |label: &str, unit: &str, min: f64, max: f64| serde_json::json!({"label": label, "unit": unit, "min": min, "max": max, "scale": "linear"});
     let meta = serde_json::json!({
@@ -38,17 +38,30 @@ fn write_song(path: &Path, count: usize) {
 /// Runs the window on `song` in `dir`, presses `press` once every point is drawn, and returns
 /// the one PNG Ctrl+S saved there (no dialog can open) and the window's "picture: saved" line.
 fn save(song: &Path, dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
+    let mut presses = vec!["when-drawn"];
+    presses.extend_from_slice(press);
+    save_in_view(song, dir, "points", &presses)
+}
+
+/// As [`save`], in the view `view` (`--view`), pressing `press` as soon as the song is shown
+/// (a `when-drawn` among them waits for the view at full detail).
+pub(crate) fn save_in_view(
+    song: &Path,
+    dir: &Path,
+    view: &str,
+    press: &[&str],
+) -> (image::RgbaImage, String) {
+    std::fs::create_dir_all(dir).unwrap();
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
     common::home_in(&mut command, dir)
         .current_dir(dir)
         .env("DBUS_SESSION_BUS_ADDRESS", "")
         .env("PATH", "/usr/bin/false-folder-without-zenity")
         .arg(song)
+        .args(["--view", view])
         .arg("--screenshot")
         .arg(dir.join("window.png"));
-    let mut presses = vec!["when-drawn"];
-    presses.extend_from_slice(press);
-    let err = common::run_pressing(&mut command, &presses);
+    let err = common::run_pressing(&mut command, press);
     let saved: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .flatten()
@@ -69,7 +82,7 @@ fn save(song: &Path, dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
 
 /// The frames the window drew while the picture was saved ("… while the window drew N
 /// frames").
-fn frames_while_saving(line: &str) -> u32 {
+pub(crate) fn frames_while_saving(line: &str) -> u32 {
     line.split_whitespace()
         .rev()
         .nth(1)
