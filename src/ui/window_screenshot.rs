@@ -22,8 +22,8 @@ use crate::ui::bridge::CompareResources;
 use crate::ui::bridge::ViewResources;
 use crate::ui::compare_shot::{CompareView, submit_compare_image};
 use crate::ui::state::compare_window::CompareLayout;
-use crate::ui::state::picture_save::PictureSave;
-use crate::ui::state::save_wait::{SaveWait, WaitStep};
+use crate::ui::state::picture_save::{COPIED, PictureSave, RENDERED, SLICED};
+use crate::ui::state::save_wait::{SaveWait, Sliced, WaitStep};
 use crate::ui::state::written;
 use crate::ui::state::{LoudscapeApp, Slot};
 
@@ -188,22 +188,33 @@ impl LoudscapeApp {
             return;
         };
         let what = self.compare_shown_as();
-        if what.is_none() && !self.save_shot.custom_size {
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
+        if what.is_none() {
             // At the view's size: the view's own picture once it is complete, waited for
-            // while it fills in (nothing drawn again for the picture in this frame).
-            self.save_shot.waiting = Some(SaveWait::new(path.clone(), notes, loaded.id));
+            // while it fills in; at a chosen size: drawn for the save a slice a frame. Nothing
+            // drawn whole for the picture in this frame either way.
+            let mut wait = SaveWait::new(path.clone(), notes, loaded.id);
+            if self.save_shot.custom_size {
+                wait.sliced = Some(Box::new(Sliced::new(&render_state.device, view, settings)));
+            }
+            let sliced = wait.sliced.is_some();
+            self.save_shot.waiting = Some(wait);
             self.step_save_wait(ctx, frame);
             if self.save_shot.waiting.is_some() {
                 let shown = std::path::absolute(&path).unwrap_or(path);
                 self.messages.info(format!(
-                    "saving {}… (waiting for the view to fill in)",
-                    shown.display()
+                    "saving {}… ({})",
+                    shown.display(),
+                    if sliced {
+                        "drawing it a part a frame"
+                    } else {
+                        "waiting for the view to fill in"
+                    }
                 ));
             }
             return;
         }
-        let mut settings = self.settings.clone();
-        settings.markers = self.markers();
         // Rendered and its read-back submitted in this frame; a thread waits for the copy,
         // draws the labels, encodes and writes (the window keeps drawing meanwhile).
         let submitted = match what {
@@ -218,11 +229,7 @@ impl LoudscapeApp {
                 compare_screenshot(render_state, what, view.camera, size, &settings)
                     .map_err(|e| format!("{}: {e:#}", path.display()))
             }
-            // A chosen size: rendered.
-            None => {
-                ViewResources::screenshot(render_state, loaded.id, &loaded.cloud, &view, &settings)
-                    .map_err(|e| e.to_string())
-            }
+            None => return,
         };
         match submitted {
             Ok(picture) => self.start_save(ctx, render_state, path, notes, picture, None),
@@ -236,10 +243,37 @@ impl LoudscapeApp {
     /// the view still without giving it, the picture is rendered. Another cloud or the
     /// compare shown meanwhile ends the wait with nothing saved.
     pub(super) fn step_save_wait(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
-        let Some(wait) = self.save_shot.waiting.as_ref() else {
+        let Some(wait) = self.save_shot.waiting.as_mut() else {
             return;
         };
-        let (Some(render_state), Some(view)) = (frame.wgpu_render_state(), self.last_view) else {
+        let Some(render_state) = frame.wgpu_render_state() else {
+            return;
+        };
+        if let Some(sliced) = wait.sliced.as_mut() {
+            let id = wait.cloud;
+            let loaded = self.song.iter().chain(&self.timeline).find(|l| l.id == id);
+            let drawn = match loaded {
+                Some(loaded) => {
+                    crate::ui::save_slices::draw_next(render_state, sliced, id, &loaded.cloud)
+                }
+                None => Some((
+                    Err(format!(
+                        "Save PNG: the cloud was closed before {} was drawn: nothing saved",
+                        wait.path.display()
+                    )),
+                    RENDERED,
+                )),
+            };
+            match drawn {
+                None => ctx.request_repaint(),
+                Some((drawn, how)) => self.finish_wait(ctx, render_state, drawn, how),
+            }
+            return;
+        }
+        let Some(view) = self.last_view else {
+            return;
+        };
+        let Some(wait) = self.save_shot.waiting.as_ref() else {
             return;
         };
         let same_cloud = self.active().is_some_and(|l| l.id == wait.cloud);
@@ -265,8 +299,8 @@ impl LoudscapeApp {
             || self.busy.is_some();
         let shown =
             ViewResources::shown_picture(render_state, loaded.id, &loaded.cloud, &view, &settings);
-        let (submitted, from_view) = match shown {
-            Some(shown) => (shown, true),
+        let (submitted, how) = match shown {
+            Some(shown) => (shown.map_err(|e| e.to_string()), COPIED),
             None => {
                 let step = self.save_shot.waiting.as_mut().map(|w| w.step(settling));
                 if step != Some(WaitStep::Render) {
@@ -283,18 +317,29 @@ impl LoudscapeApp {
                     &view,
                     &settings,
                 );
-                (rendered, false)
+                (rendered.map_err(|e| e.to_string()), RENDERED)
             }
         };
+        self.finish_wait(ctx, render_state, submitted, how);
+    }
+
+    /// The waiting save's picture is submitted (`how` it was made): its thread starts.
+    fn finish_wait(
+        &mut self,
+        ctx: &egui::Context,
+        render_state: &eframe::egui_wgpu::RenderState,
+        submitted: Result<PendingPicture, String>,
+        how: &'static str,
+    ) {
         let Some(wait) = self.save_shot.waiting.take() else {
             return;
         };
         match submitted {
             Ok(picture) => {
-                let waited = Some((wait.since, wait.frames, from_view));
+                let waited = Some((wait.since, wait.frames, how));
                 self.start_save(ctx, render_state, wait.path, wait.notes, picture, waited);
             }
-            Err(e) => self.messages.error(e.to_string()),
+            Err(e) => self.messages.error(e),
         }
     }
 
@@ -317,7 +362,7 @@ impl LoudscapeApp {
         path: PathBuf,
         notes: String,
         picture: PendingPicture,
-        waited: Option<(std::time::Instant, u32, bool)>,
+        waited: Option<(std::time::Instant, u32, &'static str)>,
     ) {
         // The full path: a bare name lands in the folder the window was started from.
         let shown = std::path::absolute(&path).unwrap_or_else(|_| path.clone());
@@ -333,9 +378,9 @@ impl LoudscapeApp {
             crate::ui::screenshot::save_png(&image, &to).map_err(|e| e.to_string())?;
             Ok(size)
         });
-        if let Some((since, frames, from_view)) = waited {
+        if let Some((since, frames, how)) = waited {
             save = save.waited_since(since, frames);
-            save.from_view = from_view;
+            save.how = how;
         }
         self.save_shot.saving = Some(save);
         ctx.request_repaint();
@@ -386,15 +431,11 @@ impl LoudscapeApp {
                     "picture: saved in {:.0} ms on a thread ({}{}), while the window drew {} \
                      frames",
                     finished.took.as_secs_f64() * 1000.0,
-                    if save.from_view {
-                        "the view's picture, copied"
-                    } else {
-                        "rendered for the picture"
-                    },
-                    if save.waited > 0 {
-                        format!("; waited {} frames for the view to fill in", save.waited)
-                    } else {
-                        String::new()
+                    save.how,
+                    match (save.waited, save.how) {
+                        (0, _) => String::new(),
+                        (n, SLICED) => format!("; waited {n} frames for the slices"),
+                        (n, _) => format!("; waited {n} frames for the view to fill in"),
                     },
                     finished.frames
                 );

@@ -2,8 +2,9 @@
 //! the view's own picture (`ViewResources::shown_picture`) in the frame of Ctrl+S, where
 //! drawing 1.5 M points on a software GPU held the window for seconds, and a thread reads it
 //! back, draws the labels and writes the PNG while the window goes on drawing frames. The PNG
-//! is the picture that rendering it again at the same size gives. Needs a display (`make test`
-//! runs it under xvfb-run).
+//! is the picture that drawing it again at the same size, chosen in the panel, gives (a slice
+//! of the points a frame into a target of the save's own, `ui/save_slices.rs`). Needs a display
+//! (`make test` runs it under xvfb-run).
 
 use crate::common;
 
@@ -113,17 +114,22 @@ fn save_png_of_a_big_cloud_copies_the_view_and_equals_a_fresh_render() {
         "the copied picture looks blank"
     );
 
-    // The same size chosen in the panel: rendered again, the way every save went before.
+    // The same size chosen in the panel: drawn again for the picture, a slice a frame into a
+    // target of its own (the window drawing frames meanwhile), not in the frame of the click.
     let (w, h) = copied.dimensions();
     let rendered_dir = home.join("rendered");
     std::fs::create_dir_all(&rendered_dir).unwrap();
     let size = format!("shot-size={w}x{h}");
     let (rendered, line) = save(&song, &rendered_dir, &[&size, "Ctrl+S"]);
-    println!("rendered: {line}");
-    assert!(line.contains("(rendered for the picture)"), "{line}");
+    println!("drawn in slices: {line}");
+    assert!(
+        line.contains("(drawn for the picture in slices; waited "),
+        "the points were drawn whole in the frame of the click: {line}"
+    );
+    assert!(frames_while_saving(&line) >= 2, "{line}");
     assert_eq!(rendered.dimensions(), (w, h));
-    // The same pixels: the slices of the view end as the single pass, the labels are drawn
-    // by the same code on the CPU.
+    // The same pixels: the slices of the view and of the save end as the single pass, the
+    // labels are drawn by the same code on the CPU.
     let (share, _) = common::difference(&copied, &rendered, 0);
     if share > 0.0 {
         let _ = copied.save(home.join("copied.png"));
@@ -132,7 +138,7 @@ fn save_png_of_a_big_cloud_copies_the_view_and_equals_a_fresh_render() {
     assert_eq!(
         share,
         0.0,
-        "the copied picture differs from a fresh render in {:.3}% of pixels (both in {})",
+        "the copied picture differs from the one drawn for it in {:.3}% of pixels (both in {})",
         share * 100.0,
         home.display()
     );

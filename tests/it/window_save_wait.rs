@@ -16,8 +16,8 @@ fn frames_waited(line: &str) -> u32 {
         .unwrap_or(0)
 }
 
-/// The same picture saved at the chosen size equal to `copied`'s: rendered for the picture,
-/// as every save at a chosen size is.
+/// The same picture saved at the chosen size equal to `copied`'s: drawn for the picture over
+/// frames (the surface in one render, in the frame after the click).
 fn rendered_like(
     copied: &image::RgbaImage,
     song: &std::path::Path,
@@ -27,8 +27,13 @@ fn rendered_like(
     let (w, h) = copied.dimensions();
     let size = format!("shot-size={w}x{h}");
     let (rendered, line) = save_in_view(song, dir, view, &["when-drawn", &size, "Ctrl+S"]);
-    println!("{view}, rendered: {line}");
-    assert!(line.contains("(rendered for the picture)"), "{line}");
+    println!("{view}, drawn for the picture: {line}");
+    let how = if view == "surface" {
+        "(rendered for the picture"
+    } else {
+        "(drawn for the picture in slices; waited "
+    };
+    assert!(line.contains(how), "{line}");
     assert_eq!(rendered.dimensions(), (w, h));
     rendered
 }
@@ -114,4 +119,26 @@ fn save_png_of_the_surface_copies_the_view() {
     let (copied, rendered) = copied_and_rendered("surface", &["when-drawn", "Ctrl+S"]);
     let (share, _) = common::difference(&copied, &rendered, 0);
     assert_eq!(share, 0.0, "differs in {:.3}% of pixels", share * 100.0);
+}
+
+/// A chosen size other than the view's, Ctrl+S as soon as the song is shown: the points are
+/// drawn for the picture a slice a frame at the camera of the click, the window drawing
+/// frames meanwhile, and the PNG has the chosen size and shows the cloud.
+#[test]
+fn save_png_at_a_chosen_size_draws_its_points_over_frames() {
+    let _screen = common::screen();
+    common::assert_display();
+    let home = common::fresh_dir("window_save_wait_size");
+    let song = home.join("synthetic_1m5.ply");
+    write_song(&song, 1_500_000);
+    let (picture, line) = save_in_view(&song, &home, "points", &["shot-size=900x500", "Ctrl+S"]);
+    println!("chosen size: {line}");
+    assert!(
+        line.contains("(drawn for the picture in slices; waited "),
+        "the points were drawn whole in the frame of the click: {line}"
+    );
+    // 1.5 M points at 200,000 points in the first slice, at most twice more in each next.
+    assert!(frames_waited(&line) >= 2, "{line}");
+    assert_eq!(picture.dimensions(), (900, 500));
+    assert!(common::coverage(&picture) > 0.05, "the picture looks blank");
 }

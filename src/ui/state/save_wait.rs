@@ -11,9 +11,23 @@
 //! wait is there to avoid. A view that stays at rest and complete without giving its picture
 //! for [`STILL_FRAMES`] frames (which a view at rest does not do) falls back to rendering the
 //! picture, as every save did before, so a save never waits forever on a still view.
+//!
+//! At a chosen size the view's picture is not the one wanted: the save draws its own picture
+//! ([`Sliced`]), at the camera of the click, into a target of its own, a slice of the points
+//! (`ui/progressive.rs`) or a band of the volume's rows (`render/volume/progressive.rs`) a
+//! frame, as the view fills in, and its read-back is submitted once it is complete
+//! (`ui/save_slices.rs`). A camera move meanwhile leaves it as it is: its picture is not on
+//! screen.
 
 use std::path::PathBuf;
 use std::time::Instant;
+
+use crate::render::gpu::target::RenderTarget;
+use crate::render::scene::RenderSettings;
+use crate::render::volume::progressive::ProgressiveVolume;
+use crate::ui::frame_cache::RenderKey;
+use crate::ui::progressive::ProgressivePoints;
+use crate::view::frame_view::FrameView;
 
 /// Frames at rest, with nothing filling in, after which a view that still does not give its
 /// picture has it rendered instead.
@@ -43,6 +57,41 @@ pub(in crate::ui) struct SaveWait {
     pub(in crate::ui) frames: u32,
     /// Frames in a row the view was still and complete without giving its picture.
     still: u32,
+    /// The picture drawn for the save over frames (a chosen size), instead of the view's.
+    pub(in crate::ui) sliced: Option<Box<Sliced>>,
+}
+
+/// A picture drawn for a save over several frames, at the camera and settings of the click,
+/// into a target of its own.
+pub(in crate::ui) struct Sliced {
+    /// The picture (the chosen size).
+    pub(in crate::ui) target: RenderTarget,
+    /// The points a slice a frame, into a points target of its own.
+    pub(in crate::ui) points: ProgressivePoints,
+    /// The volume coarse first, then a band of rows a frame.
+    pub(in crate::ui) volume: ProgressiveVolume<RenderKey>,
+    /// The view of the click at the chosen size, at rest.
+    pub(in crate::ui) view: FrameView,
+    /// The settings of the click (markers included).
+    pub(in crate::ui) settings: RenderSettings,
+}
+
+impl Sliced {
+    pub(in crate::ui) fn new(
+        device: &wgpu::Device,
+        view: FrameView,
+        settings: RenderSettings,
+    ) -> Self {
+        let mut view = view;
+        view.moving = false;
+        Self {
+            target: RenderTarget::new(device, view.width, view.height),
+            points: ProgressivePoints::default(),
+            volume: ProgressiveVolume::default(),
+            view,
+            settings,
+        }
+    }
 }
 
 impl SaveWait {
@@ -54,6 +103,7 @@ impl SaveWait {
             since: Instant::now(),
             frames: 0,
             still: 0,
+            sliced: None,
         }
     }
 
