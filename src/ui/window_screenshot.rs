@@ -1,16 +1,21 @@
-//! The window's two screenshot paths: "Save PNG" (the 3D view rendered offscreen at the
-//! 3D view's or a chosen size, through `picture::submit_view`, labels included)
-//! and the scripted `--screenshot` of the whole window (egui's own, for tests), which closes the
-//! window once saved. Save PNG writes only to a `.png` name (a video's name in the field saves
-//! nothing and says why) and never over a file this window did not save in this run: a file
-//! already there that it did not make is kept, the PNG goes to `name-2.png` beside it, and the
-//! status line says so (`state/written.rs`). At the view's size in the Points view, once the
-//! view has drawn every point (`ui/progressive.rs`), the frame of the click only copies the
-//! view's own picture (`ViewResources::shown_picture`): a song of millions of points is not
-//! drawn again in that frame, which held the window for seconds on a software GPU. Otherwise it
-//! renders the picture. Either way it submits the read-back; a thread waits for the copy, draws the labels and writes the PNG
-//! (`state/picture_save.rs`), the status saying "saving …" and then "saved …", so a large
-//! picture or a cloud of millions of points never holds the window.
+//! The window's two screenshot paths: "Save PNG" (the 3D view's picture at the 3D view's or a
+//! chosen size, labels included) and the scripted `--screenshot` of the whole window (egui's
+//! own, for tests), which closes the window once saved. Save PNG writes only to a `.png` name (a
+//! video's name in the field saves nothing and says why) and never over a file this window did
+//! not save in this run: a file already there that it did not make is kept, the PNG goes to
+//! `name-2.png` beside it, and the status line says so (`state/written.rs`).
+//!
+//! The frame of the click draws no whole picture of a single cloud. At the view's size, in the
+//! Points, Surface and Volume views, the save takes the view's own picture once it is complete
+//! (`ViewResources::shown_picture`), waiting while the view fills in, moves or waits for a
+//! surface (`state/save_wait.rs`, "saving … (waiting for the view to fill in)"). At a chosen
+//! size it draws its own picture a slice of points or a band of the volume a frame
+//! (`ui/save_slices.rs`). The A/B compare is still rendered in the frame of the click
+//! (`compare_screenshot`). Either way the read-back is submitted and a thread waits for the
+//! copy, draws the labels and writes the PNG (`state/picture_save.rs`), the status saying
+//! "saving …" and then "saved …", so a large picture or a cloud of millions of points never
+//! holds the window. One save at a time: a click while one is under way saves nothing and says
+//! why.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
