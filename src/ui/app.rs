@@ -378,6 +378,7 @@ impl eframe::App for LoudscapeApp {
             .show(ui, |ui| self.view_3d(ui));
         // A save under way first: the frame that starts one is not counted as drawn meanwhile.
         self.poll_picture_save(&ctx);
+        self.poll_save_wait(&ctx, frame);
         if std::mem::take(&mut self.save_shot.requested) {
             self.save_screenshot(&ctx, frame);
         }

@@ -204,12 +204,17 @@ impl ViewResources {
         })
     }
 
-    /// Save PNG's quick way: when the view's target holds, complete, the Points view of cloud
-    /// `id` that a render of `view` with `settings` draws (at rest, at the view's size, no
-    /// refinement under way), its read-back is submitted with the labels to draw over it, and
-    /// no point is drawn again. `None` when the target holds anything else (then the picture is
-    /// rendered: [`ViewResources::screenshot`]). The same pixels either way: the slices of a
-    /// progressive frame end as the single pass (tests/it/big_clouds.rs).
+    /// Save PNG's quick way: when the view's target holds, complete, the Points, Surface or
+    /// Volume view of cloud `id` that a render of `view` with `settings` draws (at rest, at the
+    /// view's size, no refinement under way), its read-back is submitted with the labels to
+    /// draw over it, and no point or ray is drawn again. The markers are the ones the target
+    /// holds (the playhead of the last frame drawn, which moves every frame during playback).
+    /// `None` when the target holds anything else (the view fills in, moves, or shows another
+    /// scene: wait for it, `state/save_wait.rs`, or render the picture:
+    /// [`ViewResources::screenshot`]). The same pixels as a render: the slices of a progressive
+    /// frame end as the single pass (tests/it/big_clouds.rs); the volume's bands end as one
+    /// render's volume pass, with the jitter of the refinement's first frame
+    /// (render/volume/progressive.rs).
     pub fn shown_picture(
         render_state: &egui_wgpu::RenderState,
         id: u64,
@@ -218,7 +223,11 @@ impl ViewResources {
         settings: &RenderSettings,
     ) -> Option<Result<crate::picture::PendingPicture, crate::ui::screenshot::ScreenshotError>>
     {
-        if settings.view != crate::render::scene::ViewKind::Points {
+        use crate::render::scene::ViewKind;
+        if !matches!(
+            settings.view,
+            ViewKind::Points | ViewKind::Surface | ViewKind::Volume
+        ) {
             return None;
         }
         let gpu = crate::render::gpu::context::GpuContext {
@@ -234,6 +243,8 @@ impl ViewResources {
                 .with_points_revision(r.cache.points_revision);
             // Only a moving frame draws fewer points; this one is at rest.
             wanted.settings.points.max_points_moving = held.settings.points.max_points_moving;
+            // The playhead drawn last frame: during playback it moves every frame.
+            wanted.settings.markers = held.settings.markers.clone();
             if *held != wanted {
                 return None;
             }
@@ -243,7 +254,7 @@ impl ViewResources {
                 labels: settings.show_box,
                 legend: true,
             };
-            let shapes = crate::picture::overlay(&at_rest, cloud, data, settings, what);
+            let shapes = crate::picture::overlay(&at_rest, cloud, data, &held.settings, what);
             let mut picture = crate::picture::PendingPicture::new(
                 target.width,
                 target.height,

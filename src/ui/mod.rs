@@ -37,6 +37,7 @@ mod persistence;
 pub mod progressive;
 mod recent;
 mod report_link;
+mod save_slices;
 pub mod screenshot;
 mod shortcuts;
 mod slots;

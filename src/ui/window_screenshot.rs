@@ -1,16 +1,21 @@
-//! The window's two screenshot paths: "Save PNG" (the 3D view rendered offscreen at the
-//! 3D view's or a chosen size, through `picture::submit_view`, labels included)
-//! and the scripted `--screenshot` of the whole window (egui's own, for tests), which closes the
-//! window once saved. Save PNG writes only to a `.png` name (a video's name in the field saves
-//! nothing and says why) and never over a file this window did not save in this run: a file
-//! already there that it did not make is kept, the PNG goes to `name-2.png` beside it, and the
-//! status line says so (`state/written.rs`). At the view's size in the Points view, once the
-//! view has drawn every point (`ui/progressive.rs`), the frame of the click only copies the
-//! view's own picture (`ViewResources::shown_picture`): a song of millions of points is not
-//! drawn again in that frame, which held the window for seconds on a software GPU. Otherwise it
-//! renders the picture. Either way it submits the read-back; a thread waits for the copy, draws the labels and writes the PNG
-//! (`state/picture_save.rs`), the status saying "saving …" and then "saved …", so a large
-//! picture or a cloud of millions of points never holds the window.
+//! The window's two screenshot paths: "Save PNG" (the 3D view's picture at the 3D view's or a
+//! chosen size, labels included) and the scripted `--screenshot` of the whole window (egui's
+//! own, for tests), which closes the window once saved. Save PNG writes only to a `.png` name (a
+//! video's name in the field saves nothing and says why) and never over a file this window did
+//! not save in this run: a file already there that it did not make is kept, the PNG goes to
+//! `name-2.png` beside it, and the status line says so (`state/written.rs`).
+//!
+//! The frame of the click draws no whole picture of a single cloud. At the view's size, in the
+//! Points, Surface and Volume views, the save takes the view's own picture once it is complete
+//! (`ViewResources::shown_picture`), waiting while the view fills in, moves or waits for a
+//! surface (`state/save_wait.rs`, "saving … (waiting for the view to fill in)"). At a chosen
+//! size it draws its own picture a slice of points or a band of the volume a frame
+//! (`ui/save_slices.rs`). The A/B compare is still rendered in the frame of the click
+//! (`compare_screenshot`). Either way the read-back is submitted and a thread waits for the
+//! copy, draws the labels and writes the PNG (`state/picture_save.rs`), the status saying
+//! "saving …" and then "saved …", so a large picture or a cloud of millions of points never
+//! holds the window. One save at a time: a click while one is under way saves nothing and says
+//! why.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
@@ -22,7 +27,8 @@ use crate::ui::bridge::CompareResources;
 use crate::ui::bridge::ViewResources;
 use crate::ui::compare_shot::{CompareView, submit_compare_image};
 use crate::ui::state::compare_window::CompareLayout;
-use crate::ui::state::picture_save::PictureSave;
+use crate::ui::state::picture_save::{COPIED, PictureSave, RENDERED, SLICED};
+use crate::ui::state::save_wait::{SaveWait, Sliced, WaitStep};
 use crate::ui::state::written;
 use crate::ui::state::{LoudscapeApp, Slot};
 
@@ -126,10 +132,15 @@ impl LoudscapeApp {
         if self.active().is_none() {
             return;
         }
-        if let Some(save) = &self.save_shot.saving {
+        let under_way = (self.save_shot.saving.as_ref().map(|s| &s.path)).or(self
+            .save_shot
+            .waiting
+            .as_ref()
+            .map(|w| &w.path));
+        if let Some(path) = under_way {
             self.messages.error(format!(
                 "Save PNG: still saving {}: nothing else saved until it is written",
-                save.path.display()
+                path.display()
             ));
             return;
         }
@@ -169,15 +180,50 @@ impl LoudscapeApp {
         } else {
             written::target(&wanted, &self.save_shot.made)
         };
-        let mut settings = self.settings.clone();
-        settings.markers = self.markers();
+        let mut notes = String::new();
+        if renamed {
+            notes += &format!(
+                "; {} exists and this window did not save it, so it is kept",
+                wanted.display()
+            );
+        }
+        if no_dialog {
+            notes += &format!("; {}", crate::ui::open::NO_DIALOG);
+        }
         let Some(loaded) = self.active() else {
             return;
         };
+        let what = self.compare_shown_as();
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
+        if what.is_none() {
+            // At the view's size: the view's own picture once it is complete, waited for
+            // while it fills in; at a chosen size: drawn for the save a slice a frame. Nothing
+            // drawn whole for the picture in this frame either way.
+            let mut wait = SaveWait::new(path.clone(), notes, loaded.id);
+            if self.save_shot.custom_size {
+                wait.sliced = Some(Box::new(Sliced::new(&render_state.device, view, settings)));
+            }
+            let sliced = wait.sliced.is_some();
+            self.save_shot.waiting = Some(wait);
+            self.step_save_wait(ctx, frame);
+            if self.save_shot.waiting.is_some() {
+                let shown = std::path::absolute(&path).unwrap_or(path);
+                self.messages.info(format!(
+                    "saving {}… ({})",
+                    shown.display(),
+                    if sliced {
+                        "drawing it a part a frame"
+                    } else {
+                        "waiting for the view to fill in"
+                    }
+                ));
+            }
+            return;
+        }
         // Rendered and its read-back submitted in this frame; a thread waits for the copy,
         // draws the labels, encodes and writes (the window keeps drawing meanwhile).
-        let mut from_view = false;
-        let submitted = match self.compare_shown_as() {
+        let submitted = match what {
             // The compare the view shows: both halves, or the difference picture, labelled.
             Some(what) => {
                 // The whole view (both halves), or the chosen size.
@@ -189,51 +235,141 @@ impl LoudscapeApp {
                 compare_screenshot(render_state, what, view.camera, size, &settings)
                     .map_err(|e| format!("{}: {e:#}", path.display()))
             }
-            // The view's own picture when it shows this one complete (a copy, not seconds of
-            // points drawn again in this frame); else rendered.
+            None => return,
+        };
+        match submitted {
+            Ok(picture) => self.start_save(ctx, render_state, path, notes, picture, None),
+            Err(e) => self.messages.error(e),
+        }
+    }
+
+    /// Once a frame while a save waits for the view (`state/save_wait.rs`), and in the frame
+    /// of the click: the view's picture copied once it holds it complete, and its save
+    /// started; else the wait goes on (the view fills in, moves or waits for a surface), or,
+    /// the view still without giving it, the picture is rendered. Another cloud or the
+    /// compare shown meanwhile ends the wait with nothing saved.
+    pub(super) fn step_save_wait(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
+        let Some(wait) = self.save_shot.waiting.as_mut() else {
+            return;
+        };
+        let Some(render_state) = frame.wgpu_render_state() else {
+            return;
+        };
+        if let Some(sliced) = wait.sliced.as_mut() {
+            let id = wait.cloud;
+            let loaded = self.song.iter().chain(&self.timeline).find(|l| l.id == id);
+            let drawn = match loaded {
+                Some(loaded) => {
+                    crate::ui::save_slices::draw_next(render_state, sliced, id, &loaded.cloud)
+                }
+                None => Some((
+                    Err(format!(
+                        "Save PNG: the cloud was closed before {} was drawn: nothing saved",
+                        wait.path.display()
+                    )),
+                    RENDERED,
+                )),
+            };
+            match drawn {
+                None => ctx.request_repaint(),
+                Some((drawn, how)) => self.finish_wait(ctx, render_state, drawn, how),
+            }
+            return;
+        }
+        let Some(view) = self.last_view else {
+            return;
+        };
+        let Some(wait) = self.save_shot.waiting.as_ref() else {
+            return;
+        };
+        let same_cloud = self.active().is_some_and(|l| l.id == wait.cloud);
+        let Some(loaded) = self
+            .active()
+            .filter(|_| same_cloud && self.compare_shown_as().is_none())
+        else {
+            if let Some(wait) = self.save_shot.waiting.take() {
+                self.messages.error(format!(
+                    "Save PNG: the view showed something else before it filled in: nothing \
+                     saved to {}",
+                    wait.path.display()
+                ));
+            }
+            return;
+        };
+        let mut settings = self.settings.clone();
+        settings.markers = self.markers();
+        let settling = self.refining.is_some()
+            || view.moving
+            || self.surface.busy
+            || self.volume_hold.pending()
+            || self.busy.is_some();
+        let shown =
+            ViewResources::shown_picture(render_state, loaded.id, &loaded.cloud, &view, &settings);
+        let (submitted, how) = match shown {
+            Some(shown) => (shown.map_err(|e| e.to_string()), COPIED),
             None => {
-                let shown = (!self.save_shot.custom_size)
-                    .then(|| {
-                        ViewResources::shown_picture(
-                            render_state,
-                            loaded.id,
-                            &loaded.cloud,
-                            &view,
-                            &settings,
-                        )
-                    })
-                    .flatten();
-                from_view = shown.is_some();
-                shown
-                    .unwrap_or_else(|| {
-                        ViewResources::screenshot(
-                            render_state,
-                            loaded.id,
-                            &loaded.cloud,
-                            &view,
-                            &settings,
-                        )
-                    })
-                    .map_err(|e| e.to_string())
+                let step = self.save_shot.waiting.as_mut().map(|w| w.step(settling));
+                if step != Some(WaitStep::Render) {
+                    ctx.request_repaint();
+                    return;
+                }
+                let Some(loaded) = self.active() else {
+                    return;
+                };
+                let rendered = ViewResources::screenshot(
+                    render_state,
+                    loaded.id,
+                    &loaded.cloud,
+                    &view,
+                    &settings,
+                );
+                (rendered.map_err(|e| e.to_string()), RENDERED)
             }
         };
-        let picture = match submitted {
-            Ok(picture) => picture,
-            Err(e) => {
-                self.messages.error(e);
-                return;
-            }
+        self.finish_wait(ctx, render_state, submitted, how);
+    }
+
+    /// The waiting save's picture is submitted (`how` it was made): its thread starts.
+    fn finish_wait(
+        &mut self,
+        ctx: &egui::Context,
+        render_state: &eframe::egui_wgpu::RenderState,
+        submitted: Result<PendingPicture, String>,
+        how: &'static str,
+    ) {
+        let Some(wait) = self.save_shot.waiting.take() else {
+            return;
         };
-        let mut notes = String::new();
-        if renamed {
-            notes += &format!(
-                "; {} exists and this window did not save it, so it is kept",
-                wanted.display()
-            );
+        match submitted {
+            Ok(picture) => {
+                let waited = Some((wait.since, wait.frames, how));
+                self.start_save(ctx, render_state, wait.path, wait.notes, picture, waited);
+            }
+            Err(e) => self.messages.error(e),
         }
-        if no_dialog {
-            notes += &format!("; {}", crate::ui::open::NO_DIALOG);
-        }
+    }
+
+    /// Once a frame: a save waiting for the view, a frame more.
+    pub(super) fn poll_save_wait(&mut self, ctx: &egui::Context, frame: &eframe::Frame) {
+        let Some(wait) = self.save_shot.waiting.as_mut() else {
+            return;
+        };
+        wait.frame_drawn();
+        self.step_save_wait(ctx, frame);
+    }
+
+    /// Starts the thread that reads `picture` back, draws its labels and writes it to `path`
+    /// ("saving …"). `waited`: when the save waited for the view, since when, the frames
+    /// drawn meanwhile and whether the picture is the view's own.
+    fn start_save(
+        &mut self,
+        ctx: &egui::Context,
+        render_state: &eframe::egui_wgpu::RenderState,
+        path: PathBuf,
+        notes: String,
+        picture: PendingPicture,
+        waited: Option<(std::time::Instant, u32, &'static str)>,
+    ) {
         // The full path: a bare name lands in the folder the window was started from.
         let shown = std::path::absolute(&path).unwrap_or_else(|_| path.clone());
         self.messages.info(format!("saving {}…", shown.display()));
@@ -248,7 +384,10 @@ impl LoudscapeApp {
             crate::ui::screenshot::save_png(&image, &to).map_err(|e| e.to_string())?;
             Ok(size)
         });
-        save.from_view = from_view;
+        if let Some((since, frames, how)) = waited {
+            save = save.waited_since(since, frames);
+            save.how = how;
+        }
         self.save_shot.saving = Some(save);
         ctx.request_repaint();
     }
@@ -265,9 +404,9 @@ impl LoudscapeApp {
         self.save_shot.view_drawn = holds && self.refining.is_none() && self.active().is_some();
     }
 
-    /// Whether a Save PNG is being read back or written.
+    /// Whether a Save PNG waits for the view or is being read back or written.
     pub(super) fn saving_picture(&self) -> bool {
-        self.save_shot.saving.is_some()
+        self.save_shot.saving.is_some() || self.save_shot.waiting.is_some()
     }
 
     /// Once a frame: the Save PNG under way, told when it is done ("saved …").
@@ -295,12 +434,14 @@ impl LoudscapeApp {
                 ));
                 // A log line, as loads are told: tests read the frames.
                 eprintln!(
-                    "picture: saved in {:.0} ms on a thread ({}), while the window drew {} frames",
+                    "picture: saved in {:.0} ms on a thread ({}{}), while the window drew {} \
+                     frames",
                     finished.took.as_secs_f64() * 1000.0,
-                    if save.from_view {
-                        "the view's picture, copied"
-                    } else {
-                        "rendered for the picture"
+                    save.how,
+                    match (save.waited, save.how) {
+                        (0, _) => String::new(),
+                        (n, SLICED) => format!("; waited {n} frames for the slices"),
+                        (n, _) => format!("; waited {n} frames for the view to fill in"),
                     },
                     finished.frames
                 );

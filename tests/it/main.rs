@@ -56,6 +56,7 @@ mod window_persist;
 mod window_responsive;
 mod window_save_big;
 mod window_save_safety;
+mod window_save_wait;
 mod window_stream;
 mod window_strip;
 mod window_timeline_build;

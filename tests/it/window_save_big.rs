@@ -2,8 +2,9 @@
 //! the view's own picture (`ViewResources::shown_picture`) in the frame of Ctrl+S, where
 //! drawing 1.5 M points on a software GPU held the window for seconds, and a thread reads it
 //! back, draws the labels and writes the PNG while the window goes on drawing frames. The PNG
-//! is the picture that rendering it again at the same size gives. Needs a display (`make test`
-//! runs it under xvfb-run).
+//! is the picture that drawing it again at the same size, chosen in the panel, gives (a slice
+//! of the points a frame into a target of the save's own, `ui/save_slices.rs`). Needs a display
+//! (`make test` runs it under xvfb-run).
 
 use crate::common;
 
@@ -15,7 +16,7 @@ use std::process::Command;
 const POINTS: usize = 1_500_000;
 
 /// A song cloud of `count` synthetic points (`data::synthetic::synthetic_song`) at `path`.
-fn write_song(path: &Path, count: usize) {
+pub(crate) fn write_song(path: &Path, count: usize) {
     let points = loudscape::data::synthetic::synthetic_song(count, 5);
     let axis = |label: &str, unit: &str, min: f64, max: f64| serde_json::json!({"label": label, "unit": unit, "min": min, "max": max, "scale": "linear"});
     let meta = serde_json::json!({
@@ -38,17 +39,30 @@ fn write_song(path: &Path, count: usize) {
 /// Runs the window on `song` in `dir`, presses `press` once every point is drawn, and returns
 /// the one PNG Ctrl+S saved there (no dialog can open) and the window's "picture: saved" line.
 fn save(song: &Path, dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
+    let mut presses = vec!["when-drawn"];
+    presses.extend_from_slice(press);
+    save_in_view(song, dir, "points", &presses)
+}
+
+/// As [`save`], in the view `view` (`--view`), pressing `press` as soon as the song is shown
+/// (a `when-drawn` among them waits for the view at full detail).
+pub(crate) fn save_in_view(
+    song: &Path,
+    dir: &Path,
+    view: &str,
+    press: &[&str],
+) -> (image::RgbaImage, String) {
+    std::fs::create_dir_all(dir).unwrap();
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
     common::home_in(&mut command, dir)
         .current_dir(dir)
         .env("DBUS_SESSION_BUS_ADDRESS", "")
         .env("PATH", "/usr/bin/false-folder-without-zenity")
         .arg(song)
+        .args(["--view", view])
         .arg("--screenshot")
         .arg(dir.join("window.png"));
-    let mut presses = vec!["when-drawn"];
-    presses.extend_from_slice(press);
-    let err = common::run_pressing(&mut command, &presses);
+    let err = common::run_pressing(&mut command, press);
     let saved: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .flatten()
@@ -69,7 +83,7 @@ fn save(song: &Path, dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
 
 /// The frames the window drew while the picture was saved ("… while the window drew N
 /// frames").
-fn frames_while_saving(line: &str) -> u32 {
+pub(crate) fn frames_while_saving(line: &str) -> u32 {
     line.split_whitespace()
         .rev()
         .nth(1)
@@ -100,17 +114,22 @@ fn save_png_of_a_big_cloud_copies_the_view_and_equals_a_fresh_render() {
         "the copied picture looks blank"
     );
 
-    // The same size chosen in the panel: rendered again, the way every save went before.
+    // The same size chosen in the panel: drawn again for the picture, a slice a frame into a
+    // target of its own (the window drawing frames meanwhile), not in the frame of the click.
     let (w, h) = copied.dimensions();
     let rendered_dir = home.join("rendered");
     std::fs::create_dir_all(&rendered_dir).unwrap();
     let size = format!("shot-size={w}x{h}");
     let (rendered, line) = save(&song, &rendered_dir, &[&size, "Ctrl+S"]);
-    println!("rendered: {line}");
-    assert!(line.contains("(rendered for the picture)"), "{line}");
+    println!("drawn in slices: {line}");
+    assert!(
+        line.contains("(drawn for the picture in slices; waited "),
+        "the points were drawn whole in the frame of the click: {line}"
+    );
+    assert!(frames_while_saving(&line) >= 2, "{line}");
     assert_eq!(rendered.dimensions(), (w, h));
-    // The same pixels: the slices of the view end as the single pass, the labels are drawn
-    // by the same code on the CPU.
+    // The same pixels: the slices of the view and of the save end as the single pass, the
+    // labels are drawn by the same code on the CPU.
     let (share, _) = common::difference(&copied, &rendered, 0);
     if share > 0.0 {
         let _ = copied.save(home.join("copied.png"));
@@ -119,7 +138,7 @@ fn save_png_of_a_big_cloud_copies_the_view_and_equals_a_fresh_render() {
     assert_eq!(
         share,
         0.0,
-        "the copied picture differs from a fresh render in {:.3}% of pixels (both in {})",
+        "the copied picture differs from the one drawn for it in {:.3}% of pixels (both in {})",
         share * 100.0,
         home.display()
     );

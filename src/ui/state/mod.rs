@@ -56,6 +56,7 @@ pub(super) mod messages;
 pub(super) mod open;
 pub(super) mod picture_save;
 pub(super) mod remembered;
+pub(super) mod save_wait;
 mod slot;
 pub(super) mod surface_status;
 pub(super) mod timeline_build;
@@ -200,6 +201,9 @@ pub(super) struct SaveShot {
     pub(super) made: written::MadeHere,
     /// The PNG being read back and written on a thread.
     pub(super) saving: Option<picture_save::PictureSave>,
+    /// The save waiting for the view to fill in, before its picture is copied
+    /// (`save_wait.rs`).
+    pub(super) waiting: Option<save_wait::SaveWait>,
     /// The view held its scene complete last frame (every point drawn): the scripted
     /// `--press when-drawn` of tests holds the presses after it until then.
     pub(super) view_drawn: bool,
@@ -214,6 +218,7 @@ impl Default for SaveShot {
             requested: false,
             made: written::MadeHere::default(),
             saving: None,
+            waiting: None,
             view_drawn: false,
         }
     }

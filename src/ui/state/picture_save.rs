@@ -9,6 +9,13 @@ use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+/// A picture rendered for the save in one frame.
+pub(in crate::ui) const RENDERED: &str = "rendered for the picture";
+/// The view's own picture, copied.
+pub(in crate::ui) const COPIED: &str = "the view's picture, copied";
+/// A picture drawn for the save a slice a frame.
+pub(in crate::ui) const SLICED: &str = "drawn for the picture in slices";
+
 /// What a finished save says: the picture's size, or why nothing was saved.
 pub(in crate::ui) type Saved = Result<(u32, u32), String>;
 
@@ -23,8 +30,12 @@ pub(in crate::ui) struct PictureSave {
     started: Instant,
     /// Frames the window drew while the thread worked.
     frames: u32,
-    /// Whether the picture is a copy of the view's own (not rendered again for the save).
-    pub(in crate::ui) from_view: bool,
+    /// How the picture was made, for the "picture: saved" line: [`RENDERED`], [`COPIED`] (the
+    /// view's own, not drawn again) or [`SLICED`] (drawn for the save over frames).
+    pub(in crate::ui) how: &'static str,
+    /// Frames the save waited for the view to fill in before its picture was taken
+    /// (`save_wait.rs`); they are counted among the frames drawn meanwhile.
+    pub(in crate::ui) waited: u32,
 }
 
 /// A finished save: its result, how long it took and the frames drawn meanwhile.
@@ -62,8 +73,18 @@ impl PictureSave {
             notes,
             started: Instant::now(),
             frames: 0,
-            from_view: false,
+            how: RENDERED,
+            waited: 0,
         }
+    }
+
+    /// The save began `frames` frames before, at `since`, waiting for the view: its time and
+    /// its frames count from the click.
+    pub(in crate::ui) fn waited_since(mut self, since: Instant, frames: u32) -> Self {
+        self.started = since;
+        self.frames = frames;
+        self.waited = frames;
+        self
     }
 
     /// Called once a frame: None while the thread works (the frame is counted), then what it
