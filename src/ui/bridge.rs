@@ -412,6 +412,9 @@ pub struct ViewCallback {
     pub view: FrameView,
     pub settings: RenderSettings,
     pub cloud_id: Option<u64>,
+    /// The frame time the points' slices aim at while they fill in at rest
+    /// (`ViewMotion::refine_target`).
+    pub refine_target: std::time::Duration,
 }
 
 /// What a bridge callback renders: the 3D view ([`ViewCallback`]) or a part of the compare
@@ -514,6 +517,7 @@ impl OffscreenJob for ViewCallback {
             && crate::render::scene::draws_points_at_rest(&self.settings, data)
             && res.progressive.refine.wants(data.points.total)
         {
+            res.progressive.refine.target = self.refine_target;
             let complete = res.progressive.frame(
                 device,
                 queue,

@@ -27,7 +27,25 @@ pub const INITIAL_BUDGET: u64 = 200_000;
 /// the budget at its floor, so half of each frame was not points and the same song took 4.8 s;
 /// at 150 ms it took 2.6 s (bench/bench_window.py, docs/PERFORMANCE.md). A frame this long is
 /// only taken at rest, where the picture is still: a drag or a hover is answered in the next.
+/// This is the aim while the user's hand is on the window ([`IDLE_TARGET_FRAME`] otherwise).
 pub const TARGET_FRAME: Duration = Duration::from_millis(150);
+/// The frame time a slice aims at while refining with no input for a while
+/// ([`HAND_WINDOW`]): nobody is waiting for a hover's read-out or a key, so more of each frame
+/// goes to points and less to the frame's own cost. The settle after an orbit of a 3.53 M-point
+/// song on lavapipe: 3.08 s at 150 ms, 1.39 s at 300 ms (bench/bench_window.py, alternated
+/// runs, docs/PERFORMANCE.md). The A/B compare's frames at rest aim at 250 ms likewise.
+pub const IDLE_TARGET_FRAME: Duration = Duration::from_millis(300);
+/// How long after the last pointer motion, press, scroll or key the slices keep to
+/// [`TARGET_FRAME`].
+pub const HAND_WINDOW: Duration = Duration::from_millis(800);
+
+/// The frame time a refining frame at `now` aims at, the last input having come at `last_input`.
+pub fn target_frame(last_input: Option<Instant>, now: Instant) -> Duration {
+    match last_input {
+        Some(t) if now.saturating_duration_since(t) < HAND_WINDOW => TARGET_FRAME,
+        _ => IDLE_TARGET_FRAME,
+    }
+}
 /// The budget never falls below the measured one: a frame slow for other reasons (egui, the
 /// composite, a loaded machine) must not shrink the slices to nothing (with a 20,000 floor a
 /// 4.4 M-point cloud needed about 20 s to fill in on lavapipe, most of each frame not points).
@@ -36,15 +54,11 @@ pub const MIN_BUDGET: u64 = INITIAL_BUDGET;
 /// hidden or waited for input): they do not adapt the budget.
 const MAX_MEASURED: Duration = Duration::from_millis(500);
 
-/// `budget` scaled towards [`TARGET_FRAME`] from one measured `frame` (at most halved or
-/// doubled, so one odd frame does not swing it; never below [`MIN_BUDGET`]). A frame of no
-/// time or longer than [`MAX_MEASURED`] is no measure: `budget` as it was.
-pub fn adapted(budget: u64, frame: Duration) -> u64 {
-    adapted_towards(budget, frame, TARGET_FRAME, MIN_BUDGET)
-}
-
-/// [`adapted`] towards the frame time `target`, never below `floor` (the A/B compare's, whose
-/// frames cost more besides their points: `ui/compare_refine.rs`).
+/// `budget` scaled towards the frame time `target` from one measured `frame` (at most halved
+/// or doubled, so one odd frame does not swing it; never below `floor`: [`MIN_BUDGET`] for the
+/// single view, the A/B compare's own for its frames, which cost more besides their points:
+/// `ui/compare_refine.rs`). A frame of no time or longer than [`MAX_MEASURED`] is no measure:
+/// `budget` as it was.
 pub fn adapted_towards(budget: u64, frame: Duration, target: Duration, floor: u64) -> u64 {
     if frame.is_zero() || frame > MAX_MEASURED {
         return budget;
@@ -64,6 +78,8 @@ pub struct Refine {
     total: u64,
     /// Points per slice (adapted).
     pub budget: u64,
+    /// The frame time the budget adapts towards ([`target_frame`]; [`TARGET_FRAME`] unless set).
+    pub target: Duration,
     /// When the last slice was recorded, to measure the frame time.
     last_slice: Option<Instant>,
 }
@@ -75,6 +91,7 @@ impl Default for Refine {
             next: 0,
             total: 0,
             budget: INITIAL_BUDGET,
+            target: TARGET_FRAME,
             last_slice: None,
         }
     }
@@ -128,7 +145,8 @@ impl Refine {
             return None;
         }
         if let Some(last) = self.last_slice {
-            self.budget = adapted(self.budget, now.saturating_duration_since(last));
+            let frame = now.saturating_duration_since(last);
+            self.budget = adapted_towards(self.budget, frame, self.target, MIN_BUDGET);
         }
         let range = self.slice(self.budget);
         self.last_slice = (!self.complete()).then_some(now);
@@ -527,5 +545,41 @@ mod tests {
         t += Duration::from_secs(3);
         refine.step(&k, total, t);
         assert_eq!(refine.budget, before);
+    }
+
+    #[test]
+    fn slices_aim_longer_once_the_hand_has_left_the_window() {
+        let t = Instant::now();
+        assert_eq!(target_frame(None, t), IDLE_TARGET_FRAME);
+        assert_eq!(target_frame(Some(t), t), TARGET_FRAME);
+        let later = t + HAND_WINDOW - Duration::from_millis(1);
+        assert_eq!(target_frame(Some(t), later), TARGET_FRAME);
+        assert_eq!(target_frame(Some(t), t + HAND_WINDOW), IDLE_TARGET_FRAME);
+        assert!(IDLE_TARGET_FRAME > TARGET_FRAME);
+    }
+
+    #[test]
+    fn the_budget_follows_the_target_it_is_given() {
+        let mut refine = Refine::default();
+        let mut t = Instant::now();
+        let k = key(&RenderSettings::default());
+        let total = 100_000_000;
+        refine.target = IDLE_TARGET_FRAME;
+        refine.step(&k, total, t);
+        // Frames of the short target's length, aiming at the idle one: the budget doubles.
+        let before = refine.budget;
+        t += TARGET_FRAME;
+        refine.step(&k, total, t);
+        assert_eq!(refine.budget, before * 2);
+        // Frames of the idle target's length keep it.
+        let before = refine.budget;
+        t += IDLE_TARGET_FRAME;
+        refine.step(&k, total, t);
+        assert_eq!(refine.budget, before);
+        // The hand back on the window: the same frames now halve it.
+        refine.target = TARGET_FRAME;
+        t += IDLE_TARGET_FRAME;
+        refine.step(&k, total, t);
+        assert_eq!(refine.budget, before / 2);
     }
 }

@@ -199,10 +199,25 @@ impl LoudscapeApp {
         if self.paint_compare(painter, rect, view, &render_view, &settings, hover) {
             return false;
         }
+        let hand = painter.ctx().input(|i| {
+            i.pointer.delta() != egui::Vec2::ZERO
+                || i.pointer.any_down()
+                || i.events.iter().any(|e| {
+                    matches!(
+                        e,
+                        egui::Event::Key { .. }
+                            | egui::Event::MouseWheel { .. }
+                            | egui::Event::PointerButton { .. }
+                            | egui::Event::Zoom(_)
+                            | egui::Event::Touch { .. }
+                    )
+                })
+        });
         let callback = ViewCallback {
             view: render_view,
             settings,
             cloud_id: self.active().map(|l| l.id),
+            refine_target: self.motion.refine_target(hand, Instant::now()),
         };
         painter.add(paint_callback(rect, callback));
         true

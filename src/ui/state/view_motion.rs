@@ -80,6 +80,8 @@ pub(in crate::ui) struct ViewMotion {
     moving_divisor: [u32; 3],
     /// Points the Points view draws while moving, following the device's pace.
     moving_points: u32,
+    /// When the window last had input (pointer motion, a button held, a scroll, a key).
+    last_hand: Option<Instant>,
 }
 
 impl Default for ViewMotion {
@@ -95,11 +97,22 @@ impl Default for ViewMotion {
             keep_camera_loads: 0,
             moving_divisor: [1; 3],
             moving_points: PointStyle::default().max_points_moving,
+            last_hand: None,
         }
     }
 }
 
 impl ViewMotion {
+    /// Notes whether this frame had input (`hand`) and returns the frame time the points'
+    /// slices aim at now: short while the user's hand is on the window, so that a hover or a
+    /// key is answered soon, longer once it has left it ([`crate::ui::progressive::target_frame`]).
+    pub(in crate::ui) fn refine_target(&mut self, hand: bool, now: Instant) -> Duration {
+        if hand {
+            self.last_hand = Some(now);
+        }
+        crate::ui::progressive::target_frame(self.last_hand, now)
+    }
+
     pub(in crate::ui) fn camera(&self) -> Camera {
         self.camera
     }
@@ -621,5 +634,22 @@ mod tests {
             d = next_moving_divisor(d, Some(5.0));
         }
         assert_eq!(d, 1);
+    }
+
+    #[test]
+    fn the_refine_target_is_short_while_input_comes_and_long_after() {
+        use crate::ui::progressive::{HAND_WINDOW, IDLE_TARGET_FRAME, TARGET_FRAME};
+        let mut motion = ViewMotion::default();
+        let t = Instant::now();
+        assert_eq!(motion.refine_target(false, t), IDLE_TARGET_FRAME);
+        assert_eq!(motion.refine_target(true, t), TARGET_FRAME);
+        assert_eq!(
+            motion.refine_target(false, t + HAND_WINDOW / 2),
+            TARGET_FRAME
+        );
+        assert_eq!(
+            motion.refine_target(false, t + HAND_WINDOW),
+            IDLE_TARGET_FRAME
+        );
     }
 }
