@@ -10,8 +10,8 @@
 //! (`ViewResources::shown_picture`), waiting while the view fills in, moves or waits for a
 //! surface (`state/save_wait.rs`, "saving … (waiting for the view to fill in)"). At a chosen
 //! size it draws its own picture a slice of points or a band of the volume a frame
-//! (`ui/save_slices.rs`). The A/B compare is still rendered in the frame of the click
-//! (`compare_screenshot`). Either way the read-back is submitted and a thread waits for the
+//! (`ui/save_slices.rs`). The A/B compare goes the same two ways, both halves at once
+//! (`ui/compare_save.rs`). Either way the read-back is submitted and a thread waits for the
 //! copy, draws the labels and writes the PNG (`state/picture_save.rs`), the status saying
 //! "saving …" and then "saved …", so a large picture or a cloud of millions of points never
 //! holds the window. One save at a time: a click while one is under way saves nothing and says

@@ -188,11 +188,10 @@ impl CompareResources {
         let totals = [scene.data_a.points.total, scene.data_b.points.total];
         sliced.view.frame_index += 1;
         let keys = [0, 1].map(|side| RenderKey::new(&sliced.view, &settings, Some(side), 0));
-        for side in 0..2 {
+        for (side, data) in datas.into_iter().enumerate() {
             if sliced.done[side] {
                 continue;
             }
-            let data = datas[side];
             let target = &sliced.targets[side];
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("save_png::compare_slice"),
