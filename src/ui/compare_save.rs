@@ -196,7 +196,12 @@ impl LoudscapeApp {
         }
         // Slices still to draw are progress; a view that stays still without its picture, or
         // grids that never come, end the wait.
-        let drawing = needs == Needs::Ready && compare.sliced.is_some();
+        let drawing = needs == Needs::Ready
+            && compare
+                .sliced
+                .as_ref()
+                .is_some_and(|sliced| sliced.missing.is_none());
+        let missing = compare.sliced.as_ref().and_then(|sliced| sliced.missing);
         let step = wait.step(settling || drawing || matches!(needs, Needs::Wait(_)));
         if step != WaitStep::Render {
             ctx.request_repaint();
@@ -209,6 +214,14 @@ impl LoudscapeApp {
             self.messages.error(format!(
                 "Save PNG: the compare's grids are not built (the view has none to show): \
                  nothing saved to {}",
+                wait.path.display()
+            ));
+            return;
+        }
+        if let Some(missing) = missing {
+            self.messages.error(format!(
+                "Save PNG: the compare has no {} to draw yet: nothing saved to {}",
+                missing.trim_start_matches("the "),
                 wait.path.display()
             ));
             return;

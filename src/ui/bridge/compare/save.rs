@@ -34,6 +34,8 @@ pub(in crate::ui) struct CompareSliced {
     settings: RenderSettings,
     /// The halves complete so far.
     done: [bool; 2],
+    /// What the last frame could not draw for want of it (the grids, the surfaces), if any.
+    pub(in crate::ui) missing: Option<&'static str>,
 }
 
 impl CompareSliced {
@@ -63,6 +65,7 @@ impl CompareSliced {
             size,
             settings,
             done,
+            missing: None,
         })
     }
 }
@@ -170,17 +173,28 @@ impl CompareResources {
         let datas = match sliced.what {
             CompareView::SideBySide(_) => [&scene.data_a, &scene.data_b],
             CompareView::Difference(measure) => {
-                let grids = scene.grids.as_ref().filter(|g| g.measure == measure)?;
+                let grids = scene.grids.as_ref().filter(|g| g.measure == measure);
+                sliced.missing = grids.is_none().then_some("the difference grid");
+                let grids = grids?;
                 [&grids.data, &grids.data]
             }
         };
-        if settings.view != ViewKind::Points
+        sliced.missing = if settings.view == ViewKind::Points {
+            None
+        } else if datas.iter().any(|d| d.grid.is_none()) {
+            Some("the grids")
+        } else if settings.view == ViewKind::Surface
             && datas.iter().any(|d| {
-                d.grid.as_ref().is_none_or(|grid| {
-                    settings.view == ViewKind::Surface && !d.surface.shows(grid, &settings.surface)
-                })
+                d.grid
+                    .as_ref()
+                    .is_some_and(|grid| !d.surface.shows(grid, &settings.surface))
             })
         {
+            Some("the surfaces")
+        } else {
+            None
+        };
+        if sliced.missing.is_some() {
             return None;
         }
         let device = &render_state.device;
