@@ -31,7 +31,10 @@ pub(in crate::ui) const WAIT_SURFACES: &str = "waiting for the surfaces";
 pub(in crate::ui) struct CompareWait {
     pub(in crate::ui) what: CompareView,
     pub(in crate::ui) sliced: Option<Box<CompareSliced>>,
+    /// What the save waits for, as the status says it.
     told: &'static str,
+    /// What the status said last.
+    last_told: &'static str,
 }
 
 /// Whether a compare picture `what` can be drawn now, from what the compare holds.
@@ -108,7 +111,12 @@ impl LoudscapeApp {
         } else {
             WAIT_HALVES
         };
-        wait.compare = Some(CompareWait { what, sliced, told });
+        wait.compare = Some(CompareWait {
+            what,
+            sliced,
+            told,
+            last_told: told,
+        });
         let path = wait.path.clone();
         self.save_shot.waiting = Some(wait);
         self.step_compare_wait(ctx, frame);
@@ -116,8 +124,17 @@ impl LoudscapeApp {
             && let Some(compare) = wait.compare.as_ref()
         {
             let shown = std::path::absolute(&path).unwrap_or(path);
+            let told = compare.told;
             self.messages
-                .info(format!("saving {}… ({})", shown.display(), compare.told));
+                .info(format!("saving {}… ({told})", shown.display()));
+            if let Some(compare) = self
+                .save_shot
+                .waiting
+                .as_mut()
+                .and_then(|w| w.compare.as_mut())
+            {
+                compare.last_told = told;
+            }
         }
     }
 
@@ -186,10 +203,16 @@ impl LoudscapeApp {
             );
             return;
         }
+        // Told from the frame after the click's (the click's own line says what it waits for).
         if let Needs::Wait(reason) = needs
             && compare.told != reason
         {
             compare.told = reason;
+        }
+        if let Needs::Wait(reason) = needs
+            && wait.frames > 0
+            && std::mem::replace(&mut compare.last_told, reason) != reason
+        {
             let shown = std::path::absolute(&wait.path).unwrap_or(wait.path.clone());
             self.messages
                 .info(format!("saving {}… ({reason})", shown.display()));

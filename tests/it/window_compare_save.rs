@@ -13,11 +13,11 @@ use std::process::Command;
 /// what the window wrote on stderr.
 fn save(dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    save_song(&repo.join("data/demo_song.ply"), dir, press)
+    save_song(&repo.join("data/demo_song.ply"), dir, &[], press)
 }
 
-/// As [`save`], `song` compared with itself.
-fn save_song(song: &Path, dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
+/// As [`save`], `song` compared with itself, the window started with `args` besides.
+fn save_song(song: &Path, dir: &Path, args: &[&str], press: &[&str]) -> (image::RgbaImage, String) {
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap();
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
@@ -30,6 +30,7 @@ fn save_song(song: &Path, dir: &Path, press: &[&str]) -> (image::RgbaImage, Stri
         // B is A again: its audio is found, so no message changes the view's size between
         // runs, and the difference picture is still unlike A's points.
         .arg(song)
+        .args(args)
         .arg("--screenshot")
         .arg(dir.join("window.png"));
     let err = common::run_pressing(&mut command, press);
@@ -156,7 +157,7 @@ fn save_png_while_comparing_copies_the_view_or_draws_it_over_frames() {
     for layout in ["side", "difference"] {
         let compare = format!("compare={layout}");
         let dir = home.join(format!("{layout}_copied"));
-        let (copied, err) = save_song(&song, &dir, &[&compare, "Ctrl+S"]);
+        let (copied, err) = save_song(&song, &dir, &[], &[&compare, "Ctrl+S"]);
         let line = saved_line(&err);
         println!("{layout}, copied: {line}");
         assert!(
@@ -177,7 +178,7 @@ fn save_png_while_comparing_copies_the_view_or_draws_it_over_frames() {
         let (w, h) = copied.dimensions();
         let size = format!("shot-size={w}x{h}");
         let dir = home.join(format!("{layout}_drawn"));
-        let (drawn, err) = save_song(&song, &dir, &[&size, &compare, "Ctrl+S"]);
+        let (drawn, err) = save_song(&song, &dir, &[], &[&size, &compare, "Ctrl+S"]);
         let line = saved_line(&err);
         println!("{layout}, drawn: {line}");
         assert!(
@@ -203,6 +204,63 @@ fn save_png_while_comparing_copies_the_view_or_draws_it_over_frames() {
         assert!(
             share < 0.01 && mean < 2.0,
             "{layout}: the view's picture and the one drawn over frames differ in {:.3}% of \
+             pixels, mean {mean:.3}",
+            share * 100.0
+        );
+    }
+}
+
+/// Side by side in the Surface and Volume views: Ctrl+S as soon as the compare is shown waits
+/// for the grids and the surfaces the view builds in the background (never built for the
+/// picture in a frame), then copies the view's picture, which equals the one drawn for the
+/// save at the same size (the volume within its ray jitter).
+#[test]
+fn save_png_of_surfaces_and_volumes_side_by_side_waits_for_the_view() {
+    let _screen = common::screen();
+    common::assert_display();
+    let home = common::fresh_dir("window_compare_save_grids");
+    let song = home.join("synthetic_300k.ply");
+    crate::window_save_big::write_song(&song, 300_000);
+    for view in ["surface", "volume"] {
+        let args = ["--view", view];
+        let dir = home.join(format!("{view}_copied"));
+        let (copied, err) = save_song(&song, &dir, &args, &["compare=side", "Ctrl+S"]);
+        let line = saved_line(&err);
+        println!("{view}, copied: {line}");
+        assert!(
+            line.contains("(the view's picture, copied"),
+            "{view}: the compare was drawn for the picture in the frame of the click: {line}"
+        );
+        // The grids (and then the surfaces) come after the compare is shown: the click finds
+        // them building, and the status says what the save waits for.
+        assert!(
+            err.contains("… (waiting for the grids)")
+                || err.contains("… (waiting for the surfaces)"),
+            "{view}: the save did not say it waits for the grids or surfaces: {err}"
+        );
+        assert!(common::coverage(&copied) > 0.05, "{view}: looks blank");
+        let (w, h) = copied.dimensions();
+        let size = format!("shot-size={w}x{h}");
+        let dir = home.join(format!("{view}_drawn"));
+        let (drawn, err) = save_song(&song, &dir, &args, &[&size, "compare=side", "Ctrl+S"]);
+        let line = saved_line(&err);
+        println!("{view}, drawn: {line}");
+        assert!(
+            line.contains("(drawn for the picture in slices"),
+            "{view}: the compare was drawn whole in the frame of the click: {line}"
+        );
+        let (share, mean) = common::difference(&copied, &drawn, 24);
+        println!(
+            "{view}: {:.4}% of pixels differ by over 24, mean {mean:.3}",
+            share * 100.0
+        );
+        if share > 0.0 {
+            let _ = copied.save(home.join(format!("{view}_copied.png")));
+            let _ = drawn.save(home.join(format!("{view}_drawn.png")));
+        }
+        assert!(
+            share < 0.01 && mean < 2.0,
+            "{view}: the view's picture and the one drawn over frames differ in {:.3}% of \
              pixels, mean {mean:.3}",
             share * 100.0
         );
