@@ -6,7 +6,8 @@ Ctrl+S through xdotool and keeps moving the pointer over the view, and prints wh
 "saving …" line (written in the frame that handles the key) and its "picture: saved" line came,
 in seconds after the key. Figures, not a test: the machine's load moves them.
 
-Example::
+Example (``--compare B`` for the A/B compare, ``--press compare=difference`` for its
+Difference view)::
 
     xvfb-run -a -s "-screen 0 1600x1000x24" python bench/bench_save_freeze.py \\
         --loudscape target/debug/loudscape out/bench-window/real_5m.ply
@@ -33,6 +34,10 @@ def main() -> int:
     parser.add_argument("cloud", help="a .ply cloud (or a song) to open")
     parser.add_argument("--loudscape", default="target/release/loudscape")
     parser.add_argument("--settle", type=float, default=25.0, help="seconds before Ctrl+S")
+    parser.add_argument("--compare", help="B of an A/B compare (loudscape FILE --compare B)")
+    parser.add_argument(
+        "--press", action="append", default=[], help="a scripted press before Ctrl+S (repeat)"
+    )
     args = parser.parse_args()
     binary = os.path.abspath(args.loudscape)
     cloud = os.path.abspath(args.cloud)
@@ -51,7 +56,12 @@ def main() -> int:
     # No zenity: no dialog opens, the PNG lands in the (private) current folder.
     env["PATH"] = "/nonexistent-folder-without-zenity"
     lines: list[tuple[float, str]] = []
-    window = subprocess.Popen([binary, cloud], cwd=home, env=env, stderr=subprocess.PIPE, text=True)
+    command = [binary, cloud]
+    if args.compare:
+        command += ["--compare", os.path.abspath(args.compare)]
+    for press in args.press:
+        command += ["--press", press]
+    window = subprocess.Popen(command, cwd=home, env=env, stderr=subprocess.PIPE, text=True)
 
     def read() -> None:
         assert window.stderr is not None

@@ -9,6 +9,7 @@ use crate::annotate::{Annotation, axes, compare, legend};
 use crate::data::cloud::PointCloud;
 use crate::render::compare::CompareScene;
 use crate::render::gpu::context::GpuContext;
+use crate::render::gpu::target::RenderTarget;
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::headless::render_frame;
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
@@ -80,28 +81,6 @@ fn view_for(
             view
         }
     }
-}
-
-/// One half (or the whole) of a compare picture into `picture` at `x`: the scene rendered and
-/// its copy submitted, with the labels and a title to draw over it once read.
-#[allow(clippy::too_many_arguments)]
-fn render_one(
-    gpu: &GpuContext,
-    renderer: &Renderer,
-    picture: &mut PendingPicture,
-    x: u32,
-    cloud: &PointCloud,
-    data: &SceneData,
-    view: &FrameView,
-    settings: &RenderSettings,
-    labels_on: bool,
-    title: &str,
-    legend: Option<(DifferenceMeasure, f32)>,
-) -> anyhow::Result<()> {
-    let target = render_frame(gpu, renderer, Some(data), view, settings);
-    let shapes = half_overlay(cloud, data, view, settings, labels_on, title, legend);
-    picture.add(gpu, &target, x, shapes)?;
-    Ok(())
 }
 
 /// What is drawn over one half (or the whole) of a compare picture of `view`: the axis labels
@@ -180,11 +159,6 @@ pub fn submit_compare_image(
     labels_on: bool,
     note: Option<&str>,
 ) -> anyhow::Result<PendingPicture> {
-    // The note before the file names, which are elided first when the title is too long.
-    let (b_title, difference_title) = match note {
-        Some(note) => (format!("{note}: "), format!("B - A, {note}: ")),
-        None => ("B: ".to_string(), "B - A: ".to_string()),
-    };
     let needs_grids = match what {
         CompareView::SideBySide(view) => view != ViewKind::Points,
         CompareView::Difference(_) => true,
@@ -194,13 +168,9 @@ pub fn submit_compare_image(
             .ensure_grids(&gpu.device, &gpu.queue, renderer, &base.voxels)
             .map_err(|e| anyhow::anyhow!("{e}"))?;
     }
-    let (name_a, name_b) = (file_name(&scene.a), file_name(&scene.b));
     match what {
         CompareView::SideBySide(view) => {
-            if size.0 < 2 * 16 + GAP {
-                bail!("size {}x{} is too narrow for two views", size.0, size.1);
-            }
-            let half = (size.0 - GAP) / 2;
+            let half = half_width(size.0)?;
             let settings = RenderSettings {
                 view,
                 ..base.clone()
@@ -217,34 +187,19 @@ pub fn submit_compare_image(
             }
             // One camera for both: the boxes are the same, so A's fitted view is B's.
             let frame = view_for(camera, &scene.data_a, half, size.1, 2.0);
-            let mut picture = PendingPicture::new(size.0, size.1, image::Rgba([90, 96, 110, 255]));
-            render_one(
+            let targets = [&scene.data_a, &scene.data_b]
+                .map(|data| render_frame(gpu, renderer, Some(data), &frame, &settings));
+            compose(
                 gpu,
-                renderer,
-                &mut picture,
-                0,
-                &scene.a,
-                &scene.data_a,
+                scene,
+                what,
+                [&targets[0], &targets[1]],
                 &frame,
-                &settings,
+                size,
+                base,
                 labels_on,
-                &format!("A: {name_a}"),
-                None,
-            )?;
-            render_one(
-                gpu,
-                renderer,
-                &mut picture,
-                half + GAP,
-                &scene.b,
-                &scene.data_b,
-                &frame,
-                &settings,
-                labels_on,
-                &format!("{b_title}{name_b}"),
-                None,
-            )?;
-            Ok(picture)
+                note,
+            )
         }
         CompareView::Difference(measure) => {
             scene.set_measure(&gpu.device, &gpu.queue, renderer, measure);
@@ -254,20 +209,95 @@ pub fn submit_compare_image(
                 .context("the difference grid was not built")?;
             let settings = difference_settings(base);
             let frame = view_for(camera, &grids.data, size.0, size.1, 1.0);
-            let mut picture = PendingPicture::new(size.0, size.1, image::Rgba([0; 4]));
-            render_one(
+            let target = render_frame(gpu, renderer, Some(&grids.data), &frame, &settings);
+            compose(
                 gpu,
-                renderer,
-                &mut picture,
-                0,
+                scene,
+                what,
+                [&target, &target],
+                &frame,
+                size,
+                base,
+                labels_on,
+                note,
+            )
+        }
+    }
+}
+
+/// The width of each half of a side-by-side picture `width` wide (the gap between them), or
+/// why two halves do not fit.
+pub fn half_width(width: u32) -> anyhow::Result<u32> {
+    if width < 2 * 16 + GAP {
+        bail!("width {width} is too narrow for two views");
+    }
+    Ok((width - GAP) / 2)
+}
+
+/// The compare picture from its halves already drawn (`targets`: A and B side by side, the
+/// difference twice in the Difference view), each of `view`, their copies submitted with the
+/// labels, titles and colour keys to draw over them, into a picture of `size`: every compare
+/// picture's, whether its halves were drawn for it in one go, over frames, or are the
+/// window's own.
+#[allow(clippy::too_many_arguments)]
+pub fn compose(
+    gpu: &GpuContext,
+    scene: &CompareScene,
+    what: CompareView,
+    targets: [&RenderTarget; 2],
+    view: &FrameView,
+    size: (u32, u32),
+    base: &RenderSettings,
+    labels_on: bool,
+    note: Option<&str>,
+) -> anyhow::Result<PendingPicture> {
+    // The note before the file names, which are elided first when the title is too long.
+    let (b_title, difference_title) = match note {
+        Some(note) => (format!("{note}: "), format!("B - A, {note}: ")),
+        None => ("B: ".to_string(), "B - A: ".to_string()),
+    };
+    let (name_a, name_b) = (file_name(&scene.a), file_name(&scene.b));
+    match what {
+        CompareView::SideBySide(kind) => {
+            let settings = RenderSettings {
+                view: kind,
+                ..base.clone()
+            };
+            let half = view.width;
+            let mut picture = PendingPicture::new(size.0, size.1, image::Rgba([90, 96, 110, 255]));
+            let halves = [
+                (0, &scene.a, &scene.data_a, format!("A: {name_a}")),
+                (
+                    half + GAP,
+                    &scene.b,
+                    &scene.data_b,
+                    format!("{b_title}{name_b}"),
+                ),
+            ];
+            for ((x, cloud, data, title), target) in halves.into_iter().zip(targets) {
+                let shapes = half_overlay(cloud, data, view, &settings, labels_on, &title, None);
+                picture.add(gpu, target, x, shapes)?;
+            }
+            Ok(picture)
+        }
+        CompareView::Difference(measure) => {
+            let grids = scene
+                .grids
+                .as_ref()
+                .context("the difference grid was not built")?;
+            let settings = difference_settings(base);
+            let mut picture = PendingPicture::new(size.0, size.1, image::Rgba([0; 4]));
+            let title = format!("{difference_title}{name_b} against {name_a}");
+            let shapes = half_overlay(
                 &scene.a,
                 &grids.data,
-                &frame,
+                view,
                 &settings,
                 labels_on,
-                &format!("{difference_title}{name_b} against {name_a}"),
+                &title,
                 Some((measure, grids.range())),
-            )?;
+            );
+            picture.add(gpu, targets[0], 0, shapes)?;
             Ok(picture)
         }
     }

@@ -212,8 +212,12 @@ impl eframe::App for LoudscapeApp {
             raw_input.events = events;
         }
         // Scripted presses (tests), once the data is shown (whole, not the points so far of a
-        // song being extracted) or nothing is loading. A compare's B loaded first too.
-        let compare_ready = self.compare.as_ref().is_none_or(|c| !c.loading());
+        // song being extracted) or nothing is loading. A compare's B loaded first too, and its
+        // scene prepared (a Save PNG pressed then saves the compare, not A alone).
+        let compare_ready = self
+            .compare
+            .as_ref()
+            .is_none_or(|c| !c.loading() && c.scene_build.is_none());
         if !self.scripted_presses.is_empty()
             && ((self.active().is_some() && !self.previewing()) || self.loading.is_empty())
             && self.scripted_input_ready()

@@ -26,6 +26,7 @@ pub use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::view::frame_view::FrameView;
 
 mod compare;
+pub(in crate::ui) use compare::CompareSliced;
 pub use compare::{CompareCallback, CompareResources};
 
 /// An offscreen render target sized to a view and the pass that composites it into egui's

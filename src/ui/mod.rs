@@ -18,6 +18,7 @@ mod compare_align;
 mod compare_panel;
 mod compare_readouts;
 pub mod compare_refine;
+mod compare_save;
 mod compare_scene;
 pub mod compare_shot;
 mod compare_view;

@@ -10,8 +10,8 @@
 //! (`ViewResources::shown_picture`), waiting while the view fills in, moves or waits for a
 //! surface (`state/save_wait.rs`, "saving … (waiting for the view to fill in)"). At a chosen
 //! size it draws its own picture a slice of points or a band of the volume a frame
-//! (`ui/save_slices.rs`). The A/B compare is still rendered in the frame of the click
-//! (`compare_screenshot`). Either way the read-back is submitted and a thread waits for the
+//! (`ui/save_slices.rs`). The A/B compare goes the same two ways, both halves at once
+//! (`ui/compare_save.rs`). Either way the read-back is submitted and a thread waits for the
 //! copy, draws the labels and writes the PNG (`state/picture_save.rs`), the status saying
 //! "saving …" and then "saved …", so a large picture or a cloud of millions of points never
 //! holds the window. One save at a time: a click while one is under way saves nothing and says
@@ -221,25 +221,15 @@ impl LoudscapeApp {
             }
             return;
         }
-        // Rendered and its read-back submitted in this frame; a thread waits for the copy,
-        // draws the labels, encodes and writes (the window keeps drawing meanwhile).
-        let submitted = match what {
-            // The compare the view shows: both halves, or the difference picture, labelled.
-            Some(what) => {
-                // The whole view (both halves), or the chosen size.
-                let size = if self.save_shot.custom_size {
-                    (view.width, view.height)
-                } else {
-                    self.view_px
-                };
-                compare_screenshot(render_state, what, view.camera, size, &settings)
-                    .map_err(|e| format!("{}: {e:#}", path.display()))
-            }
-            None => return,
-        };
-        match submitted {
-            Ok(picture) => self.start_save(ctx, render_state, path, notes, picture, None),
-            Err(e) => self.messages.error(e),
+        // The compare the view shows (both halves, or the difference picture), labelled:
+        // the view's own once complete, or drawn for the save over frames.
+        if let Some(what) = what {
+            let wait = SaveWait::new(path, notes, loaded.id);
+            let size = self
+                .save_shot
+                .custom_size
+                .then_some((view.width, view.height));
+            self.start_compare_save(ctx, frame, wait, what, &view, size, settings);
         }
     }
 
@@ -252,6 +242,10 @@ impl LoudscapeApp {
         let Some(wait) = self.save_shot.waiting.as_mut() else {
             return;
         };
+        if wait.compare.is_some() {
+            self.step_compare_wait(ctx, frame);
+            return;
+        }
         let Some(render_state) = frame.wgpu_render_state() else {
             return;
         };
@@ -330,7 +324,7 @@ impl LoudscapeApp {
     }
 
     /// The waiting save's picture is submitted (`how` it was made): its thread starts.
-    fn finish_wait(
+    pub(super) fn finish_wait(
         &mut self,
         ctx: &egui::Context,
         render_state: &eframe::egui_wgpu::RenderState,
@@ -486,8 +480,10 @@ impl LoudscapeApp {
 }
 
 /// The compare rendered offscreen from the window's compare scene, as `loudscape render A
-/// --compare B` draws it (titles, labels and colour keys included).
-fn compare_screenshot(
+/// --compare B` draws it (titles, labels and colour keys included): a compare save whose view
+/// stays still without giving its picture. Never with grids still to build: that is the
+/// view's work, in the background.
+pub(super) fn compare_screenshot(
     render_state: &eframe::egui_wgpu::RenderState,
     what: CompareView,
     camera: crate::view::camera::Camera,
@@ -499,6 +495,10 @@ fn compare_screenshot(
             .scene
             .as_mut()
             .ok_or_else(|| anyhow::anyhow!("the compare is not ready yet"))?;
+        let needs_grids = what != CompareView::SideBySide(crate::render::scene::ViewKind::Points);
+        if needs_grids && !scene.grids_built_for(&settings.voxels) {
+            anyhow::bail!("the compare's grids are not built yet");
+        }
         let gpu = crate::render::gpu::context::GpuContext {
             adapter: render_state.adapter.clone(),
             device: render_state.device.clone(),

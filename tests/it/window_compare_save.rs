@@ -13,6 +13,11 @@ use std::process::Command;
 /// what the window wrote on stderr.
 fn save(dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    save_song(&repo.join("data/demo_song.ply"), dir, &[], press)
+}
+
+/// As [`save`], `song` compared with itself, the window started with `args` besides.
+fn save_song(song: &Path, dir: &Path, args: &[&str], press: &[&str]) -> (image::RgbaImage, String) {
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap();
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
@@ -20,11 +25,12 @@ fn save(dir: &Path, press: &[&str]) -> (image::RgbaImage, String) {
         .current_dir(dir)
         .env("DBUS_SESSION_BUS_ADDRESS", "")
         .env("PATH", "/usr/bin/false-folder-without-zenity")
-        .arg(repo.join("data/demo_song.ply"))
+        .arg(song)
         .arg("--compare")
         // B is A again: its audio is found, so no message changes the view's size between
         // runs, and the difference picture is still unlike A's points.
-        .arg(repo.join("data/demo_song.ply"))
+        .arg(song)
+        .args(args)
         .arg("--screenshot")
         .arg(dir.join("window.png"));
     let err = common::run_pressing(&mut command, press);
@@ -117,6 +123,148 @@ fn save_png_while_comparing_saves_what_the_view_shows() {
         "the difference picture looks like A alone ({:.1}% of pixels differ)",
         share * 100.0
     );
+}
+
+/// The line saying how the picture was saved ("picture: saved in T ms on a thread (how…").
+fn saved_line(err: &str) -> String {
+    err.lines()
+        .find(|l| l.starts_with("picture: saved in "))
+        .unwrap_or_else(|| panic!("no line saying how the picture was saved: {err}"))
+        .to_string()
+}
+
+/// The frames the save waited for the view or its slices ("…; waited N frames …").
+fn frames_waited(line: &str) -> u32 {
+    line.split_once("; waited ")
+        .and_then(|(_, rest)| rest.split_whitespace().next())
+        .map(|n| n.parse().unwrap_or_else(|_| panic!("no count in {line:?}")))
+        .unwrap_or(0)
+}
+
+/// Save PNG at the view's size while comparing never draws the compare for the picture: it
+/// copies what the view shows once complete; at a chosen size it draws both halves for the
+/// save over frames. The two are the same picture at the same size, side by side and in the
+/// Difference view. A song of 600,000 points compared with itself is more than a frame's
+/// points: Ctrl+S as soon as it is shown waits frames for both halves to fill in, and at a
+/// chosen size draws them a slice a frame.
+#[test]
+fn save_png_while_comparing_copies_the_view_or_draws_it_over_frames() {
+    let _screen = common::screen();
+    common::assert_display();
+    let home = common::fresh_dir("window_compare_save_copy");
+    let song = home.join("synthetic_600k.ply");
+    crate::window_save_big::write_song(&song, 600_000);
+    for layout in ["side", "difference"] {
+        let compare = format!("compare={layout}");
+        let dir = home.join(format!("{layout}_copied"));
+        let (copied, err) = save_song(&song, &dir, &[], &[&compare, "Ctrl+S"]);
+        let line = saved_line(&err);
+        println!("{layout}, copied: {line}");
+        assert!(
+            line.contains("(the view's picture, copied"),
+            "{layout}: the compare was drawn for the picture in the frame of the click: {line}"
+        );
+        if layout == "side" {
+            assert!(
+                frames_waited(&line) >= 1,
+                "no frame drawn while both halves filled in: {line}"
+            );
+        }
+        // The song against itself differs nowhere: the Difference view shows its box, title and
+        // legend over an empty grid.
+        if layout == "side" {
+            assert!(common::coverage(&copied) > 0.05, "{layout}: looks blank");
+        }
+        let (w, h) = copied.dimensions();
+        let size = format!("shot-size={w}x{h}");
+        let dir = home.join(format!("{layout}_drawn"));
+        let (drawn, err) = save_song(&song, &dir, &[], &[&size, &compare, "Ctrl+S"]);
+        let line = saved_line(&err);
+        println!("{layout}, drawn: {line}");
+        assert!(
+            line.contains("(drawn for the picture in slices"),
+            "{layout}: the compare was drawn whole in the frame of the click: {line}"
+        );
+        if layout == "side" {
+            assert!(
+                frames_waited(&line) >= 1,
+                "both halves drawn in one frame: {line}"
+            );
+        }
+        assert_eq!(drawn.dimensions(), (w, h));
+        let (share, mean) = common::difference(&copied, &drawn, 24);
+        println!(
+            "{layout}: {:.4}% of pixels differ by over 24, mean {mean:.3}",
+            share * 100.0
+        );
+        if share > 0.0 {
+            let _ = copied.save(home.join(format!("{layout}_copied.png")));
+            let _ = drawn.save(home.join(format!("{layout}_drawn.png")));
+        }
+        assert!(
+            share < 0.01 && mean < 2.0,
+            "{layout}: the view's picture and the one drawn over frames differ in {:.3}% of \
+             pixels, mean {mean:.3}",
+            share * 100.0
+        );
+    }
+}
+
+/// Side by side in the Surface and Volume views: Ctrl+S as soon as the compare is shown waits
+/// for the grids and the surfaces the view builds in the background (never built for the
+/// picture in a frame), then copies the view's picture, which equals the one drawn for the
+/// save at the same size (the volume within its ray jitter).
+#[test]
+fn save_png_of_surfaces_and_volumes_side_by_side_waits_for_the_view() {
+    let _screen = common::screen();
+    common::assert_display();
+    let home = common::fresh_dir("window_compare_save_grids");
+    let song = home.join("synthetic_300k.ply");
+    crate::window_save_big::write_song(&song, 300_000);
+    for view in ["surface", "volume"] {
+        let args = ["--view", view];
+        let dir = home.join(format!("{view}_copied"));
+        let (copied, err) = save_song(&song, &dir, &args, &["compare=side", "Ctrl+S"]);
+        let line = saved_line(&err);
+        println!("{view}, copied: {line}");
+        assert!(
+            line.contains("(the view's picture, copied"),
+            "{view}: the compare was drawn for the picture in the frame of the click: {line}"
+        );
+        // The grids (and then the surfaces) come after the compare is shown: the click finds
+        // them building, and the status says what the save waits for.
+        assert!(
+            err.contains("… (waiting for the grids)")
+                || err.contains("… (waiting for the surfaces)"),
+            "{view}: the save did not say it waits for the grids or surfaces: {err}"
+        );
+        assert!(common::coverage(&copied) > 0.05, "{view}: looks blank");
+        let (w, h) = copied.dimensions();
+        let size = format!("shot-size={w}x{h}");
+        let dir = home.join(format!("{view}_drawn"));
+        let (drawn, err) = save_song(&song, &dir, &args, &[&size, "compare=side", "Ctrl+S"]);
+        let line = saved_line(&err);
+        println!("{view}, drawn: {line}");
+        assert!(
+            line.contains("(drawn for the picture in slices"),
+            "{view}: the compare was drawn whole in the frame of the click: {line}"
+        );
+        let (share, mean) = common::difference(&copied, &drawn, 24);
+        println!(
+            "{view}: {:.4}% of pixels differ by over 24, mean {mean:.3}",
+            share * 100.0
+        );
+        if share > 0.0 {
+            let _ = copied.save(home.join(format!("{view}_copied.png")));
+            let _ = drawn.save(home.join(format!("{view}_drawn.png")));
+        }
+        assert!(
+            share < 0.01 && mean < 2.0,
+            "{view}: the view's picture and the one drawn over frames differ in {:.3}% of \
+             pixels, mean {mean:.3}",
+            share * 100.0
+        );
+    }
 }
 
 /// Side by side follows the selected view: in Volume both halves draw the volume (its density

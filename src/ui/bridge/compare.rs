@@ -7,6 +7,9 @@
 
 use eframe::egui_wgpu::{self, CallbackResources};
 
+mod save;
+pub(in crate::ui) use save::CompareSliced;
+
 use super::{Offscreen, OffscreenJob, Prepare, ViewResources};
 use crate::data::cloud::PointCloud;
 use crate::render::compare::{BuiltGrids, CompareScene};

@@ -59,6 +59,8 @@ pub(in crate::ui) struct SaveWait {
     still: u32,
     /// The picture drawn for the save over frames (a chosen size), instead of the view's.
     pub(in crate::ui) sliced: Option<Box<Sliced>>,
+    /// The A/B compare saved instead of the single view (`ui/compare_save.rs`).
+    pub(in crate::ui) compare: Option<crate::ui::compare_save::CompareWait>,
 }
 
 /// A picture drawn for a save over several frames, at the camera and settings of the click,
@@ -104,6 +106,7 @@ impl SaveWait {
             frames: 0,
             still: 0,
             sliced: None,
+            compare: None,
         }
     }
 
