@@ -15,7 +15,7 @@ use crate::render::scene::ViewKind;
 use crate::ui::bridge::{CompareResources, CompareSliced};
 use crate::ui::state::LoudscapeApp;
 use crate::ui::state::picture_save::{COPIED, RENDERED, SLICED};
-use crate::ui::state::save_wait::{SaveWait, WaitStep};
+use crate::ui::state::save_wait::{CompareWait, SaveWait, WaitStep};
 
 /// What a compare save waiting for the view says.
 pub(in crate::ui) const WAIT_HALVES: &str = "waiting for both halves to fill in";
@@ -25,17 +25,6 @@ pub(in crate::ui) const WAIT_SLICES: &str = "drawing it a part a frame";
 pub(in crate::ui) const WAIT_GRIDS: &str = "waiting for the grids";
 /// What a compare save waiting for the view's surfaces says.
 pub(in crate::ui) const WAIT_SURFACES: &str = "waiting for the surfaces";
-
-/// A compare save under way: what it saves, its picture drawn over frames at a chosen size,
-/// and what the status last said it waits for.
-pub(in crate::ui) struct CompareWait {
-    pub(in crate::ui) what: CompareView,
-    pub(in crate::ui) sliced: Option<Box<CompareSliced>>,
-    /// What the save waits for, as the status says it.
-    told: &'static str,
-    /// What the status said last.
-    last_told: &'static str,
-}
 
 /// Whether a compare picture `what` can be drawn now, from what the compare holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

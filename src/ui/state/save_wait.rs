@@ -22,12 +22,25 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use crate::picture::compare::CompareView;
 use crate::render::gpu::target::RenderTarget;
 use crate::render::scene::RenderSettings;
 use crate::render::volume::progressive::ProgressiveVolume;
+use crate::ui::bridge::CompareSliced;
 use crate::ui::frame_cache::RenderKey;
 use crate::ui::progressive::ProgressivePoints;
 use crate::view::frame_view::FrameView;
+
+/// A compare save under way (`ui/compare_save.rs`): what it saves, its picture drawn over
+/// frames at a chosen size, and what the status last said it waits for.
+pub(in crate::ui) struct CompareWait {
+    pub(in crate::ui) what: CompareView,
+    pub(in crate::ui) sliced: Option<Box<CompareSliced>>,
+    /// What the save waits for, as the status says it.
+    pub(in crate::ui) told: &'static str,
+    /// What the status said last.
+    pub(in crate::ui) last_told: &'static str,
+}
 
 /// Frames at rest, with nothing filling in, after which a view that still does not give its
 /// picture has it rendered instead.
@@ -60,7 +73,7 @@ pub(in crate::ui) struct SaveWait {
     /// The picture drawn for the save over frames (a chosen size), instead of the view's.
     pub(in crate::ui) sliced: Option<Box<Sliced>>,
     /// The A/B compare saved instead of the single view (`ui/compare_save.rs`).
-    pub(in crate::ui) compare: Option<crate::ui::compare_save::CompareWait>,
+    pub(in crate::ui) compare: Option<CompareWait>,
 }
 
 /// A picture drawn for a save over several frames, at the camera and settings of the click,
