@@ -78,8 +78,11 @@ def song_frames(
         if song is not None:
             return song, True
         if notes is not None:
+            # What was done comes before why: a long path cut at the message limit loses the
+            # end of the problem's details, not the outcome.
             notes.append(
-                f"{path}: its cache entry {entry} is unusable ({problem}); recomputed and replaced"
+                f"{path}: its cache entry was unusable, recomputed and replaced: "
+                f"{os.path.basename(entry)} ({problem})"
             )
     song = compute_song_frames(
         path, n_fft=n_fft, hop_length=hop_length, highpass_hz=highpass_hz, strict=strict
