@@ -69,8 +69,10 @@ real-music:
 	@bash scripts/fetch-real-music.sh data/real-music
 
 # The tests, and the `>>>` examples in the docstrings of both packages (they run as written).
-# The Python suites run in PYTEST_JOBS processes (pytest-xdist), each test file in one of them,
-# so a file's module fixtures are built once; PYTEST_JOBS=0 runs them in this process.
+# The extractor's suite runs in PYTEST_JOBS processes (pytest-xdist), each test file in one of
+# them, so a file's module fixtures are built once; PYTEST_JOBS=0 runs it in this process.
+# tests/python stays in one process: its window test (an Xvfb screen of its own) once failed to
+# open its window with another file's tests beside it.
 PYTEST_JOBS ?= auto
 PYTEST_PARALLEL = $(if $(filter 0,$(PYTEST_JOBS)),,-n $(PYTEST_JOBS) --dist loadfile)
 test-py: venv real-music
@@ -81,7 +83,7 @@ test-py: venv real-music
 # tests use: `cargo build` would rebuild with other features).
 test-mesh: system venv
 	$(CARGO) test --no-run -q
-	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q $(PYTEST_PARALLEL) tests/python
+	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
 
 # The fuzzers (docs/RELIABILITY.md): examples/fuzz_ply.rs mutates PLY bytes against the loader,
 # its metadata parser and the axes/read-outs; examples/fuzz_formats.rs builds version-2
