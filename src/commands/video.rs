@@ -29,6 +29,7 @@ use super::args::{ViewChoice, camera_arg, check_iso, check_output, load_cloud, s
 use super::render::{DrawArgs, prepare_grid};
 use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound, song_sound};
 use super::video_frames::{self, Layout, Rendered, StripLayer};
+use super::video_still::StillLayer;
 
 /// The largest frame: 4K UHD (either way round).
 pub const MAX_PIXELS: u64 = 3840 * 2160;
@@ -103,7 +104,8 @@ pub enum CameraMotion {
 /// `--detail`: how much of the data each frame draws.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Detail {
-    /// Fast on a software rasterizer such as lavapipe, else full.
+    /// Full with a fixed camera (the scene is drawn once); with a moving one, fast on a
+    /// software rasterizer such as lavapipe, else full.
     Auto,
     /// Every point, the volume's full ray step: what `render` draws.
     Full,
@@ -302,10 +304,15 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let view_height = size.1 - strip_height;
 
     let gpu = GpuContext::new_headless()?;
+    // A still camera's scene is drawn once (`video_still`), so `auto` draws it in full even on
+    // a software rasterizer; a moving camera draws every frame afresh.
     let fast = match args.detail {
         Detail::Full => false,
         Detail::Fast => true,
-        Detail::Auto => gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu,
+        Detail::Auto => {
+            args.camera != CameraMotion::Fixed
+                && gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu
+        }
     };
     let renderer = Renderer::new(&gpu.device);
     let mut drawn = match (&args.draw.compare, compare_view) {
@@ -388,6 +395,8 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         .map(|target| TargetReader::new(&gpu.device, target));
     let view_bytes = layout.view_bytes();
     video_frames::run(layout, encoder, progress, |out| {
+        // A still camera's scene, drawn once (`video_still`).
+        let mut still = StillLayer::default();
         // The frame drawn last, still to be read back and handed on.
         let mut pending: Option<Pending> = None;
         // Reads `frame` back (where its copy is still on the GPU) and hands it on; false
@@ -411,14 +420,15 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
                 break;
             };
             let slot = (k % 2) as usize;
-            let gpu_frame = GpuFrame {
+            let mut gpu_frame = GpuFrame {
                 gpu: &gpu,
                 renderer: &renderer,
                 target: &targets[slot],
                 reader: &readers[slot],
+                still: &mut still,
             };
             let (overlay, index) = render_video_frame(
-                &gpu_frame,
+                &mut gpu_frame,
                 &mut drawn,
                 &plan,
                 &settings,
@@ -486,13 +496,15 @@ struct GpuFrame<'a> {
     /// The view's size.
     target: &'a RenderTarget,
     reader: &'a TargetReader,
+    /// A still camera's scene, drawn once (`video_still`).
+    still: &'a mut StillLayer,
 }
 
 /// Frame `k` of the video, without the strip, into `out` (the view's RGBA rows); returns what
 /// is drawn over it (labels, legend, title), laid out in pixels, and the submission of its
 /// read-back where it is still on the GPU (`TargetReader::finish_into` fills `out`).
 fn render_video_frame(
-    frame: &GpuFrame,
+    frame: &mut GpuFrame,
     drawn: &mut Drawn,
     plan: &Plan,
     settings: &RenderSettings,
@@ -543,14 +555,20 @@ fn render_video_frame(
             let mut view = FrameView::at_rest(camera, data.world_from_data, w, h);
             view.moving = plan.fast;
             view.frame_index = k as u32;
-            loudscape::render::headless::render_into(
-                gpu,
-                renderer,
-                Some(data),
-                &view,
-                &settings,
-                frame.target,
-            );
+            if plan.motion == CameraMotion::Fixed {
+                frame
+                    .still
+                    .render(gpu, renderer, data, &view, &settings, frame.target);
+            } else {
+                loudscape::render::headless::render_into(
+                    gpu,
+                    renderer,
+                    Some(data),
+                    &view,
+                    &settings,
+                    frame.target,
+                );
+            }
             let copy = frame
                 .reader
                 .submit_copy(&gpu.device, &gpu.queue, frame.target)

@@ -368,6 +368,12 @@ fn stops_on(signal: &str, code: i32) {
             &demo(),
             "--size",
             "320x180",
+            // A camera that moves draws every frame (a still one draws the view once), so
+            // the whole song's video is still encoding when the signal comes.
+            "--camera",
+            "orbit",
+            "--detail",
+            "full",
             "--progress",
             "json",
             "-o",
