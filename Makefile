@@ -153,11 +153,13 @@ bench-surface: build venv
 # loudscape against its peers, in the same run, alternated, medians and ratios (issue 37;
 # figures in docs/PERFORMANCE.md): the volume against VTK's CPU ray caster on the same grid,
 # camera and ramp; song extraction against librosa's stft+hpss and ffmpeg's ebur128; an 8-track
-# timeline against ffmpeg two at a time; the isosurfaces against VTK's flying edges.
+# timeline against ffmpeg two at a time; the isosurfaces against VTK's flying edges; videos
+# (points and volume, still and orbiting camera) against ffmpeg's showcqt spectrum video.
 bench-peers: build venv real-music
 	$(PY) bench/peers_volume.py --loudscape target/release/loudscape
 	$(PY) bench/peers_extract.py
 	$(PY) bench/bench_surface.py --loudscape target/release/loudscape --runs 9
+	$(PY) bench/peers_video.py --loudscape target/release/loudscape
 
 # The window's frame loop under recorded input, release build under Xvfb at 1280x720: orbit
 # frame rates per view, hover read-out latency, isovalue sweep rate, on the demo and a ~5 M-point
