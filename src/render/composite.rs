@@ -109,3 +109,43 @@ impl CompositePass {
         }
     }
 }
+
+/// An offscreen render target sized to a view and the pass that composites it into egui's
+/// frame: the window's 3D view and each half of its compare, the web page's view and halves.
+pub struct Offscreen {
+    target: Option<RenderTarget>,
+    composite: CompositePass,
+}
+
+impl Offscreen {
+    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
+        Self {
+            target: None,
+            composite: CompositePass::new(device, format),
+        }
+    }
+
+    /// Makes the target `width` x `height`; true when it was made anew (what it held is gone).
+    pub fn ensure_size(&mut self, device: &wgpu::Device, width: u32, height: u32) -> bool {
+        if self
+            .target
+            .as_ref()
+            .is_some_and(|t| t.has_size(width, height))
+        {
+            return false;
+        }
+        let target = RenderTarget::new(device, width, height);
+        self.composite.set_source(device, &target);
+        self.target = Some(target);
+        true
+    }
+
+    pub fn target(&self) -> Option<&RenderTarget> {
+        self.target.as_ref()
+    }
+
+    /// Composites the target into the callback's viewport.
+    pub fn draw(&self, render_pass: &mut wgpu::RenderPass<'_>) {
+        self.composite.draw(render_pass);
+    }
+}

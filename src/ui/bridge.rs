@@ -18,8 +18,7 @@ use std::sync::Arc;
 use eframe::egui_wgpu::{self, CallbackResources, CallbackTrait, ScreenDescriptor};
 
 use crate::data::cloud::PointCloud;
-use crate::render::composite::CompositePass;
-use crate::render::gpu::target::RenderTarget;
+pub(crate) use crate::render::composite::Offscreen;
 use crate::render::scene::{RenderSettings, Renderer, SceneData};
 use crate::render::surface::state::ExtractionStatus;
 pub use crate::ui::frame_cache::{FrameCache, RenderKey};
@@ -28,46 +27,6 @@ use crate::view::frame_view::FrameView;
 mod compare;
 pub(in crate::ui) use compare::CompareSliced;
 pub use compare::{CompareCallback, CompareResources};
-
-/// An offscreen render target sized to a view and the pass that composites it into egui's
-/// frame (the 3D view's, and each half of the compare's).
-pub(crate) struct Offscreen {
-    target: Option<RenderTarget>,
-    composite: CompositePass,
-}
-
-impl Offscreen {
-    fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
-        Self {
-            target: None,
-            composite: CompositePass::new(device, format),
-        }
-    }
-
-    /// Makes the target `width` x `height`; true when it was made anew (what it held is gone).
-    fn ensure_size(&mut self, device: &wgpu::Device, width: u32, height: u32) -> bool {
-        if self
-            .target
-            .as_ref()
-            .is_some_and(|t| t.has_size(width, height))
-        {
-            return false;
-        }
-        let target = RenderTarget::new(device, width, height);
-        self.composite.set_source(device, &target);
-        self.target = Some(target);
-        true
-    }
-
-    fn target(&self) -> Option<&RenderTarget> {
-        self.target.as_ref()
-    }
-
-    /// Composites the target into the callback's viewport.
-    fn draw(&self, render_pass: &mut wgpu::RenderPass<'static>) {
-        self.composite.draw(render_pass);
-    }
-}
 
 /// GPU state owned by the window, kept in egui_wgpu's callback resources. The window reaches it
 /// through [`ViewResources::read`] and [`ViewResources::write`] (one lock and one look-up of

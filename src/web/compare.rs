@@ -37,8 +37,7 @@ use wasm_bindgen::prelude::*;
 use super::gl;
 use super::surface::WebSurface;
 use crate::data::cloud::PointCloud;
-use crate::render::composite::CompositePass;
-use crate::render::gpu::target::RenderTarget;
+use crate::render::composite::Offscreen;
 use crate::render::grid::VoxelGrid;
 use crate::render::grid::voxelize_host;
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
@@ -95,16 +94,11 @@ enum HalvesDrawing {
     Downlevel([gl::GlRenderer; 2]),
 }
 
-/// One half's offscreen target and its composite into the view.
-struct HalfTarget {
-    target: Option<RenderTarget>,
-    composite: CompositePass,
-}
-
 /// GPU state of the compare page, in egui_wgpu's callback resources.
 struct CompareResources {
     drawing: HalvesDrawing,
-    halves: [HalfTarget; 2],
+    /// Each half's offscreen target and its composite into the view.
+    halves: [Offscreen; 2],
 }
 
 /// The compare viewer: one camera, two clouds, their labels.
@@ -170,10 +164,7 @@ impl CompareApp {
                     .map(|cloud| gl::GlRenderer::new(device, cloud, &settings.points)),
             )
         };
-        let half = || HalfTarget {
-            target: None,
-            composite: CompositePass::new(device, render_state.target_format),
-        };
+        let half = || Offscreen::new(device, render_state.target_format);
         let resources = CompareResources {
             drawing,
             halves: [half(), half()],
@@ -579,18 +570,9 @@ impl CallbackTrait for HalfPaint {
         let Some(res) = resources.get_mut::<CompareResources>() else {
             return Vec::new();
         };
-        let (width, height) = (self.view.width, self.view.height);
         let half = &mut res.halves[self.side];
-        if !half
-            .target
-            .as_ref()
-            .is_some_and(|t| t.has_size(width, height))
-        {
-            let target = RenderTarget::new(device, width, height);
-            half.composite.set_source(device, &target);
-            half.target = Some(target);
-        }
-        let Some(target) = &half.target else {
+        half.ensure_size(device, self.view.width, self.view.height);
+        let Some(target) = half.target() else {
             return Vec::new();
         };
         match &res.drawing {
@@ -618,7 +600,7 @@ impl CallbackTrait for HalfPaint {
         resources: &CallbackResources,
     ) {
         if let Some(res) = resources.get::<CompareResources>() {
-            res.halves[self.side].composite.draw(render_pass);
+            res.halves[self.side].draw(render_pass);
         }
     }
 }

@@ -37,8 +37,7 @@ use glam::{Mat4, Vec3};
 use wasm_bindgen::prelude::*;
 
 use crate::data::cloud::PointCloud;
-use crate::render::composite::CompositePass;
-use crate::render::gpu::target::RenderTarget;
+use crate::render::composite::Offscreen;
 use crate::render::grid::voxelize::{VoxelizePass, VoxelizeRequest};
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
 use crate::render::surface::SurfaceSettings;
@@ -121,8 +120,7 @@ fn web_options() -> eframe::WebOptions {
 /// GPU state of the page, in egui_wgpu's callback resources.
 struct WebResources {
     drawing: Drawing,
-    target: Option<RenderTarget>,
-    composite: CompositePass,
+    offscreen: Offscreen,
 }
 
 /// What draws the view: every pass of the window (WebGPU), or the Points and Surface views
@@ -228,9 +226,8 @@ impl WebApp {
             Drawing::Downlevel(gl::GlRenderer::new(device, &cloud, &settings.points))
         };
         let resources = WebResources {
-            composite: CompositePass::new(device, render_state.target_format),
+            offscreen: Offscreen::new(device, render_state.target_format),
             drawing,
-            target: None,
         };
         render_state
             .renderer
@@ -635,17 +632,9 @@ impl CallbackTrait for ViewPaint {
         let Some(res) = resources.get_mut::<WebResources>() else {
             return Vec::new();
         };
-        let (width, height) = (self.view.width, self.view.height);
-        if !res
-            .target
-            .as_ref()
-            .is_some_and(|t| t.has_size(width, height))
-        {
-            let target = RenderTarget::new(device, width, height);
-            res.composite.set_source(device, &target);
-            res.target = Some(target);
-        }
-        match (&res.target, &res.drawing) {
+        res.offscreen
+            .ensure_size(device, self.view.width, self.view.height);
+        match (res.offscreen.target(), &res.drawing) {
             (
                 Some(target),
                 Drawing::Full {
@@ -674,7 +663,7 @@ impl CallbackTrait for ViewPaint {
         resources: &CallbackResources,
     ) {
         if let Some(res) = resources.get::<WebResources>() {
-            res.composite.draw(render_pass);
+            res.offscreen.draw(render_pass);
         }
     }
 }
