@@ -6,7 +6,7 @@
 
 use crate::common::{self, line_starting, xdotool};
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -24,28 +24,6 @@ fn refined(line: &str) -> (u32, u64) {
     (number("in") as u32, number("most"))
 }
 
-/// A song cloud of `count` synthetic points (`data::synthetic::synthetic_song`) at `path`.
-fn write_song(path: &Path, count: usize) {
-    let points = loudscape::data::synthetic::synthetic_song(count, 11);
-    let axis = |label: &str, unit: &str, min: f64, max: f64| serde_json::json!({"label": label, "unit": unit, "min": min, "max": max, "scale": "linear"});
-    let meta = serde_json::json!({
-        "format_version": loudscape::data::cloud::FORMAT_VERSION,
-        "mode": "song",
-        "point_count": points.len(),
-        "axes": {
-            "x": axis("time", "s", 0.0, 29.953741),
-            "y": axis("level", "dB", -65.018802, -5.018802),
-            "z": axis("frequency", "Hz", 0.0, 11025.0),
-            // As the demo's, so the two share their axes.
-            "scalar": axis("A-weighted level", "dB", -114.0, 0.0),
-            "hp": axis("harmonic-percussive ratio", "", 0.0, 1.0),
-        },
-    });
-    let mut file = Vec::new();
-    loudscape::data::cloud::write(&mut file, &points, Some(&meta)).unwrap();
-    std::fs::write(path, file).unwrap();
-}
-
 #[test]
 fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
     let _screen = common::screen();
@@ -58,7 +36,7 @@ fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
     let home = common::fresh_dir("window_compare_refine_home");
     let song = repo.join("data/demo_song.ply");
     let big = home.join("synthetic_1m.ply");
-    write_song(&big, 1_000_000);
+    common::write_synthetic_song(&big, 1_000_000, 11);
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
     let child = common::home_in(&mut command, &home)
         .arg(&song)

@@ -34,15 +34,7 @@ fn save_song(song: &Path, dir: &Path, args: &[&str], press: &[&str]) -> (image::
         .arg("--screenshot")
         .arg(dir.join("window.png"));
     let err = common::run_pressing(&mut command, press);
-    let saved: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| {
-            p.file_name()
-                .is_some_and(|n| n.to_string_lossy().starts_with("loudscape-"))
-        })
-        .collect();
+    let saved = common::saved_pictures(dir);
     assert_eq!(saved.len(), 1, "one PNG saved: {saved:?}\n{err}");
     assert!(
         err.contains(&format!("saving {}…", saved[0].display()))
@@ -153,7 +145,7 @@ fn save_png_while_comparing_copies_the_view_or_draws_it_over_frames() {
     common::assert_display();
     let home = common::fresh_dir("window_compare_save_copy");
     let song = home.join("synthetic_600k.ply");
-    crate::window_save_big::write_song(&song, 600_000);
+    common::write_synthetic_song(&song, 600_000, 5);
     for layout in ["side", "difference"] {
         let compare = format!("compare={layout}");
         let dir = home.join(format!("{layout}_copied"));
@@ -220,7 +212,7 @@ fn save_png_of_surfaces_and_volumes_side_by_side_waits_for_the_view() {
     common::assert_display();
     let home = common::fresh_dir("window_compare_save_grids");
     let song = home.join("synthetic_300k.ply");
-    crate::window_save_big::write_song(&song, 300_000);
+    common::write_synthetic_song(&song, 300_000, 5);
     for view in ["surface", "volume"] {
         let args = ["--view", view];
         let dir = home.join(format!("{view}_copied"));

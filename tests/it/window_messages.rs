@@ -9,13 +9,6 @@ use crate::common::{self, assert_display, repo, wait_for_window};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-/// A PATH without zenity and no session bus: no file dialog can open.
-fn no_dialog(command: &mut Command) -> &mut Command {
-    command
-        .env("DBUS_SESSION_BUS_ADDRESS", "")
-        .env("PATH", "/usr/bin/false-folder-without-zenity")
-}
-
 /// Runs the window on the demo song until its screenshot is saved, pressing `press`.
 fn screenshot(shot: &Path, press: &[&str]) -> (image::RgbaImage, String) {
     screenshot_of(&repo().join("data/demo_song.ply"), shot, press)
@@ -25,7 +18,7 @@ fn screenshot(shot: &Path, press: &[&str]) -> (image::RgbaImage, String) {
 fn screenshot_of(cloud: &Path, shot: &Path, press: &[&str]) -> (image::RgbaImage, String) {
     let _ = std::fs::remove_file(shot);
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
-    no_dialog(&mut command)
+    common::no_dialog(&mut command)
         .arg(cloud)
         .arg("--screenshot")
         .arg(shot);

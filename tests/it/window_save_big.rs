@@ -8,33 +8,12 @@
 
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 /// Points in the synthetic song: several frames' budget of progressive points
 /// (`ui/progressive.rs`), so the view fills in over frames before Ctrl+S.
 const POINTS: usize = 1_500_000;
-
-/// A song cloud of `count` synthetic points (`data::synthetic::synthetic_song`) at `path`.
-pub(crate) fn write_song(path: &Path, count: usize) {
-    let points = loudscape::data::synthetic::synthetic_song(count, 5);
-    let axis = |label: &str, unit: &str, min: f64, max: f64| serde_json::json!({"label": label, "unit": unit, "min": min, "max": max, "scale": "linear"});
-    let meta = serde_json::json!({
-        "format_version": loudscape::data::cloud::FORMAT_VERSION,
-        "mode": "song",
-        "point_count": points.len(),
-        "axes": {
-            "x": axis("time", "s", 0.0, 29.953741),
-            "y": axis("level", "dB", -65.018802, -5.018802),
-            "z": axis("frequency", "Hz", 0.0, 11025.0),
-            "scalar": axis("A-weighted level", "dB", -114.0, 0.0),
-            "hp": axis("harmonic-percussive ratio", "", 0.0, 1.0),
-        },
-    });
-    let mut file = Vec::new();
-    loudscape::data::cloud::write(&mut file, &points, Some(&meta)).unwrap();
-    std::fs::write(path, file).unwrap();
-}
 
 /// Runs the window on `song` in `dir`, presses `press` once every point is drawn, and returns
 /// the one PNG Ctrl+S saved there (no dialog can open) and the window's "picture: saved" line.
@@ -54,24 +33,14 @@ pub(crate) fn save_in_view(
 ) -> (image::RgbaImage, String) {
     std::fs::create_dir_all(dir).unwrap();
     let mut command = Command::new(env!("CARGO_BIN_EXE_loudscape"));
-    common::home_in(&mut command, dir)
+    common::no_dialog(common::home_in(&mut command, dir))
         .current_dir(dir)
-        .env("DBUS_SESSION_BUS_ADDRESS", "")
-        .env("PATH", "/usr/bin/false-folder-without-zenity")
         .arg(song)
         .args(["--view", view])
         .arg("--screenshot")
         .arg(dir.join("window.png"));
     let err = common::run_pressing(&mut command, press);
-    let saved: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| {
-            p.file_name()
-                .is_some_and(|n| n.to_string_lossy().starts_with("loudscape-"))
-        })
-        .collect();
+    let saved = common::saved_pictures(dir);
     assert_eq!(saved.len(), 1, "one PNG saved: {saved:?}\n{err}");
     let line = err
         .lines()
@@ -97,7 +66,7 @@ fn save_png_of_a_big_cloud_copies_the_view_and_equals_a_fresh_render() {
     common::assert_display();
     let home = common::fresh_dir("window_save_big");
     let song = home.join("synthetic_1m5.ply");
-    write_song(&song, POINTS);
+    common::write_synthetic_song(&song, POINTS, 5);
 
     // At the view's size (the default): the view's picture, copied.
     let copied_dir = home.join("copied");

@@ -5,7 +5,7 @@
 //! of the same size. Needs a display (`make test` runs it under xvfb-run).
 
 use crate::common;
-use crate::window_save_big::{frames_while_saving, save_in_view, write_song};
+use crate::window_save_big::{frames_while_saving, save_in_view};
 
 /// The frames the save waited for the view ("…; waited N frames for the view to fill in"),
 /// none when it did not wait.
@@ -47,7 +47,7 @@ fn save_png_while_the_points_fill_in_waits_and_copies_the_view() {
     common::assert_display();
     let home = common::fresh_dir("window_save_wait_points");
     let song = home.join("synthetic_1m5.ply");
-    write_song(&song, 1_500_000);
+    common::write_synthetic_song(&song, 1_500_000, 5);
 
     let (copied, line) = save_in_view(&song, &home.join("copied"), "points", &["Ctrl+S"]);
     println!("points, copied: {line}");
@@ -73,7 +73,7 @@ fn save_png_while_the_points_fill_in_waits_and_copies_the_view() {
 fn copied_and_rendered(view: &str, press: &[&str]) -> (image::RgbaImage, image::RgbaImage) {
     let home = common::fresh_dir(&format!("window_save_wait_{view}"));
     let song = home.join("synthetic_300k.ply");
-    write_song(&song, 300_000);
+    common::write_synthetic_song(&song, 300_000, 5);
     let (copied, line) = save_in_view(&song, &home.join("copied"), view, press);
     println!("{view}, copied: {line}");
     assert!(
@@ -130,7 +130,7 @@ fn save_png_at_a_chosen_size_draws_its_points_over_frames() {
     common::assert_display();
     let home = common::fresh_dir("window_save_wait_size");
     let song = home.join("synthetic_1m5.ply");
-    write_song(&song, 1_500_000);
+    common::write_synthetic_song(&song, 1_500_000, 5);
     let (picture, line) = save_in_view(&song, &home, "points", &["shot-size=900x500", "Ctrl+S"]);
     println!("chosen size: {line}");
     assert!(

@@ -485,3 +485,48 @@ pub fn coverage(image: &image::RgbaImage) -> f64 {
         .count();
     covered as f64 / (image.width() * image.height()) as f64
 }
+
+/// A song cloud of `count` synthetic points (`data::synthetic::synthetic_song`, its `seed`) at
+/// `path`, with the demo's axes (so the two share them in a compare).
+pub fn write_synthetic_song(path: &Path, count: usize, seed: u64) {
+    let points = loudscape::data::synthetic::synthetic_song(count, seed);
+    let axis = |label: &str, unit: &str, min: f64, max: f64| serde_json::json!({"label": label, "unit": unit, "min": min, "max": max, "scale": "linear"});
+    let meta = serde_json::json!({
+        "format_version": loudscape::data::cloud::FORMAT_VERSION,
+        "mode": "song",
+        "point_count": points.len(),
+        "axes": {
+            "x": axis("time", "s", 0.0, 29.953741),
+            "y": axis("level", "dB", -65.018802, -5.018802),
+            "z": axis("frequency", "Hz", 0.0, 11025.0),
+            "scalar": axis("A-weighted level", "dB", -114.0, 0.0),
+            "hp": axis("harmonic-percussive ratio", "", 0.0, 1.0),
+        },
+    });
+    let mut file = Vec::new();
+    loudscape::data::cloud::write(&mut file, &points, Some(&meta)).unwrap();
+    std::fs::write(path, file).unwrap();
+}
+
+/// A PATH without zenity and no session bus: no file dialog can open, so a save goes straight
+/// to its default name.
+pub fn no_dialog(command: &mut Command) -> &mut Command {
+    command
+        .env("DBUS_SESSION_BUS_ADDRESS", "")
+        .env("PATH", "/usr/bin/false-folder-without-zenity")
+}
+
+/// The pictures Save PNG wrote into `dir` under its default names (`loudscape-….png`).
+pub fn saved_pictures(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name().is_some_and(|n| {
+                let n = n.to_string_lossy();
+                n.starts_with("loudscape-") && n.ends_with(".png")
+            })
+        })
+        .collect()
+}
