@@ -197,6 +197,10 @@ impl LoudscapeApp {
 /// drawn its scene complete (every point of a large cloud).
 const WHEN_DRAWN: &str = "when-drawn";
 
+/// The scripted press (`--press close-window`) that asks the window to close as its close button
+/// does (the window system's close request).
+const CLOSE_WINDOW: &str = "close-window";
+
 impl eframe::App for LoudscapeApp {
     /// The frame is cleared to the panels' colour, which the panels then leave unpainted
     /// ([`crate::ui::style::panel_frame`]).
@@ -232,6 +236,15 @@ impl eframe::App for LoudscapeApp {
                         ctx.request_repaint();
                         break;
                     }
+                    continue;
+                }
+                if name == CLOSE_WINDOW {
+                    raw_input
+                        .viewports
+                        .entry(egui::ViewportId::ROOT)
+                        .or_default()
+                        .events
+                        .push(egui::ViewportEvent::Close);
                     continue;
                 }
                 if self.scripted_setting(&name)
@@ -386,6 +399,8 @@ impl eframe::App for LoudscapeApp {
         if std::mem::take(&mut self.save_shot.requested) {
             self.save_screenshot(&ctx, frame);
         }
+        // After the save of this frame's Ctrl+S has started: a close in the same frame waits.
+        self.close_after_save(&ctx);
         self.remember_audio_choice();
         self.ask_to_save(&ctx, frame);
         if self.step_iso_sweep(frame) {

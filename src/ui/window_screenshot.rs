@@ -398,6 +398,44 @@ impl LoudscapeApp {
         self.save_shot.view_drawn = holds && self.refining.is_none() && self.active().is_some();
     }
 
+    /// Once a frame: the window asked to close while a Save PNG is under way (waiting for the
+    /// view to fill in, or being written) stays open until the PNG is written, the view going
+    /// on filling in and the status saying so, then closes. A second close request closes at
+    /// once, saying nothing was saved. (Dropping the waiting save would write nothing: the
+    /// picture the user asked for, lost.)
+    pub(super) fn close_after_save(&mut self, ctx: &egui::Context) {
+        let asked = ctx.input(|i| i.viewport().close_requested());
+        let pending = self.saving_picture();
+        if asked && pending && !self.save_shot.closing {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.save_shot.closing = true;
+            let path = self
+                .save_shot
+                .waiting
+                .as_ref()
+                .map(|w| w.path.clone())
+                .or_else(|| self.save_shot.saving.as_ref().map(|s| s.path.clone()))
+                .unwrap_or_default();
+            let shown = std::path::absolute(&path).unwrap_or(path);
+            self.messages.info(format!(
+                "closing once {} is saved (close again to quit without it)",
+                shown.display()
+            ));
+            ctx.request_repaint();
+        } else if asked && pending {
+            if let Some(wait) = self.save_shot.waiting.take() {
+                let shown = std::path::absolute(&wait.path).unwrap_or(wait.path);
+                self.messages.error(format!(
+                    "Save PNG: the window closed before the view filled in: nothing saved to {}",
+                    shown.display()
+                ));
+            }
+        } else if self.save_shot.closing && !pending {
+            self.save_shot.closing = false;
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+    }
+
     /// Whether a Save PNG waits for the view or is being read back or written.
     pub(super) fn saving_picture(&self) -> bool {
         self.save_shot.saving.is_some() || self.save_shot.waiting.is_some()

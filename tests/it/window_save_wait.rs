@@ -142,3 +142,63 @@ fn save_png_at_a_chosen_size_draws_its_points_over_frames() {
     assert_eq!(picture.dimensions(), (900, 500));
     assert!(common::coverage(&picture) > 0.05, "the picture looks blank");
 }
+
+/// The window asked to close while a save waits for the view to fill in (Ctrl+S on a 1.5
+/// M-point song and the close button's request in the same frame: `--press close-window`, the
+/// request the window system sends): it stays open until the PNG is written, says so, then
+/// closes with status 0, the PNG whole. It used to close at once and write nothing.
+#[test]
+fn closing_the_window_while_a_save_waits_writes_the_png_first() {
+    let _screen = common::screen();
+    common::assert_display();
+    let home = common::fresh_dir("window_save_wait_close");
+    let song = home.join("synthetic_1m5.ply");
+    common::write_synthetic_song(&song, 1_500_000, 5);
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_loudscape"));
+    let child = common::no_dialog(common::home_in(&mut command, &home))
+        .current_dir(&home)
+        .arg(&song)
+        .args(["--press", "Ctrl+S", "--press", "close-window"])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("start loudscape");
+    common::while_running(child, |child, lines| {
+        let mut seen = Vec::new();
+        let timeout = std::time::Duration::from_secs(120);
+        let waiting = common::line_starting(lines, "loudscape: saving ", timeout, &mut seen)
+            .unwrap_or_else(|| panic!("the save never started:\n{}", seen.join("\n")));
+        assert!(
+            waiting.ends_with("(waiting for the view to fill in)"),
+            "the save did not wait for the view, so closing tests nothing: {waiting}"
+        );
+        let closing = common::line_starting(lines, "loudscape: closing once ", timeout, &mut seen)
+            .unwrap_or_else(|| panic!("the window did not say it waits:\n{}", seen.join("\n")));
+        assert!(
+            closing.contains("close again to quit without it"),
+            "{closing}"
+        );
+        let saved = common::line_starting(lines, "loudscape: saved ", timeout, &mut seen)
+            .unwrap_or_else(|| panic!("the PNG was not saved:\n{}", seen.join("\n")));
+        let deadline = std::time::Instant::now() + timeout;
+        let status = loop {
+            if let Some(status) = child.try_wait().expect("wait") {
+                break status;
+            }
+            assert!(
+                std::time::Instant::now() < deadline,
+                "the window did not close once saved: {saved}"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        };
+        assert!(status.success(), "{status}: {}", seen.join("\n"));
+        let pictures = common::saved_pictures(&home);
+        assert_eq!(pictures.len(), 1, "{pictures:?}");
+        assert!(
+            saved.contains(&pictures[0].display().to_string()),
+            "{saved}"
+        );
+        let image = image::open(&pictures[0]).expect("a whole PNG").to_rgba8();
+        assert!(common::coverage(&image) > 0.05, "the picture looks blank");
+    });
+}

@@ -207,6 +207,9 @@ pub(super) struct SaveShot {
     /// The view held its scene complete last frame (every point drawn): the scripted
     /// `--press when-drawn` of tests holds the presses after it until then.
     pub(super) view_drawn: bool,
+    /// The window was asked to close while a save was under way: it closes once the PNG is
+    /// written (`window_screenshot.rs`, `close_after_save`).
+    pub(super) closing: bool,
 }
 
 impl Default for SaveShot {
@@ -220,6 +223,7 @@ impl Default for SaveShot {
             saving: None,
             waiting: None,
             view_drawn: false,
+            closing: false,
         }
     }
 }
