@@ -282,31 +282,23 @@ fn sort_steps(
 }
 
 /// One step of every lane's sorted window: remove `outgoing` (present in the window), insert
-/// `incoming`. Branch-free: `r[j]` is the window with the outgoing key removed (`s[j + 1]`
-/// from the first equal key on, `u32::MAX` past the end), and the new window is
-/// `max(r[j - 1], min(r[j], x))` with `r[-1] = 0`.
+/// `incoming`. Branch-free: `r[j]` is the window with the outgoing key removed (`s[j]` below
+/// the outgoing key; from its first copy on, the sorted window being at or above it there,
+/// `s[j + 1]`, `u32::MAX` past the end), and the new window is `max(r[j - 1], min(r[j], x))`
+/// with `r[-1] = 0`.
 #[inline(always)]
 fn slide(window: &mut [Lane], outgoing: &Lane, incoming: &Lane) {
     let Some(last) = window.len().checked_sub(1) else {
         return;
     };
-    let mut found = [0u32; LANES];
     let mut previous = [0u32; LANES];
     let mut current = window[0];
     for j in 0..last {
         let next = window[j + 1];
-        window[j] = place(
-            &mut found,
-            &mut previous,
-            &current,
-            &next,
-            outgoing,
-            incoming,
-        );
+        window[j] = place(&mut previous, &current, &next, outgoing, incoming);
         current = next;
     }
     window[last] = place(
-        &mut found,
         &mut previous,
         &current,
         &[u32::MAX; LANES],
@@ -318,7 +310,6 @@ fn slide(window: &mut [Lane], outgoing: &Lane, incoming: &Lane) {
 /// One position of [`slide`]: the window's key there (`current`) and after it (`next`).
 #[inline(always)]
 fn place(
-    found: &mut Lane,
     previous: &mut Lane,
     current: &Lane,
     next: &Lane,
@@ -327,12 +318,11 @@ fn place(
 ) -> Lane {
     let mut sorted = [0u32; LANES];
     for l in 0..LANES {
-        found[l] |= if current[l] == outgoing[l] {
-            u32::MAX
+        let shifted = if current[l] >= outgoing[l] {
+            next[l]
         } else {
-            0
+            current[l]
         };
-        let shifted = (next[l] & found[l]) | (current[l] & !found[l]);
         sorted[l] = previous[l].max(shifted.min(incoming[l]));
         previous[l] = shifted;
     }
