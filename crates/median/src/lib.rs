@@ -60,7 +60,7 @@ impl Error {
 /// Checks a filter's shape: `(outer, len)` padded rows and window `size`; returns the medians
 /// per row and the element counts of input and output.
 fn check(rows: usize, len: usize, size: usize) -> Result<(usize, usize, usize), Error> {
-    if size == 0 || size % 2 == 0 {
+    if size.is_multiple_of(2) {
         return Err(Error::Size);
     }
     if len < size {
