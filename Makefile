@@ -70,6 +70,7 @@ test-rust: system venv
 	$(XVFB) $(CARGO) test -- --skip window
 	$(XVFB) $(CARGO) test window -- --test-threads=1
 	$(CARGO) test -q -p loudscape-shader-msl
+	$(CARGO) test -q -p loudscape-median
 
 lint-py: venv
 	$(VENV)/bin/ruff check preprocess bench tests/python tests/web docs
@@ -134,6 +135,7 @@ PLATFORMS ?= aarch64-apple-darwin x86_64-pc-windows-msvc
 check-platforms: system
 	rustup target add $(PLATFORMS)
 	RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check --all-targets $(addprefix --target ,$(PLATFORMS))
+	RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check -p loudscape-median --all-targets $(addprefix --target ,$(PLATFORMS))
 
 # The pip way: build the wheel, install it into a fresh venv, render a song from it. pip builds
 # the app in release (about 6 minutes from clean); `make test` builds the wheel with the dev
