@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from loudscape_extract import native
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.native import available as native_available
+from loudscape_extract.native import median_columns, median_rows
 
 __all__ = [
     "HPSS_KERNEL",
@@ -83,12 +84,12 @@ def median_filter_axis(data: np.ndarray, *, size: int, axis: int) -> np.ndarray:
     as_integers = (
         data.dtype == np.float32 and data.view(unsigned).max() <= _POSITIVE_INFINITY_BITS[unsigned]
     )
-    if as_integers and native.available():
+    if as_integers and native_available():
         # The compiled kernel filters down the columns as they lie, and along the rows.
         keys = _pad_symmetric(data.view(np.uint32), half, axis, np.uint32)
         if axis == 1:
-            return native.median_rows(keys, size).view(np.float32)
-        return native.median_columns(keys, size).view(np.float32)
+            return median_rows(keys, size).view(np.float32)
+        return median_columns(keys, size).view(np.float32)
     import scipy.ndimage  # only here: its import is a cost the compiled kernel saves
 
     # scipy's 1-D running median is about a quarter faster on integers than on floats; it
