@@ -7,10 +7,11 @@
 //! symmetrically by half a window; for a padded row of length `len` this returns the
 //! `len - size + 1` medians of the windows that lie fully inside it.
 //!
-//! Each row keeps its window sorted. A step removes the outgoing key (the first equal key: a
-//! running "found" flag shifts the rest down one place) and inserts the incoming one
-//! (`s'[j] = max(r[j-1], min(r[j], x))` over the shifted keys `r`), both in one branch-free
-//! pass; the median is `s[size / 2]`. Rows are independent, so [`LANES`] of them run side by
+//! Each row keeps its window sorted. A step removes the outgoing key (its first copy: the keys
+//! from the first one at or above it shift down one place; the window being sorted and holding
+//! the key, a comparison per position says so without a running flag) and inserts the incoming
+//! one (`s'[j] = max(r[j-1], min(r[j], x))` over the shifted keys `r`), both in one
+//! branch-free pass; the median is `s[size / 2]`. Rows are independent, so [`LANES`] of them run side by
 //! side in the lanes of one vector (AVX2, chosen at run time, or whatever the compiler makes of
 //! the portable code elsewhere). Filtering down the columns, consecutive columns are the lanes
 //! and load as they lie; filtering along the rows, tiles of [`LANES`] rows are transposed first.
@@ -57,7 +58,7 @@ impl Error {
     }
 }
 
-/// Checks a filter's shape: `(outer, len)` padded rows and window `size`; returns the medians
+/// Checks a filter's shape: `rows` padded rows of `len` keys and window `size`; returns the medians
 /// per row and the element counts of input and output.
 fn check(rows: usize, len: usize, size: usize) -> Result<(usize, usize, usize), Error> {
     if size.is_multiple_of(2) {
