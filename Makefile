@@ -18,7 +18,7 @@ export XDG_RUNTIME_DIR ?= $(shell d=/tmp/loudscape-runtime-$$(id -u); mkdir -p $
 # processes were checked not to hold connections of their own.
 XVFB := $(if $(DISPLAY)$(WAYLAND_DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24 -maxclients 2048 -noreset")
 
-.PHONY: run test system venv build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke fuzz-py demo clean bench-window bench-surface check-platforms test-wheel bench-peers web test-web
+.PHONY: run test system venv native build lint-rust test-rust lint-py test-py test-mesh real-music fuzz fuzz-smoke fuzz-py demo clean bench-window bench-surface check-platforms test-wheel bench-peers web test-web
 
 system:
 	@bash scripts/setup-system.sh
@@ -31,12 +31,24 @@ $(VENV)/.installed: preprocess/pyproject.toml
 
 venv: $(VENV)/.installed
 
+# The extractor's compiled running median (crates/median, loaded by
+# preprocess/loudscape_extract/native.py) built into the package the venv installs editable;
+# without it the extractor falls back to scipy (the same medians, slower). Copied through a
+# temporary name so that a running extractor keeps the file it loaded.
+NATIVE_TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
+NATIVE_SUFFIX     := $(if $(filter Darwin,$(shell uname -s)),.dylib,.so)
+NATIVE_LIB        := preprocess/loudscape_extract/_median$(NATIVE_SUFFIX)
+native:
+	$(CARGO) build --release -p loudscape-median
+	cp $(NATIVE_TARGET_DIR)/release/libloudscape_median$(NATIVE_SUFFIX) $(NATIVE_LIB).tmp
+	mv -f $(NATIVE_LIB).tmp $(NATIVE_LIB)
+
 build: system
 	$(CARGO) build --release
 
 # Opens the demo in a window; with no display, renders every view of the demo to PNG files.
 # The venv holds the extractor the app runs when it is given a song instead of a cloud.
-run: build venv
+run: build venv native
 	@if [ -n "$(DISPLAY)$(WAYLAND_DISPLAY)" ] || [ "$$(uname -s)" = Darwin ]; then \
 		./target/release/loudscape $(DEMO_SONG) $(wildcard $(DEMO_TIMELINE)); \
 	else \
@@ -58,6 +70,7 @@ test-rust: system venv
 	$(XVFB) $(CARGO) test -- --skip window
 	$(XVFB) $(CARGO) test window -- --test-threads=1
 	$(CARGO) test -q -p loudscape-shader-msl
+	$(CARGO) test -q -p loudscape-median
 
 lint-py: venv
 	$(VENV)/bin/ruff check preprocess bench tests/python tests/web docs
@@ -72,16 +85,18 @@ real-music:
 # The extractor's suite runs in PYTEST_JOBS processes (pytest-xdist), each test file in one of
 # them, so a file's module fixtures are built once; PYTEST_JOBS=0 runs it in this process.
 # tests/python stays in one process: its window test (an Xvfb screen of its own) once failed to
-# open its window with another file's tests beside it.
+# open its window with another file's tests beside it. LOUDSCAPE_REQUIRE_NATIVE=1: the
+# compiled running median must be the one in use (preprocess/tests/test_hpss_native.py).
 PYTEST_JOBS ?= auto
 PYTEST_PARALLEL = $(if $(filter 0,$(PYTEST_JOBS)),,-n $(PYTEST_JOBS) --dist loadfile)
-test-py: venv real-music
+test-py: export LOUDSCAPE_REQUIRE_NATIVE = 1
+test-py: venv native real-music
 	$(VENV)/bin/pytest -q $(PYTEST_PARALLEL) preprocess/tests
 	$(VENV)/bin/pytest -q --doctest-modules preprocess/loudscape_extract preprocess/loudscape
 
 # The app's isosurfaces against scikit-image, through the `loudscape` binary (the one the Rust
 # tests use: `cargo build` would rebuild with other features).
-test-mesh: system venv
+test-mesh: system venv native
 	$(CARGO) test --no-run -q
 	LOUDSCAPE_BIN=target/debug/loudscape $(VENV)/bin/pytest -q tests/python
 
@@ -120,6 +135,7 @@ PLATFORMS ?= aarch64-apple-darwin x86_64-pc-windows-msvc
 check-platforms: system
 	rustup target add $(PLATFORMS)
 	RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check --all-targets $(addprefix --target ,$(PLATFORMS))
+	RUSTFLAGS="-D warnings" CARGO_TARGET_DIR=target/platforms $(CARGO) check -p loudscape-median --all-targets $(addprefix --target ,$(PLATFORMS))
 
 # The pip way: build the wheel, install it into a fresh venv, render a song from it. pip builds
 # the app in release (about 6 minutes from clean); `make test` builds the wheel with the dev
@@ -138,16 +154,16 @@ test: WHEEL_PROFILE = dev
 # Benchmarks, not part of `make test` (minutes each; figures in docs/PERFORMANCE.md).
 # 1,000 short songs cold (process pool, two-worker Dask LocalCluster) and the warm rebuild of a
 # 10,000-song timeline, kept in out/bench-timeline/timeline_10000.ply.
-bench-timeline: venv
+bench-timeline: venv native
 	$(PY) bench/bench_timeline.py
 
 # Peak memory of Song extraction on 5, 20 and 60-minute tracks.
-bench-memory: venv
+bench-memory: venv native
 	$(PY) bench/bench_memory.py
 
 # Isosurfaces, both engines (GPU passes, CPU extraction) against VTK's flying edges and
 # scikit-image's marching cubes on the same fields, in the same run.
-bench-surface: build venv
+bench-surface: build venv native
 	$(PY) bench/bench_surface.py --loudscape target/release/loudscape --runs 9
 
 # loudscape against its peers, in the same run, alternated, medians and ratios (issue 37;
@@ -155,7 +171,7 @@ bench-surface: build venv
 # camera and ramp; song extraction against librosa's stft+hpss and ffmpeg's ebur128; an 8-track
 # timeline against ffmpeg two at a time; the isosurfaces against VTK's flying edges; videos
 # (points and volume, still and orbiting camera) against ffmpeg's showcqt spectrum video.
-bench-peers: build venv real-music
+bench-peers: build venv native real-music
 	$(PY) bench/peers_volume.py --loudscape target/release/loudscape
 	$(PY) bench/peers_extract.py
 	$(PY) bench/bench_surface.py --loudscape target/release/loudscape --runs 9
@@ -164,7 +180,7 @@ bench-peers: build venv real-music
 # The window's frame loop under recorded input, release build under Xvfb at 1280x720: orbit
 # frame rates per view, hover read-out latency, isovalue sweep rate, on the demo and a ~5 M-point
 # real song (extracted once into out/bench-window/). BEFORE=path/to/loudscape adds its column.
-bench-window: venv real-music
+bench-window: venv native real-music
 	$(CARGO) build --release
 	$(PY) bench/bench_window.py --loudscape target/release/loudscape $(if $(BEFORE),--vs $(BEFORE))
 
@@ -201,4 +217,4 @@ test-web: web venv
 
 clean:
 	$(CARGO) clean
-	rm -rf $(VENV) $(OUT)
+	rm -rf $(VENV) $(OUT) $(NATIVE_LIB)

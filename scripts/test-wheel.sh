@@ -24,11 +24,24 @@ installed=$(date +%s)
 echo "test-wheel: installed into a fresh venv in $((installed - built)) s"
 
 bin="$work/venv/bin"
+mkdir "$work/home"
 for command in loudscape loudscape-extract; do
     [ -x "$bin/$command" ] || { echo "test-wheel: the wheel installed no $command" >&2; exit 1; }
 done
+# The extractor of the wheel loads its compiled running median (crates/median), from the venv.
+(cd "$work" && env -i PATH=/usr/bin:/bin HOME="$work/home" "$bin/python" -c '
+import os
+import sys
+
+from loudscape_extract import native
+
+path = native.library_path()
+assert native.available(), f"the compiled running median is not loaded (file: {path})"
+assert path.startswith(sys.prefix), path
+print("test-wheel: the extractor loads", os.path.basename(path))
+')
 cp "$root/data/demo_song.flac" "$work/song.flac"
-mkdir "$work/cache" "$work/home"
+mkdir "$work/cache"
 (cd "$work" && env -i PATH=/usr/bin:/bin HOME="$work/home" LOUDSCAPE_CACHE_DIR="$work/cache" \
     ${XDG_RUNTIME_DIR:+XDG_RUNTIME_DIR="$XDG_RUNTIME_DIR"} \
     "$bin/loudscape" render song.flac --size 640x360 --output picture.png)
