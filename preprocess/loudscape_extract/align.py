@@ -30,9 +30,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import fft
 
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.fft import irfft, rfft
 
 #: The envelope's rate in Hz (10 ms steps).
 ENVELOPE_RATE = 100
@@ -188,7 +188,7 @@ def onset_envelope(samples: np.ndarray, sample_rate: int) -> np.ndarray:
     n_frames = int(max(0, (len(x) - n_fft) * ENVELOPE_RATE // rate + 1))
     if n_frames < 2:
         return np.zeros(max(n_frames, 1))
-    freqs = fft.rfftfreq(n_fft, 1.0 / rate)
+    freqs = np.fft.rfftfreq(n_fft, 1.0 / rate)
     edges = np.geomspace(60.0, 5_500.0, _N_BANDS + 1)
     band_of = np.searchsorted(edges, freqs) - 1
     to_bands = np.zeros((len(freqs), _N_BANDS), dtype=np.float32)
@@ -201,7 +201,7 @@ def onset_envelope(samples: np.ndarray, sample_rate: int) -> np.ndarray:
     offsets = np.arange(n_fft)
     for lo in range(0, n_frames, chunk):
         frames = x[starts[lo : lo + chunk, None] + offsets] * window
-        spectrum = fft.rfft(frames, axis=1)
+        spectrum = rfft(frames, axis=1)
         power = spectrum.real**2 + spectrum.imag**2
         bands[lo : lo + chunk] = power @ to_bands
     floor = 1e-10 * max(float(bands.max()), 1e-20)
@@ -223,7 +223,7 @@ class _Correlator:
         m = len(other)
         self.n = n
         self.size = 1 << int(np.ceil(np.log2(n + m)))
-        self.spectrum = fft.rfft(other, self.size)
+        self.spectrum = rfft(other, self.size)
         self.lags = np.arange(0, m - n + 1)
         sums = np.concatenate(([0.0], np.cumsum(other)))
         sq = np.concatenate(([0.0], np.cumsum(other * other)))
@@ -238,7 +238,7 @@ class _Correlator:
         if len(lags) == 0:
             return lags, np.zeros(0)
         w = window - window.mean()
-        raw = fft.irfft(self.spectrum * np.conj(fft.rfft(w, self.size)), self.size)
+        raw = irfft(self.spectrum * np.conj(rfft(w, self.size)), self.size)
         rho = raw[lags] / (self.seg_std * np.linalg.norm(w) + 1e-12)
         return lags, rho
 
@@ -404,9 +404,9 @@ def _gcc_phat_offset(
     ex_a = a[start : start + n_ex] * np.hanning(n_ex)
     ex_b = b[b_lo : b_lo + n_ex + 2 * margin]
     size = 1 << int(np.ceil(np.log2(len(ex_a) + len(ex_b))))
-    cross = fft.rfft(ex_b, size) * np.conj(fft.rfft(ex_a, size))
+    cross = rfft(ex_b, size) * np.conj(rfft(ex_a, size))
     cross /= np.abs(cross) + 1e-12
-    corr = fft.irfft(cross, size)[: 2 * margin + 1]
+    corr = irfft(cross, size)[: 2 * margin + 1]
     # Prefer the peak near the envelope's estimate; the whole range measures the noise.
     near = int(REFINE_RANGE_S * sample_rate)
     window = corr[margin - near : margin + near + 1]

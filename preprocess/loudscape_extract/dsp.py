@@ -1,4 +1,4 @@
-"""Small signal-processing helpers on numpy and scipy.fft.
+"""Small signal-processing helpers on numpy and scipy's pocketfft (`fft.py`).
 
 ``scipy.signal`` is not used: importing it costs about a second here, a fifth of the time
 budget for a whole song. What Song mode needs from it is small: a Hann window, a
@@ -13,7 +13,8 @@ import functools
 import math
 
 import numpy as np
-import scipy.fft
+
+from loudscape_extract.fft import irfft, rfft
 
 __all__ = [
     "fft_convolve",
@@ -121,7 +122,7 @@ def fft_convolve(x: np.ndarray, h: np.ndarray, *, dtype=np.float64) -> np.ndarra
     size = 1 << max(16, math.ceil(math.log2(4 * m)))
     step = size - m + 1
     n_blocks = -(-n // step)
-    spectrum = scipy.fft.rfft(np.asarray(h, dtype=dtype), size)
+    spectrum = rfft(np.asarray(h, dtype=dtype), size)
     padded = np.zeros((x.shape[0], m - 1 + n_blocks * step + size), dtype=dtype)
     padded[:, m - 1 : m - 1 + n] = x
     y = np.empty((x.shape[0], n_blocks * step), dtype=dtype)
@@ -137,9 +138,9 @@ def fft_convolve(x: np.ndarray, h: np.ndarray, *, dtype=np.float64) -> np.ndarra
             strides=(padded.strides[0], step * item, item),
             writeable=False,
         )
-        spectra = scipy.fft.rfft(segments, axis=-1)
+        spectra = rfft(segments, axis=-1)
         spectra *= spectrum
-        out = scipy.fft.irfft(spectra, size, axis=-1)
+        out = irfft(spectra, size, axis=-1)
         y[:, first * step : (first + count) * step] = out[:, :, m - 1 :].reshape(x.shape[0], -1)
     return y[:, :n].reshape(*lead, n)
 

@@ -20,11 +20,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
 from numpy.lib.stride_tricks import sliding_window_view
 
 from loudscape_extract.dsp import sos_filter
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.fft import irfft, rfft
 from loudscape_extract.loudness import (
     ABSOLUTE_GATE_LUFS,
     TRUE_PEAK_OVERSAMPLING,
@@ -174,7 +174,7 @@ def _interpolated_peak(
     flat = np.zeros(per_phase * factor)
     flat[: taps.shape[0]] = taps
     # Phase p, as a causal filter: h_p[k] = taps[p + k * factor].
-    spectra = scipy.fft.rfft(flat.reshape(per_phase, factor).T, size, axis=-1)
+    spectra = rfft(flat.reshape(per_phase, factor).T, size, axis=-1)
     spectra = spectra.astype(np.complex64)
     step = size - per_phase + 1
     n = padded.shape[-1]
@@ -185,11 +185,11 @@ def _interpolated_peak(
         stop = min(first + size, n)
         block[:] = 0.0
         block[:, : stop - first] = padded[:, first:stop]
-        spectrum = scipy.fft.rfft(block, axis=-1)
+        spectrum = rfft(block, axis=-1)
         m = min(step, count - first)
         best = out[first : first + m]
         for phase in range(factor):
-            y = scipy.fft.irfft(spectrum * spectra[phase], size, axis=-1)
+            y = irfft(spectrum * spectra[phase], size, axis=-1)
             np.maximum(best, np.abs(y[:, per_phase - 1 : per_phase - 1 + m]).max(axis=0), out=best)
     return out
 

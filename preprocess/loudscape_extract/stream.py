@@ -24,13 +24,13 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-import scipy.fft
 from numpy.lib.stride_tricks import sliding_window_view
 
 from loudscape_extract.curves import loudness_curves
 from loudscape_extract.dsp import hann_window
 from loudscape_extract.dynamics import dr_from_blocks
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.fft import rfft
 from loudscape_extract.hpss import (
     HPSS_KERNEL,
     HPSS_MARGIN,
@@ -102,7 +102,7 @@ def _magnitude(frames: np.ndarray, window_scaled: np.ndarray) -> np.ndarray:
     magnitude = np.empty((frames.shape[1] // 2 + 1, n_frames), dtype=np.float32)
     for start in range(0, n_frames, _FFT_CHUNK_FRAMES):
         stop = min(start + _FFT_CHUNK_FRAMES, n_frames)
-        spectrum = scipy.fft.rfft(frames[start:stop] * window_scaled, axis=1)
+        spectrum = rfft(frames[start:stop] * window_scaled, axis=1)
         magnitude[:, start:stop] = np.abs(spectrum).T
     magnitude[0] *= np.float32(0.5)
     magnitude[-1] *= np.float32(0.5)

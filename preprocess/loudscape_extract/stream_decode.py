@@ -18,7 +18,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.fft
 from numpy.lib.stride_tricks import sliding_window_view
 
 from loudscape_extract.audio import (
@@ -38,6 +37,7 @@ from loudscape_extract.dynamics import (
     highpass_sos,
 )
 from loudscape_extract.errors import ExtractError
+from loudscape_extract.fft import irfft, rfft
 from loudscape_extract.loudness import (
     TRUE_PEAK_OVERSAMPLING,
     WindowMaxima,
@@ -232,7 +232,7 @@ def _phase_outputs(x: np.ndarray, phases: list[np.ndarray], count: int):
     size = 1 << max(12, math.ceil(math.log2(4 * m)))
     step = size - m + 1
     n_blocks = -(-count // step)
-    spectra = [scipy.fft.rfft(np.asarray(h, dtype=np.float32), size) for h in phases]
+    spectra = [rfft(np.asarray(h, dtype=np.float32), size) for h in phases]
     padded = np.zeros((rows, n_blocks * step + m - 1), dtype=np.float32)
     padded[:, : min(n, padded.shape[1])] = x[:, : padded.shape[1]]
     batch = max(1, (1 << 19) // size)
@@ -246,11 +246,11 @@ def _phase_outputs(x: np.ndarray, phases: list[np.ndarray], count: int):
             strides=(padded.strides[0], step * item, item),
             writeable=False,
         )
-        spectrum = scipy.fft.rfft(segments, axis=-1)
+        spectrum = rfft(segments, axis=-1)
         begin = first * step
         length = min(blocks * step, count - begin)
         for index, h_spectrum in enumerate(spectra):
-            y = scipy.fft.irfft(spectrum * h_spectrum, size, axis=-1)[:, :, m - 1 :]
+            y = irfft(spectrum * h_spectrum, size, axis=-1)[:, :, m - 1 :]
             yield index, begin, y.reshape(rows, -1)[:, :length]
 
 
