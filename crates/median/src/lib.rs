@@ -343,21 +343,12 @@ pub unsafe extern "C" fn loudscape_median_rows(
     size: usize,
     output: *mut u32,
 ) -> i32 {
-    let (_, n_in, n_out) = match check(rows, len, size) {
-        Ok(counts) => counts,
-        Err(error) => return error.code(),
-    };
-    if input.is_null() || output.is_null() {
-        return ERR_NULL;
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe {
+        entry(input, rows, len, size, output, |input, output| {
+            median_rows(input, rows, len, size, output)
+        })
     }
-    // SAFETY: the caller guarantees the counts checked above.
-    let (input, output) = unsafe {
-        (
-            std::slice::from_raw_parts(input, n_in),
-            std::slice::from_raw_parts_mut(output, n_out),
-        )
-    };
-    guarded(|| median_rows(input, rows, len, size, output))
 }
 
 /// [`median_columns`] for C callers: `input` holds `len * columns` keys, `output` room for
@@ -373,7 +364,29 @@ pub unsafe extern "C" fn loudscape_median_columns(
     size: usize,
     output: *mut u32,
 ) -> i32 {
-    let (_, n_in, n_out) = match check(columns, len, size) {
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe {
+        entry(input, columns, len, size, output, |input, output| {
+            median_columns(input, len, columns, size, output)
+        })
+    }
+}
+
+/// What both entry points do around their filter: the counts checked, null pointers refused,
+/// the pointers made slices of the checked lengths, and the filter run without unwinding.
+///
+/// # Safety
+/// `input` and `output` must point to as many valid, non-overlapping `u32`s as [`check`]
+/// counts for `lanes`, `len` and `size`.
+unsafe fn entry(
+    input: *const u32,
+    lanes: usize,
+    len: usize,
+    size: usize,
+    output: *mut u32,
+    filter: impl FnOnce(&[u32], &mut [u32]) -> Result<(), Error>,
+) -> i32 {
+    let (_, n_in, n_out) = match check(lanes, len, size) {
         Ok(counts) => counts,
         Err(error) => return error.code(),
     };
@@ -387,7 +400,7 @@ pub unsafe extern "C" fn loudscape_median_columns(
             std::slice::from_raw_parts_mut(output, n_out),
         )
     };
-    guarded(|| median_columns(input, len, columns, size, output))
+    guarded(|| filter(input, output))
 }
 
 /// 1 where the vector path (AVX2) runs on this CPU, else 0.
