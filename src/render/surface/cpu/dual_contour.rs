@@ -93,8 +93,14 @@ pub fn write(
         threads,
         vertices,
         indices,
-        || -> ([Vec<u32>; 4], Option<usize>) { (std::array::from_fn(|_| vec![0u32; width]), None) },
-        |(maps, last_row), rows, row, vertices, indices| {
+        || -> ([Vec<u32>; 4], Option<usize>, EdgeRows) {
+            (
+                std::array::from_fn(|_| vec![0u32; width]),
+                None,
+                EdgeRows::new(width + 1),
+            )
+        },
+        |(maps, last_row, edges), rows, row, vertices, indices| {
             let cells_y = rows.cells_y;
             let (cy, cz) = (row % cells_y, row / cells_y);
             // The vertices of this row and of the rows one below in y, z and both; after row
@@ -105,6 +111,7 @@ pub fn write(
                 maps.swap(0, 1);
                 maps.swap(2, 3);
             }
+            edges.next_row(follows);
             for (k, map) in maps.iter_mut().enumerate() {
                 let (dy, dz) = (k & 1, k >> 1);
                 if cy < dy || cz < dz || (follows && dy == 1) {
@@ -117,7 +124,7 @@ pub fn write(
                 }
             }
             for (cx, mask) in rows.cells(cy, cz) {
-                vertices.push(cell_vertex(grid, iso, cx, cy, cz, mask));
+                vertices.push(cell_vertex(grid, iso, cx, cy, cz, mask, edges));
                 let s = CpuGrid::cell_sample(cx, cy, cz);
                 let edges = quad_edges(s, mask);
                 for axis in 0..3 {
@@ -143,10 +150,81 @@ pub fn write(
     );
 }
 
+/// Each crossed edge's unit normal and crossing, worked out by the first of the four cells
+/// around it to need them and read by the others (they depend only on the edge's two samples):
+/// the edges from the samples of the four sample rows a cell row's corners lie on, slot `dy + 2
+/// dz` holding sample row (cy - 1 + dy, cz - 1 + dz) of cell row (cy, cz), the edge along axis
+/// a from the sample at x = cx - 1 + dx at `3 (cx + dx) + a`. An entry is valid while its stamp
+/// is its slot's; the next cell row in y takes over the two rows at dy = 1 as its rows at
+/// dy = 0 (as the vertex maps are), so an edge is worked out at most twice (once per cell row in
+/// z around it) instead of four times. The same operations on the same values either way, so
+/// the same mesh.
+struct EdgeRows {
+    /// (normal x, y, z, crossing t) of each edge.
+    entries: [Vec<[f32; 4]>; 4],
+    stamps: [Vec<u32>; 4],
+    /// The stamp of each slot's valid entries.
+    slot_stamps: [u32; 4],
+    next_stamp: u32,
+}
+
+impl EdgeRows {
+    /// Rows of `width` samples (cells along x, plus one).
+    fn new(width: usize) -> Self {
+        Self {
+            entries: std::array::from_fn(|_| vec![[0.0; 4]; 3 * width]),
+            stamps: std::array::from_fn(|_| vec![0; 3 * width]),
+            slot_stamps: [0; 4],
+            next_stamp: 0,
+        }
+    }
+
+    /// Moves to the next cell row: after the cell row one below in y (`follows`) its rows at
+    /// dy = 1 are this row's at dy = 0 and only the rows at dy = 1 are new; otherwise all four.
+    fn next_row(&mut self, follows: bool) {
+        if follows {
+            self.entries.swap(0, 1);
+            self.stamps.swap(0, 1);
+            self.slot_stamps.swap(0, 1);
+            self.entries.swap(2, 3);
+            self.stamps.swap(2, 3);
+            self.slot_stamps.swap(2, 3);
+        }
+        for slot in 0..4 {
+            if !follows || slot & 1 == 1 {
+                self.next_stamp += 1;
+                self.slot_stamps[slot] = self.next_stamp;
+            }
+        }
+    }
+
+    /// Entry `i` of row slot `slot`, from `make` unless it is there already.
+    #[inline]
+    fn get(&mut self, slot: usize, i: usize, make: impl FnOnce() -> [f32; 4]) -> [f32; 4] {
+        let stamp = self.slot_stamps[slot];
+        if self.stamps[slot][i] == stamp {
+            self.entries[slot][i]
+        } else {
+            let entry = make();
+            self.entries[slot][i] = entry;
+            self.stamps[slot][i] = stamp;
+            entry
+        }
+    }
+}
+
 /// The vertex of active cell (cx, cy, cz) with corner mask `mask` (as `cell_vertices` in the
-/// shader).
+/// shader), its crossed edges' normals and crossings through `edges`.
 #[inline]
-fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: u32) -> MeshVertex {
+fn cell_vertex(
+    grid: &CpuGrid,
+    iso: f32,
+    cx: usize,
+    cy: usize,
+    cz: usize,
+    mask: u32,
+    edges: &mut EdgeRows,
+) -> MeshVertex {
     let origin = grid.cell_origin(cx, cy, cz);
     let strides = grid.strides();
     let h = grid.hp();
@@ -178,18 +256,25 @@ fn cell_vertex(grid: &CpuGrid, iso: f32, cx: usize, cy: usize, cz: usize, mask: 
         crossed &= crossed - 1;
         let ka = cube_edge_start(e);
         let kb = ka | (1 << (e >> 2));
-        let (va, vb) = (values[ka as usize], values[kb as usize]);
-        let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+        // The edge's normal and crossing depend only on its two samples (see [`EdgeRows`]).
+        let slot = (ka >> 1) as usize;
+        let at = 3 * (cx + (ka & 1) as usize) + (e >> 2) as usize;
+        let [nx, ny, nz, t] = edges.get(slot, at, || {
+            let (va, vb) = (values[ka as usize], values[kb as usize]);
+            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+            let (ga, gb) = (gradients[ka as usize], gradients[kb as usize]);
+            let g = ga + (gb - ga) * t;
+            let length = g.length();
+            let n = if length > 1e-20 {
+                g / length
+            } else {
+                Vec3A::ZERO
+            };
+            [n.x, n.y, n.z, t]
+        });
+        let n = Vec3A::new(nx, ny, nz);
         let pa = Vec3A::from(corner_offset(ka));
         let p = pa + (Vec3A::from(corner_offset(kb)) - pa) * t;
-        let (ga, gb) = (gradients[ka as usize], gradients[kb as usize]);
-        let g = ga + (gb - ga) * t;
-        let length = g.length();
-        let n = if length > 1e-20 {
-            g / length
-        } else {
-            Vec3A::ZERO
-        };
         a00 += n.x * n.x;
         a01 += n.x * n.y;
         a02 += n.x * n.z;
