@@ -15,7 +15,6 @@ pub mod render_compare;
 pub mod video;
 pub mod video_encode;
 pub mod video_frames;
-pub mod video_still;
 pub mod voxelize;
 
 /// `.npy` grids: in the library (`loudscape::data::npy`), where the fuzzers reach them too.

@@ -80,6 +80,7 @@ pub fn run(
         &settings,
         !args.draw.no_labels,
         aligned.note.as_deref(),
+        None,
     )?;
     super::render::save_png(&image, &args.output)?;
     let detail = match what {

@@ -22,6 +22,7 @@ use loudscape::render::gpu::target::{RenderTarget, TargetReader};
 use loudscape::render::markers::MarkerBox;
 use loudscape::render::points::PointStyle;
 use loudscape::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use loudscape::render::still::StillLayer;
 use loudscape::view::camera::Camera;
 use loudscape::view::frame_view::FrameView;
 
@@ -29,7 +30,6 @@ use super::args::{ViewChoice, camera_arg, check_iso, check_output, load_cloud, s
 use super::render::{DrawArgs, prepare_grid};
 use super::video_encode::{EncodeSpec, Encoder, Progress, ProgressMode, Sound, song_sound};
 use super::video_frames::{self, Layout, Rendered, StripLayer};
-use super::video_still::StillLayer;
 
 /// The largest frame: 4K UHD (either way round).
 pub const MAX_PIXELS: u64 = 3840 * 2160;
@@ -304,7 +304,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
     let view_height = size.1 - strip_height;
 
     let gpu = GpuContext::new_headless()?;
-    // A still camera's scene is drawn once (`video_still`), so `auto` draws it in full even on
+    // A still camera's scene is drawn once (`render/still.rs`), so `auto` draws it in full even on
     // a software rasterizer; a moving camera draws every frame afresh.
     let fast = match args.detail {
         Detail::Full => false,
@@ -395,8 +395,8 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
         .map(|target| TargetReader::new(&gpu.device, target));
     let view_bytes = layout.view_bytes();
     video_frames::run(layout, encoder, progress, |out| {
-        // A still camera's scene, drawn once (`video_still`).
-        let mut still = StillLayer::default();
+        // A still camera's scene (each half of a compare's), drawn once (`render/still.rs`).
+        let mut stills: [StillLayer; 2] = Default::default();
         // The frame drawn last, still to be read back and handed on.
         let mut pending: Option<Pending> = None;
         // Reads `frame` back (where its copy is still on the GPU) and hands it on; false
@@ -425,7 +425,7 @@ pub fn run(args: VideoArgs) -> anyhow::Result<()> {
                 renderer: &renderer,
                 target: &targets[slot],
                 reader: &readers[slot],
-                still: &mut still,
+                stills: &mut stills,
             };
             let (overlay, index) = render_video_frame(
                 &mut gpu_frame,
@@ -496,8 +496,8 @@ struct GpuFrame<'a> {
     /// The view's size.
     target: &'a RenderTarget,
     reader: &'a TargetReader,
-    /// A still camera's scene, drawn once (`video_still`).
-    still: &'a mut StillLayer,
+    /// A still camera's scene (each half of a compare's), drawn once (`render/still.rs`).
+    stills: &'a mut [StillLayer; 2],
 }
 
 /// Frame `k` of the video, without the strip, into `out` (the view's RGBA rows); returns what
@@ -556,9 +556,7 @@ fn render_video_frame(
             view.moving = plan.fast;
             view.frame_index = k as u32;
             if plan.motion == CameraMotion::Fixed {
-                frame
-                    .still
-                    .render(gpu, renderer, data, &view, &settings, frame.target);
+                frame.stills[0].render(gpu, renderer, data, &view, &settings, frame.target);
             } else {
                 loudscape::render::headless::render_into(
                     gpu,
@@ -625,6 +623,8 @@ fn render_video_frame(
                     Some(motion.camera(base, elapsed, head_x))
                 }
             };
+            // A still camera's halves are drawn once, the playheads over them every frame.
+            let stills = (plan.motion == CameraMotion::Fixed).then_some(&mut *frame.stills);
             let image = render_compare_image(
                 gpu,
                 renderer,
@@ -635,6 +635,7 @@ fn render_video_frame(
                 &settings,
                 *labels,
                 note.as_deref(),
+                stills,
             )?;
             out.copy_from_slice(image.as_raw());
             Ok((Vec::new(), None))

@@ -13,6 +13,7 @@ use crate::render::gpu::target::RenderTarget;
 use crate::render::grid::difference::DifferenceMeasure;
 use crate::render::headless::render_frame;
 use crate::render::scene::{RenderSettings, Renderer, SceneData, ViewKind};
+use crate::render::still::StillLayer;
 use crate::render::volume::{TransferPreset, VolumeSettings};
 use crate::view::camera::Camera;
 use crate::view::frame_view::FrameView;
@@ -138,15 +139,18 @@ pub fn render_compare_image(
     base: &RenderSettings,
     labels_on: bool,
     note: Option<&str>,
+    stills: Option<&mut [StillLayer; 2]>,
 ) -> anyhow::Result<image::RgbaImage> {
     let picture = submit_compare_image(
-        gpu, renderer, scene, what, camera, size, base, labels_on, note,
+        gpu, renderer, scene, what, camera, size, base, labels_on, note, stills,
     )?;
     Ok(picture.finish(&gpu.device, Wait::Blocking)?)
 }
 
 /// [`render_compare_image`] up to the GPU: the halves (or the difference) rendered and their
 /// read-backs submitted, finished by [`PendingPicture::finish`] where the caller waits best.
+/// With `stills` (a video's still camera) each half is drawn once into its layer and each
+/// picture draws only the box and the markers over it, the same pixels (`render/still.rs`).
 #[allow(clippy::too_many_arguments)]
 pub fn submit_compare_image(
     gpu: &GpuContext,
@@ -158,6 +162,7 @@ pub fn submit_compare_image(
     base: &RenderSettings,
     labels_on: bool,
     note: Option<&str>,
+    mut stills: Option<&mut [StillLayer; 2]>,
 ) -> anyhow::Result<PendingPicture> {
     let needs_grids = match what {
         CompareView::SideBySide(view) => view != ViewKind::Points,
@@ -175,7 +180,12 @@ pub fn submit_compare_image(
                 view,
                 ..base.clone()
             };
-            if view == ViewKind::Surface {
+            // One camera for both: the boxes are the same, so A's fitted view is B's.
+            let frame = view_for(camera, &scene.data_a, half, size.1, 2.0);
+            let held = stills
+                .as_deref()
+                .is_some_and(|stills| stills.iter().all(|still| still.holds(&frame)));
+            if view == ViewKind::Surface && !held {
                 for data in [&scene.data_a, &scene.data_b] {
                     if let Some(grid) = data.grid.as_ref() {
                         renderer
@@ -185,10 +195,14 @@ pub fn submit_compare_image(
                     }
                 }
             }
-            // One camera for both: the boxes are the same, so A's fitted view is B's.
-            let frame = view_for(camera, &scene.data_a, half, size.1, 2.0);
-            let targets = [&scene.data_a, &scene.data_b]
-                .map(|data| render_frame(gpu, renderer, Some(data), &frame, &settings));
+            let [still_a, still_b] = match stills.as_deref_mut() {
+                Some([a, b]) => [Some(a), Some(b)],
+                None => [None, None],
+            };
+            let targets = [
+                draw_half(gpu, renderer, still_a, &scene.data_a, &frame, &settings),
+                draw_half(gpu, renderer, still_b, &scene.data_b, &frame, &settings),
+            ];
             compose(
                 gpu,
                 scene,
@@ -209,7 +223,8 @@ pub fn submit_compare_image(
                 .context("the difference grid was not built")?;
             let settings = difference_settings(base);
             let frame = view_for(camera, &grids.data, size.0, size.1, 1.0);
-            let target = render_frame(gpu, renderer, Some(&grids.data), &frame, &settings);
+            let still = stills.map(|s| &mut s[0]);
+            let target = draw_half(gpu, renderer, still, &grids.data, &frame, &settings);
             compose(
                 gpu,
                 scene,
@@ -222,6 +237,26 @@ pub fn submit_compare_image(
                 note,
             )
         }
+    }
+}
+
+/// `data` seen from `frame`: drawn whole, or from its still layer (drawn into it first when the
+/// layer holds another view).
+fn draw_half(
+    gpu: &GpuContext,
+    renderer: &Renderer,
+    still: Option<&mut StillLayer>,
+    data: &SceneData,
+    frame: &FrameView,
+    settings: &RenderSettings,
+) -> RenderTarget {
+    match still {
+        Some(still) => {
+            let target = RenderTarget::new(&gpu.device, frame.width, frame.height);
+            still.render(gpu, renderer, data, frame, settings, &target);
+            target
+        }
+        None => render_frame(gpu, renderer, Some(data), frame, settings),
     }
 }
 

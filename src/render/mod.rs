@@ -19,6 +19,7 @@ pub mod points;
 pub mod points_attributes;
 pub mod scene;
 pub mod shaders;
+pub mod still;
 pub mod surface;
 pub mod transfer;
 pub mod volume;

@@ -552,6 +552,7 @@ pub(super) fn compare_screenshot(
             settings,
             settings.show_box,
             None,
+            None,
         )
     })
     .unwrap_or_else(|| Err(anyhow::anyhow!("the compare is not ready yet")))

@@ -198,6 +198,7 @@ fn picture(what: CompareView, size: (u32, u32)) -> image::RgbaImage {
         &settings,
         true,
         None,
+        None,
     )
     .expect("render")
 }

@@ -561,3 +561,56 @@ fn frames_in_flight_are_read_back_each_from_its_own_target() {
             .is_err()
     );
 }
+
+/// A compare video with a still camera draws each half once (`render/still.rs`): its pictures
+/// equal the compare picture drawn whole, byte for byte, side by side (points and surface) and
+/// the difference, at two playheads, and each layer is drawn once.
+#[test]
+fn a_still_compare_picture_is_the_compare_drawn_whole_byte_for_byte() {
+    use loudscape::picture::compare::{CompareView, render_compare_image};
+    use loudscape::render::compare::CompareScene;
+    use loudscape::render::grid::difference::DifferenceMeasure;
+    use loudscape::render::markers::MarkerBox;
+    use loudscape::render::scene::{RenderSettings, Renderer, ViewKind};
+    use loudscape::render::still::StillLayer;
+    let gpu = common::gpu();
+    let renderer = Renderer::new(&gpu.device);
+    let a = common::demo_song();
+    let b = loudscape::extract::open_for_command(&repo().join("data/fixture_song.ply"))
+        .expect("the fixture song");
+    let mut scene = CompareScene::new(&gpu.device, &renderer, &a, &b).expect("the compare");
+    let size = (480, 200);
+    for what in [
+        CompareView::SideBySide(ViewKind::Points),
+        CompareView::SideBySide(ViewKind::Surface),
+        CompareView::Difference(DifferenceMeasure::Density),
+    ] {
+        let mut stills: [StillLayer; 2] = Default::default();
+        for x in [-0.3f32, 0.4] {
+            let settings = RenderSettings {
+                markers: vec![MarkerBox::playhead(x)],
+                ..Default::default()
+            };
+            let picture = |stills: Option<&mut [StillLayer; 2]>, scene: &mut CompareScene| {
+                render_compare_image(
+                    &gpu, &renderer, scene, what, None, size, &settings, true, None, stills,
+                )
+                .expect("the compare picture")
+            };
+            let whole = picture(None, &mut scene);
+            let still = picture(Some(&mut stills), &mut scene);
+            let differ = whole
+                .pixels()
+                .zip(still.pixels())
+                .filter(|(p, q)| p != q)
+                .count();
+            assert_eq!(differ, 0, "{what:?}, playhead {x}: pixels differ");
+        }
+        let draws = stills.each_ref().map(StillLayer::draws);
+        let expected = match what {
+            CompareView::SideBySide(_) => [1, 1],
+            CompareView::Difference(_) => [1, 0],
+        };
+        assert_eq!(draws, expected, "{what:?}: each half drawn once");
+    }
+}

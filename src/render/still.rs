@@ -1,16 +1,17 @@
-//! A still camera's video draws its scene once. With `--camera fixed` (the default) only the
-//! playhead (a timeline's song band) and the labels painted on the CPU change from frame to
+//! A still camera's video draws its scene once. With `video --camera fixed` (the default) only
+//! the playhead (a timeline's song band) and the labels painted on the CPU change from frame to
 //! frame, so the points, surface or volume are drawn once into a layer of their own (colour and
 //! depth, without the box and the markers), and every frame copies that layer into its target
 //! and draws the box and the markers over it ([`Renderer::render_overlay`]), the window's way
 //! of redrawing a refined view when only the playhead moves (`ui/progressive.rs`). The frame is
 //! what one [`Renderer::render`] draws: the same passes in the same order over the same depth.
+//! An A/B compare's video keeps one layer a half (`picture::compare::submit_compare_image`).
 
-use loudscape::render::gpu::context::GpuContext;
-use loudscape::render::gpu::target::RenderTarget;
-use loudscape::render::headless::render_into;
-use loudscape::render::scene::{Recording, RenderSettings, Renderer, SceneData};
-use loudscape::view::frame_view::FrameView;
+use crate::render::gpu::context::GpuContext;
+use crate::render::gpu::target::RenderTarget;
+use crate::render::headless::render_into;
+use crate::render::scene::{Recording, RenderSettings, Renderer, SceneData};
+use crate::view::frame_view::FrameView;
 
 /// The scene drawn once for a still camera, kept for the frames that follow.
 #[derive(Default)]
@@ -23,6 +24,18 @@ pub struct StillLayer {
 }
 
 impl StillLayer {
+    /// Whether the layer holds the scene seen from `view` (drawn for it already).
+    pub fn holds(&self, view: &FrameView) -> bool {
+        self.drawn_for
+            .as_ref()
+            .is_some_and(|drawn| same_view(drawn, view))
+    }
+
+    /// How many times the scene was drawn into the layer.
+    pub fn draws(&self) -> u32 {
+        self.draws
+    }
+
     /// Draws the frame of `data` seen from `view` with `settings` into `target`: the scene from
     /// the layer (drawn first when the view changed), the box and the markers over it.
     pub fn render(
@@ -35,22 +48,19 @@ impl StillLayer {
         target: &RenderTarget,
     ) {
         let (width, height) = (target.width, target.height);
-        let layer = match &self.target {
-            Some(layer) if (layer.width, layer.height) == (width, height) => layer,
-            _ => {
-                self.drawn_for = None;
-                self.target
-                    .insert(RenderTarget::new(&gpu.device, width, height))
-            }
+        if self
+            .target
+            .as_ref()
+            .is_none_or(|layer| (layer.width, layer.height) != (width, height))
+        {
+            self.drawn_for = None;
+            self.target = Some(RenderTarget::new(&gpu.device, width, height));
+        }
+        let drawn = self.holds(view);
+        let Some(layer) = self.target.as_ref() else {
+            return;
         };
-        // The frame's index only seeds the volume's ray jitter: one still picture, one seed.
-        let same = |drawn: &FrameView| {
-            drawn.camera == view.camera
-                && drawn.world_from_data == view.world_from_data
-                && drawn.moving == view.moving
-                && (drawn.width, drawn.height) == (view.width, view.height)
-        };
-        if !self.drawn_for.as_ref().is_some_and(same) {
+        if !drawn {
             let mut bare = settings.clone();
             bare.markers.clear();
             bare.show_box = false;
@@ -83,13 +93,22 @@ impl StillLayer {
     }
 }
 
+/// Whether two views see the same scene: the frame's index only seeds the volume's ray jitter
+/// (one still picture, one seed).
+fn same_view(a: &FrameView, b: &FrameView) -> bool {
+    a.camera == b.camera
+        && a.world_from_data == b.world_from_data
+        && a.moving == b.moving
+        && (a.width, a.height) == (b.width, b.height)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use loudscape::render::markers::MarkerBox;
-    use loudscape::render::points::PointStyle;
-    use loudscape::render::scene::ViewKind;
-    use loudscape::view::camera::Camera;
+    use crate::render::markers::MarkerBox;
+    use crate::render::points::PointStyle;
+    use crate::render::scene::ViewKind;
+    use crate::view::camera::Camera;
 
     /// Every view of the demo through the layer equals one `render` of it, byte for byte, at
     /// two playheads (the second frame reuses the layer), and the layer is drawn once.
@@ -98,7 +117,7 @@ mod tests {
         let gpu = GpuContext::new_headless().expect("a GPU adapter (lavapipe will do)");
         let renderer = Renderer::new(&gpu.device);
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/demo_song.ply");
-        let cloud = crate::commands::args::load_cloud(&path).expect("the demo cloud");
+        let cloud = crate::extract::open_for_command(&path).expect("the demo cloud");
         let (w, h) = (320, 180);
         for view_kind in [ViewKind::Points, ViewKind::Surface, ViewKind::Volume] {
             let mut settings = RenderSettings {
@@ -108,10 +127,14 @@ mod tests {
             settings.points.size_px = PointStyle::size_for(cloud.points.len());
             let mut data = SceneData::upload(&gpu.device, &gpu.queue, &renderer, &cloud);
             if view_kind != ViewKind::Points {
-                crate::commands::render::prepare_grid(
-                    &gpu, &renderer, &cloud, &mut data, &settings,
-                )
-                .expect("the grid");
+                data.ensure_grid(&gpu.device, &gpu.queue, &renderer, &cloud, &settings.voxels)
+                    .expect("the grid");
+            }
+            if let (ViewKind::Surface, Some(grid)) = (view_kind, data.grid.as_ref()) {
+                renderer
+                    .surface
+                    .extract_blocking(&gpu.queue, &data.surface, grid, &settings.surface)
+                    .expect("the surface");
             }
             let camera = FrameView::fitted(
                 Camera::default(),
@@ -140,7 +163,8 @@ mod tests {
                     .count();
                 assert_eq!(differ, 0, "{view_kind:?}, playhead {x}: pixels differ");
             }
-            assert_eq!(still.draws, 1, "{view_kind:?}: the scene drawn once");
+            assert_eq!(still.draws(), 1, "{view_kind:?}: the scene drawn once");
+            assert!(still.holds(&view));
         }
     }
 }
