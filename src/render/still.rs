@@ -75,14 +75,7 @@ impl StillLayer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("video::still_frame"),
             });
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
-        for (from, to) in [(&layer.color, &target.color), (&layer.depth, &target.depth)] {
-            encoder.copy_texture_to_texture(from.as_image_copy(), to.as_image_copy(), size);
-        }
+        layer.copy_into(&mut encoder, target);
         let recording = Recording {
             queue: &gpu.queue,
             encoder: &mut encoder,

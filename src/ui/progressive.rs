@@ -389,17 +389,7 @@ impl ProgressivePoints {
             };
             renderer.render_points_slice(recording, data, view, &bare, range);
         }
-        let size = wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        };
-        for (from, to) in [
-            (&points.color, &target.color),
-            (&points.depth, &target.depth),
-        ] {
-            encoder.copy_texture_to_texture(from.as_image_copy(), to.as_image_copy(), size);
-        }
+        points.copy_into(encoder, target);
         // The points no slice has reached yet stand in sparsely (the subset drawn while moving),
         // so the picture is whole from the first frame at rest; a frame without a slice has
         // not prepared the points' parameters and needs none (the refinement is complete).

@@ -69,6 +69,19 @@ impl RenderTarget {
         self.width == width.max(1) && self.height == height.max(1)
     }
 
+    /// Records a copy of this target's colour and depth into `to` (of the same size): a picture
+    /// drawn once, to draw more over it (the window's refined points, a video's still view).
+    pub fn copy_into(&self, encoder: &mut wgpu::CommandEncoder, to: &RenderTarget) {
+        let size = wgpu::Extent3d {
+            width: self.width,
+            height: self.height,
+            depth_or_array_layers: 1,
+        };
+        for (from, to) in [(&self.color, &to.color), (&self.depth, &to.depth)] {
+            encoder.copy_texture_to_texture(from.as_image_copy(), to.as_image_copy(), size);
+        }
+    }
+
     /// Copies the colour texture to the CPU as tightly packed RGBA8 rows, top row first.
     pub fn read_rgba(
         &self,
