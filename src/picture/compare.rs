@@ -162,7 +162,7 @@ pub fn submit_compare_image(
     base: &RenderSettings,
     labels_on: bool,
     note: Option<&str>,
-    mut stills: Option<&mut [StillLayer; 2]>,
+    stills: Option<&mut [StillLayer; 2]>,
 ) -> anyhow::Result<PendingPicture> {
     let needs_grids = match what {
         CompareView::SideBySide(view) => view != ViewKind::Points,
@@ -195,24 +195,20 @@ pub fn submit_compare_image(
                     }
                 }
             }
-            let [still_a, still_b] = match stills.as_deref_mut() {
-                Some([a, b]) => [Some(a), Some(b)],
-                None => [None, None],
+            let drawn;
+            let targets = match stills {
+                Some([a, b]) => [
+                    a.render_kept(gpu, renderer, &scene.data_a, &frame, &settings),
+                    b.render_kept(gpu, renderer, &scene.data_b, &frame, &settings),
+                ],
+                None => {
+                    drawn = [&scene.data_a, &scene.data_b]
+                        .map(|data| render_frame(gpu, renderer, Some(data), &frame, &settings));
+                    [&drawn[0], &drawn[1]]
+                }
             };
-            let targets = [
-                draw_half(gpu, renderer, still_a, &scene.data_a, &frame, &settings),
-                draw_half(gpu, renderer, still_b, &scene.data_b, &frame, &settings),
-            ];
             compose(
-                gpu,
-                scene,
-                what,
-                [&targets[0], &targets[1]],
-                &frame,
-                size,
-                base,
-                labels_on,
-                note,
+                gpu, scene, what, targets, &frame, size, base, labels_on, note,
             )
         }
         CompareView::Difference(measure) => {
@@ -223,13 +219,21 @@ pub fn submit_compare_image(
                 .context("the difference grid was not built")?;
             let settings = difference_settings(base);
             let frame = view_for(camera, &grids.data, size.0, size.1, 1.0);
-            let still = stills.map(|s| &mut s[0]);
-            let target = draw_half(gpu, renderer, still, &grids.data, &frame, &settings);
+            let drawn;
+            let target = match stills {
+                Some([still, _]) => {
+                    still.render_kept(gpu, renderer, &grids.data, &frame, &settings)
+                }
+                None => {
+                    drawn = render_frame(gpu, renderer, Some(&grids.data), &frame, &settings);
+                    &drawn
+                }
+            };
             compose(
                 gpu,
                 scene,
                 what,
-                [&target, &target],
+                [target, target],
                 &frame,
                 size,
                 base,
@@ -237,26 +241,6 @@ pub fn submit_compare_image(
                 note,
             )
         }
-    }
-}
-
-/// `data` seen from `frame`: drawn whole, or from its still layer (drawn into it first when the
-/// layer holds another view).
-fn draw_half(
-    gpu: &GpuContext,
-    renderer: &Renderer,
-    still: Option<&mut StillLayer>,
-    data: &SceneData,
-    frame: &FrameView,
-    settings: &RenderSettings,
-) -> RenderTarget {
-    match still {
-        Some(still) => {
-            let target = RenderTarget::new(&gpu.device, frame.width, frame.height);
-            still.render(gpu, renderer, data, frame, settings, &target);
-            target
-        }
-        None => render_frame(gpu, renderer, Some(data), frame, settings),
     }
 }
 

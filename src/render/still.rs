@@ -17,6 +17,8 @@ use crate::view::frame_view::FrameView;
 #[derive(Default)]
 pub struct StillLayer {
     target: Option<RenderTarget>,
+    /// The frame [`StillLayer::render_kept`] draws into, kept from frame to frame.
+    frame: Option<RenderTarget>,
     /// The view the layer holds (camera, size, detail); another one draws it again.
     drawn_for: Option<FrameView>,
     /// How many times the scene was drawn into the layer.
@@ -34,6 +36,25 @@ impl StillLayer {
     /// How many times the scene was drawn into the layer.
     pub fn draws(&self) -> u32 {
         self.draws
+    }
+
+    /// [`StillLayer::render`] into a frame target of the layer's own, of the view's size, kept
+    /// from frame to frame (a copy of it submitted before the next call reads this frame's).
+    pub fn render_kept(
+        &mut self,
+        gpu: &GpuContext,
+        renderer: &Renderer,
+        data: &SceneData,
+        view: &FrameView,
+        settings: &RenderSettings,
+    ) -> &RenderTarget {
+        let frame = self
+            .frame
+            .take()
+            .filter(|frame| frame.has_size(view.width, view.height))
+            .unwrap_or_else(|| RenderTarget::new(&gpu.device, view.width, view.height));
+        self.render(gpu, renderer, data, view, settings, &frame);
+        self.frame.insert(frame)
     }
 
     /// Draws the frame of `data` seen from `view` with `settings` into `target`: the scene from
