@@ -294,10 +294,19 @@ impl InsideBits {
             while todo != 0 {
                 let j = todo.trailing_zeros();
                 todo &= todo - 1;
-                let mut mask = 0u32;
-                for (k, word) in r.iter().enumerate() {
-                    mask |= (((word >> j) & 1) as u32) << k;
-                }
+                // Corner row k's corners dx = 0 and 1 are bits j and j + 1 of r[2k] (r[2k + 1]
+                // is r[2k] a sample on): mask bits 2k and 2k + 1, two at a time but for the
+                // last cell of a word, whose dx = 1 corners are in the next word.
+                let mask = if j < 63 {
+                    (((r[0] >> j) & 3)
+                        | ((r[2] >> j) & 3) << 2
+                        | ((r[4] >> j) & 3) << 4
+                        | ((r[6] >> j) & 3) << 6) as u32
+                } else {
+                    r.iter().enumerate().fold(0u32, |mask, (k, word)| {
+                        mask | (((word >> j) & 1) as u32) << k
+                    })
+                };
                 f(64 * w + j as usize, mask);
             }
         }
