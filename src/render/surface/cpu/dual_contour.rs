@@ -126,6 +126,7 @@ pub fn write(
                     map[cx] = vertex;
                 }
             }
+            let row_start = vertices.len();
             for (cx, mask) in rows.cells(cy, cz) {
                 vertices.push(cell_vertex(grid, iso, cx, cy, cz, mask, edges));
                 let s = CpuGrid::cell_sample(cx, cy, cz);
@@ -149,6 +150,11 @@ pub fn write(
                     indices.extend_from_slice(&[q[0], q[1], q[2], q[0], q[2], q[3]]);
                 }
             }
+            grid.outward_normals(&mut vertices[row_start..], |vertex| {
+                let code = vertex.pad as u32;
+                let (cx, mask) = ((code >> 8) as usize, code & 0xff);
+                mean_edge_normal(grid, iso, cx, cy, cz, mask)
+            });
         },
     );
 }
@@ -263,17 +269,13 @@ fn cell_vertex(
         let slot = (ka >> 1) as usize;
         let at = 3 * (cx + (ka & 1) as usize) + (e >> 2) as usize;
         let [nx, ny, nz, t] = edges.get(slot, at, || {
-            let (va, vb) = (values[ka as usize], values[kb as usize]);
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            let (ga, gb) = (gradients[ka as usize], gradients[kb as usize]);
-            let g = ga + (gb - ga) * t;
-            let length = g.length();
-            let n = if length > 1e-20 {
-                g / length
-            } else {
-                Vec3A::ZERO
-            };
-            [n.x, n.y, n.z, t]
+            edge_crossing(
+                values[ka as usize],
+                values[kb as usize],
+                gradients[ka as usize],
+                gradients[kb as usize],
+                iso,
+            )
         });
         let n = Vec3A::new(nx, ny, nz);
         let pa = Vec3A::from(corner_offset(ka));
@@ -327,16 +329,124 @@ fn cell_vertex(
         hp_sum += w * h[origin + corner_step(strides, k)];
         weight_sum += w;
     }
-    let mut normal = grid.outward_normal_a(gradient);
-    if normal == Vec3A::ZERO {
-        normal = grid.outward_normal_a(normal_sum);
-    }
     let base = CpuGrid::cell_sample(cx, cy, cz).as_vec3();
     let local = Vec3::from(local);
+    // The gradient for now, made the outward unit normal for the whole row at once
+    // (`CpuGrid::outward_normals`); without one, the crossings' normals' sum is the normal
+    // (`mean_edge_normal`, the cell found again by the row and the pad).
     MeshVertex {
         position: grid.data_position(base + local).to_array(),
         hp: weighted_hp(hp_sum, weight_sum),
-        normal: normal.to_array(),
-        pad: 0.0,
+        normal: gradient.to_array(),
+        pad: ((cx as u32) << 8 | mask) as f32,
+    }
+}
+
+/// The outward normal of the sum of cell (cx, cy, cz)'s crossings' unit normals (mask `mask`),
+/// where its vertex has no gradient: the crossings worked out again as [`cell_vertex`] works them
+/// out (the same operations, so the same sum).
+#[cold]
+fn mean_edge_normal(
+    grid: &CpuGrid,
+    iso: f32,
+    cx: usize,
+    cy: usize,
+    cz: usize,
+    mask: u32,
+) -> [f32; 3] {
+    let origin = grid.cell_origin(cx, cy, cz);
+    let values = grid.corners(origin);
+    let strides = grid.strides();
+    let mut normal_sum = Vec3A::ZERO;
+    let mut crossed = CROSSED_EDGES[mask as usize & 0xff];
+    while crossed != 0 {
+        let e = crossed.trailing_zeros();
+        crossed &= crossed - 1;
+        let ka = cube_edge_start(e);
+        let kb = ka | (1 << (e >> 2));
+        let n = edge_crossing(
+            values[ka as usize],
+            values[kb as usize],
+            grid.gradient(origin + corner_step(strides, ka)),
+            grid.gradient(origin + corner_step(strides, kb)),
+            iso,
+        );
+        normal_sum += Vec3A::new(n[0], n[1], n[2]);
+    }
+    grid.outward_normal_a(normal_sum).to_array()
+}
+
+/// An edge's unit normal and crossing (x, y, z, t) from its ends' values and gradients.
+#[inline]
+fn edge_crossing(va: f32, vb: f32, ga: Vec3A, gb: Vec3A, iso: f32) -> [f32; 4] {
+    let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+    let g = ga + (gb - ga) * t;
+    let length = g.length();
+    let n = if length > 1e-20 {
+        g / length
+    } else {
+        Vec3A::ZERO
+    };
+    [n.x, n.y, n.z, t]
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::UVec3;
+
+    use super::*;
+
+    /// The normal a vertex without a gradient takes is the outward normal of the sum of its
+    /// crossings' unit normals, worked out here edge by edge from each corner's own gradient,
+    /// for every active cell of an irregular field on voxels that are not cubes.
+    #[test]
+    fn a_flat_vertex_takes_its_crossings_mean_normal() {
+        let dims = UVec3::new(9, 8, 7);
+        let density: Vec<f32> = (0..dims.element_product())
+            .map(|i| ((i * 37 + i / 9 * 11) % 17) as f32 / 16.0)
+            .collect();
+        let grid = CpuGrid::new(
+            dims,
+            Vec3::new(-1.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.5, 7.0),
+            &density,
+            &vec![0.5; density.len()],
+        );
+        let iso = 0.45;
+        let mut checked = 0;
+        for cz in 0..=dims.z as usize {
+            for cy in 0..=dims.y as usize {
+                for cx in 0..=dims.x as usize {
+                    let origin = grid.cell_origin(cx, cy, cz);
+                    let values = grid.corners(origin);
+                    let mask = (0..8).fold(0u32, |m, k| m | u32::from(values[k] > iso) << k);
+                    if mask == 0 || mask == 0xff {
+                        continue;
+                    }
+                    let mut sum = Vec3::ZERO;
+                    for ka in 0..8u32 {
+                        for axis in 0..3 {
+                            let kb = ka | 1 << axis;
+                            if kb == ka || (mask >> ka) & 1 == (mask >> kb) & 1 {
+                                continue;
+                            }
+                            let (va, vb) = (values[ka as usize], values[kb as usize]);
+                            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+                            let ga = grid.corner_gradient(origin, &values, ka);
+                            let gb = grid.corner_gradient(origin, &values, kb);
+                            sum += (ga + (gb - ga) * t).normalize_or_zero();
+                        }
+                    }
+                    let expected = grid.outward_normal(sum);
+                    let normal = Vec3::from(mean_edge_normal(&grid, iso, cx, cy, cz, mask));
+                    assert!(
+                        (normal - expected).length() < 1e-6,
+                        "cell ({cx}, {cy}, {cz}): {normal} against {expected}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 100, "only {checked} cells checked");
     }
 }

@@ -14,7 +14,9 @@
 //! (surfaces close at the grid's border), which is cell index `c + 1` (0 ..= dims) here. A *cell
 //! row* is the cells of one (y, z) along x.
 
-use glam::{IVec3, UVec3, Vec3, Vec3A};
+use glam::{IVec3, Mat4, UVec3, Vec3, Vec3A, Vec4};
+
+use crate::render::surface::buffers::MeshVertex;
 
 /// Samples of padding on each side: a cell's corners reach one sample past the grid and their
 /// central differences one more.
@@ -173,6 +175,55 @@ impl CpuGrid {
         -g / len
     }
 
+    /// Turns each vertex's gradient (grid units, in `normal`) into its outward unit normal, four
+    /// vertices at a time in SIMD lanes (the operations of [`CpuGrid::outward_normal_a`], lane
+    /// for lane, so the same values, without one vertex's divisions and square root waiting on
+    /// another's); a vertex without a gradient takes `fallback(vertex)` (the vertex as written,
+    /// its pad holding what the caller needs to find it). Every pad is then zero.
+    pub fn outward_normals(
+        &self,
+        vertices: &mut [MeshVertex],
+        fallback: impl Fn(&MeshVertex) -> [f32; 3],
+    ) {
+        let size = self.voxel_size;
+        let (sx, sy, sz) = (
+            Vec4::splat(size.x),
+            Vec4::splat(size.y),
+            Vec4::splat(size.z),
+        );
+        let mut groups = vertices.chunks_exact_mut(4);
+        for group in &mut groups {
+            let lanes = Mat4::from_cols_array_2d(&std::array::from_fn(|i| {
+                let n = group[i].normal;
+                [n[0], n[1], n[2], 0.0]
+            }))
+            .transpose();
+            let (x, y, z) = (lanes.x_axis / sx, lanes.y_axis / sy, lanes.z_axis / sz);
+            let length = sqrt_lanes(x * x + y * y + z * z);
+            let normals = Mat4::from_cols(-x / length, -y / length, -z / length, Vec4::ZERO)
+                .transpose()
+                .to_cols_array_2d();
+            let flat = length.cmplt(Vec4::splat(1e-20)).bitmask();
+            for (i, vertex) in group.iter_mut().enumerate() {
+                vertex.normal = if flat & (1 << i) != 0 {
+                    fallback(vertex)
+                } else {
+                    [normals[i][0], normals[i][1], normals[i][2]]
+                };
+                vertex.pad = 0.0;
+            }
+        }
+        for vertex in groups.into_remainder() {
+            let normal = self.outward_normal_a(Vec3A::from(vertex.normal));
+            vertex.normal = if normal == Vec3A::ZERO {
+                fallback(vertex)
+            } else {
+                normal.to_array()
+            };
+            vertex.pad = 0.0;
+        }
+    }
+
     /// Padded rows (y, z).
     fn rows(&self) -> usize {
         self.sy * self.sz
@@ -187,6 +238,19 @@ pub fn weighted_hp(sum_weighted: f32, sum_weights: f32) -> f32 {
         return 0.5;
     }
     (sum_weighted / sum_weights).clamp(0.0, 1.0)
+}
+
+/// The square root of each lane (IEEE, as `f32::sqrt`): one instruction where glam keeps Vec4 in
+/// an SSE register.
+#[inline]
+fn sqrt_lanes(v: Vec4) -> Vec4 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    {
+        // SAFETY: SSE2 is enabled at compile time (cfg above).
+        return Vec4::from(unsafe { std::arch::x86_64::_mm_sqrt_ps(v.into()) });
+    }
+    #[allow(unreachable_code)]
+    Vec4::new(v.x.sqrt(), v.y.sqrt(), v.z.sqrt(), v.w.sqrt())
 }
 
 /// Cube corner k (bit 0: x, bit 1: y, bit 2: z) as an offset from the cell's lowest sample.
@@ -400,6 +464,64 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The normals made four at a time are, bit for bit, those of one vertex at a time
+    /// ([`CpuGrid::outward_normal_a`]), in full groups and in the remainder, on voxels that are
+    /// not cubes; exactly the vertices without a gradient take the fallback, given the vertex as
+    /// written; every pad ends zero and nothing else changes.
+    #[test]
+    fn normals_in_lanes_are_the_scalar_normals() {
+        let g = CpuGrid::new(
+            UVec3::new(3, 4, 5),
+            Vec3::new(-1.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.5, 7.0),
+            &[0.0; 60],
+            &[0.5; 60],
+        );
+        let gradients = [
+            Vec3A::new(0.3, -0.7, 0.11),
+            Vec3A::ZERO,
+            Vec3A::new(-1e-9, 2e-9, 0.0),
+            Vec3A::new(5.0, 0.0, -3.5),
+            Vec3A::new(1e-30, 0.0, 0.0),
+            Vec3A::new(-0.25, 0.5, 0.125),
+            Vec3A::ZERO,
+        ];
+        let fallback = |v: &MeshVertex| [v.pad, -v.pad, 7.0];
+        let mut vertices: Vec<MeshVertex> = gradients
+            .iter()
+            .enumerate()
+            .map(|(i, gradient)| MeshVertex {
+                position: [i as f32; 3],
+                hp: 0.25,
+                normal: gradient.to_array(),
+                pad: i as f32 + 1.0,
+            })
+            .collect();
+        let expected: Vec<[f32; 3]> = vertices
+            .iter()
+            .map(|v| {
+                let n = g.outward_normal_a(Vec3A::from(v.normal));
+                if n == Vec3A::ZERO {
+                    fallback(v)
+                } else {
+                    n.to_array()
+                }
+            })
+            .collect();
+        g.outward_normals(&mut vertices, fallback);
+        for (i, (v, n)) in vertices.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                v.normal.map(f32::to_bits),
+                n.map(f32::to_bits),
+                "vertex {i}"
+            );
+            assert_eq!(v.pad, 0.0, "vertex {i}'s pad");
+            assert_eq!((v.position, v.hp), ([i as f32; 3], 0.25), "vertex {i}");
+        }
+        let fell_back: Vec<usize> = (0..7).filter(|&i| expected[i][2] == 7.0).collect();
+        assert_eq!(fell_back, vec![1, 4, 6], "the vertices without a gradient");
     }
 
     #[test]

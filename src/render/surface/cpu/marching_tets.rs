@@ -8,7 +8,7 @@
 //! neighbouring cell through that row's map of first vertices. Deterministic: the output is the
 //! same whatever the number of threads.
 
-use glam::{Mat4, Vec3A, Vec4};
+use glam::Vec3A;
 
 use crate::render::surface::buffers::MeshVertex;
 use wgpu::WriteOnly;
@@ -184,7 +184,8 @@ impl RowWriter<'_> {
                     let t = ((iso - v0) / (vk - v0)).clamp(0.0, 1.0);
                     let gk = grid.gradient(at);
                     // The gradient for now, made the unit normal for the whole row at once
-                    // (`outward_normals`); the pad holds the edge and which end is inside.
+                    // (`CpuGrid::outward_normals`); the pad holds the edge and which end is
+                    // inside.
                     let gradient = g0 + (gk - g0) * t;
                     let wk = vk.max(0.0);
                     let position = box_min + (base + offset * t + 0.5) * voxel_size;
@@ -218,65 +219,8 @@ impl RowWriter<'_> {
                 ]);
             }
         }
-        outward_normals(grid, &mut vertices[row_start..]);
+        grid.outward_normals(&mut vertices[row_start..], |v| edge_normal(grid, v.pad));
     }
-}
-
-/// Turns each vertex's gradient (grid units, in `normal`) into its outward unit normal, four
-/// vertices at a time in SIMD lanes (the operations of [`CpuGrid::outward_normal_a`], lane for
-/// lane, so the same values); a vertex without a gradient takes its edge's own direction from
-/// its inside end outward (the edge and end in `pad`, which is then zero).
-fn outward_normals(grid: &CpuGrid, vertices: &mut [MeshVertex]) {
-    let size = grid.voxel_size;
-    let (sx, sy, sz) = (
-        Vec4::splat(size.x),
-        Vec4::splat(size.y),
-        Vec4::splat(size.z),
-    );
-    let mut groups = vertices.chunks_exact_mut(4);
-    for group in &mut groups {
-        let lanes = Mat4::from_cols_array_2d(&std::array::from_fn(|i| {
-            let n = group[i].normal;
-            [n[0], n[1], n[2], group[i].pad]
-        }))
-        .transpose();
-        let (x, y, z) = (lanes.x_axis / sx, lanes.y_axis / sy, lanes.z_axis / sz);
-        let length = sqrt_lanes(x * x + y * y + z * z);
-        let normals = Mat4::from_cols(-x / length, -y / length, -z / length, Vec4::ZERO)
-            .transpose()
-            .to_cols_array_2d();
-        let flat = length.cmplt(Vec4::splat(1e-20)).bitmask();
-        for (i, vertex) in group.iter_mut().enumerate() {
-            if flat & (1 << i) != 0 {
-                vertex.normal = edge_normal(grid, vertex.pad);
-            } else {
-                vertex.normal = [normals[i][0], normals[i][1], normals[i][2]];
-            }
-            vertex.pad = 0.0;
-        }
-    }
-    for vertex in groups.into_remainder() {
-        let normal = grid.outward_normal_a(Vec3A::from(vertex.normal));
-        vertex.normal = if normal == Vec3A::ZERO {
-            edge_normal(grid, vertex.pad)
-        } else {
-            normal.to_array()
-        };
-        vertex.pad = 0.0;
-    }
-}
-
-/// The square root of each lane (IEEE, as `f32::sqrt`): one instruction where glam keeps Vec4 in
-/// a SIMD register.
-#[inline]
-fn sqrt_lanes(v: Vec4) -> Vec4 {
-    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-    {
-        // SAFETY: SSE2 is enabled at compile time (cfg above).
-        return Vec4::from(unsafe { std::arch::x86_64::_mm_sqrt_ps(v.into()) });
-    }
-    #[allow(unreachable_code)]
-    Vec4::new(v.x.sqrt(), v.y.sqrt(), v.z.sqrt(), v.w.sqrt())
 }
 
 /// The normal of a vertex whose edge has no gradient: the edge's own direction, from its inside
@@ -286,69 +230,4 @@ fn edge_normal(grid: &CpuGrid, code: f32) -> [f32; 3] {
     let code = code as u32;
     let along = (Vec3A::from(corner_offset(code & 7)) * Vec3A::from(grid.voxel_size)).normalize();
     if code & 8 != 0 { along } else { -along }.to_array()
-}
-
-#[cfg(test)]
-mod tests {
-    use glam::{UVec3, Vec3};
-
-    use super::*;
-
-    /// The normals made four at a time are, bit for bit, those of one vertex at a time
-    /// ([`CpuGrid::outward_normal_a`], the edge's direction where there is no gradient), in full
-    /// groups and in the remainder, on a grid whose voxels are not cubes.
-    #[test]
-    fn normals_in_lanes_are_the_scalar_normals() {
-        let grid = CpuGrid::new(
-            UVec3::new(3, 4, 5),
-            Vec3::new(-1.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.5, 7.0),
-            &[0.0; 60],
-            &[0.5; 60],
-        );
-        let gradients = [
-            Vec3A::new(0.3, -0.7, 0.11),
-            Vec3A::ZERO,
-            Vec3A::new(-1e-9, 2e-9, 0.0),
-            Vec3A::new(5.0, 0.0, -3.5),
-            Vec3A::new(1e-30, 0.0, 0.0),
-            Vec3A::new(-0.25, 0.5, 0.125),
-            Vec3A::ZERO,
-        ];
-        let mut vertices: Vec<MeshVertex> = gradients
-            .iter()
-            .enumerate()
-            .map(|(i, g)| MeshVertex {
-                position: [i as f32; 3],
-                hp: 0.25,
-                normal: g.to_array(),
-                pad: ((i as u32 % 7 + 1) | (i as u32 & 1) << 3) as f32,
-            })
-            .collect();
-        let expected: Vec<[f32; 3]> = vertices
-            .iter()
-            .map(|v| {
-                let n = grid.outward_normal_a(Vec3A::from(v.normal));
-                let code = v.pad as u32;
-                if n != Vec3A::ZERO {
-                    return n.to_array();
-                }
-                let along = (Vec3A::from(corner_offset(code & 7)) * Vec3A::from(grid.voxel_size))
-                    .normalize();
-                if code & 8 != 0 { along } else { -along }.to_array()
-            })
-            .collect();
-        outward_normals(&grid, &mut vertices);
-        for (i, (v, n)) in vertices.iter().zip(&expected).enumerate() {
-            assert_eq!(
-                v.normal.map(f32::to_bits),
-                n.map(f32::to_bits),
-                "vertex {i}"
-            );
-            assert_eq!(v.pad, 0.0, "vertex {i}'s pad");
-            assert_eq!((v.position, v.hp), ([i as f32; 3], 0.25), "vertex {i}");
-            let length = Vec3::from(v.normal).length();
-            assert!((length - 1.0).abs() < 1e-6, "vertex {i}: length {length}");
-        }
-    }
 }
