@@ -279,12 +279,18 @@ pub struct InsideBits {
     cells_x: usize,
 }
 
+impl Drop for InsideBits {
+    fn drop(&mut self) {
+        super::recycle::WORDS.give(std::mem::take(&mut self.bits));
+    }
+}
+
 impl InsideBits {
     /// The inside bits of `grid` at `iso`, computed on `threads` threads.
     pub fn new(grid: &CpuGrid, iso: f32, threads: usize) -> Self {
         let words = grid.sx.div_ceil(64);
         let rows = grid.rows();
-        let mut bits = vec![0u64; words * rows];
+        let mut bits = super::recycle::WORDS.filled(words * rows, 0);
         let occupied: Vec<bool> = grid.row_max.iter().map(|&m| m > iso).collect();
         let per = rows.div_ceil(threads.max(1)).max(1);
         let parts: Vec<_> = bits.chunks_mut(per * words).enumerate().collect();

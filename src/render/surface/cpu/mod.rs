@@ -25,6 +25,7 @@ pub mod dual_contour;
 pub mod grid;
 pub mod marching_tets;
 pub mod plan;
+pub mod recycle;
 
 use std::sync::{Arc, Mutex};
 

@@ -11,7 +11,7 @@ use wgpu::WriteOnly;
 
 use crate::render::surface::buffers::MeshVertex;
 use crate::render::surface::cpu::grid::{CpuGrid, InsideBits, balanced_ranges};
-use crate::render::surface::cpu::{Instant, Phases, for_each_part};
+use crate::render::surface::cpu::{Instant, Phases, for_each_part, recycle};
 
 /// Vertices a thread gathers before it copies them out (and a quarter as many indices' worth
 /// of bytes).
@@ -70,11 +70,11 @@ impl Plan {
         let started = Instant::now();
         let (cells_y, cells_z) = (grid.dims.y as usize + 1, grid.dims.z as usize + 1);
         let rows = cells_y * cells_z;
-        let mut counts = vec![[0u32; 3]; rows];
+        let mut counts = recycle::COUNTS.filled(rows, [0u32; 3]);
         let per = rows.div_ceil(threads.max(1)).max(1);
         let parts: Vec<_> = counts.chunks_mut(per).enumerate().collect();
         let chunk_cells = for_each_part(parts, |(chunk, out)| {
-            let mut cells = Vec::new();
+            let mut cells = recycle::U32S.take();
             for (r, c) in out.iter_mut().enumerate() {
                 let row = chunk * per + r;
                 let (cy, cz) = (row % cells_y, row / cells_y);
@@ -88,13 +88,13 @@ impl Plan {
             }
             cells
         });
-        let plan = Self::assemble(
-            bits.cells_x(),
-            cells_y,
-            cells_z,
-            &counts,
-            chunk_cells.concat(),
-        );
+        let mut cells = recycle::U32S.take();
+        for part in chunk_cells {
+            cells.extend_from_slice(&part);
+            recycle::U32S.give(part);
+        }
+        let plan = Self::assemble(bits.cells_x(), cells_y, cells_z, &counts, cells);
+        recycle::COUNTS.give(counts);
         phases.lap("classify", started);
         plan
     }
@@ -108,10 +108,14 @@ impl Plan {
         counts: &[[u32; 3]],
         cells: Vec<u32>,
     ) -> Self {
-        let rows = counts.len();
-        let mut vertex_start = Vec::with_capacity(rows + 1);
-        let mut index_start = Vec::with_capacity(rows + 1);
-        let mut cell_start = Vec::with_capacity(rows + 1);
+        let starts = || {
+            let mut v = recycle::USIZES.take();
+            v.reserve(counts.len() + 1);
+            v
+        };
+        let (mut vertex_start, mut index_start, mut cell_start) = (starts(), starts(), starts());
+        let mut row_active = recycle::U32S.take();
+        row_active.extend(counts.iter().map(|c| c[2]));
         let (mut v, mut i, mut active) = (0usize, 0usize, 0usize);
         for c in counts {
             vertex_start.push(v);
@@ -130,7 +134,7 @@ impl Plan {
             cell_start,
             vertex_start,
             index_start,
-            row_active: counts.iter().map(|c| c[2]).collect(),
+            row_active,
             active_cells: active as u64,
             cells_y,
             cells_z,
@@ -205,6 +209,21 @@ impl Plan {
     }
 }
 
+impl Drop for Plan {
+    fn drop(&mut self) {
+        for v in [&mut self.cells, &mut self.row_active] {
+            recycle::U32S.give(std::mem::take(v));
+        }
+        for v in [
+            &mut self.cell_start,
+            &mut self.vertex_start,
+            &mut self.index_start,
+        ] {
+            recycle::USIZES.give(std::mem::take(v));
+        }
+    }
+}
+
 /// A thread's share of the output, sent to it. `WriteOnly<[u8]>` is an exclusive borrow of
 /// bytes, sent like a `&mut [u8]`; wgpu 30 implements `Send` for `WriteOnly<T>` only where `T`
 /// is sized, so the share travels wrapped.
@@ -231,16 +250,26 @@ struct Batches<'a> {
     indices: Vec<u32>,
 }
 
+impl Drop for Batches<'_> {
+    fn drop(&mut self) {
+        recycle::VERTICES.give(std::mem::take(&mut self.vertices));
+        recycle::U32S.give(std::mem::take(&mut self.indices));
+    }
+}
+
 impl<'a> Batches<'a> {
     fn new(vertex_out: WriteOnly<'a, [u8]>, index_out: WriteOnly<'a, [u8]>) -> Self {
-        Self {
+        let mut batches = Self {
             vertex_out,
             index_out,
             vertex_at: 0,
             index_at: 0,
-            vertices: Vec::with_capacity(2 * BATCH),
-            indices: Vec::with_capacity(8 * BATCH),
-        }
+            vertices: recycle::VERTICES.take(),
+            indices: recycle::U32S.take(),
+        };
+        batches.vertices.reserve(2 * BATCH);
+        batches.indices.reserve(8 * BATCH);
+        batches
     }
 
     fn flush(&mut self) {
