@@ -52,20 +52,21 @@ const CROSSED_EDGES: [u16; 256] = {
 };
 
 /// Bit a set when the edge from the cell's corner 0 along axis a crosses the isovalue and the
-/// four cells around it exist (`base` is the cell's lowest sample).
+/// four cells around it exist (`base` is the cell's lowest sample). Without branches: it is
+/// asked of every active cell when counting.
 #[inline]
 fn quad_edges(base: IVec3, mask: u32) -> u32 {
-    let mut edges = 0;
-    for axis in 0..3 {
-        let (b, c) = ((axis + 1) % 3, (axis + 2) % 3);
-        if base[b] < 0 || base[c] < 0 {
-            continue;
-        }
-        if (mask >> (1 << axis)) & 1 != mask & 1 {
-            edges |= 1 << axis;
-        }
-    }
-    edges
+    // Corner 1 << a is the edge's far end.
+    let inside = mask & 1;
+    let crossed = ((mask >> 1) ^ inside) & 1
+        | (((mask >> 2) ^ inside) & 1) << 1
+        | (((mask >> 4) ^ inside) & 1) << 2;
+    // The cells around the edge along a lie below the cell on the two other axes.
+    let below = u32::from(base.x < 0) | u32::from(base.y < 0) << 1 | u32::from(base.z < 0) << 2;
+    let open = u32::from(below & 0b110 == 0)
+        | u32::from(below & 0b101 == 0) << 1
+        | u32::from(below & 0b011 == 0) << 2;
+    crossed & open
 }
 
 /// Counts the dual contouring surface of `grid` at `iso` on `threads` threads.
