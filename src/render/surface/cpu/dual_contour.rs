@@ -13,7 +13,9 @@ use crate::render::surface::buffers::MeshVertex;
 use wgpu::WriteOnly;
 
 use crate::render::surface::cpu::Phases;
-use crate::render::surface::cpu::grid::{CpuGrid, corner_offset, corner_step, weighted_hp};
+use crate::render::surface::cpu::grid::{
+    CpuGrid, corner_offset, corner_offset_a, corner_step, weighted_hp,
+};
 use crate::render::surface::cpu::plan::Plan;
 
 /// The pull toward the mass point, relative to one unit-normal plane (QEF_BIAS in
@@ -279,8 +281,8 @@ fn cell_vertex(
             )
         });
         let n = Vec3A::new(nx, ny, nz);
-        let pa = Vec3A::from(corner_offset(ka));
-        let p = pa + (Vec3A::from(corner_offset(kb)) - pa) * t;
+        let pa = corner_offset_a(ka);
+        let p = pa + (corner_offset_a(kb) - pa) * t;
         a00 += n.x * n.x;
         a01 += n.x * n.y;
         a02 += n.x * n.z;

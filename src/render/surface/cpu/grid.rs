@@ -259,6 +259,22 @@ pub fn corner_offset(k: u32) -> Vec3 {
     Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32)
 }
 
+/// [`corner_offset`] in SIMD lanes, from a table: worked out, each was three conversions of an
+/// integer to a float (edges' corners are not known when compiling).
+#[inline]
+pub fn corner_offset_a(k: u32) -> Vec3A {
+    const OFFSETS: [Vec3A; 8] = {
+        let mut table = [Vec3A::ZERO; 8];
+        let mut k = 0;
+        while k < 8 {
+            table[k] = Vec3A::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32);
+            k += 1;
+        }
+        table
+    };
+    OFFSETS[k as usize & 7]
+}
+
 /// The padded index step from a cell's lowest sample to its corner k.
 #[inline]
 pub fn corner_step(strides: [usize; 3], k: u32) -> usize {

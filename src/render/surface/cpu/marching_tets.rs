@@ -14,7 +14,9 @@ use crate::render::surface::buffers::MeshVertex;
 use wgpu::WriteOnly;
 
 use crate::render::surface::cpu::Phases;
-use crate::render::surface::cpu::grid::{CpuGrid, corner_offset, corner_step, weighted_hp};
+use crate::render::surface::cpu::grid::{
+    CpuGrid, corner_offset, corner_offset_a, corner_step, weighted_hp,
+};
 use crate::render::surface::cpu::plan::{Plan, Rows};
 use crate::render::surface::marching_tets::{CASE_STRIDE, case_table};
 
@@ -177,7 +179,7 @@ impl RowWriter<'_> {
                 while todo != 0 {
                     let k = todo.trailing_zeros() & 7;
                     todo &= todo - 1;
-                    let offset = Vec3A::from(corner_offset(k));
+                    let offset = corner_offset_a(k);
                     let at = origin + corner_step(strides, k);
                     let vk = values[k as usize];
                     let hk = h[at];
