@@ -166,12 +166,11 @@ fn cell_vertices(
     if (all(normal == vec3<f32>(0.0))) {
         normal = outward_normal(normal_sum);
     }
-    var vertex: MeshVertex;
-    vertex.position = data_position(vec3<f32>(base) + local);
-    vertex.hp = weighted_hp(hp_sum, weight_sum);
-    vertex.normal = normal;
-    vertex.pad = 0.0;
-    vertices[i] = vertex;
+    // Member by member, the padding left as the buffer holds it (zero: nothing writes another
+    // value there): one store fewer per vertex.
+    vertices[i].position = data_position(vec3<f32>(base) + local);
+    vertices[i].hp = weighted_hp(hp_sum, weight_sum);
+    vertices[i].normal = normal;
 }
 
 // The vertex of the cell whose lowest sample is `cell`; INVALID when it was not written.

@@ -2,10 +2,12 @@
 // read, the mesh they write, the active-cell list, and sampling helpers. Keep IsoParams,
 // MeshVertex, Counters and the binding numbers in sync with src/render/surface/buffers.rs.
 //
-// Every extraction runs in the same shape: `inside_bits_pass` packs which samples are inside
-// into bits (one load per sample); `classify` finds, 32 cells per thread, the cells whose
-// corners straddle the isovalue and appends only those to `active_list`, reserving their output
-// with atomics; `dispatch_active` turns the count into indirect dispatch arguments; the
+// Every extraction runs in the same shape: `word_range_pass` (once per grid, kept for the next
+// isovalue) finds each 32-sample word's lowest and highest density; `inside_bits_pass` packs
+// which samples are inside into bits (one load per sample, only in the words whose range
+// straddles the isovalue: the others are all in or all out); `classify` finds, 32 cells per
+// thread, the cells whose corners straddle the isovalue and appends only those to
+// `active_list`, reserving their output with atomics; `dispatch_active` turns the count into indirect dispatch arguments; the
 // expensive passes then run one thread per active cell (a few % of the grid), so SIMD lanes are
 // not spent on empty cells.
 //
@@ -62,7 +64,11 @@ struct Counters {
 // One entry per active cell: (cell_slot, inside mask of its eight corners, first vertex, first
 // index) as reserved by `classify`.
 @group(1) @binding(8) var<storage, read_write> active_list: array<vec4<u32>>;
-// Whether each sample is inside, 32 to a word (see bit_words).
+// Whether each sample is inside, 32 to a word (see bit_words); after the bits, from
+// `range_start()`, the lowest and highest density of each word's 32 samples (samples outside
+// the grid count as 0; two f32 by their bits), written by `word_range_pass` once per grid and
+// kept for the next isovalue, so `inside_bits_pass` loads only the words whose range straddles
+// the isovalue.
 @group(1) @binding(9) var<storage, read_write> inside_bits: array<u32>;
 
 const INVALID: u32 = 0xffffffffu;
@@ -210,7 +216,71 @@ fn bit_word(w: u32, y: u32, z: u32) -> u32 {
     return inside_bits[w + bit_words() * (y + (params.dims.y + 2u) * z)];
 }
 
-// One thread per word of inside bits: 32 loads and compares, one store.
+// Where the word ranges start in `inside_bits`: after the bits.
+fn range_start() -> u32 {
+    return bit_words() * (params.dims.y + 2u) * (params.dims.z + 2u);
+}
+
+// The word of inside bits thread t packs: its word along x and its padded row's y and z (-1 ..
+// dims), or None past the last word.
+fn bit_word_of(t: u32) -> vec4<i32> {
+    let words = bit_words();
+    let side = params.dims + vec3<u32>(2u);
+    let w = t % words;
+    let row = t / words;
+    let valid = i32(t < words * side.y * side.z);
+    return vec4<i32>(i32(w), i32(row % side.y) - 1, i32(row / side.y) - 1, valid);
+}
+
+// Whether padded row (y, z) lies in the grid (else all of its samples read as density 0).
+fn row_in_grid(y: i32, z: i32) -> bool {
+    return y >= 0 && y < i32(params.dims.y) && z >= 0 && z < i32(params.dims.z);
+}
+
+// Whether `v` is NaN (by its bits, which no fast-math assumption folds away).
+fn is_nan(v: f32) -> bool {
+    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
+}
+
+// One thread per word of inside bits, once per grid: the lowest and highest density of the
+// word's 32 samples. A NaN sample, which is never inside, makes the lowest NaN (so the word is
+// never taken as all inside) and is passed over for the highest.
+@compute @workgroup_size(64)
+fn word_range_pass(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let t = active_thread(group, groups, lane);
+    let word = bit_word_of(t);
+    if (word.w == 0) {
+        return;
+    }
+    var lo = 0.0;
+    var hi = 0.0;
+    if (row_in_grid(word.y, word.z)) {
+        let x0 = word.x * 32 - 1;
+        let row_start = params.dims.x * (u32(word.y) + params.dims.y * u32(word.z));
+        let first = max(-x0, 0);
+        let end = clamp(i32(params.dims.x) - x0, 0, 32);
+        // A word reaching past the row holds samples of density 0; a whole one starts from its
+        // first sample.
+        if (first == 0 && end == 32) {
+            lo = density[row_start + u32(x0)];
+            hi = select(lo, 0.0, is_nan(lo));
+        }
+        for (var b = first; b < end; b++) {
+            let v = density[row_start + u32(x0 + b)];
+            lo = select(select(lo, v, v < lo || is_nan(v)), lo, is_nan(lo));
+            hi = select(hi, v, v > hi);
+        }
+    }
+    inside_bits[range_start() + 2u * t] = bitcast<u32>(lo);
+    inside_bits[range_start() + 2u * t + 1u] = bitcast<u32>(hi);
+}
+
+// One thread per word of inside bits: 32 loads and compares and one store where the word's
+// density range straddles the isovalue; elsewhere one load of the range and the store.
 @compute @workgroup_size(64)
 fn inside_bits_pass(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -218,18 +288,26 @@ fn inside_bits_pass(
     @builtin(local_invocation_index) lane: u32,
 ) {
     let t = active_thread(group, groups, lane);
-    let words = bit_words();
-    let side = params.dims + vec3<u32>(2u);
-    if (t >= words * side.y * side.z) {
+    let word = bit_word_of(t);
+    if (word.w == 0) {
         return;
     }
-    let w = t % words;
-    let row = t / words;
-    let y = i32(row % side.y) - 1;
-    let z = i32(row / side.y) - 1;
+    let w = u32(word.x);
+    let y = word.y;
+    let z = word.z;
+    let range = vec2<f32>(
+        bitcast<f32>(inside_bits[range_start() + 2u * t]),
+        bitcast<f32>(inside_bits[range_start() + 2u * t + 1u]),
+    );
     // Samples outside the grid read as density 0.
     var bits = select(0u, 0xffffffffu, 0.0 > params.iso_value);
-    if (y >= 0 && y < i32(params.dims.y) && z >= 0 && z < i32(params.dims.z)) {
+    if (!(range.y > params.iso_value)) {
+        // No sample above the isovalue.
+        bits = 0u;
+    } else if (range.x > params.iso_value) {
+        // Every sample above it.
+        bits = 0xffffffffu;
+    } else if (row_in_grid(y, z)) {
         let x0 = i32(w * 32u) - 1;
         let row_start = params.dims.x * (u32(y) + params.dims.y * u32(z));
         let lo = u32(max(-x0, 0));

@@ -30,9 +30,24 @@ fn owned_edges(mask: u32) -> u32 {
     return (mask ^ flip) & 0xfeu;
 }
 
+// The triangles of a tetrahedron with `inside` of its four corners inside: one when one or
+// three are, two when two are.
+fn tet_triangles(inside: u32) -> u32 {
+    return select(inside & 1u, 2u, inside == 2u);
+}
+
+// The triangle count of cell mask `mask` (the low byte of its `cases` header), from the inside
+// corners of its six tetrahedra (0-1-3-7, 0-1-5-7, 0-2-3-7, 0-2-6-7, 0-4-5-7, 0-4-6-7) without
+// a load.
+fn cell_triangles(mask: u32) -> u32 {
+    return tet_triangles(countOneBits(mask & 0x8bu)) + tet_triangles(countOneBits(mask & 0xa3u))
+        + tet_triangles(countOneBits(mask & 0x8du)) + tet_triangles(countOneBits(mask & 0xc5u))
+        + tet_triangles(countOneBits(mask & 0xb1u)) + tet_triangles(countOneBits(mask & 0xd1u));
+}
+
 // Vertices (one per crossed owned edge) and indices (three per triangle) of a cell.
 fn cell_output(base: vec3<i32>, mask: u32) -> vec2<u32> {
-    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * (cases[mask * CASE_STRIDE] & 0xffu));
+    return vec2<u32>(countOneBits(owned_edges(mask)), 3u * cell_triangles(mask));
 }
 
 // The cell map holds an active cell's first vertex and its owned crossing edges (bits 1..7 of
@@ -90,12 +105,11 @@ fn edge_vertices(
             normal = select(-along, along, inside0);
         }
         let wk = max(vk, 0.0);
-        vertices[out] = MeshVertex(
-            data_position(vec3<f32>(base) + vec3<f32>(offset) * t),
-            weighted_hp(w0 * h0 + wk * hk, w0 + wk),
-            normal,
-            0.0,
-        );
+        // Member by member, the padding left as the buffer holds it (zero: nothing writes
+        // another value there): one store fewer per vertex.
+        vertices[out].position = data_position(vec3<f32>(base) + vec3<f32>(offset) * t);
+        vertices[out].hp = weighted_hp(w0 * h0 + wk * hk, w0 + wk);
+        vertices[out].normal = normal;
         out += 1u;
     }
 }

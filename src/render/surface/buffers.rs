@@ -70,6 +70,9 @@ pub struct MeshBuffers {
     pub cell_map: Option<wgpu::Buffer>,
     /// One bit per (padded) sample: inside or not; grown to the grid on demand.
     pub inside_bits: Option<wgpu::Buffer>,
+    /// The grid whose per-word density ranges `inside_bits` holds after its bits (its density
+    /// buffer and size), once they are recorded; see [`MeshBuffers::take_new_grid`].
+    ranges_of: Option<(wgpu::Buffer, UVec3)>,
     pub vertex_capacity: u32,
     pub index_capacity: u32,
     pub active_capacity: u32,
@@ -138,6 +141,7 @@ impl MeshBuffers {
             ),
             cell_map: None,
             inside_bits: None,
+            ranges_of: None,
             vertex_capacity,
             index_capacity,
             active_capacity,
@@ -146,10 +150,12 @@ impl MeshBuffers {
     }
 
     /// Makes sure `cell_map` has an entry for every cell of `grid` ((dims + 1)^3) and
-    /// `inside_bits` a bit for every padded sample.
+    /// `inside_bits` a bit for every padded sample, then the density range (two `f32`) of every
+    /// word of bits.
     pub(crate) fn ensure_grid_buffers(&mut self, device: &wgpu::Device, grid: &VoxelGrid) {
         let grow = |buffer: &mut Option<wgpu::Buffer>, label: &str, needed: u64| {
-            if buffer.as_ref().is_none_or(|b| b.size() < needed) {
+            let grown = buffer.as_ref().is_none_or(|b| b.size() < needed);
+            if grown {
                 *buffer = Some(device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
                     size: needed,
@@ -157,15 +163,38 @@ impl MeshBuffers {
                     mapped_at_creation: false,
                 }));
             }
+            grown
         };
         let cells = (grid.dims.as_u64vec3() + glam::U64Vec3::ONE).element_product();
         grow(&mut self.cell_map, "surface::cell_map", cells * 4);
         let [words, rows] = bit_threads(grid.dims, 2);
-        grow(
+        if grow(
             &mut self.inside_bits,
             "surface::inside_bits",
-            words * rows * 4,
-        );
+            words * rows * 4 * 3,
+        ) {
+            self.ranges_of = None;
+        }
+    }
+
+    /// Whether the word ranges must be worked out for `grid` (`inside_bits` holds another
+    /// grid's, or none); if so, takes them as recorded for `grid`. Grids are not written after they are
+    /// built, so a grid is known by its density buffer (held here, so its id is not reused)
+    /// and size.
+    pub(crate) fn take_new_grid(&mut self, grid: &VoxelGrid) -> bool {
+        let same = self
+            .ranges_of
+            .as_ref()
+            .is_some_and(|(density, dims)| *density == grid.density && *dims == grid.dims);
+        if !same {
+            self.ranges_of = Some((grid.density.clone(), grid.dims));
+        }
+        !same
+    }
+
+    /// Forgets which grid's word ranges `inside_bits` holds (an extraction recorded but not run to its end).
+    pub(crate) fn forget_grid(&mut self) {
+        self.ranges_of = None;
     }
 
     /// Writes the extraction parameters for `grid` at `iso_value`.

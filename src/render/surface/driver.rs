@@ -323,6 +323,10 @@ pub(crate) fn extract_until_fits(
             timing.resolve(&mut encoder, TIMESTAMPS);
         }
         let (vertex_capacity, index_capacity) = (buffers.vertex_capacity, buffers.index_capacity);
+        if dropped || slice_error.is_some() {
+            // The grid's word ranges may not have been worked out.
+            buffers.forget_grid();
+        }
         if dropped {
             state.key = None;
             return Err(SurfaceError::Superseded);

@@ -1,7 +1,8 @@
 //! The extraction skeleton both methods share, the CPU side of shaders/surface/extraction.wgsl:
-//! the bind-group layout of group 1, the pipelines in the order they run (pack the inside bits,
-//! classify, the dispatch over the active cells, two passes over the active cells only, the draw
-//! arguments) and their recording, with optional per-pass timestamps.
+//! the bind-group layout of group 1, the pipelines in the order they run (once per grid the
+//! density range of each word of inside bits, then pack the inside bits, classify, the dispatch
+//! over the active cells, two passes over the active cells only, the draw arguments) and their
+//! recording, with optional per-pass timestamps.
 
 use crate::render::gpu::layouts::{storage_entry, uniform_entry, whole_buffer_entries};
 use crate::render::grid::VoxelGrid;
@@ -85,6 +86,8 @@ pub(crate) struct ExtractionPipelines {
     name: &'static str,
     /// The method's layout of group 1 (see [`extraction_layout`]).
     layout: wgpu::BindGroupLayout,
+    /// Over every word of inside bits, once per grid: the density range of its samples.
+    word_range: wgpu::ComputePipeline,
     /// Over every sample: packs which are inside into bits.
     inside_bits: wgpu::ComputePipeline,
     /// Over every 32 cells along x: appends the active cells.
@@ -101,8 +104,8 @@ pub(crate) struct ExtractionPipelines {
 
 impl ExtractionPipelines {
     /// Builds a method's pipelines from its composed shader `source`, whose entry points are
-    /// `inside_bits_pass`, `classify`, `dispatch_active`, the two `per_active` ones and
-    /// `finalize`; `extra` bindings from 10 on belong to the method.
+    /// `word_range_pass`, `inside_bits_pass`, `classify`, `dispatch_active`, the two
+    /// `per_active` ones and `finalize`; `extra` bindings from 10 on belong to the method.
     pub(crate) fn new(
         device: &wgpu::Device,
         name: &'static str,
@@ -128,6 +131,7 @@ impl ExtractionPipelines {
         };
         Self {
             name,
+            word_range: pipeline("word_range_pass"),
             inside_bits: pipeline("inside_bits_pass"),
             classify: pipeline("classify"),
             dispatch_active: pipeline("dispatch_active"),
@@ -184,6 +188,18 @@ impl ExtractionPipelines {
             let [words, rows] = bit_threads(grid.dims, pad);
             Dispatch::Direct(flat_workgroups(words * rows))
         };
+        // The density range of each word of inside bits, once per grid (kept in `buffers` for
+        // the next isovalue); recorded ahead of the timed passes, in the first slice.
+        if buffers.take_new_grid(grid) {
+            record_dispatches(
+                encoder,
+                &label,
+                &bind_group,
+                &[(&self.word_range, sweep(2))],
+                None,
+                0,
+            );
+        }
         let before = [
             (&self.inside_bits, sweep(2)),
             (&self.classify, sweep(1)),

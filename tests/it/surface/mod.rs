@@ -419,6 +419,64 @@ fn sliced_extraction_equals_one_submission() {
     }
 }
 
+/// One surface extracted from several grids and isovalues in turn, as the window does: the
+/// GPU passes keep each grid's per-word density ranges for the next isovalue, and every
+/// extraction is still the one a fresh surface gives, also after the grid changes to another of
+/// the same size (a sphere, then a torus, then the sphere again) or of another size.
+#[test]
+fn one_surface_follows_grid_and_isovalue_changes() {
+    let gpu = common::gpu();
+    let sphere_grid = grid_from(&gpu, 40, sphere);
+    let torus_grid = grid_from(&gpu, 40, torus);
+    let lumpy_dims = UVec3::new(37, 22, 29);
+    let (density, hp) = lumpy_fields(lumpy_dims);
+    let lumpy = VoxelGrid::from_fields(
+        &gpu.device,
+        lumpy_dims,
+        Vec3::splat(-1.0),
+        Vec3::ONE,
+        &density,
+        &hp,
+    );
+    let steps = [
+        (&sphere_grid, 0.5),
+        (&sphere_grid, 0.2),
+        (&torus_grid, 0.35),
+        (&torus_grid, 0.6),
+        (&sphere_grid, 0.93),
+        (&lumpy, 0.3),
+        (&torus_grid, 0.35),
+    ];
+    let pass = surface_pass(&gpu);
+    for method in [MT, DC] {
+        let surface = ExtractedSurface::new();
+        for (step, &(grid, iso_value)) in steps.iter().enumerate() {
+            let settings = SurfaceSettings {
+                method,
+                iso_value,
+                lit: true,
+            };
+            let counts = pass
+                .extract_blocking(&gpu.queue, &surface, grid, &settings)
+                .expect("extraction");
+            assert!(counts.fits(), "{counts:?}");
+            let mesh = pass.read_mesh(&gpu.queue, &surface).expect("read back");
+            let fresh = extract(&gpu, &pass, grid, method, iso_value);
+            assert!(
+                fresh.triangle_count() > 100,
+                "{} step {step}",
+                method.name()
+            );
+            assert_eq!(
+                triangle_set(&mesh),
+                triangle_set(&fresh),
+                "{} step {step}",
+                method.name()
+            );
+        }
+    }
+}
+
 /// The window's path: an isovalue changed on every frame (a dragged slider) never waits for the
 /// GPU, the last mesh stays drawable meanwhile, and once the requests stop the surface shown is
 /// the one of the last isovalue, equal to a blocking extraction of it.
