@@ -13,9 +13,7 @@ use crate::render::surface::buffers::MeshVertex;
 use wgpu::WriteOnly;
 
 use crate::render::surface::cpu::Phases;
-use crate::render::surface::cpu::grid::{
-    CpuGrid, corner_offset, corner_offset_a, corner_step, weighted_hp,
-};
+use crate::render::surface::cpu::grid::{CpuGrid, corner_offset_a, corner_step, weighted_hp};
 use crate::render::surface::cpu::plan::Plan;
 
 /// The pull toward the mass point, relative to one unit-normal plane (QEF_BIAS in
@@ -324,10 +322,14 @@ fn cell_vertex(
 
     let mut gradient = Vec3A::ZERO;
     let (mut hp_sum, mut weight_sum) = (0.0f32, 0.0f32);
+    // A corner's trilinear weight on an axis is 1 - l on its near side and l on its far side
+    // (the values `c * l + (1 - c) * (1 - l)` takes for c = 0 and 1 with l in [0, 1], but for
+    // the sign of a zero, which the sums do not see), worked out once per axis.
+    let sides = [Vec3A::ONE - local, local];
     for k in 0..8u32 {
-        let c = Vec3A::from(corner_offset(k));
-        let weights = c * local + (Vec3A::ONE - c) * (Vec3A::ONE - local);
-        gradient += weights.x * weights.y * weights.z * gradients[k as usize];
+        let (x, y, z) = (k as usize & 1, (k as usize >> 1) & 1, k as usize >> 2);
+        let weight = sides[x].x * sides[y].y * sides[z].z;
+        gradient += weight * gradients[k as usize];
         let w = values[k as usize].max(0.0);
         hp_sum += w * h[origin + corner_step(strides, k)];
         weight_sum += w;
