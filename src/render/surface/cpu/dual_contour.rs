@@ -255,8 +255,8 @@ fn cell_vertex(
         grid.gradient(origin + sx + sy + sz),
     ];
     let mut count = 0u32;
-    let (mut mass, mut normal_sum, mut b) = (Vec3A::ZERO, Vec3A::ZERO, Vec3A::ZERO);
-    let (mut a00, mut a01, mut a02, mut a11, mut a12, mut a22) = (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mut mass, mut b) = (Vec3A::ZERO, Vec3A::ZERO);
+    let (mut row0, mut row1, mut a22) = (Vec3A::ZERO, Vec3A::ZERO, 0.0f32);
     // The crossed edges in increasing order, as the shader's loop over all twelve visits them
     // (the same sums in the same order), without a branch per edge that the corner pattern
     // decides.
@@ -281,24 +281,23 @@ fn cell_vertex(
         let n = Vec3A::new(nx, ny, nz);
         let pa = corner_offset_a(ka);
         let p = pa + (corner_offset_a(kb) - pa) * t;
-        a00 += n.x * n.x;
-        a01 += n.x * n.y;
-        a02 += n.x * n.z;
-        a11 += n.y * n.y;
-        a12 += n.y * n.z;
+        // The products n n^T summed entry by entry in lanes: (a00, a01, a02) and (·, a11, a12).
+        row0 += n * n.x;
+        row1 += n * n.y;
         a22 += n.z * n.z;
         b += n * n.dot(p);
         mass += p;
-        normal_sum += n;
         count += 1;
     }
+    let (mut a00, a01, a02) = (row0.x, row0.y, row0.z);
+    let (mut a11, a12) = (row1.y, row1.z);
     mass /= count.max(1) as f32;
     // (A + bias I) y = b - A mass, y = x - mass, solved by the adjugate.
-    let rhs = b - Vec3A::new(
-        a00 * mass.x + a01 * mass.y + a02 * mass.z,
-        a01 * mass.x + a11 * mass.y + a12 * mass.z,
-        a02 * mass.x + a12 * mass.y + a22 * mass.z,
-    );
+    // A mass by A's columns in lanes (each lane's products summed in the scalar order).
+    let a_mass = Vec3A::new(a00, a01, a02) * mass.x
+        + Vec3A::new(a01, a11, a12) * mass.y
+        + Vec3A::new(a02, a12, a22) * mass.z;
+    let rhs = b - a_mass;
     a00 += QEF_BIAS;
     a11 += QEF_BIAS;
     a22 += QEF_BIAS;
@@ -311,11 +310,10 @@ fn cell_vertex(
     let det = a00 * c00 + a01 * c01 + a02 * c02;
     let mut local = mass;
     if det.abs() > 1e-12 {
-        let y = Vec3A::new(
-            c00 * rhs.x + c01 * rhs.y + c02 * rhs.z,
-            c01 * rhs.x + c11 * rhs.y + c12 * rhs.z,
-            c02 * rhs.x + c12 * rhs.y + c22 * rhs.z,
-        ) / det;
+        let y = (Vec3A::new(c00, c01, c02) * rhs.x
+            + Vec3A::new(c01, c11, c12) * rhs.y
+            + Vec3A::new(c02, c12, c22) * rhs.z)
+            / det;
         local = mass + y;
     }
     local = local.clamp(Vec3A::ZERO, Vec3A::ONE);
