@@ -7,7 +7,12 @@ C order, shape (nz, ny, nx), voxel centres at -1 + (index + 0.5) * 2 / n); then 
 ``skimage.measure.marching_cubes`` on those fields at the same isovalue in the same run, padded
 by one zero voxel as loudscape closes surfaces at the grid border, and prints the ratios and the
 surface areas. When VTK is installed (``pip install vtk``) its flying edges
-(``vtkFlyingEdges3D``) runs on the same padded fields too.
+(``vtkFlyingEdges3D``) runs on the same padded fields too: on one thread (the PyPI build's
+default SMP backend, Sequential) and on every core (STDThread), each with the geometry alone
+(normals, gradients and scalars off: the set-up issue 37 measured) and with its vertices made
+as ours are (a unit normal from the interpolated gradient, one more point array interpolated as
+our hp). Our CPU engine on every core is held to the second on every core, on one thread to
+the second on one thread.
 
 Usage: python bench/bench_surface.py [--loudscape target/release/loudscape] [--runs 10]
 """
@@ -41,10 +46,19 @@ def skimage_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, 
     return float(np.median(times)), len(faces), area
 
 
-def vtk_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, int] | None:
-    """Median time (ms) and triangle count of VTK's flying edges, or None without VTK."""
+def vtk_median_ms(
+    field: np.ndarray, iso: float, runs: int, threads: str, vertices: bool
+) -> tuple[float, int] | None:
+    """Median time (ms) and triangle count of VTK's flying edges, or None without VTK.
+
+    ``threads``: VTK's SMP backend, "Sequential" (one thread, the PyPI build's default) or
+    "STDThread" (every core). ``vertices``: the vertices as ours are made (a unit normal from the
+    interpolated gradient and one more point array interpolated, as our hp); otherwise the
+    geometry alone (normals, gradients and scalars off), the set-up the issue measured.
+    """
     try:
         from vtkmodules.util.numpy_support import numpy_to_vtk
+        from vtkmodules.vtkCommonCore import vtkSMPTools
         from vtkmodules.vtkCommonDataModel import vtkImageData
         from vtkmodules.vtkFiltersCore import vtkFlyingEdges3D
     except ImportError:
@@ -53,29 +67,53 @@ def vtk_median_ms(field: np.ndarray, iso: float, runs: int) -> tuple[float, int]
     image = vtkImageData()
     # VTK's x varies fastest, as in the (z, y, x) C-order array.
     image.SetDimensions(padded.shape[2], padded.shape[1], padded.shape[0])
-    image.GetPointData().SetScalars(numpy_to_vtk(padded.ravel(), deep=True))
+    scalars = numpy_to_vtk(padded.ravel(), deep=True)
+    scalars.SetName("density")
+    image.GetPointData().SetScalars(scalars)
+    if vertices:
+        # A second point array of the field's size, interpolated at every vertex as our hp is
+        # (its values do not change the work).
+        hp = numpy_to_vtk(np.clip(padded.ravel(), 0.0, 1.0), deep=True)
+        hp.SetName("hp")
+        image.GetPointData().AddArray(hp)
+    tools = vtkSMPTools()
+    tools.SetBackend(threads)
     times = []
     triangles = 0
-    for _ in range(runs):
-        edges = vtkFlyingEdges3D()
-        edges.SetInputData(image)
-        edges.SetValue(0, iso)
-        edges.ComputeNormalsOff()
-        edges.ComputeGradientsOff()
-        edges.ComputeScalarsOff()
-        start = time.perf_counter()
-        edges.Update()
-        times.append((time.perf_counter() - start) * 1e3)
-        triangles = edges.GetOutput().GetNumberOfPolys()
+    try:
+        for _ in range(runs):
+            edges = vtkFlyingEdges3D()
+            edges.SetInputData(image)
+            edges.SetValue(0, iso)
+            edges.SetComputeNormals(vertices)
+            edges.SetInterpolateAttributes(vertices)
+            edges.ComputeGradientsOff()
+            edges.ComputeScalarsOff()
+            start = time.perf_counter()
+            edges.Update()
+            times.append((time.perf_counter() - start) * 1e3)
+            triangles = edges.GetOutput().GetNumberOfPolys()
+    finally:
+        tools.SetBackend("Sequential")
     return float(np.median(times)), triangles
 
 
-def vtk_threads() -> str:
-    """VTK's SMP backend and thread count (flying edges runs in parallel only with SMP on)."""
+def vtk_threads(backend: str) -> int:
+    """The threads VTK's flying edges runs on with SMP backend ``backend``."""
     from vtkmodules.vtkCommonCore import vtkSMPTools
 
     tools = vtkSMPTools()
-    return f"SMP backend {tools.GetBackend()}, {tools.GetEstimatedNumberOfThreads()} thread(s)"
+    tools.SetBackend(backend)
+    try:
+        return tools.GetEstimatedNumberOfThreads()
+    finally:
+        tools.SetBackend("Sequential")
+
+
+def versus(vtk: dict, our_ms: float, threads: str, vertices: bool, label: str) -> str:
+    """ ", R x VTK label": our time over VTK's with ``threads`` and ``vertices`` (none: "")."""
+    peer = vtk[(threads, vertices)]
+    return "" if peer is None else f", {our_ms / peer[0]:.2f}x VTK {label}"
 
 
 def load_average() -> str:
@@ -118,7 +156,7 @@ def main() -> int:
         for match in re.finditer(pattern, done.stdout):
             name, method, engine, ms, tris, area = match.groups()
             ours[(name, method, engine)] = (float(ms), int(tris), float(area))
-        # The CPU engine on one thread, as VTK's flying edges runs without SMP (the PyPI build).
+        # The CPU engine on one thread, against VTK on one thread.
         one_thread = {
             (name, method): float(ms)
             for name, method, ms in re.findall(
@@ -131,30 +169,46 @@ def main() -> int:
             field = np.load(npy)
             ms, tris, area = skimage_median_ms(field, args.iso, args.runs)
             print(f"  {name}: marching_cubes {ms:.1f} ms, {tris} triangles, area {area:.4f}")
-            flying = vtk_median_ms(field, args.iso, args.runs)
-            if flying is None:
+            # VTK on one thread (its PyPI build's default) and on every core, the geometry
+            # alone (the issue's set-up) and with vertices made as ours are (like for like).
+            vtk = {
+                (threads, vertices): vtk_median_ms(field, args.iso, args.runs, threads, vertices)
+                for vertices in (False, True)
+                for threads in ("Sequential", "STDThread")
+            }
+            if vtk[("Sequential", False)] is None:
                 print("    VTK flying edges: not installed (pip install vtk)")
             else:
-                print(
-                    f"    VTK flying edges: {flying[0]:.1f} ms, {flying[1]} triangles"
-                    f" ({vtk_threads()})"
-                )
+                cores = vtk_threads("STDThread")
+                for vertices, what in (
+                    (False, "geometry only"),
+                    (True, "with unit normals and hp interpolated, as ours"),
+                ):
+                    one, every = vtk[("Sequential", vertices)], vtk[("STDThread", vertices)]
+                    print(
+                        f"    VTK flying edges, {what}: 1 thread {one[0]:.1f} ms,"
+                        f" {cores} threads {every[0]:.1f} ms, {one[1]} triangles"
+                    )
+
             for method in ("mt", "dc"):
                 for engine in ("gpu", "cpu"):
                     if (name, method, engine) not in ours:
                         print(f"    {method} ({engine} engine): no result")
                         continue
                     our_ms, _, our_area = ours[(name, method, engine)]
-                    versus_vtk = "" if flying is None else f", {our_ms / flying[0]:.2f}x VTK's time"
+                    ratios = versus(vtk, our_ms, "Sequential", False, "geometry, 1 thread")
+                    if engine == "cpu":
+                        ratios += versus(vtk, our_ms, "STDThread", True, "as ours, every core")
                     print(
                         f"    {method} ({engine} engine): {our_ms:.1f} ms,"
-                        f" {ms / our_ms:.2f}x scikit-image's speed{versus_vtk},"
+                        f" {ms / our_ms:.2f}x scikit-image's speed{ratios},"
                         f" area {100 * (our_area / area - 1):+.2f}% vs scikit-image"
                     )
                 if (name, method) in one_thread:
                     our_ms = one_thread[(name, method)]
-                    versus_vtk = "" if flying is None else f", {our_ms / flying[0]:.2f}x VTK's time"
-                    print(f"    {method} (cpu engine, 1 thread): {our_ms:.1f} ms{versus_vtk}")
+                    ratios = versus(vtk, our_ms, "Sequential", False, "geometry, 1 thread")
+                    ratios += versus(vtk, our_ms, "Sequential", True, "as ours, 1 thread")
+                    print(f"    {method} (cpu engine, 1 thread): {our_ms:.1f} ms{ratios}")
     # The ratio moves with the machine's load: llvmpipe's threads share the cores with any
     # other work, single-threaded scikit-image less so.
     print(f"load average after: {load_average()}")
