@@ -47,26 +47,21 @@ pub use std::time::Instant;
 #[cfg(target_arch = "wasm32")]
 pub use web_time::Instant;
 
-/// Runs `work` on each of `parts` and gives back their results in order: each part on a scoped
-/// thread of its own; where there is one part, or on wasm32 always (a web page has no threads:
-/// `std::thread::scope` panics there), [`in_turn`] on the calling thread. The engine's sweeps
-/// share out their rows through this, so one thread (what [`default_threads`] is on wasm32) is
-/// the serial path, with the same output.
+/// Runs `work` on each of `parts` and gives back their results in order: each part a task of
+/// rayon's pool, whose threads stay between extractions (spawning two threads per sweep cost
+/// about 85 us on the 2-core machine of docs/PERFORMANCE.md, three sweeps an extraction); where
+/// there is one part, or on wasm32 always (a web page has no threads), [`in_turn`] on the
+/// calling thread. The engine's sweeps share out their rows through this, so one thread (what
+/// [`default_threads`] is on wasm32) is the serial path, with the same output. A panic in a part
+/// is raised again on the calling thread.
 pub fn for_each_part<P: Send, R: Send>(parts: Vec<P>, work: impl Fn(P) -> R + Sync) -> Vec<R> {
-    if cfg!(target_arch = "wasm32") || parts.len() <= 1 {
-        return in_turn(parts, work);
+    #[cfg(not(target_arch = "wasm32"))]
+    if parts.len() > 1 {
+        use rayon::prelude::*;
+        // One part a task: the parts are already the threads' balanced shares.
+        return parts.into_par_iter().with_max_len(1).map(&work).collect();
     }
-    std::thread::scope(|scope| {
-        let work = &work;
-        let workers: Vec<_> = parts
-            .into_iter()
-            .map(|part| scope.spawn(move || work(part)))
-            .collect();
-        workers
-            .into_iter()
-            .map(|w| w.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
-    })
+    in_turn(parts, work)
 }
 
 /// [`for_each_part`]'s serial path: each part after the other, on the calling thread.
