@@ -69,25 +69,20 @@ impl StillLayer {
         target: &RenderTarget,
     ) {
         let (width, height) = (target.width, target.height);
-        if self
-            .target
-            .as_ref()
-            .is_none_or(|layer| (layer.width, layer.height) != (width, height))
-        {
-            self.drawn_for = None;
-            self.target = Some(RenderTarget::new(&gpu.device, width, height));
-        }
-        let drawn = self.holds(view);
-        let Some(layer) = self.target.as_ref() else {
-            return;
+        let layer = match self.target.take() {
+            Some(layer) if layer.has_size(width, height) => layer,
+            _ => {
+                self.drawn_for = None;
+                RenderTarget::new(&gpu.device, width, height)
+            }
         };
-        if !drawn {
+        if !self.holds(view) {
             let mut bare = settings.clone();
             bare.markers.clear();
             bare.show_box = false;
             // Its own submission: the frame's uniforms are written through the queue, and the
             // overlay's pass below writes them again.
-            render_into(gpu, renderer, Some(data), view, &bare, layer);
+            render_into(gpu, renderer, Some(data), view, &bare, &layer);
             self.drawn_for = Some(*view);
             self.draws += 1;
         }
@@ -104,6 +99,7 @@ impl StillLayer {
         };
         renderer.render_overlay(recording, data, view, settings, None);
         gpu.queue.submit([encoder.finish()]);
+        self.target = Some(layer);
     }
 }
 

@@ -51,6 +51,22 @@ const CROSSED_EDGES: [u16; 256] = {
     table
 };
 
+/// The cube edges (see [`cube_edge_start`]) that corner mask `mask` crosses, in increasing order,
+/// each with its two corners: (e, ka, kb).
+#[inline]
+fn crossed_edges(mask: u32) -> impl Iterator<Item = (u32, u32, u32)> {
+    let mut crossed = CROSSED_EDGES[mask as usize & 0xff];
+    std::iter::from_fn(move || {
+        if crossed == 0 {
+            return None;
+        }
+        let e = crossed.trailing_zeros();
+        crossed &= crossed - 1;
+        let ka = cube_edge_start(e);
+        Some((e, ka, ka | (1 << (e >> 2))))
+    })
+}
+
 /// Bit a set when the edge from the cell's corner 0 along axis a crosses the isovalue and the
 /// four cells around it exist (`base` is the cell's lowest sample). Without branches: it is
 /// asked of every active cell when counting.
@@ -260,12 +276,7 @@ fn cell_vertex(
     // The crossed edges in increasing order, as the shader's loop over all twelve visits them
     // (the same sums in the same order), without a branch per edge that the corner pattern
     // decides.
-    let mut crossed = CROSSED_EDGES[mask as usize & 0xff];
-    while crossed != 0 {
-        let e = crossed.trailing_zeros();
-        crossed &= crossed - 1;
-        let ka = cube_edge_start(e);
-        let kb = ka | (1 << (e >> 2));
+    for (e, ka, kb) in crossed_edges(mask) {
         // The edge's normal and crossing depend only on its two samples (see [`EdgeRows`]).
         let slot = (ka >> 1) as usize;
         let at = 3 * (cx + (ka & 1) as usize) + (e >> 2) as usize;
@@ -361,12 +372,7 @@ fn mean_edge_normal(
     let values = grid.corners(origin);
     let strides = grid.strides();
     let mut normal_sum = Vec3A::ZERO;
-    let mut crossed = CROSSED_EDGES[mask as usize & 0xff];
-    while crossed != 0 {
-        let e = crossed.trailing_zeros();
-        crossed &= crossed - 1;
-        let ka = cube_edge_start(e);
-        let kb = ka | (1 << (e >> 2));
+    for (_, ka, kb) in crossed_edges(mask) {
         let n = edge_crossing(
             values[ka as usize],
             values[kb as usize],

@@ -253,14 +253,9 @@ fn sqrt_lanes(v: Vec4) -> Vec4 {
     Vec4::new(v.x.sqrt(), v.y.sqrt(), v.z.sqrt(), v.w.sqrt())
 }
 
-/// Cube corner k (bit 0: x, bit 1: y, bit 2: z) as an offset from the cell's lowest sample.
-#[inline]
-pub fn corner_offset(k: u32) -> Vec3 {
-    Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32)
-}
-
-/// [`corner_offset`] in SIMD lanes, from a table: worked out, each was three conversions of an
-/// integer to a float (edges' corners are not known when compiling).
+/// Cube corner k (bit 0: x, bit 1: y, bit 2: z) as an offset from the cell's lowest sample, in
+/// SIMD lanes, from a table: worked out, each was three conversions of an integer to a float
+/// (edges' corners are not known when compiling).
 #[inline]
 pub fn corner_offset_a(k: u32) -> Vec3A {
     const OFFSETS: [Vec3A; 8] = {

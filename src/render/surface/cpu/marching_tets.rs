@@ -14,9 +14,7 @@ use crate::render::surface::buffers::MeshVertex;
 use wgpu::WriteOnly;
 
 use crate::render::surface::cpu::Phases;
-use crate::render::surface::cpu::grid::{
-    CpuGrid, corner_offset, corner_offset_a, corner_step, weighted_hp,
-};
+use crate::render::surface::cpu::grid::{CpuGrid, corner_offset_a, corner_step, weighted_hp};
 use crate::render::surface::cpu::plan::{Plan, Rows};
 use crate::render::surface::marching_tets::{CASE_STRIDE, case_table};
 
@@ -230,6 +228,6 @@ impl RowWriter<'_> {
 #[cold]
 fn edge_normal(grid: &CpuGrid, code: f32) -> [f32; 3] {
     let code = code as u32;
-    let along = (Vec3A::from(corner_offset(code & 7)) * Vec3A::from(grid.voxel_size)).normalize();
+    let along = (corner_offset_a(code & 7) * Vec3A::from(grid.voxel_size)).normalize();
     if code & 8 != 0 { along } else { -along }.to_array()
 }
