@@ -95,12 +95,21 @@ fn cell_vertices(
     var a12 = 0.0;
     var a22 = 0.0;
     var b = vec3<f32>(0.0);
+    // The crossed edges first, then only those: SIMD lanes loop as often as the busiest lane
+    // has crossings instead of twelve times (the sums run in the same order, edge by edge).
+    var crossed = 0u;
     for (var e = 0u; e < 12u; e++) {
         let ka = cube_edge_start(e);
         let kb = ka | (1u << (e >> 2u));
-        if (((mask >> ka) & 1u) == ((mask >> kb) & 1u)) {
-            continue;
+        if (((mask >> ka) & 1u) != ((mask >> kb) & 1u)) {
+            crossed |= 1u << e;
         }
+    }
+    while (crossed != 0u) {
+        let e = firstTrailingBit(crossed);
+        crossed &= crossed - 1u;
+        let ka = cube_edge_start(e);
+        let kb = ka | (1u << (e >> 2u));
         let va = corner_value(c0, c1, ka);
         let vb = corner_value(c0, c1, kb);
         let t = clamp((params.iso_value - va) / (vb - va), 0.0, 1.0);
@@ -173,13 +182,35 @@ fn cell_vertices(
     vertices[i].normal = normal;
 }
 
-// The vertex of the cell whose lowest sample is `cell`; INVALID when it was not written.
-fn cell_vertex(cell: vec3<i32>) -> u32 {
-    let j = cell_map[cell_slot(cell)];
+// The vertex of the cell in slot `slot`; INVALID when it was not written.
+fn slot_vertex(slot: u32) -> u32 {
+    let j = cell_map[slot];
     if (j >= params.active_capacity || j >= params.vertex_capacity) {
         return INVALID;
     }
     return j;
+}
+
+// Writes quad q (vertices counter-clockwise seen from +axis when corner 0 is inside, else
+// wound the other way) as two triangles at index `first` when it fits, and returns the next
+// quad's first index.
+fn write_quad(first: u32, q_in: vec4<u32>, inside0: bool, capacity: u32) -> u32 {
+    if (first + 6u <= capacity) {
+        // Inside beyond the edge: the surface faces -axis.
+        var q = select(q_in.xwzy, q_in, inside0);
+        if (any(q == vec4<u32>(INVALID))) {
+            // A cell's vertex did not fit (the CPU grows the buffers): a degenerate pair
+            // keeps the drawn range clean (index 0 is inside the vertex buffer).
+            q = vec4<u32>(0u);
+        }
+        indices[first] = q.x;
+        indices[first + 1u] = q.y;
+        indices[first + 2u] = q.z;
+        indices[first + 3u] = q.x;
+        indices[first + 4u] = q.z;
+        indices[first + 5u] = q.w;
+    }
+    return first + 6u;
 }
 
 @compute @workgroup_size(64)
@@ -193,50 +224,42 @@ fn quads(
         return;
     }
     let entry = active_list[i];
-    // Sample s, the cell's lowest; the edges from s along +x, +y, +z.
+    // Sample s, the cell's lowest; the edges from s along +x, +y, +z. The quad around the edge
+    // along a joins the cells s - eb - ec, s - ec, s and s - eb (b x c = a): six neighbours in
+    // all, each loaded once and only when a crossed edge needs it; the cell's own vertex is its
+    // active index (no load).
     let s = slot_cell(entry.x);
     let edges = quad_edges(s, entry.y);
     let inside0 = (entry.y & 1u) != 0u;
-    let units = array<vec3<i32>, 3>(vec3<i32>(1, 0, 0), vec3<i32>(0, 1, 0), vec3<i32>(0, 0, 1));
+    let own = select(i, INVALID, i >= params.vertex_capacity);
+    let sy = params.dims.x + 1u;
+    let sz = sy * (params.dims.y + 1u);
+    var vx = INVALID;
+    var vy = INVALID;
+    var vz = INVALID;
+    if ((edges & 6u) != 0u) {
+        vx = slot_vertex(entry.x - 1u);
+    }
+    if ((edges & 5u) != 0u) {
+        vy = slot_vertex(entry.x - sy);
+    }
+    if ((edges & 3u) != 0u) {
+        vz = slot_vertex(entry.x - sz);
+    }
     // Whole quads only: with reservations of six, a capacity rounded down to six is never split.
     let capacity = params.index_capacity - params.index_capacity % 6u;
     var first = entry.w;
-    for (var axis = 0u; axis < 3u; axis++) {
-        if (((edges >> axis) & 1u) == 0u) {
-            continue;
-        }
-        let b = (axis + 1u) % 3u;
-        let c = (axis + 2u) % 3u;
-        let eb = units[b];
-        let ec = units[c];
-        // Counter-clockwise seen from +axis (b x c = axis).
-        var q = array<u32, 4>(
-            cell_vertex(s - eb - ec),
-            cell_vertex(s - ec),
-            cell_vertex(s),
-            cell_vertex(s - eb),
-        );
-        if (!inside0) {
-            // Inside beyond the edge: the surface faces -axis.
-            let swap = q[1];
-            q[1] = q[3];
-            q[3] = swap;
-        }
-        let valid = q[0] != INVALID && q[1] != INVALID && q[2] != INVALID && q[3] != INVALID;
-        if (first + 6u <= capacity) {
-            if (!valid) {
-                // A cell's vertex did not fit (the CPU grows the buffers): a degenerate pair
-                // keeps the drawn range clean (index 0 is inside the vertex buffer).
-                q = array<u32, 4>(0u, 0u, 0u, 0u);
-            }
-            indices[first] = q[0];
-            indices[first + 1u] = q[1];
-            indices[first + 2u] = q[2];
-            indices[first + 3u] = q[0];
-            indices[first + 4u] = q[2];
-            indices[first + 5u] = q[3];
-        }
-        first += 6u;
+    if ((edges & 1u) != 0u) {
+        let q = vec4<u32>(slot_vertex(entry.x - sy - sz), vz, own, vy);
+        first = write_quad(first, q, inside0, capacity);
+    }
+    if ((edges & 2u) != 0u) {
+        let q = vec4<u32>(slot_vertex(entry.x - sz - 1u), vx, own, vz);
+        first = write_quad(first, q, inside0, capacity);
+    }
+    if ((edges & 4u) != 0u) {
+        let q = vec4<u32>(slot_vertex(entry.x - 1u - sy), vy, own, vx);
+        first = write_quad(first, q, inside0, capacity);
     }
 }
 
