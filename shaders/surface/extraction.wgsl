@@ -237,6 +237,20 @@ fn row_in_grid(y: i32, z: i32) -> bool {
     return y >= 0 && y < i32(params.dims.y) && z >= 0 && z < i32(params.dims.z);
 }
 
+// The samples of word `word` (see bit_word_of; its row in the grid): the density index of its
+// bit 0 (sample x = 32 w - 1, which may lie before the row) and the bits [first, end) that lie
+// in the row, as (index, first, end).
+fn word_samples(word: vec4<i32>) -> vec3<i32> {
+    let x0 = word.x * 32 - 1;
+    let row_start = i32(params.dims.x * (u32(word.y) + params.dims.y * u32(word.z)));
+    return vec3<i32>(row_start + x0, max(-x0, 0), clamp(i32(params.dims.x) - x0, 0, 32));
+}
+
+// Where the density range of thread t's word lies in `inside_bits`: its lowest, then its highest.
+fn range_slot(t: u32) -> u32 {
+    return range_start() + 2u * t;
+}
+
 // Whether `v` is NaN (by its bits, which no fast-math assumption folds away).
 fn is_nan(v: f32) -> bool {
     return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
@@ -259,24 +273,21 @@ fn word_range_pass(
     var lo = 0.0;
     var hi = 0.0;
     if (row_in_grid(word.y, word.z)) {
-        let x0 = word.x * 32 - 1;
-        let row_start = params.dims.x * (u32(word.y) + params.dims.y * u32(word.z));
-        let first = max(-x0, 0);
-        let end = clamp(i32(params.dims.x) - x0, 0, 32);
+        let samples = word_samples(word);
         // A word reaching past the row holds samples of density 0; a whole one starts from its
         // first sample.
-        if (first == 0 && end == 32) {
-            lo = density[row_start + u32(x0)];
+        if (samples.y == 0 && samples.z == 32) {
+            lo = density[u32(samples.x)];
             hi = select(lo, 0.0, is_nan(lo));
         }
-        for (var b = first; b < end; b++) {
-            let v = density[row_start + u32(x0 + b)];
+        for (var b = samples.y; b < samples.z; b++) {
+            let v = density[u32(samples.x + b)];
             lo = select(select(lo, v, v < lo || is_nan(v)), lo, is_nan(lo));
             hi = select(hi, v, v > hi);
         }
     }
-    inside_bits[range_start() + 2u * t] = bitcast<u32>(lo);
-    inside_bits[range_start() + 2u * t + 1u] = bitcast<u32>(hi);
+    inside_bits[range_slot(t)] = bitcast<u32>(lo);
+    inside_bits[range_slot(t) + 1u] = bitcast<u32>(hi);
 }
 
 // One thread per word of inside bits: 32 loads and compares and one store where the word's
@@ -292,12 +303,9 @@ fn inside_bits_pass(
     if (word.w == 0) {
         return;
     }
-    let w = u32(word.x);
-    let y = word.y;
-    let z = word.z;
     let range = vec2<f32>(
-        bitcast<f32>(inside_bits[range_start() + 2u * t]),
-        bitcast<f32>(inside_bits[range_start() + 2u * t + 1u]),
+        bitcast<f32>(inside_bits[range_slot(t)]),
+        bitcast<f32>(inside_bits[range_slot(t) + 1u]),
     );
     // Samples outside the grid read as density 0.
     var bits = select(0u, 0xffffffffu, 0.0 > params.iso_value);
@@ -307,14 +315,11 @@ fn inside_bits_pass(
     } else if (range.x > params.iso_value) {
         // Every sample above it.
         bits = 0xffffffffu;
-    } else if (row_in_grid(y, z)) {
-        let x0 = i32(w * 32u) - 1;
-        let row_start = params.dims.x * (u32(y) + params.dims.y * u32(z));
-        let lo = u32(max(-x0, 0));
-        let hi = u32(clamp(i32(params.dims.x) - x0, 0, 32));
-        for (var b = lo; b < hi; b++) {
-            let inside = density[row_start + u32(x0 + i32(b))] > params.iso_value;
-            bits = (bits & ~(1u << b)) | (u32(inside) << b);
+    } else if (row_in_grid(word.y, word.z)) {
+        let samples = word_samples(word);
+        for (var b = samples.y; b < samples.z; b++) {
+            let inside = density[u32(samples.x + b)] > params.iso_value;
+            bits = (bits & ~(1u << u32(b))) | (u32(inside) << u32(b));
         }
     }
     inside_bits[t] = bits;

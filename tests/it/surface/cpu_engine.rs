@@ -35,14 +35,7 @@ fn cpu_engine_extracts_the_gpu_surface_triangle_for_triangle() {
     );
     let song_dims = UVec3::splat(48);
     let (song_density, song_hp) = song_like_field(song_dims);
-    let song = VoxelGrid::from_fields(
-        &gpu.device,
-        song_dims,
-        Vec3::splat(-1.0),
-        Vec3::ONE,
-        &song_density,
-        &song_hp,
-    );
+    let song = unit_box_grid(&gpu, song_dims, &song_density, &song_hp);
     let cases = [
         (grid_from(&gpu, 40, sphere), vec![0.5, 0.2, 0.93]),
         (grid_from(&gpu, 40, torus), vec![0.35]),

@@ -10,14 +10,7 @@ fn render_song_surface(method: SurfaceMethod) -> image::RgbaImage {
     let mut data = SceneData::new(&gpu.device, &renderer, &cloud);
     let dims = UVec3::new(96, 64, 64);
     let (density, hp) = song_like_field(dims);
-    data.grid = Some(VoxelGrid::from_fields(
-        &gpu.device,
-        dims,
-        Vec3::splat(-1.0),
-        Vec3::ONE,
-        &density,
-        &hp,
-    ));
+    data.grid = Some(unit_box_grid(&gpu, dims, &density, &hp));
     let settings = RenderSettings {
         view: ViewKind::Surface,
         surface: SurfaceSettings {

@@ -41,14 +41,12 @@ fn grid_from(gpu: &GpuContext, n: u32, field: impl Fn(Vec3) -> f32) -> VoxelGrid
             }
         }
     }
-    VoxelGrid::from_fields(
-        &gpu.device,
-        dims,
-        Vec3::splat(-1.0),
-        Vec3::ONE,
-        &density,
-        &hp,
-    )
+    unit_box_grid(gpu, dims, &density, &hp)
+}
+
+/// A grid of `dims` samples over [-1, 1]^3 from its density and hp fields.
+fn unit_box_grid(gpu: &GpuContext, dims: UVec3, density: &[f32], hp: &[f32]) -> VoxelGrid {
+    VoxelGrid::from_fields(&gpu.device, dims, Vec3::splat(-1.0), Vec3::ONE, density, hp)
 }
 
 const SPHERE_RADIUS: f32 = 0.6;
@@ -430,14 +428,7 @@ fn one_surface_follows_grid_and_isovalue_changes() {
     let torus_grid = grid_from(&gpu, 40, torus);
     let lumpy_dims = UVec3::new(37, 22, 29);
     let (density, hp) = lumpy_fields(lumpy_dims);
-    let lumpy = VoxelGrid::from_fields(
-        &gpu.device,
-        lumpy_dims,
-        Vec3::splat(-1.0),
-        Vec3::ONE,
-        &density,
-        &hp,
-    );
+    let lumpy = unit_box_grid(&gpu, lumpy_dims, &density, &hp);
     let steps = [
         (&sphere_grid, 0.5),
         (&sphere_grid, 0.2),

@@ -273,9 +273,8 @@ fn cell_vertex(
     let mut count = 0u32;
     let (mut mass, mut b) = (Vec3A::ZERO, Vec3A::ZERO);
     let (mut row0, mut row1, mut a22) = (Vec3A::ZERO, Vec3A::ZERO, 0.0f32);
-    // The crossed edges in increasing order, as the shader's loop over all twelve visits them
-    // (the same sums in the same order), without a branch per edge that the corner pattern
-    // decides.
+    // The crossed edges in increasing order, as the shader's `cell_vertices` visits them (the
+    // same sums in the same order), without a branch per edge that the corner pattern decides.
     for (e, ka, kb) in crossed_edges(mask) {
         // The edge's normal and crossing depend only on its two samples (see [`EdgeRows`]).
         let slot = (ka >> 1) as usize;
