@@ -100,6 +100,18 @@ impl SharedBudget {
     }
 }
 
+/// A refinement of both halves, once complete (the window logs it: tests wait for it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Refined {
+    /// Frames it took.
+    pub frames: u32,
+    /// The most points one of them drew, both halves together.
+    pub most_points: u64,
+    /// The shared budget it left: both clouds within it, the next frames at rest draw them
+    /// whole (no refinement after an orbit); beyond it, the next ones refine again.
+    pub budget: u64,
+}
+
 /// The compare's progressive points: one [`ProgressivePoints`] for A and one for the version
 /// beside it, and the budget they share.
 #[derive(Default)]
@@ -109,8 +121,8 @@ pub struct CompareRefine {
     /// Frames of the refinement under way, and the most points one of them drew.
     frames: u32,
     most_points: u64,
-    /// The last refinement completed: its frames and the most points a frame, until taken.
-    finished: Option<(u32, u64)>,
+    /// The last refinement completed, until taken.
+    finished: Option<Refined>,
 }
 
 impl CompareRefine {
@@ -162,15 +174,18 @@ impl CompareRefine {
         // complete, though its scheduler has nothing left of no cloud).
         let done = (0..2).all(|s| self.halves[s].refine.remaining(keys[s], totals[s]) == 0);
         if done && self.frames > 0 {
-            self.finished = Some((self.frames, self.most_points));
+            self.finished = Some(Refined {
+                frames: self.frames,
+                most_points: self.most_points,
+                budget: self.budget.budget,
+            });
             (self.frames, self.most_points) = (0, 0);
         }
         complete
     }
 
-    /// The refinement completed since the last call: how many frames it took and the most
-    /// points one of them drew (the window logs it: tests wait for it).
-    pub fn take_finished(&mut self) -> Option<(u32, u64)> {
+    /// The refinement completed since the last call.
+    pub fn take_finished(&mut self) -> Option<Refined> {
         self.finished.take()
     }
 

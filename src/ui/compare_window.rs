@@ -395,9 +395,13 @@ impl LoudscapeApp {
         let (refining, finished) = CompareResources::write(render_state, |compare, _| {
             (compare.refining(), compare.refine_finished())
         })?;
-        if let Some((frames, most)) = finished {
-            // A log line, as loads are told: tests wait for it.
-            eprintln!("compare: points refined in {frames} frames, at most {most} points a frame");
+        if let Some(done) = finished {
+            // A log line, as loads are told: tests wait for it (and read from the budget whether
+            // an orbit refines again).
+            eprintln!(
+                "compare: points refined in {} frames, at most {} points a frame, budget now {}",
+                done.frames, done.most_points, done.budget
+            );
         }
         refining
     }

@@ -1,7 +1,10 @@
 //! The A/B compare's halves are drawn progressively at rest (`ui/compare_refine.rs`): with the
 //! demo song (147,750 points) beside a synthetic song of a million points, more than one
 //! compare frame's budget, the halves fill in over several frames, the window saying so once
-//! both are complete; an orbit starts them over, and at the end both halves show a song.
+//! both are complete; an orbit starts them over while the budget the frames adapted to is still
+//! short of both clouds (on a machine fast enough for more, the budget outgrows them and the
+//! frames after the orbit draw them whole, as `compare_refine`'s own tests hold), and at the end
+//! both halves show a song.
 //! Needs a display (`make test` runs it under xvfb-run).
 
 use crate::common::{self, line_starting, xdotool};
@@ -10,9 +13,9 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The frames and the most points a frame of a "compare: points refined in N frames, at most
-/// P points a frame" line.
-fn refined(line: &str) -> (u32, u64) {
+/// The frames, the most points a frame and the budget left of a "compare: points refined in N
+/// frames, at most P points a frame, budget now B" line.
+fn refined(line: &str) -> (u32, u64, u64) {
     let words: Vec<&str> = line.split_whitespace().collect();
     let number = |after: &str| {
         let at = words.iter().position(|w| *w == after).expect(line);
@@ -21,7 +24,7 @@ fn refined(line: &str) -> (u32, u64) {
             .parse::<u64>()
             .expect(line)
     };
-    (number("in") as u32, number("most"))
+    (number("in") as u32, number("most"), number("now"))
 }
 
 #[test]
@@ -52,17 +55,20 @@ fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
         let prefix = "compare: points refined in ";
         let line = line_starting(lines, prefix, Duration::from_secs(120), &mut seen)
             .unwrap_or_else(|| panic!("the halves never completed:\n{}", seen.join("\n")));
-        let (frames, most) = refined(&line);
+        let (frames, most, budget) = refined(&line);
         // 1,147,750 points against a first frame's budget of 400,000 (COMPARE_MIN_BUDGET): more
         // than one frame, none of them drawing both clouds whole.
+        let total = 147_750 + 1_000_000;
         assert!(frames >= 2, "{line}");
-        assert!(most < 147_750 + 1_000_000, "{line}");
+        assert!(most < total, "{line}");
 
         // An orbit: a drag across the view, made again until the halves refine anew (a press
-        // before the window laid out its view starts no drag).
+        // before the window laid out its view starts no drag). Where the budget has outgrown
+        // both clouds the frames after it draw them whole: one orbit, and no line to wait for.
+        let refines_again = budget < total;
         let deadline = Instant::now() + Duration::from_secs(90);
         let mut again = None;
-        while again.is_none() && Instant::now() < deadline {
+        loop {
             xdotool(&["mousemove", "--window", &window, "700", "400"]);
             xdotool(&["mousedown", "1"]);
             for step in 1..=10 {
@@ -73,11 +79,24 @@ fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
             xdotool(&["mouseup", "1"]);
             // Away from the view, so no read-out covers the points.
             xdotool(&["mousemove", "--window", &window, "5", "5"]);
+            if !refines_again {
+                break;
+            }
             again = line_starting(lines, prefix, Duration::from_secs(20), &mut seen);
+            if again.is_some() || Instant::now() >= deadline {
+                break;
+            }
         }
-        let again =
-            again.unwrap_or_else(|| panic!("no refinement after the orbit:\n{}", seen.join("\n")));
-        assert!(refined(&again).0 >= 1, "{again}");
+        if refines_again {
+            let again = again.unwrap_or_else(|| {
+                panic!(
+                    "no refinement after the orbit with a budget of {budget} points a frame \
+                     for {total}:\n{}",
+                    seen.join("\n")
+                )
+            });
+            assert!(refined(&again).0 >= 1, "{again}");
+        }
 
         // Complete: both halves of the 3D view (right of the side panel) show the song.
         let shot = common::output_dir().join("window_compare_refine.png");

@@ -154,8 +154,8 @@ impl CompareResources {
         self.refine.progress()
     }
 
-    /// The halves' last refinement, once complete: its frames and most points a frame.
-    pub(in crate::ui) fn refine_finished(&mut self) -> Option<(u32, u64)> {
+    /// The halves' last refinement, once complete.
+    pub(in crate::ui) fn refine_finished(&mut self) -> Option<crate::ui::compare_refine::Refined> {
         self.refine.take_finished()
     }
 
