@@ -85,7 +85,8 @@ real-music:
 # The extractor's suite runs in PYTEST_JOBS processes (pytest-xdist), each test file in one of
 # them, so a file's module fixtures are built once; PYTEST_JOBS=0 runs it in this process.
 # tests/python stays in one process: its window test (an Xvfb screen of its own) once failed to
-# open its window with another file's tests beside it. LOUDSCAPE_REQUIRE_NATIVE=1: the
+# open its window with another file's tests beside it (that screen now runs with -noreset, as
+# the window tests' does: bench/bench_window.py). LOUDSCAPE_REQUIRE_NATIVE=1: the
 # compiled running median must be the one in use (preprocess/tests/test_hpss_native.py).
 PYTEST_JOBS ?= auto
 PYTEST_PARALLEL = $(if $(filter 0,$(PYTEST_JOBS)),,-n $(PYTEST_JOBS) --dist loadfile)

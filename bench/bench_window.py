@@ -82,7 +82,12 @@ class CaseResult:
 
 
 def start_xvfb() -> tuple[subprocess.Popen, str]:
-    """A private Xvfb screen of WIDTH x HEIGHT; returns the process and its display name."""
+    """A private Xvfb screen of WIDTH x HEIGHT; returns the process and its display name.
+
+    With -noreset: by default Xvfb resets whenever its last client leaves, and a window that
+    connects during the reset fails ("Failed to open connection to X server"); the first
+    `xdotool search` of find_window, made as the window starts, is such a client.
+    """
     if shutil.which("Xvfb") is None:
         raise RuntimeError("Xvfb is not installed (apt-get install xvfb)")
     read, write = os.pipe()
@@ -96,6 +101,7 @@ def start_xvfb() -> tuple[subprocess.Popen, str]:
             f"{WIDTH}x{HEIGHT}x24",
             "-nolisten",
             "tcp",
+            "-noreset",
         ],
         pass_fds=(write,),
         stderr=subprocess.DEVNULL,

@@ -66,7 +66,10 @@ def test_the_window_stops_painting_at_rest(display, view, tmp_path):
             [str(BINARY), str(DEMO), "--view", view], env=env, stdout=log, stderr=log
         )
     try:
-        wid = bw.find_window(display, proc, 60)
+        try:
+            wid = bw.find_window(display, proc, 60)
+        except RuntimeError as error:
+            pytest.fail(f"{error}: {(tmp_path / 'log.txt').read_text().strip()}")
         bw.size_window(wid, env)
         x = XDriver(display)
         x.watch(wid)
