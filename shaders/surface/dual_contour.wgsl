@@ -232,8 +232,9 @@ fn quads(
     let edges = quad_edges(s, entry.y);
     let inside0 = (entry.y & 1u) != 0u;
     let own = select(i, INVALID, i >= params.vertex_capacity);
-    let sy = params.dims.x + 1u;
-    let sz = sy * (params.dims.y + 1u);
+    let strides = slot_strides();
+    let sy = strides.x;
+    let sz = strides.y;
     var vx = INVALID;
     var vy = INVALID;
     var vz = INVALID;

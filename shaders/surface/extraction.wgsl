@@ -163,11 +163,17 @@ fn weighted_hp(sum_weighted: f32, sum_weights: f32) -> f32 {
     return clamp(sum_weighted / sum_weights, 0.0, 1.0);
 }
 
+// The steps between neighbouring slots of `cell_map` along y and z (along x: 1).
+fn slot_strides() -> vec2<u32> {
+    let sy = params.dims.x + 1u;
+    return vec2<u32>(sy, sy * (params.dims.y + 1u));
+}
+
 // The cell's slot in `cell_map`: cells run from -1 to dims - 1 on each axis.
 fn cell_slot(cell: vec3<i32>) -> u32 {
     let q = vec3<u32>(cell + vec3<i32>(1));
-    let side = params.dims + vec3<u32>(1u);
-    return q.x + side.x * (q.y + side.y * q.z);
+    let strides = slot_strides();
+    return q.x + strides.x * q.y + strides.y * q.z;
 }
 
 // The cell (its lowest sample) of a slot.

@@ -149,15 +149,15 @@ fn triangles(
     // loaded once, by strides with no division back to cell coordinates; the cell's own entry
     // needs no load.
     let needed = header >> 8u;
-    let sy = params.dims.x + 1u;
-    let sz = sy * (params.dims.y + 1u);
+    let strides = slot_strides();
     var entries = vec4<u32>(cell_map_entry(i, entry.y, entry.z), INVALID, INVALID, INVALID);
     var entries_hi = vec4<u32>(INVALID);
     for (var c = 1u; c < 7u; c++) {
         if (((needed >> c) & 1u) == 0u) {
             continue;
         }
-        let owner = cell_map[entry.x + (c & 1u) + sy * ((c >> 1u) & 1u) + sz * (c >> 2u)];
+        let step = (c & 1u) + strides.x * ((c >> 1u) & 1u) + strides.y * (c >> 2u);
+        let owner = cell_map[entry.x + step];
         if (c < 4u) {
             entries[c] = owner;
         } else {

@@ -62,13 +62,9 @@ fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
         assert!(frames >= 2, "{line}");
         assert!(most < total, "{line}");
 
-        // An orbit: a drag across the view, made again until the halves refine anew (a press
-        // before the window laid out its view starts no drag). Where the budget has outgrown
-        // both clouds the frames after it draw them whole: one orbit, and no line to wait for.
-        let refines_again = budget < total;
-        let deadline = Instant::now() + Duration::from_secs(90);
-        let mut again = None;
-        loop {
+        // An orbit: a drag across the view, then the pointer away from it, so no read-out
+        // covers the points.
+        let orbit = || {
             xdotool(&["mousemove", "--window", &window, "700", "400"]);
             xdotool(&["mousedown", "1"]);
             for step in 1..=10 {
@@ -77,17 +73,17 @@ fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
                 xdotool(&["mousemove", "--window", &window, &x, "400"]);
             }
             xdotool(&["mouseup", "1"]);
-            // Away from the view, so no read-out covers the points.
             xdotool(&["mousemove", "--window", &window, "5", "5"]);
-            if !refines_again {
-                break;
+        };
+        if budget < total {
+            // Made again until the halves refine anew (a press before the window laid out its
+            // view starts no drag).
+            let deadline = Instant::now() + Duration::from_secs(90);
+            let mut again = None;
+            while again.is_none() && Instant::now() < deadline {
+                orbit();
+                again = line_starting(lines, prefix, Duration::from_secs(20), &mut seen);
             }
-            again = line_starting(lines, prefix, Duration::from_secs(20), &mut seen);
-            if again.is_some() || Instant::now() >= deadline {
-                break;
-            }
-        }
-        if refines_again {
             let again = again.unwrap_or_else(|| {
                 panic!(
                     "no refinement after the orbit with a budget of {budget} points a frame \
@@ -96,6 +92,10 @@ fn compare_halves_fill_in_over_frames_and_again_after_an_orbit() {
                 )
             });
             assert!(refined(&again).0 >= 1, "{again}");
+        } else {
+            // The budget has outgrown both clouds: the frames after the orbit draw them whole,
+            // and there is no line to wait for.
+            orbit();
         }
 
         // Complete: both halves of the 3D view (right of the side panel) show the song.

@@ -19,7 +19,7 @@ use crate::render::points::PointBuffers;
 use crate::render::scene::{RenderSettings, ViewKind};
 use crate::render::surface::SurfaceSettings;
 use crate::render::surface::state::ExtractionStatus;
-use crate::ui::compare_refine::CompareRefine;
+use crate::ui::compare_refine::{CompareRefine, Refined};
 use crate::ui::frame_cache::{FrameCache, RenderKey};
 use crate::view::frame_view::FrameView;
 
@@ -155,7 +155,7 @@ impl CompareResources {
     }
 
     /// The halves' last refinement, once complete.
-    pub(in crate::ui) fn refine_finished(&mut self) -> Option<crate::ui::compare_refine::Refined> {
+    pub(in crate::ui) fn refine_finished(&mut self) -> Option<Refined> {
         self.refine.take_finished()
     }
 
